@@ -1,0 +1,1 @@
+//! The generic radiance cache: records, error metrics, spatial index, interpolation, persistence.

@@ -1,0 +1,129 @@
+//! Compiles every C99 and C++17 program in `ffi-tests/` against `include/raddiff.h` and the static
+//! library cargo built for this test run, runs it, and requires exit status 0.
+//!
+//! `RADDIFF_FFI_SANITIZE=1` adds AddressSanitizer and UndefinedBehaviorSanitizer (used by `.ci/run`).
+//! `CC` / `CXX` choose the compilers (default `cc` / `c++`).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `target/<profile>`, where cargo put `libraddiff.a` for this build.
+fn profile_dir() -> PathBuf {
+    let exe = std::env::current_exe().unwrap();
+    exe.parent().unwrap().parent().unwrap().to_path_buf()
+}
+
+fn sanitize() -> bool {
+    std::env::var_os("RADDIFF_FFI_SANITIZE").is_some_and(|v| v != "0")
+}
+
+fn compile(source: &Path, out: &Path, cpp: bool, link: bool) {
+    let compiler = if cpp {
+        std::env::var("CXX").unwrap_or_else(|_| "c++".into())
+    } else {
+        std::env::var("CC").unwrap_or_else(|_| "cc".into())
+    };
+    let mut cmd = Command::new(&compiler);
+    cmd.arg(if cpp { "-std=c++17" } else { "-std=c99" })
+        .args(["-Wall", "-Wextra", "-Werror", "-pedantic", "-g", "-O1"])
+        .arg("-I")
+        .arg(root().join("include"))
+        .arg("-I")
+        .arg(root().join("ffi-tests"));
+    if sanitize() {
+        cmd.args([
+            "-fsanitize=address,undefined",
+            "-fno-sanitize-recover=all",
+            "-fno-omit-frame-pointer",
+        ]);
+    }
+    if link {
+        cmd.arg(source).arg("-o").arg(out);
+        cmd.arg(profile_dir().join("libraddiff.a"));
+        cmd.args(["-lpthread", "-ldl", "-lm", "-lrt"]);
+    } else {
+        cmd.arg("-c").arg(source).arg("-o").arg(out);
+    }
+    let result = cmd
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {compiler}: {e}"));
+    assert!(
+        result.status.success(),
+        "{compiler} failed on {}:\n{}",
+        source.display(),
+        String::from_utf8_lossy(&result.stderr)
+    );
+}
+
+fn sources(ext: &str) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(root().join("ffi-tests"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == ext))
+        .collect();
+    v.sort();
+    v
+}
+
+fn out_dir() -> PathBuf {
+    let dir =
+        PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(if sanitize() { "ffi-san" } else { "ffi" });
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn header_compiles_warning_free_as_c99_and_cpp17() {
+    let dir = out_dir();
+    let c = dir.join("header_only.c");
+    std::fs::write(
+        &c,
+        "#include \"raddiff.h\"\nint raddiff_header_only_check(void) { return RADDIFF_OK; }\n",
+    )
+    .unwrap();
+    compile(&c, &dir.join("header_only_c.o"), false, false);
+    let cpp = dir.join("header_only.cpp");
+    std::fs::write(
+        &cpp,
+        "#include \"raddiff.h\"\nint raddiff_header_only_check() { return RADDIFF_OK; }\n",
+    )
+    .unwrap();
+    compile(&cpp, &dir.join("header_only_cpp.o"), true, false);
+}
+
+#[test]
+fn ffi_programs_pass() {
+    let lib = profile_dir().join("libraddiff.a");
+    assert!(
+        lib.exists(),
+        "static library not found at {}",
+        lib.display()
+    );
+    let dir = out_dir();
+    let mut programs = Vec::new();
+    for (ext, cpp) in [("c", false), ("cpp", true)] {
+        for src in sources(ext) {
+            let stem = src.file_stem().unwrap().to_string_lossy().to_string();
+            let exe = dir.join(format!("{stem}_{ext}"));
+            compile(&src, &exe, cpp, true);
+            programs.push(exe);
+        }
+    }
+    assert!(!programs.is_empty(), "no programs in ffi-tests/");
+    for exe in programs {
+        let out = Command::new(&exe).output().unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            out.status.success(),
+            "{} failed ({}):\n{stdout}\n{stderr}",
+            exe.display(),
+            out.status
+        );
+        print!("{stdout}");
+    }
+}
