@@ -7,8 +7,18 @@
 //! conversion: the computation lives in the Rust modules.
 #![allow(non_camel_case_types)]
 
+mod cache;
 mod common;
+mod form_factor;
+mod gather;
 mod kernels;
+mod radii;
+mod scatter;
 
+pub use cache::*;
 pub use common::*;
+pub use form_factor::*;
+pub use gather::*;
 pub use kernels::*;
+pub use radii::*;
+pub use scatter::*;

@@ -1,2 +1,6 @@
 //! Stratified direction layouts for hemisphere and sphere gathers, and irradiance with its
 //! derivatives from what the traced rays found.
+
+// Occlusion-aware Hessians from the triangulated gather, and the record radii they imply.
+pub mod hessian;
+pub mod radii;
