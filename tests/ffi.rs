@@ -95,6 +95,20 @@ fn header_compiles_warning_free_as_c99_and_cpp17() {
     compile(&cpp, &dir.join("header_only_cpp.o"), true, false);
 }
 
+/// The README's C example is `ffi-tests/readme_example.c`, so it is compiled and run below.
+#[test]
+fn readme_c_example_is_tested() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let start = readme.find("```c\n").expect("README has a C example") + 5;
+    let end = start + readme[start..].find("```").unwrap();
+    let example = std::fs::read_to_string(root().join("ffi-tests/readme_example.c")).unwrap();
+    assert_eq!(
+        &readme[start..end],
+        example,
+        "README C example and ffi-tests/readme_example.c differ"
+    );
+}
+
 #[test]
 fn ffi_programs_pass() {
     let lib = profile_dir().join("libraddiff.a");
