@@ -105,7 +105,7 @@ fn solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<De
     let (sc1, sc2) = pow2_scale(extent);
     let r = raw.map(|v| v * sc1 * sc2);
     let s = r.map(|v| v.length());
-    if s.iter().any(|&s| s == 0.0) {
+    if s.contains(&0.0) {
         return Err(Error::Degenerate(
             "solid angle: x lies at a vertex of the triangle".into(),
         ));
@@ -194,10 +194,11 @@ fn solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<De
         let s_sum = s[0] + s[1] + s[2];
         let u = [r[0] * inv_s[0], r[1] * inv_s[1], r[2] * inv_s[2]];
         let u_sum = u[0] + u[1] + u[2];
+        // Scalars multiply u uᵀ after the outer product so that every term is exactly symmetric.
         let mut hess_d =
-            DMat3::from_diagonal(DVec3::splat(c[0] + c[1] + c[2])) + outer(u_sum, u_sum * s_sum);
+            DMat3::from_diagonal(DVec3::splat(c[0] + c[1] + c[2])) + outer(u_sum, u_sum) * s_sum;
         for k in 0..3 {
-            hess_d -= outer(u[k], u[k] * (s_sum + p[k] * inv_s[k]));
+            hess_d -= outer(u[k], u[k]) * (s_sum + p[k] * inv_s[k]);
         }
         let inv_g2 = inv_g * inv_g;
         let q = 2.0 * d_den * a_num * inv_g2;
