@@ -100,6 +100,41 @@ const char *raddiff_last_error(void);
 // The library version as "MAJOR.MINOR.PATCH" (static storage).
 const char *raddiff_version(void);
 
+// Form factor from a differential area at `x` with unit normal `n` to the triangle `(a, b, c)`:
+// `(1/pi)` times the integral of `n . w` over the triangle's solid angle, with the part below the
+// tangent plane clipped away; value, gradient and Hessian with respect to `x` (`n` fixed). The
+// triangle is two-sided (either vertex order). See the Rust `kernels::triangle_form_factor`.
+//
+// `RADDIFF_ERROR_INVALID_ARGUMENT`: non-finite input, `n` not unit length within 1e-6, bad `order`.
+// `RADDIFF_ERROR_DEGENERATE`: zero-area triangle, or a gradient/Hessian with `x` in the triangle's
+// plane (the value there is 0).
+//
+// # Safety
+// `out` must be NULL or valid for writing one `raddiff_deriv3`.
+enum raddiff_status raddiff_triangle_form_factor(struct raddiff_vec3 x,
+                                                 struct raddiff_vec3 n,
+                                                 struct raddiff_vec3 a,
+                                                 struct raddiff_vec3 b,
+                                                 struct raddiff_vec3 c,
+                                                 uint32_t order,
+                                                 struct raddiff_deriv3 *out);
+
+// The same as `raddiff_triangle_form_factor` for a planar simple polygon of `count >= 3`
+// vertices (either orientation). See the Rust `kernels::polygon_form_factor`.
+//
+// `RADDIFF_ERROR_INVALID_ARGUMENT` also for `count < 3`, a non-planar (beyond 1e-8 of its extent)
+// or self-intersecting polygon.
+//
+// # Safety
+// `vertices` must be NULL or valid for reading `count` `raddiff_vec3`; `out` must be NULL or valid
+// for writing one `raddiff_deriv3`.
+enum raddiff_status raddiff_polygon_form_factor(struct raddiff_vec3 x,
+                                                struct raddiff_vec3 n,
+                                                const struct raddiff_vec3 *vertices,
+                                                size_t count,
+                                                uint32_t order,
+                                                struct raddiff_deriv3 *out);
+
 // `exp(-sigma_t |x - y|)` and its derivatives with respect to `x` (see the Rust
 // `kernels::transmittance`). `RADDIFF_ERROR_DEGENERATE` for a gradient at `x == y`.
 enum raddiff_status raddiff_transmittance(struct raddiff_vec3 x,
