@@ -70,10 +70,12 @@ impl TryFrom<u32> for Interpolation {
             3 => Interpolation::Log,
             4 => Interpolation::WardClassic,
             5 => Interpolation::WardTabellion,
-            _ => return Err(Error::InvalidArgument(format!(
+            _ => {
+                return Err(Error::InvalidArgument(format!(
                 "interpolation {v} is not one of RADDIFF_INTERP_WARD (0), _TENT (1), _CUBIC (2), \
                      _LOG (3), _WARD_CLASSIC (4), _WARD_TABELLION (5)"
-            ))),
+            )))
+            }
         })
     }
 }

@@ -89,7 +89,8 @@ pub use value::CacheValue;
 
 use crate::error::{ensure_finite3, Error, Result};
 use interp::{Kernel, Used};
-use record::{Channel, Head, RecordInput};
+pub(crate) use record::RecordInput;
+use record::{Channel, Head};
 
 /// Largest channel count per record.
 pub const MAX_CHANNELS: usize = 4096;
