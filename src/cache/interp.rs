@@ -9,7 +9,7 @@
 //!
 //! | scheme | weight wᵢ (0 outside) | valid where | extrapolated value |
 //! |---|---|---|---|
-//! | [`Ward`](Interpolation::Ward) (thesis eq. 3.13, Křivánek-Gautron) | 1/(t+ρ) − 1 | t+ρ < 1 | Eᵢ + Δx·∇ₜEᵢ + (nᵢ×n)·∇ᵣEᵢ (eq. 3.19) |
+//! | [`Ward`](Interpolation::Ward) (thesis eq. 3.13, Křivánek-Gautron) | 1/max(t+ρ, 10⁻⁹) − 1 | t+ρ < 1 | Eᵢ + Δx·∇ₜEᵢ + (nᵢ×n)·∇ᵣEᵢ (eq. 3.19) |
 //! | [`WardClassic`](Interpolation::WardClassic) (eq. 3.12) | 1/max(t+ρ, 10⁻⁹) | t+ρ < 1 | as Ward |
 //! | [`WardTabellion`](Interpolation::WardTabellion) (eq. 3.14) | 1 − (t+ρ) | t+ρ < 1 | as Ward |
 //! | [`Tent`](Interpolation::Tent) (eq. 6.11-6.13) | (1−t)·(n·nᵢ − cos Δn_max)/(1 − cos Δn_max) | t < 1, n·nᵢ > cos Δn_max | as Ward (eq. 6.10) |
@@ -89,6 +89,10 @@ pub(crate) struct Kernel {
     inv_a: f64,
 }
 
+/// Floor of t + ρ in Ward's weights: at a record's exact position and normal the weight is
+/// 10⁹ (finite) instead of infinite, so that record dominates as the limit demands.
+const WARD_FLOOR: f64 = 1e-9;
+
 /// Largest exponent accepted in log-space extrapolation: keeps exp() a finite f32.
 const LOG_EXPONENT_MAX: f64 = 88.0;
 
@@ -133,8 +137,8 @@ impl Kernel {
                     return 0.0;
                 }
                 match self.interpolation {
-                    Interpolation::Ward => 1.0 / s - 1.0,
-                    Interpolation::WardClassic => 1.0 / s.max(1e-9),
+                    Interpolation::Ward => 1.0 / s.max(WARD_FLOOR) - 1.0,
+                    Interpolation::WardClassic => 1.0 / s.max(WARD_FLOOR),
                     _ => 1.0 - s,
                 }
             }
