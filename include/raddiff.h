@@ -11,6 +11,51 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// Largest channel count per record.
+#define MAX_CHANNELS 4096
+
+// Current (and only accepted) format version.
+#define FORMAT_VERSION 1
+
+// Smallest and largest accepted radius and position magnitude (L).
+#define RADIUS_MIN 1e-30
+
+// Largest accepted radius (L).
+#define RADIUS_MAX 1e30
+
+// Largest accepted absolute position coordinate (L).
+#define POSITION_MAX 1e30
+
+// Size of the fixed part of a stored record (bytes).
+#define HEAD_BYTES 88
+
+// Size of each channel's part of a stored record (bytes).
+#define CHANNEL_BYTES 16
+
+// Records on surfaces: ellipses in the tangent plane, normals compared at lookup.
+#define RADDIFF_DOMAIN_SURFACE 0
+
+// Records in participating media: ellipsoids, normals ignored.
+#define RADDIFF_DOMAIN_VOLUME 1
+
+// Ward-Heckbert first-order extrapolation with Krivanek-Gautron weights 1/(t+rho) - 1.
+#define RADDIFF_INTERP_WARD 0
+
+// Anisotropic tent weights (1 - t) times the normal tent (Schwarzhaupt eq. 6.10-6.13).
+#define RADDIFF_INTERP_TENT 1
+
+// Linear-space extrapolation with the cubic kernel 3d^2 - 2d^3, d = 1 - t (Marco et al. eq. 23).
+#define RADDIFF_INTERP_CUBIC 2
+
+// Log-space extrapolation of Jarosz et al. 2008 with the cubic kernel (Marco et al. eq. 4).
+#define RADDIFF_INTERP_LOG 3
+
+// Ward-Heckbert extrapolation with Ward's original weights 1/(t+rho) (no fall-off to 0).
+#define RADDIFF_INTERP_WARD_CLASSIC 4
+
+// Ward-Heckbert extrapolation with Tabellion-Lamorlette weights 1 - (t+rho).
+#define RADDIFF_INTERP_WARD_TABELLION 5
+
 // Major version of the library this header belongs to.
 #define RADDIFF_VERSION_MAJOR 0
 
@@ -50,6 +95,23 @@ typedef enum raddiff_status {
   RADDIFF_ERROR_PANIC = 7,
 } raddiff_status;
 
+// A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
+// `raddiff_cache_insert` on the same handle at once (lookups never block).
+typedef struct raddiff_cache raddiff_cache;
+
+// How a cache is created.
+typedef struct raddiff_cache_config {
+  // Floats per record value (1..=4096).
+  uint32_t channels;
+  // `RADDIFF_DOMAIN_SURFACE` or `RADDIFF_DOMAIN_VOLUME`.
+  uint32_t domain;
+  // `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`).
+  uint32_t interpolation;
+  // Radians in (0, pi]: largest normal deviation for a record to be used (surface domain;
+  // ignored in volumes). 0.2 is a good default.
+  double max_normal_deviation;
+} raddiff_cache_config;
+
 // A 3D vector or point.
 typedef struct raddiff_vec3 {
   // x component.
@@ -59,6 +121,27 @@ typedef struct raddiff_vec3 {
   // z component.
   double z;
 } raddiff_vec3;
+
+// A record to insert.
+typedef struct raddiff_cache_record {
+  // Where the gather was computed.
+  struct raddiff_vec3 position;
+  // Surface normal (need not be unit length); ignored in the volume domain.
+  struct raddiff_vec3 normal;
+  // `channels` floats.
+  const float *value;
+  // Nullable: 3*channels floats, translational gradient, channel-major (`gradient[3*c + k]`
+  // is the derivative of channel c along world axis k).
+  const float *gradient;
+  // Nullable: 3*channels floats, rotational gradient (derivative with respect to the rotation
+  // vector of the normal, Ward-Heckbert convention), channel-major; surface domain only.
+  const float *rotation_gradient;
+  // Surface: radii[0..1] along axes[0] (projected to the tangent plane) and normal x axes[0];
+  // radii[2] unused. Volume: ellipsoid radii along axes[0..2]. In [1e-30, 1e30].
+  double radii[3];
+  // Principal axes (need not be unit; may be zero for isotropic radii).
+  struct raddiff_vec3 axes[3];
+} raddiff_cache_record;
 
 // Value, gradient and Hessian (row-major, symmetric) with respect to a 3D point.
 typedef struct raddiff_deriv3 {
@@ -91,6 +174,47 @@ typedef struct raddiff_deriv2 {
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+// Creates an empty cache, or returns NULL (with `raddiff_last_error`) for a NULL or invalid
+// configuration. Free it with `raddiff_cache_free`.
+struct raddiff_cache *raddiff_cache_new(const struct raddiff_cache_config *config);
+
+// Frees a cache (NULL is ignored). No other thread may be using it.
+void raddiff_cache_free(struct raddiff_cache *cache);
+
+// Inserts a record (thread-safe). Inserting a record identical to a stored one is a no-op that
+// succeeds. `RADDIFF_ERROR_INVALID_ARGUMENT` for non-finite input, radii out of range, a zero
+// surface normal, or degenerate axes with anisotropic radii.
+enum raddiff_status raddiff_cache_insert(struct raddiff_cache *cache,
+                                         const struct raddiff_cache_record *record);
+
+// Interpolates the cache at `position` with surface normal `normal` (ignored in volumes) into
+// `value` (`channels` floats) and, if `weight_sum` is not NULL, the sum of the weights used.
+// `RADDIFF_ERROR_NOT_FOUND` when no record covers the point (outputs untouched). Thread-safe and
+// lock-free; the result depends only on the set of records covering the point.
+enum raddiff_status raddiff_cache_lookup(const struct raddiff_cache *cache,
+                                         struct raddiff_vec3 position,
+                                         struct raddiff_vec3 normal,
+                                         float *value,
+                                         double *weight_sum);
+
+// Number of records (0 for NULL).
+size_t raddiff_cache_len(const struct raddiff_cache *cache);
+
+// Writes the cache to `path` atomically (temporary file in the same directory, fsync, rename):
+// a crash never leaves a damaged file. `RADDIFF_ERROR_IO` on failure.
+enum raddiff_status raddiff_cache_save(const struct raddiff_cache *cache, const char *path);
+
+// Loads a cache saved by `raddiff_cache_save` (channels, domain and interpolation come from the
+// file). Returns NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in
+// `raddiff_last_error` for unreadable, truncated, damaged or wrong-version files.
+struct raddiff_cache *raddiff_cache_load(const char *path);
+
+// Adds to `into` every record of `from` it does not hold yet (identical records, e.g. the same
+// gather saved by two render nodes, are detected and skipped). Both caches need the same channel
+// count and domain (`RADDIFF_ERROR_INVALID_ARGUMENT` otherwise). `from` may equal `into`.
+enum raddiff_status raddiff_cache_merge(struct raddiff_cache *into,
+                                        const struct raddiff_cache *from);
 
 // Message of the last failed raddiff call on this thread, or "" if none failed yet.
 //
