@@ -29,6 +29,34 @@
 // Compute the value, the gradient and the Hessian.
 #define RADDIFF_ORDER_HESSIAN 2
 
+// Ward-Heckbert cosine-weighted polar strata: `theta_j = asin(sqrt((j+u)/m))`, `phi_k = 2 pi (k+v)/n`.
+#define RADDIFF_LAYOUT_COSINE_POLAR 0
+
+// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (irradiance and
+// rotational gradient only: translational gradients need a polar or sphere layout).
+#define RADDIFF_LAYOUT_CONCENTRIC 1
+
+// Whole sphere, m x n equal solid-angle strata (`cos theta_j = 1 - 2(j+u)/m`), for points in a medium.
+#define RADDIFF_LAYOUT_SPHERE 2
+
+
+
+
+
+// How far a traced direction may be from unit length (`| |ω|² − 1 |`) and from its stratum
+// (in sin²θ or cosθ across a ring wall, in the sine of the angle across an azimuth wall).
+#define DIRECTION_TOLERANCE 1e-6
+
+// Largest number of strata along either axis (M or N).
+#define MAX_STRATA_PER_AXIS (1 << 16)
+
+// Largest total number of strata M·N (16 Mi rays).
+#define MAX_STRATA (1 << 24)
+
+// How far a frame may be from orthonormal: `| |n|² − 1 |`, `| |t|² − 1 |` and `|n·t|` must each be
+// at most this. Within it, the frame is re-orthonormalized (Gram-Schmidt, keeping `n`).
+#define FRAME_TOLERANCE 1e-6
+
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
 typedef enum raddiff_status {
@@ -50,6 +78,23 @@ typedef enum raddiff_status {
   RADDIFF_ERROR_PANIC = 7,
 } raddiff_status;
 
+// Which results [`ValidGather::evaluate`] computes; work for the others is skipped.
+typedef struct Wanted Wanted;
+
+// An m x n stratified layout: `kind` is a `RADDIFF_LAYOUT_*` constant; 1 <= m, n <=
+// `RADDIFF_GATHER_MAX_STRATA_PER_AXIS`, m*n <= `RADDIFF_GATHER_MAX_STRATA`. Seed 0: stratum centres;
+// any other seed: deterministic jitter, identical on every platform.
+typedef struct raddiff_gather_layout {
+  // `RADDIFF_LAYOUT_COSINE_POLAR`, `_CONCENTRIC` or `_SPHERE`.
+  uint32_t kind;
+  // Strata along theta (or the first concentric grid axis).
+  uint32_t m;
+  // Strata along phi (or the second concentric grid axis).
+  uint32_t n;
+  // 0 for stratum centres, otherwise jitter seed.
+  uint64_t seed;
+} raddiff_gather_layout;
+
 // A 3D vector or point.
 typedef struct raddiff_vec3 {
   // x component.
@@ -60,6 +105,66 @@ typedef struct raddiff_vec3 {
   double z;
 } raddiff_vec3;
 
+// The frame of a gather: `position`, unit `normal`, unit `tangent` perpendicular to it (each within
+// 1e-6); the bitangent is `normal x tangent`. Local direction (lx, ly, lz) is
+// `lx*tangent + ly*bitangent + lz*normal`.
+typedef struct raddiff_frame {
+  // The gather point.
+  struct raddiff_vec3 position;
+  // Unit normal: the pole of the layout.
+  struct raddiff_vec3 normal;
+  // Unit tangent, perpendicular to the normal: azimuth 0.
+  struct raddiff_vec3 tangent;
+} raddiff_frame;
+
+// What the rays found. Index `i = j*n + k`.
+typedef struct raddiff_gather_input {
+  // m*n world directions as returned by `raddiff_gather_directions`.
+  const struct raddiff_vec3 *directions;
+  // m*n hit distances (> 0); `INFINITY` for a miss (distant environment).
+  const double *distance;
+  // m*n*channels radiance leaving each hit towards x (environment radiance for a miss), before
+  // attenuation; index `i*channels + c`.
+  const float *radiance;
+  // Values per direction (>= 1).
+  uint32_t channels;
+  // Homogeneous extinction (1/L) between x and the hits, >= 0; 0 = no medium. With a medium a miss
+  // is attenuated to zero.
+  double sigma_t;
+  // Nullable: m*n*steps*channels in-scattered radiance `sigma_s*L_i` (plus emission) at
+  // `t_s = (s + 0.5)*step` along each direction, before attenuation; index
+  // `(i*steps + s)*channels + c`. Sample s stands for `[s*step, (s+1)*step]`; samples beyond a
+  // direction's hit are not read.
+  const float *media_radiance;
+  // Nullable: m*n*steps*3*channels world-space gradient of `media_radiance`; index
+  // `((i*steps + s)*channels + c)*3 + axis`.
+  const float *media_radiance_gradient;
+  // Media march steps per direction (>= 1 when `media_radiance` is given).
+  uint32_t steps;
+  // Media march step length (> 0 when `media_radiance` is given).
+  double step;
+} raddiff_gather_input;
+
+// Caller-owned outputs; a NULL array means "not wanted" and its work is skipped. Per-channel
+// vectors are stored channel by channel: `gradient[3*c + axis]`, `hessian[9*c + 3*row + col]`.
+typedef struct raddiff_gather_output {
+  // channels: irradiance (hemisphere layouts) or scalar fluence (sphere).
+  double *irradiance;
+  // 3*channels: Ward-Heckbert translational gradient (world axes, all three components), with the
+  // participating-media terms of Jarosz et al. 2008 when a medium is given. Polar/sphere layouts.
+  double *gradient;
+  // 3*channels: rotational gradient (world axes); zero for the sphere layout.
+  double *rotation_gradient;
+  // 3*channels: gradient of the triangulated environment (not available in this build: must be NULL).
+  double *occlusion_gradient;
+  // 9*channels: occlusion-aware 3x3 translation Hessian (not available in this build: must be NULL).
+  double *hessian;
+  // Harmonic mean of the hit distances, m*n / sum(1/r); INFINITY if every ray missed.
+  double harmonic_mean_distance;
+  // Smallest hit distance; INFINITY if every ray missed.
+  double min_distance;
+} raddiff_gather_output;
+
 // Value, gradient and Hessian (row-major, symmetric) with respect to a 3D point.
 typedef struct raddiff_deriv3 {
   // The value.
@@ -69,6 +174,10 @@ typedef struct raddiff_deriv3 {
   // The Hessian, row-major (0 when not requested).
   double hessian[9];
 } raddiff_deriv3;
+
+
+
+
 
 #ifdef __cplusplus
 extern "C" {
@@ -81,6 +190,18 @@ const char *raddiff_last_error(void);
 
 // The library version as "MAJOR.MINOR.PATCH" (static storage).
 const char *raddiff_version(void);
+
+// Writes the m*n world directions of `layout` at `frame` (index `j*n + k`) to `directions`.
+enum raddiff_status raddiff_gather_directions(const struct raddiff_gather_layout *layout,
+                                              const struct raddiff_frame *frame,
+                                              struct raddiff_vec3 *directions);
+
+// Irradiance (or fluence) and its derivatives from a traced gather (see `gather::evaluate`).
+// Every output array that is non-NULL is written on success; nothing is written on failure.
+enum raddiff_status raddiff_gather_evaluate(const struct raddiff_gather_layout *layout,
+                                            const struct raddiff_frame *frame,
+                                            const struct raddiff_gather_input *input,
+                                            struct raddiff_gather_output *output);
 
 // `exp(-sigma_t |x - y|)` and its derivatives with respect to `x` (see the Rust
 // `kernels::transmittance`). `RADDIFF_ERROR_DEGENERATE` for a gradient at `x == y`.
