@@ -213,6 +213,16 @@ impl Scene {
 
     /// Reference irradiance at x with normal n (x below every quad).
     pub fn irradiance(&self, x: DVec3, n: DVec3) -> f64 {
+        self.integrate(x, n, false)
+    }
+
+    /// Reference fluence at x (whole sphere; needs sigma > 0 or env = 0 below the horizon).
+    pub fn fluence(&self, x: DVec3) -> f64 {
+        self.integrate(x, DVec3::Z, true)
+    }
+
+    fn integrate(&self, x: DVec3, n: DVec3, fluence: bool) -> f64 {
+        let weight = |w: DVec3| if fluence { 1.0 } else { n.dot(w) };
         let top = self.quads.iter().map(|q| q.h).fold(f64::MIN, f64::max);
         let scale = |h: f64| (top - x.z) / (h - x.z);
         let mut xs = Vec::new();
@@ -231,8 +241,8 @@ impl Scene {
         xs.dedup();
         ys.dedup();
         // environment over the whole hemisphere, then each cell's difference to it
-        let mut e = self.hemisphere_env(x, n);
-        let simple = self.sigma == 0.0 && matches!(self.media, Media::None);
+        let mut e = self.hemisphere_env(x, n, fluence);
+        let simple = !fluence && self.sigma == 0.0 && matches!(self.media, Media::None);
         for a in 0..xs.len() - 1 {
             for b in 0..ys.len() - 1 {
                 let c = DVec3::new(0.5 * (xs[a] + xs[a + 1]), 0.5 * (ys[b] + ys[b + 1]), top);
@@ -245,7 +255,7 @@ impl Scene {
                         && p.x < q.x[1]
                         && p.y > q.y[0]
                         && p.y < q.y[1]
-                        && front.is_none_or(|f| q.h < f.h)
+                        && front.map_or(true, |f| q.h < f.h)
                     {
                         front = Some(q);
                     }
@@ -273,7 +283,7 @@ impl Scene {
                         let f = q.radiance * (-self.sigma * r).exp()
                             - env
                             - self.media_segment(x, w, r.min(self.march_end()), self.march_end());
-                        e += wx * wy * domega * n.dot(w) * f;
+                        e += wx * wy * domega * weight(w) * f;
                     }
                 }
             }
@@ -281,29 +291,32 @@ impl Scene {
         e
     }
 
-    /// ∫ over the hemisphere of n of env_radiance (n·ω) dω.
-    fn hemisphere_env(&self, x: DVec3, n: DVec3) -> f64 {
+    /// ∫ over the hemisphere of n (or the sphere) of the environment's radiance times (n·ω) (or 1).
+    fn hemisphere_env(&self, x: DVec3, n: DVec3, fluence: bool) -> f64 {
+        let sr = if fluence { 4.0 * PI } else { PI };
         let surface = if self.sigma == 0.0 {
-            self.env * PI
+            self.env * sr
         } else {
             0.0
         };
         match self.media {
             Media::None => surface,
             Media::Constant(_) => {
-                surface + PI * self.media_segment(x, DVec3::Z, 0.0, self.march_end())
+                surface + sr * self.media_segment(x, DVec3::Z, 0.0, self.march_end())
             }
             Media::Field(_) => {
                 let t = n.any_orthonormal_vector();
                 let b = n.cross(t);
                 let nphi = 96;
                 let mut sum = 0.0;
-                for (th, wt) in gauss_n(0.0, PI / 2.0, 4) {
+                let top = if fluence { PI } else { PI / 2.0 };
+                for (th, wt) in gauss_n(0.0, top, 4) {
                     for i in 0..nphi {
                         let ph = 2.0 * PI * i as f64 / nphi as f64;
                         let w = (t * ph.cos() + b * ph.sin()) * th.sin() + n * th.cos();
                         let m = self.media_segment(x, w, 0.0, self.march_end());
-                        sum += wt * (2.0 * PI / nphi as f64) * th.cos() * th.sin() * m;
+                        let c = if fluence { 1.0 } else { th.cos() };
+                        sum += wt * (2.0 * PI / nphi as f64) * c * th.sin() * m;
                     }
                 }
                 surface + sum
@@ -313,16 +326,26 @@ impl Scene {
 
     /// 4th-order central-difference gradient of the reference irradiance (normal fixed).
     pub fn irradiance_gradient(&self, x: DVec3, n: DVec3) -> DVec3 {
-        let h = 1e-3;
-        let mut g = DVec3::ZERO;
-        for axis in 0..3 {
-            let mut e = DVec3::ZERO;
-            e[axis] = h;
-            let f = |s: f64| self.irradiance(x + e * s, n);
-            g[axis] = (f(-2.0) - 8.0 * f(-1.0) + 8.0 * f(1.0) - f(2.0)) / (12.0 * h);
-        }
-        g
+        central_gradient(|p| self.irradiance(p, n), x)
     }
+
+    /// 4th-order central-difference gradient of the reference fluence.
+    pub fn fluence_gradient(&self, x: DVec3) -> DVec3 {
+        central_gradient(|p| self.fluence(p), x)
+    }
+}
+
+/// 4th-order central differences, step 1e-3 (the references are smooth in x and accurate to ~1e-13).
+pub fn central_gradient(f: impl Fn(DVec3) -> f64, x: DVec3) -> DVec3 {
+    let h = 1e-3;
+    let mut g = DVec3::ZERO;
+    for axis in 0..3 {
+        let mut e = DVec3::ZERO;
+        e[axis] = h;
+        let f = |s: f64| f(x + e * s);
+        g[axis] = (f(-2.0) - 8.0 * f(-1.0) + 8.0 * f(1.0) - f(2.0)) / (12.0 * h);
+    }
+    g
 }
 
 /// Form factor of a convex planar polygon fully above the tangent plane of (x, n): Lambert's formula.
