@@ -39,23 +39,11 @@
 // Whole sphere, m x n equal solid-angle strata (`cos theta_j = 1 - 2(j+u)/m`), for points in a medium.
 #define RADDIFF_LAYOUT_SPHERE 2
 
+// Largest m or n of a gather layout.
+#define RADDIFF_GATHER_MAX_STRATA_PER_AXIS 65536
 
-
-
-
-// How far a traced direction may be from unit length (`| |ω|² − 1 |`) and from its stratum
-// (in sin²θ or cosθ across a ring wall, in the sine of the angle across an azimuth wall).
-#define DIRECTION_TOLERANCE 1e-6
-
-// Largest number of strata along either axis (M or N).
-#define MAX_STRATA_PER_AXIS (1 << 16)
-
-// Largest total number of strata M·N (16 Mi rays).
-#define MAX_STRATA (1 << 24)
-
-// How far a frame may be from orthonormal: `| |n|² − 1 |`, `| |t|² − 1 |` and `|n·t|` must each be
-// at most this. Within it, the frame is re-orthonormalized (Gram-Schmidt, keeping `n`).
-#define FRAME_TOLERANCE 1e-6
+// Largest m*n of a gather layout.
+#define RADDIFF_GATHER_MAX_STRATA 16777216
 
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.

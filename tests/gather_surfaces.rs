@@ -102,3 +102,18 @@ fn rotation_gradient_matches_rotated_normal_differences() {
     println!("  rate {:.2}", rate(&ms, &errs));
     assert!(errs[3] < 1e-2 && errs[3] < errs[0] / 3.0, "{errs:?}");
 }
+
+/// The reference values embedded in ffi-tests/gather.cpp (environment 0).
+#[test]
+fn reference_for_the_cpp_test() {
+    let scene = Scene::new(vec![emitter(), occluder_a()]);
+    let x = DVec3::new(0.05, -0.1, 0.0);
+    let e = scene.irradiance(x, DVec3::Z);
+    let g = scene.irradiance_gradient(x, DVec3::Z);
+    println!(
+        "cpp reference: E = {e:.10}, grad = {:.7} {:.7} {:.7}",
+        g.x, g.y, g.z
+    );
+    assert!((e - 0.3040080277).abs() < 1e-9);
+    assert!((g - DVec3::new(-0.6510830, -0.0671441, 0.2474822)).length() < 1e-6);
+}

@@ -17,9 +17,9 @@ pub const RADDIFF_LAYOUT_CONCENTRIC: u32 = 1;
 /// Whole sphere, m x n equal solid-angle strata (`cos theta_j = 1 - 2(j+u)/m`), for points in a medium.
 pub const RADDIFF_LAYOUT_SPHERE: u32 = 2;
 /// Largest m or n of a gather layout.
-pub const RADDIFF_GATHER_MAX_STRATA_PER_AXIS: u32 = gather::MAX_STRATA_PER_AXIS;
+pub const RADDIFF_GATHER_MAX_STRATA_PER_AXIS: u32 = 65536;
 /// Largest m*n of a gather layout.
-pub const RADDIFF_GATHER_MAX_STRATA: u64 = gather::MAX_STRATA;
+pub const RADDIFF_GATHER_MAX_STRATA: u64 = 16777216;
 
 /// The frame of a gather: `position`, unit `normal`, unit `tangent` perpendicular to it (each within
 /// 1e-6); the bitangent is `normal x tangent`. Local direction (lx, ly, lz) is
@@ -102,6 +102,11 @@ pub struct raddiff_gather_output {
     /// Smallest hit distance; INFINITY if every ray missed.
     pub min_distance: f64,
 }
+
+const _: () = assert!(
+    RADDIFF_GATHER_MAX_STRATA_PER_AXIS == Layout::MAX_STRATA_PER_AXIS
+        && RADDIFF_GATHER_MAX_STRATA == Layout::MAX_STRATA
+);
 
 // The directions array is read in place as glam vectors: both are three packed doubles.
 const _: () = assert!(

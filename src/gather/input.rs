@@ -5,10 +5,6 @@ use glam::DVec3;
 use super::layout::{Frame, Layout, LayoutKind};
 use crate::error::{ensure_finite, Error, Result};
 
-/// How far a traced direction may be from unit length (`| |ω|² − 1 |`) and from its stratum
-/// (in sin²θ or cosθ across a ring wall, in the sine of the angle across an azimuth wall).
-pub const DIRECTION_TOLERANCE: f64 = 1e-6;
-
 /// In-scattered (and emitted) radiance of a participating medium, marched along every direction.
 ///
 /// Step `s` of direction `i` is the sample at `t_s = (s + 0.5)·step` and stands for the interval
@@ -32,7 +28,7 @@ pub struct MediaRadiance<'a> {
 #[derive(Debug, Clone, Copy)]
 pub struct GatherInput<'a> {
     /// The traced world directions, as returned by [`Layout::directions`] (unit, each inside its
-    /// stratum within [`DIRECTION_TOLERANCE`]).
+    /// stratum within [`GatherInput::DIRECTION_TOLERANCE`]).
     pub directions: &'a [DVec3],
     /// Hit distances (L), > 0; `f64::INFINITY` for a miss (distant environment).
     pub distance: &'a [f64],
@@ -76,6 +72,12 @@ fn check_all_finite(values: &[f32], what: &str) -> Result<()> {
 }
 
 impl GatherInput<'_> {
+    /// How far a traced direction may be from unit length (`| |ω|² − 1 |`) and from its stratum
+    /// (in sin²θ or cosθ across a ring wall, in the sine of the angle across an azimuth wall).
+    ///
+    /// cbindgen:ignore
+    pub const DIRECTION_TOLERANCE: f64 = 1e-6;
+
     /// Checks sizes and values against `layout` and the (orthonormalized) `frame`.
     pub(crate) fn validate(&self, layout: &Layout, frame: &Frame) -> Result<()> {
         let cells = layout.len();
@@ -142,7 +144,7 @@ impl GatherInput<'_> {
 
 /// Every direction unit, in the right half-space, and (polar and sphere layouts) inside its stratum.
 fn check_directions(layout: &Layout, frame: &Frame, directions: &[DVec3]) -> Result<()> {
-    let tol = DIRECTION_TOLERANCE;
+    let tol = GatherInput::DIRECTION_TOLERANCE;
     let (m, n) = (layout.m as usize, layout.n as usize);
     // Azimuth walls as unit 2D vectors (φ_k = 2πk/N); the last one wraps to the first.
     let walls: Vec<(f64, f64)> = if layout.kind == LayoutKind::Concentric || n < 2 {

@@ -20,16 +20,6 @@ use glam::{DVec2, DVec3};
 
 use crate::error::{ensure_finite3, Error, Result};
 
-/// Largest number of strata along either axis (M or N).
-pub const MAX_STRATA_PER_AXIS: u32 = 1 << 16;
-
-/// Largest total number of strata M·N (16 Mi rays).
-pub const MAX_STRATA: u64 = 1 << 24;
-
-/// How far a frame may be from orthonormal: `| |n|² − 1 |`, `| |t|² − 1 |` and `|n·t|` must each be
-/// at most this. Within it, the frame is re-orthonormalized (Gram-Schmidt, keeping `n`).
-pub const FRAME_TOLERANCE: f64 = 1e-6;
-
 /// Which stratification a gather uses. The discriminants are the C constants
 /// `RADDIFF_LAYOUT_COSINE_POLAR`, `RADDIFF_LAYOUT_CONCENTRIC` and `RADDIFF_LAYOUT_SPHERE`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -77,8 +67,14 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// How far a frame may be from orthonormal: `| |n|² − 1 |`, `| |t|² − 1 |` and `|n·t|` must
+    /// each be at most this. Within it, the frame is re-orthonormalized (Gram-Schmidt, keeping `n`).
+    ///
+    /// cbindgen:ignore
+    pub const TOLERANCE: f64 = 1e-6;
+
     /// A validated frame. `normal` and `tangent` must be unit and perpendicular within
-    /// [`FRAME_TOLERANCE`]; they are re-orthonormalized (so directions are unit to rounding).
+    /// [`Frame::TOLERANCE`]; they are re-orthonormalized (so directions are unit to rounding).
     pub fn new(position: DVec3, normal: DVec3, tangent: DVec3) -> Result<Frame> {
         Frame {
             position,
@@ -88,7 +84,7 @@ impl Frame {
         .orthonormalized()
     }
 
-    /// Checks this frame against [`FRAME_TOLERANCE`] and returns it with `normal` normalized and
+    /// Checks this frame against [`Frame::TOLERANCE`] and returns it with `normal` normalized and
     /// `tangent` made exactly perpendicular to it.
     pub fn orthonormalized(&self) -> Result<Frame> {
         ensure_finite3(self.position, "frame position")?;
@@ -96,18 +92,18 @@ impl Frame {
         ensure_finite3(self.tangent, "frame tangent")?;
         let nn = self.normal.length_squared();
         let tt = self.tangent.length_squared();
-        if (nn - 1.0).abs() > FRAME_TOLERANCE {
+        if (nn - 1.0).abs() > Frame::TOLERANCE {
             return Err(Error::InvalidArgument(format!(
                 "frame normal is not unit (|n|^2 = {nn})"
             )));
         }
-        if (tt - 1.0).abs() > FRAME_TOLERANCE {
+        if (tt - 1.0).abs() > Frame::TOLERANCE {
             return Err(Error::InvalidArgument(format!(
                 "frame tangent is not unit (|t|^2 = {tt})"
             )));
         }
         let nt = self.normal.dot(self.tangent);
-        if nt.abs() > FRAME_TOLERANCE {
+        if nt.abs() > Frame::TOLERANCE {
             return Err(Error::InvalidArgument(format!(
                 "frame tangent is not perpendicular to the normal (n.t = {nt})"
             )));
@@ -171,15 +167,25 @@ pub enum StratumBounds {
 pub struct Layout {
     /// The stratification.
     pub kind: LayoutKind,
-    /// Strata along θ (polar, sphere) or along the first square axis (concentric), 1..=[`MAX_STRATA_PER_AXIS`].
+    /// Strata along θ (polar, sphere) or along the first square axis (concentric), 1..=[`Layout::MAX_STRATA_PER_AXIS`].
     pub m: u32,
-    /// Strata along φ (polar, sphere) or along the second square axis (concentric), 1..=[`MAX_STRATA_PER_AXIS`].
+    /// Strata along φ (polar, sphere) or along the second square axis (concentric), 1..=[`Layout::MAX_STRATA_PER_AXIS`].
     pub n: u32,
     /// 0: stratum centres; anything else: deterministic per-stratum jitter.
     pub seed: u64,
 }
 
 impl Layout {
+    /// Largest number of strata along either axis (M or N).
+    ///
+    /// cbindgen:ignore
+    pub const MAX_STRATA_PER_AXIS: u32 = 1 << 16;
+
+    /// Largest total number of strata M·N (16 Mi rays).
+    ///
+    /// cbindgen:ignore
+    pub const MAX_STRATA: u64 = 1 << 24;
+
     /// A validated layout (see [`Layout::validate`]).
     pub fn new(kind: LayoutKind, m: u32, n: u32, seed: u64) -> Result<Layout> {
         let layout = Layout { kind, m, n, seed };
@@ -187,19 +193,21 @@ impl Layout {
         Ok(layout)
     }
 
-    /// `InvalidArgument` unless `1 ≤ m, n ≤ MAX_STRATA_PER_AXIS` and `m·n ≤ MAX_STRATA`.
+    /// `InvalidArgument` unless `1 ≤ m, n ≤ Layout::MAX_STRATA_PER_AXIS` and `m·n ≤ Layout::MAX_STRATA`.
     pub fn validate(&self) -> Result<()> {
         for (name, v) in [("m", self.m), ("n", self.n)] {
-            if v == 0 || v > MAX_STRATA_PER_AXIS {
+            if v == 0 || v > Layout::MAX_STRATA_PER_AXIS {
                 return Err(Error::InvalidArgument(format!(
-                    "layout {name} = {v} is outside 1..={MAX_STRATA_PER_AXIS}"
+                    "layout {name} = {v} is outside 1..={}",
+                    Layout::MAX_STRATA_PER_AXIS
                 )));
             }
         }
-        if self.len() as u64 > MAX_STRATA {
+        if self.len() as u64 > Layout::MAX_STRATA {
             return Err(Error::InvalidArgument(format!(
-                "layout m*n = {} exceeds the maximum {MAX_STRATA}",
-                self.len()
+                "layout m*n = {} exceeds the maximum {}",
+                self.len(),
+                Layout::MAX_STRATA
             )));
         }
         Ok(())
@@ -451,7 +459,7 @@ mod tests {
     #[test]
     fn bad_layouts_and_frames_are_rejected() {
         assert!(Layout::new(LayoutKind::Sphere, 0, 4, 0).is_err());
-        assert!(Layout::new(LayoutKind::Sphere, 4, MAX_STRATA_PER_AXIS + 1, 0).is_err());
+        assert!(Layout::new(LayoutKind::Sphere, 4, Layout::MAX_STRATA_PER_AXIS + 1, 0).is_err());
         assert!(Layout::new(LayoutKind::Sphere, 1 << 13, 1 << 13, 0).is_err());
         assert!(LayoutKind::try_from(3).is_err());
         let p = DVec3::ZERO;

@@ -36,11 +36,8 @@ pub mod layout;
 mod walls;
 
 pub use evaluate::{evaluate, GatherValues, ValidGather, Wanted};
-pub use input::{GatherInput, MediaRadiance, DIRECTION_TOLERANCE};
-pub use layout::{
-    concentric_to_local, Frame, Layout, LayoutKind, StratumBounds, FRAME_TOLERANCE, MAX_STRATA,
-    MAX_STRATA_PER_AXIS,
-};
+pub use input::{GatherInput, MediaRadiance};
+pub use layout::{concentric_to_local, Frame, Layout, LayoutKind, StratumBounds};
 
 // Occlusion-aware Hessians from the triangulated gather, and the record radii they imply.
 pub mod hessian;
