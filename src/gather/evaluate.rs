@@ -135,58 +135,58 @@ impl<'a> ValidGather<'a> {
         let mut out = GatherValues::default();
         let ch = self.input.channels;
         let weight = self.stratum_weight();
-        let transmittance = self.transmittance(wanted, &mut out)?;
-        let surface = Surface {
-            radiance: self.input.radiance,
-            channels: ch,
-            transmittance: transmittance.as_deref(),
-        };
-        let media = self
-            .input
-            .media
-            .as_ref()
-            .map(|m| (m, March::new(self.input.sigma_t, m.step, m.steps)));
-        let media_cells = match &media {
-            Some((m, march))
-                if wanted.irradiance || wanted.rotation_gradient || wanted.gradient =>
-            {
-                Some(self.media_cells(m, march, wanted, &mut out))
+        let plain = self.input.sigma_t == 0.0 && self.input.media.is_none();
+        if plain && !wanted.gradient && !wanted.rotation_gradient {
+            // Irradiance straight from the input: no per-stratum array needed.
+            if wanted.irradiance {
+                let mut e = vec![0.0; ch];
+                for cell in self.input.radiance.chunks_exact(ch) {
+                    for (e, &l) in e.iter_mut().zip(cell) {
+                        *e += l as f64;
+                    }
+                }
+                out.irradiance = e.into_iter().map(|e| e * weight).collect();
             }
-            _ => None,
-        };
-        let total = |i: usize, c: usize| {
-            surface.at(i, c) + media_cells.as_ref().map_or(0.0, |e| e[i * ch + c])
-        };
-        if wanted.irradiance {
-            let mut e = vec![0.0; ch];
-            for i in 0..self.layout.len() {
-                for (c, e) in e.iter_mut().enumerate() {
-                    *e += total(i, c);
+        } else {
+            // Radiance reaching x through each stratum: attenuated surface radiance plus media.
+            let mut rad: Vec<f64> = self.input.radiance.iter().map(|&l| l as f64).collect();
+            if self.input.sigma_t > 0.0 {
+                self.attenuate(&mut rad, wanted, &mut out)?;
+            }
+            if let Some(media) = &self.input.media {
+                let march = March::new(self.input.sigma_t, media.step, media.steps);
+                self.add_media(&mut rad, media, &march, wanted, &mut out);
+            }
+            if wanted.irradiance {
+                let mut e = vec![0.0; ch];
+                for cell in rad.chunks_exact(ch) {
+                    for (e, &l) in e.iter_mut().zip(cell) {
+                        *e += l;
+                    }
+                }
+                out.irradiance = e.into_iter().map(|e| e * weight).collect();
+            }
+            let walls =
+                (self.layout.kind != LayoutKind::Concentric).then(|| Walls::new(&self.layout));
+            if wanted.gradient {
+                let walls = walls.as_ref().expect("walls exist for polar layouts");
+                let local = self.wall_gradient(walls, &rad);
+                if out.gradient.is_empty() {
+                    out.gradient = vec![DVec3::ZERO; ch];
+                }
+                for (g, l) in out.gradient.iter_mut().zip(local) {
+                    *g += self.frame.to_world(l);
                 }
             }
-            out.irradiance = e.into_iter().map(|e| e * weight).collect();
-        }
-        let walls = (self.layout.kind != LayoutKind::Concentric
-            && (wanted.gradient || wanted.rotation_gradient))
-            .then(|| Walls::new(&self.layout));
-        if wanted.gradient {
-            let walls = walls.as_ref().expect("walls exist for polar layouts");
-            let local = self.wall_gradient(walls, &total);
-            if out.gradient.is_empty() {
-                out.gradient = vec![DVec3::ZERO; ch];
+            if wanted.rotation_gradient {
+                out.rotation_gradient = self.rotation_gradient(walls.as_ref(), &rad);
             }
-            for (g, l) in out.gradient.iter_mut().zip(local) {
-                *g += self.frame.to_world(l);
-            }
-        }
-        if wanted.rotation_gradient {
-            out.rotation_gradient = self.rotation_gradient(walls.as_ref(), &total);
         }
         if wanted.distances {
             let (mut inv_sum, mut min) = (0.0, f64::INFINITY);
             for &r in self.input.distance {
-                inv_sum += 1.0 / r;
-                min = f64::min(min, r);
+                inv_sum += r.recip();
+                min = min.min(r);
             }
             out.harmonic_mean_distance = Some(self.layout.len() as f64 / inv_sum);
             out.min_distance = Some(min);
@@ -203,13 +203,9 @@ impl<'a> ValidGather<'a> {
         Ok(out)
     }
 
-    /// Per-stratum transmittance to the hit (None without a medium); adds the cell-radiance
-    /// gradient `weight · Σ ∇T·L` (eq. 17-18) to `out.gradient` when wanted.
-    fn transmittance(&self, wanted: Wanted, out: &mut GatherValues) -> Result<Option<Vec<f64>>> {
-        let sigma = self.input.sigma_t;
-        if sigma == 0.0 {
-            return Ok(None);
-        }
+    /// Multiplies each stratum's radiance by the transmittance to its hit (zero for a miss) and
+    /// adds the cell-radiance gradient `weight · Σ ∇T·L` (eq. 17-18) to `out.gradient` when wanted.
+    fn attenuate(&self, rad: &mut [f64], wanted: Wanted, out: &mut GatherValues) -> Result<()> {
         let ch = self.input.channels;
         let order = if wanted.gradient {
             out.gradient = vec![DVec3::ZERO; ch];
@@ -218,42 +214,45 @@ impl<'a> ValidGather<'a> {
             Order::Value
         };
         let weight = self.stratum_weight();
-        let mut t = Vec::with_capacity(self.layout.len());
-        for (i, (&r, &w)) in self
+        for ((&r, &w), cell) in self
             .input
             .distance
             .iter()
             .zip(self.input.directions)
-            .enumerate()
+            .zip(rad.chunks_exact_mut(ch))
         {
             if r.is_infinite() {
-                t.push(0.0);
+                cell.fill(0.0);
                 continue;
             }
             // Translation invariance: x at the origin keeps r exact however far x is from 0.
-            let d = kernels::transmittance(DVec3::ZERO, w * r, sigma, order)?;
-            t.push(d.value);
+            let d = kernels::transmittance(DVec3::ZERO, w * r, self.input.sigma_t, order)?;
             if wanted.gradient && d.value != 0.0 {
-                let rad = &self.input.radiance[i * ch..(i + 1) * ch];
-                for (g, &l) in out.gradient.iter_mut().zip(rad) {
-                    *g += d.gradient * (weight * l as f64);
+                for (g, &l) in out.gradient.iter_mut().zip(cell.iter()) {
+                    *g += d.gradient * (weight * l);
                 }
             }
+            for l in cell {
+                *l *= d.value;
+            }
         }
-        Ok(Some(t))
+        Ok(())
     }
 
-    /// Media radiance reaching x through each stratum, `Σ_s Q_s ∫ T dt` over the visible part of
-    /// each step (`M·N·channels`). When the gradient is wanted, adds `weight · Σ_i ∇L_m,i` to
-    /// `out.gradient`, the gradient of each stratum's segment integral with its hit point held fixed
-    /// (the Ward-Heckbert assumption): see [`segment_gradient`].
-    fn media_cells(
+    /// Adds the media radiance reaching x through each stratum, `Σ_s Q_s ∫ T dt` over the visible
+    /// part of each step, to `rad`. When the gradient is wanted, adds `weight · Σ_i ∇L_m,i` to
+    /// `out.gradient`: the gradient of each stratum's segment integral with its hit point held fixed
+    /// (the Ward-Heckbert assumption), so that together with the wall terms on the total radiance
+    /// the visibility gradient of surfaces occluding the medium (Jarosz 2008 eq. 22-26) appears at
+    /// silhouettes, and nowhere else.
+    fn add_media(
         &self,
+        rad: &mut [f64],
         media: &MediaRadiance<'_>,
         march: &March,
         wanted: Wanted,
         out: &mut GatherValues,
-    ) -> Vec<f64> {
+    ) {
         let ch = self.input.channels;
         let steps = media.steps;
         let weight = self.stratum_weight();
@@ -261,7 +260,6 @@ impl<'a> ValidGather<'a> {
             out.gradient = vec![DVec3::ZERO; ch];
         }
         let end = march.end();
-        let mut cells = vec![0.0; self.layout.len() * ch];
         for (i, (&r, &w)) in self
             .input
             .distance
@@ -269,7 +267,7 @@ impl<'a> ValidGather<'a> {
             .zip(self.input.directions)
             .enumerate()
         {
-            let e = &mut cells[i * ch..(i + 1) * ch];
+            let e = &mut rad[i * ch..(i + 1) * ch];
             if !wanted.gradient {
                 march.visit(0.0, r, |s, i0, _| {
                     let q = &media.radiance[(i * steps + s) * ch..(i * steps + s + 1) * ch];
@@ -306,56 +304,88 @@ impl<'a> ValidGather<'a> {
                 }
             });
         }
-        cells
     }
 
     /// Ward-Heckbert wall terms on the total (surface + media) radiance, local frame, per channel.
-    fn wall_gradient(&self, walls: &Walls, total: &dyn Fn(usize, usize) -> f64) -> Vec<DVec3> {
+    ///
+    /// Each wall contributes `(L_a − L_b)/min(r_a, r_b)` times its wall vector; the vectors factor
+    /// into a per-ring scalar and a per-column vector, so the loop accumulates scalars per column
+    /// and applies the column vectors once at the end.
+    fn wall_gradient(&self, walls: &Walls, rad: &[f64]) -> Vec<DVec3> {
         let (m, n) = (self.layout.m as usize, self.layout.n as usize);
         let ch = self.input.channels;
-        let dist = self.input.distance;
-        let mut g = vec![DVec3::ZERO; ch];
-        let mut wall = |a: usize, b: usize, w: DVec3| {
-            let r = dist[a].min(dist[b]);
-            if r == f64::INFINITY {
-                return;
-            }
-            let inv = 1.0 / r;
-            for (c, g) in g.iter_mut().enumerate() {
-                let d = total(a, c) - total(b, c);
-                *g += w * (d * inv);
-            }
-        };
+        let row_len = n * ch;
+        // 1/r, 0 for a miss: 1/min(r_a, r_b) = max(1/r_a, 1/r_b).
+        let inv_r: Vec<f64> = self.input.distance.iter().map(|&r| 1.0 / r).collect();
+        let mut azimuth = vec![0.0; row_len];
+        let mut ring = vec![0.0; row_len];
+        let mut normal = vec![0.0; ch];
         for j in 0..m {
-            for k in 0..n {
-                let i = j * n + k;
-                if n >= 2 {
-                    wall(i, j * n + (k + n - 1) % n, walls.azimuth_wall_vector(j, k));
+            let row = &rad[j * row_len..(j + 1) * row_len];
+            let inv = &inv_r[j * n..(j + 1) * n];
+            if n >= 2 {
+                let span = walls.ring_span[j];
+                for k in 0..n {
+                    let kp = if k == 0 { n - 1 } else { k - 1 };
+                    let s = inv[k].max(inv[kp]) * span;
+                    if s == 0.0 {
+                        continue;
+                    }
+                    for c in 0..ch {
+                        azimuth[k * ch + c] += (row[k * ch + c] - row[kp * ch + c]) * s;
+                    }
                 }
-                if j >= 1 {
-                    wall(i, i - n, walls.ring_wall_vector(j, k));
+            }
+            if j >= 1 {
+                let prev = &rad[(j - 1) * row_len..j * row_len];
+                let inv_prev = &inv_r[(j - 1) * n..j * n];
+                let (a, b) = walls.ring_wall[j];
+                for k in 0..n {
+                    let s = inv[k].max(inv_prev[k]);
+                    if s == 0.0 {
+                        continue;
+                    }
+                    for c in 0..ch {
+                        let d = (row[k * ch + c] - prev[k * ch + c]) * s;
+                        ring[k * ch + c] += d * a;
+                        normal[c] += d * b;
+                    }
                 }
+            }
+        }
+        let mut g: Vec<DVec3> = normal.iter().map(|&z| DVec3::new(0.0, 0.0, z)).collect();
+        for k in 0..n {
+            let (cos_k, sin_k) = walls.phi_wall[k];
+            let (c1, c2) = walls.column[k];
+            for (c, g) in g.iter_mut().enumerate() {
+                let (az, rg) = (azimuth[k * ch + c], ring[k * ch + c]);
+                g.x += rg * c1 - az * sin_k;
+                g.y += rg * c2 + az * cos_k;
             }
         }
         g
     }
 
     /// `∫ L (n × ω) dω` per channel (world axes).
-    fn rotation_gradient(
-        &self,
-        walls: Option<&Walls>,
-        total: &dyn Fn(usize, usize) -> f64,
-    ) -> Vec<DVec3> {
+    fn rotation_gradient(&self, walls: Option<&Walls>, rad: &[f64]) -> Vec<DVec3> {
         let ch = self.input.channels;
         let mut g = vec![DVec3::ZERO; ch];
         let n = self.layout.n as usize;
         match (self.layout.kind, walls) {
             (LayoutKind::Sphere, _) => {}
             (LayoutKind::CosinePolar, Some(walls)) => {
-                for i in 0..self.layout.len() {
-                    let v = walls.rotation_vector(i / n, i % n);
+                // ∫_cell sinθ e_φ dω = (∫ sin²θ dθ)(∫ e_φ dφ): per-column sums, then the vectors.
+                let mut column = vec![0.0; n * ch];
+                for (j, row) in rad.chunks_exact(n * ch).enumerate() {
+                    let s = walls.ring_sin2[j];
+                    for (acc, &l) in column.iter_mut().zip(row) {
+                        *acc += s * l;
+                    }
+                }
+                for k in 0..n {
+                    let (c1, c2) = walls.column[k];
                     for (c, g) in g.iter_mut().enumerate() {
-                        *g += v * total(i, c);
+                        *g += DVec3::new(-c2, c1, 0.0) * column[k * ch + c];
                     }
                 }
             }
@@ -363,11 +393,11 @@ impl<'a> ValidGather<'a> {
                 // Concentric strata are not θ/φ boxes: Monte Carlo with the cosine pdf,
                 // (n × ω)/cosθ per sample, cosθ clamped where a jittered sample touches the horizon.
                 let weight = self.stratum_weight();
-                for (i, &w) in self.input.directions.iter().enumerate() {
+                for (&w, cell) in self.input.directions.iter().zip(rad.chunks_exact(ch)) {
                     let l = self.frame.to_local(w);
                     let v = DVec3::new(-l.y, l.x, 0.0) * (weight / l.z.max(1e-6));
-                    for (c, g) in g.iter_mut().enumerate() {
-                        *g += v * total(i, c);
+                    for (g, &l) in g.iter_mut().zip(cell) {
+                        *g += v * l;
                     }
                 }
             }
@@ -384,24 +414,6 @@ pub fn evaluate(
     wanted: Wanted,
 ) -> Result<GatherValues> {
     ValidGather::new(layout, frame, input)?.evaluate(wanted)
-}
-
-/// Surface radiance reaching x through each stratum: hit radiance times transmittance.
-struct Surface<'a> {
-    radiance: &'a [f32],
-    channels: usize,
-    transmittance: Option<&'a [f64]>,
-}
-
-impl Surface<'_> {
-    #[inline]
-    fn at(&self, i: usize, c: usize) -> f64 {
-        let l = self.radiance[i * self.channels + c] as f64;
-        match self.transmittance {
-            Some(t) => l * t[i],
-            None => l,
-        }
-    }
 }
 
 /// March steps `[s·Δ, (s+1)·Δ]`, weighted by the exact integrals of `exp(−σt)` and `t·exp(−σt)` over
@@ -483,6 +495,70 @@ impl March {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The factored wall loop equals the plain sum over walls of `(L_a − L_b)/min(r) · W`, and the
+    /// factored rotation sum the plain sum of `L ∫_cell sinθ e_φ dω`.
+    #[test]
+    fn factored_sums_match_plain_wall_sums() {
+        for kind in [LayoutKind::CosinePolar, LayoutKind::Sphere] {
+            let layout = Layout::new(kind, 5, 7, 3).unwrap();
+            let frame = Frame::new(DVec3::ZERO, DVec3::Z, DVec3::X).unwrap();
+            let dirs = layout.directions(&frame).unwrap();
+            let ch = 2;
+            let dist: Vec<f64> = (0..35)
+                .map(|i| {
+                    if i % 4 == 0 {
+                        f64::INFINITY
+                    } else {
+                        1.0 + (i % 5) as f64
+                    }
+                })
+                .collect();
+            let rad: Vec<f32> = (0..70).map(|i| ((i * 29) % 13) as f32 * 0.1).collect();
+            let input = GatherInput {
+                directions: &dirs,
+                distance: &dist,
+                radiance: &rad,
+                channels: ch,
+                sigma_t: 0.0,
+                media: None,
+            };
+            let v = ValidGather::new(&layout, &frame, &input).unwrap();
+            let walls = Walls::new(&layout);
+            let r64: Vec<f64> = rad.iter().map(|&l| l as f64).collect();
+            let got = v.wall_gradient(&walls, &r64);
+            let rot = v.rotation_gradient(Some(&walls), &r64);
+            let (m, n) = (5, 7);
+            for c in 0..ch {
+                let mut want = DVec3::ZERO;
+                let mut want_rot = DVec3::ZERO;
+                let mut wall = |a: usize, b: usize, w: DVec3| {
+                    let r = dist[a].min(dist[b]);
+                    if r.is_finite() {
+                        want += w * ((r64[a * ch + c] - r64[b * ch + c]) / r);
+                    }
+                };
+                for j in 0..m {
+                    for k in 0..n {
+                        let i = j * n + k;
+                        wall(i, j * n + (k + n - 1) % n, walls.azimuth_wall_vector(j, k));
+                        if j >= 1 {
+                            wall(i, i - n, walls.ring_wall_vector(j, k));
+                        }
+                        want_rot += walls.rotation_vector(j, k) * r64[i * ch + c];
+                    }
+                }
+                assert!(
+                    (got[c] - want).length() < 1e-13,
+                    "{kind:?} {} {want}",
+                    got[c]
+                );
+                if kind == LayoutKind::CosinePolar {
+                    assert!((rot[c] - want_rot).length() < 1e-13);
+                }
+            }
+        }
+    }
 
     #[test]
     fn march_weights_integrate_the_exponential_exactly() {

@@ -62,11 +62,15 @@ fn check_len(what: &str, got: usize, want: Option<usize>, formula: &str) -> Resu
 }
 
 fn check_all_finite(values: &[f32], what: &str) -> Result<()> {
-    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
-        return Err(Error::InvalidArgument(format!(
-            "{what}[{i}] is not finite ({})",
-            values[i]
-        )));
+    // Branch-free per block so the scan vectorizes; locate the culprit only on failure.
+    for (b, block) in values.chunks(256).enumerate() {
+        if block.iter().fold(false, |bad, v| bad | !v.is_finite()) {
+            let i = b * 256 + block.iter().position(|v| !v.is_finite()).unwrap_or(0);
+            return Err(Error::InvalidArgument(format!(
+                "{what}[{i}] is not finite ({})",
+                values[i]
+            )));
+        }
     }
     Ok(())
 }
@@ -146,59 +150,61 @@ impl GatherInput<'_> {
 fn check_directions(layout: &Layout, frame: &Frame, directions: &[DVec3]) -> Result<()> {
     let tol = GatherInput::DIRECTION_TOLERANCE;
     let (m, n) = (layout.m as usize, layout.n as usize);
-    // Azimuth walls as unit 2D vectors (φ_k = 2πk/N); the last one wraps to the first.
+    // Azimuth walls as unit 2D vectors (φ_k = 2πk/N), N+1 of them (the last one is the first).
     let walls: Vec<(f64, f64)> = if layout.kind == LayoutKind::Concentric || n < 2 {
         Vec::new()
     } else {
-        (0..n)
+        (0..=n)
             .map(|k| {
-                let (s, c) = (std::f64::consts::TAU * k as f64 / n as f64).sin_cos();
+                let (s, c) = (std::f64::consts::TAU * (k % n) as f64 / n as f64).sin_cos();
                 (c, s)
             })
             .collect()
     };
     let b = frame.bitangent();
-    for (i, &w) in directions.iter().enumerate() {
-        let bad = |why: &str| {
-            Err(Error::InvalidArgument(format!(
-                "directions[{i}] = {w} {why} (j = {}, k = {})",
-                i / n,
-                i % n
-            )))
+    for (j, row) in directions.chunks_exact(n).enumerate() {
+        // The ring's range in sin²θ (polar) or cosθ (sphere), widened by the tolerance.
+        let (lo, hi) = match layout.kind {
+            LayoutKind::CosinePolar => (j as f64 / m as f64 - tol, (j + 1) as f64 / m as f64 + tol),
+            LayoutKind::Sphere => (
+                1.0 - 2.0 * (j + 1) as f64 / m as f64 - tol,
+                1.0 - 2.0 * j as f64 / m as f64 + tol,
+            ),
+            LayoutKind::Concentric => (f64::NEG_INFINITY, f64::INFINITY),
         };
-        if !w.is_finite() {
-            return bad("is not finite");
-        }
-        if (w.length_squared() - 1.0).abs() > 2.0 * tol {
-            return bad("is not unit");
-        }
-        let (lx, ly, lz) = (w.dot(frame.tangent), w.dot(b), w.dot(frame.normal));
-        let (j, k) = (i / n, i % n);
-        let in_ring = match layout.kind {
-            LayoutKind::CosinePolar => {
-                let s2 = lx * lx + ly * ly;
-                lz >= -tol
-                    && s2 >= j as f64 / m as f64 - tol
-                    && s2 <= (j + 1) as f64 / m as f64 + tol
+        for (k, &w) in row.iter().enumerate() {
+            let lx = w.dot(frame.tangent);
+            let ly = w.dot(b);
+            let lz = w.dot(frame.normal);
+            let ring = match layout.kind {
+                LayoutKind::Sphere => lz,
+                _ => lx * lx + ly * ly,
+            };
+            let unit = (w.length_squared() - 1.0).abs() <= 2.0 * tol;
+            let above = lz >= -tol || layout.kind == LayoutKind::Sphere;
+            let azimuth = walls.is_empty() || {
+                let (a0, a1) = (walls[k], walls[k + 1]);
+                a0.0 * ly - a0.1 * lx >= -tol && lx * a1.1 - ly * a1.0 >= -tol
+            };
+            // NaN fails every comparison, so one test covers non-finite input too.
+            if unit && above && ring >= lo && ring <= hi && azimuth {
+                continue;
             }
-            LayoutKind::Sphere => {
-                lz <= 1.0 - 2.0 * j as f64 / m as f64 + tol
-                    && lz >= 1.0 - 2.0 * (j + 1) as f64 / m as f64 - tol
-            }
-            LayoutKind::Concentric => lz >= -tol,
-        };
-        if !in_ring {
-            return bad(if layout.kind == LayoutKind::Concentric {
+            let why = if !w.is_finite() {
+                "is not finite"
+            } else if !unit {
+                "is not unit"
+            } else if !above {
                 "is below the horizon"
-            } else {
+            } else if !(ring >= lo && ring <= hi) {
                 "is outside its stratum's ring (wrong frame or index order?)"
-            });
-        }
-        if !walls.is_empty() {
-            let (a0, a1) = (walls[k], walls[(k + 1) % n]);
-            if a0.0 * ly - a0.1 * lx < -tol || lx * a1.1 - ly * a1.0 < -tol {
-                return bad("is outside its stratum's azimuth range (wrong frame or index order?)");
-            }
+            } else {
+                "is outside its stratum's azimuth range (wrong frame or index order?)"
+            };
+            return Err(Error::InvalidArgument(format!(
+                "directions[{}] = {w} {why} (j = {j}, k = {k})",
+                j * n + k
+            )));
         }
     }
     Ok(())

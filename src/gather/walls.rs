@@ -19,6 +19,7 @@
 
 use std::f64::consts::TAU;
 
+#[cfg(test)]
 use glam::DVec3;
 
 use super::layout::{Layout, LayoutKind};
@@ -98,7 +99,7 @@ impl Walls {
     }
 
     /// `∫ w ν dl` of the ring wall at the top of ring `j ≥ 1`, column `k` (local frame).
-    #[inline]
+    #[cfg(test)]
     pub(crate) fn ring_wall_vector(&self, j: usize, k: usize) -> DVec3 {
         let (a, b) = self.ring_wall[j];
         let (c1, c2) = self.column[k];
@@ -106,7 +107,7 @@ impl Walls {
     }
 
     /// `∫ w ν dl` of the azimuth wall at the start of column `k`, ring `j` (local frame).
-    #[inline]
+    #[cfg(test)]
     pub(crate) fn azimuth_wall_vector(&self, j: usize, k: usize) -> DVec3 {
         let (c, s) = self.phi_wall[k];
         let r = self.ring_span[j];
@@ -114,7 +115,7 @@ impl Walls {
     }
 
     /// `∫_cell sinθ e_φ dω` of stratum `(j, k)` (local frame): the rotational-gradient weight.
-    #[inline]
+    #[cfg(test)]
     pub(crate) fn rotation_vector(&self, j: usize, k: usize) -> DVec3 {
         let (c1, c2) = self.column[k];
         DVec3::new(-c2, c1, 0.0) * self.ring_sin2[j]
