@@ -29,6 +29,15 @@
 // Compute the value, the gradient and the Hessian.
 #define RADDIFF_ORDER_HESSIAN 2
 
+// Maximum triangles per leaf.
+#define LEAF_SIZE 4
+
+// Number of sub-intervals of an edge scanned for sign changes of g before the bracketed solves.
+#define EDGE_SCAN_INTERVALS 6
+
+// Maximum number of sub-arcs the normal-cone test examines before giving up (keeping the rest).
+#define NORMAL_CONE_BUDGET 48
+
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
 typedef enum raddiff_status {
@@ -50,6 +59,11 @@ typedef enum raddiff_status {
   RADDIFF_ERROR_PANIC = 7,
 } raddiff_status;
 
+// A refractive triangle mesh with per-vertex shading normals and its bounding-sphere hierarchy
+// (opaque). Create with `raddiff_refractive_mesh_new`, release with `raddiff_refractive_mesh_free`.
+// Immutable after creation: one mesh may be shared by any number of threads.
+typedef struct raddiff_refractive_mesh raddiff_refractive_mesh;
+
 // A 3D vector or point.
 typedef struct raddiff_vec3 {
   // x component.
@@ -70,6 +84,18 @@ typedef struct raddiff_deriv3 {
   double hessian[9];
 } raddiff_deriv3;
 
+// The homogeneous medium inside a refractive mesh.
+typedef struct raddiff_medium {
+  // Relative index of refraction (inside over outside), > 1.
+  double eta;
+  // Extinction coefficient (1/length), >= 0.
+  double sigma_t;
+  // Scattering coefficient (1/length), in [0, sigma_t].
+  double sigma_s;
+  // Henyey-Greenstein asymmetry in (-1, 1); 0 is isotropic.
+  double g;
+} raddiff_medium;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -89,6 +115,43 @@ enum raddiff_status raddiff_transmittance(struct raddiff_vec3 x,
                                           double sigma_t,
                                           uint32_t order,
                                           struct raddiff_deriv3 *out);
+
+// Builds a refractive mesh: `positions` and `normals` hold 3 floats per vertex (`vertex_count`
+// vertices), `indices` 3 vertex indices per triangle (`triangle_count` triangles). Triangles wind
+// counter-clockwise seen from outside; normals point outwards and need not be unit. The arrays are
+// copied. Returns NULL on failure (NULL array, no triangles, index out of range, non-finite or zero
+// normal, non-finite position, zero-area triangle, normal facing away from its triangle); see
+// `raddiff_last_error()`.
+struct raddiff_refractive_mesh *raddiff_refractive_mesh_new(const float *positions,
+                                                            const float *normals,
+                                                            size_t vertex_count,
+                                                            const uint32_t *indices,
+                                                            size_t triangle_count);
+
+// Releases a mesh created by `raddiff_refractive_mesh_new`. NULL is ignored.
+//
+// # Safety
+// `mesh` must be NULL or a pointer returned by `raddiff_refractive_mesh_new` not yet freed.
+void raddiff_refractive_mesh_free(struct raddiff_refractive_mesh *mesh);
+
+// Single-scattered radiance arriving at `entry` along the refracted eye segment `entry -> exit`
+// inside the mesh, from a point light of intensity `intensity` (power per steradian) at `light`
+// outside the mesh: the integral over the segment of sigma_s * phase * intensity * Fresnel
+// transmittance * exp(-sigma_t (distance travelled inside)) / D over all refracted paths (see the
+// README, "Single scattering"). It is radiance inside the medium, before the refraction out towards
+// the camera (multiply by the exit Fresnel transmittance / eta^2 for the radiance outside).
+//
+// Errors: NULL pointer; `RADDIFF_ERROR_INVALID_ARGUMENT` for eta <= 1, sigma_s outside
+// [0, sigma_t], |g| >= 1, non-finite input, negative intensity; for a closed mesh also entry/exit
+// outside its bounding sphere or a light inside it. `*radiance` is written only on success;
+// `entry == exit` gives 0. Occlusion of the light paths by other parts of the mesh is not tested.
+enum raddiff_status raddiff_single_scatter(const struct raddiff_refractive_mesh *mesh,
+                                           const struct raddiff_medium *medium,
+                                           struct raddiff_vec3 entry,
+                                           struct raddiff_vec3 exit,
+                                           struct raddiff_vec3 light,
+                                           double intensity,
+                                           double *radiance);
 
 #ifdef __cplusplus
 }  // extern "C"
