@@ -79,6 +79,24 @@ typedef struct raddiff_deriv3 {
   double hessian[9];
 } raddiff_deriv3;
 
+// A 2D vector or point.
+typedef struct raddiff_vec2 {
+  // x component.
+  double x;
+  // y component.
+  double y;
+} raddiff_vec2;
+
+// Value, gradient and Hessian (row-major, symmetric) with respect to a 2D point.
+typedef struct raddiff_deriv2 {
+  // The value.
+  double value;
+  // The gradient (0 when not requested).
+  double gradient[2];
+  // The Hessian, row-major (0 when not requested).
+  double hessian[4];
+} raddiff_deriv2;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -98,6 +116,42 @@ enum raddiff_status raddiff_transmittance(struct raddiff_vec3 x,
                                           double sigma_t,
                                           uint32_t order,
                                           struct raddiff_deriv3 *out);
+
+// Transmittance through a heterogeneous medium from `count >= 1` extinction samples `sigma_t`
+// (and optionally their spatial gradients, `sigma_t_gradient`, NULL when unknown) at the midpoints
+// `t_i = (i + 0.5)/count` of the segment `x -> y`; gradient with respect to `x` (see the Rust
+// `kernels::transmittance_marched` for the exact definition). `order` must be
+// `RADDIFF_ORDER_VALUE` or `RADDIFF_ORDER_GRADIENT`; `RADDIFF_ORDER_HESSIAN`, `count == 0`, a
+// negative or non-finite sample give `RADDIFF_ERROR_INVALID_ARGUMENT`.
+// `sigma_t` must point to `count` doubles and `sigma_t_gradient` to `count` vectors (or be NULL).
+enum raddiff_status raddiff_transmittance_marched(struct raddiff_vec3 x,
+                                                  struct raddiff_vec3 y,
+                                                  const double *sigma_t,
+                                                  const struct raddiff_vec3 *sigma_t_gradient,
+                                                  size_t count,
+                                                  uint32_t order,
+                                                  struct raddiff_deriv3 *out);
+
+// Unsigned solid angle (steradians) subtended at `x` by the triangle `(a, b, c)`, with gradient
+// and Hessian with respect to `x` (see the Rust `kernels::triangle_solid_angle`). On the
+// triangle's plane: 2π inside, 0 outside, zero derivatives; `RADDIFF_ERROR_DEGENERATE` on an edge or
+// at a vertex; zero-area triangles give 0.
+enum raddiff_status raddiff_triangle_solid_angle(struct raddiff_vec3 x,
+                                                 struct raddiff_vec3 a,
+                                                 struct raddiff_vec3 b,
+                                                 struct raddiff_vec3 c,
+                                                 uint32_t order,
+                                                 struct raddiff_deriv3 *out);
+
+// Flatland form factor: the angle subtended at `x` by the segment `(a, b)`, divided by 2π, with
+// gradient and Hessian (row-major 2x2) with respect to `x` (see the Rust
+// `kernels::segment_form_factor_2d`). On the segment's line: 1/2 between the endpoints, 0 beyond,
+// zero derivatives; `RADDIFF_ERROR_DEGENERATE` at an endpoint; a zero-length segment gives 0.
+enum raddiff_status raddiff_segment_form_factor_2d(struct raddiff_vec2 x,
+                                                   struct raddiff_vec2 a,
+                                                   struct raddiff_vec2 b,
+                                                   uint32_t order,
+                                                   struct raddiff_deriv2 *out);
 
 // Elliptical surface record from a 3x3 Hessian (see the Rust `gather::radii::surface_radii`): the
 // Hessian (row-major) is projected on the tangent plane of the unit `normal` and eigen-decomposed;
