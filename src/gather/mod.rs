@@ -5,4 +5,5 @@
 pub mod hessian;
 mod hessian_edge;
 pub mod hessian_mesh;
+pub mod hessian_unaware;
 pub mod radii;

@@ -2,6 +2,8 @@
 //! rectangles, and reference evaluation by shifted meshes.
 #![allow(dead_code)]
 
+pub mod scene;
+
 use std::f64::consts::{FRAC_PI_4, TAU};
 
 use glam::{DVec2, DVec3};
