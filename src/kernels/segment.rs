@@ -45,7 +45,7 @@ pub fn segment_form_factor_2d(x: DVec2, a: DVec2, b: DVec2, order: Order) -> Res
     let raw_a = a - x;
     let raw_b = b - x;
     let extent = raw_a.abs().max_element().max(raw_b.abs().max_element());
-    if !extent.is_finite() {
+    if !extent.is_finite() || !(b - a).is_finite() {
         // Finite points more than f64::MAX apart: halve everything (exact) and retry.
         return segment_form_factor_2d(x * 0.5, a * 0.5, b * 0.5, order).map(|mut d| {
             d.gradient *= 0.5;
@@ -82,6 +82,11 @@ pub fn segment_form_factor_2d(x: DVec2, a: DVec2, b: DVec2, order: Order) -> Res
     let sign = cross.signum();
     let mut out = Deriv2::constant(cross.abs().atan2(dot) * INV_TWO_PI);
     if !order.gradient() {
+        if !out.value.is_finite() {
+            return Err(Error::Degenerate(
+                "segment form factor: the value overflows".into(),
+            ));
+        }
         return Ok(out);
     }
 

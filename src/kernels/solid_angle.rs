@@ -83,6 +83,18 @@ pub fn triangle_solid_angle_signed(
 }
 
 fn solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<Deriv3> {
+    let out = solid_angle_unchecked(x, y, order, signed)?;
+    if !out.is_finite() {
+        return Err(Error::Degenerate(
+            "solid angle: the result overflows (x is extremely close to an edge or vertex, or \
+             coordinates are near the limits of f64)"
+                .into(),
+        ));
+    }
+    Ok(out)
+}
+
+fn solid_angle_unchecked(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<Deriv3> {
     ensure_finite3(x, "x")?;
     ensure_finite3(y[0], "a")?;
     ensure_finite3(y[1], "b")?;
@@ -91,10 +103,11 @@ fn solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<De
     // Work in units where the farthest vertex is at distance ~1: the formulas are homogeneous
     // (A, D ~ L³, g ~ L⁶), so this keeps every intermediate product in range.
     let raw = [y[0] - x, y[1] - x, y[2] - x];
+    let raw_edges = [y[2] - y[1], y[0] - y[2], y[1] - y[0]];
     let extent = raw.iter().fold(0.0f64, |m, r| m.max(r.abs().max_element()));
-    if !extent.is_finite() {
+    if !extent.is_finite() || !raw_edges.iter().all(|e| e.is_finite()) {
         // Finite points more than f64::MAX apart: halve everything (exact) and retry.
-        return solid_angle(x * 0.5, y.map(|v| v * 0.5), order, signed)
+        return solid_angle_unchecked(x * 0.5, y.map(|v| v * 0.5), order, signed)
             .map(|d| rescale(d, 0.5, 1.0));
     }
     if extent == 0.0 {
@@ -105,14 +118,14 @@ fn solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<De
     let (sc1, sc2) = pow2_scale(extent);
     let r = raw.map(|v| v * sc1 * sc2);
     let s = r.map(|v| v.length());
-    if s.iter().any(|&s| s == 0.0) {
+    if s.contains(&0.0) {
         return Err(Error::Degenerate(
             "solid angle: x lies at a vertex of the triangle".into(),
         ));
     }
 
     // Edges from the coordinates themselves (differences of the r_k would lose distance/size).
-    let edges = [y[2] - y[1], y[0] - y[2], y[1] - y[0]].map(|v| v * sc1 * sc2);
+    let edges = raw_edges.map(|v| v * sc1 * sc2);
     let (mut a_num, mut normal) = robust_a(x, y, &r, &edges, &s, sc1, sc2);
     if normal == DVec3::ZERO {
         // Exactly collinear vertices: no area, no solid angle, anywhere.
@@ -194,10 +207,11 @@ fn solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<De
         let s_sum = s[0] + s[1] + s[2];
         let u = [r[0] * inv_s[0], r[1] * inv_s[1], r[2] * inv_s[2]];
         let u_sum = u[0] + u[1] + u[2];
+        // Scalars multiply u uᵀ after the outer product so that every term is exactly symmetric.
         let mut hess_d =
-            DMat3::from_diagonal(DVec3::splat(c[0] + c[1] + c[2])) + outer(u_sum, u_sum * s_sum);
+            DMat3::from_diagonal(DVec3::splat(c[0] + c[1] + c[2])) + outer(u_sum, u_sum) * s_sum;
         for k in 0..3 {
-            hess_d -= outer(u[k], u[k] * (s_sum + p[k] * inv_s[k]));
+            hess_d -= outer(u[k], u[k]) * (s_sum + p[k] * inv_s[k]);
         }
         let inv_g2 = inv_g * inv_g;
         let q = 2.0 * d_den * a_num * inv_g2;
@@ -209,13 +223,7 @@ fn solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<De
             * 2.0;
     }
 
-    let out = rescale(out, sc1, sc2);
-    if !out.is_finite() {
-        return Err(Error::Degenerate(
-            "solid angle derivatives overflow (x is extremely close to an edge or vertex)".into(),
-        ));
-    }
-    Ok(out)
+    Ok(rescale(out, sc1, sc2))
 }
 
 /// `A = (y_v − x)·N` and the normal `N = (b − a)×(c − a)` in the scaled units.

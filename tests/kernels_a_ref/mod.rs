@@ -1,7 +1,7 @@
 //! Independent high-precision references for the kernels-a tests: each value formula evaluated in
 //! astro-float at 320 bits from the exact f64 inputs, and its derivatives by central differences at
 //! that precision with a tiny step (truncation ~ (h/ρ)², rounding ~ 2^-320/h²: both far below f64).
-#![allow(dead_code)]
+#![allow(dead_code, clippy::needless_range_loop)]
 
 use astro_float::{BigFloat, Consts, RoundingMode};
 use glam::{DMat2, DMat3, DVec2, DVec3};
@@ -69,7 +69,7 @@ pub fn to_f64(v: &B) -> f64 {
         return 0.0;
     }
     let digits = v.mantissa_digits().expect("finite reference");
-    let e = v.exponent().expect("finite reference") as i32;
+    let e = v.exponent().expect("finite reference");
     let n = digits.len();
     // Mantissa is 0.d_{n-1} d_{n-2} ... in base 2^64, times 2^e.
     let hi = digits[n - 1] as f64;
