@@ -3,7 +3,6 @@
 
 // Occlusion-aware Hessians from the triangulated gather, and the record radii they imply.
 pub mod hessian;
-mod hessian_edge;
 pub mod hessian_mesh;
 pub mod hessian_unaware;
 pub mod radii;
