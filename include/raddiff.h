@@ -11,6 +11,51 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// Largest channel count per record.
+#define MAX_CHANNELS 4096
+
+// Current (and only accepted) format version.
+#define FORMAT_VERSION 1
+
+// Smallest and largest accepted radius and position magnitude (L).
+#define RADIUS_MIN 1e-30
+
+// Largest accepted radius (L).
+#define RADIUS_MAX 1e30
+
+// Largest accepted absolute position coordinate (L).
+#define POSITION_MAX 1e30
+
+// Size of the fixed part of a stored record (bytes).
+#define HEAD_BYTES 88
+
+// Size of each channel's part of a stored record (bytes).
+#define CHANNEL_BYTES 16
+
+// Records on surfaces: ellipses in the tangent plane, normals compared at lookup.
+#define RADDIFF_DOMAIN_SURFACE 0
+
+// Records in participating media: ellipsoids, normals ignored.
+#define RADDIFF_DOMAIN_VOLUME 1
+
+// Ward-Heckbert first-order extrapolation with Krivanek-Gautron weights 1/(t+rho) - 1.
+#define RADDIFF_INTERP_WARD 0
+
+// Anisotropic tent weights (1 - t) times the normal tent (Schwarzhaupt eq. 6.10-6.13).
+#define RADDIFF_INTERP_TENT 1
+
+// Linear-space extrapolation with the cubic kernel 3d^2 - 2d^3, d = 1 - t (Marco et al. eq. 23).
+#define RADDIFF_INTERP_CUBIC 2
+
+// Log-space extrapolation of Jarosz et al. 2008 with the cubic kernel (Marco et al. eq. 4).
+#define RADDIFF_INTERP_LOG 3
+
+// Ward-Heckbert extrapolation with Ward's original weights 1/(t+rho) (no fall-off to 0).
+#define RADDIFF_INTERP_WARD_CLASSIC 4
+
+// Ward-Heckbert extrapolation with Tabellion-Lamorlette weights 1 - (t+rho).
+#define RADDIFF_INTERP_WARD_TABELLION 5
+
 // Major version of the library this header belongs to.
 #define RADDIFF_VERSION_MAJOR 0
 
@@ -28,6 +73,57 @@
 
 // Compute the value, the gradient and the Hessian.
 #define RADDIFF_ORDER_HESSIAN 2
+
+// Ward-Heckbert cosine-weighted polar strata: `theta_j = asin(sqrt((j+u)/m))`, `phi_k = 2 pi (k+v)/n`.
+#define RADDIFF_LAYOUT_COSINE_POLAR 0
+
+// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (irradiance and
+// rotational gradient only: translational gradients need a polar or sphere layout).
+#define RADDIFF_LAYOUT_CONCENTRIC 1
+
+// Whole sphere, m x n equal solid-angle strata (`cos theta_j = 1 - 2(j+u)/m`), for points in a medium.
+#define RADDIFF_LAYOUT_SPHERE 2
+
+// Largest m or n of a gather layout.
+#define RADDIFF_GATHER_MAX_STRATA_PER_AXIS 65536
+
+// Largest m*n of a gather layout.
+#define RADDIFF_GATHER_MAX_STRATA 16777216
+
+// `error` bounds the integrated absolute error over the record.
+#define RADDIFF_ERROR_ABSOLUTE 0
+
+// `error` bounds the integrated error divided by `|value|`.
+#define RADDIFF_ERROR_RELATIVE 1
+
+// Largest radius the radii functions return (caller's length unit), e.g. for a zero Hessian.
+#define RADDIFF_MAX_RADIUS 1e30
+
+// Misses are placed at this multiple of the largest finite hit distance (2^20: the occlusion
+// terms of the distant environment converge like `1/FAR_DISTANCE_FACTOR`, about 1e-6 relative).
+#define FAR_DISTANCE_FACTOR 1048576.0
+
+// Fraction of the irradiance added to every triangle radiance by
+// [`OcclusionDerivatives::robust_hessian`] (thesis sec. 6.3).
+#define ROBUST_FRACTION 0.01
+
+// No triangle (the right side of a horizon edge).
+#define NONE UINT32_MAX
+
+// Marks the synthesized pole vertex in [`Topology::vertex_source`].
+#define POLE UINT32_MAX
+
+// Flag in [`Topology::triangle_edges`]: the triangle runs the edge backwards.
+#define REVERSED (1 << 31)
+
+// Maximum triangles per leaf.
+#define LEAF_SIZE 4
+
+// Number of sub-intervals of an edge scanned for sign changes of g before the bracketed solves.
+#define EDGE_SCAN_INTERVALS 6
+
+// Maximum number of sub-arcs the normal-cone test examines before giving up (keeping the rest).
+#define NORMAL_CONE_BUDGET 48
 
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
@@ -50,6 +146,31 @@ typedef enum raddiff_status {
   RADDIFF_ERROR_PANIC = 7,
 } raddiff_status;
 
+// Which results [`ValidGather::evaluate`] computes; work for the others is skipped.
+typedef struct Wanted Wanted;
+
+// A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
+// `raddiff_cache_insert` on the same handle at once (lookups never block).
+typedef struct raddiff_cache raddiff_cache;
+
+// A refractive triangle mesh with per-vertex shading normals and its bounding-sphere hierarchy
+// (opaque). Create with `raddiff_refractive_mesh_new`, release with `raddiff_refractive_mesh_free`.
+// Immutable after creation: one mesh may be shared by any number of threads.
+typedef struct raddiff_refractive_mesh raddiff_refractive_mesh;
+
+// How a cache is created.
+typedef struct raddiff_cache_config {
+  // Floats per record value (1..=4096).
+  uint32_t channels;
+  // `RADDIFF_DOMAIN_SURFACE` or `RADDIFF_DOMAIN_VOLUME`.
+  uint32_t domain;
+  // `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`).
+  uint32_t interpolation;
+  // Radians in (0, pi]: largest normal deviation for a record to be used (surface domain;
+  // ignored in volumes). 0.2 is a good default.
+  double max_normal_deviation;
+} raddiff_cache_config;
+
 // A 3D vector or point.
 typedef struct raddiff_vec3 {
   // x component.
@@ -59,6 +180,27 @@ typedef struct raddiff_vec3 {
   // z component.
   double z;
 } raddiff_vec3;
+
+// A record to insert.
+typedef struct raddiff_cache_record {
+  // Where the gather was computed.
+  struct raddiff_vec3 position;
+  // Surface normal (need not be unit length); ignored in the volume domain.
+  struct raddiff_vec3 normal;
+  // `channels` floats.
+  const float *value;
+  // Nullable: 3*channels floats, translational gradient, channel-major (`gradient[3*c + k]`
+  // is the derivative of channel c along world axis k).
+  const float *gradient;
+  // Nullable: 3*channels floats, rotational gradient (derivative with respect to the rotation
+  // vector of the normal, Ward-Heckbert convention), channel-major; surface domain only.
+  const float *rotation_gradient;
+  // Surface: radii[0..1] along axes[0] (projected to the tangent plane) and normal x axes[0];
+  // radii[2] unused. Volume: ellipsoid radii along axes[0..2]. In [1e-30, 1e30].
+  double radii[3];
+  // Principal axes (need not be unit; may be zero for isotropic radii).
+  struct raddiff_vec3 axes[3];
+} raddiff_cache_record;
 
 // Value, gradient and Hessian (row-major, symmetric) with respect to a 3D point.
 typedef struct raddiff_deriv3 {
@@ -70,9 +212,158 @@ typedef struct raddiff_deriv3 {
   double hessian[9];
 } raddiff_deriv3;
 
+// An m x n stratified layout: `kind` is a `RADDIFF_LAYOUT_*` constant; 1 <= m, n <=
+// `RADDIFF_GATHER_MAX_STRATA_PER_AXIS`, m*n <= `RADDIFF_GATHER_MAX_STRATA`. Seed 0: stratum centres;
+// any other seed: deterministic jitter, identical on every platform.
+typedef struct raddiff_gather_layout {
+  // `RADDIFF_LAYOUT_COSINE_POLAR`, `_CONCENTRIC` or `_SPHERE`.
+  uint32_t kind;
+  // Strata along theta (or the first concentric grid axis).
+  uint32_t m;
+  // Strata along phi (or the second concentric grid axis).
+  uint32_t n;
+  // 0 for stratum centres, otherwise jitter seed.
+  uint64_t seed;
+} raddiff_gather_layout;
+
+// The frame of a gather: `position`, unit `normal`, unit `tangent` perpendicular to it (each within
+// 1e-6); the bitangent is `normal x tangent`. Local direction (lx, ly, lz) is
+// `lx*tangent + ly*bitangent + lz*normal`.
+typedef struct raddiff_frame {
+  // The gather point.
+  struct raddiff_vec3 position;
+  // Unit normal: the pole of the layout.
+  struct raddiff_vec3 normal;
+  // Unit tangent, perpendicular to the normal: azimuth 0.
+  struct raddiff_vec3 tangent;
+} raddiff_frame;
+
+// What the rays found. Index `i = j*n + k`.
+typedef struct raddiff_gather_input {
+  // m*n world directions as returned by `raddiff_gather_directions`.
+  const struct raddiff_vec3 *directions;
+  // m*n hit distances (> 0); `INFINITY` for a miss (distant environment).
+  const double *distance;
+  // m*n*channels radiance leaving each hit towards x (environment radiance for a miss), before
+  // attenuation; index `i*channels + c`.
+  const float *radiance;
+  // Values per direction (>= 1).
+  uint32_t channels;
+  // Homogeneous extinction (1/L) between x and the hits, >= 0; 0 = no medium. With a medium a miss
+  // is attenuated to zero.
+  double sigma_t;
+  // Nullable: m*n*steps*channels in-scattered radiance `sigma_s*L_i` (plus emission) at
+  // `t_s = (s + 0.5)*step` along each direction, before attenuation; index
+  // `(i*steps + s)*channels + c`. Sample s stands for `[s*step, (s+1)*step]`; samples beyond a
+  // direction's hit are not read.
+  const float *media_radiance;
+  // Nullable: m*n*steps*3*channels world-space gradient of `media_radiance`; index
+  // `((i*steps + s)*channels + c)*3 + axis`.
+  const float *media_radiance_gradient;
+  // Media march steps per direction (>= 1 when `media_radiance` is given).
+  uint32_t steps;
+  // Media march step length (> 0 when `media_radiance` is given).
+  double step;
+} raddiff_gather_input;
+
+// Caller-owned outputs; a NULL array means "not wanted" and its work is skipped. Per-channel
+// vectors are stored channel by channel: `gradient[3*c + axis]`, `hessian[9*c + 3*row + col]`.
+typedef struct raddiff_gather_output {
+  // channels: irradiance (hemisphere layouts) or scalar fluence (sphere).
+  double *irradiance;
+  // 3*channels: Ward-Heckbert translational gradient (world axes, all three components), with the
+  // participating-media terms of Jarosz et al. 2008 when a medium is given. Polar/sphere layouts.
+  double *gradient;
+  // 3*channels: rotational gradient (world axes); zero for the sphere layout.
+  double *rotation_gradient;
+  // 3*channels: gradient of the triangulated environment (not available in this build: must be NULL).
+  double *occlusion_gradient;
+  // 9*channels: occlusion-aware 3x3 translation Hessian (not available in this build: must be NULL).
+  double *hessian;
+  // Harmonic mean of the hit distances, m*n / sum(1/r); INFINITY if every ray missed.
+  double harmonic_mean_distance;
+  // Smallest hit distance; INFINITY if every ray missed.
+  double min_distance;
+} raddiff_gather_output;
+
+// A 2D vector or point.
+typedef struct raddiff_vec2 {
+  // x component.
+  double x;
+  // y component.
+  double y;
+} raddiff_vec2;
+
+// Value, gradient and Hessian (row-major, symmetric) with respect to a 2D point.
+typedef struct raddiff_deriv2 {
+  // The value.
+  double value;
+  // The gradient (0 when not requested).
+  double gradient[2];
+  // The Hessian, row-major (0 when not requested).
+  double hessian[4];
+} raddiff_deriv2;
+
+// The homogeneous medium inside a refractive mesh.
+typedef struct raddiff_medium {
+  // Relative index of refraction (inside over outside), > 1.
+  double eta;
+  // Extinction coefficient (1/length), >= 0.
+  double sigma_t;
+  // Scattering coefficient (1/length), in [0, sigma_t].
+  double sigma_s;
+  // Henyey-Greenstein asymmetry in (-1, 1); 0 is isotropic.
+  double g;
+} raddiff_medium;
+
+
+
+
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+// Creates an empty cache, or returns NULL (with `raddiff_last_error`) for a NULL or invalid
+// configuration. Free it with `raddiff_cache_free`.
+struct raddiff_cache *raddiff_cache_new(const struct raddiff_cache_config *config);
+
+// Frees a cache (NULL is ignored). No other thread may be using it.
+void raddiff_cache_free(struct raddiff_cache *cache);
+
+// Inserts a record (thread-safe). Inserting a record identical to a stored one is a no-op that
+// succeeds. `RADDIFF_ERROR_INVALID_ARGUMENT` for non-finite input, radii out of range, a zero
+// surface normal, or degenerate axes with anisotropic radii.
+enum raddiff_status raddiff_cache_insert(struct raddiff_cache *cache,
+                                         const struct raddiff_cache_record *record);
+
+// Interpolates the cache at `position` with surface normal `normal` (ignored in volumes) into
+// `value` (`channels` floats) and, if `weight_sum` is not NULL, the sum of the weights used.
+// `RADDIFF_ERROR_NOT_FOUND` when no record covers the point (outputs untouched). Thread-safe and
+// lock-free; the result depends only on the set of records covering the point.
+enum raddiff_status raddiff_cache_lookup(const struct raddiff_cache *cache,
+                                         struct raddiff_vec3 position,
+                                         struct raddiff_vec3 normal,
+                                         float *value,
+                                         double *weight_sum);
+
+// Number of records (0 for NULL).
+size_t raddiff_cache_len(const struct raddiff_cache *cache);
+
+// Writes the cache to `path` atomically (temporary file in the same directory, fsync, rename):
+// a crash never leaves a damaged file. `RADDIFF_ERROR_IO` on failure.
+enum raddiff_status raddiff_cache_save(const struct raddiff_cache *cache, const char *path);
+
+// Loads a cache saved by `raddiff_cache_save` (channels, domain and interpolation come from the
+// file). Returns NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in
+// `raddiff_last_error` for unreadable, truncated, damaged or wrong-version files.
+struct raddiff_cache *raddiff_cache_load(const char *path);
+
+// Adds to `into` every record of `from` it does not hold yet (identical records, e.g. the same
+// gather saved by two render nodes, are detected and skipped). Both caches need the same channel
+// count and domain (`RADDIFF_ERROR_INVALID_ARGUMENT` otherwise). `from` may equal `into`.
+enum raddiff_status raddiff_cache_merge(struct raddiff_cache *into,
+                                        const struct raddiff_cache *from);
 
 // Message of the last failed raddiff call on this thread, or "" if none failed yet.
 //
@@ -117,6 +408,18 @@ enum raddiff_status raddiff_polygon_form_factor(struct raddiff_vec3 x,
                                                 uint32_t order,
                                                 struct raddiff_deriv3 *out);
 
+// Writes the m*n world directions of `layout` at `frame` (index `j*n + k`) to `directions`.
+enum raddiff_status raddiff_gather_directions(const struct raddiff_gather_layout *layout,
+                                              const struct raddiff_frame *frame,
+                                              struct raddiff_vec3 *directions);
+
+// Irradiance (or fluence) and its derivatives from a traced gather (see `gather::evaluate`).
+// Every output array that is non-NULL is written on success; nothing is written on failure.
+enum raddiff_status raddiff_gather_evaluate(const struct raddiff_gather_layout *layout,
+                                            const struct raddiff_frame *frame,
+                                            const struct raddiff_gather_input *input,
+                                            struct raddiff_gather_output *output);
+
 // `exp(-sigma_t |x - y|)` and its derivatives with respect to `x` (see the Rust
 // `kernels::transmittance`). `RADDIFF_ERROR_DEGENERATE` for a gradient at `x == y`.
 enum raddiff_status raddiff_transmittance(struct raddiff_vec3 x,
@@ -124,6 +427,121 @@ enum raddiff_status raddiff_transmittance(struct raddiff_vec3 x,
                                           double sigma_t,
                                           uint32_t order,
                                           struct raddiff_deriv3 *out);
+
+// Transmittance through a heterogeneous medium from `count >= 1` extinction samples `sigma_t`
+// (and optionally their spatial gradients, `sigma_t_gradient`, NULL when unknown) at the midpoints
+// `t_i = (i + 0.5)/count` of the segment `x -> y`; gradient with respect to `x` (see the Rust
+// `kernels::transmittance_marched` for the exact definition). `order` must be
+// `RADDIFF_ORDER_VALUE` or `RADDIFF_ORDER_GRADIENT`; `RADDIFF_ORDER_HESSIAN`, `count == 0`, a
+// negative or non-finite sample give `RADDIFF_ERROR_INVALID_ARGUMENT`.
+// `sigma_t` must point to `count` doubles and `sigma_t_gradient` to `count` vectors (or be NULL).
+enum raddiff_status raddiff_transmittance_marched(struct raddiff_vec3 x,
+                                                  struct raddiff_vec3 y,
+                                                  const double *sigma_t,
+                                                  const struct raddiff_vec3 *sigma_t_gradient,
+                                                  size_t count,
+                                                  uint32_t order,
+                                                  struct raddiff_deriv3 *out);
+
+// Unsigned solid angle (steradians) subtended at `x` by the triangle `(a, b, c)`, with gradient
+// and Hessian with respect to `x` (see the Rust `kernels::triangle_solid_angle`). On the
+// triangle's plane: 2π inside, 0 outside, zero derivatives; `RADDIFF_ERROR_DEGENERATE` on an edge or
+// at a vertex; zero-area triangles give 0.
+enum raddiff_status raddiff_triangle_solid_angle(struct raddiff_vec3 x,
+                                                 struct raddiff_vec3 a,
+                                                 struct raddiff_vec3 b,
+                                                 struct raddiff_vec3 c,
+                                                 uint32_t order,
+                                                 struct raddiff_deriv3 *out);
+
+// Flatland form factor: the angle subtended at `x` by the segment `(a, b)`, divided by 2π, with
+// gradient and Hessian (row-major 2x2) with respect to `x` (see the Rust
+// `kernels::segment_form_factor_2d`). On the segment's line: 1/2 between the endpoints, 0 beyond,
+// zero derivatives; `RADDIFF_ERROR_DEGENERATE` at an endpoint; a zero-length segment gives 0.
+enum raddiff_status raddiff_segment_form_factor_2d(struct raddiff_vec2 x,
+                                                   struct raddiff_vec2 a,
+                                                   struct raddiff_vec2 b,
+                                                   uint32_t order,
+                                                   struct raddiff_deriv2 *out);
+
+// Elliptical surface record from a 3x3 Hessian (see the Rust `gather::radii::surface_radii`): the
+// Hessian (row-major) is projected on the tangent plane of the unit `normal` and eigen-decomposed;
+// `radii[0] <= radii[1]` are the semi-axes along the world-space unit tangents `axes[0..2]`, chosen so
+// that the integrated second-order error over the ellipse equals the tolerance (`error`, or
+// `error * |value|` for `RADDIFF_ERROR_RELATIVE`). `max_anisotropy >= 1` caps `radii[1]/radii[0]`.
+// A vanishing Hessian gives `RADDIFF_MAX_RADIUS`.
+//
+// # Safety
+// `hessian` must be NULL or point to 9 readable doubles; `radii` to 2 writable doubles and `axes` to
+// 2 writable `raddiff_vec3` (or be NULL, which is reported).
+enum raddiff_status raddiff_surface_radii(const double *hessian,
+                                          struct raddiff_vec3 normal,
+                                          double value,
+                                          double error,
+                                          uint32_t mode,
+                                          double max_anisotropy,
+                                          double *radii,
+                                          struct raddiff_vec3 *axes);
+
+// Ellipsoidal media record from a 3x3 Hessian (row-major; see the Rust `gather::radii::volume_radii`):
+// semi-axes `radii[0] <= radii[1] <= radii[2]` along the orthonormal `axes[0..3]`, chosen so that the
+// integrated second-order error over the ellipsoid equals the tolerance. `max_anisotropy >= 1` caps
+// `radii[2]/radii[0]`. A vanishing Hessian gives `RADDIFF_MAX_RADIUS`.
+//
+// # Safety
+// `hessian` must be NULL or point to 9 readable doubles; `radii` to 3 writable doubles and `axes` to
+// 3 writable `raddiff_vec3` (or be NULL, which is reported).
+enum raddiff_status raddiff_volume_radii(const double *hessian,
+                                         double value,
+                                         double error,
+                                         uint32_t mode,
+                                         double max_anisotropy,
+                                         double *radii,
+                                         struct raddiff_vec3 *axes);
+
+// Builds a refractive mesh: `positions` and `normals` hold 3 floats per vertex (`vertex_count`
+// vertices), `indices` 3 vertex indices per triangle (`triangle_count` triangles). Triangles wind
+// counter-clockwise seen from outside; normals point outwards and need not be unit. The arrays are
+// copied. Returns NULL on failure (NULL array, no triangles, index out of range, non-finite or zero
+// normal, non-finite position, zero-area triangle, normal facing away from its triangle); see
+// `raddiff_last_error()`.
+//
+// # Safety
+// Each array must be NULL or valid for reads of the stated number of elements.
+struct raddiff_refractive_mesh *raddiff_refractive_mesh_new(const float *positions,
+                                                            const float *normals,
+                                                            size_t vertex_count,
+                                                            const uint32_t *indices,
+                                                            size_t triangle_count);
+
+// Releases a mesh created by `raddiff_refractive_mesh_new`. NULL is ignored.
+//
+// # Safety
+// `mesh` must be NULL or a pointer returned by `raddiff_refractive_mesh_new` not yet freed.
+void raddiff_refractive_mesh_free(struct raddiff_refractive_mesh *mesh);
+
+// Single-scattered radiance arriving at `entry` along the refracted eye segment `entry -> exit`
+// inside the mesh, from a point light of intensity `intensity` (power per steradian) at `light`
+// outside the mesh: the integral over the segment of sigma_s * phase * intensity * Fresnel
+// transmittance * exp(-sigma_t (distance travelled inside)) / D over all refracted paths (see the
+// README, "Single scattering"). It is radiance inside the medium, before the refraction out towards
+// the camera (multiply by the exit Fresnel transmittance / eta^2 for the radiance outside).
+//
+// Errors: NULL pointer; `RADDIFF_ERROR_INVALID_ARGUMENT` for eta <= 1, sigma_s outside
+// [0, sigma_t], |g| >= 1, non-finite input, negative intensity; for a closed mesh also entry/exit
+// outside its bounding sphere or a light inside it. `*radiance` is written only on success;
+// `entry == exit` gives 0. Occlusion of the light paths by other parts of the mesh is not tested.
+//
+// # Safety
+// `mesh` must be NULL or a live mesh from `raddiff_refractive_mesh_new`; `medium` NULL or valid
+// for reads; `radiance` NULL or valid for writes.
+enum raddiff_status raddiff_single_scatter(const struct raddiff_refractive_mesh *mesh,
+                                           const struct raddiff_medium *medium,
+                                           struct raddiff_vec3 entry,
+                                           struct raddiff_vec3 exit,
+                                           struct raddiff_vec3 light,
+                                           double intensity,
+                                           double *radiance);
 
 #ifdef __cplusplus
 }  // extern "C"
