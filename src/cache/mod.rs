@@ -245,6 +245,13 @@ impl<V: CacheValue> Cache<V> {
         }
     }
 
+    /// Releases index memory kept only for concurrent readers: entry arrays replaced while growing
+    /// (kept so that lookups never wait) and growth slack. Needs exclusive access; [`Cache::load`]
+    /// and [`Cache::from_bytes`] return compacted caches. Typically halves the index.
+    pub fn compact(&mut self) {
+        self.index.compact();
+    }
+
     /// Record `id` (< len, published).
     #[inline]
     fn stored(&self, id: u32) -> (&Head, &[Channel]) {
