@@ -38,7 +38,7 @@ use glam::DVec3;
 use super::record::{Channel, Domain, Head};
 use crate::error::{ensure_finite, Error, Result};
 
-/// How covering records are weighted and extrapolated (see the [module docs](self) for formulas).
+/// How covering records are weighted and extrapolated (formulas in the [module docs](crate::cache::interp)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Interpolation {
     /// Ward-Heckbert first-order extrapolation with Křivánek-Gautron weights 1/(t+ρ) − 1

@@ -67,7 +67,7 @@
 //! [`Error::Corrupt`] (or [`Error::Io`]) with the reason; it never panics on any input.
 
 mod index;
-mod interp;
+pub mod interp;
 pub mod metric;
 mod persist;
 mod record;
