@@ -20,8 +20,11 @@ use crate::error::{Error, Result};
 /// No triangle (the right side of a horizon edge).
 pub const NONE: u32 = u32::MAX;
 
-/// Marks the synthesized pole vertex in [`Topology::vertex_source`].
+/// Marks the synthesized pole vertex in [`Topology::vertex_source`] (the north pole, θ = 0).
 pub const POLE: u32 = u32::MAX;
+
+/// Marks the synthesized south pole vertex (θ = π) of a [`Connectivity::Sphere`] mesh.
+pub const SOUTH_POLE: u32 = u32::MAX - 1;
 
 /// Which grid connectivity the directions follow (the hemisphere layouts of `LAYOUTS.md`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -32,6 +35,9 @@ pub enum Connectivity {
     /// The M×N grid of the concentric map: the square's centre is the pole, its boundary the
     /// horizon (`RADDIFF_LAYOUT_CONCENTRIC`).
     Concentric,
+    /// Rings j = 0 (north) … M−1 (south) of N azimuthal strata over the whole sphere, closed by a
+    /// pole vertex at each end (`RADDIFF_LAYOUT_SPHERE`; points in a medium).
+    Sphere,
 }
 
 /// An undirected mesh edge, oriented as its left triangle lists it.
@@ -118,6 +124,35 @@ impl Topology {
                     triangles.push([pole, ring(0, k), ring(0, k + 1)]);
                 }
                 for j in 0..m {
+                    for k in 0..n {
+                        quad(
+                            &mut triangles,
+                            ring(j, k),
+                            ring(j + 1, k),
+                            ring(j + 1, k + 1),
+                            ring(j, k + 1),
+                        );
+                    }
+                }
+            }
+            Connectivity::Sphere => {
+                if m < 1 || n < 3 {
+                    return Err(Error::InvalidArgument(format!(
+                        "a sphere layout needs m >= 1 and n >= 3 to be triangulated (got {m}x{n})"
+                    )));
+                }
+                let north = vertex_source.len() as u32;
+                vertex_source.push(POLE);
+                on_horizon.push(false);
+                let south = vertex_source.len() as u32;
+                vertex_source.push(SOUTH_POLE);
+                on_horizon.push(false);
+                let ring = |j: usize, k: usize| id(j, k % n);
+                for k in 0..n {
+                    triangles.push([north, ring(0, k), ring(0, k + 1)]);
+                    triangles.push([south, ring(m - 1, k + 1), ring(m - 1, k)]);
+                }
+                for j in 0..m - 1 {
                     for k in 0..n {
                         quad(
                             &mut triangles,
@@ -308,6 +343,17 @@ mod tests {
             let perimeter = 2 * (m + n) - 4;
             assert_eq!(topo.vertex_count(), m * n + perimeter);
             check(&topo, perimeter);
+        }
+    }
+
+    #[test]
+    fn sphere_mesh_is_a_closed_consistently_oriented_surface() {
+        for (m, n) in [(1, 3), (4, 8), (16, 32)] {
+            let topo = Topology::new(Connectivity::Sphere, m, n).unwrap();
+            let v = topo.vertex_count() as i64;
+            let t = topo.triangles.len() as i64;
+            assert_eq!(v - topo.edges.len() as i64 + t, 2);
+            assert!(topo.edges.iter().all(|e| e.right != NONE));
         }
     }
 

@@ -3,6 +3,7 @@
 
 // Occlusion-aware Hessians from the triangulated gather, and the record radii they imply.
 pub mod hessian;
+pub mod hessian_media;
 pub mod hessian_mesh;
 pub mod hessian_unaware;
 pub mod radii;

@@ -57,6 +57,12 @@ pub fn local_direction(
             let phi = TAU * (k as f64 + uv.y) / n as f64;
             DVec3::new(st * phi.cos(), st * phi.sin(), ct)
         }
+        Connectivity::Sphere => {
+            let ct = 1.0 - 2.0 * (j as f64 + uv.x) / m as f64;
+            let st = ((1.0 - ct) * (1.0 + ct)).max(0.0).sqrt();
+            let phi = TAU * (k as f64 + uv.y) / n as f64;
+            DVec3::new(st * phi.cos(), st * phi.sin(), ct)
+        }
         Connectivity::Concentric => concentric(DVec2::new(
             2.0 * (j as f64 + uv.x) / m as f64 - 1.0,
             2.0 * (k as f64 + uv.y) / n as f64 - 1.0,
