@@ -74,6 +74,57 @@
 // Compute the value, the gradient and the Hessian.
 #define RADDIFF_ORDER_HESSIAN 2
 
+// Ward-Heckbert cosine-weighted polar strata: `theta_j = asin(sqrt((j+u)/m))`, `phi_k = 2 pi (k+v)/n`.
+#define RADDIFF_LAYOUT_COSINE_POLAR 0
+
+// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (irradiance and
+// rotational gradient only: translational gradients need a polar or sphere layout).
+#define RADDIFF_LAYOUT_CONCENTRIC 1
+
+// Whole sphere, m x n equal solid-angle strata (`cos theta_j = 1 - 2(j+u)/m`), for points in a medium.
+#define RADDIFF_LAYOUT_SPHERE 2
+
+// Largest m or n of a gather layout.
+#define RADDIFF_GATHER_MAX_STRATA_PER_AXIS 65536
+
+// Largest m*n of a gather layout.
+#define RADDIFF_GATHER_MAX_STRATA 16777216
+
+// `error` bounds the integrated absolute error over the record.
+#define RADDIFF_ERROR_ABSOLUTE 0
+
+// `error` bounds the integrated error divided by `|value|`.
+#define RADDIFF_ERROR_RELATIVE 1
+
+// Largest radius the radii functions return (caller's length unit), e.g. for a zero Hessian.
+#define RADDIFF_MAX_RADIUS 1e30
+
+// Misses are placed at this multiple of the largest finite hit distance (2^20: the occlusion
+// terms of the distant environment converge like `1/FAR_DISTANCE_FACTOR`, about 1e-6 relative).
+#define FAR_DISTANCE_FACTOR 1048576.0
+
+// Fraction of the irradiance added to every triangle radiance by
+// [`OcclusionDerivatives::robust_hessian`] (thesis sec. 6.3).
+#define ROBUST_FRACTION 0.01
+
+// No triangle (the right side of a horizon edge).
+#define NONE UINT32_MAX
+
+// Marks the synthesized pole vertex in [`Topology::vertex_source`].
+#define POLE UINT32_MAX
+
+// Flag in [`Topology::triangle_edges`]: the triangle runs the edge backwards.
+#define REVERSED (1 << 31)
+
+// Maximum triangles per leaf.
+#define LEAF_SIZE 4
+
+// Number of sub-intervals of an edge scanned for sign changes of g before the bracketed solves.
+#define EDGE_SCAN_INTERVALS 6
+
+// Maximum number of sub-arcs the normal-cone test examines before giving up (keeping the rest).
+#define NORMAL_CONE_BUDGET 48
+
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
 typedef enum raddiff_status {
@@ -95,9 +146,17 @@ typedef enum raddiff_status {
   RADDIFF_ERROR_PANIC = 7,
 } raddiff_status;
 
+// Which results [`ValidGather::evaluate`] computes; work for the others is skipped.
+typedef struct Wanted Wanted;
+
 // A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
 // `raddiff_cache_insert` on the same handle at once (lookups never block).
 typedef struct raddiff_cache raddiff_cache;
+
+// A refractive triangle mesh with per-vertex shading normals and its bounding-sphere hierarchy
+// (opaque). Create with `raddiff_refractive_mesh_new`, release with `raddiff_refractive_mesh_free`.
+// Immutable after creation: one mesh may be shared by any number of threads.
+typedef struct raddiff_refractive_mesh raddiff_refractive_mesh;
 
 // How a cache is created.
 typedef struct raddiff_cache_config {
@@ -153,6 +212,80 @@ typedef struct raddiff_deriv3 {
   double hessian[9];
 } raddiff_deriv3;
 
+// An m x n stratified layout: `kind` is a `RADDIFF_LAYOUT_*` constant; 1 <= m, n <=
+// `RADDIFF_GATHER_MAX_STRATA_PER_AXIS`, m*n <= `RADDIFF_GATHER_MAX_STRATA`. Seed 0: stratum centres;
+// any other seed: deterministic jitter, identical on every platform.
+typedef struct raddiff_gather_layout {
+  // `RADDIFF_LAYOUT_COSINE_POLAR`, `_CONCENTRIC` or `_SPHERE`.
+  uint32_t kind;
+  // Strata along theta (or the first concentric grid axis).
+  uint32_t m;
+  // Strata along phi (or the second concentric grid axis).
+  uint32_t n;
+  // 0 for stratum centres, otherwise jitter seed.
+  uint64_t seed;
+} raddiff_gather_layout;
+
+// The frame of a gather: `position`, unit `normal`, unit `tangent` perpendicular to it (each within
+// 1e-6); the bitangent is `normal x tangent`. Local direction (lx, ly, lz) is
+// `lx*tangent + ly*bitangent + lz*normal`.
+typedef struct raddiff_frame {
+  // The gather point.
+  struct raddiff_vec3 position;
+  // Unit normal: the pole of the layout.
+  struct raddiff_vec3 normal;
+  // Unit tangent, perpendicular to the normal: azimuth 0.
+  struct raddiff_vec3 tangent;
+} raddiff_frame;
+
+// What the rays found. Index `i = j*n + k`.
+typedef struct raddiff_gather_input {
+  // m*n world directions as returned by `raddiff_gather_directions`.
+  const struct raddiff_vec3 *directions;
+  // m*n hit distances (> 0); `INFINITY` for a miss (distant environment).
+  const double *distance;
+  // m*n*channels radiance leaving each hit towards x (environment radiance for a miss), before
+  // attenuation; index `i*channels + c`.
+  const float *radiance;
+  // Values per direction (>= 1).
+  uint32_t channels;
+  // Homogeneous extinction (1/L) between x and the hits, >= 0; 0 = no medium. With a medium a miss
+  // is attenuated to zero.
+  double sigma_t;
+  // Nullable: m*n*steps*channels in-scattered radiance `sigma_s*L_i` (plus emission) at
+  // `t_s = (s + 0.5)*step` along each direction, before attenuation; index
+  // `(i*steps + s)*channels + c`. Sample s stands for `[s*step, (s+1)*step]`; samples beyond a
+  // direction's hit are not read.
+  const float *media_radiance;
+  // Nullable: m*n*steps*3*channels world-space gradient of `media_radiance`; index
+  // `((i*steps + s)*channels + c)*3 + axis`.
+  const float *media_radiance_gradient;
+  // Media march steps per direction (>= 1 when `media_radiance` is given).
+  uint32_t steps;
+  // Media march step length (> 0 when `media_radiance` is given).
+  double step;
+} raddiff_gather_input;
+
+// Caller-owned outputs; a NULL array means "not wanted" and its work is skipped. Per-channel
+// vectors are stored channel by channel: `gradient[3*c + axis]`, `hessian[9*c + 3*row + col]`.
+typedef struct raddiff_gather_output {
+  // channels: irradiance (hemisphere layouts) or scalar fluence (sphere).
+  double *irradiance;
+  // 3*channels: Ward-Heckbert translational gradient (world axes, all three components), with the
+  // participating-media terms of Jarosz et al. 2008 when a medium is given. Polar/sphere layouts.
+  double *gradient;
+  // 3*channels: rotational gradient (world axes); zero for the sphere layout.
+  double *rotation_gradient;
+  // 3*channels: gradient of the triangulated environment (not available in this build: must be NULL).
+  double *occlusion_gradient;
+  // 9*channels: occlusion-aware 3x3 translation Hessian (not available in this build: must be NULL).
+  double *hessian;
+  // Harmonic mean of the hit distances, m*n / sum(1/r); INFINITY if every ray missed.
+  double harmonic_mean_distance;
+  // Smallest hit distance; INFINITY if every ray missed.
+  double min_distance;
+} raddiff_gather_output;
+
 // A 2D vector or point.
 typedef struct raddiff_vec2 {
   // x component.
@@ -170,6 +303,22 @@ typedef struct raddiff_deriv2 {
   // The Hessian, row-major (0 when not requested).
   double hessian[4];
 } raddiff_deriv2;
+
+// The homogeneous medium inside a refractive mesh.
+typedef struct raddiff_medium {
+  // Relative index of refraction (inside over outside), > 1.
+  double eta;
+  // Extinction coefficient (1/length), >= 0.
+  double sigma_t;
+  // Scattering coefficient (1/length), in [0, sigma_t].
+  double sigma_s;
+  // Henyey-Greenstein asymmetry in (-1, 1); 0 is isotropic.
+  double g;
+} raddiff_medium;
+
+
+
+
 
 #ifdef __cplusplus
 extern "C" {
@@ -259,6 +408,18 @@ enum raddiff_status raddiff_polygon_form_factor(struct raddiff_vec3 x,
                                                 uint32_t order,
                                                 struct raddiff_deriv3 *out);
 
+// Writes the m*n world directions of `layout` at `frame` (index `j*n + k`) to `directions`.
+enum raddiff_status raddiff_gather_directions(const struct raddiff_gather_layout *layout,
+                                              const struct raddiff_frame *frame,
+                                              struct raddiff_vec3 *directions);
+
+// Irradiance (or fluence) and its derivatives from a traced gather (see `gather::evaluate`).
+// Every output array that is non-NULL is written on success; nothing is written on failure.
+enum raddiff_status raddiff_gather_evaluate(const struct raddiff_gather_layout *layout,
+                                            const struct raddiff_frame *frame,
+                                            const struct raddiff_gather_input *input,
+                                            struct raddiff_gather_output *output);
+
 // `exp(-sigma_t |x - y|)` and its derivatives with respect to `x` (see the Rust
 // `kernels::transmittance`). `RADDIFF_ERROR_DEGENERATE` for a gradient at `x == y`.
 enum raddiff_status raddiff_transmittance(struct raddiff_vec3 x,
@@ -302,6 +463,85 @@ enum raddiff_status raddiff_segment_form_factor_2d(struct raddiff_vec2 x,
                                                    struct raddiff_vec2 b,
                                                    uint32_t order,
                                                    struct raddiff_deriv2 *out);
+
+// Elliptical surface record from a 3x3 Hessian (see the Rust `gather::radii::surface_radii`): the
+// Hessian (row-major) is projected on the tangent plane of the unit `normal` and eigen-decomposed;
+// `radii[0] <= radii[1]` are the semi-axes along the world-space unit tangents `axes[0..2]`, chosen so
+// that the integrated second-order error over the ellipse equals the tolerance (`error`, or
+// `error * |value|` for `RADDIFF_ERROR_RELATIVE`). `max_anisotropy >= 1` caps `radii[1]/radii[0]`.
+// A vanishing Hessian gives `RADDIFF_MAX_RADIUS`.
+//
+// # Safety
+// `hessian` must be NULL or point to 9 readable doubles; `radii` to 2 writable doubles and `axes` to
+// 2 writable `raddiff_vec3` (or be NULL, which is reported).
+enum raddiff_status raddiff_surface_radii(const double *hessian,
+                                          struct raddiff_vec3 normal,
+                                          double value,
+                                          double error,
+                                          uint32_t mode,
+                                          double max_anisotropy,
+                                          double *radii,
+                                          struct raddiff_vec3 *axes);
+
+// Ellipsoidal media record from a 3x3 Hessian (row-major; see the Rust `gather::radii::volume_radii`):
+// semi-axes `radii[0] <= radii[1] <= radii[2]` along the orthonormal `axes[0..3]`, chosen so that the
+// integrated second-order error over the ellipsoid equals the tolerance. `max_anisotropy >= 1` caps
+// `radii[2]/radii[0]`. A vanishing Hessian gives `RADDIFF_MAX_RADIUS`.
+//
+// # Safety
+// `hessian` must be NULL or point to 9 readable doubles; `radii` to 3 writable doubles and `axes` to
+// 3 writable `raddiff_vec3` (or be NULL, which is reported).
+enum raddiff_status raddiff_volume_radii(const double *hessian,
+                                         double value,
+                                         double error,
+                                         uint32_t mode,
+                                         double max_anisotropy,
+                                         double *radii,
+                                         struct raddiff_vec3 *axes);
+
+// Builds a refractive mesh: `positions` and `normals` hold 3 floats per vertex (`vertex_count`
+// vertices), `indices` 3 vertex indices per triangle (`triangle_count` triangles). Triangles wind
+// counter-clockwise seen from outside; normals point outwards and need not be unit. The arrays are
+// copied. Returns NULL on failure (NULL array, no triangles, index out of range, non-finite or zero
+// normal, non-finite position, zero-area triangle, normal facing away from its triangle); see
+// `raddiff_last_error()`.
+//
+// # Safety
+// Each array must be NULL or valid for reads of the stated number of elements.
+struct raddiff_refractive_mesh *raddiff_refractive_mesh_new(const float *positions,
+                                                            const float *normals,
+                                                            size_t vertex_count,
+                                                            const uint32_t *indices,
+                                                            size_t triangle_count);
+
+// Releases a mesh created by `raddiff_refractive_mesh_new`. NULL is ignored.
+//
+// # Safety
+// `mesh` must be NULL or a pointer returned by `raddiff_refractive_mesh_new` not yet freed.
+void raddiff_refractive_mesh_free(struct raddiff_refractive_mesh *mesh);
+
+// Single-scattered radiance arriving at `entry` along the refracted eye segment `entry -> exit`
+// inside the mesh, from a point light of intensity `intensity` (power per steradian) at `light`
+// outside the mesh: the integral over the segment of sigma_s * phase * intensity * Fresnel
+// transmittance * exp(-sigma_t (distance travelled inside)) / D over all refracted paths (see the
+// README, "Single scattering"). It is radiance inside the medium, before the refraction out towards
+// the camera (multiply by the exit Fresnel transmittance / eta^2 for the radiance outside).
+//
+// Errors: NULL pointer; `RADDIFF_ERROR_INVALID_ARGUMENT` for eta <= 1, sigma_s outside
+// [0, sigma_t], |g| >= 1, non-finite input, negative intensity; for a closed mesh also entry/exit
+// outside its bounding sphere or a light inside it. `*radiance` is written only on success;
+// `entry == exit` gives 0. Occlusion of the light paths by other parts of the mesh is not tested.
+//
+// # Safety
+// `mesh` must be NULL or a live mesh from `raddiff_refractive_mesh_new`; `medium` NULL or valid
+// for reads; `radiance` NULL or valid for writes.
+enum raddiff_status raddiff_single_scatter(const struct raddiff_refractive_mesh *mesh,
+                                           const struct raddiff_medium *medium,
+                                           struct raddiff_vec3 entry,
+                                           struct raddiff_vec3 exit,
+                                           struct raddiff_vec3 light,
+                                           double intensity,
+                                           double *radiance);
 
 #ifdef __cplusplus
 }  // extern "C"
