@@ -53,6 +53,20 @@ fn bench(c: &mut Criterion) {
                 })
             },
         );
+        // Worst case: every sample a different radiance, so no edge can be skipped.
+        let noisy: Vec<f32> = sg
+            .radiance
+            .iter()
+            .enumerate()
+            .map(|(i, l)| l + 0.01 * ((i * 7919 % 101) as f32))
+            .collect();
+        let mut gn = g;
+        gn.radiance = &noisy;
+        group.bench_with_input(
+            BenchmarkId::new("hessian (shared edges, noisy radiance)", samples),
+            &gn,
+            |b, g| b.iter(|| occlusion_derivatives(&topo, black_box(g), Order::Hessian).unwrap()),
+        );
         let d = occlusion_derivatives(&topo, &g, Order::Hessian).unwrap();
         let h = d.robust_hessian(0);
         let e = d.irradiance[0];

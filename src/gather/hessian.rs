@@ -435,22 +435,26 @@ pub fn occlusion_derivatives_on(
     if g.sigma_t > 0.0 {
         return with_medium(topo, mesh, g, order, out);
     }
-    let tri_radiance =
-        |t: u32, c: usize| vertex_radiance(topo, mesh, g, mesh.farthest[t as usize], c);
+    // Radiance of every triangle (its farthest vertex's), channel-interleaved, plus a zero row that
+    // stands for the outside of the horizon.
+    let tcount = topo.triangles.len();
+    let mut tri = vec![0.0f64; (tcount + 1) * channels];
+    for (t, row) in tri.chunks_exact_mut(channels).take(tcount).enumerate() {
+        for (c, l) in row.iter_mut().enumerate() {
+            *l = vertex_radiance(topo, mesh, g, mesh.farthest[t], c);
+        }
+    }
+    let outside = tcount;
     let scale = Scale::of(mesh);
     let mut acc = vec![Deriv3::constant(0.0); channels];
     let mut delta = vec![0.0f64; channels];
     for e in &topo.edges {
         let boundary = e.right == NONE;
+        let right = if boundary { outside } else { e.right as usize };
+        let (l, r) = (e.left as usize * channels, right * channels);
         let mut any = false;
         for (c, d) in delta.iter_mut().enumerate() {
-            let left = tri_radiance(e.left, c);
-            let right = if boundary {
-                0.0
-            } else {
-                tri_radiance(e.right, c)
-            };
-            *d = left - right;
+            *d = tri[l + c] - tri[r + c];
             any |= *d != 0.0;
         }
         if !any && !boundary {
