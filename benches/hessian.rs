@@ -11,8 +11,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use glam::DVec3;
 use hessian_common::{scene, SceneGather};
 use raddiff::gather::hessian::{
-    mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle, Connectivity,
-    Topology,
+    mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle, LayoutKind, Topology,
 };
 use raddiff::gather::radii::{surface_radii, ErrorMode};
 use raddiff::Order;
@@ -22,7 +21,7 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("hessian");
     for side in [32usize, 64, 128] {
         let samples = side * side;
-        let kind = Connectivity::Concentric;
+        let kind = LayoutKind::Concentric;
         // Grey environment: every triangle carries a radiance, as in a lit interior.
         let sg = SceneGather::new(kind, side, side, 0, x, &scene::rects(), 0.5);
         let g = sg.gather();

@@ -6,7 +6,7 @@ mod hessian_common;
 use std::f64::consts::{PI, TAU};
 
 use glam::{DVec2, DVec3};
-use raddiff::gather::hessian::{Connectivity, Topology};
+use raddiff::gather::hessian::{LayoutKind, Topology};
 use raddiff::gather::hessian_media::{
     flatland_derivatives, flatland_derivatives_from, media_derivatives, media_derivatives_from,
     MediaGather, MediaSteps,
@@ -24,7 +24,7 @@ struct Sphere3 {
 /// A sphere gather at the origin inside a box-like room: walls at varied distances, a small
 /// occluding plate, and a media radiance field that varies in space.
 fn room(m: usize, n: usize, steps: usize, step: f64) -> Sphere3 {
-    let dirs = hessian_common::directions(Connectivity::Sphere, m, n, 3, DVec3::Z, DVec3::X);
+    let dirs = hessian_common::directions(LayoutKind::Sphere, m, n, 3, DVec3::Z, DVec3::X);
     let mut dist = Vec::new();
     let mut rad = Vec::new();
     let mut media = Vec::new();
@@ -73,8 +73,8 @@ fn room(m: usize, n: usize, steps: usize, step: f64) -> Sphere3 {
 #[test]
 fn closed_rings_sum_to_the_full_sphere() {
     let (m, n) = (8, 16);
-    let topo = Topology::new(Connectivity::Sphere, m, n).unwrap();
-    let dirs = hessian_common::directions(Connectivity::Sphere, m, n, 0, DVec3::Z, DVec3::X);
+    let topo = Topology::new(LayoutKind::Sphere, m, n).unwrap();
+    let dirs = hessian_common::directions(LayoutKind::Sphere, m, n, 0, DVec3::Z, DVec3::X);
     let dist = vec![f64::INFINITY; m * n];
     let rad = vec![1.0f32; m * n];
     let steps = 5;
@@ -152,7 +152,7 @@ fn fd_check_3d(topo: &Topology, g: &MediaGather<DVec3>, h: f64, tol: f64) {
 #[test]
 fn media_derivatives_match_finite_differences() {
     let (m, n, steps, step) = (8, 16, 12, 0.2);
-    let topo = Topology::new(Connectivity::Sphere, m, n).unwrap();
+    let topo = Topology::new(LayoutKind::Sphere, m, n).unwrap();
     let r = room(m, n, steps, step);
     for sigma in [0.0, 0.4] {
         let g = MediaGather {
@@ -176,8 +176,8 @@ fn occluded_ring_vertices_carry_no_radiance() {
     // A wall at distance 0.36 in every direction: rings beyond it are entirely occluded, so marching
     // further adds nothing.
     let (m, n) = (6, 12);
-    let topo = Topology::new(Connectivity::Sphere, m, n).unwrap();
-    let dirs = hessian_common::directions(Connectivity::Sphere, m, n, 0, DVec3::Z, DVec3::X);
+    let topo = Topology::new(LayoutKind::Sphere, m, n).unwrap();
+    let dirs = hessian_common::directions(LayoutKind::Sphere, m, n, 0, DVec3::Z, DVec3::X);
     let dist = vec![0.36; m * n];
     let rad = vec![0.0f32; m * n];
     let eval = |steps: usize| {
@@ -352,7 +352,7 @@ fn invalid_media_gathers_are_rejected() {
         step: 0.0,
     });
     assert!(flatland_derivatives(&g, Order::Gradient).is_err());
-    let topo = Topology::new(Connectivity::Polar, 4, 4).unwrap();
+    let topo = Topology::new(LayoutKind::CosinePolar, 4, 4).unwrap();
     let d3 = vec![DVec3::Z; 16];
     let g3 = MediaGather {
         directions: &d3,

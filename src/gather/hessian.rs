@@ -49,8 +49,9 @@
 
 use glam::{DMat3, DVec3};
 
-pub use super::hessian_mesh::{Connectivity, Edge, Topology};
+pub use super::hessian_mesh::{Edge, Topology};
 use super::hessian_mesh::{NONE, POLE, REVERSED};
+pub use super::layout::LayoutKind;
 use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 use crate::kernels;
 use crate::kernels::form_factor;
@@ -188,7 +189,7 @@ fn check_gather(topo: &Topology, g: &HemisphereGather) -> Result<DVec3> {
 
 /// Places the mesh vertices of one gather (validating it against `topo`).
 pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeometry> {
-    if topo.connectivity == Connectivity::Sphere {
+    if topo.connectivity == LayoutKind::Sphere {
         return Err(Error::InvalidArgument(
             "a sphere layout is a media gather: use gather::hessian_media".into(),
         ));

@@ -32,7 +32,8 @@
 use glam::{DMat2, DVec2, DVec3};
 
 use super::hessian::FAR_DISTANCE_FACTOR;
-use super::hessian_mesh::{Connectivity, Topology, POLE, SOUTH_POLE};
+use super::hessian_mesh::{Topology, POLE, SOUTH_POLE};
+use super::layout::LayoutKind;
 use crate::error::{ensure_finite, Error, Result};
 use crate::kernels;
 use crate::{Deriv2, Deriv3, Order};
@@ -211,7 +212,7 @@ fn product3(l: f64, t: &Deriv3, o: &Deriv3, w: f64, acc: &mut Deriv3, order: Ord
 }
 
 /// Occlusion-aware fluence, gradient and Hessian at a point in a medium from a sphere gather
-/// (module docs). `topo` must be a [`Connectivity::Sphere`] topology of the layout's M×N.
+/// (module docs). `topo` must be a [`LayoutKind::Sphere`] topology of the layout's M×N.
 pub fn media_derivatives(
     topo: &Topology,
     g: &MediaGather<DVec3>,
@@ -229,7 +230,7 @@ pub fn media_derivatives_from(
     order: Order,
     offset: DVec3,
 ) -> Result<MediaDerivatives> {
-    if topo.connectivity != Connectivity::Sphere {
+    if topo.connectivity != LayoutKind::Sphere {
         return Err(Error::InvalidArgument(
             "media derivatives need a sphere topology".into(),
         ));
