@@ -11,6 +11,51 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// Largest channel count per record.
+#define MAX_CHANNELS 4096
+
+// Current (and only accepted) format version.
+#define FORMAT_VERSION 1
+
+// Smallest and largest accepted radius and position magnitude (L).
+#define RADIUS_MIN 1e-30
+
+// Largest accepted radius (L).
+#define RADIUS_MAX 1e30
+
+// Largest accepted absolute position coordinate (L).
+#define POSITION_MAX 1e30
+
+// Size of the fixed part of a stored record (bytes).
+#define HEAD_BYTES 88
+
+// Size of each channel's part of a stored record (bytes).
+#define CHANNEL_BYTES 16
+
+// Records on surfaces: ellipses in the tangent plane, normals compared at lookup.
+#define RADDIFF_DOMAIN_SURFACE 0
+
+// Records in participating media: ellipsoids, normals ignored.
+#define RADDIFF_DOMAIN_VOLUME 1
+
+// Ward-Heckbert first-order extrapolation with Krivanek-Gautron weights 1/(t+rho) - 1.
+#define RADDIFF_INTERP_WARD 0
+
+// Anisotropic tent weights (1 - t) times the normal tent (Schwarzhaupt eq. 6.10-6.13).
+#define RADDIFF_INTERP_TENT 1
+
+// Linear-space extrapolation with the cubic kernel 3d^2 - 2d^3, d = 1 - t (Marco et al. eq. 23).
+#define RADDIFF_INTERP_CUBIC 2
+
+// Log-space extrapolation of Jarosz et al. 2008 with the cubic kernel (Marco et al. eq. 4).
+#define RADDIFF_INTERP_LOG 3
+
+// Ward-Heckbert extrapolation with Ward's original weights 1/(t+rho) (no fall-off to 0).
+#define RADDIFF_INTERP_WARD_CLASSIC 4
+
+// Ward-Heckbert extrapolation with Tabellion-Lamorlette weights 1 - (t+rho).
+#define RADDIFF_INTERP_WARD_TABELLION 5
+
 // Major version of the library this header belongs to.
 #define RADDIFF_VERSION_MAJOR 0
 
@@ -50,6 +95,23 @@ typedef enum raddiff_status {
   RADDIFF_ERROR_PANIC = 7,
 } raddiff_status;
 
+// A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
+// `raddiff_cache_insert` on the same handle at once (lookups never block).
+typedef struct raddiff_cache raddiff_cache;
+
+// How a cache is created.
+typedef struct raddiff_cache_config {
+  // Floats per record value (1..=4096).
+  uint32_t channels;
+  // `RADDIFF_DOMAIN_SURFACE` or `RADDIFF_DOMAIN_VOLUME`.
+  uint32_t domain;
+  // `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`).
+  uint32_t interpolation;
+  // Radians in (0, pi]: largest normal deviation for a record to be used (surface domain;
+  // ignored in volumes). 0.2 is a good default.
+  double max_normal_deviation;
+} raddiff_cache_config;
+
 // A 3D vector or point.
 typedef struct raddiff_vec3 {
   // x component.
@@ -59,6 +121,27 @@ typedef struct raddiff_vec3 {
   // z component.
   double z;
 } raddiff_vec3;
+
+// A record to insert.
+typedef struct raddiff_cache_record {
+  // Where the gather was computed.
+  struct raddiff_vec3 position;
+  // Surface normal (need not be unit length); ignored in the volume domain.
+  struct raddiff_vec3 normal;
+  // `channels` floats.
+  const float *value;
+  // Nullable: 3*channels floats, translational gradient, channel-major (`gradient[3*c + k]`
+  // is the derivative of channel c along world axis k).
+  const float *gradient;
+  // Nullable: 3*channels floats, rotational gradient (derivative with respect to the rotation
+  // vector of the normal, Ward-Heckbert convention), channel-major; surface domain only.
+  const float *rotation_gradient;
+  // Surface: radii[0..1] along axes[0] (projected to the tangent plane) and normal x axes[0];
+  // radii[2] unused. Volume: ellipsoid radii along axes[0..2]. In [1e-30, 1e30].
+  double radii[3];
+  // Principal axes (need not be unit; may be zero for isotropic radii).
+  struct raddiff_vec3 axes[3];
+} raddiff_cache_record;
 
 // Value, gradient and Hessian (row-major, symmetric) with respect to a 3D point.
 typedef struct raddiff_deriv3 {
@@ -70,9 +153,68 @@ typedef struct raddiff_deriv3 {
   double hessian[9];
 } raddiff_deriv3;
 
+// A 2D vector or point.
+typedef struct raddiff_vec2 {
+  // x component.
+  double x;
+  // y component.
+  double y;
+} raddiff_vec2;
+
+// Value, gradient and Hessian (row-major, symmetric) with respect to a 2D point.
+typedef struct raddiff_deriv2 {
+  // The value.
+  double value;
+  // The gradient (0 when not requested).
+  double gradient[2];
+  // The Hessian, row-major (0 when not requested).
+  double hessian[4];
+} raddiff_deriv2;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+// Creates an empty cache, or returns NULL (with `raddiff_last_error`) for a NULL or invalid
+// configuration. Free it with `raddiff_cache_free`.
+struct raddiff_cache *raddiff_cache_new(const struct raddiff_cache_config *config);
+
+// Frees a cache (NULL is ignored). No other thread may be using it.
+void raddiff_cache_free(struct raddiff_cache *cache);
+
+// Inserts a record (thread-safe). Inserting a record identical to a stored one is a no-op that
+// succeeds. `RADDIFF_ERROR_INVALID_ARGUMENT` for non-finite input, radii out of range, a zero
+// surface normal, or degenerate axes with anisotropic radii.
+enum raddiff_status raddiff_cache_insert(struct raddiff_cache *cache,
+                                         const struct raddiff_cache_record *record);
+
+// Interpolates the cache at `position` with surface normal `normal` (ignored in volumes) into
+// `value` (`channels` floats) and, if `weight_sum` is not NULL, the sum of the weights used.
+// `RADDIFF_ERROR_NOT_FOUND` when no record covers the point (outputs untouched). Thread-safe and
+// lock-free; the result depends only on the set of records covering the point.
+enum raddiff_status raddiff_cache_lookup(const struct raddiff_cache *cache,
+                                         struct raddiff_vec3 position,
+                                         struct raddiff_vec3 normal,
+                                         float *value,
+                                         double *weight_sum);
+
+// Number of records (0 for NULL).
+size_t raddiff_cache_len(const struct raddiff_cache *cache);
+
+// Writes the cache to `path` atomically (temporary file in the same directory, fsync, rename):
+// a crash never leaves a damaged file. `RADDIFF_ERROR_IO` on failure.
+enum raddiff_status raddiff_cache_save(const struct raddiff_cache *cache, const char *path);
+
+// Loads a cache saved by `raddiff_cache_save` (channels, domain and interpolation come from the
+// file). Returns NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in
+// `raddiff_last_error` for unreadable, truncated, damaged or wrong-version files.
+struct raddiff_cache *raddiff_cache_load(const char *path);
+
+// Adds to `into` every record of `from` it does not hold yet (identical records, e.g. the same
+// gather saved by two render nodes, are detected and skipped). Both caches need the same channel
+// count and domain (`RADDIFF_ERROR_INVALID_ARGUMENT` otherwise). `from` may equal `into`.
+enum raddiff_status raddiff_cache_merge(struct raddiff_cache *into,
+                                        const struct raddiff_cache *from);
 
 // Message of the last failed raddiff call on this thread, or "" if none failed yet.
 //
@@ -82,6 +224,41 @@ const char *raddiff_last_error(void);
 // The library version as "MAJOR.MINOR.PATCH" (static storage).
 const char *raddiff_version(void);
 
+// Form factor from a differential area at `x` with unit normal `n` to the triangle `(a, b, c)`:
+// `(1/pi)` times the integral of `n . w` over the triangle's solid angle, with the part below the
+// tangent plane clipped away; value, gradient and Hessian with respect to `x` (`n` fixed). The
+// triangle is two-sided (either vertex order). See the Rust `kernels::triangle_form_factor`.
+//
+// `RADDIFF_ERROR_INVALID_ARGUMENT`: non-finite input, `n` not unit length within 1e-6, bad `order`.
+// `RADDIFF_ERROR_DEGENERATE`: zero-area triangle, or a gradient/Hessian with `x` in the triangle's
+// plane (the value there is 0).
+//
+// # Safety
+// `out` must be NULL or valid for writing one `raddiff_deriv3`.
+enum raddiff_status raddiff_triangle_form_factor(struct raddiff_vec3 x,
+                                                 struct raddiff_vec3 n,
+                                                 struct raddiff_vec3 a,
+                                                 struct raddiff_vec3 b,
+                                                 struct raddiff_vec3 c,
+                                                 uint32_t order,
+                                                 struct raddiff_deriv3 *out);
+
+// The same as `raddiff_triangle_form_factor` for a planar simple polygon of `count >= 3`
+// vertices (either orientation). See the Rust `kernels::polygon_form_factor`.
+//
+// `RADDIFF_ERROR_INVALID_ARGUMENT` also for `count < 3`, a non-planar (beyond 1e-8 of its extent)
+// or self-intersecting polygon.
+//
+// # Safety
+// `vertices` must be NULL or valid for reading `count` `raddiff_vec3`; `out` must be NULL or valid
+// for writing one `raddiff_deriv3`.
+enum raddiff_status raddiff_polygon_form_factor(struct raddiff_vec3 x,
+                                                struct raddiff_vec3 n,
+                                                const struct raddiff_vec3 *vertices,
+                                                size_t count,
+                                                uint32_t order,
+                                                struct raddiff_deriv3 *out);
+
 // `exp(-sigma_t |x - y|)` and its derivatives with respect to `x` (see the Rust
 // `kernels::transmittance`). `RADDIFF_ERROR_DEGENERATE` for a gradient at `x == y`.
 enum raddiff_status raddiff_transmittance(struct raddiff_vec3 x,
@@ -89,6 +266,42 @@ enum raddiff_status raddiff_transmittance(struct raddiff_vec3 x,
                                           double sigma_t,
                                           uint32_t order,
                                           struct raddiff_deriv3 *out);
+
+// Transmittance through a heterogeneous medium from `count >= 1` extinction samples `sigma_t`
+// (and optionally their spatial gradients, `sigma_t_gradient`, NULL when unknown) at the midpoints
+// `t_i = (i + 0.5)/count` of the segment `x -> y`; gradient with respect to `x` (see the Rust
+// `kernels::transmittance_marched` for the exact definition). `order` must be
+// `RADDIFF_ORDER_VALUE` or `RADDIFF_ORDER_GRADIENT`; `RADDIFF_ORDER_HESSIAN`, `count == 0`, a
+// negative or non-finite sample give `RADDIFF_ERROR_INVALID_ARGUMENT`.
+// `sigma_t` must point to `count` doubles and `sigma_t_gradient` to `count` vectors (or be NULL).
+enum raddiff_status raddiff_transmittance_marched(struct raddiff_vec3 x,
+                                                  struct raddiff_vec3 y,
+                                                  const double *sigma_t,
+                                                  const struct raddiff_vec3 *sigma_t_gradient,
+                                                  size_t count,
+                                                  uint32_t order,
+                                                  struct raddiff_deriv3 *out);
+
+// Unsigned solid angle (steradians) subtended at `x` by the triangle `(a, b, c)`, with gradient
+// and Hessian with respect to `x` (see the Rust `kernels::triangle_solid_angle`). On the
+// triangle's plane: 2π inside, 0 outside, zero derivatives; `RADDIFF_ERROR_DEGENERATE` on an edge or
+// at a vertex; zero-area triangles give 0.
+enum raddiff_status raddiff_triangle_solid_angle(struct raddiff_vec3 x,
+                                                 struct raddiff_vec3 a,
+                                                 struct raddiff_vec3 b,
+                                                 struct raddiff_vec3 c,
+                                                 uint32_t order,
+                                                 struct raddiff_deriv3 *out);
+
+// Flatland form factor: the angle subtended at `x` by the segment `(a, b)`, divided by 2π, with
+// gradient and Hessian (row-major 2x2) with respect to `x` (see the Rust
+// `kernels::segment_form_factor_2d`). On the segment's line: 1/2 between the endpoints, 0 beyond,
+// zero derivatives; `RADDIFF_ERROR_DEGENERATE` at an endpoint; a zero-length segment gives 0.
+enum raddiff_status raddiff_segment_form_factor_2d(struct raddiff_vec2 x,
+                                                   struct raddiff_vec2 a,
+                                                   struct raddiff_vec2 b,
+                                                   uint32_t order,
+                                                   struct raddiff_deriv2 *out);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -11,10 +11,11 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// `target/<profile>`, where cargo put `libraddiff.a` for this build.
-fn profile_dir() -> PathBuf {
+/// The static library cargo built for this test run. `cargo test` writes it to `target/<profile>/deps/`
+/// and does not copy it up to `target/<profile>/` (only `cargo build` does), so take the fresh one.
+fn static_library() -> PathBuf {
     let exe = std::env::current_exe().unwrap();
-    exe.parent().unwrap().parent().unwrap().to_path_buf()
+    exe.parent().unwrap().join("libraddiff.a")
 }
 
 fn sanitize() -> bool {
@@ -43,7 +44,7 @@ fn compile(source: &Path, out: &Path, cpp: bool, link: bool) {
     }
     if link {
         cmd.arg(source).arg("-o").arg(out);
-        cmd.arg(profile_dir().join("libraddiff.a"));
+        cmd.arg(static_library());
         cmd.args(["-lpthread", "-ldl", "-lm", "-lrt"]);
     } else {
         cmd.arg("-c").arg(source).arg("-o").arg(out);
@@ -111,7 +112,7 @@ fn readme_c_example_is_tested() {
 
 #[test]
 fn ffi_programs_pass() {
-    let lib = profile_dir().join("libraddiff.a");
+    let lib = static_library();
     assert!(
         lib.exists(),
         "static library not found at {}",

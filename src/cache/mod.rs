@@ -1,1 +1,499 @@
 //! The generic radiance cache: records, error metrics, spatial index, interpolation, persistence.
+//!
+//! A [`Cache<V>`] holds records of a value `V` ([`CacheValue`]: `f32`, `[f32; N]` or `Vec<f32>`
+//! with the channel count chosen at run time) in one [`Domain`]: ellipses on surfaces or ellipsoids
+//! in media. A renderer keeps one cache per quantity (irradiance, single and multiple scattering,
+//! RGB or spherical-harmonic coefficients).
+//!
+//! ```
+//! use glam::DVec3;
+//! use raddiff::cache::{Cache, CacheConfig, Extent, Record, metric};
+//!
+//! let cache: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3))?;
+//! let radius = metric::split_sphere(0.2, metric::harmonic_mean_distance(&[1.0, 2.0, 4.0])?)?;
+//! let mut record = Record::new(DVec3::ZERO, DVec3::Z, [1.0, 0.5, 0.25], Extent::isotropic(radius));
+//! record.gradient = Some([[0.1, 0.0, 0.0], [0.0; 3], [0.0; 3]]); // d/dx, d/dy, d/dz
+//! cache.insert(&record)?;
+//! let hit = cache.lookup(DVec3::new(0.05, 0.0, 0.0), DVec3::Z)?;
+//! assert!((hit.value[0] - 1.005).abs() < 1e-6);
+//! # Ok::<(), raddiff::Error>(())
+//! ```
+//!
+//! # Concurrency and determinism
+//! `Cache` is `Sync`: any number of threads call [`Cache::lookup`] and [`Cache::insert`] through a
+//! shared reference. Lookups never lock and never wait for each other or for inserts; inserts are
+//! serialized by one mutex (an insert costs ~1 µs, a gather that produces a record hundreds of µs)
+//! and are visible to every lookup that starts after the insert returns. Records are immutable
+//! once inserted and are stored in an append-only arena; the index is an octree of immutable
+//! published nodes (see `index.rs`).
+//!
+//! The value returned for a query depends only on the set of records covering it: covering
+//! records are sorted by their identity key before the weighted sum, so neither insertion order nor
+//! thread timing changes a single bit. Inserting a record whose stored bits equal an existing
+//! record's is a no-op (returns `false`), so the cache is a set.
+//!
+//! # Record identity
+//! The identity key of a record is the FNV-1a 64-bit hash of its stored bytes in the file layout
+//! below, without the key field: position (3×f64), frame (9×f32), radii (3×f32), gradient scales
+//! (2×f32) and, per channel, value (f32) and six binary16 gradient components, all little-endian.
+//! Two records are duplicates when all of these bytes are equal (checked byte for byte, not only by
+//! key), which is exactly what inserting the same gather twice, on any machine, produces.
+//!
+//! # File format (version 1, little-endian)
+//! | offset | size | field |
+//! |---|---|---|
+//! | 0 | 8 | magic `RDFCACHE` |
+//! | 8 | 4 | format version, u32 = 1 |
+//! | 12 | 4 | channels, u32 ≥ 1 |
+//! | 16 | 4 | domain, u32 (0 surface, 1 volume) |
+//! | 20 | 4 | interpolation, u32 (`RADDIFF_INTERP_*`) |
+//! | 24 | 8 | max normal deviation, f64 radians |
+//! | 32 | 8 | record count N, u64 |
+//! | 40 | 4 | record size S = 88 + 16·channels, u32 |
+//! | 44 | 4 | reserved, 0 |
+//! | 48 | N·S | records, sorted by strictly increasing identity key |
+//! | 48 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
+//!
+//! Record (S bytes): position 3×f64; frame 3×3 f32 (rows: surface axis 0, axis 1 = n × axis 0,
+//! normal; volume: axes 0, 1, 2); radii 3×f32 (surface: radius along axis 0, axis 1, and their
+//! minimum for the normal direction); translational and rotational gradient scales 2×f32; identity
+//! key u64; then per channel: value f32, translational gradient 3×binary16, rotational gradient
+//! 3×binary16, the gradients relative to their scale.
+//!
+//! [`Cache::save`] writes a temporary file in the same directory, `fsync`s it, renames it over the
+//! target and `fsync`s the directory: a crash leaves either the old or the new file. [`Cache::load`]
+//! checks the magic, version, header fields, exact length, checksum, every record (finite numbers,
+//! radii in range, orthonormal frame, key matching the contents) and the key order, and reports
+//! [`Error::Corrupt`] (or [`Error::Io`]) with the reason; it never panics on any input.
+
+mod index;
+mod interp;
+pub mod metric;
+mod persist;
+mod record;
+mod store;
+mod value;
+
+use std::marker::PhantomData;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+use glam::DVec3;
+use smallvec::SmallVec;
+
+pub use interp::Interpolation;
+pub use record::{
+    Domain, Extent, Record, CHANNEL_BYTES, HEAD_BYTES, POSITION_MAX, RADIUS_MAX, RADIUS_MIN,
+};
+pub use value::CacheValue;
+
+use crate::error::{ensure_finite3, Error, Result};
+use interp::{Kernel, Used};
+pub(crate) use record::RecordInput;
+use record::{Channel, Head};
+
+/// Largest channel count per record.
+pub const MAX_CHANNELS: usize = 4096;
+
+/// Configuration of a cache.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CacheConfig {
+    /// Floats per record value (must match a fixed-size `V`).
+    pub channels: usize,
+    /// Surfaces or media.
+    pub domain: Domain,
+    /// How records are weighted and extrapolated.
+    pub interpolation: Interpolation,
+    /// Largest angle (radians, in (0, π]) between a record's normal and a query normal for the
+    /// record to be used (surface domain; ignored in volumes).
+    pub max_normal_deviation: f64,
+}
+
+impl CacheConfig {
+    /// Surface irradiance: Ward-Heckbert interpolation, maximum normal deviation 0.2 rad (the
+    /// thesis' default).
+    pub fn surface(channels: usize) -> Self {
+        CacheConfig {
+            channels,
+            domain: Domain::Surface,
+            interpolation: Interpolation::Ward,
+            max_normal_deviation: 0.2,
+        }
+    }
+
+    /// Media radiance: the cubic kernel of Marco et al. (eq. 23).
+    pub fn volume(channels: usize) -> Self {
+        CacheConfig {
+            channels,
+            domain: Domain::Volume,
+            interpolation: Interpolation::Cubic,
+            max_normal_deviation: 0.2,
+        }
+    }
+
+    /// The same configuration with another interpolation scheme.
+    pub fn with_interpolation(mut self, interpolation: Interpolation) -> Self {
+        self.interpolation = interpolation;
+        self
+    }
+}
+
+/// The result of a lookup.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Lookup<V> {
+    /// The interpolated value.
+    pub value: V,
+    /// Sum of the weights of the records used (scheme-dependent scale; see [`Interpolation`]).
+    pub weight_sum: f64,
+    /// How many records covered the query.
+    pub records: usize,
+}
+
+/// Memory held by a cache.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MemoryUsage {
+    /// Bytes per stored record: `HEAD_BYTES + CHANNEL_BYTES * channels`.
+    pub bytes_per_record: usize,
+    /// Bytes allocated for records (the arena grows in doubling chunks).
+    pub record_bytes: usize,
+    /// Bytes held by the spatial index (nodes and entry arrays, including retired arrays).
+    pub index_bytes: usize,
+    /// Index entries (each record is listed in one or more octree nodes).
+    pub index_entries: usize,
+}
+
+/// A thread-safe radiance cache (see the [module docs](self)).
+pub struct Cache<V: CacheValue> {
+    config: CacheConfig,
+    kernel: Kernel,
+    records: store::Chunks<u64>,
+    len: AtomicUsize,
+    index: index::Octree,
+    writer: Mutex<()>,
+    _value: PhantomData<fn() -> V>,
+}
+
+impl<V: CacheValue> std::fmt::Debug for Cache<V> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Cache")
+            .field("config", &self.config)
+            .field("len", &self.len())
+            .finish()
+    }
+}
+
+/// Records are positioned exactly in `f64` octree cubes only while |x| / radius stays below this.
+const PRECISION_RATIO: f64 = (1u64 << 50) as f64;
+
+impl<V: CacheValue> Cache<V> {
+    /// An empty cache. `InvalidArgument` for 0 or more than [`MAX_CHANNELS`] channels, a channel
+    /// count that disagrees with `V`, or a maximum normal deviation outside (0, π] (surfaces).
+    pub fn new(config: CacheConfig) -> Result<Self> {
+        if config.channels == 0 || config.channels > MAX_CHANNELS {
+            return Err(Error::InvalidArgument(format!(
+                "channels must be in 1..={MAX_CHANNELS} (got {})",
+                config.channels
+            )));
+        }
+        if let Some(n) = V::FIXED_CHANNELS {
+            if n != config.channels {
+                return Err(Error::InvalidArgument(format!(
+                    "the value type has {n} channels but the configuration asks for {}",
+                    config.channels
+                )));
+            }
+        }
+        let kernel = Kernel::new(
+            config.interpolation,
+            config.domain,
+            config.max_normal_deviation,
+        )?;
+        let words = (HEAD_BYTES + CHANNEL_BYTES * config.channels).div_ceil(8);
+        Ok(Cache {
+            config,
+            kernel,
+            records: store::Chunks::new(words),
+            len: AtomicUsize::new(0),
+            index: index::Octree::new(),
+            writer: Mutex::new(()),
+            _value: PhantomData,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &CacheConfig {
+        &self.config
+    }
+
+    /// Number of records.
+    pub fn len(&self) -> usize {
+        self.len.load(Ordering::Acquire)
+    }
+
+    /// Whether the cache has no records.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Memory held by the cache.
+    pub fn memory(&self) -> MemoryUsage {
+        MemoryUsage {
+            bytes_per_record: HEAD_BYTES + CHANNEL_BYTES * self.config.channels,
+            record_bytes: self.records.allocated_bytes(),
+            index_bytes: self.index.bytes(),
+            index_entries: self.index.entries(),
+        }
+    }
+
+    /// Record `id` (< len, published).
+    #[inline]
+    fn stored(&self, id: u32) -> (&Head, &[Channel]) {
+        let slot = self.records.slot(id as usize);
+        let ptr = slot.as_ptr();
+        // SAFETY: a slot is `words` u64s (8-aligned) holding a `Head` followed by `channels`
+        // `Channel`s (4-aligned, at byte 88), written before the id was published.
+        unsafe {
+            let head = &*(ptr as *const Head);
+            let chans = std::slice::from_raw_parts(
+                (ptr as *const u8).add(HEAD_BYTES) as *const Channel,
+                self.config.channels,
+            );
+            (head, chans)
+        }
+    }
+
+    /// Inserts a record. Returns `false` (and changes nothing) if an identical record is already
+    /// stored. `InvalidArgument` for non-finite or out-of-range input, a zero surface normal,
+    /// degenerate axes with anisotropic radii, or a radius below |position|·2⁻⁵⁰ (beyond `f64`
+    /// resolution of the index).
+    pub fn insert(&self, record: &Record<V>) -> Result<bool> {
+        let g = record.gradient.as_ref().map(record::channel_major);
+        let r = record.rotation_gradient.as_ref().map(record::channel_major);
+        self.insert_flat(&RecordInput {
+            position: record.position,
+            normal: record.normal,
+            value: record.value.as_channels(),
+            gradient: g.as_deref(),
+            rotation: r.as_deref(),
+            extent: record.extent,
+        })
+    }
+
+    pub(crate) fn insert_flat(&self, input: &RecordInput<'_>) -> Result<bool> {
+        let (head, chans) = record::encode(self.config.domain, self.config.channels, input)?;
+        self.insert_stored(&head, &chans)
+    }
+
+    fn insert_stored(&self, head: &Head, chans: &[Channel]) -> Result<bool> {
+        let position = head.position();
+        let radius = head.max_radius();
+        if position.abs().max_element() > radius * PRECISION_RATIO {
+            return Err(Error::InvalidArgument(format!(
+                "record radius {radius:e} is below 2^-50 of its position {position}: \
+                 beyond the index's f64 resolution"
+            )));
+        }
+        let _guard = self.writer.lock().unwrap_or_else(|e| e.into_inner());
+        let mut duplicate = false;
+        self.index.query(position, |id| {
+            let (h, c) = self.stored(id);
+            duplicate |= h == head && c == chans;
+        });
+        if duplicate {
+            return Ok(false);
+        }
+        let id = self.len.load(Ordering::Relaxed);
+        if id >= u32::MAX as usize {
+            return Err(Error::InvalidArgument(
+                "cache is full (2^32 - 1 records)".into(),
+            ));
+        }
+        self.records.ensure(id);
+        let ptr = self.records.slot_ptr(id) as *mut u8;
+        // SAFETY: slot `id` is unpublished, sized for the head and the channels, and 8-aligned.
+        unsafe {
+            (ptr as *mut Head).write(*head);
+            std::ptr::copy_nonoverlapping(
+                chans.as_ptr(),
+                ptr.add(HEAD_BYTES) as *mut Channel,
+                chans.len(),
+            );
+        }
+        self.index.insert(id as u32, position, radius);
+        self.len.store(id + 1, Ordering::Release);
+        Ok(true)
+    }
+
+    fn check_query(&self, position: DVec3, normal: DVec3) -> Result<DVec3> {
+        ensure_finite3(position, "query position")?;
+        if self.config.domain == Domain::Volume {
+            return Ok(DVec3::ZERO);
+        }
+        ensure_finite3(normal, "query normal")?;
+        let l = normal.length();
+        if !(l > 0.0 && l.is_finite()) {
+            return Err(Error::InvalidArgument(
+                "query normal must be non-zero in the surface domain".into(),
+            ));
+        }
+        Ok(normal / l)
+    }
+
+    /// Interpolates at `position` with surface normal `normal` (ignored in volumes) into `out`
+    /// (exactly `channels` floats), returning the weight sum and the number of records used.
+    /// `NotFound` when no record covers the point; `out` is written only on success.
+    pub fn lookup_into(
+        &self,
+        position: DVec3,
+        normal: DVec3,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
+        let n = self.check_query(position, normal)?;
+        if out.len() != self.config.channels {
+            return Err(Error::InvalidArgument(format!(
+                "output has {} floats, the cache has {} channels",
+                out.len(),
+                self.config.channels
+            )));
+        }
+        let surface = self.config.domain == Domain::Surface;
+        let mut used: SmallVec<[Used<'_>; 16]> = SmallVec::new();
+        self.index.query(position, |id| {
+            let (head, channels) = self.stored(id);
+            let t = head.normalized_distance(position);
+            let cos_n = if surface { head.axis(2).dot(n) } else { 1.0 };
+            let weight = self.kernel.weight(t, cos_n);
+            if weight > 0.0 {
+                used.push(Used {
+                    key: head.key,
+                    weight,
+                    head,
+                    channels,
+                });
+            }
+        });
+        if used.is_empty() {
+            return Err(Error::NotFound(format!(
+                "no cache record covers {position}"
+            )));
+        }
+        used.sort_unstable_by_key(|u| u.key);
+        let mut tmp: SmallVec<[f32; 32]> = SmallVec::from_elem(0.0, out.len());
+        let weight_sum = interp::blend(&self.kernel, &used, position, n, &mut tmp);
+        if !(weight_sum > 0.0 && weight_sum.is_finite()) {
+            return Err(Error::NotFound(format!(
+                "the records covering {position} have zero total weight"
+            )));
+        }
+        out.copy_from_slice(&tmp);
+        Ok((weight_sum, used.len()))
+    }
+
+    /// Interpolates at `position` with surface normal `normal` (ignored in volumes).
+    /// `NotFound` when no record covers the point.
+    pub fn lookup(&self, position: DVec3, normal: DVec3) -> Result<Lookup<V>> {
+        let mut out: SmallVec<[f32; 32]> = SmallVec::from_elem(0.0, self.config.channels);
+        let (weight_sum, records) = self.lookup_into(position, normal, &mut out)?;
+        Ok(Lookup {
+            value: V::from_channels(&out),
+            weight_sum,
+            records,
+        })
+    }
+
+    /// Neighbour clamping (thesis 3.5.4, Křivánek et al. 2006) for a record about to be inserted
+    /// at `position`: every stored record j whose bounding sphere contains `position` bounds the
+    /// new record's largest radius by Rⱼ + ‖position − xⱼ‖ (Rⱼ its largest radius); the extent is
+    /// scaled uniformly (anisotropy kept) to satisfy all bounds. Stored records are immutable, so
+    /// the reverse clamp of the neighbours is not applied (it would make results depend on
+    /// insertion order).
+    pub fn clamp_to_neighbours(&self, position: DVec3, extent: &Extent) -> Result<Extent> {
+        ensure_finite3(position, "position")?;
+        let mut limit = f64::INFINITY;
+        self.index.query(position, |id| {
+            let (head, _) = self.stored(id);
+            limit = limit.min(head.max_radius() + (position - head.position()).length());
+        });
+        let r = extent.max_radius();
+        Ok(if r > limit {
+            extent.scaled(limit / r)
+        } else {
+            *extent
+        })
+    }
+
+    /// Identity keys of all records, sorted (equal for two caches holding the same records).
+    pub fn keys(&self) -> Vec<u64> {
+        let mut keys: Vec<u64> = (0..self.len() as u32)
+            .map(|i| self.stored(i).0.key)
+            .collect();
+        keys.sort_unstable();
+        keys
+    }
+
+    /// Every stored record, decoded (values as stored; gradients as stored in binary16), in no
+    /// particular order.
+    pub fn records(&self) -> Vec<Record<V>> {
+        (0..self.len() as u32)
+            .map(|i| {
+                let (h, ch) = self.stored(i);
+                let values: SmallVec<[f32; 32]> = ch.iter().map(|c| c.value).collect();
+                let axis = |k: usize, rot: bool| {
+                    let v: SmallVec<[f32; 32]> = ch
+                        .iter()
+                        .map(|c| {
+                            let g = if rot {
+                                c.rotation(h.rotation_scale)
+                            } else {
+                                c.gradient(h.gradient_scale)
+                            };
+                            g[k] as f32
+                        })
+                        .collect();
+                    V::from_channels(&v)
+                };
+                let surface = self.config.domain == Domain::Surface;
+                Record {
+                    position: h.position(),
+                    normal: if surface { h.axis(2) } else { DVec3::ZERO },
+                    value: V::from_channels(&values),
+                    gradient: Some(std::array::from_fn(|k| axis(k, false))),
+                    rotation_gradient: surface.then(|| std::array::from_fn(|k| axis(k, true))),
+                    extent: Extent {
+                        radii: h.radii.map(|r| r as f64),
+                        axes: std::array::from_fn(|k| h.axis(k)),
+                    },
+                }
+            })
+            .collect()
+    }
+
+    /// Adds every record of `other` that `self` does not already hold (duplicates, i.e. records
+    /// with identical stored bytes, are skipped). Returns how many were added. Both caches must
+    /// have the same channel count and domain; `self` keeps its interpolation settings.
+    /// `other` may be `self` (a no-op).
+    pub fn merge(&self, other: &Cache<V>) -> Result<usize> {
+        if other.config.channels != self.config.channels
+            || other.config.domain != self.config.domain
+        {
+            return Err(Error::InvalidArgument(format!(
+                "cannot merge a cache of {} channels ({:?}) into one of {} channels ({:?})",
+                other.config.channels,
+                other.config.domain,
+                self.config.channels,
+                self.config.domain
+            )));
+        }
+        let mut added = 0;
+        for id in 0..other.len() as u32 {
+            let (head, chans) = other.stored(id);
+            if self.insert_stored(head, chans)? {
+                added += 1;
+            }
+        }
+        Ok(added)
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,1 +1,242 @@
-//! (in progress)
+//! C wrappers for the radiance cache (`raddiff_cache_*`), over `cache::Cache<Vec<f32>>`.
+
+// These are C entry points: every pointer is NULL-checked and the caller's validity contract is
+// the header's; marking them `unsafe fn` would change nothing for C callers.
+#![allow(clippy::not_unsafe_ptr_arg_deref)]
+
+use std::ffi::{c_char, CStr};
+use std::path::PathBuf;
+
+use glam::DVec3;
+
+use super::common::*;
+use crate::cache::{Cache, CacheConfig, Domain, Extent, Interpolation};
+#[cfg(not(unix))]
+use crate::Error;
+
+/// Records on surfaces: ellipses in the tangent plane, normals compared at lookup.
+pub const RADDIFF_DOMAIN_SURFACE: u32 = 0;
+/// Records in participating media: ellipsoids, normals ignored.
+pub const RADDIFF_DOMAIN_VOLUME: u32 = 1;
+
+/// Ward-Heckbert first-order extrapolation with Krivanek-Gautron weights 1/(t+rho) - 1.
+pub const RADDIFF_INTERP_WARD: u32 = 0;
+/// Anisotropic tent weights (1 - t) times the normal tent (Schwarzhaupt eq. 6.10-6.13).
+pub const RADDIFF_INTERP_TENT: u32 = 1;
+/// Linear-space extrapolation with the cubic kernel 3d^2 - 2d^3, d = 1 - t (Marco et al. eq. 23).
+pub const RADDIFF_INTERP_CUBIC: u32 = 2;
+/// Log-space extrapolation of Jarosz et al. 2008 with the cubic kernel (Marco et al. eq. 4).
+pub const RADDIFF_INTERP_LOG: u32 = 3;
+/// Ward-Heckbert extrapolation with Ward's original weights 1/(t+rho) (no fall-off to 0).
+pub const RADDIFF_INTERP_WARD_CLASSIC: u32 = 4;
+/// Ward-Heckbert extrapolation with Tabellion-Lamorlette weights 1 - (t+rho).
+pub const RADDIFF_INTERP_WARD_TABELLION: u32 = 5;
+
+/// A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
+/// `raddiff_cache_insert` on the same handle at once (lookups never block).
+pub struct raddiff_cache {
+    inner: Cache<Vec<f32>>,
+}
+
+/// How a cache is created.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct raddiff_cache_config {
+    /// Floats per record value (1..=4096).
+    pub channels: u32,
+    /// `RADDIFF_DOMAIN_SURFACE` or `RADDIFF_DOMAIN_VOLUME`.
+    pub domain: u32,
+    /// `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`).
+    pub interpolation: u32,
+    /// Radians in (0, pi]: largest normal deviation for a record to be used (surface domain;
+    /// ignored in volumes). 0.2 is a good default.
+    pub max_normal_deviation: f64,
+}
+
+/// A record to insert.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct raddiff_cache_record {
+    /// Where the gather was computed.
+    pub position: raddiff_vec3,
+    /// Surface normal (need not be unit length); ignored in the volume domain.
+    pub normal: raddiff_vec3,
+    /// `channels` floats.
+    pub value: *const f32,
+    /// Nullable: 3*channels floats, translational gradient, channel-major (`gradient[3*c + k]`
+    /// is the derivative of channel c along world axis k).
+    pub gradient: *const f32,
+    /// Nullable: 3*channels floats, rotational gradient (derivative with respect to the rotation
+    /// vector of the normal, Ward-Heckbert convention), channel-major; surface domain only.
+    pub rotation_gradient: *const f32,
+    /// Surface: radii[0..1] along axes[0] (projected to the tangent plane) and normal x axes[0];
+    /// radii[2] unused. Volume: ellipsoid radii along axes[0..2]. In [1e-30, 1e30].
+    pub radii: [f64; 3],
+    /// Principal axes (need not be unit; may be zero for isotropic radii).
+    pub axes: [raddiff_vec3; 3],
+}
+
+fn config_from_c(c: &raddiff_cache_config) -> Result<CacheConfig, FfiError> {
+    Ok(CacheConfig {
+        channels: c.channels as usize,
+        domain: Domain::try_from(c.domain)?,
+        interpolation: Interpolation::try_from(c.interpolation)?,
+        max_normal_deviation: c.max_normal_deviation,
+    })
+}
+
+unsafe fn path_from_c(path: *const c_char) -> Result<PathBuf, FfiError> {
+    let c = CStr::from_ptr(in_ref(path, "path")?);
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        Ok(PathBuf::from(std::ffi::OsStr::from_bytes(c.to_bytes())))
+    }
+    #[cfg(not(unix))]
+    {
+        c.to_str()
+            .map(PathBuf::from)
+            .map_err(|_| Error::InvalidArgument("path is not valid UTF-8".into()).into())
+    }
+}
+
+/// Creates an empty cache, or returns NULL (with `raddiff_last_error`) for a NULL or invalid
+/// configuration. Free it with `raddiff_cache_free`.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_new(config: *const raddiff_cache_config) -> *mut raddiff_cache {
+    guard_ptr(|| {
+        let config = config_from_c(unsafe { in_ref(config, "config")? })?;
+        let inner = Cache::new(config)?;
+        Ok(Box::into_raw(Box::new(raddiff_cache { inner })))
+    })
+}
+
+/// Frees a cache (NULL is ignored). No other thread may be using it.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_free(cache: *mut raddiff_cache) {
+    if !cache.is_null() {
+        // SAFETY: `cache` came from `raddiff_cache_new` / `raddiff_cache_load` and is freed once.
+        drop(unsafe { Box::from_raw(cache) });
+    }
+}
+
+/// Inserts a record (thread-safe). Inserting a record identical to a stored one is a no-op that
+/// succeeds. `RADDIFF_ERROR_INVALID_ARGUMENT` for non-finite input, radii out of range, a zero
+/// surface normal, or degenerate axes with anisotropic radii.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_insert(
+    cache: *mut raddiff_cache,
+    record: *const raddiff_cache_record,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        let r = unsafe { in_ref(record, "record")? };
+        let channels = cache.inner.config().channels;
+        let value = unsafe { in_slice(r.value, channels, "record->value")? };
+        let gradient = (!r.gradient.is_null())
+            .then(|| unsafe { in_slice(r.gradient, 3 * channels, "record->gradient") })
+            .transpose()?;
+        let rotation = (!r.rotation_gradient.is_null())
+            .then(|| unsafe {
+                in_slice(
+                    r.rotation_gradient,
+                    3 * channels,
+                    "record->rotation_gradient",
+                )
+            })
+            .transpose()?;
+        cache.inner.insert_flat(&crate::cache::RecordInput {
+            position: r.position.into(),
+            normal: r.normal.into(),
+            value,
+            gradient,
+            rotation,
+            extent: Extent {
+                radii: r.radii,
+                axes: r.axes.map(DVec3::from),
+            },
+        })?;
+        Ok(())
+    })
+}
+
+/// Interpolates the cache at `position` with surface normal `normal` (ignored in volumes) into
+/// `value` (`channels` floats) and, if `weight_sum` is not NULL, the sum of the weights used.
+/// `RADDIFF_ERROR_NOT_FOUND` when no record covers the point (outputs untouched). Thread-safe and
+/// lock-free; the result depends only on the set of records covering the point.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_lookup(
+    cache: *const raddiff_cache,
+    position: raddiff_vec3,
+    normal: raddiff_vec3,
+    value: *mut f32,
+    weight_sum: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        if value.is_null() {
+            return Err(FfiError::Null("value"));
+        }
+        let channels = cache.inner.config().channels;
+        let mut tmp = vec![0.0f32; channels];
+        let (sum, _) = cache
+            .inner
+            .lookup_into(position.into(), normal.into(), &mut tmp)?;
+        // SAFETY: the caller provides `channels` writable floats at `value`.
+        unsafe { std::ptr::copy_nonoverlapping(tmp.as_ptr(), value, channels) };
+        if let Some(w) = unsafe { weight_sum.as_mut() } {
+            *w = sum;
+        }
+        Ok(())
+    })
+}
+
+/// Number of records (0 for NULL).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_len(cache: *const raddiff_cache) -> usize {
+    // SAFETY: NULL or a live handle.
+    unsafe { cache.as_ref() }.map_or(0, |c| c.inner.len())
+}
+
+/// Writes the cache to `path` atomically (temporary file in the same directory, fsync, rename):
+/// a crash never leaves a damaged file. `RADDIFF_ERROR_IO` on failure.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_save(
+    cache: *const raddiff_cache,
+    path: *const c_char,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        let path = unsafe { path_from_c(path)? };
+        cache.inner.save(path)?;
+        Ok(())
+    })
+}
+
+/// Loads a cache saved by `raddiff_cache_save` (channels, domain and interpolation come from the
+/// file). Returns NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in
+/// `raddiff_last_error` for unreadable, truncated, damaged or wrong-version files.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_load(path: *const c_char) -> *mut raddiff_cache {
+    guard_ptr(|| {
+        let path = unsafe { path_from_c(path)? };
+        let inner = Cache::load(path)?;
+        Ok(Box::into_raw(Box::new(raddiff_cache { inner })))
+    })
+}
+
+/// Adds to `into` every record of `from` it does not hold yet (identical records, e.g. the same
+/// gather saved by two render nodes, are detected and skipped). Both caches need the same channel
+/// count and domain (`RADDIFF_ERROR_INVALID_ARGUMENT` otherwise). `from` may equal `into`.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_merge(
+    into: *mut raddiff_cache,
+    from: *const raddiff_cache,
+) -> raddiff_status {
+    guard(|| {
+        let into = unsafe { in_ref(into, "into")? };
+        let from = unsafe { in_ref(from, "from")? };
+        into.inner.merge(&from.inner)?;
+        Ok(())
+    })
+}

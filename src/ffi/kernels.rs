@@ -1,5 +1,9 @@
 //! C wrappers for the closed-form derivative kernels.
 
+// C entry points take raw pointers by design: each is NULL-checked (`out_ref`, `in_slice`) and its
+// validity for the stated length is the C caller's contract, documented on every function.
+#![allow(clippy::not_unsafe_ptr_arg_deref)]
+
 use super::common::*;
 use crate::kernels;
 
@@ -17,6 +21,87 @@ pub extern "C" fn raddiff_transmittance(
         let out = unsafe { out_ref(out, "out")? };
         let order = order_from_c(order)?;
         *out = kernels::transmittance(x.into(), y.into(), sigma_t, order)?.into();
+        Ok(())
+    })
+}
+
+/// Transmittance through a heterogeneous medium from `count >= 1` extinction samples `sigma_t`
+/// (and optionally their spatial gradients, `sigma_t_gradient`, NULL when unknown) at the midpoints
+/// `t_i = (i + 0.5)/count` of the segment `x -> y`; gradient with respect to `x` (see the Rust
+/// `kernels::transmittance_marched` for the exact definition). `order` must be
+/// `RADDIFF_ORDER_VALUE` or `RADDIFF_ORDER_GRADIENT`; `RADDIFF_ORDER_HESSIAN`, `count == 0`, a
+/// negative or non-finite sample give `RADDIFF_ERROR_INVALID_ARGUMENT`.
+/// `sigma_t` must point to `count` doubles and `sigma_t_gradient` to `count` vectors (or be NULL).
+#[no_mangle]
+pub extern "C" fn raddiff_transmittance_marched(
+    x: raddiff_vec3,
+    y: raddiff_vec3,
+    sigma_t: *const f64,
+    sigma_t_gradient: *const raddiff_vec3,
+    count: usize,
+    order: u32,
+    out: *mut raddiff_deriv3,
+) -> raddiff_status {
+    guard(|| {
+        let out = unsafe { out_ref(out, "out")? };
+        let order = order_from_c(order)?;
+        if count == 0 {
+            return Err(crate::Error::InvalidArgument(
+                "count must be >= 1 (at least one sigma_t sample)".into(),
+            )
+            .into());
+        }
+        let sigma = unsafe { in_slice(sigma_t, count, "sigma_t")? };
+        let gradient: Option<Vec<glam::DVec3>> = if sigma_t_gradient.is_null() {
+            None
+        } else {
+            let g = unsafe { in_slice(sigma_t_gradient, count, "sigma_t_gradient")? };
+            Some(g.iter().map(|&v| v.into()).collect())
+        };
+        *out =
+            kernels::transmittance_marched(x.into(), y.into(), sigma, gradient.as_deref(), order)?
+                .into();
+        Ok(())
+    })
+}
+
+/// Unsigned solid angle (steradians) subtended at `x` by the triangle `(a, b, c)`, with gradient
+/// and Hessian with respect to `x` (see the Rust `kernels::triangle_solid_angle`). On the
+/// triangle's plane: 2π inside, 0 outside, zero derivatives; `RADDIFF_ERROR_DEGENERATE` on an edge or
+/// at a vertex; zero-area triangles give 0.
+#[no_mangle]
+pub extern "C" fn raddiff_triangle_solid_angle(
+    x: raddiff_vec3,
+    a: raddiff_vec3,
+    b: raddiff_vec3,
+    c: raddiff_vec3,
+    order: u32,
+    out: *mut raddiff_deriv3,
+) -> raddiff_status {
+    guard(|| {
+        let out = unsafe { out_ref(out, "out")? };
+        let order = order_from_c(order)?;
+        *out = kernels::triangle_solid_angle(x.into(), a.into(), b.into(), c.into(), order)?.into();
+        Ok(())
+    })
+}
+
+/// Flatland form factor: the angle subtended at `x` by the segment `(a, b)`, divided by 2π, with
+/// gradient and Hessian (row-major 2x2) with respect to `x` (see the Rust
+/// `kernels::segment_form_factor_2d`). On the segment's line: 1/2 between the endpoints, 0 beyond,
+/// zero derivatives; `RADDIFF_ERROR_DEGENERATE` at an endpoint; a zero-length segment gives 0.
+#[no_mangle]
+pub extern "C" fn raddiff_segment_form_factor_2d(
+    x: raddiff_vec2,
+    a: raddiff_vec2,
+    b: raddiff_vec2,
+    order: u32,
+    out: *mut raddiff_deriv2,
+) -> raddiff_status {
+    guard(|| {
+        let out = unsafe { out_ref(out, "out")? };
+        let order = order_from_c(order)?;
+        *out = kernels::segment_form_factor_2d(x.into(), a.into(), b.into(), order)?.into();
         Ok(())
     })
 }

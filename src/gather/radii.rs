@@ -1,1 +1,412 @@
-//! (in progress)
+//! Record radii from a Hessian: the ellipse (surface, flatland medium) or ellipsoid (medium) over
+//! which a first-order extrapolation stays within an error tolerance.
+//!
+//! # What is bounded (ERRATA item 5)
+//!
+//! A record at x extrapolates to first order, `f(x + d) ≈ f(x) + ∇f·d`. Taking the second-order
+//! Taylor expansion as the oracle, the error at offset `d` is `½ |dᵀ H d|` (thesis eq. 4.16, Marco
+//! eq. 20). In the eigenbasis of the symmetric Hessian, `|dᵀ H d| ≤ Σ |λ_i| d_i²` (triangle
+//! inequality; equality when H is definite). The quantity this module bounds is the **integrated**
+//! error over the record's region D, an ellipse (2D) or ellipsoid (3D) whose axes are the
+//! eigenvectors:
+//!
+//! ```text
+//!   E(D) = ½ ∫_D |dᵀ H d| dd  ≤  B(D) = ½ Σ_i |λ_i| ∫_D d_i² dd
+//!   2D, semi-axes a_i:  ∫ d_1² = π a_1³ a_2 / 4            ⇒ B = (π/8)  a_1 a_2     Σ |λ_i| a_i²
+//!   3D, semi-axes a_i:  ∫ d_1² = 4π a_1³ a_2 a_3 / 15      ⇒ B = (2π/15) a_1 a_2 a_3 Σ |λ_i| a_i²
+//! ```
+//!
+//! and the radii are chosen so that `B(D) = τ` exactly, with the tolerance `τ = error` in
+//! [`ErrorMode::Absolute`] (units: value·L² in 2D, value·L³ in 3D) or `τ = error·|value|` in
+//! [`ErrorMode::Relative`] (units L², L³: the thesis eq. 6.7 and Marco eq. 20 divide by the value).
+//!
+//! Shape: the ellipse of largest area (ellipsoid of largest volume) with `B = τ` has
+//! `|λ_i| a_i²` equal on every axis (Lagrange multipliers; AM-GM), so `a_i ∝ |λ_i|^{-1/2}`. The
+//! axis ratios are then clamped to `max_anisotropy` relative to the shortest axis, and one common
+//! scale solves `B = τ` for the clamped shape, so the bound holds whatever the clamp did.
+//!
+//! Relation to the papers: for an isotropic Hessian in 2D this is exactly thesis eq. 4.19 / 6.9 and
+//! Marco eq. 21, `R = (4τ/(π|λ|))^{1/4}`. The papers' anisotropic formulas (thesis eq. 4.22 / 6.9,
+//! Marco eq. 21) take every axis from that isotropic formula; over the resulting ellipse `B` is
+//! `τ (a_1/a_2 + a_2/a_1)/2`, above the tolerance whenever the radii differ. Marco eq. 22,
+//! `R = (15τ/(4π|λ|))^{1/5}`, bounds `∫ |λ| d_1²` (one axis, no ½); for an isotropic Hessian `B` is
+//! then 1.5 τ. Ours is `R = (5τ/(2π|λ|))^{1/5}` in that case. `tests/radii_*.rs` integrate the
+//! error numerically over the returned regions and check both statements.
+//!
+//! Limits: where the Hessian vanishes (all eigenvalues zero, or the radius would exceed it) a
+//! radius is [`MAX_RADIUS`]; tangent eigenvalues below the rounding level of the projection
+//! (16 ε times the largest entry of the 3x3 Hessian) count as zero; a zero eigenvalue alone is handled by the anisotropy clamp. A zero
+//! tolerance (relative mode at `value == 0`, or `error == 0`) with a non-zero Hessian gives radii 0.
+
+use glam::{DMat2, DMat3, DVec2, DVec3};
+use nalgebra::{Matrix2, Matrix3};
+
+use crate::error::{ensure_finite, ensure_finite3, Error, Result};
+
+/// Largest radius returned (in the caller's length unit L): the radius of a record whose Hessian is
+/// zero (or so small that the formula would exceed it) along that axis.
+pub static MAX_RADIUS: f64 = 1e30;
+
+/// How the error tolerance is measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum ErrorMode {
+    /// `error` bounds the integrated absolute error (thesis eq. 4.21-4.22).
+    Absolute = 0,
+    /// `error` bounds the integrated error divided by `|value|` (thesis eq. 6.7-6.9, Marco eq. 20-22).
+    Relative = 1,
+}
+
+impl TryFrom<u32> for ErrorMode {
+    type Error = Error;
+    fn try_from(v: u32) -> Result<Self> {
+        match v {
+            0 => Ok(ErrorMode::Absolute),
+            1 => Ok(ErrorMode::Relative),
+            _ => Err(Error::InvalidArgument(format!(
+                "error mode {v} is not RADDIFF_ERROR_ABSOLUTE (0) or RADDIFF_ERROR_RELATIVE (1)"
+            ))),
+        }
+    }
+}
+
+/// An elliptical surface record: semi-axes `radii[0] <= radii[1]` along the unit tangent `axes`.
+///
+/// `axes[0]` is the direction of strongest curvature (largest |eigenvalue|); both axes are
+/// perpendicular to the normal and to each other.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceRadii {
+    /// Semi-axis lengths (L), ascending.
+    pub radii: [f64; 2],
+    /// Unit world-space directions of the semi-axes.
+    pub axes: [DVec3; 2],
+}
+
+/// An ellipsoidal media record: semi-axes `radii[0] <= radii[1] <= radii[2]` along orthonormal `axes`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VolumeRadii {
+    /// Semi-axis lengths (L), ascending.
+    pub radii: [f64; 3],
+    /// Unit directions of the semi-axes (a right- or left-handed orthonormal set).
+    pub axes: [DVec3; 3],
+}
+
+/// An elliptical flatland record (Marco eq. 21): semi-axes `radii[0] <= radii[1]` along `axes`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EllipseRadii {
+    /// Semi-axis lengths (L), ascending.
+    pub radii: [f64; 2],
+    /// Unit directions of the semi-axes.
+    pub axes: [DVec2; 2],
+}
+
+/// The 2x2 Hessian on the plane spanned by the orthonormal `u1`, `u2` (thesis eq. 4.17):
+/// `[[u1·H u1, u1·H u2], [u2·H u1, u2·H u2]]`, symmetrized.
+pub fn tangent_hessian(hessian: DMat3, u1: DVec3, u2: DVec3) -> DMat2 {
+    let a = hessian * u1;
+    let b = hessian * u2;
+    let off = 0.5 * (u1.dot(b) + u2.dot(a));
+    DMat2::from_cols(DVec2::new(u1.dot(a), off), DVec2::new(off, u2.dot(b)))
+}
+
+/// An orthonormal tangent basis `(u1, u2)` of the unit `normal` with `u1 × u2 = normal`
+/// (Duff et al. 2017, continuous except on the `normal.z = -1` branch cut).
+pub fn tangent_basis(normal: DVec3) -> (DVec3, DVec3) {
+    let sign = 1f64.copysign(normal.z);
+    let a = -1.0 / (sign + normal.z);
+    let b = normal.x * normal.y * a;
+    (
+        DVec3::new(
+            1.0 + sign * normal.x * normal.x * a,
+            sign * b,
+            -sign * normal.x,
+        ),
+        DVec3::new(b, sign + normal.y * normal.y * a, -normal.y),
+    )
+}
+
+/// Integrated error bound `B = ½ Σ |λ_i| ∫ d_i²` over the ellipse with semi-axes `radii[i]` along
+/// the eigenvectors of eigenvalues `eigenvalues[i]` (module docs). Units: value·L².
+pub fn ellipse_error_bound(eigenvalues: [f64; 2], radii: [f64; 2]) -> f64 {
+    let s: f64 = eigenvalues
+        .iter()
+        .zip(radii)
+        .map(|(l, a)| l.abs() * a * a)
+        .sum();
+    std::f64::consts::PI / 8.0 * radii[0] * radii[1] * s
+}
+
+/// Integrated error bound `B = ½ Σ |λ_i| ∫ d_i²` over the ellipsoid with semi-axes `radii[i]` along
+/// the eigenvectors of eigenvalues `eigenvalues[i]` (module docs). Units: value·L³.
+pub fn ellipsoid_error_bound(eigenvalues: [f64; 3], radii: [f64; 3]) -> f64 {
+    let s: f64 = eigenvalues
+        .iter()
+        .zip(radii)
+        .map(|(l, a)| l.abs() * a * a)
+        .sum();
+    2.0 * std::f64::consts::PI / 15.0 * radii[0] * radii[1] * radii[2] * s
+}
+
+fn check_common(value: f64, error: f64, max_anisotropy: f64) -> Result<()> {
+    ensure_finite(value, "value")?;
+    ensure_finite(error, "error")?;
+    ensure_finite(max_anisotropy, "max_anisotropy")?;
+    if error < 0.0 {
+        return Err(Error::InvalidArgument(format!(
+            "error must be >= 0 (got {error})"
+        )));
+    }
+    if max_anisotropy < 1.0 {
+        return Err(Error::InvalidArgument(format!(
+            "max_anisotropy must be >= 1 (got {max_anisotropy})"
+        )));
+    }
+    Ok(())
+}
+
+fn tolerance(value: f64, error: f64, mode: ErrorMode) -> f64 {
+    match mode {
+        ErrorMode::Absolute => error,
+        ErrorMode::Relative => error * value.abs(),
+    }
+}
+
+/// Semi-axes for the eigenvalue magnitudes `mu` sorted descending (module docs), in the same order.
+///
+/// `mu` is given divided by a positive `scale` (so that its largest entry is about 1 and nothing
+/// overflows); `tau` is the tolerance in unscaled units.
+fn solve_radii<const D: usize>(
+    mu: [f64; D],
+    scale: f64,
+    tau: f64,
+    max_anisotropy: f64,
+) -> [f64; D] {
+    let top = mu[0];
+    if top <= 0.0 || scale <= 0.0 {
+        return [MAX_RADIUS; D];
+    }
+    if tau <= 0.0 {
+        return [0.0; D];
+    }
+    // Shape: a_i ∝ |λ_i|^{-1/2} relative to the shortest axis, clamped to the anisotropy.
+    let mut shape = [1.0; D];
+    for i in 1..D {
+        let ratio = mu[i] / top;
+        shape[i] = if ratio * max_anisotropy * max_anisotropy <= 1.0 {
+            max_anisotropy
+        } else {
+            ratio.recip().sqrt()
+        };
+    }
+    let (constant, power): (f64, f64) = if D == 2 {
+        (std::f64::consts::PI / 8.0, 4.0)
+    } else {
+        (2.0 * std::f64::consts::PI / 15.0, 5.0)
+    };
+    let product: f64 = shape.iter().product();
+    let weighted: f64 = mu.iter().zip(shape).map(|(m, s)| m / top * s * s).sum();
+    // B(R·shape) = constant · R^power · product · (top·scale) · weighted = tau.
+    let r = ((tau / (top * scale)) / (constant * product * weighted)).powf(power.recip());
+    let mut out = [0.0; D];
+    for i in 0..D {
+        let a = r * shape[i];
+        out[i] = if a.is_finite() {
+            a.min(MAX_RADIUS)
+        } else {
+            MAX_RADIUS
+        };
+    }
+    out
+}
+
+fn max_abs(values: &[f64]) -> f64 {
+    values.iter().fold(0.0, |m, v| m.max(v.abs()))
+}
+
+/// Eigen-decomposition of a symmetric 2x2 matrix, eigenvalues by descending magnitude, after scaling
+/// by `scale` (returned) so that the largest entry is 1.
+fn eigen2(m: DMat2) -> (f64, [f64; 2], [DVec2; 2]) {
+    let scale = max_abs(&m.to_cols_array());
+    if scale == 0.0 {
+        return (0.0, [0.0; 2], [DVec2::X, DVec2::Y]);
+    }
+    let s = m * scale.recip();
+    let off = 0.5 * (s.x_axis.y + s.y_axis.x);
+    let eig = Matrix2::new(s.x_axis.x, off, off, s.y_axis.y).symmetric_eigen();
+    let mut idx = [0usize, 1];
+    idx.sort_by(|&a, &b| {
+        eig.eigenvalues[b]
+            .abs()
+            .total_cmp(&eig.eigenvalues[a].abs())
+    });
+    let vals = idx.map(|i| eig.eigenvalues[i]);
+    let first = eig.eigenvectors.column(idx[0]);
+    let v0 = DVec2::new(first[0], first[1]).normalize();
+    // The second axis is the perpendicular of the first: exactly orthonormal, whatever the solver did.
+    let v1 = v0.perp();
+    (scale, vals, [v0, v1])
+}
+
+/// Eigen-decomposition of a symmetric 3x3 matrix, eigenvalues by descending magnitude, after scaling
+/// by `scale` (returned) so that the largest entry is 1.
+fn eigen3(m: DMat3) -> (f64, [f64; 3], [DVec3; 3]) {
+    let scale = max_abs(&m.to_cols_array());
+    if scale == 0.0 {
+        return (0.0, [0.0; 3], [DVec3::X, DVec3::Y, DVec3::Z]);
+    }
+    let s = m * scale.recip();
+    let sym = |i: usize, j: usize| 0.5 * (s.col(j)[i] + s.col(i)[j]);
+    let mat = Matrix3::from_fn(sym);
+    let eig = mat.symmetric_eigen();
+    let mut idx = [0usize, 1, 2];
+    idx.sort_by(|&a, &b| {
+        eig.eigenvalues[b]
+            .abs()
+            .total_cmp(&eig.eigenvalues[a].abs())
+    });
+    let vals = idx.map(|i| eig.eigenvalues[i]);
+    let col = |i: usize| {
+        let c = eig.eigenvectors.column(idx[i]);
+        DVec3::new(c[0], c[1], c[2])
+    };
+    // Re-orthonormalize (Gram-Schmidt, third = cross) so the axes are exactly orthonormal.
+    let v0 = col(0).normalize();
+    let v1 = (col(1) - v0 * v0.dot(col(1))).normalize();
+    let v2 = v0.cross(v1);
+    (scale, vals, [v0, v1, v2])
+}
+
+/// Radii of an elliptical surface record from the 3x3 Hessian at a surface point (thesis ch. 4.2 and
+/// 6.3, with the bound of the module docs).
+///
+/// * `hessian`: 3x3 translation Hessian of the cached quantity (value/L²); only its symmetric part
+///   matters and it is projected onto the tangent plane of `normal` (thesis eq. 4.17).
+/// * `normal`: unit surface normal (length within 1e-6 of 1).
+/// * `value`: the record's value (used in [`ErrorMode::Relative`]).
+/// * `error`: tolerance ≥ 0 on the integrated error over the record (module docs for units).
+/// * `max_anisotropy`: largest `radii[1] / radii[0]`, ≥ 1 (the thesis uses 2).
+///
+/// Returns radii ascending and world-space tangent axes. Never Inf or NaN: see the module limits.
+pub fn surface_radii(
+    hessian: DMat3,
+    normal: DVec3,
+    value: f64,
+    error: f64,
+    mode: ErrorMode,
+    max_anisotropy: f64,
+) -> Result<SurfaceRadii> {
+    if !hessian.is_finite() {
+        return Err(Error::InvalidArgument("hessian is not finite".into()));
+    }
+    ensure_finite3(normal, "normal")?;
+    check_common(value, error, max_anisotropy)?;
+    let len = normal.length();
+    if (len - 1.0).abs() > 1e-6 {
+        return Err(Error::InvalidArgument(format!(
+            "normal must be a unit vector (length {len})"
+        )));
+    }
+    let n = normal / len;
+    let (u1, u2) = tangent_basis(n);
+    let (scale, vals, vecs) = eigen2(tangent_hessian(hessian, u1, u2));
+    // The projection rounds at ~ε‖H‖: tangent curvature below that is noise, not information.
+    let floor = 16.0 * f64::EPSILON * max_abs(&hessian.to_cols_array());
+    let mu = vals.map(|v| {
+        if v.abs() * scale <= floor {
+            0.0
+        } else {
+            v.abs()
+        }
+    });
+    let radii = solve_radii(mu, scale, tolerance(value, error, mode), max_anisotropy);
+    let axes = vecs.map(|v| (u1 * v.x + u2 * v.y).normalize());
+    Ok(SurfaceRadii { radii, axes })
+}
+
+/// Radii of an elliptical flatland media record from the 2x2 Hessian (Marco eq. 21, with the bound
+/// of the module docs). Arguments as in [`surface_radii`] without the projection.
+pub fn ellipse_radii(
+    hessian: DMat2,
+    value: f64,
+    error: f64,
+    mode: ErrorMode,
+    max_anisotropy: f64,
+) -> Result<EllipseRadii> {
+    if !hessian.is_finite() {
+        return Err(Error::InvalidArgument("hessian is not finite".into()));
+    }
+    check_common(value, error, max_anisotropy)?;
+    let (scale, vals, axes) = eigen2(hessian);
+    let mu = vals.map(|v| v.abs());
+    let radii = solve_radii(mu, scale, tolerance(value, error, mode), max_anisotropy);
+    Ok(EllipseRadii { radii, axes })
+}
+
+/// Radii of an ellipsoidal media record from the 3x3 Hessian (Marco eq. 22, with the bound of the
+/// module docs; for an isotropic Hessian `R = (5τ/(2π|λ|))^{1/5}`).
+///
+/// * `max_anisotropy`: largest `radii[2] / radii[0]`, ≥ 1.
+///
+/// Other arguments as in [`surface_radii`]. Returns radii ascending along orthonormal axes, the
+/// first along the eigenvector of largest |eigenvalue|.
+pub fn volume_radii(
+    hessian: DMat3,
+    value: f64,
+    error: f64,
+    mode: ErrorMode,
+    max_anisotropy: f64,
+) -> Result<VolumeRadii> {
+    if !hessian.is_finite() {
+        return Err(Error::InvalidArgument("hessian is not finite".into()));
+    }
+    check_common(value, error, max_anisotropy)?;
+    let (scale, vals, axes) = eigen3(hessian);
+    let mu = vals.map(|v| v.abs());
+    let radii = solve_radii(mu, scale, tolerance(value, error, mode), max_anisotropy);
+    Ok(VolumeRadii { radii, axes })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn isotropic_2d_matches_thesis_eq_4_19() {
+        let h = DMat2::from_diagonal(DVec2::new(3.0, 3.0));
+        let r = ellipse_radii(h, 1.0, 0.02, ErrorMode::Absolute, 2.0).unwrap();
+        let expect = (4.0 * 0.02 / (std::f64::consts::PI * 3.0)).powf(0.25);
+        assert!((r.radii[0] - expect).abs() < 1e-14 * expect);
+        assert!((r.radii[1] - expect).abs() < 1e-14 * expect);
+    }
+
+    #[test]
+    fn isotropic_3d_is_marco_eq_22_without_the_overshoot() {
+        let h = DMat3::from_diagonal(DVec3::splat(-2.0));
+        let r = volume_radii(h, 4.0, 0.1, ErrorMode::Relative, 2.0).unwrap();
+        let tau = 0.4;
+        let ours = (5.0 * tau / (2.0 * std::f64::consts::PI * 2.0)).powf(0.2);
+        for a in r.radii {
+            assert!((a - ours).abs() < 1e-13 * ours);
+        }
+        let marco = (15.0 * tau / (4.0 * std::f64::consts::PI * 2.0)).powf(0.2);
+        let b = ellipsoid_error_bound([-2.0; 3], [marco; 3]);
+        assert!((b / tau - 1.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tangent_basis_is_orthonormal_and_right_handed() {
+        for n in [
+            DVec3::Z,
+            -DVec3::Z,
+            DVec3::X,
+            DVec3::new(0.3, -0.4, 0.866).normalize(),
+            DVec3::new(1e-9, 0.0, -1.0).normalize(),
+        ] {
+            let (u1, u2) = tangent_basis(n);
+            assert!((u1.length() - 1.0).abs() < 1e-14);
+            assert!((u2.length() - 1.0).abs() < 1e-14);
+            assert!(u1.dot(u2).abs() < 1e-14 && u1.dot(n).abs() < 1e-14);
+            assert!((u1.cross(u2) - n).length() < 1e-14);
+        }
+    }
+}

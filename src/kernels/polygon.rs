@@ -1,1 +1,507 @@
-//! (in progress)
+//! Planar polygons seen from a point: validation, exact power-of-two rescaling, clipping by the
+//! tangent plane, the far-field quadrature of the form factor, and Arvo's irradiance Jacobian.
+//!
+//! The public entry points for form factors are in [`form_factor`](super::form_factor); this module
+//! holds the polygon machinery they share, plus [`vector_form_factor_jacobian`], an independent
+//! implementation of Arvo's irradiance Jacobian (Schwarzhaupt thesis §5.1) used to cross-check the
+//! form-factor gradient.
+
+use std::sync::OnceLock;
+
+use glam::{DMat3, DVec2, DVec3};
+use smallvec::SmallVec;
+
+use crate::error::{ensure_finite3, Error, Result};
+use crate::{Deriv3, Order};
+
+use super::form_factor::{clip_edge_term, edge_term, outer_self, sym_outer, EdgeFrame};
+
+/// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).
+pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;
+/// Largest distance of a vertex from the polygon's plane, relative to its extent.
+const PLANARITY_TOLERANCE: f64 = 1e-8;
+/// `2·area / extent²` at or below which a polygon counts as having zero area.
+const AREA_TOLERANCE: f64 = 1e-13;
+/// Distance (from the vertex centroid) over radius above which the form factor is integrated by
+/// quadrature instead of the edge sum. Chosen by measurement (see `tests/kernels_b_accuracy.rs`): at
+/// 16 the edge sum has lost ~16 ulps to cancellation and the 8x8 Gauss rule is at its rounding floor.
+pub(crate) const FAR_FIELD_RATIO: f64 = 16.0;
+/// Gauss-Legendre points per direction on each fan triangle in the far field.
+const GAUSS_POINTS: usize = 8;
+
+const FRAC_1_PI: f64 = std::f64::consts::FRAC_1_PI;
+
+type Points = SmallVec<[DVec3; 8]>;
+
+/// Validates a receiver normal: finite, unit within [`NORMAL_TOLERANCE`]; returns it renormalized.
+pub(crate) fn unit_normal(n: DVec3) -> Result<DVec3> {
+    ensure_finite3(n, "n")?;
+    let len = n.length();
+    if (len - 1.0).abs() > NORMAL_TOLERANCE || len.is_nan() {
+        return Err(Error::InvalidArgument(format!(
+            "n must be a unit vector (|n| = {len}, tolerance {NORMAL_TOLERANCE:e})"
+        )));
+    }
+    Ok(n / len)
+}
+
+/// `2^k` for `k` in the normal exponent range.
+fn pow2(k: i32) -> f64 {
+    let k = k.clamp(-1022, 1023);
+    f64::from_bits(((k + 1023) as u64) << 52)
+}
+
+/// Binary exponent of a positive finite `v` (clamped to the normal range).
+fn exponent(v: f64) -> i32 {
+    (((v.to_bits() >> 52) & 0x7ff) as i32 - 1023).max(-1022)
+}
+
+/// Positions relative to the first vertex (`u`) and to `x` (`r`), rescaled by an exact power of two
+/// so that the largest coordinate is in [1, 2): huge and tiny scenes neither overflow nor lose
+/// precision, and derivatives are scaled back exactly.
+pub(crate) struct Scaled {
+    pub u: Points,
+    pub r: Points,
+    /// d(scaled coordinate)/d(world coordinate).
+    inv_scale: f64,
+}
+
+impl Scaled {
+    pub(crate) fn new(x: DVec3, vertices: &[DVec3]) -> Result<Self> {
+        let attempt = |pre: f64| -> (Points, Points) {
+            let v0 = vertices[0] * pre;
+            let xs = x * pre;
+            let u = vertices.iter().map(|v| *v * pre - v0).collect();
+            let r = vertices.iter().map(|v| *v * pre - xs).collect();
+            (u, r)
+        };
+        let finite = |p: &Points| p.iter().all(|v| v.is_finite());
+        let mut pre = 1.0;
+        let (mut u, mut r) = attempt(pre);
+        if !finite(&u) || !finite(&r) {
+            // Differences of coordinates near ±f64::MAX overflow: scale first (exactly).
+            pre = pow2(-4);
+            (u, r) = attempt(pre);
+        }
+        let max_abs = u
+            .iter()
+            .chain(r.iter())
+            .map(|v| v.abs().max_element())
+            .fold(0.0, f64::max);
+        if max_abs == 0.0 {
+            return Err(Error::Degenerate("x and all vertices coincide".into()));
+        }
+        let k = exponent(max_abs);
+        let s = pow2(-k);
+        for v in u.iter_mut().chain(r.iter_mut()) {
+            *v *= s;
+        }
+        Ok(Scaled {
+            u,
+            r,
+            inv_scale: pre * s,
+        })
+    }
+
+    /// Converts derivatives in scaled units back to world units; non-finite results are refused.
+    pub(crate) fn finish(&self, mut d: Deriv3, order: Order) -> Result<Deriv3> {
+        if order.gradient() {
+            d.gradient *= self.inv_scale;
+        }
+        if order.hessian() {
+            d.hessian *= self.inv_scale * self.inv_scale;
+        }
+        if d.is_finite() {
+            Ok(d)
+        } else {
+            Err(Error::Degenerate(
+                "form factor derivatives overflow f64 for this configuration".into(),
+            ))
+        }
+    }
+}
+
+/// The polygon's plane, checked for area, planarity and simplicity.
+struct Plane {
+    normal: DVec3,
+}
+
+impl Plane {
+    fn new(u: &[DVec3]) -> Result<Self> {
+        let count = u.len();
+        // Newell's normal, relative to the first vertex (u[0] = 0).
+        let mut nn = DVec3::ZERO;
+        for i in 0..count {
+            nn += u[i].cross(u[(i + 1) % count]);
+        }
+        let extent = u.iter().map(|v| v.length()).fold(0.0, f64::max);
+        let twice_area = nn.length();
+        if twice_area <= AREA_TOLERANCE * extent * extent || twice_area.is_nan() {
+            return Err(Error::Degenerate(format!(
+                "polygon has (numerically) zero area (2*area = {twice_area:e}, extent {extent:e})"
+            )));
+        }
+        let normal = nn / twice_area;
+        let off_plane = u.iter().map(|v| normal.dot(*v).abs()).fold(0.0, f64::max);
+        if off_plane > PLANARITY_TOLERANCE * extent {
+            return Err(Error::InvalidArgument(format!(
+                "polygon is not planar: a vertex is {off_plane:e} from its plane \
+                 (tolerance {PLANARITY_TOLERANCE:e} x extent {extent:e})"
+            )));
+        }
+        if count > 3 {
+            check_simple(u, normal)?;
+        }
+        Ok(Plane { normal })
+    }
+}
+
+fn orient2(a: DVec2, b: DVec2, c: DVec2) -> f64 {
+    (b - a).perp_dot(c - a)
+}
+
+fn on_segment(a: DVec2, b: DVec2, p: DVec2) -> bool {
+    p.x >= a.x.min(b.x) && p.x <= a.x.max(b.x) && p.y >= a.y.min(b.y) && p.y <= a.y.max(b.y)
+}
+
+/// Whether closed segments `[a, b]` and `[c, d]` share a point.
+fn segments_touch(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
+    let d1 = orient2(c, d, a);
+    let d2 = orient2(c, d, b);
+    let d3 = orient2(a, b, c);
+    let d4 = orient2(a, b, d);
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0))
+        && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0))
+    {
+        return true;
+    }
+    (d1 == 0.0 && on_segment(c, d, a))
+        || (d2 == 0.0 && on_segment(c, d, b))
+        || (d3 == 0.0 && on_segment(a, b, c))
+        || (d4 == 0.0 && on_segment(a, b, d))
+}
+
+/// Rejects polygons where two non-adjacent edges touch (projected on the dominant plane).
+fn check_simple(u: &[DVec3], normal: DVec3) -> Result<()> {
+    let a = normal.abs();
+    let project = |v: DVec3| {
+        if a.x >= a.y && a.x >= a.z {
+            DVec2::new(v.y, v.z)
+        } else if a.y >= a.z {
+            DVec2::new(v.z, v.x)
+        } else {
+            DVec2::new(v.x, v.y)
+        }
+    };
+    let p: SmallVec<[DVec2; 8]> = u.iter().map(|v| project(*v)).collect();
+    let count = p.len();
+    for i in 0..count {
+        for j in i + 2..count {
+            if i == 0 && j == count - 1 {
+                continue;
+            }
+            if segments_touch(p[i], p[(i + 1) % count], p[j], p[(j + 1) % count]) {
+                return Err(Error::InvalidArgument(format!(
+                    "polygon is not simple: edges {i} and {j} intersect"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A vertex of the clipped polygon.
+#[derive(Clone, Copy)]
+struct ClipVertex {
+    /// Relative to the first input vertex (exact edge vectors).
+    u: DVec3,
+    /// Relative to x.
+    r: DVec3,
+    /// On the clip line (created by clipping, or an input vertex exactly on the tangent plane).
+    on_line: bool,
+}
+
+/// Sutherland-Hodgman clip by the half-space `n·r ≥ 0`. Returns the clipped loop and whether any
+/// vertex was cut away.
+fn clip(u: &[DVec3], r: &[DVec3], n: DVec3) -> (SmallVec<[ClipVertex; 10]>, bool) {
+    let count = u.len();
+    let d: SmallVec<[f64; 8]> = r.iter().map(|r| n.dot(*r)).collect();
+    let mut out = SmallVec::new();
+    let mut cut = false;
+    for i in 0..count {
+        let j = (i + 1) % count;
+        if d[i] >= 0.0 {
+            out.push(ClipVertex {
+                u: u[i],
+                r: r[i],
+                on_line: d[i] == 0.0,
+            });
+        } else {
+            cut = true;
+        }
+        if (d[i] > 0.0 && d[j] < 0.0) || (d[i] < 0.0 && d[j] > 0.0) {
+            let t = d[i] / (d[i] - d[j]);
+            let e = u[j] - u[i];
+            out.push(ClipVertex {
+                u: u[i] + t * e,
+                r: r[i] + t * e,
+                on_line: true,
+            });
+        }
+    }
+    (out, cut)
+}
+
+/// Gauss-Legendre nodes and weights on [0, 1].
+fn gauss_legendre() -> &'static [(f64, f64); GAUSS_POINTS] {
+    static RULE: OnceLock<[(f64, f64); GAUSS_POINTS]> = OnceLock::new();
+    RULE.get_or_init(|| {
+        let n = GAUSS_POINTS;
+        let mut rule = [(0.0, 0.0); GAUSS_POINTS];
+        for (i, slot) in rule.iter_mut().enumerate() {
+            // Newton on P_n from the Chebyshev-like initial guess.
+            let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+            let mut dp = 1.0;
+            for _ in 0..100 {
+                let (mut p0, mut p1) = (1.0, z);
+                for k in 2..=n {
+                    let kf = k as f64;
+                    let p2 = ((2.0 * kf - 1.0) * z * p1 - (kf - 1.0) * p0) / kf;
+                    p0 = p1;
+                    p1 = p2;
+                }
+                dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
+                let dz = p1 / dp;
+                z -= dz;
+                if dz.abs() < 1e-17 {
+                    break;
+                }
+            }
+            let w = 2.0 / ((1.0 - z * z) * dp * dp);
+            *slot = (0.5 * (1.0 - z), 0.5 * w);
+        }
+        rule
+    })
+}
+
+/// Signed form factor of the clipped loop by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` over fan triangles
+/// (Duffy map), with analytic derivatives of the integrand. Accurate when x is far from the loop.
+fn far_field(verts: &[ClipVertex], n: DVec3, order: Order) -> Deriv3 {
+    let rule = gauss_legendre();
+    let mut out = Deriv3::constant(0.0);
+    let a = verts[0];
+    for k in 1..verts.len() - 1 {
+        let ab = verts[k].u - a.u;
+        let bc = verts[k + 1].u - verts[k].u;
+        let normal = ab.cross(verts[k + 1].u - a.u); // 2·area·N̂
+        let c_t = normal.dot(a.r);
+        let mut q0 = 0.0;
+        let mut q1 = DVec3::ZERO;
+        let mut q2 = DMat3::ZERO;
+        for &(s, ws) in rule {
+            for &(t, wt) in rule {
+                let weight = ws * wt * s;
+                let r = a.r + s * ab + (s * t) * bc;
+                let inv2 = 1.0 / r.length_squared();
+                let inv4 = inv2 * inv2;
+                let nr = n.dot(r);
+                q0 += weight * nr * inv4;
+                if order.gradient() {
+                    let inv6 = inv4 * inv2;
+                    q1 += weight * (4.0 * nr * inv6 * r - inv4 * n);
+                    if order.hessian() {
+                        let inv8 = inv4 * inv4;
+                        q2 += (outer_self(r) * (24.0 * nr * inv8)
+                            - sym_outer(n, r) * (4.0 * inv6)
+                            - DMat3::IDENTITY * (4.0 * nr * inv6))
+                            * weight;
+                    }
+                }
+            }
+        }
+        out.value += FRAC_1_PI * c_t * q0;
+        if order.gradient() {
+            out.gradient += FRAC_1_PI * (c_t * q1 - q0 * normal);
+            if order.hessian() {
+                out.hessian += (q2 * c_t - sym_outer(normal, q1)) * FRAC_1_PI;
+            }
+        }
+    }
+    out
+}
+
+/// The Hessian term from the motion of the clip line ℓ:
+/// `n nᵀ (|h_P| / (π ‖n_t‖)) ∫_{P∩ℓ} ds/‖r‖⁴`, with `P∩ℓ` the oriented clip edges (bridges of
+/// non-convex polygons traverse ℓ twice in opposite directions and cancel).
+fn clip_line_hessian(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) -> Result<DMat3> {
+    let n_t = n - n.dot(plane_n) * plane_n;
+    let nt_len = n_t.length();
+    let along = (n_t / nt_len).cross(plane_n);
+    let count = verts.len();
+    let mut integral = 0.0;
+    for i in 0..count {
+        let (a, b) = (verts[i], verts[(i + 1) % count]);
+        if !(a.on_line && b.on_line) {
+            continue;
+        }
+        let e = b.u - a.u;
+        let Some(frame) = EdgeFrame::new(a.r, e) else {
+            continue;
+        };
+        let a2 = frame.moments(Order::Gradient)?.a2;
+        integral += a2.copysign(e.dot(along));
+    }
+    if integral == 0.0 {
+        return Ok(DMat3::ZERO);
+    }
+    Ok(outer_self(n) * (h_p.abs() * FRAC_1_PI / nt_len * integral))
+}
+
+/// The form factor in scaled units (see `polygon_form_factor`).
+fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
+    let plane = Plane::new(&s.u)?;
+    let nearest =
+        s.r.iter()
+            .min_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
+            .copied()
+            .unwrap_or_default();
+    let h_p = plane.normal.dot(nearest);
+    let r_max = s.r.iter().map(|r| r.length()).fold(0.0, f64::max);
+    if h_p.abs() <= 4.0 * f64::EPSILON * r_max {
+        if order.gradient() {
+            return Err(Error::Degenerate(
+                "x lies in the polygon's plane: the form factor has a crease there".into(),
+            ));
+        }
+        return Ok(Deriv3::constant(0.0));
+    }
+    let (verts, cut) = clip(&s.u, &s.r, n);
+    if verts.len() < 3 {
+        return Ok(Deriv3::constant(0.0));
+    }
+    // The switch looks at the visible (clipped) part: a thin sliver above the horizon is "far" from x
+    // relative to its own size even when the whole polygon is not.
+    let count = verts.len() as f64;
+    let centroid = verts.iter().map(|v| v.r).sum::<DVec3>() / count;
+    let radius = verts
+        .iter()
+        .map(|v| (v.r - centroid).length())
+        .fold(0.0, f64::max);
+    let far = centroid.length() >= FAR_FIELD_RATIO * radius;
+    let mut d = if far {
+        far_field(&verts, n, order)
+    } else {
+        let mut sum = Deriv3::constant(0.0);
+        for i in 0..verts.len() {
+            let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
+            let t = if cut && a.on_line && b.on_line {
+                clip_edge_term(a.r, b.u - a.u, n, order)?
+            } else {
+                edge_term(a.r, b.u - a.u, n, order)?
+            };
+            sum.value += t.value;
+            sum.gradient += t.gradient;
+            sum.hessian += t.hessian;
+        }
+        sum
+    };
+    // The edge sum is positive when the polygon's right-hand normal points away from x.
+    if h_p < 0.0 {
+        d.value = -d.value;
+        d.gradient = -d.gradient;
+        d.hessian = -d.hessian;
+    }
+    if far && cut && order.hessian() {
+        d.hessian += clip_line_hessian(&verts, n, plane.normal, h_p)?;
+    }
+    // The clipped, visible part satisfies 0 ≤ F ≤ 1; rounding may step outside by an ulp.
+    d.value = d.value.clamp(0.0, 1.0);
+    Ok(d)
+}
+
+/// Shared implementation of `polygon_form_factor` / `triangle_form_factor`.
+pub(crate) fn form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order) -> Result<Deriv3> {
+    ensure_finite3(x, "x")?;
+    if vertices.len() < 3 {
+        return Err(Error::InvalidArgument(format!(
+            "a polygon needs at least 3 vertices (got {})",
+            vertices.len()
+        )));
+    }
+    for v in vertices {
+        ensure_finite3(*v, "vertex")?;
+    }
+    let n = unit_normal(n)?;
+    let scaled = Scaled::new(x, vertices)?;
+    let d = evaluate(&scaled, n, order)?;
+    scaled.finish(d, order)
+}
+
+/// Arvo's irradiance Jacobian (Arvo 1994; Schwarzhaupt thesis §5.1, eq. 5.19) of the *vector form
+/// factor* of an unoccluded, unclipped polygon:
+///
+/// ```text
+/// Φ(x) = (1/2π) Σ_k Θ_k Γ_k,   Θ_k = angle(v_k − x, v_{k+1} − x),
+/// Γ_k = unit((v_k − x) × (v_{k+1} − x)),    J = ∂Φ/∂x  (J_ij = ∂Φ_i/∂x_j).
+/// ```
+///
+/// `n·Φ` is the signed, unclipped form factor of [`edge_form_factor`](super::edge_form_factor)'s
+/// convention (positive when the vertices run clockwise as seen from `x`), so its gradient is
+/// `Jᵀ n`. This is an independent formulation (unit vertex vectors, edge matrices
+/// `E(a, b) = w wᵀ/(‖w‖² a·b) + (acos(a·b)/‖w‖)(𝟙 − w wᵀ/‖w‖²)` and skew matrices), kept to
+/// cross-check the form-factor gradient.
+///
+/// Limits: Arvo's edge matrix divides by `a·b`, so an edge seen under exactly a right angle, `x` on
+/// an edge's line, or `x` at a vertex gives [`Error::Degenerate`]. Units: per L.
+pub fn vector_form_factor_jacobian(x: DVec3, vertices: &[DVec3]) -> Result<DMat3> {
+    ensure_finite3(x, "x")?;
+    if vertices.len() < 3 {
+        return Err(Error::InvalidArgument(format!(
+            "a polygon needs at least 3 vertices (got {})",
+            vertices.len()
+        )));
+    }
+    let skew = |p: DVec3| {
+        DMat3::from_cols(
+            DVec3::new(0.0, p.z, -p.y),
+            DVec3::new(-p.z, 0.0, p.x),
+            DVec3::new(p.y, -p.x, 0.0),
+        )
+    };
+    let mut unit = SmallVec::<[(DVec3, DMat3); 8]>::new();
+    for v in vertices {
+        ensure_finite3(*v, "vertex")?;
+        let d = *v - x;
+        let len = d.length();
+        if len == 0.0 {
+            return Err(Error::Degenerate("x coincides with a vertex".into()));
+        }
+        let u = d / len;
+        // ∂u/∂x = −(𝟙 − u uᵀ)/‖v − x‖
+        unit.push((u, (outer_self(u) - DMat3::IDENTITY) * (1.0 / len)));
+    }
+    let count = unit.len();
+    let mut jac = DMat3::ZERO;
+    for k in 0..count {
+        let (a, ja) = unit[k];
+        let (b, jb) = unit[(k + 1) % count];
+        let w = a.cross(b);
+        let w2 = w.length_squared();
+        let ab = a.dot(b);
+        if w2 == 0.0 || ab == 0.0 {
+            return Err(Error::Degenerate(
+                "Arvo's edge matrix is singular (x on an edge's line, or a right angle)".into(),
+            ));
+        }
+        let ww = outer_self(w) * (1.0 / w2);
+        let edge =
+            ww * (1.0 / ab) + (DMat3::IDENTITY - ww) * (ab.clamp(-1.0, 1.0).acos() / w2.sqrt());
+        jac += edge * (skew(a) * jb - skew(b) * ja);
+    }
+    let jac = jac * (0.5 * FRAC_1_PI);
+    if jac.is_finite() {
+        Ok(jac)
+    } else {
+        Err(Error::Degenerate("Arvo Jacobian overflows".into()))
+    }
+}

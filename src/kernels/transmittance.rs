@@ -16,7 +16,9 @@ use crate::{Deriv3, Order};
 /// Limits: at `x == y` the value is 1 and the gradient is undefined (the distance has a cone
 /// point): orders above [`Order::Value`] return [`Error::Degenerate`]. For `sigma_t·|x−y|` beyond
 /// ~745 the value underflows to 0 and so do the derivatives. If the Hessian's `1/|x−y|` term would
-/// overflow (distances below ~1e-300 L), [`Error::Degenerate`] is returned.
+/// overflow (distances below ~1e-300 L), [`Error::Degenerate`] is returned. Points more than
+/// `f64::MAX` apart give 0. Distances are computed without overflow or underflow of the squared
+/// length, so separations from 1e-320 to 1e308 keep full precision.
 pub fn transmittance(x: DVec3, y: DVec3, sigma_t: f64, order: Order) -> Result<Deriv3> {
     ensure_finite3(x, "x")?;
     ensure_finite3(y, "y")?;
@@ -29,9 +31,8 @@ pub fn transmittance(x: DVec3, y: DVec3, sigma_t: f64, order: Order) -> Result<D
     if sigma_t == 0.0 {
         return Ok(Deriv3::constant(1.0));
     }
-    let d = x - y;
-    // The difference of finite points can overflow when they are ~1e308 apart: T is 0 there.
-    let dist = d.length();
+    // Points more than f64::MAX apart: T is 0 for any sigma_t above ~1e-305 (documented limit).
+    let (u, dist) = separation(x, y);
     if !dist.is_finite() {
         return Ok(Deriv3::constant(0.0));
     }
@@ -48,7 +49,6 @@ pub fn transmittance(x: DVec3, y: DVec3, sigma_t: f64, order: Order) -> Result<D
     if t == 0.0 {
         return Ok(out);
     }
-    let u = d / dist;
     out.gradient = -sigma_t * t * u;
     if order.hessian() {
         let uu = DMat3::from_cols(u * u.x, u * u.y, u * u.z);
@@ -62,4 +62,32 @@ pub fn transmittance(x: DVec3, y: DVec3, sigma_t: f64, order: Order) -> Result<D
         )));
     }
     Ok(out)
+}
+
+/// The unit vector `(x − y)/‖x − y‖` (zero when `x == y`) and the distance `‖x − y‖`, without the
+/// overflow or underflow of the squared length that `DVec3::length` suffers beyond ~1e154 or below
+/// ~1e-154. The distance is `inf` only when it exceeds `f64::MAX`.
+pub(crate) fn separation(x: DVec3, y: DVec3) -> (DVec3, f64) {
+    let d = x - y;
+    if !d.is_finite() {
+        // Finite points whose difference overflows: measure at half scale (exact).
+        let h = x * 0.5 - y * 0.5;
+        let (u, dist) = scaled_length(h);
+        return (u, 2.0 * dist);
+    }
+    scaled_length(d)
+}
+
+fn scaled_length(d: DVec3) -> (DVec3, f64) {
+    let m = d.abs().max_element();
+    if m == 0.0 {
+        return (DVec3::ZERO, 0.0);
+    }
+    if (1e-150..1e150).contains(&m) {
+        let dist = d.length();
+        return (d / dist, dist);
+    }
+    let v = d / m;
+    let len = v.length();
+    (v / len, len * m)
 }

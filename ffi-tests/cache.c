@@ -1,0 +1,168 @@
+/* raddiff_cache_*: every function, its error paths, a save/load round trip and corrupt files. */
+#include "raddiff.h"
+#include "check.h"
+#include <string.h>
+
+static raddiff_cache_record make_record(double x, const float *value, const float *gradient) {
+  raddiff_cache_record r;
+  memset(&r, 0, sizeof r);
+  r.position.x = x;
+  r.normal.z = 1.0;
+  r.value = value;
+  r.gradient = gradient;
+  r.rotation_gradient = NULL;
+  r.radii[0] = r.radii[1] = r.radii[2] = 1.0;
+  return r; /* isotropic: axes may stay zero */
+}
+
+int main(int argc, char **argv) {
+  char path[4096], bad_path[4096];
+  const float v0[3] = {1.0f, 2.0f, 3.0f}, v1[3] = {2.0f, 2.0f, 2.0f};
+  /* channel-major: channel c's gradient is g[3c..3c+2]; only channel 0 varies along x */
+  const float g0[9] = {0.5f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+  raddiff_cache_config cfg = {3, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD, 0.2};
+  raddiff_cache *cache, *loaded, *other;
+  raddiff_cache_record rec;
+  raddiff_vec3 p = {0.25, 0.0, 0.0}, n = {0.0, 0.0, 1.0}, far = {10.0, 0.0, 0.0};
+  float out[3] = {-1.0f, -1.0f, -1.0f}, out2[3];
+  double wsum = -1.0;
+  FILE *f;
+  (void)argc;
+  if (strlen(argv[0]) > 4000) return 1;
+  sprintf(path, "%s.rdfcache", argv[0]);
+  sprintf(bad_path, "%s.no-such-dir/x.rdfcache", argv[0]);
+
+  /* constructor errors */
+  CHECK(raddiff_cache_new(NULL) == NULL);
+  CHECK(strstr(raddiff_last_error(), "null") != NULL);
+  cfg.domain = 7;
+  CHECK(raddiff_cache_new(&cfg) == NULL);
+  CHECK(strstr(raddiff_last_error(), "domain") != NULL);
+  cfg.domain = RADDIFF_DOMAIN_SURFACE;
+  cfg.interpolation = 99;
+  CHECK(raddiff_cache_new(&cfg) == NULL);
+  cfg.interpolation = RADDIFF_INTERP_WARD;
+  cfg.channels = 0;
+  CHECK(raddiff_cache_new(&cfg) == NULL);
+  cfg.channels = 3;
+  cfg.max_normal_deviation = -1.0;
+  CHECK(raddiff_cache_new(&cfg) == NULL);
+  cfg.max_normal_deviation = 0.2;
+  raddiff_cache_free(NULL);
+
+  cache = raddiff_cache_new(&cfg);
+  CHECK(cache != NULL);
+  CHECK(raddiff_cache_len(cache) == 0);
+  CHECK(raddiff_cache_len(NULL) == 0);
+
+  /* empty cache: not found, outputs untouched */
+  CHECK_STATUS(raddiff_cache_lookup(cache, p, n, out, &wsum), RADDIFF_ERROR_NOT_FOUND);
+  CHECK(out[0] == -1.0f && wsum == -1.0);
+
+  /* insert errors */
+  rec = make_record(0.0, v0, g0);
+  CHECK_STATUS(raddiff_cache_insert(NULL, &rec), RADDIFF_ERROR_NULL_POINTER);
+  CHECK_STATUS(raddiff_cache_insert(cache, NULL), RADDIFF_ERROR_NULL_POINTER);
+  rec.value = NULL;
+  CHECK_STATUS(raddiff_cache_insert(cache, &rec), RADDIFF_ERROR_NULL_POINTER);
+  rec.value = v0;
+  rec.position.y = NAN;
+  CHECK_STATUS(raddiff_cache_insert(cache, &rec), RADDIFF_ERROR_INVALID_ARGUMENT);
+  rec.position.y = 0.0;
+  rec.radii[0] = 0.0;
+  CHECK_STATUS(raddiff_cache_insert(cache, &rec), RADDIFF_ERROR_INVALID_ARGUMENT);
+  rec.radii[0] = 1.0;
+  rec.normal.z = 0.0;
+  CHECK_STATUS(raddiff_cache_insert(cache, &rec), RADDIFF_ERROR_INVALID_ARGUMENT);
+  rec.normal.z = 1.0;
+  CHECK(raddiff_cache_len(cache) == 0);
+
+  /* two records: at x = 0 (value v0, d(channel 0)/dx = 0.5) and at x = 1 (value v1) */
+  CHECK_STATUS(raddiff_cache_insert(cache, &rec), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_insert(cache, &rec), RADDIFF_OK); /* duplicate: no-op */
+  CHECK(raddiff_cache_len(cache) == 1);
+  rec = make_record(1.0, v1, NULL);
+  CHECK_STATUS(raddiff_cache_insert(cache, &rec), RADDIFF_OK);
+  CHECK(raddiff_cache_len(cache) == 2);
+
+  /* at x = 0.25: w0 = 1/0.25 - 1 = 3, w1 = 1/0.75 - 1 = 1/3 */
+  CHECK_STATUS(raddiff_cache_lookup(cache, p, n, out, &wsum), RADDIFF_OK);
+  CHECK_CLOSE(wsum, 10.0 / 3.0, 1e-12);
+  CHECK_CLOSE(out[0], (3.0 * (1.0 + 0.25 * 0.5) + 2.0 / 3.0) / (10.0 / 3.0), 1e-6);
+  CHECK_CLOSE(out[1], 2.0, 1e-6);
+  CHECK_CLOSE(out[2], (3.0 * 3.0 + 2.0 / 3.0) / (10.0 / 3.0), 1e-6);
+  CHECK_STATUS(raddiff_cache_lookup(cache, p, n, out2, NULL), RADDIFF_OK);
+  CHECK(memcmp(out, out2, sizeof out) == 0);
+
+  /* lookup errors */
+  CHECK_STATUS(raddiff_cache_lookup(NULL, p, n, out, NULL), RADDIFF_ERROR_NULL_POINTER);
+  CHECK_STATUS(raddiff_cache_lookup(cache, p, n, NULL, NULL), RADDIFF_ERROR_NULL_POINTER);
+  {
+    raddiff_vec3 nanp = {NAN, 0.0, 0.0}, zero = {0.0, 0.0, 0.0};
+    CHECK_STATUS(raddiff_cache_lookup(cache, nanp, n, out2, NULL), RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK_STATUS(raddiff_cache_lookup(cache, p, zero, out2, NULL), RADDIFF_ERROR_INVALID_ARGUMENT);
+  }
+  CHECK_STATUS(raddiff_cache_lookup(cache, far, n, out2, NULL), RADDIFF_ERROR_NOT_FOUND);
+  CHECK(strlen(raddiff_last_error()) > 0);
+
+  /* save / load round trip */
+  CHECK_STATUS(raddiff_cache_save(NULL, path), RADDIFF_ERROR_NULL_POINTER);
+  CHECK_STATUS(raddiff_cache_save(cache, NULL), RADDIFF_ERROR_NULL_POINTER);
+  CHECK_STATUS(raddiff_cache_save(cache, bad_path), RADDIFF_ERROR_IO);
+  CHECK_STATUS(raddiff_cache_save(cache, path), RADDIFF_OK);
+  loaded = raddiff_cache_load(path);
+  CHECK(loaded != NULL);
+  CHECK(raddiff_cache_len(loaded) == 2);
+  CHECK_STATUS(raddiff_cache_lookup(loaded, p, n, out2, NULL), RADDIFF_OK);
+  CHECK(memcmp(out, out2, sizeof out) == 0);
+
+  /* merge: duplicates are skipped, mismatched caches refused */
+  CHECK_STATUS(raddiff_cache_merge(loaded, cache), RADDIFF_OK);
+  CHECK(raddiff_cache_len(loaded) == 2);
+  CHECK_STATUS(raddiff_cache_merge(loaded, loaded), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_merge(NULL, cache), RADDIFF_ERROR_NULL_POINTER);
+  CHECK_STATUS(raddiff_cache_merge(loaded, NULL), RADDIFF_ERROR_NULL_POINTER);
+  cfg.domain = RADDIFF_DOMAIN_VOLUME;
+  cfg.interpolation = RADDIFF_INTERP_CUBIC;
+  other = raddiff_cache_new(&cfg);
+  CHECK(other != NULL);
+  CHECK_STATUS(raddiff_cache_merge(other, cache), RADDIFF_ERROR_INVALID_ARGUMENT);
+  /* volume domain: the normal is ignored, cubic kernel at t = 0.5: w = 0.5 */
+  rec = make_record(0.0, v0, NULL);
+  rec.normal.z = 0.0;
+  CHECK_STATUS(raddiff_cache_insert(other, &rec), RADDIFF_OK);
+  {
+    raddiff_vec3 q = {0.0, 0.5, 0.0}, zero = {0.0, 0.0, 0.0};
+    CHECK_STATUS(raddiff_cache_lookup(other, q, zero, out2, &wsum), RADDIFF_OK);
+    CHECK_CLOSE(wsum, 0.5, 1e-12);
+    CHECK_CLOSE(out2[2], 3.0, 1e-7);
+  }
+  raddiff_cache_free(other);
+  raddiff_cache_free(loaded);
+
+  /* unreadable and corrupt files: NULL with an IO / CORRUPT message */
+  CHECK(raddiff_cache_load(NULL) == NULL);
+  CHECK(raddiff_cache_load(bad_path) == NULL);
+  CHECK(strstr(raddiff_last_error(), "i/o error") != NULL);
+  f = fopen(path, "r+b");
+  CHECK(f != NULL);
+  if (f) {
+    fseek(f, 60, SEEK_SET);
+    fputc(0x5a, f);
+    fclose(f);
+  }
+  CHECK(raddiff_cache_load(path) == NULL);
+  CHECK(strstr(raddiff_last_error(), "corrupt") != NULL);
+  f = fopen(path, "wb");
+  CHECK(f != NULL);
+  if (f) {
+    fputs("RDFCACHE", f); /* truncated right after the magic */
+    fclose(f);
+  }
+  CHECK(raddiff_cache_load(path) == NULL);
+  CHECK(strstr(raddiff_last_error(), "truncated") != NULL);
+  remove(path);
+
+  raddiff_cache_free(cache);
+  CHECK_DONE("cache.c");
+}

@@ -1,0 +1,198 @@
+//! Saving and loading caches (format documented in the [module docs](super)).
+
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use super::record::{self, Domain, CHANNEL_BYTES, FNV_OFFSET, HEAD_BYTES};
+use super::{Cache, CacheConfig, CacheValue, Interpolation, MAX_CHANNELS};
+use crate::error::{Error, Result};
+
+/// File magic.
+pub const MAGIC: [u8; 8] = *b"RDFCACHE";
+/// Current (and only accepted) format version.
+pub const FORMAT_VERSION: u32 = 1;
+const HEADER_BYTES: usize = 48;
+const CHECKSUM_BYTES: usize = 8;
+
+impl<V: CacheValue> Cache<V> {
+    /// The cache in the documented binary format (records sorted by identity key, so equal
+    /// record sets give byte-identical output whatever the insertion order).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let count = self.len();
+        let mut ids: Vec<(u64, u32)> = (0..count as u32)
+            .map(|i| (self.stored(i).0.key, i))
+            .collect();
+        ids.sort_unstable();
+        let stride = HEAD_BYTES + CHANNEL_BYTES * self.config.channels;
+        let mut out = Vec::with_capacity(HEADER_BYTES + count * stride + CHECKSUM_BYTES);
+        out.extend_from_slice(&MAGIC);
+        out.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        out.extend_from_slice(&(self.config.channels as u32).to_le_bytes());
+        out.extend_from_slice(&(self.config.domain as u32).to_le_bytes());
+        out.extend_from_slice(&(self.config.interpolation as u32).to_le_bytes());
+        out.extend_from_slice(&self.config.max_normal_deviation.to_le_bytes());
+        out.extend_from_slice(&(count as u64).to_le_bytes());
+        out.extend_from_slice(&(stride as u32).to_le_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes());
+        for (_, id) in ids {
+            let (head, chans) = self.stored(id);
+            record::serialize(head, chans, &mut out);
+        }
+        let sum = record::fnv1a(FNV_OFFSET, &out);
+        out.extend_from_slice(&sum.to_le_bytes());
+        out
+    }
+
+    /// Parses and validates a cache in the documented binary format. `Corrupt` with the reason
+    /// for anything that [`Cache::to_bytes`] could not have written, including a channel count
+    /// that disagrees with `V`. Never panics.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        let corrupt = |m: String| Err(Error::Corrupt(m));
+        if bytes.len() < HEADER_BYTES + CHECKSUM_BYTES {
+            return corrupt(format!(
+                "truncated: {} bytes, a cache file has at least {}",
+                bytes.len(),
+                HEADER_BYTES + CHECKSUM_BYTES
+            ));
+        }
+        if bytes[..8] != MAGIC {
+            return corrupt("bad magic: not a raddiff cache file".into());
+        }
+        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
+        let version = u32_at(8);
+        if version != FORMAT_VERSION {
+            return corrupt(format!(
+                "unsupported format version {version} (this library reads version {FORMAT_VERSION})"
+            ));
+        }
+        let channels = u32_at(12) as usize;
+        if channels == 0 || channels > MAX_CHANNELS {
+            return corrupt(format!("channel count {channels} out of range"));
+        }
+        if let Some(n) = V::FIXED_CHANNELS {
+            if n != channels {
+                return corrupt(format!(
+                    "the file holds {channels}-channel records, this cache type has {n} channels"
+                ));
+            }
+        }
+        let domain = Domain::try_from(u32_at(16)).map_err(|e| Error::Corrupt(e.to_string()))?;
+        let interpolation =
+            Interpolation::try_from(u32_at(20)).map_err(|e| Error::Corrupt(e.to_string()))?;
+        let max_normal_deviation = f64::from_le_bytes(bytes[24..32].try_into().unwrap_or([0; 8]));
+        let count = u64_at(32);
+        let stride = u32_at(40) as usize;
+        if stride != HEAD_BYTES + CHANNEL_BYTES * channels {
+            return corrupt(format!(
+                "record size {stride} does not match {channels} channels"
+            ));
+        }
+        if u32_at(44) != 0 {
+            return corrupt("reserved header field is not 0".into());
+        }
+        let expected = usize::try_from(count)
+            .ok()
+            .and_then(|c| c.checked_mul(stride))
+            .and_then(|b| b.checked_add(HEADER_BYTES + CHECKSUM_BYTES));
+        match expected {
+            Some(e) if e == bytes.len() => {}
+            Some(e) if e > bytes.len() => {
+                return corrupt(format!(
+                    "truncated: {count} records need {e} bytes, the file has {}",
+                    bytes.len()
+                ))
+            }
+            _ => {
+                return corrupt(format!(
+                    "length {} does not match {count} records of {stride} bytes",
+                    bytes.len()
+                ))
+            }
+        }
+        let body = bytes.len() - CHECKSUM_BYTES;
+        if record::fnv1a(FNV_OFFSET, &bytes[..body]) != u64_at(body) {
+            return corrupt("checksum mismatch: the file is damaged".into());
+        }
+        let config = CacheConfig {
+            channels,
+            domain,
+            interpolation,
+            max_normal_deviation,
+        };
+        let cache = Cache::new(config).map_err(|e| Error::Corrupt(format!("header: {e}")))?;
+        let mut previous: Option<u64> = None;
+        for i in 0..count as usize {
+            let at = HEADER_BYTES + i * stride;
+            let (head, chans) = record::deserialize(domain, &bytes[at..at + stride])
+                .map_err(|e| Error::Corrupt(format!("record {i}: {e}")))?;
+            if previous.is_some_and(|p| p >= head.key) {
+                return corrupt(format!("record {i}: keys not strictly increasing"));
+            }
+            previous = Some(head.key);
+            cache
+                .insert_stored(&head, &chans)
+                .map_err(|e| Error::Corrupt(format!("record {i}: {e}")))?;
+        }
+        Ok(cache)
+    }
+
+    /// Writes the cache to `path` atomically: a temporary file in the same directory is written,
+    /// flushed to disk and renamed over `path`, then the directory is synced. `Io` on failure
+    /// (the temporary file is removed; `path` is untouched).
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
+        let path = path.as_ref();
+        let bytes = self.to_bytes();
+        let tmp = temp_path(path)?;
+        let result = (|| -> std::io::Result<()> {
+            let mut f = File::create(&tmp)?;
+            f.write_all(&bytes)?;
+            f.sync_all()?;
+            drop(f);
+            std::fs::rename(&tmp, path)?;
+            if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+                // Directory fsync makes the rename durable; some platforms cannot open directories.
+                if let Ok(d) = File::open(dir) {
+                    let _ = d.sync_all();
+                }
+            }
+            Ok(())
+        })();
+        if let Err(e) = result {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(Error::Io(format!(
+                "saving cache to {}: {e}",
+                path.display()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Reads and validates a cache file written by [`Cache::save`]. `Io` if it cannot be read,
+    /// `Corrupt` (with the reason) if it is not a valid cache for `V`.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path)
+            .map_err(|e| Error::Io(format!("reading cache {}: {e}", path.display())))?;
+        Self::from_bytes(&bytes).map_err(|e| match e {
+            Error::Corrupt(m) => Error::Corrupt(format!("{}: {m}", path.display())),
+            other => other,
+        })
+    }
+}
+
+fn temp_path(path: &Path) -> Result<PathBuf> {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = path
+        .file_name()
+        .ok_or_else(|| Error::Io(format!("{} is not a file path", path.display())))?;
+    let mut tmp = name.to_os_string();
+    tmp.push(format!(
+        ".tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    Ok(path.with_file_name(tmp))
+}

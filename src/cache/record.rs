@@ -1,0 +1,508 @@
+//! Records: what a caller inserts ([`Record`], [`Extent`]) and the compact form the cache stores.
+//!
+//! Stored form (88 bytes + 16 bytes per channel, see the [module docs](super) for the file layout):
+//! position as `f64` (extrapolation distances stay exact in large scenes), the orthonormal frame and
+//! the radii as `f32`, and per channel the value as `f32` and the six gradient components as IEEE
+//! binary16 relative to a per-record scale (the largest absolute translational, resp. rotational,
+//! gradient component over all channels), i.e. a relative precision of 2^-11 of that scale.
+
+use glam::DVec3;
+use half::f16;
+use smallvec::SmallVec;
+
+use super::value::CacheValue;
+use crate::error::{ensure_finite, ensure_finite3, Error, Result};
+
+/// Where a cache's records live.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Domain {
+    /// Records on surfaces: an ellipse in the tangent plane of the record's normal, valid for query
+    /// normals within the maximum normal deviation. `RADDIFF_DOMAIN_SURFACE` (0).
+    Surface = 0,
+    /// Records in a participating medium: an ellipsoid, normals ignored. `RADDIFF_DOMAIN_VOLUME` (1).
+    Volume = 1,
+}
+
+impl TryFrom<u32> for Domain {
+    type Error = Error;
+    fn try_from(v: u32) -> Result<Self> {
+        match v {
+            0 => Ok(Domain::Surface),
+            1 => Ok(Domain::Volume),
+            _ => Err(Error::InvalidArgument(format!(
+                "domain {v} is not RADDIFF_DOMAIN_SURFACE (0) or RADDIFF_DOMAIN_VOLUME (1)"
+            ))),
+        }
+    }
+}
+
+/// Smallest and largest accepted radius and position magnitude (L).
+pub const RADIUS_MIN: f64 = 1e-30;
+/// Largest accepted radius (L).
+pub const RADIUS_MAX: f64 = 1e30;
+/// Largest accepted absolute position coordinate (L).
+pub const POSITION_MAX: f64 = 1e30;
+
+/// The region where a record is valid: radii along orthogonal axes.
+///
+/// * Surface domain: `radii[0]`, `radii[1]` along `axes[0]` and `n × axes[0]` in the tangent plane
+///   (`axes[0]` is projected onto the tangent plane; `axes[1]`, `axes[2]` and `radii[2]` are
+///   ignored). Offsets along the normal count against `min(radii[0], radii[1])` (thesis eq. 6.12).
+/// * Volume domain: an ellipsoid with `radii[i]` along `axes[i]` (`axes[1]` is orthogonalized
+///   against `axes[0]`; `axes[2]` is their cross product).
+///
+/// For isotropic radii the axes may be zero: any frame is used. Radii must lie in
+/// [`RADIUS_MIN`, `RADIUS_MAX`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Extent {
+    /// Radii (L) along the axes.
+    pub radii: [f64; 3],
+    /// Principal axes (need not be normalized).
+    pub axes: [DVec3; 3],
+}
+
+impl Extent {
+    /// A sphere (volume) or disc (surface) of radius `r`.
+    pub fn isotropic(r: f64) -> Self {
+        Extent {
+            radii: [r; 3],
+            axes: [DVec3::ZERO; 3],
+        }
+    }
+
+    /// The largest radius: the record's bounding-sphere radius.
+    pub fn max_radius(&self) -> f64 {
+        self.radii[0].max(self.radii[1]).max(self.radii[2])
+    }
+
+    /// Every radius multiplied by `s` (axes unchanged).
+    pub fn scaled(&self, s: f64) -> Self {
+        Extent {
+            radii: self.radii.map(|r| r * s),
+            axes: self.axes,
+        }
+    }
+}
+
+/// A record to insert: a gather's result at one point.
+///
+/// Gradients are axis-major: `gradient[k]` holds the derivative of every channel along world axis
+/// `k` (per L). The rotational gradient is the derivative with respect to the rotation vector θ of
+/// the normal (n(θ) = n + θ × n): Ward-Heckbert's convention, used in thesis eq. 3.19 as
+/// `(nᵢ × n) · ∇_r`. It only matters in the surface domain.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Record<V> {
+    /// Where the gather was computed (L).
+    pub position: DVec3,
+    /// Surface normal (surface domain; need not be normalized). Ignored in the volume domain.
+    pub normal: DVec3,
+    /// The gathered value.
+    pub value: V,
+    /// Translational gradient (per L), if known.
+    pub gradient: Option<[V; 3]>,
+    /// Rotational gradient (per radian), if known (surface domain).
+    pub rotation_gradient: Option<[V; 3]>,
+    /// The validity region.
+    pub extent: Extent,
+}
+
+impl<V: CacheValue> Record<V> {
+    /// A record with no gradients.
+    pub fn new(position: DVec3, normal: DVec3, value: V, extent: Extent) -> Self {
+        Record {
+            position,
+            normal,
+            value,
+            gradient: None,
+            rotation_gradient: None,
+            extent,
+        }
+    }
+}
+
+/// Size of the fixed part of a stored record (bytes).
+pub const HEAD_BYTES: usize = 88;
+/// Size of each channel's part of a stored record (bytes).
+pub const CHANNEL_BYTES: usize = 16;
+
+/// Fixed part of a stored record. Frame rows: surface (axis 0, axis 1, normal); volume (axes 0-2).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Head {
+    pub position: [f64; 3],
+    pub frame: [[f32; 3]; 3],
+    pub radii: [f32; 3],
+    pub gradient_scale: f32,
+    pub rotation_scale: f32,
+    pub key: u64,
+}
+
+/// One channel of a stored record: value and binary16 gradients relative to the head's scales.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Channel {
+    pub value: f32,
+    pub gradient: [u16; 3],
+    pub rotation: [u16; 3],
+}
+
+const _: () = assert!(std::mem::size_of::<Head>() == HEAD_BYTES);
+const _: () = assert!(std::mem::size_of::<Channel>() == CHANNEL_BYTES);
+
+impl Head {
+    #[inline]
+    pub(crate) fn position(&self) -> DVec3 {
+        DVec3::from_array(self.position)
+    }
+
+    #[inline]
+    pub(crate) fn axis(&self, i: usize) -> DVec3 {
+        let a = self.frame[i];
+        DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64)
+    }
+
+    /// Bounding-sphere radius.
+    #[inline]
+    pub(crate) fn max_radius(&self) -> f64 {
+        self.radii[0].max(self.radii[1]).max(self.radii[2]) as f64
+    }
+
+    /// Normalized ellipsoid distance t (thesis eq. 6.12): 1 on the boundary of the record.
+    #[inline]
+    pub(crate) fn normalized_distance(&self, p: DVec3) -> f64 {
+        let d = p - self.position();
+        let mut t2 = 0.0;
+        for i in 0..3 {
+            let u = d.dot(self.axis(i)) / self.radii[i] as f64;
+            t2 += u * u;
+        }
+        t2.sqrt()
+    }
+}
+
+impl Channel {
+    #[inline]
+    pub(crate) fn gradient(&self, scale: f32) -> DVec3 {
+        unpack(self.gradient, scale)
+    }
+
+    #[inline]
+    pub(crate) fn rotation(&self, scale: f32) -> DVec3 {
+        unpack(self.rotation, scale)
+    }
+}
+
+#[inline]
+fn unpack(h: [u16; 3], scale: f32) -> DVec3 {
+    let s = scale as f64;
+    DVec3::new(
+        f16::from_bits(h[0]).to_f64() * s,
+        f16::from_bits(h[1]).to_f64() * s,
+        f16::from_bits(h[2]).to_f64() * s,
+    )
+}
+
+/// A record in the flat, channel-major form the C ABI uses (`gradient[3 c + k]`).
+pub(crate) struct RecordInput<'a> {
+    pub position: DVec3,
+    pub normal: DVec3,
+    pub value: &'a [f32],
+    pub gradient: Option<&'a [f32]>,
+    pub rotation: Option<&'a [f32]>,
+    pub extent: Extent,
+}
+
+pub(crate) type Channels = SmallVec<[Channel; 8]>;
+
+/// Converts axis-major `[V; 3]` gradients to channel-major floats.
+pub(crate) fn channel_major<V: CacheValue>(g: &[V; 3]) -> SmallVec<[f32; 24]> {
+    let c = g[0].as_channels().len();
+    let mut out = SmallVec::with_capacity(3 * c);
+    for ch in 0..c {
+        for axis in g {
+            out.push(axis.as_channels().get(ch).copied().unwrap_or(f32::NAN));
+        }
+    }
+    out
+}
+
+fn check_floats(v: &[f32], len: usize, what: &str) -> Result<()> {
+    if v.len() != len {
+        return Err(Error::InvalidArgument(format!(
+            "{what} has {} floats, expected {len}",
+            v.len()
+        )));
+    }
+    if let Some(bad) = v.iter().find(|x| !x.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "{what} is not finite ({bad})"
+        )));
+    }
+    Ok(())
+}
+
+/// Largest |component| as the scale, and each component as binary16 relative to it.
+fn pack_gradients(g: Option<&[f32]>, channels: usize) -> (f32, SmallVec<[[u16; 3]; 8]>) {
+    let mut out: SmallVec<[[u16; 3]; 8]> = SmallVec::from_elem([0; 3], channels);
+    let Some(g) = g else { return (0.0, out) };
+    let scale = g.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    if scale == 0.0 {
+        return (0.0, out);
+    }
+    for (c, o) in out.iter_mut().enumerate() {
+        for k in 0..3 {
+            o[k] = f16::from_f32(g[3 * c + k] / scale).to_bits();
+        }
+    }
+    (scale, out)
+}
+
+fn unit(v: DVec3) -> Option<DVec3> {
+    let l = v.length();
+    (l.is_finite() && l > 0.0).then(|| v / l)
+}
+
+fn check_radius(r: f64, i: usize) -> Result<f32> {
+    ensure_finite(r, "radius")?;
+    if !(RADIUS_MIN..=RADIUS_MAX).contains(&r) {
+        return Err(Error::InvalidArgument(format!(
+            "radii[{i}] = {r} is outside [{RADIUS_MIN:e}, {RADIUS_MAX:e}]"
+        )));
+    }
+    Ok(r as f32)
+}
+
+/// Validates a record and converts it to the stored form (key filled in).
+pub(crate) fn encode(
+    domain: Domain,
+    channels: usize,
+    input: &RecordInput<'_>,
+) -> Result<(Head, Channels)> {
+    ensure_finite3(input.position, "record position")?;
+    if input.position.abs().max_element() > POSITION_MAX {
+        return Err(Error::InvalidArgument(format!(
+            "record position {} is beyond ±{POSITION_MAX:e}",
+            input.position
+        )));
+    }
+    check_floats(input.value, channels, "record value")?;
+    if let Some(g) = input.gradient {
+        check_floats(g, 3 * channels, "record gradient")?;
+    }
+    if let Some(g) = input.rotation {
+        check_floats(g, 3 * channels, "record rotation gradient")?;
+    }
+    for a in &input.extent.axes {
+        ensure_finite3(*a, "record axis")?;
+    }
+    let r = &input.extent.radii;
+    let (frame, radii) = match domain {
+        Domain::Surface => {
+            ensure_finite3(input.normal, "record normal")?;
+            let n = unit(input.normal).ok_or_else(|| {
+                Error::InvalidArgument(
+                    "record normal must be non-zero in the surface domain".into(),
+                )
+            })?;
+            let r0 = check_radius(r[0], 0)?;
+            let r1 = check_radius(r[1], 1)?;
+            let a0 =
+                match unit(input.extent.axes[0] - input.extent.axes[0].dot(n) * n) {
+                    Some(a) => a,
+                    None if r0 == r1 => n.any_orthonormal_vector(),
+                    None => return Err(Error::InvalidArgument(
+                        "axes[0] must have a component in the tangent plane for anisotropic radii"
+                            .into(),
+                    )),
+                };
+            ([a0, n.cross(a0), n], [r0, r1, r0.min(r1)])
+        }
+        Domain::Volume => {
+            let rr = [
+                check_radius(r[0], 0)?,
+                check_radius(r[1], 1)?,
+                check_radius(r[2], 2)?,
+            ];
+            let iso = rr[0] == rr[1] && rr[1] == rr[2];
+            let degenerate = || {
+                Error::InvalidArgument(
+                    "axes[0] and axes[1] must be non-parallel, non-zero for anisotropic radii"
+                        .into(),
+                )
+            };
+            let frame = match unit(input.extent.axes[0]) {
+                Some(a0) => {
+                    let a1 = input.extent.axes[1];
+                    match unit(a1 - a1.dot(a0) * a0) {
+                        Some(a1) => [a0, a1, a0.cross(a1)],
+                        None if rr[1] == rr[2] => {
+                            let a1 = a0.any_orthonormal_vector();
+                            [a0, a1, a0.cross(a1)]
+                        }
+                        None => return Err(degenerate()),
+                    }
+                }
+                None if iso => [DVec3::X, DVec3::Y, DVec3::Z],
+                None => return Err(degenerate()),
+            };
+            (frame, rr)
+        }
+    };
+    let (gradient_scale, grads) = pack_gradients(input.gradient, channels);
+    let (rotation_scale, rots) = match domain {
+        Domain::Surface => pack_gradients(input.rotation, channels),
+        Domain::Volume => pack_gradients(None, channels),
+    };
+    let mut head = Head {
+        position: input.position.to_array(),
+        frame: frame.map(|a| a.as_vec3().to_array()),
+        radii,
+        gradient_scale,
+        rotation_scale,
+        key: 0,
+    };
+    let chans: Channels = (0..channels)
+        .map(|c| Channel {
+            value: input.value[c],
+            gradient: grads[c],
+            rotation: rots[c],
+        })
+        .collect();
+    head.key = identity(&head, &chans);
+    Ok((head, chans))
+}
+
+/// FNV-1a 64-bit over bytes, continuing from `state` (start with [`FNV_OFFSET`]).
+pub(crate) fn fnv1a(mut state: u64, bytes: &[u8]) -> u64 {
+    for &b in bytes {
+        state ^= b as u64;
+        state = state.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    state
+}
+
+/// FNV-1a 64-bit offset basis.
+pub(crate) const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// Appends the little-endian serialization of a record (the file format's record layout, which is
+/// also the in-memory layout on little-endian machines).
+pub(crate) fn serialize(head: &Head, chans: &[Channel], out: &mut Vec<u8>) {
+    write_head_fields(head, out);
+    out.extend_from_slice(&head.key.to_le_bytes());
+    write_channels(chans, out);
+}
+
+fn write_head_fields(head: &Head, out: &mut Vec<u8>) {
+    for p in head.position {
+        out.extend_from_slice(&p.to_le_bytes());
+    }
+    for a in head.frame {
+        for x in a {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    for r in head.radii {
+        out.extend_from_slice(&r.to_le_bytes());
+    }
+    out.extend_from_slice(&head.gradient_scale.to_le_bytes());
+    out.extend_from_slice(&head.rotation_scale.to_le_bytes());
+}
+
+fn write_channels(chans: &[Channel], out: &mut Vec<u8>) {
+    for c in chans {
+        out.extend_from_slice(&c.value.to_le_bytes());
+        for h in c.gradient.iter().chain(&c.rotation) {
+            out.extend_from_slice(&h.to_le_bytes());
+        }
+    }
+}
+
+/// A record's identity: FNV-1a 64 of its little-endian stored bytes without the key field
+/// (position, frame, radii, scales, then the channels). Two records are duplicates iff every
+/// stored bit agrees, which is what inserting the same gather twice (on any machine) produces.
+pub(crate) fn identity(head: &Head, chans: &[Channel]) -> u64 {
+    let mut buf = Vec::with_capacity(HEAD_BYTES + chans.len() * CHANNEL_BYTES);
+    write_head_fields(head, &mut buf);
+    write_channels(chans, &mut buf);
+    fnv1a(FNV_OFFSET, &buf)
+}
+
+/// Parses one serialized record (length `HEAD_BYTES + channels * CHANNEL_BYTES`) and checks that
+/// it could have been produced by [`encode`]: finite numbers, radii in range, orthonormal frame,
+/// finite binary16 gradients, matching key.
+pub(crate) fn deserialize(domain: Domain, bytes: &[u8]) -> Result<(Head, Channels)> {
+    let f64_at = |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
+    let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+    let u16_at = |o: usize| u16::from_le_bytes(bytes[o..o + 2].try_into().unwrap_or([0; 2]));
+    let corrupt = |what: &str| Error::Corrupt(format!("record {what}"));
+    let mut head = Head::default();
+    for i in 0..3 {
+        head.position[i] = f64_at(8 * i);
+        for k in 0..3 {
+            head.frame[i][k] = f32_at(24 + 12 * i + 4 * k);
+        }
+        head.radii[i] = f32_at(60 + 4 * i);
+    }
+    head.gradient_scale = f32_at(72);
+    head.rotation_scale = f32_at(76);
+    head.key = u64::from_le_bytes(bytes[80..88].try_into().unwrap_or([0; 8]));
+    if !head
+        .position
+        .iter()
+        .all(|p| p.is_finite() && p.abs() <= POSITION_MAX)
+    {
+        return Err(corrupt("position out of range"));
+    }
+    let radius_ok = |r: f32| r.is_finite() && (RADIUS_MIN as f32..=RADIUS_MAX as f32).contains(&r);
+    if !head.radii.iter().all(|&r| radius_ok(r)) {
+        return Err(corrupt("radius out of range"));
+    }
+    if domain == Domain::Surface && head.radii[2] != head.radii[0].min(head.radii[1]) {
+        return Err(corrupt("normal radius inconsistent"));
+    }
+    for s in [head.gradient_scale, head.rotation_scale] {
+        if !(s.is_finite() && s >= 0.0) {
+            return Err(corrupt("gradient scale invalid"));
+        }
+    }
+    let frame: [DVec3; 3] = std::array::from_fn(|i| head.axis(i));
+    for (i, a) in frame.iter().enumerate() {
+        if !a.is_finite() || (a.length() - 1.0).abs() > 1e-5 {
+            return Err(corrupt("frame axis not unit length"));
+        }
+        for b in &frame[i + 1..] {
+            if a.dot(*b).abs() > 1e-5 {
+                return Err(corrupt("frame not orthogonal"));
+            }
+        }
+    }
+    let channels = (bytes.len() - HEAD_BYTES) / CHANNEL_BYTES;
+    let mut chans = Channels::with_capacity(channels);
+    for c in 0..channels {
+        let o = HEAD_BYTES + c * CHANNEL_BYTES;
+        let mut ch = Channel {
+            value: f32_at(o),
+            ..Channel::default()
+        };
+        for k in 0..3 {
+            ch.gradient[k] = u16_at(o + 4 + 2 * k);
+            ch.rotation[k] = u16_at(o + 10 + 2 * k);
+        }
+        if !ch.value.is_finite() {
+            return Err(corrupt("value not finite"));
+        }
+        if !ch
+            .gradient
+            .iter()
+            .chain(&ch.rotation)
+            .all(|&h| f16::from_bits(h).is_finite())
+        {
+            return Err(corrupt("gradient not finite"));
+        }
+        chans.push(ch);
+    }
+    if identity(&head, &chans) != head.key {
+        return Err(corrupt("identity key does not match its contents"));
+    }
+    Ok((head, chans))
+}

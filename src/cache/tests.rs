@@ -1,0 +1,360 @@
+//! Hand-computed interpolation cases, set semantics, validation.
+
+use glam::DVec3;
+
+use super::*;
+
+fn surface(interp: Interpolation) -> Cache<f32> {
+    Cache::new(CacheConfig::surface(1).with_interpolation(interp)).unwrap()
+}
+
+fn volume(interp: Interpolation) -> Cache<f32> {
+    Cache::new(CacheConfig::volume(1).with_interpolation(interp)).unwrap()
+}
+
+fn rec(p: DVec3, value: f32, gradient: [f32; 3], r: f64) -> Record<f32> {
+    Record {
+        position: p,
+        normal: DVec3::Z,
+        value,
+        gradient: Some(gradient),
+        rotation_gradient: None,
+        extent: Extent::isotropic(r),
+    }
+}
+
+fn close(a: f64, b: f64, tol: f64) {
+    assert!((a - b).abs() <= tol * b.abs().max(1.0), "{a} vs {b}");
+}
+
+#[test]
+fn ward_single_record_extrapolates_along_the_gradient() {
+    let c = surface(Interpolation::Ward);
+    assert!(c
+        .insert(&rec(DVec3::ZERO, 1.0, [0.1, 0.0, 0.0], 1.0))
+        .unwrap());
+    let l = c.lookup(DVec3::new(0.5, 0.0, 0.0), DVec3::Z).unwrap();
+    // t = 0.5: w = 1/0.5 − 1 = 1; E = 1 + 0.5·0.1
+    close(l.value as f64, 1.05, 1e-7);
+    close(l.weight_sum, 1.0, 1e-12);
+    assert_eq!(l.records, 1);
+}
+
+#[test]
+fn ward_weights_two_records_by_hand() {
+    let c = surface(Interpolation::Ward);
+    c.insert(&rec(DVec3::ZERO, 1.0, [0.0; 3], 1.0)).unwrap();
+    c.insert(&rec(DVec3::X, 2.0, [0.0; 3], 1.0)).unwrap();
+    let l = c.lookup(DVec3::new(0.25, 0.0, 0.0), DVec3::Z).unwrap();
+    // wA = 1/0.25 − 1 = 3, wB = 1/0.75 − 1 = 1/3: (3·1 + 2/3)/(10/3) = 1.1
+    close(l.value as f64, 1.1, 1e-7);
+    close(l.weight_sum, 10.0 / 3.0, 1e-12);
+    // classic weights 1/t: (4·1 + 4/3·2)/(16/3) = 1.25
+    let c = surface(Interpolation::WardClassic);
+    c.insert(&rec(DVec3::ZERO, 1.0, [0.0; 3], 1.0)).unwrap();
+    c.insert(&rec(DVec3::X, 2.0, [0.0; 3], 1.0)).unwrap();
+    let l = c.lookup(DVec3::new(0.25, 0.0, 0.0), DVec3::Z).unwrap();
+    close(l.value as f64, 1.25, 1e-7);
+    // Tabellion-Lamorlette 1 − t: (0.75·1 + 0.25·2)/1 = 1.25
+    let c = surface(Interpolation::WardTabellion);
+    c.insert(&rec(DVec3::ZERO, 1.0, [0.0; 3], 1.0)).unwrap();
+    c.insert(&rec(DVec3::X, 2.0, [0.0; 3], 1.0)).unwrap();
+    let l = c.lookup(DVec3::new(0.25, 0.0, 0.0), DVec3::Z).unwrap();
+    close(l.value as f64, 1.25, 1e-7);
+    close(l.weight_sum, 1.0, 1e-12);
+}
+
+#[test]
+fn ward_normal_term_limits_validity_to_the_max_deviation() {
+    let c = surface(Interpolation::Ward);
+    c.insert(&rec(DVec3::ZERO, 1.0, [0.0; 3], 1.0)).unwrap();
+    // at the record's position: valid strictly below 0.2 rad
+    let tilt = |a: f64| DVec3::new(a.sin(), 0.0, a.cos());
+    assert!(c.lookup(DVec3::ZERO, tilt(0.199)).is_ok());
+    assert!(matches!(
+        c.lookup(DVec3::ZERO, tilt(0.201)),
+        Err(Error::NotFound(_))
+    ));
+    // ρ = √((1 − cos 0.1)/(1 − cos 0.2)), t = 0.3: w = 1/(t + ρ) − 1
+    let rho = ((1.0 - 0.1f64.cos()) / (1.0 - 0.2f64.cos())).sqrt();
+    let l = c.lookup(DVec3::new(0.3, 0.0, 0.0), tilt(0.1)).unwrap();
+    close(l.weight_sum, 1.0 / (0.3 + rho) - 1.0, 1e-12);
+}
+
+#[test]
+fn rotation_gradient_follows_eq_3_19_sign() {
+    // E(n) = n·d for a distant source d: ∇ᵣE = nᵢ × d; with nᵢ = z, d = (0.6, 0, 0.8): (0, 0.6, 0).
+    let d = DVec3::new(0.6, 0.0, 0.8);
+    let c = surface(Interpolation::Tent);
+    let mut r = rec(DVec3::ZERO, 0.8, [0.0; 3], 1.0);
+    let gr = DVec3::Z.cross(d);
+    r.rotation_gradient = Some([gr.x as f32, gr.y as f32, gr.z as f32]);
+    c.insert(&r).unwrap();
+    for a in [0.05f64, -0.1, 0.15] {
+        // rotate the normal about y by a: n = (sin a, 0, cos a); but the x-component of d sees
+        // rotation about -y... use rotation about x instead to exercise the y gradient.
+        let n = DVec3::new(0.0, -a.sin(), a.cos()); // rotation about +x by a
+        let exact = n.dot(d);
+        let got = c.lookup(DVec3::ZERO, n).unwrap().value as f64;
+        // first order: E + (nᵢ × n)·∇ᵣE = 0.8 + (sin a, 0, 0)·(0, 0.6, 0) ... = 0.8 for this axis
+        close(got, 0.8, 1e-7);
+        assert!((got - exact).abs() < 0.8 * a * a);
+        let n = DVec3::new(a.sin(), 0.0, a.cos()); // rotation about +y by a
+        let exact = n.dot(d);
+        let got = c.lookup(DVec3::ZERO, n).unwrap().value as f64;
+        // nᵢ × n = (0, sin a, 0): E ≈ 0.8 + 0.6 sin a; the opposite sign (eq. 6.10) gives 0.8 − 0.6 sin a
+        close(got, 0.8 + 0.6 * a.sin(), 1e-6);
+        assert!((got - exact).abs() < 0.5 * a * a, "{got} vs {exact}");
+    }
+}
+
+#[test]
+fn tent_weights_on_an_anisotropic_ellipse() {
+    let c = surface(Interpolation::Tent);
+    let mut r = rec(DVec3::ZERO, 3.0, [0.0; 3], 1.0);
+    r.extent = Extent {
+        radii: [2.0, 1.0, 0.0],
+        axes: [DVec3::X, DVec3::ZERO, DVec3::ZERO],
+    };
+    c.insert(&r).unwrap();
+    // t = √((1/2)² + (0.5/1)²)
+    let l = c.lookup(DVec3::new(1.0, 0.5, 0.0), DVec3::Z).unwrap();
+    close(l.weight_sum, 1.0 - 0.5f64.sqrt(), 1e-6);
+    close(l.value as f64, 3.0, 1e-7);
+    // the normal offset counts against min(R0, R1) = 1: t = 0.5
+    let l = c.lookup(DVec3::new(0.0, 0.0, 0.5), DVec3::Z).unwrap();
+    close(l.weight_sum, 0.5, 1e-6);
+    // normal tent: (cos 0.1 − cos 0.2)/(1 − cos 0.2) at the centre
+    let n = DVec3::new(0.1f64.sin(), 0.0, 0.1f64.cos());
+    let l = c.lookup(DVec3::ZERO, n).unwrap();
+    close(
+        l.weight_sum,
+        (0.1f64.cos() - 0.2f64.cos()) / (1.0 - 0.2f64.cos()),
+        1e-6,
+    );
+    assert!(matches!(
+        c.lookup(DVec3::new(1.9, 0.5, 0.0), DVec3::Z),
+        Err(Error::NotFound(_))
+    ));
+    assert!(c.lookup(DVec3::new(0.0, 1.1, 0.0), DVec3::Z).is_err());
+    assert!(c.lookup(DVec3::new(1.9, 0.0, 0.0), DVec3::Z).is_ok());
+}
+
+#[test]
+fn cubic_kernel_on_an_ellipsoid() {
+    let c = volume(Interpolation::Cubic);
+    let mut r = rec(DVec3::ZERO, 1.0, [0.0, 0.0, 0.5], 1.0);
+    r.extent = Extent {
+        radii: [1.0, 2.0, 4.0],
+        axes: [DVec3::X, DVec3::Y, DVec3::Z],
+    };
+    c.insert(&r).unwrap();
+    // t = 2/4 = 0.5, d = 0.5: w = 3/4 − 2/8 = 0.5; E = 1 + 2·0.5
+    let l = c.lookup(DVec3::new(0.0, 0.0, 2.0), DVec3::ZERO).unwrap();
+    close(l.weight_sum, 0.5, 1e-12);
+    close(l.value as f64, 2.0, 1e-7);
+    // a second record with t = 0.8 (d = 0.2: w = 0.12 − 0.016 = 0.104), value 5
+    c.insert(&rec(DVec3::new(0.0, 0.0, 2.8), 5.0, [0.0; 3], 1.0))
+        .unwrap();
+    let l = c.lookup(DVec3::new(0.0, 0.0, 2.0), DVec3::ZERO).unwrap();
+    close(l.weight_sum, 0.604, 1e-6);
+    close(l.value as f64, (0.5 * 2.0 + 0.104 * 5.0) / 0.604, 1e-6);
+}
+
+#[test]
+fn log_space_extrapolation_by_hand() {
+    let c = volume(Interpolation::Log);
+    c.insert(&rec(DVec3::ZERO, 2.0, [1.0, 0.0, 0.0], 1.0))
+        .unwrap();
+    // exp(ln 2 + 0.5·1/2) = 2 e^¼
+    let l = c.lookup(DVec3::new(0.5, 0.0, 0.0), DVec3::ZERO).unwrap();
+    close(l.value as f64, 2.0 * 0.25f64.exp(), 1e-6);
+    // equal weights: geometric mean of 2 e^¼ and 8 (record at x = 1, value 8, no gradient)
+    c.insert(&rec(DVec3::X, 8.0, [0.0; 3], 1.0)).unwrap();
+    let l = c.lookup(DVec3::new(0.5, 0.0, 0.0), DVec3::ZERO).unwrap();
+    close(l.value as f64, (2.0 * 0.25f64.exp() * 8.0).sqrt(), 1e-6);
+    // a non-positive value: the channel falls back to linear (cubic) interpolation
+    let c = volume(Interpolation::Log);
+    c.insert(&rec(DVec3::ZERO, 0.0, [0.0; 3], 1.0)).unwrap();
+    c.insert(&rec(DVec3::X, 8.0, [0.0; 3], 1.0)).unwrap();
+    let l = c.lookup(DVec3::new(0.5, 0.0, 0.0), DVec3::ZERO).unwrap();
+    close(l.value as f64, 4.0, 1e-7);
+    // a huge log-gradient stays finite
+    let c = volume(Interpolation::Log);
+    c.insert(&rec(DVec3::ZERO, 1e-30, [1e30, 0.0, 0.0], 1.0))
+        .unwrap();
+    let l = c.lookup(DVec3::new(0.5, 0.0, 0.0), DVec3::ZERO).unwrap();
+    assert!(l.value.is_finite());
+}
+
+#[test]
+fn volume_ignores_normals_and_surface_rejects_zero_normals() {
+    let c = volume(Interpolation::Tent);
+    c.insert(&Record::new(
+        DVec3::ZERO,
+        DVec3::ZERO,
+        1.0f32,
+        Extent::isotropic(1.0),
+    ))
+    .unwrap();
+    assert!(c.lookup(DVec3::new(0.0, 0.9, 0.0), DVec3::ZERO).is_ok());
+    let s = surface(Interpolation::Tent);
+    let bad = Record::new(DVec3::ZERO, DVec3::ZERO, 1.0f32, Extent::isotropic(1.0));
+    assert!(matches!(s.insert(&bad), Err(Error::InvalidArgument(_))));
+    s.insert(&rec(DVec3::ZERO, 1.0, [0.0; 3], 1.0)).unwrap();
+    assert!(matches!(
+        s.lookup(DVec3::ZERO, DVec3::ZERO),
+        Err(Error::InvalidArgument(_))
+    ));
+}
+
+#[test]
+fn invalid_records_are_rejected() {
+    let c = surface(Interpolation::Ward);
+    let mut r = rec(DVec3::ZERO, 1.0, [0.0; 3], 1.0);
+    r.value = f32::NAN;
+    assert!(c.insert(&r).is_err());
+    let mut r = rec(DVec3::new(f64::INFINITY, 0.0, 0.0), 1.0, [0.0; 3], 1.0);
+    assert!(c.insert(&r).is_err());
+    r.position = DVec3::ZERO;
+    r.extent = Extent::isotropic(0.0);
+    assert!(c.insert(&r).is_err());
+    r.extent = Extent::isotropic(-1.0);
+    assert!(c.insert(&r).is_err());
+    r.extent = Extent::isotropic(1.0);
+    r.gradient = Some([f32::INFINITY, 0.0, 0.0]);
+    assert!(c.insert(&r).is_err());
+    // anisotropic radii need an axis with a tangent component
+    r.gradient = None;
+    r.extent = Extent {
+        radii: [1.0, 2.0, 0.0],
+        axes: [DVec3::Z, DVec3::ZERO, DVec3::ZERO],
+    };
+    assert!(c.insert(&r).is_err());
+    // below the index's resolution
+    let r = rec(DVec3::new(1e6, 0.0, 0.0), 1.0, [0.0; 3], 1e-12);
+    assert!(c.insert(&r).is_err());
+    assert!(c.is_empty());
+    assert!(Cache::<f32>::new(CacheConfig::surface(2)).is_err());
+    assert!(Cache::<Vec<f32>>::new(CacheConfig::surface(0)).is_err());
+    let mut cfg = CacheConfig::surface(1);
+    cfg.max_normal_deviation = 0.0;
+    assert!(Cache::<f32>::new(cfg).is_err());
+    cfg.max_normal_deviation = f64::NAN;
+    assert!(Cache::<f32>::new(cfg).is_err());
+}
+
+#[test]
+fn duplicates_are_detected_and_order_does_not_matter() {
+    let mut recs = Vec::new();
+    let mut s = 7u64;
+    let mut rnd = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..400 {
+        let p = DVec3::new(rnd() * 4.0, rnd() * 4.0, 0.0);
+        let g = [rnd() as f32 - 0.5, rnd() as f32 - 0.5, 0.0];
+        recs.push(Record {
+            position: p,
+            normal: DVec3::new(rnd() * 0.1, rnd() * 0.1, 1.0),
+            value: [rnd() as f32, rnd() as f32, rnd() as f32],
+            gradient: Some([[g[0]; 3], [g[1]; 3], [0.0; 3]]),
+            rotation_gradient: Some([[0.1; 3], [0.2; 3], [0.0; 3]]),
+            extent: Extent::isotropic(0.3 + rnd()),
+        });
+    }
+    let a: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3)).unwrap();
+    let b: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3)).unwrap();
+    for r in &recs {
+        assert!(a.insert(r).unwrap());
+    }
+    for r in recs.iter().rev() {
+        assert!(b.insert(r).unwrap());
+        assert!(!b.insert(r).unwrap());
+    }
+    assert_eq!(a.len(), 400);
+    assert_eq!(b.len(), 400);
+    assert_eq!(a.keys(), b.keys());
+    assert_eq!(a.to_bytes(), b.to_bytes());
+    let mut found = 0;
+    for i in 0..2000 {
+        let p = DVec3::new((i % 45) as f64 * 0.09, (i / 45) as f64 * 0.09, 0.0);
+        let la = a.lookup(p, DVec3::Z);
+        let lb = b.lookup(p, DVec3::Z);
+        match (la, lb) {
+            (Ok(x), Ok(y)) => {
+                found += 1;
+                assert_eq!(x.value.map(f32::to_bits), y.value.map(f32::to_bits));
+                assert_eq!(x.weight_sum.to_bits(), y.weight_sum.to_bits());
+            }
+            (Err(_), Err(_)) => {}
+            _ => panic!("one cache found records, the other not"),
+        }
+    }
+    assert!(found > 1000);
+    // merge: nothing new from an identical cache, everything from an empty one
+    assert_eq!(a.merge(&b).unwrap(), 0);
+    let c: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3)).unwrap();
+    assert_eq!(c.merge(&a).unwrap(), 400);
+    assert_eq!(c.keys(), a.keys());
+    assert_eq!(a.merge(&a).unwrap(), 0);
+    let wrong: Cache<[f32; 3]> = Cache::new(CacheConfig::volume(3)).unwrap();
+    assert!(wrong.merge(&a).is_err());
+}
+
+#[test]
+fn bytes_per_record_meet_the_budget() {
+    for (channels, expected) in [(1usize, 104usize), (3, 136), (27, 520)] {
+        let c: Cache<Vec<f32>> = Cache::new(CacheConfig::surface(channels)).unwrap();
+        let m = c.memory();
+        assert_eq!(m.bytes_per_record, expected);
+        assert!(m.bytes_per_record <= 96 + 16 * channels);
+    }
+}
+
+#[test]
+fn neighbour_clamping_bounds_the_new_radius() {
+    let c = surface(Interpolation::Ward);
+    c.insert(&rec(DVec3::ZERO, 1.0, [0.0; 3], 1.0)).unwrap();
+    // a new record 0.5 away may not exceed 1 + 0.5
+    let e = c
+        .clamp_to_neighbours(DVec3::new(0.5, 0.0, 0.0), &Extent::isotropic(4.0))
+        .unwrap();
+    close(e.radii[0], 1.5, 1e-6);
+    let e = c
+        .clamp_to_neighbours(DVec3::new(0.5, 0.0, 0.0), &Extent::isotropic(1.2))
+        .unwrap();
+    assert_eq!(e.radii[0], 1.2);
+    // far away: unchanged
+    let e = c
+        .clamp_to_neighbours(DVec3::new(5.0, 0.0, 0.0), &Extent::isotropic(4.0))
+        .unwrap();
+    assert_eq!(e.radii[0], 4.0);
+}
+
+#[test]
+fn gradients_survive_binary16_storage() {
+    let c: Cache<[f32; 2]> = Cache::new(CacheConfig::volume(2)).unwrap();
+    let g = [[1000.0f32, 0.001], [-3.0, 0.0], [0.5, 2e-4]];
+    let r = Record {
+        position: DVec3::ZERO,
+        normal: DVec3::Z,
+        value: [1.0f32, 2.0],
+        gradient: Some(g),
+        rotation_gradient: None,
+        extent: Extent::isotropic(1.0),
+    };
+    c.insert(&r).unwrap();
+    let back = c.records().pop().unwrap();
+    let gb = back.gradient.unwrap();
+    for k in 0..3 {
+        for ch in 0..2 {
+            // relative to the record's largest component (1000): 2^-11 steps, subnormals below 6e-5
+            assert!((gb[k][ch] - g[k][ch]).abs() <= 1000.0 * 6e-4, "{k} {ch}");
+        }
+    }
+    assert_eq!(back.value, [1.0, 2.0]);
+}

@@ -1,0 +1,189 @@
+//! Saving, loading and validating cache files: round trips, atomic replacement, and rejection of
+//! every kind of damage (a proptest over mutated and truncated files shows `from_bytes` never
+//! panics and never accepts a damaged file).
+
+use glam::DVec3;
+use proptest::prelude::*;
+use raddiff::cache::{Cache, CacheConfig, Extent, Record};
+use raddiff::Error;
+
+fn sample(n: usize) -> Cache<[f32; 3]> {
+    let c: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3)).unwrap();
+    for i in 0..n {
+        let x = i as f64 * 0.37;
+        c.insert(&Record {
+            position: DVec3::new(x, (i % 5) as f64, 0.0),
+            normal: DVec3::new(0.1, 0.0, 1.0),
+            value: [i as f32, 1.0, 0.5],
+            gradient: Some([[0.5, 0.0, 0.1], [0.0; 3], [0.25; 3]]),
+            rotation_gradient: Some([[0.0; 3], [0.3, 0.2, 0.1], [0.0; 3]]),
+            extent: Extent {
+                radii: [0.5, 1.0, 0.0],
+                axes: [DVec3::X, DVec3::ZERO, DVec3::ZERO],
+            },
+        })
+        .unwrap();
+    }
+    c
+}
+
+fn tmp_dir(name: &str) -> std::path::PathBuf {
+    let d = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn fnv(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// Rewrites the trailing checksum so that only the deeper validation can catch a change.
+fn reseal(bytes: &mut [u8]) {
+    let body = bytes.len() - 8;
+    let sum = fnv(&bytes[..body]);
+    bytes[body..].copy_from_slice(&sum.to_le_bytes());
+}
+
+fn corrupt_reason(bytes: &[u8]) -> String {
+    match Cache::<[f32; 3]>::from_bytes(bytes) {
+        Err(Error::Corrupt(m)) => m,
+        other => panic!("expected Corrupt, got {other:?}"),
+    }
+}
+
+#[test]
+fn save_load_round_trip_is_exact_and_atomic() {
+    let dir = tmp_dir("cache_round_trip");
+    let path = dir.join("irradiance.rdfcache");
+    let c = sample(50);
+    c.save(&path).unwrap();
+    // overwrite in place: still exactly one file, no temporary left behind
+    c.save(&path).unwrap();
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 1, "{names:?}");
+    let back = Cache::<[f32; 3]>::load(&path).unwrap();
+    assert_eq!(back.len(), 50);
+    assert_eq!(back.keys(), c.keys());
+    assert_eq!(back.config(), c.config());
+    assert_eq!(back.to_bytes(), std::fs::read(&path).unwrap());
+    for i in 0..200 {
+        let p = DVec3::new(i as f64 * 0.1, (i % 7) as f64 * 0.5, 0.0);
+        let (a, b) = (c.lookup(p, DVec3::Z), back.lookup(p, DVec3::Z));
+        assert_eq!(a.ok().map(|l| l.value), b.ok().map(|l| l.value));
+    }
+    // runtime channels read the same file
+    let dynamic = Cache::<Vec<f32>>::load(&path).unwrap();
+    assert_eq!(dynamic.config().channels, 3);
+    // failures: I/O and wrong channel count
+    assert!(matches!(
+        c.save(dir.join("missing/dir/x.rdfcache")),
+        Err(Error::Io(_))
+    ));
+    assert!(matches!(
+        Cache::<f32>::load(dir.join("nope")),
+        Err(Error::Io(_))
+    ));
+    match Cache::<f32>::load(&path) {
+        Err(Error::Corrupt(m)) => assert!(m.contains("3-channel"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn every_truncation_is_rejected() {
+    let bytes = sample(3).to_bytes();
+    for len in 0..bytes.len() {
+        let m = corrupt_reason(&bytes[..len]);
+        assert!(
+            m.contains("truncated") || m.contains("length"),
+            "{len}: {m}"
+        );
+    }
+    let mut longer = bytes.clone();
+    longer.push(0);
+    corrupt_reason(&longer);
+}
+
+#[test]
+fn header_and_record_damage_is_named() {
+    let good = sample(4).to_bytes();
+    let mut b = good.clone();
+    b[0] = b'X';
+    assert!(corrupt_reason(&b).contains("magic"));
+    let mut b = good.clone();
+    b[8] = 2;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("version"));
+    let mut b = good.clone();
+    b[100] ^= 1;
+    assert!(corrupt_reason(&b).contains("checksum"));
+    // a resealed file with a NaN radius (record 0 radii start at 48 + 60)
+    let mut b = good.clone();
+    b[48 + 60..48 + 64].copy_from_slice(&f32::NAN.to_le_bytes());
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("radius"));
+    // a resealed file whose value changed without its identity key
+    let mut b = good.clone();
+    b[48 + 88..48 + 92].copy_from_slice(&7.5f32.to_le_bytes());
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("key"));
+    // records swapped: keys no longer increasing
+    let stride = 88 + 16 * 3;
+    let mut b = good.clone();
+    let (r0, r1) = (48..48 + stride, 48 + stride..48 + 2 * stride);
+    let first: Vec<u8> = b[r0.clone()].to_vec();
+    b.copy_within(r1.clone(), r0.start);
+    b[r1].copy_from_slice(&first);
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("increasing"));
+    // domain out of range
+    let mut b = good.clone();
+    b[16] = 9;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("domain"));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    #[test]
+    fn mutated_files_never_panic_and_are_never_accepted(
+        flips in proptest::collection::vec((any::<prop::sample::Index>(), 1u8..=255), 1..4),
+        cut in any::<prop::sample::Index>(),
+        mode in 0u8..4,
+        reseal_after in any::<bool>(),
+        junk in proptest::collection::vec(any::<u8>(), 1..16),
+    ) {
+        let good = sample(6).to_bytes();
+        let mut b = good.clone();
+        match mode {
+            0 => for (i, x) in &flips { let i = i.index(b.len()); b[i] ^= x; },
+            1 => b.truncate(cut.index(b.len())),
+            2 => { let i = cut.index(b.len()); b.splice(i..i, junk.iter().copied()); }
+            _ => { for (i, x) in &flips { let i = i.index(b.len()); b[i] ^= x; } b.truncate(cut.index(b.len()) + 1); }
+        }
+        if reseal_after && b.len() >= 8 {
+            reseal(&mut b);
+        }
+        let result = std::panic::catch_unwind(|| Cache::<[f32; 3]>::from_bytes(&b));
+        prop_assert!(result.is_ok(), "from_bytes panicked");
+        if b != good {
+            match result.unwrap() {
+                Err(Error::Corrupt(_)) => {}
+                // with a valid checksum, only the freely editable header settings (interpolation,
+                // normal deviation) may change; the records must then be exactly the original ones
+                Ok(c) => {
+                    prop_assert!(reseal_after, "damaged file accepted ({} records)", c.len());
+                    prop_assert_eq!(c.keys(), sample(6).keys());
+                }
+                Err(e) => prop_assert!(false, "unexpected error {e}"),
+            }
+        }
+    }
+}

@@ -1,0 +1,369 @@
+//! Property tests (proptest) for the kernels-a kernels: Hessian symmetry, invariance under vertex
+//! permutation and rigid motion, closed-mesh identities (signed solid angles sum to 4π inside and 0
+//! outside; segment form factors of a convex polygon sum to 1), gradients and Hessians equal to
+//! finite differences of values and gradients.
+
+use glam::{DMat3, DQuat, DVec2, DVec3};
+use proptest::prelude::*;
+use raddiff::{kernels, Deriv3, Order};
+use std::f64::consts::PI;
+
+fn vec3(range: f64) -> impl Strategy<Value = DVec3> {
+    (-range..range, -range..range, -range..range).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+}
+
+fn unit_quat() -> impl Strategy<Value = DQuat> {
+    (vec3(1.0), -1.0f64..1.0).prop_filter_map("degenerate axis", |(v, w)| {
+        let q = DQuat::from_xyzw(v.x, v.y, v.z, w);
+        (q.length() > 0.1).then(|| q.normalize())
+    })
+}
+
+/// A well-shaped triangle scaled by 10^k, k ∈ [-3, 3], and an evaluation point at least 5% of its
+/// size away from its plane and vertices.
+fn configuration() -> impl Strategy<Value = (DVec3, [DVec3; 3])> {
+    (vec3(1.0), vec3(1.0), vec3(1.0), vec3(3.0), -3.0f64..3.0).prop_filter_map(
+        "ill-shaped or too close",
+        |(a, b, c, x, k)| {
+            let n = (b - a).cross(c - a);
+            let l = (b - a).length().max((c - a).length()).max((c - b).length());
+            if n.length() < 0.2 * l * l || l < 0.3 {
+                return None;
+            }
+            let h = (x - a).dot(n.normalize()).abs();
+            let near = [a, b, c]
+                .iter()
+                .map(|v| (*v - x).length())
+                .fold(h, f64::min);
+            if near < 0.05 * l {
+                return None;
+            }
+            let s = 10f64.powf(k);
+            Some((x * s, [a * s, b * s, c * s]))
+        },
+    )
+}
+
+fn scale_of(d: &Deriv3) -> (f64, f64) {
+    let g = d.gradient.abs().max_element();
+    let h = d
+        .hessian
+        .to_cols_array()
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    (g, h)
+}
+
+fn close3(a: &Deriv3, b: &Deriv3, tol: f64) -> bool {
+    let (g, h) = scale_of(b);
+    (a.value - b.value).abs() <= tol * b.value.abs().max(1e-300)
+        && (a.gradient - b.gradient).abs().max_element() <= tol * g
+        && (a.hessian - b.hessian)
+            .to_cols_array()
+            .iter()
+            .all(|v| v.abs() <= tol * h)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn solid_angle_hessian_is_exactly_symmetric((x, [a, b, c]) in configuration()) {
+        for d in [
+            kernels::triangle_solid_angle(x, a, b, c, Order::Hessian).unwrap(),
+            kernels::triangle_solid_angle_signed(x, a, b, c, Order::Hessian).unwrap(),
+        ] {
+            prop_assert_eq!(d.hessian, d.hessian.transpose());
+        }
+    }
+
+    #[test]
+    fn solid_angle_is_invariant_under_vertex_permutation((x, [a, b, c]) in configuration()) {
+        let d = kernels::triangle_solid_angle(x, a, b, c, Order::Hessian).unwrap();
+        let s = kernels::triangle_solid_angle_signed(x, a, b, c, Order::Hessian).unwrap();
+        prop_assert!((d.value - s.value.abs()).abs() <= 1e-15 * d.value);
+        for (p, odd) in [([a, b, c], false), ([b, c, a], false), ([c, a, b], false),
+                         ([b, a, c], true), ([a, c, b], true), ([c, b, a], true)] {
+            let e = kernels::triangle_solid_angle(x, p[0], p[1], p[2], Order::Hessian).unwrap();
+            prop_assert!(close3(&e, &d, 1e-13), "{:?} vs {:?}", e, d);
+            let t = kernels::triangle_solid_angle_signed(x, p[0], p[1], p[2], Order::Hessian)
+                .unwrap();
+            let expect = if odd {
+                Deriv3 { value: -s.value, gradient: -s.gradient, hessian: s.hessian * -1.0 }
+            } else {
+                s
+            };
+            prop_assert!(close3(&t, &expect, 1e-13), "{:?} vs {:?}", t, expect);
+        }
+    }
+
+    #[test]
+    fn solid_angle_is_invariant_under_rigid_motion(
+        (x, [a, b, c]) in configuration(), q in unit_quat(), t in vec3(5.0)
+    ) {
+        let scale = (b - a).length();
+        let m = |p: DVec3| q * p + t * scale;
+        let d = kernels::triangle_solid_angle(x, a, b, c, Order::Hessian).unwrap();
+        let e = kernels::triangle_solid_angle(m(x), m(a), m(b), m(c), Order::Hessian).unwrap();
+        let r = DMat3::from_quat(q);
+        let expect = Deriv3 {
+            value: d.value,
+            gradient: r * d.gradient,
+            hessian: r * d.hessian * r.transpose(),
+        };
+        prop_assert!(close3(&e, &expect, 1e-12), "{:?} vs {:?}", e, expect);
+    }
+
+    #[test]
+    fn solid_angle_derivatives_match_finite_differences((x, [a, b, c]) in configuration()) {
+        let l = (b - a).length();
+        let h = 1e-4 * l;
+        let f = |p: DVec3| kernels::triangle_solid_angle(p, a, b, c, Order::Gradient).unwrap();
+        let d = kernels::triangle_solid_angle(x, a, b, c, Order::Hessian).unwrap();
+        let (gs, hs) = scale_of(&d);
+        for i in 0..3 {
+            let mut e = DVec3::ZERO;
+            e[i] = h;
+            let (p, m) = (f(x + e), f(x - e));
+            let g = (p.value - m.value) / (2.0 * h);
+            prop_assert!((g - d.gradient[i]).abs() <= 1e-6 * gs, "grad {i}: {g} vs {}", d.gradient[i]);
+            let col = (p.gradient - m.gradient) / (2.0 * h);
+            prop_assert!((col - d.hessian.col(i)).abs().max_element() <= 1e-6 * hs,
+                "hessian col {i}: {col:?} vs {:?}", d.hessian.col(i));
+        }
+    }
+
+    #[test]
+    fn closed_meshes_subtend_four_pi_inside_and_nothing_outside(
+        q in unit_quat(), t in vec3(10.0), k in -3.0f64..3.0, inside in vec3(0.3),
+        out_dir in vec3(1.0), out_dist in 1.5f64..100.0, mesh in 0usize..3
+    ) {
+        prop_assume!(out_dir.length() > 0.1);
+        let s = 10f64.powf(k);
+        let tris = match mesh { 0 => tetrahedron(), 1 => cube(), _ => icosahedron() };
+        let place = |p: DVec3| (q * p + t) * s;
+        // The three meshes contain the ball of radius 0.3 / sqrt(3) around the origin.
+        let inner = place(inside / 3f64.sqrt());
+        let outer = place(out_dir.normalize() * 2.0 * out_dist);
+        for (x, total) in [(inner, 4.0 * PI), (outer, 0.0)] {
+            // Not Deriv3::default(): glam's default matrix is the identity.
+            let mut sum = Deriv3::constant(0.0);
+            let mut gscale = 0.0f64;
+            let mut hscale = 0.0f64;
+            for [a, b, c] in &tris {
+                let d = kernels::triangle_solid_angle_signed(
+                    x, place(*a), place(*b), place(*c), Order::Hessian).unwrap();
+                let (g, h) = scale_of(&d);
+                gscale = gscale.max(g);
+                hscale = hscale.max(h);
+                sum.value += d.value;
+                sum.gradient += d.gradient;
+                sum.hessian += d.hessian;
+            }
+            prop_assert!((sum.value - total).abs() <= 1e-12 * 4.0 * PI, "{} vs {}", sum.value, total);
+            prop_assert!(sum.gradient.abs().max_element() <= 1e-12 * gscale, "{:?}", sum.gradient);
+            prop_assert!(sum.hessian.to_cols_array().iter().all(|v| v.abs() <= 1e-12 * hscale),
+                "{:?}", sum.hessian);
+            if total > 0.0 {
+                // Inside a convex mesh every face is seen from its back: unsigned = signed.
+                let unsigned: f64 = tris.iter().map(|[a, b, c]| kernels::triangle_solid_angle(
+                    x, place(*a), place(*b), place(*c), Order::Value).unwrap().value).sum();
+                prop_assert!((unsigned - total).abs() <= 1e-12 * total);
+            }
+        }
+    }
+
+    #[test]
+    fn segment_form_factors_of_a_convex_polygon_sum_to_one(
+        n in 3usize..12, phase in 0.0f64..1.0, k in -3.0f64..3.0, c in (-5.0f64..5.0, -5.0f64..5.0),
+        inside in (-0.5f64..0.5, -0.5f64..0.5), stretch in 0.2f64..5.0
+    ) {
+        let s = 10f64.powf(k);
+        let center = DVec2::new(c.0, c.1);
+        let verts: Vec<DVec2> = (0..n).map(|i| {
+            let t = 2.0 * PI * (i as f64 + phase) / n as f64;
+            (center + DVec2::new(t.cos() * stretch, t.sin())) * s
+        }).collect();
+        // The polygon inscribed in the unit circle contains the disc of radius cos(π/n) ≥ 0.5, and
+        // |inside| · 0.6 ≤ 0.43: the (affinely stretched) polygon contains this point.
+        let x = (center + DVec2::new(inside.0 * stretch, inside.1) * 0.6) * s;
+        let mut value = 0.0;
+        let mut grad = DVec2::ZERO;
+        let mut hess = glam::DMat2::ZERO;
+        let mut gscale = 0.0f64;
+        let mut hscale = 0.0f64;
+        for i in 0..n {
+            let d = kernels::segment_form_factor_2d(x, verts[i], verts[(i + 1) % n], Order::Hessian)
+                .unwrap();
+            prop_assert_eq!(d.hessian, d.hessian.transpose());
+            value += d.value;
+            grad += d.gradient;
+            hess += d.hessian;
+            gscale = gscale.max(d.gradient.abs().max_element());
+            hscale = hscale.max(d.hessian.to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs())));
+        }
+        prop_assert!((value - 1.0).abs() <= 1e-13);
+        prop_assert!(grad.abs().max_element() <= 1e-12 * gscale, "{:?}", grad);
+        prop_assert!(hess.to_cols_array().iter().all(|v| v.abs() <= 1e-12 * hscale), "{:?}", hess);
+    }
+
+    #[test]
+    fn segment_derivatives_match_finite_differences(
+        x in (-3.0f64..3.0, -3.0f64..3.0), a in (-1.0f64..1.0, -1.0f64..1.0),
+        b in (-1.0f64..1.0, -1.0f64..1.0), k in -3.0f64..3.0
+    ) {
+        let s = 10f64.powf(k);
+        let (x, a, b) = (DVec2::new(x.0, x.1) * s, DVec2::new(a.0, a.1) * s, DVec2::new(b.0, b.1) * s);
+        let len = (b - a).length();
+        prop_assume!(len > 0.3 * s);
+        let rho = ((x - a).perp_dot((b - a) / len)).abs().min((x - a).length()).min((x - b).length());
+        prop_assume!(rho > 0.05 * s);
+        let h = 1e-4 * rho;
+        let d = kernels::segment_form_factor_2d(x, a, b, Order::Hessian).unwrap();
+        let gs = d.gradient.abs().max_element();
+        let hs = d.hessian.to_cols_array().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..2 {
+            let mut e = DVec2::ZERO;
+            e[i] = h;
+            let p = kernels::segment_form_factor_2d(x + e, a, b, Order::Gradient).unwrap();
+            let m = kernels::segment_form_factor_2d(x - e, a, b, Order::Gradient).unwrap();
+            let g = (p.value - m.value) / (2.0 * h);
+            prop_assert!((g - d.gradient[i]).abs() <= 1e-6 * gs);
+            let col = (p.gradient - m.gradient) / (2.0 * h);
+            prop_assert!((col - d.hessian.col(i)).abs().max_element() <= 1e-6 * hs);
+        }
+    }
+
+    #[test]
+    fn transmittance_derivatives_match_finite_differences(
+        x in vec3(2.0), y in vec3(2.0), sigma in 0.0f64..3.0, k in -3.0f64..3.0
+    ) {
+        let s = 10f64.powf(k);
+        let (x, y, sigma) = (x * s, y * s, sigma / s);
+        let dist = (x - y).length();
+        prop_assume!(dist > 0.05 * s);
+        let d = kernels::transmittance(x, y, sigma, Order::Hessian).unwrap();
+        prop_assert_eq!(d.hessian, d.hessian.transpose());
+        let (gs, hs) = scale_of(&d);
+        let h = 1e-4 * dist;
+        for i in 0..3 {
+            let mut e = DVec3::ZERO;
+            e[i] = h;
+            let p = kernels::transmittance(x + e, y, sigma, Order::Gradient).unwrap();
+            let m = kernels::transmittance(x - e, y, sigma, Order::Gradient).unwrap();
+            prop_assert!(((p.value - m.value) / (2.0 * h) - d.gradient[i]).abs() <= 1e-6 * gs + 1e-300);
+            let col = (p.gradient - m.gradient) / (2.0 * h);
+            prop_assert!((col - d.hessian.col(i)).abs().max_element() <= 1e-6 * hs + 1e-300);
+        }
+        // Rigid motion: T depends on the distance only.
+        let e = kernels::transmittance(x + DVec3::splat(s), y + DVec3::splat(s), sigma, Order::Value)
+            .unwrap();
+        prop_assert!((e.value - d.value).abs() <= 1e-13);
+    }
+
+    #[test]
+    fn marched_gradient_matches_finite_differences_of_resampled_values(
+        x in vec3(2.0), y in vec3(2.0), n in 1usize..16, s0 in 0.5f64..2.0, kv in vec3(0.2)
+    ) {
+        prop_assume!((x - y).length() > 0.1);
+        // Linear field σ(p) = s0 + kv·p (kept ≥ 0 on the sampled region), resampled at each x.
+        let sample = |x: DVec3| -> (Vec<f64>, Vec<DVec3>) {
+            (0..n).map(|j| {
+                let p = x + (y - x) * ((j as f64 + 0.5) / n as f64);
+                (s0 + kv.dot(p), kv)
+            }).unzip()
+        };
+        let (sig, grad) = sample(x);
+        prop_assume!(sig.iter().all(|&s| s >= 0.0));
+        let d = kernels::transmittance_marched(x, y, &sig, Some(&grad), Order::Gradient).unwrap();
+        let h = 1e-5;
+        for i in 0..3 {
+            let mut e = DVec3::ZERO;
+            e[i] = h;
+            let (sp, _) = sample(x + e);
+            let (sm, _) = sample(x - e);
+            let p = kernels::transmittance_marched(x + e, y, &sp, None, Order::Value).unwrap();
+            let m = kernels::transmittance_marched(x - e, y, &sm, None, Order::Value).unwrap();
+            let g = (p.value - m.value) / (2.0 * h);
+            prop_assert!((g - d.gradient[i]).abs() <= 1e-7 * d.gradient.abs().max_element().max(1e-3),
+                "{i}: {g} vs {}", d.gradient[i]);
+        }
+    }
+}
+
+fn tetrahedron() -> Vec<[DVec3; 3]> {
+    // Regular tetrahedron (inradius 1/3 of the circumradius √3): outward-facing triangles.
+    let v = [
+        DVec3::new(1.0, 1.0, 1.0),
+        DVec3::new(1.0, -1.0, -1.0),
+        DVec3::new(-1.0, 1.0, -1.0),
+        DVec3::new(-1.0, -1.0, 1.0),
+    ];
+    orient_outward(vec![
+        [v[0], v[1], v[2]],
+        [v[0], v[1], v[3]],
+        [v[0], v[2], v[3]],
+        [v[1], v[2], v[3]],
+    ])
+}
+
+fn cube() -> Vec<[DVec3; 3]> {
+    let mut tris = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0, 1.0] {
+            let corner = |u: f64, v: f64| {
+                let mut p = DVec3::ZERO;
+                p[axis] = sign;
+                p[(axis + 1) % 3] = u;
+                p[(axis + 2) % 3] = v;
+                p
+            };
+            let (a, b, c, d) = (
+                corner(-1.0, -1.0),
+                corner(1.0, -1.0),
+                corner(1.0, 1.0),
+                corner(-1.0, 1.0),
+            );
+            tris.push([a, b, c]);
+            tris.push([a, c, d]);
+        }
+    }
+    orient_outward(tris)
+}
+
+fn icosahedron() -> Vec<[DVec3; 3]> {
+    let p = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut v = Vec::new();
+    for (s1, s2) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+        v.push(DVec3::new(0.0, s1, s2 * p));
+        v.push(DVec3::new(s1, s2 * p, 0.0));
+        v.push(DVec3::new(s2 * p, 0.0, s1));
+    }
+    // Faces: triples of mutually adjacent vertices (edge length 2).
+    let mut tris = Vec::new();
+    for i in 0..12 {
+        for j in (i + 1)..12 {
+            for k in (j + 1)..12 {
+                let adj = |a: DVec3, b: DVec3| ((a - b).length() - 2.0).abs() < 1e-9;
+                if adj(v[i], v[j]) && adj(v[j], v[k]) && adj(v[i], v[k]) {
+                    tris.push([v[i], v[j], v[k]]);
+                }
+            }
+        }
+    }
+    assert_eq!(tris.len(), 20);
+    orient_outward(tris)
+}
+
+/// Orders each triangle of a convex mesh around the origin so that its normal faces outwards.
+fn orient_outward(tris: Vec<[DVec3; 3]>) -> Vec<[DVec3; 3]> {
+    tris.into_iter()
+        .map(|[a, b, c]| {
+            if (b - a).cross(c - a).dot(a) > 0.0 {
+                [a, b, c]
+            } else {
+                [a, c, b]
+            }
+        })
+        .collect()
+}

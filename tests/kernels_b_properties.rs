@@ -1,0 +1,261 @@
+//! Property tests of the form-factor kernels: Hessian symmetry, invariance under vertex order and
+//! rigid motion, closed hemispheres summing to 1, gradients equal to finite differences, agreement
+//! of the clipped kernel with the raw edge sum when nothing is clipped, and agreement of the
+//! gradient with Arvo's irradiance Jacobian.
+
+use glam::{DMat3, DQuat, DVec3};
+use proptest::prelude::*;
+use raddiff::{kernels, Deriv3, Order};
+
+fn vec3(r: f64) -> impl Strategy<Value = DVec3> {
+    (-r..r, -r..r, -r..r).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+}
+
+fn unit() -> impl Strategy<Value = DVec3> {
+    vec3(1.0)
+        .prop_filter("not too short", |v| v.length() > 0.2)
+        .prop_map(|v| v.normalize())
+}
+
+/// A triangle of reasonable shape and a point away from its plane (so derivatives exist).
+fn configuration() -> impl Strategy<Value = (DVec3, DVec3, [DVec3; 3])> {
+    (vec3(2.0), unit(), vec3(1.0), vec3(1.0), vec3(1.0)).prop_filter_map(
+        "well-shaped",
+        |(x, n, a, b, c)| {
+            let normal = (b - a).cross(c - a);
+            if normal.length() < 0.1 {
+                return None;
+            }
+            if normal.normalize().dot(a - x).abs() < 0.05
+                || (a - x).length().min((b - x).length()).min((c - x).length()) < 0.05
+            {
+                return None;
+            }
+            Some((x, n, [a, b, c]))
+        },
+    )
+}
+
+fn scale_of(d: &Deriv3) -> (f64, f64, f64) {
+    (
+        d.value.abs().max(1e-300),
+        d.gradient.abs().max_element().max(1e-300),
+        d.hessian
+            .to_cols_array()
+            .iter()
+            .fold(1e-300f64, |m, v| m.max(v.abs())),
+    )
+}
+
+fn close(a: &Deriv3, b: &Deriv3, tol: f64) -> bool {
+    let (sv, sg, sh) = scale_of(b);
+    let dh = (a.hessian - b.hessian)
+        .to_cols_array()
+        .iter()
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    (a.value - b.value).abs() <= tol * sv.max(1e-14)
+        && (a.gradient - b.gradient).abs().max_element() <= tol * sg.max(1e-14)
+        && dh <= tol * sh.max(1e-14)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    #[test]
+    fn hessian_is_symmetric((x, n, t) in configuration()) {
+        let d = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
+        prop_assert!(d.is_finite());
+        prop_assert_eq!(d.hessian, d.hessian.transpose());
+        prop_assert!((0.0..=1.0).contains(&d.value));
+    }
+
+    #[test]
+    fn invariant_under_vertex_order((x, n, t) in configuration()) {
+        let d = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
+        for p in [[1, 2, 0], [2, 0, 1], [0, 2, 1], [2, 1, 0], [1, 0, 2]] {
+            let e = kernels::triangle_form_factor(x, n, t[p[0]], t[p[1]], t[p[2]], Order::Hessian).unwrap();
+            // small clipped values are conditioned by the clip (see the accuracy tests): 1e-16 absolute
+            prop_assert!(close(&e, &d, 1e-11) || ((e.value - d.value).abs() < 1e-16 && close(&Deriv3 { value: d.value, ..e }, &d, 1e-11)), "{p:?}: {e:?} vs {d:?}");
+        }
+    }
+
+    #[test]
+    fn invariant_under_rigid_motion((x, n, t) in configuration(), axis in unit(), angle in -3.0..3.0f64, shift in vec3(100.0)) {
+        let q = DQuat::from_axis_angle(axis, angle);
+        let m = |v: DVec3| q * v + shift;
+        let d = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
+        let e = kernels::triangle_form_factor(m(x), (q * n).normalize(), m(t[0]), m(t[1]), m(t[2]), Order::Hessian).unwrap();
+        let r = DMat3::from_quat(q);
+        let expect = Deriv3 { value: d.value, gradient: r * d.gradient, hessian: r * d.hessian * r.transpose() };
+        // the translation by up to 100 costs ~100 ulps of the unit-size coordinates
+        prop_assert!(close(&e, &expect, 1e-10), "{e:?} vs {expect:?}");
+    }
+
+    #[test]
+    fn gradient_and_hessian_match_finite_differences((x, n, t) in configuration()) {
+        let d = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
+        let h = 1e-5;
+        let (_, sg, sh) = scale_of(&d);
+        for i in 0..3 {
+            let mut e = DVec3::ZERO;
+            e[i] = h;
+            let fp = kernels::triangle_form_factor(x + e, n, t[0], t[1], t[2], Order::Gradient).unwrap();
+            let fm = kernels::triangle_form_factor(x - e, n, t[0], t[1], t[2], Order::Gradient).unwrap();
+            let g = (fp.value - fm.value) / (2.0 * h);
+            prop_assert!((g - d.gradient[i]).abs() <= 1e-6 * sg.max(1e-3), "d/dx{i}: fd {g} vs {}", d.gradient[i]);
+            let col = (fp.gradient - fm.gradient) / (2.0 * h);
+            prop_assert!((col - d.hessian.col(i)).abs().max_element() <= 1e-5 * sh.max(1e-2), "H col {i}: fd {col:?} vs {:?}", d.hessian.col(i));
+        }
+    }
+
+    /// Nothing below the tangent plane: the kernel equals |Σ edge terms| including derivatives.
+    #[test]
+    fn unclipped_equals_edge_sum((x, _n, t) in configuration(), tilt in vec3(0.3)) {
+        let normal = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+        // face the triangle so that all of it is above the tangent plane
+        let towards = if normal.dot(t[0] - x) > 0.0 { normal } else { -normal };
+        let n = (towards + tilt).normalize();
+        prop_assume!(t.iter().all(|v| n.dot(*v - x) > 0.0));
+        let d = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
+        let mut sum = Deriv3::constant(0.0);
+        for i in 0..3 {
+            let e = kernels::edge_form_factor(x, n, t[i], t[(i + 1) % 3], Order::Hessian).unwrap();
+            sum.value += e.value;
+            sum.gradient += e.gradient;
+            sum.hessian += e.hessian;
+        }
+        if sum.value < 0.0 {
+            sum.value = -sum.value;
+            sum.gradient = -sum.gradient;
+            sum.hessian = -sum.hessian;
+        }
+        prop_assert!(close(&d, &sum, 1e-11), "{d:?} vs {sum:?}");
+    }
+
+    /// Arvo's irradiance Jacobian (thesis §5.1): ∇F = ±Jᵀ n for an unclipped polygon.
+    #[test]
+    fn gradient_matches_arvo_jacobian((x, _n, t) in configuration(), tilt in vec3(0.3)) {
+        let normal = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+        let towards = if normal.dot(t[0] - x) > 0.0 { normal } else { -normal };
+        let n = (towards + tilt).normalize();
+        prop_assume!(t.iter().all(|v| n.dot(*v - x) > 0.0));
+        let d = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Gradient).unwrap();
+        let jac = kernels::vector_form_factor_jacobian(x, &t).unwrap();
+        // Φ·n is the signed form factor: + when the vertices run clockwise seen from x
+        let sign = if normal.dot(t[0] - x) > 0.0 { 1.0 } else { -1.0 };
+        let arvo = jac.transpose() * n * sign;
+        prop_assert!((arvo - d.gradient).abs().max_element() <= 1e-11 * d.gradient.abs().max_element().max(1e-12), "{arvo:?} vs {:?}", d.gradient);
+    }
+
+    /// The twelve triangles of a box around x (clipped by the tangent plane) sum to 1, and their
+    /// gradients and Hessians sum to 0.
+    #[test]
+    fn closed_box_sums_to_one(x in vec3(0.45), n in unit(), half in (0.5..3.0f64, 0.5..3.0f64, 0.5..3.0f64)) {
+        let (hx, hy, hz) = half;
+        let c = |i: usize| DVec3::new(
+            if i & 1 == 0 { -hx } else { hx },
+            if i & 2 == 0 { -hy } else { hy },
+            if i & 4 == 0 { -hz } else { hz },
+        ) * 1.0 + DVec3::ZERO;
+        let faces = [[0, 1, 3, 2], [4, 5, 7, 6], [0, 1, 5, 4], [2, 3, 7, 6], [0, 2, 6, 4], [1, 3, 7, 5]];
+        let mut total = Deriv3::constant(0.0);
+        let mut quads = Deriv3::constant(0.0);
+        for f in faces {
+            for tri in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+                let d = kernels::triangle_form_factor(x, n, c(tri[0]), c(tri[1]), c(tri[2]), Order::Hessian).unwrap();
+                total.value += d.value;
+                total.gradient += d.gradient;
+                total.hessian += d.hessian;
+            }
+            let q = kernels::polygon_form_factor(x, n, &[c(f[0]), c(f[1]), c(f[2]), c(f[3])], Order::Hessian).unwrap();
+            quads.value += q.value;
+            quads.gradient += q.gradient;
+            quads.hessian += q.hessian;
+        }
+        for t in [total, quads] {
+            prop_assert!((t.value - 1.0).abs() < 1e-13, "sum {}", t.value);
+            prop_assert!(t.gradient.abs().max_element() < 1e-11, "gradient sum {:?}", t.gradient);
+            prop_assert!(t.hessian.to_cols_array().iter().all(|v| v.abs() < 1e-9), "hessian sum {:?}", t.hessian);
+        }
+    }
+}
+
+#[test]
+fn unit_normal_is_checked_and_renormalized() {
+    let t = [
+        DVec3::new(0., 0., 1.),
+        DVec3::new(1., 0., 1.),
+        DVec3::new(0., 1., 1.),
+    ];
+    let a = kernels::triangle_form_factor(DVec3::ZERO, DVec3::Z, t[0], t[1], t[2], Order::Hessian)
+        .unwrap();
+    let b = kernels::triangle_form_factor(
+        DVec3::ZERO,
+        DVec3::Z * (1.0 + 5e-7),
+        t[0],
+        t[1],
+        t[2],
+        Order::Hessian,
+    )
+    .unwrap();
+    assert_eq!(a, b);
+    for bad in [DVec3::ZERO, DVec3::Z * 1.01, DVec3::new(f64::NAN, 0., 1.)] {
+        assert!(matches!(
+            kernels::triangle_form_factor(DVec3::ZERO, bad, t[0], t[1], t[2], Order::Value),
+            Err(raddiff::Error::InvalidArgument(_))
+        ));
+    }
+}
+
+#[test]
+fn edge_term_limits() {
+    let (a, b) = (DVec3::new(0., 0., 1.), DVec3::new(1., 0., 1.));
+    // on the segment: undefined
+    assert!(matches!(
+        kernels::edge_form_factor((a + b) / 2.0, DVec3::Z, a, b, Order::Value),
+        Err(raddiff::Error::Degenerate(_))
+    ));
+    assert!(matches!(
+        kernels::edge_form_factor(a, DVec3::Z, a, b, Order::Value),
+        Err(raddiff::Error::Degenerate(_))
+    ));
+    // on the line outside the segment: the finite limit, continuous with nearby points
+    let x = DVec3::new(-1., 0., 1.);
+    let on = kernels::edge_form_factor(x, DVec3::Y, a, b, Order::Hessian).unwrap();
+    let near =
+        kernels::edge_form_factor(x + DVec3::new(0., 0., 1e-9), DVec3::Y, a, b, Order::Hessian)
+            .unwrap();
+    assert!(on.is_finite());
+    assert!((on.value - near.value).abs() < 1e-8);
+    assert!((on.gradient - near.gradient).abs().max_element() < 1e-7);
+    // a zero-length edge contributes nothing; reversing the edge flips the sign
+    assert_eq!(
+        kernels::edge_form_factor(x, DVec3::Y, a, a, Order::Hessian).unwrap(),
+        Deriv3::constant(0.0)
+    );
+    let y = DVec3::new(0.3, -0.4, 0.2);
+    let ab = kernels::edge_form_factor(y, DVec3::Z, a, b, Order::Hessian).unwrap();
+    let ba = kernels::edge_form_factor(y, DVec3::Z, b, a, Order::Hessian).unwrap();
+    assert!((ab.value + ba.value).abs() < 1e-16);
+    assert!((ab.gradient + ba.gradient).abs().max_element() < 1e-15);
+}
+
+#[test]
+fn far_field_switch_is_continuous() {
+    // Walk x outwards through the switch: the kernel changes formulation but not value.
+    let t = [
+        DVec3::new(-0.5, -0.3, 0.0),
+        DVec3::new(0.6, -0.2, 0.1),
+        DVec3::new(0.1, 0.7, -0.1),
+    ];
+    let c = (t[0] + t[1] + t[2]) / 3.0;
+    let radius = t.iter().map(|v| (*v - c).length()).fold(0.0, f64::max);
+    let dir = DVec3::new(0.3, 0.2, 0.9).normalize();
+    let n = -DVec3::new(0.1, 0.3, 0.9).normalize();
+    let at = |k: f64| {
+        kernels::triangle_form_factor(c + dir * k * radius, n, t[0], t[1], t[2], Order::Hessian)
+            .unwrap()
+    };
+    let (below, above) = (at(16.0 * (1.0 - 1e-14)), at(16.0 * (1.0 + 1e-14)));
+    assert!(close(&below, &above, 1e-12), "{below:?} vs {above:?}");
+}
