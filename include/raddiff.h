@@ -74,6 +74,15 @@
 // Compute the value, the gradient and the Hessian.
 #define RADDIFF_ORDER_HESSIAN 2
 
+// `error` bounds the integrated absolute error over the record.
+#define RADDIFF_ERROR_ABSOLUTE 0
+
+// `error` bounds the integrated error divided by `|value|`.
+#define RADDIFF_ERROR_RELATIVE 1
+
+// Largest radius the radii functions return (caller's length unit), e.g. for a zero Hessian.
+#define RADDIFF_MAX_RADIUS 1e30
+
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
 typedef enum raddiff_status {
@@ -302,6 +311,41 @@ enum raddiff_status raddiff_segment_form_factor_2d(struct raddiff_vec2 x,
                                                    struct raddiff_vec2 b,
                                                    uint32_t order,
                                                    struct raddiff_deriv2 *out);
+
+// Elliptical surface record from a 3x3 Hessian (see the Rust `gather::radii::surface_radii`): the
+// Hessian (row-major) is projected on the tangent plane of the unit `normal` and eigen-decomposed;
+// `radii[0] <= radii[1]` are the semi-axes along the world-space unit tangents `axes[0..2]`, chosen so
+// that the integrated second-order error over the ellipse equals the tolerance (`error`, or
+// `error * |value|` for `RADDIFF_ERROR_RELATIVE`). `max_anisotropy >= 1` caps `radii[1]/radii[0]`.
+// A vanishing Hessian gives `RADDIFF_MAX_RADIUS`.
+//
+// # Safety
+// `hessian` must be NULL or point to 9 readable doubles; `radii` to 2 writable doubles and `axes` to
+// 2 writable `raddiff_vec3` (or be NULL, which is reported).
+enum raddiff_status raddiff_surface_radii(const double *hessian,
+                                          struct raddiff_vec3 normal,
+                                          double value,
+                                          double error,
+                                          uint32_t mode,
+                                          double max_anisotropy,
+                                          double *radii,
+                                          struct raddiff_vec3 *axes);
+
+// Ellipsoidal media record from a 3x3 Hessian (row-major; see the Rust `gather::radii::volume_radii`):
+// semi-axes `radii[0] <= radii[1] <= radii[2]` along the orthonormal `axes[0..3]`, chosen so that the
+// integrated second-order error over the ellipsoid equals the tolerance. `max_anisotropy >= 1` caps
+// `radii[2]/radii[0]`. A vanishing Hessian gives `RADDIFF_MAX_RADIUS`.
+//
+// # Safety
+// `hessian` must be NULL or point to 9 readable doubles; `radii` to 3 writable doubles and `axes` to
+// 3 writable `raddiff_vec3` (or be NULL, which is reported).
+enum raddiff_status raddiff_volume_radii(const double *hessian,
+                                         double value,
+                                         double error,
+                                         uint32_t mode,
+                                         double max_anisotropy,
+                                         double *radii,
+                                         struct raddiff_vec3 *axes);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -378,24 +378,30 @@ impl<V: CacheValue> Cache<V> {
             )));
         }
         used.sort_unstable_by_key(|u| u.key);
-        let mut tmp: SmallVec<[f32; 32]> = SmallVec::from_elem(0.0, out.len());
-        let weight_sum = interp::blend(&self.kernel, &used, position, n, &mut tmp);
+        let weight_sum: f64 = used.iter().map(|u| u.weight).sum();
         if !(weight_sum > 0.0 && weight_sum.is_finite()) {
             return Err(Error::NotFound(format!(
                 "the records covering {position} have zero total weight"
             )));
         }
-        out.copy_from_slice(&tmp);
+        interp::blend(&self.kernel, &used, weight_sum, position, n, out);
         Ok((weight_sum, used.len()))
     }
 
     /// Interpolates at `position` with surface normal `normal` (ignored in volumes).
     /// `NotFound` when no record covers the point.
     pub fn lookup(&self, position: DVec3, normal: DVec3) -> Result<Lookup<V>> {
-        let mut out: SmallVec<[f32; 32]> = SmallVec::from_elem(0.0, self.config.channels);
-        let (weight_sum, records) = self.lookup_into(position, normal, &mut out)?;
+        let mut buf = [0.0f32; 32];
+        let mut heap = Vec::new();
+        let out: &mut [f32] = if self.config.channels <= buf.len() {
+            &mut buf[..self.config.channels]
+        } else {
+            heap.resize(self.config.channels, 0.0);
+            &mut heap
+        };
+        let (weight_sum, records) = self.lookup_into(position, normal, out)?;
         Ok(Lookup {
-            value: V::from_channels(&out),
+            value: V::from_channels(out),
             weight_sum,
             records,
         })

@@ -1,0 +1,69 @@
+//! Occlusion-aware Hessian of a hemisphere gather: triangulation, gradient, Hessian (shared edges
+//! vs per triangle) and radii, for 1024, 4096 and 16384 rays of the thesis evaluation scene.
+//! Run: `cargo bench --bench hessian -- --warm-up-time 1 --measurement-time 3`.
+
+#[path = "../tests/hessian_common/mod.rs"]
+mod hessian_common;
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use glam::DVec3;
+use hessian_common::{scene, SceneGather};
+use raddiff::gather::hessian::{
+    mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle, Connectivity,
+    Topology,
+};
+use raddiff::gather::radii::{surface_radii, ErrorMode};
+use raddiff::Order;
+
+fn bench(c: &mut Criterion) {
+    let x = DVec3::new(-0.3, -0.2, 0.0);
+    let mut group = c.benchmark_group("hessian");
+    for side in [32usize, 64, 128] {
+        let samples = side * side;
+        let kind = Connectivity::Concentric;
+        // Grey environment: every triangle carries a radiance, as in a lit interior.
+        let sg = SceneGather::new(kind, side, side, 0, x, &scene::rects(), 0.5);
+        let g = sg.gather();
+        let topo = Topology::new(kind, side, side).unwrap();
+        group.throughput(Throughput::Elements(samples as u64));
+        group.bench_with_input(
+            BenchmarkId::new("topology (once per layout)", samples),
+            &side,
+            |b, &s| b.iter(|| Topology::new(kind, black_box(s), s).unwrap()),
+        );
+        group.bench_with_input(BenchmarkId::new("triangulation", samples), &g, |b, g| {
+            b.iter(|| mesh_geometry(&topo, black_box(g)).unwrap())
+        });
+        group.bench_with_input(BenchmarkId::new("gradient", samples), &g, |b, g| {
+            b.iter(|| occlusion_derivatives(&topo, black_box(g), Order::Gradient).unwrap())
+        });
+        group.bench_with_input(
+            BenchmarkId::new("hessian (shared edges)", samples),
+            &g,
+            |b, g| b.iter(|| occlusion_derivatives(&topo, black_box(g), Order::Hessian).unwrap()),
+        );
+        group.bench_with_input(
+            BenchmarkId::new("hessian (per triangle)", samples),
+            &g,
+            |b, g| {
+                b.iter(|| {
+                    occlusion_derivatives_per_triangle(&topo, black_box(g), Order::Hessian).unwrap()
+                })
+            },
+        );
+        let d = occlusion_derivatives(&topo, &g, Order::Hessian).unwrap();
+        let h = d.robust_hessian(0);
+        let e = d.irradiance[0];
+        group.bench_with_input(BenchmarkId::new("radii", samples), &h, |b, h| {
+            b.iter(|| {
+                surface_radii(black_box(*h), DVec3::Z, e, 0.05, ErrorMode::Relative, 2.0).unwrap()
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
