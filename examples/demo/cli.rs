@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use crate::caching::Metric;
 use crate::scene::SceneKind;
 
 pub const USAGE: &str = "\
@@ -26,7 +27,7 @@ OPTIONS:
 #[derive(Clone, Debug)]
 pub struct Options {
     pub scenes: Vec<SceneKind>,
-    pub metrics: Vec<String>,
+    pub metrics: Vec<Metric>,
     pub records: usize,
     pub width: usize,
     pub height: usize,
@@ -116,11 +117,10 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Options>, 
         return Err("--reference must be a positive square number (e.g. 1024, 4096)".into());
     }
     o.metrics = if metric == "all" {
-        crate::metrics::ALL.iter().map(|m| m.to_string()).collect()
-    } else if crate::metrics::ALL.contains(&metric.as_str()) {
-        vec![metric]
+        Metric::ALL.to_vec()
     } else {
-        return Err(format!("unknown metric {metric:?} (see --help)"));
+        vec![Metric::parse(&metric)
+            .ok_or_else(|| format!("unknown metric {metric:?} (see --help)"))?]
     };
     Ok(Some(o))
 }

@@ -81,3 +81,30 @@ pub fn auto_exposure(values: &[DVec3]) -> f64 {
 pub fn luminance(c: DVec3) -> f64 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
+/// A perceptually ordered colour ramp (black, blue, magenta, orange, yellow-white) for t in [0, 1].
+pub fn heat(t: f64) -> [u8; 3] {
+    const STOPS: [[f64; 3]; 5] = [
+        [0.0, 0.0, 0.0],
+        [0.15, 0.1, 0.55],
+        [0.75, 0.15, 0.5],
+        [0.98, 0.55, 0.1],
+        [1.0, 1.0, 0.75],
+    ];
+    let t = t.clamp(0.0, 1.0) * (STOPS.len() - 1) as f64;
+    let i = (t.floor() as usize).min(STOPS.len() - 2);
+    let f = t - i as f64;
+    let mut c = [0u8; 3];
+    for (ch, out) in c.iter_mut().enumerate() {
+        *out = ((STOPS[i][ch] * (1.0 - f) + STOPS[i + 1][ch] * f) * 255.0 + 0.5) as u8;
+    }
+    c
+}
+
+/// False-colour map of non-negative scalars, `scale` mapping to the top of the ramp.
+pub fn heat_map(width: usize, height: usize, values: &[f64], scale: f64) -> Rgb8 {
+    let mut img = Rgb8::new(width, height);
+    for (i, v) in values.iter().enumerate() {
+        img.set(i % width, i / width, heat(v / scale));
+    }
+    img
+}

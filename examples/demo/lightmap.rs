@@ -120,9 +120,19 @@ impl LightMap {
 
     /// Reflected radiance found along a ray (zero on a miss), and the hit distance (∞ on a miss).
     pub fn trace(&self, scene: &Scene, ray: &Ray) -> (f64, DVec3) {
+        let (distance, radiance, _) = self.trace_with_normal(scene, ray);
+        (distance, radiance)
+    }
+
+    /// [`LightMap::trace`] and the unit normal at the hit facing the ray's origin (zero on a miss).
+    pub fn trace_with_normal(&self, scene: &Scene, ray: &Ray) -> (f64, DVec3, DVec3) {
         match scene.bvh.intersect(ray, scene.epsilon(), f64::INFINITY) {
-            Some(hit) => (hit.distance, self.radiance(hit.primitive, hit.s, hit.t)),
-            None => (f64::INFINITY, DVec3::ZERO),
+            Some(hit) => {
+                let n = scene.bvh.primitive(hit.primitive).normal;
+                let n = if n.dot(ray.direction) > 0.0 { -n } else { n };
+                (hit.distance, self.radiance(hit.primitive, hit.s, hit.t), n)
+            }
+            None => (f64::INFINITY, DVec3::ZERO, DVec3::ZERO),
         }
     }
 

@@ -5,13 +5,18 @@
 //! plot are written under `out/`.
 
 mod bvh;
+mod caching;
 mod cli;
+mod derivs;
 mod geometry;
 mod image;
 mod lightmap;
-mod metrics;
+mod outputs;
+mod plot;
 mod render;
+mod report;
 mod scene;
+mod timing;
 
 use std::path::Path;
 use std::time::Instant;
@@ -19,6 +24,7 @@ use std::time::Instant;
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::caching::GatherStore;
 use crate::lightmap::LightMap;
 use crate::render::GBuffer;
 use crate::scene::Scene;
@@ -143,6 +149,84 @@ fn run() -> Result<(), String> {
             ),
             "reference-indirect-irradiance",
         )?;
+
+        let store = GatherStore::new(
+            &scene,
+            &lightmap,
+            &gbuffer,
+            options.gather_m,
+            options.gather_n,
+            options.metrics.iter().any(|m| m.uses_hessian()),
+        )
+        .map_err(|e| e.to_string())?;
+        let mut scene_report = report::SceneReport::new(name, &options, ref_seconds);
+        let bar = progress("caches");
+        bar.set_length((options.metrics.len() * options.thresholds) as u64);
+        for &metric in &options.metrics {
+            if metric == caching::Metric::HessianUnaware && scene.medium.is_some() {
+                println!("   hessian-unaware: not defined in a participating medium, skipped");
+                continue;
+            }
+            let tuned =
+                caching::tune(&store, metric, options.records).map_err(|e| e.to_string())?;
+            let render: Vec<DVec3> = gbuffer
+                .pixels
+                .iter()
+                .zip(&tuned.image)
+                .map(|(p, e)| p.base + p.indirect_weight * *e)
+                .collect();
+            let file = format!("cache-{}", metric.name());
+            save(
+                image::tonemap(options.width, options.height, &render, exposure),
+                &file,
+            )?;
+            save(
+                outputs::records_overlay(
+                    &scene.camera,
+                    &gbuffer,
+                    &render,
+                    exposure,
+                    &tuned.records,
+                ),
+                &format!("{file}-records"),
+            )?;
+            save(
+                outputs::error_map(&gbuffer, &tuned.image, &reference, report::ERROR_MAP_SCALE),
+                &format!("{file}-error"),
+            )?;
+            // Error against time: the same metric at thresholds around the tuned one.
+            let mut sweep = Vec::new();
+            for k in 0..options.thresholds {
+                let factor = 2f64.powf(0.75 * (k as f64 - 1.0));
+                let run = if factor == 1.0 {
+                    None
+                } else {
+                    Some(
+                        caching::run(&store, metric, tuned.parameter * factor)
+                            .map_err(|e| e.to_string())?,
+                    )
+                };
+                let r = run.as_ref().unwrap_or(&tuned);
+                sweep.push(report::Row::new(r, &reference, &gbuffer));
+                bar.inc(1);
+            }
+            scene_report.add(report::Row::new(&tuned, &reference, &gbuffer), sweep);
+        }
+        bar.finish_and_clear();
+        scene_report.overhead(&store, &reference);
+        scene_report
+            .write(&options.out)
+            .map_err(|e| e.to_string())?;
+        plot::error_against_time(
+            &options.out.join(format!("{name}-error-time.png")),
+            &format!(
+                "{name}: error against time, {} rays per record",
+                store.rays_per_gather()
+            ),
+            &scene_report.series(),
+        )
+        .unwrap_or_else(|e| eprintln!("   plot skipped: {e}"));
+        print!("{}", scene_report.markdown());
     }
     Ok(())
 }
