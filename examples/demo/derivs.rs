@@ -4,7 +4,7 @@
 
 use glam::{DMat3, DVec3};
 use raddiff::gather::hessian::{occlusion_derivatives, HemisphereGather};
-use raddiff::gather::hessian_mesh::{Connectivity, Topology};
+use raddiff::gather::hessian_mesh::Topology;
 use raddiff::gather::hessian_unaware::unaware_derivatives;
 use raddiff::gather::{
     evaluate, Frame, GatherInput, GatherValues, Layout, LayoutKind, MediaRadiance, Wanted,
@@ -82,7 +82,7 @@ impl Gatherer {
         Ok(Gatherer {
             m: m as u32,
             n: n as u32,
-            topology: Topology::new(Connectivity::Polar, m, n)?,
+            topology: Topology::new(LayoutKind::CosinePolar, m, n)?,
             hessian,
         })
     }
