@@ -198,8 +198,8 @@ typedef struct raddiff_cache_record {
   // Nullable: 3*channels floats, rotational gradient (derivative with respect to the rotation
   // vector of the normal, Ward-Heckbert convention), channel-major; surface domain only.
   const float *rotation_gradient;
-  // Surface: radii[0..1] along axes[0] (projected to the tangent plane) and normal x axes[0];
-  // radii[2] unused. Volume: ellipsoid radii along axes[0..2]. In [1e-30, 1e30].
+  // Surface: `radii[0..1]` along `axes[0]` (projected to the tangent plane) and `normal x axes[0]`;
+  // `radii[2]` unused. Volume: ellipsoid radii along `axes[0..2]`. Each in 1e-30..=1e30.
   double radii[3];
   // Principal axes (need not be unit; may be zero for isotropic radii).
   struct raddiff_vec3 axes[3];
