@@ -16,7 +16,7 @@ use glam::DVec3;
 
 use super::input::{GatherInput, MediaRadiance};
 use super::layout::{Frame, Layout, LayoutKind};
-use super::walls::Walls;
+use super::walls::{ConcentricWalls, Walls};
 use crate::error::{Error, Result};
 use crate::{kernels, Order};
 
@@ -121,17 +121,8 @@ impl<'a> ValidGather<'a> {
 
     /// Computes what `wanted` asks for.
     ///
-    /// `InvalidArgument` if a translational gradient is asked of a [`LayoutKind::Concentric`]
-    /// layout: its walls are not θ/φ lines, and Ward-Heckbert's wall terms are implemented for the
-    /// polar and sphere layouts only. `Degenerate` if a result overflows (e.g. hits at ~1e-300 L).
+    /// `Degenerate` if a result overflows (e.g. hits at ~1e-300 L).
     pub fn evaluate(&self, wanted: Wanted) -> Result<GatherValues> {
-        if wanted.gradient && self.layout.kind == LayoutKind::Concentric {
-            return Err(Error::InvalidArgument(
-                "translational gradients need RADDIFF_LAYOUT_COSINE_POLAR or RADDIFF_LAYOUT_SPHERE: \
-                 the concentric layout's cell walls are not theta/phi lines"
-                    .into(),
-            ));
-        }
         let mut out = GatherValues::default();
         let ch = self.input.channels;
         let weight = self.stratum_weight();
@@ -169,8 +160,12 @@ impl<'a> ValidGather<'a> {
             let walls =
                 (self.layout.kind != LayoutKind::Concentric).then(|| Walls::new(&self.layout));
             if wanted.gradient {
-                let walls = walls.as_ref().expect("walls exist for polar layouts");
-                let local = self.wall_gradient(walls, &rad);
+                let local = match &walls {
+                    Some(walls) => self.wall_gradient(walls, &rad),
+                    None => {
+                        self.concentric_wall_gradient(&ConcentricWalls::cached(&self.layout), &rad)
+                    }
+                };
                 if out.gradient.is_empty() {
                     out.gradient = vec![DVec3::ZERO; ch];
                 }
@@ -361,6 +356,43 @@ impl<'a> ValidGather<'a> {
                 let (az, rg) = (azimuth[k * ch + c], ring[k * ch + c]);
                 g.x += rg * c1 - az * sin_k;
                 g.y += rg * c2 + az * cos_k;
+            }
+        }
+        g
+    }
+
+    /// The same wall terms for the concentric layout, whose wall vectors are computed by quadrature
+    /// along the images of the grid lines (see [`ConcentricWalls`]).
+    fn concentric_wall_gradient(&self, walls: &ConcentricWalls, rad: &[f64]) -> Vec<DVec3> {
+        let (m, n) = (self.layout.m as usize, self.layout.n as usize);
+        let ch = self.input.channels;
+        let inv_r: Vec<f64> = self.input.distance.iter().map(|&r| 1.0 / r).collect();
+        let mut g = vec![DVec3::ZERO; ch];
+        let mut wall = |a: usize, b: usize, w: DVec3| {
+            let s = inv_r[a].max(inv_r[b]);
+            if s == 0.0 {
+                return;
+            }
+            for (c, g) in g.iter_mut().enumerate() {
+                *g += w * ((rad[a * ch + c] - rad[b * ch + c]) * s);
+            }
+        };
+        for j in 1..m {
+            for k in 0..n {
+                wall(
+                    j * n + k,
+                    (j - 1) * n + k,
+                    walls.first_axis[(j - 1) * n + k],
+                );
+            }
+        }
+        for j in 0..m {
+            for k in 1..n {
+                wall(
+                    j * n + k,
+                    j * n + k - 1,
+                    walls.second_axis[j * (n - 1) + k - 1],
+                );
             }
         }
         g
