@@ -3,10 +3,15 @@
 //! * Value: stratified Monte Carlo with weight `A_{j,k}·cosθ = π/(MN)` per stratum for the
 //!   cosine-weighted hemisphere layouts and `4π/(MN)` for the sphere (fluence) — Jarosz et al. 2008
 //!   Table 2 with ERRATA 4: the cell area is `(MN)⁻¹ pdf⁻¹`.
-//! * Translational gradient: Ward-Heckbert wall motion (see [`super::walls`]) on the attenuated
-//!   surface radiance, plus the cell-radiance term `∇T·L` through a homogeneous medium
-//!   (Jarosz 2008 eq. 14-18), plus, with media radiance, the in-scattered radiance gradient and the
-//!   visibility gradient of surfaces occluding the medium (eq. 19-26, Algorithm 1).
+//! * Translational gradient: Ward-Heckbert wall motion (see [`super::walls`]) on the radiance
+//!   reaching x through each stratum, plus the cell-radiance term `∇T·L` through a homogeneous
+//!   medium (Jarosz 2008 eq. 14-18), plus, with media radiance, the gradient of each stratum's
+//!   marched segment with its hit point fixed. Media radiance enters the wall terms with the surface
+//!   radiance, so the visibility gradient of surfaces occluding the medium (eq. 22-26) arises at
+//!   silhouettes, where the shells between the occluder and the farther hit move with the occluder.
+//!   Applying eq. 24 at every depth difference instead (Algorithm 1 taken literally) also moves the
+//!   iso-distance contours of smooth surfaces as if they were silhouettes, which biased the gradient
+//!   by 18-50% in the reference tests; the segment model converges (README, "Gathers").
 //! * Rotational gradient (thesis eq. 3.23-3.24): `∫ L (n × ω) dω`, integrated exactly over each
 //!   polar stratum (no `tanθ` blow-up at the horizon); Monte Carlo for the concentric layout.
 
@@ -157,13 +162,15 @@ impl<'a> ValidGather<'a> {
                 }
                 out.irradiance = e.into_iter().map(|e| e * weight).collect();
             }
-            let walls =
-                (self.layout.kind != LayoutKind::Concentric).then(|| Walls::new(&self.layout));
+            let walls = (self.layout.kind != LayoutKind::Concentric
+                && (wanted.gradient || wanted.rotation_gradient))
+                .then(|| Walls::new(&self.layout));
             if wanted.gradient {
                 let local = match &walls {
                     Some(walls) => self.wall_gradient(walls, &rad),
                     None => {
-                        self.concentric_wall_gradient(&ConcentricWalls::cached(&self.layout), &rad)
+                        let walls = ConcentricWalls::cached(&self.layout);
+                        self.concentric_wall_gradient(&walls, &rad)
                     }
                 };
                 if out.gradient.is_empty() {
