@@ -34,7 +34,7 @@ fn record(i: usize, n: usize) -> Record<[f32; 3]> {
     let k = i as u64 * 8;
     Record {
         position: DVec3::new(unit(k) * s, unit(k + 1) * s, 0.0),
-        normal: DVec3::new(unit(k + 2) * 0.1, unit(k + 3) * 0.1, 1.0),
+        normal: DVec3::new(unit(k + 2) * 0.01, unit(k + 3) * 0.01, 1.0),
         value: [unit(k + 4) as f32, 0.5, 0.25],
         gradient: Some([[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0; 3]]),
         rotation_gradient: Some([[0.0; 3], [0.05; 3], [0.0; 3]]),
@@ -43,19 +43,21 @@ fn record(i: usize, n: usize) -> Record<[f32; 3]> {
 }
 
 fn build(n: usize) -> Cache<[f32; 3]> {
-    let cache = Cache::new(CacheConfig::surface(3)).unwrap();
+    let mut cache = Cache::new(CacheConfig::surface(3)).unwrap();
     let t = Instant::now();
     for i in 0..n {
         cache.insert(&record(i, n)).unwrap();
     }
     let m = cache.memory();
+    let elapsed = t.elapsed();
+    cache.compact();
     eprintln!(
-        "cache of {n} records built in {:.2?}: {} B/record stored, {:.0} B/record allocated, \
-         index {:.0} B/record, {:.2} index entries/record",
-        t.elapsed(),
+        "cache of {n} records built in {elapsed:.2?}: {} B/record stored, {:.0} B/record allocated, \
+         index {:.0} B/record ({:.0} after compact), {:.2} index entries/record",
         m.bytes_per_record,
         m.record_bytes as f64 / n as f64,
         m.index_bytes as f64 / n as f64,
+        cache.memory().index_bytes as f64 / n as f64,
         m.index_entries as f64 / n as f64
     );
     cache

@@ -11,8 +11,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use glam::DVec3;
 use hessian_common::{scene, SceneGather};
 use raddiff::gather::hessian::{
-    mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle, Connectivity,
-    Topology,
+    mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle, LayoutKind, Topology,
 };
 use raddiff::gather::radii::{surface_radii, ErrorMode};
 use raddiff::Order;
@@ -22,7 +21,7 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("hessian");
     for side in [32usize, 64, 128] {
         let samples = side * side;
-        let kind = Connectivity::Concentric;
+        let kind = LayoutKind::Concentric;
         // Grey environment: every triangle carries a radiance, as in a lit interior.
         let sg = SceneGather::new(kind, side, side, 0, x, &scene::rects(), 0.5);
         let g = sg.gather();
@@ -52,6 +51,20 @@ fn bench(c: &mut Criterion) {
                     occlusion_derivatives_per_triangle(&topo, black_box(g), Order::Hessian).unwrap()
                 })
             },
+        );
+        // Worst case: every sample a different radiance, so no edge can be skipped.
+        let noisy: Vec<f32> = sg
+            .radiance
+            .iter()
+            .enumerate()
+            .map(|(i, l)| l + 0.01 * ((i * 7919 % 101) as f32))
+            .collect();
+        let mut gn = g;
+        gn.radiance = &noisy;
+        group.bench_with_input(
+            BenchmarkId::new("hessian (shared edges, noisy radiance)", samples),
+            &gn,
+            |b, g| b.iter(|| occlusion_derivatives(&topo, black_box(g), Order::Hessian).unwrap()),
         );
         let d = occlusion_derivatives(&topo, &g, Order::Hessian).unwrap();
         let h = d.robust_hessian(0);

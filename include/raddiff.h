@@ -110,8 +110,11 @@
 // No triangle (the right side of a horizon edge).
 #define NONE UINT32_MAX
 
-// Marks the synthesized pole vertex in [`Topology::vertex_source`].
+// Marks the synthesized pole vertex in [`Topology::vertex_source`] (the north pole, θ = 0).
 #define POLE UINT32_MAX
+
+// Marks the synthesized south pole vertex (θ = π) of a [`LayoutKind::Sphere`] mesh.
+#define SOUTH_POLE (UINT32_MAX - 1)
 
 // Flag in [`Topology::triangle_edges`]: the triangle runs the edge backwards.
 #define REVERSED (1 << 31)
@@ -195,8 +198,8 @@ typedef struct raddiff_cache_record {
   // Nullable: 3*channels floats, rotational gradient (derivative with respect to the rotation
   // vector of the normal, Ward-Heckbert convention), channel-major; surface domain only.
   const float *rotation_gradient;
-  // Surface: radii[0..1] along axes[0] (projected to the tangent plane) and normal x axes[0];
-  // radii[2] unused. Volume: ellipsoid radii along axes[0..2]. In [1e-30, 1e30].
+  // Surface: `radii[0..1]` along `axes[0]` (projected to the tangent plane) and `normal x axes[0]`;
+  // `radii[2]` unused. Volume: ellipsoid radii along `axes[0..2]`. Each in 1e-30..=1e30.
   double radii[3];
   // Principal axes (need not be unit; may be zero for isotropic radii).
   struct raddiff_vec3 axes[3];
@@ -276,9 +279,12 @@ typedef struct raddiff_gather_output {
   double *gradient;
   // 3*channels: rotational gradient (world axes); zero for the sphere layout.
   double *rotation_gradient;
-  // 3*channels: gradient of the triangulated environment (not available in this build: must be NULL).
+  // 3*channels: occlusion-aware gradient of the triangulated environment (thesis ch. 6; Marco et
+  // al. 2018 sec. 4 for the sphere layout). Hemisphere layouts need no media_radiance.
   double *occlusion_gradient;
-  // 9*channels: occlusion-aware 3x3 translation Hessian (not available in this build: must be NULL).
+  // 9*channels: occlusion-aware 3x3 translation Hessian, row-major; for hemisphere layouts with
+  // the thesis' robustness terms (1% of the irradiance on every triangle, geometric Hessian for an
+  // all-black channel), ready for raddiff_surface_radii.
   double *hessian;
   // Harmonic mean of the hit distances, m*n / sum(1/r); INFINITY if every ray missed.
   double harmonic_mean_distance;

@@ -9,11 +9,11 @@ use glam::{DMat3, DVec2, DVec3};
 use hessian_common::{Rect, SceneGather};
 use raddiff::gather::hessian::{
     mesh_geometry, occlusion_derivatives, occlusion_derivatives_on,
-    occlusion_derivatives_per_triangle, Connectivity, HemisphereGather, MeshGeometry, Topology,
+    occlusion_derivatives_per_triangle, HemisphereGather, LayoutKind, MeshGeometry, Topology,
 };
 use raddiff::Order;
 
-const KINDS: [Connectivity; 2] = [Connectivity::Polar, Connectivity::Concentric];
+const KINDS: [LayoutKind; 2] = [LayoutKind::CosinePolar, LayoutKind::Concentric];
 
 fn scene() -> Vec<Rect> {
     vec![
@@ -244,7 +244,7 @@ fn robust_hessian_adds_one_percent_and_falls_back_when_black() {
 fn channels_are_independent() {
     let rects = scene();
     let sg = SceneGather::new(
-        Connectivity::Concentric,
+        LayoutKind::Concentric,
         8,
         8,
         1,
@@ -252,7 +252,7 @@ fn channels_are_independent() {
         &rects,
         0.5,
     );
-    let topo = Topology::new(Connectivity::Concentric, 8, 8).unwrap();
+    let topo = Topology::new(LayoutKind::Concentric, 8, 8).unwrap();
     let single = occlusion_derivatives(&topo, &sg.gather(), Order::Hessian).unwrap();
     let rgb: Vec<f32> = sg
         .radiance
@@ -273,8 +273,8 @@ fn channels_are_independent() {
 #[test]
 fn gradient_order_skips_the_hessian_and_value_order_is_rejected() {
     let rects = scene();
-    let sg = SceneGather::new(Connectivity::Polar, 4, 8, 0, DVec3::ZERO, &rects, 0.5);
-    let topo = Topology::new(Connectivity::Polar, 4, 8).unwrap();
+    let sg = SceneGather::new(LayoutKind::CosinePolar, 4, 8, 0, DVec3::ZERO, &rects, 0.5);
+    let topo = Topology::new(LayoutKind::CosinePolar, 4, 8).unwrap();
     let d = occlusion_derivatives(&topo, &sg.gather(), Order::Gradient).unwrap();
     assert_eq!(d.hessian[0], DMat3::ZERO);
     assert!(d.gradient[0].length() > 0.0);
@@ -284,8 +284,8 @@ fn gradient_order_skips_the_hessian_and_value_order_is_rejected() {
 #[test]
 fn invalid_gathers_are_rejected() {
     let rects = scene();
-    let sg = SceneGather::new(Connectivity::Polar, 4, 8, 0, DVec3::ZERO, &rects, 0.5);
-    let topo = Topology::new(Connectivity::Polar, 4, 8).unwrap();
+    let sg = SceneGather::new(LayoutKind::CosinePolar, 4, 8, 0, DVec3::ZERO, &rects, 0.5);
+    let topo = Topology::new(LayoutKind::CosinePolar, 4, 8).unwrap();
     let mut g = sg.gather();
     g.channels = 2;
     assert!(occlusion_derivatives(&topo, &g, Order::Gradient).is_err());
@@ -309,6 +309,6 @@ fn invalid_gathers_are_rejected() {
     let mut g = sg.gather();
     g.radiance = &rad;
     assert!(occlusion_derivatives(&topo, &g, Order::Gradient).is_err());
-    let small = Topology::new(Connectivity::Polar, 4, 4).unwrap();
+    let small = Topology::new(LayoutKind::CosinePolar, 4, 4).unwrap();
     assert!(occlusion_derivatives(&small, &sg.gather(), Order::Gradient).is_err());
 }

@@ -8,7 +8,7 @@ mod hessian_common;
 use glam::{DMat3, DVec3};
 use hessian_common::scene::{self, exact_gradient, exact_hessian, tangent_eigenvalues};
 use hessian_common::SceneGather;
-use raddiff::gather::hessian::{occlusion_derivatives, Connectivity, Topology};
+use raddiff::gather::hessian::{occlusion_derivatives, LayoutKind, Topology};
 use raddiff::gather::hessian_unaware::unaware_derivatives;
 use raddiff::Order;
 
@@ -26,7 +26,7 @@ fn eigen_error(h: DMat3, truth: [f64; 2]) -> f64 {
     (e[0] - truth[0]).abs().max((e[1] - truth[1]).abs()) / scale
 }
 
-fn errors(kind: Connectivity, m: usize, n: usize, x: DVec3) -> Errors {
+fn errors(kind: LayoutKind, m: usize, n: usize, x: DVec3) -> Errors {
     let rects = scene::rects();
     let sg = SceneGather::new(kind, m, n, 0, x, &rects, 0.0);
     let topo = Topology::new(kind, m, n).unwrap();
@@ -49,7 +49,7 @@ fn errors(kind: Connectivity, m: usize, n: usize, x: DVec3) -> Errors {
 const POINTS: [DVec3; 2] = [DVec3::new(-0.3, -0.2, 0.0), DVec3::new(0.2, -0.2, 0.0)];
 
 /// `gradient_tol`: relative gradient error required of the largest gather.
-fn study(kind: Connectivity, grids: &[(usize, usize)], gradient_tol: f64) {
+fn study(kind: LayoutKind, grids: &[(usize, usize)], gradient_tol: f64) {
     let mut all = Vec::new();
     for x in POINTS {
         let frac = scene::visible_fraction(x);
@@ -108,7 +108,7 @@ fn study(kind: Connectivity, grids: &[(usize, usize)], gradient_tol: f64) {
 #[test]
 fn concentric_gather_converges_in_the_penumbra() {
     study(
-        Connectivity::Concentric,
+        LayoutKind::Concentric,
         &[(16, 16), (32, 32), (64, 64), (128, 128)],
         0.05,
     );
@@ -118,7 +118,7 @@ fn concentric_gather_converges_in_the_penumbra() {
 fn polar_gather_converges_in_the_penumbra() {
     // Polar cells are elongated near the pole and the horizon: slower than concentric.
     study(
-        Connectivity::Polar,
+        LayoutKind::CosinePolar,
         &[(8, 32), (16, 64), (32, 128), (64, 256)],
         0.2,
     );

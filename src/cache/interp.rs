@@ -38,7 +38,7 @@ use glam::DVec3;
 use super::record::{Channel, Domain, Head};
 use crate::error::{ensure_finite, Error, Result};
 
-/// How covering records are weighted and extrapolated (see the [module docs](self) for formulas).
+/// How covering records are weighted and extrapolated (formulas in the [module docs](crate::cache::interp)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Interpolation {
     /// Ward-Heckbert first-order extrapolation with Křivánek-Gautron weights 1/(t+ρ) − 1
@@ -199,22 +199,21 @@ pub(crate) fn blend(
         let mut log_ok = [log; BLOCK];
         for u in used {
             let dx = x - u.head.position();
-            let dn = if surface && u.head.rotation_scale != 0.0 {
-                Some(u.head.axis(2).cross(n))
-            } else {
-                None
-            };
-            let gs = u.head.gradient_scale;
-            let rs = u.head.rotation_scale;
+            // offsets pre-multiplied by the records' binary16 scales (see Channel::gradient_unscaled)
+            let dx = (u.head.gradient_scale != 0.0)
+                .then(|| dx * super::record::packed_scale(u.head.gradient_scale));
+            let dn = (surface && u.head.rotation_scale != 0.0).then(|| {
+                u.head.axis(2).cross(n) * super::record::packed_scale(u.head.rotation_scale)
+            });
             let w = u.weight;
             for (c, ch) in u.channels[base..base + out.len()].iter().enumerate() {
                 let v = ch.value as f64;
                 let mut delta = 0.0;
-                if gs != 0.0 {
-                    delta += dx.dot(ch.gradient(gs));
+                if let Some(dx) = dx {
+                    delta += dx.dot(ch.gradient_unscaled());
                 }
                 if let Some(dn) = dn {
-                    delta += dn.dot(ch.rotation(rs));
+                    delta += dn.dot(ch.rotation_unscaled());
                 }
                 linear[c] += w * (v + delta);
                 if log {

@@ -67,7 +67,7 @@
 //! [`Error::Corrupt`] (or [`Error::Io`]) with the reason; it never panics on any input.
 
 mod index;
-mod interp;
+pub mod interp;
 pub mod metric;
 mod persist;
 mod record;
@@ -243,6 +243,13 @@ impl<V: CacheValue> Cache<V> {
             index_bytes: self.index.bytes(),
             index_entries: self.index.entries(),
         }
+    }
+
+    /// Releases index memory kept only for concurrent readers: entry arrays replaced while growing
+    /// (kept so that lookups never wait) and growth slack. Needs exclusive access; [`Cache::load`]
+    /// and [`Cache::from_bytes`] return compacted caches. Typically halves the index.
+    pub fn compact(&mut self) {
+        self.index.compact();
     }
 
     /// Record `id` (< len, published).

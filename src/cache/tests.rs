@@ -385,3 +385,11 @@ fn many_channels_cross_the_accumulation_blocks() {
         Err(Error::InvalidArgument(_))
     ));
 }
+
+#[test]
+fn caches_are_send_and_sync() {
+    fn shared<T: Send + Sync>() {}
+    shared::<Cache<f32>>();
+    shared::<Cache<[f32; 9]>>();
+    shared::<Cache<Vec<f32>>>();
+}

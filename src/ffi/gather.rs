@@ -93,9 +93,12 @@ pub struct raddiff_gather_output {
     pub gradient: *mut f64,
     /// 3*channels: rotational gradient (world axes); zero for the sphere layout.
     pub rotation_gradient: *mut f64,
-    /// 3*channels: gradient of the triangulated environment (not available in this build: must be NULL).
+    /// 3*channels: occlusion-aware gradient of the triangulated environment (thesis ch. 6; Marco et
+    /// al. 2018 sec. 4 for the sphere layout). Hemisphere layouts need no media_radiance.
     pub occlusion_gradient: *mut f64,
-    /// 9*channels: occlusion-aware 3x3 translation Hessian (not available in this build: must be NULL).
+    /// 9*channels: occlusion-aware 3x3 translation Hessian, row-major; for hemisphere layouts with
+    /// the thesis' robustness terms (1% of the irradiance on every triangle, geometric Hessian for an
+    /// all-black channel), ready for raddiff_surface_radii.
     pub hessian: *mut f64,
     /// Harmonic mean of the hit distances, m*n / sum(1/r); INFINITY if every ray missed.
     pub harmonic_mean_distance: f64,
@@ -167,12 +170,6 @@ pub extern "C" fn raddiff_gather_evaluate(
         let frame = Frame::from(unsafe { in_ref(frame, "frame")? });
         let input = unsafe { in_ref(input, "input")? };
         let output = unsafe { out_ref(output, "output")? };
-        if !output.occlusion_gradient.is_null() || !output.hessian.is_null() {
-            return Err(Error::InvalidArgument(
-                "occlusion_gradient/hessian outputs are not available in this build".into(),
-            )
-            .into());
-        }
         let cells = layout.len();
         let ch = input.channels as usize;
         let directions: &[raddiff_vec3] =
@@ -234,7 +231,25 @@ pub extern "C" fn raddiff_gather_evaluate(
             distances: true,
         };
         let values = gather::evaluate(&layout, &frame, &input, wanted)?;
+        let occlusion = if output.occlusion_gradient.is_null() && output.hessian.is_null() {
+            None
+        } else {
+            let valid = gather::ValidGather::new(&layout, &frame, &input)?;
+            Some(gather::hessian_fill::occlusion_outputs(
+                &valid,
+                !output.hessian.is_null(),
+            )?)
+        };
         unsafe {
+            if let Some((gradients, hessians)) = &occlusion {
+                write_vec3(output.occlusion_gradient, gradients);
+                if !output.hessian.is_null() {
+                    let out = std::slice::from_raw_parts_mut(output.hessian, 9 * hessians.len());
+                    for (o, h) in out.chunks_exact_mut(9).zip(hessians) {
+                        o.copy_from_slice(&mat3_to_row_major(*h));
+                    }
+                }
+            }
             write(output.irradiance, &values.irradiance);
             write_vec3(output.gradient, &values.gradient);
             write_vec3(output.rotation_gradient, &values.rotation_gradient);

@@ -49,10 +49,13 @@
 
 use glam::{DMat3, DVec3};
 
-pub use super::hessian_mesh::{Connectivity, Edge, Topology};
+pub use super::hessian_mesh::{Edge, Topology};
 use super::hessian_mesh::{NONE, POLE, REVERSED};
+pub use super::layout::LayoutKind;
 use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 use crate::kernels;
+use crate::kernels::form_factor;
+use crate::kernels::solid_angle::pow2_scale;
 use crate::{Deriv3, Order};
 
 /// Misses are placed at this multiple of the largest finite hit distance (2^20: the occlusion
@@ -186,6 +189,11 @@ fn check_gather(topo: &Topology, g: &HemisphereGather) -> Result<DVec3> {
 
 /// Places the mesh vertices of one gather (validating it against `topo`).
 pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeometry> {
+    if topo.connectivity == LayoutKind::Sphere {
+        return Err(Error::InvalidArgument(
+            "a sphere layout is a media gather: use gather::hessian_media".into(),
+        ));
+    }
     let normal = check_gather(topo, g)?;
     let largest = g
         .distance
@@ -268,22 +276,49 @@ pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeomet
     })
 }
 
-/// The edge term of `a → b` seen from the origin (x), unit normal `n`.
+/// The edge term of `a → b` seen from the origin (x), unit normal `n`, positions already scaled
+/// (see [`Scale`]) and validated.
 ///
-/// The kernel measures the edge from its first vertex, so it is called from the nearer end and
-/// negated if that reverses the edge (odd in the direction): for a near-to-environment edge the
-/// other order loses about log10(far/near) digits in the edge's foot point.
+/// The kernel's edge integral is measured from its first vertex, so it is called from the nearer
+/// end and negated if that reverses the edge (the term is odd in the direction): for a
+/// near-to-environment edge the other order loses about log10(far/near) digits in the foot point.
 #[inline]
 fn edge_term(n: DVec3, a: DVec3, b: DVec3, order: Order) -> Result<Deriv3> {
     if a.length_squared() <= b.length_squared() {
-        kernels::edge_form_factor(DVec3::ZERO, n, a, b, order)
+        form_factor::edge_term(a, b - a, n, order)
     } else {
-        let f = kernels::edge_form_factor(DVec3::ZERO, n, b, a, order)?;
+        let f = form_factor::edge_term(b, a - b, n, order)?;
         Ok(Deriv3 {
             value: -f.value,
             gradient: -f.gradient,
             hessian: -f.hessian,
         })
+    }
+}
+
+/// Exact power-of-two rescaling of a gather's positions so that its largest hit distance is about
+/// 1 (nothing overflows in the edge moments, whatever the scene's unit), and back.
+#[derive(Debug, Clone, Copy)]
+struct Scale {
+    f1: f64,
+    f2: f64,
+}
+
+impl Scale {
+    fn of(mesh: &MeshGeometry) -> Scale {
+        let (f1, f2) = pow2_scale(mesh.far_distance / FAR_DISTANCE_FACTOR);
+        Scale { f1, f2 }
+    }
+
+    #[inline]
+    fn point(&self, p: DVec3) -> DVec3 {
+        p * self.f1 * self.f2
+    }
+
+    fn back(&self, mut d: Deriv3) -> Deriv3 {
+        d.gradient = d.gradient * self.f1 * self.f2;
+        d.hessian = d.hessian * self.f1 * self.f1 * self.f2 * self.f2;
+        d
     }
 }
 
@@ -326,18 +361,36 @@ fn empty(channels: usize, black: Vec<bool>) -> OcclusionDerivatives {
     }
 }
 
-/// Irradiance is `π Σ L_Δ F_Δ` (F is the cosine-weighted solid angle over π).
-fn finish(mut out: OcclusionDerivatives, acc: &[Deriv3]) -> OcclusionDerivatives {
+/// Irradiance is `π Σ L_Δ F_Δ` (F is the cosine-weighted solid angle over π); derivatives are
+/// brought back from the scaled units.
+fn finish(
+    mut out: OcclusionDerivatives,
+    acc: &[Deriv3],
+    scale: Scale,
+) -> Result<OcclusionDerivatives> {
     use std::f64::consts::PI;
     for (c, a) in acc.iter().enumerate() {
+        let a = scale.back(*a);
         out.irradiance[c] = PI * a.value;
         out.gradient[c] = a.gradient * PI;
         out.hessian[c] = a.hessian * PI;
     }
-    out.geometric.value *= PI;
-    out.geometric.gradient *= PI;
-    out.geometric.hessian *= PI;
-    out
+    let geo = scale.back(out.geometric);
+    out.geometric = Deriv3 {
+        value: geo.value * PI,
+        gradient: geo.gradient * PI,
+        hessian: geo.hessian * PI,
+    };
+    let finite = out.gradient.iter().all(|g| g.is_finite())
+        && out.hessian.iter().all(|h| h.is_finite())
+        && out.irradiance.iter().all(|e| e.is_finite())
+        && out.geometric.is_finite();
+    if !finite {
+        return Err(Error::Degenerate(
+            "occlusion derivatives overflow for this gather".into(),
+        ));
+    }
+    Ok(out)
 }
 
 fn add_scaled(acc: &mut Deriv3, d: &Deriv3, w: f64, order: Order) {
@@ -383,21 +436,26 @@ pub fn occlusion_derivatives_on(
     if g.sigma_t > 0.0 {
         return with_medium(topo, mesh, g, order, out);
     }
-    let tri_radiance =
-        |t: u32, c: usize| vertex_radiance(topo, mesh, g, mesh.farthest[t as usize], c);
+    // Radiance of every triangle (its farthest vertex's), channel-interleaved, plus a zero row that
+    // stands for the outside of the horizon.
+    let tcount = topo.triangles.len();
+    let mut tri = vec![0.0f64; (tcount + 1) * channels];
+    for (t, row) in tri.chunks_exact_mut(channels).take(tcount).enumerate() {
+        for (c, l) in row.iter_mut().enumerate() {
+            *l = vertex_radiance(topo, mesh, g, mesh.farthest[t], c);
+        }
+    }
+    let outside = tcount;
+    let scale = Scale::of(mesh);
     let mut acc = vec![Deriv3::constant(0.0); channels];
     let mut delta = vec![0.0f64; channels];
     for e in &topo.edges {
         let boundary = e.right == NONE;
+        let right = if boundary { outside } else { e.right as usize };
+        let (l, r) = (e.left as usize * channels, right * channels);
         let mut any = false;
         for (c, d) in delta.iter_mut().enumerate() {
-            let left = tri_radiance(e.left, c);
-            let right = if boundary {
-                0.0
-            } else {
-                tri_radiance(e.right, c)
-            };
-            *d = left - right;
+            *d = tri[l + c] - tri[r + c];
             any |= *d != 0.0;
         }
         if !any && !boundary {
@@ -405,8 +463,8 @@ pub fn occlusion_derivatives_on(
         }
         let f = edge_term(
             n,
-            mesh.positions[e.a as usize],
-            mesh.positions[e.b as usize],
+            scale.point(mesh.positions[e.a as usize]),
+            scale.point(mesh.positions[e.b as usize]),
             order,
         )?;
         if boundary {
@@ -418,7 +476,7 @@ pub fn occlusion_derivatives_on(
             }
         }
     }
-    Ok(finish(out, &acc))
+    finish(out, &acc, scale)
 }
 
 /// The per-triangle form of [`occlusion_derivatives`]: every triangle's three edge terms are
@@ -436,13 +494,14 @@ pub fn occlusion_derivatives_per_triangle(
         ));
     }
     let n = g.normal.normalize();
+    let scale = Scale::of(&mesh);
     let mut out = empty(g.channels, all_black(g));
     let mut acc = vec![Deriv3::constant(0.0); g.channels];
     for (t, tri) in topo.triangles.iter().enumerate() {
         let mut f = Deriv3::constant(0.0);
         for i in 0..3 {
-            let a = mesh.positions[tri[i] as usize];
-            let b = mesh.positions[tri[(i + 1) % 3] as usize];
+            let a = scale.point(mesh.positions[tri[i] as usize]);
+            let b = scale.point(mesh.positions[tri[(i + 1) % 3] as usize]);
             add_scaled(&mut f, &edge_term(n, a, b, order)?, 1.0, order);
         }
         add_scaled(&mut out.geometric, &f, 1.0, order);
@@ -451,7 +510,7 @@ pub fn occlusion_derivatives_per_triangle(
             add_scaled(a, &f, l, order);
         }
     }
-    Ok(finish(out, &acc))
+    finish(out, &acc, scale)
 }
 
 /// Medium path: per-triangle form factors from once-computed edge terms, times the transmittance
@@ -464,12 +523,15 @@ fn with_medium(
     mut out: OcclusionDerivatives,
 ) -> Result<OcclusionDerivatives> {
     let n = g.normal.normalize();
+    let scale = Scale::of(mesh);
+    // σ_t r is scale-free: σ_t in scaled units is σ_t / (f1 f2).
+    let sigma = g.sigma_t / scale.f1 / scale.f2;
     let mut edge_terms = Vec::with_capacity(topo.edges.len());
     for e in &topo.edges {
         edge_terms.push(edge_term(
             n,
-            mesh.positions[e.a as usize],
-            mesh.positions[e.b as usize],
+            scale.point(mesh.positions[e.a as usize]),
+            scale.point(mesh.positions[e.b as usize]),
             order,
         )?);
     }
@@ -491,8 +553,12 @@ fn with_medium(
                 order,
             );
         }
-        let tr =
-            kernels::transmittance(DVec3::ZERO, mesh.positions[far as usize], g.sigma_t, order)?;
+        let tr = kernels::transmittance(
+            DVec3::ZERO,
+            scale.point(mesh.positions[far as usize]),
+            sigma,
+            order,
+        )?;
         let mut p = Deriv3::constant(f.value * tr.value);
         if order.gradient() {
             p.gradient = f.gradient * tr.value + tr.gradient * f.value;
@@ -517,5 +583,5 @@ fn with_medium(
             }
         }
     }
-    Ok(finish(out, &acc))
+    finish(out, &acc, scale)
 }

@@ -15,24 +15,17 @@
 //! once with the triangle on its left (which lists it as `a → b`) and the one on its right (which
 //! lists it `b → a`), or [`NONE`] on the horizon, where the mesh ends.
 
+use super::layout::LayoutKind;
 use crate::error::{Error, Result};
 
 /// No triangle (the right side of a horizon edge).
 pub const NONE: u32 = u32::MAX;
 
-/// Marks the synthesized pole vertex in [`Topology::vertex_source`].
+/// Marks the synthesized pole vertex in [`Topology::vertex_source`] (the north pole, θ = 0).
 pub const POLE: u32 = u32::MAX;
 
-/// Which grid connectivity the directions follow (the hemisphere layouts of `LAYOUTS.md`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Connectivity {
-    /// Rings j = 0 (pole) … M−1 (horizon) of N azimuthal strata, wrapping around in k
-    /// (`RADDIFF_LAYOUT_COSINE_POLAR`).
-    Polar,
-    /// The M×N grid of the concentric map: the square's centre is the pole, its boundary the
-    /// horizon (`RADDIFF_LAYOUT_CONCENTRIC`).
-    Concentric,
-}
+/// Marks the synthesized south pole vertex (θ = π) of a [`LayoutKind::Sphere`] mesh.
+pub const SOUTH_POLE: u32 = u32::MAX - 1;
 
 /// An undirected mesh edge, oriented as its left triangle lists it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -50,8 +43,10 @@ pub struct Edge {
 /// Connectivity of the triangulated hemisphere of an M×N layout.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Topology {
-    /// The grid connectivity.
-    pub connectivity: Connectivity,
+    /// The layout whose grid connectivity the mesh follows: `CosinePolar` (rings 0 = pole … M−1 =
+    /// horizon, wrapping in k), `Concentric` (the square's centre is the pole, its boundary the
+    /// horizon) or `Sphere` (rings from north to south, closed by a pole vertex at each end).
+    pub connectivity: LayoutKind,
     /// Strata along the first axis.
     pub m: usize,
     /// Strata along the second axis.
@@ -74,9 +69,9 @@ pub struct Topology {
 pub const REVERSED: u32 = 1 << 31;
 
 impl Topology {
-    /// The mesh of an `m`×`n` layout. Needs at least 3 azimuthal strata for the polar layout and a
-    /// 2×2 grid for the concentric one (`InvalidArgument` otherwise).
-    pub fn new(connectivity: Connectivity, m: usize, n: usize) -> Result<Topology> {
+    /// The mesh of an `m`×`n` layout. Needs at least 3 azimuthal strata for the polar and sphere
+    /// layouts and a 2×2 grid for the concentric one (`InvalidArgument` otherwise).
+    pub fn new(connectivity: LayoutKind, m: usize, n: usize) -> Result<Topology> {
         let samples = m
             .checked_mul(n)
             .filter(|&s| s < (u32::MAX / 4) as usize)
@@ -91,7 +86,7 @@ impl Topology {
             t.push([a, c, d]);
         };
         match connectivity {
-            Connectivity::Polar => {
+            LayoutKind::CosinePolar => {
                 if m < 1 || n < 3 {
                     return Err(Error::InvalidArgument(format!(
                         "a polar layout needs m >= 1 and n >= 3 to be triangulated (got {m}x{n})"
@@ -129,7 +124,36 @@ impl Topology {
                     }
                 }
             }
-            Connectivity::Concentric => {
+            LayoutKind::Sphere => {
+                if m < 1 || n < 3 {
+                    return Err(Error::InvalidArgument(format!(
+                        "a sphere layout needs m >= 1 and n >= 3 to be triangulated (got {m}x{n})"
+                    )));
+                }
+                let north = vertex_source.len() as u32;
+                vertex_source.push(POLE);
+                on_horizon.push(false);
+                let south = vertex_source.len() as u32;
+                vertex_source.push(SOUTH_POLE);
+                on_horizon.push(false);
+                let ring = |j: usize, k: usize| id(j, k % n);
+                for k in 0..n {
+                    triangles.push([north, ring(0, k), ring(0, k + 1)]);
+                    triangles.push([south, ring(m - 1, k + 1), ring(m - 1, k)]);
+                }
+                for j in 0..m - 1 {
+                    for k in 0..n {
+                        quad(
+                            &mut triangles,
+                            ring(j, k),
+                            ring(j + 1, k),
+                            ring(j + 1, k + 1),
+                            ring(j, k + 1),
+                        );
+                    }
+                }
+            }
+            LayoutKind::Concentric => {
                 if m < 2 || n < 2 {
                     return Err(Error::InvalidArgument(format!(
                         "a concentric layout needs m, n >= 2 to be triangulated (got {m}x{n})"
@@ -294,7 +318,7 @@ mod tests {
     #[test]
     fn polar_mesh_is_a_consistently_oriented_disc() {
         for (m, n) in [(1, 3), (2, 5), (8, 32), (3, 4)] {
-            let topo = Topology::new(Connectivity::Polar, m, n).unwrap();
+            let topo = Topology::new(LayoutKind::CosinePolar, m, n).unwrap();
             assert_eq!(topo.vertex_count(), m * n + n + 1);
             assert_eq!(topo.triangles.len(), n + 2 * m * n);
             check(&topo, n);
@@ -304,7 +328,7 @@ mod tests {
     #[test]
     fn concentric_mesh_is_a_consistently_oriented_disc() {
         for (m, n) in [(2, 2), (3, 5), (16, 16), (7, 4)] {
-            let topo = Topology::new(Connectivity::Concentric, m, n).unwrap();
+            let topo = Topology::new(LayoutKind::Concentric, m, n).unwrap();
             let perimeter = 2 * (m + n) - 4;
             assert_eq!(topo.vertex_count(), m * n + perimeter);
             check(&topo, perimeter);
@@ -312,9 +336,20 @@ mod tests {
     }
 
     #[test]
+    fn sphere_mesh_is_a_closed_consistently_oriented_surface() {
+        for (m, n) in [(1, 3), (4, 8), (16, 32)] {
+            let topo = Topology::new(LayoutKind::Sphere, m, n).unwrap();
+            let v = topo.vertex_count() as i64;
+            let t = topo.triangles.len() as i64;
+            assert_eq!(v - topo.edges.len() as i64 + t, 2);
+            assert!(topo.edges.iter().all(|e| e.right != NONE));
+        }
+    }
+
+    #[test]
     fn too_small_layouts_are_rejected() {
-        assert!(Topology::new(Connectivity::Polar, 4, 2).is_err());
-        assert!(Topology::new(Connectivity::Polar, 0, 8).is_err());
-        assert!(Topology::new(Connectivity::Concentric, 1, 8).is_err());
+        assert!(Topology::new(LayoutKind::CosinePolar, 4, 2).is_err());
+        assert!(Topology::new(LayoutKind::CosinePolar, 0, 8).is_err());
+        assert!(Topology::new(LayoutKind::Concentric, 1, 8).is_err());
     }
 }

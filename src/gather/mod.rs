@@ -41,6 +41,8 @@ pub use layout::{concentric_to_local, Frame, Layout, LayoutKind, StratumBounds};
 
 // Occlusion-aware Hessians from the triangulated gather, and the record radii they imply.
 pub mod hessian;
+pub mod hessian_fill;
+pub mod hessian_media;
 pub mod hessian_mesh;
 pub mod hessian_unaware;
 pub mod radii;

@@ -252,36 +252,101 @@ fn clip(u: &[DVec3], r: &[DVec3], n: DVec3) -> (SmallVec<[ClipVertex; 10]>, bool
     (out, cut)
 }
 
-/// Gauss-Legendre nodes and weights on [0, 1].
+/// Gauss-Legendre nodes and weights on [0, 1] (Newton on the Legendre polynomial).
+fn legendre_rule<const N: usize>() -> [(f64, f64); N] {
+    let mut rule = [(0.0, 0.0); N];
+    for (i, slot) in rule.iter_mut().enumerate() {
+        let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (N as f64 + 0.5)).cos();
+        let mut dp = 1.0;
+        for _ in 0..100 {
+            let (mut p0, mut p1) = (1.0, z);
+            for k in 2..=N {
+                let kf = k as f64;
+                let p2 = ((2.0 * kf - 1.0) * z * p1 - (kf - 1.0) * p0) / kf;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = N as f64 * (z * p1 - p0) / (z * z - 1.0);
+            let dz = p1 / dp;
+            z -= dz;
+            if dz.abs() < 1e-17 {
+                break;
+            }
+        }
+        let w = 2.0 / ((1.0 - z * z) * dp * dp);
+        *slot = (0.5 * (1.0 - z), 0.5 * w);
+    }
+    rule
+}
+
 fn gauss_legendre() -> &'static [(f64, f64); GAUSS_POINTS] {
     static RULE: OnceLock<[(f64, f64); GAUSS_POINTS]> = OnceLock::new();
-    RULE.get_or_init(|| {
-        let n = GAUSS_POINTS;
-        let mut rule = [(0.0, 0.0); GAUSS_POINTS];
-        for (i, slot) in rule.iter_mut().enumerate() {
-            // Newton on P_n from the Chebyshev-like initial guess.
-            let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 1.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, z);
-                for k in 2..=n {
-                    let kf = k as f64;
-                    let p2 = ((2.0 * kf - 1.0) * z * p1 - (kf - 1.0) * p0) / kf;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
-                let dz = p1 / dp;
-                z -= dz;
-                if dz.abs() < 1e-17 {
-                    break;
-                }
-            }
-            let w = 2.0 / ((1.0 - z * z) * dp * dp);
-            *slot = (0.5 * (1.0 - z), 0.5 * w);
+    RULE.get_or_init(legendre_rule::<GAUSS_POINTS>)
+}
+
+fn gauss_legendre_16() -> &'static [(f64, f64); 16] {
+    static RULE: OnceLock<[(f64, f64); 16]> = OnceLock::new();
+    RULE.get_or_init(legendre_rule::<16>)
+}
+
+/// Below this `|h_P| / d_e` for every edge (x close to the polygon's plane compared with its
+/// distance to every edge line, in the plane), the value is recomputed by [`near_plane_value`].
+const NEAR_PLANE_RATIO: f64 = 0.1;
+
+/// The signed edge-sum value for x near the polygon's plane, without the cancellation of the plain
+/// sum. Split `n = n_N N̂ + n_t`. The `n_t` part has no cancellation (each term is O(h_P)). The `N̂`
+/// part is the parallel-receiver form factor, whose edge terms are O(1) and sum to O(h_P²) outside
+/// the polygon; per edge it equals `(Δψ_e − G_e)/2π` with `Δψ_e` the signed angle the edge subtends
+/// at the foot point of x in the plane and `G_e = ∫ ε cos²ψ/(1 + ε cos²ψ) dψ` over the edge's
+/// angular range (`ε = h_P²/d_e²`, `d_e` the in-plane distance to the edge line). `ΣΔψ_e` is
+/// exactly `2π·winding`, and the `G_e` are small and integrated by a 16-point Gauss rule (the
+/// integrand's poles are `asinh(1/√ε) ≥ 3` away from the real axis). `None` when not applicable.
+fn near_plane_value(
+    verts: &[ClipVertex],
+    n: DVec3,
+    plane_n: DVec3,
+    h_p: f64,
+) -> Result<Option<f64>> {
+    let count = verts.len();
+    let h2 = h_p * h_p;
+    let n_par = n.dot(plane_n);
+    let n_t = n - n_par * plane_n;
+    let mut transverse = 0.0;
+    let mut turning = 0.0;
+    let mut small = 0.0;
+    for i in 0..count {
+        let (a, b) = (verts[i], verts[(i + 1) % count]);
+        let e = b.u - a.u;
+        let len = e.length();
+        if len == 0.0 {
+            continue;
         }
-        rule
-    })
+        let e_hat = e / len;
+        // in-plane vectors from the foot point of x to the endpoints
+        let qa = a.r - plane_n.dot(a.r) * plane_n;
+        let qb = b.r - plane_n.dot(b.r) * plane_n;
+        let d = plane_n.dot(qa.cross(e_hat));
+        if h_p.abs() >= NEAR_PLANE_RATIO * d.abs() || d.is_nan() {
+            return Ok(None);
+        }
+        let dpsi = plane_n.dot(qa.cross(qb)).atan2(qa.dot(qb));
+        let sa = qa.dot(e_hat);
+        let (psi_a, psi_b) = ((sa / d.abs()).atan(), ((sa + len) / d.abs()).atan());
+        let eps = h2 / (d * d);
+        let mut g = 0.0;
+        for &(t, w) in gauss_legendre_16() {
+            let c = (psi_a + t * (psi_b - psi_a)).cos();
+            let c2e = eps * c * c;
+            g += w * c2e / (1.0 + c2e);
+        }
+        g *= (psi_b - psi_a).abs();
+        turning += dpsi;
+        small += g.copysign(dpsi);
+        transverse += edge_term(a.r, e, n_t, Order::Value)?.value;
+    }
+    let winding = (turning / std::f64::consts::TAU).round();
+    let parallel = winding - small * (0.5 * FRAC_1_PI);
+    Ok(Some(n_par * parallel + transverse))
 }
 
 /// Signed form factor of the clipped loop by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` over fan triangles
@@ -402,6 +467,9 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
             sum.value += t.value;
             sum.gradient += t.gradient;
             sum.hessian += t.hessian;
+        }
+        if let Some(v) = near_plane_value(&verts, n, plane.normal, h_p)? {
+            sum.value = v;
         }
         sum
     };

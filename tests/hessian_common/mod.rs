@@ -1,87 +1,25 @@
-//! Shared helpers for the Hessian tests: layout directions (LAYOUTS.md), a tiny ray caster over
-//! rectangles, and reference evaluation by shifted meshes.
+//! Shared helpers for the Hessian tests: layout directions (from `gather::Layout`), a tiny ray
+//! caster over rectangles, and the thesis evaluation scene.
 #![allow(dead_code)]
 
 pub mod scene;
 
-use std::f64::consts::{FRAC_PI_4, TAU};
-
 use glam::{DVec2, DVec3};
-use raddiff::gather::hessian::{Connectivity, HemisphereGather};
+use raddiff::gather::hessian::HemisphereGather;
+use raddiff::gather::{Frame, Layout, LayoutKind};
 
-fn splitmix64(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-fn jitter(seed: u64, j: usize, k: usize) -> DVec2 {
-    if seed == 0 {
-        return DVec2::splat(0.5);
-    }
-    let h = splitmix64(seed ^ splitmix64(((j as u64) << 32) | k as u64));
-    let h2 = splitmix64(h);
-    let u = |v: u64| (v >> 11) as f64 / (1u64 << 53) as f64;
-    DVec2::new(u(h), u(h2))
-}
-
-fn concentric(s: DVec2) -> DVec3 {
-    let (a, b) = (s.x, s.y);
-    let (r, phi) = if a == 0.0 && b == 0.0 {
-        (0.0, 0.0)
-    } else if a.abs() > b.abs() {
-        (a, FRAC_PI_4 * (b / a))
-    } else {
-        (b, 2.0 * FRAC_PI_4 - FRAC_PI_4 * (a / b))
-    };
-    let d = DVec2::new(r * phi.cos(), r * phi.sin());
-    DVec3::new(d.x, d.y, (1.0 - d.length_squared()).max(0.0).sqrt())
-}
-
-/// Local direction of stratum (j, k) per LAYOUTS.md.
-pub fn local_direction(
-    kind: Connectivity,
-    m: usize,
-    n: usize,
-    seed: u64,
-    j: usize,
-    k: usize,
-) -> DVec3 {
-    let uv = jitter(seed, j, k);
-    match kind {
-        Connectivity::Polar => {
-            let s2 = (j as f64 + uv.x) / m as f64;
-            let st = s2.sqrt();
-            let ct = (1.0 - s2).max(0.0).sqrt();
-            let phi = TAU * (k as f64 + uv.y) / n as f64;
-            DVec3::new(st * phi.cos(), st * phi.sin(), ct)
-        }
-        Connectivity::Concentric => concentric(DVec2::new(
-            2.0 * (j as f64 + uv.x) / m as f64 - 1.0,
-            2.0 * (k as f64 + uv.y) / n as f64 - 1.0,
-        )),
-    }
-}
-
-/// World directions for the frame (normal, tangent), index j*n + k.
+/// World directions of the gather layout for the frame (normal, tangent), index j*n + k.
 pub fn directions(
-    kind: Connectivity,
+    kind: LayoutKind,
     m: usize,
     n: usize,
     seed: u64,
     normal: DVec3,
     tangent: DVec3,
 ) -> Vec<DVec3> {
-    let b = normal.cross(tangent);
-    let mut out = Vec::with_capacity(m * n);
-    for j in 0..m {
-        for k in 0..n {
-            let l = local_direction(kind, m, n, seed, j, k);
-            out.push((tangent * l.x + b * l.y + normal * l.z).normalize());
-        }
-    }
-    out
+    let layout = Layout::new(kind, m as u32, n as u32, seed).unwrap();
+    let frame = Frame::new(DVec3::ZERO, normal, tangent).unwrap();
+    layout.directions(&frame).unwrap()
 }
 
 /// An axis-aligned rectangle at height z, radiance seen from below.
@@ -132,7 +70,7 @@ pub struct SceneGather {
 
 impl SceneGather {
     pub fn new(
-        kind: Connectivity,
+        kind: LayoutKind,
         m: usize,
         n: usize,
         seed: u64,
