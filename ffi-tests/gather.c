@@ -123,8 +123,9 @@ int main(void) {
     bad.m = RADDIFF_GATHER_MAX_STRATA_PER_AXIS + 1;
     CHECK_STATUS(raddiff_gather_evaluate(&bad, &frame, &in, &out), RADDIFF_ERROR_INVALID_ARGUMENT);
     bad = layout;
-    bad.kind = RADDIFF_LAYOUT_CONCENTRIC; /* and the directions no longer match their strata */
+    bad.kind = RADDIFF_LAYOUT_SPHERE; /* the directions no longer match their strata */
     CHECK_STATUS(raddiff_gather_evaluate(&bad, &frame, &in, &out), RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(raddiff_last_error(), "stratum") != NULL);
   }
   {
     raddiff_frame bad = frame;
@@ -166,6 +167,21 @@ int main(void) {
   }
   /* occlusion_gradient and hessian outputs: tested in ffi-tests/radii.cpp */
   CHECK(e[0] == 42.0 && out.min_distance == 42.0);
+
+  /* the concentric layout: irradiance and both gradients too */
+  {
+    raddiff_gather_layout cl = {RADDIFF_LAYOUT_CONCENTRIC, M, N, 5};
+    CHECK_STATUS(raddiff_gather_directions(&cl, &frame, dirs), RADDIFF_OK);
+    for (i = 0; i < CELLS; i++) {
+      dist[i] = dirs[i].y > 0.0 ? 1.0 : INFINITY;
+      rad[2 * i] = dirs[i].y > 0.0 ? 1.0f : 0.0f;
+    }
+    CHECK_STATUS(raddiff_gather_evaluate(&cl, &frame, &in, &out), RADDIFF_OK);
+    CHECK(e[0] > 1.0 && e[0] < 2.2);
+    CHECK(g[1] > 0.0);
+    CHECK(rg[0] < 0.0);
+    CHECK_STATUS(raddiff_gather_directions(&layout, &frame, dirs), RADDIFF_OK);
+  }
 
   /* a medium: marched emissive radiance, no surfaces hit: E = pi q (1 - exp(-sigma T)) / sigma */
   {

@@ -77,8 +77,8 @@
 // Ward-Heckbert cosine-weighted polar strata: `theta_j = asin(sqrt((j+u)/m))`, `phi_k = 2 pi (k+v)/n`.
 #define RADDIFF_LAYOUT_COSINE_POLAR 0
 
-// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (irradiance and
-// rotational gradient only: translational gradients need a polar or sphere layout).
+// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (its walls are the
+// images of the grid lines; their Ward-Heckbert terms are integrated numerically).
 #define RADDIFF_LAYOUT_CONCENTRIC 1
 
 // Whole sphere, m x n equal solid-angle strata (`cos theta_j = 1 - 2(j+u)/m`), for points in a medium.
@@ -275,7 +275,7 @@ typedef struct raddiff_gather_output {
   // channels: irradiance (hemisphere layouts) or scalar fluence (sphere).
   double *irradiance;
   // 3*channels: Ward-Heckbert translational gradient (world axes, all three components), with the
-  // participating-media terms of Jarosz et al. 2008 when a medium is given. Polar/sphere layouts.
+  // participating-media terms of Jarosz et al. 2008 when a medium is given.
   double *gradient;
   // 3*channels: rotational gradient (world axes); zero for the sphere layout.
   double *rotation_gradient;

@@ -11,8 +11,8 @@ use crate::Error;
 
 /// Ward-Heckbert cosine-weighted polar strata: `theta_j = asin(sqrt((j+u)/m))`, `phi_k = 2 pi (k+v)/n`.
 pub const RADDIFF_LAYOUT_COSINE_POLAR: u32 = 0;
-/// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (irradiance and
-/// rotational gradient only: translational gradients need a polar or sphere layout).
+/// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (its walls are the
+/// images of the grid lines; their Ward-Heckbert terms are integrated numerically).
 pub const RADDIFF_LAYOUT_CONCENTRIC: u32 = 1;
 /// Whole sphere, m x n equal solid-angle strata (`cos theta_j = 1 - 2(j+u)/m`), for points in a medium.
 pub const RADDIFF_LAYOUT_SPHERE: u32 = 2;
@@ -89,7 +89,7 @@ pub struct raddiff_gather_output {
     /// channels: irradiance (hemisphere layouts) or scalar fluence (sphere).
     pub irradiance: *mut f64,
     /// 3*channels: Ward-Heckbert translational gradient (world axes, all three components), with the
-    /// participating-media terms of Jarosz et al. 2008 when a medium is given. Polar/sphere layouts.
+    /// participating-media terms of Jarosz et al. 2008 when a medium is given.
     pub gradient: *mut f64,
     /// 3*channels: rotational gradient (world axes); zero for the sphere layout.
     pub rotation_gradient: *mut f64,
