@@ -94,7 +94,7 @@ pub struct raddiff_gather_output {
     /// 3*channels: rotational gradient (world axes); zero for the sphere layout.
     pub rotation_gradient: *mut f64,
     /// 3*channels: occlusion-aware gradient of the triangulated environment (thesis ch. 6; Marco et
-    /// al. 2018 sec. 4 for the sphere layout). Hemisphere layouts need no media_radiance.
+    /// al. 2018 sec. 4 for the sphere layout and for marched media radiance).
     pub occlusion_gradient: *mut f64,
     /// 9*channels: occlusion-aware 3x3 translation Hessian, row-major; for hemisphere layouts with
     /// the thesis' robustness terms (1% of the irradiance on every triangle, geometric Hessian for an
