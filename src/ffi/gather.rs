@@ -230,26 +230,16 @@ pub extern "C" fn raddiff_gather_evaluate(
             rotation_gradient: !output.rotation_gradient.is_null(),
             distances: true,
         };
-        let values = gather::evaluate(&layout, &frame, &input, wanted)?;
-        let occlusion = if output.occlusion_gradient.is_null() && output.hessian.is_null() {
-            None
-        } else {
-            let valid = gather::ValidGather::new(&layout, &frame, &input)?;
-            Some(gather::hessian_fill::occlusion_outputs(
-                &valid,
-                !output.hessian.is_null(),
-            )?)
-        };
+        // Validate once; the evaluation and the occlusion-aware pass share it.
+        let valid = gather::ValidGather::new(&layout, &frame, &input)?;
+        let values = valid.evaluate(wanted)?;
         unsafe {
-            if let Some((gradients, hessians)) = &occlusion {
-                write_vec3(output.occlusion_gradient, gradients);
-                if !output.hessian.is_null() {
-                    let out = std::slice::from_raw_parts_mut(output.hessian, 9 * hessians.len());
-                    for (o, h) in out.chunks_exact_mut(9).zip(hessians) {
-                        o.copy_from_slice(&mat3_to_row_major(*h));
-                    }
-                }
-            }
+            let occlusion_gradient = (!output.occlusion_gradient.is_null())
+                .then(|| std::slice::from_raw_parts_mut(output.occlusion_gradient, 3 * ch));
+            let hessian = (!output.hessian.is_null())
+                .then(|| std::slice::from_raw_parts_mut(output.hessian, 9 * ch));
+            // Computes before writing: on failure nothing has been written.
+            gather::hessian_fill::fill_from_gather(&valid, occlusion_gradient, hessian)?;
             write(output.irradiance, &values.irradiance);
             write_vec3(output.gradient, &values.gradient);
             write_vec3(output.rotation_gradient, &values.rotation_gradient);
