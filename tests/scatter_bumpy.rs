@@ -122,8 +122,14 @@ fn pruning_changes_time_not_result() {
             &ScatterOptions::default(),
         )
         .unwrap();
-        for (spindle, cone) in [(false, false), (true, false), (false, true)] {
+        for (sided, spindle, cone) in [
+            (false, false, false),
+            (true, false, false),
+            (false, true, false),
+            (false, false, true),
+        ] {
             let opts = ScatterOptions {
+                sidedness_test: sided,
                 spindle_test: spindle,
                 normal_cone_test: cone,
                 ..Default::default()
@@ -133,7 +139,7 @@ fn pruning_changes_time_not_result() {
             // the end solves of triangles whose curve folds (traced branches), hence the 1e-6.
             assert!(
                 (r.radiance - full.radiance).abs() <= 1e-6 * full.radiance,
-                "spindle {spindle}, cone {cone}: {} vs {}",
+                "sidedness {sided}, spindle {spindle}, cone {cone}: {} vs {}",
                 r.radiance,
                 full.radiance
             );

@@ -9,7 +9,7 @@ use super::contribution::{path_contribution, DistanceFactor, Medium};
 use super::interval::{seeds_at, solutions_at, triangle_support, SupportInterval};
 use super::mesh::RefractiveMesh;
 use super::newton::NewtonSettings;
-use super::prune::{normal_cone_test, spindle_test};
+use super::prune::{normal_cone_test, sidedness_test, spindle_test};
 use super::stats::ScatterStats;
 use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 
@@ -19,6 +19,8 @@ pub struct ScatterOptions {
     /// Gauss-Legendre nodes per support piece (≥ 1). The contribution of one triangle is smooth on
     /// its support, so a few nodes suffice: 8 gives ~1e-6 relative error on the bumpy sphere.
     pub samples_per_interval: usize,
+    /// Apply the sidedness test to triangles (also clips the x range to where V is below the plane).
+    pub sidedness_test: bool,
     /// Apply the spindle test to hierarchy nodes and triangles.
     pub spindle_test: bool,
     /// Apply the shading-normal cone test to triangles (also narrows the x range searched).
@@ -33,6 +35,7 @@ impl Default for ScatterOptions {
     fn default() -> Self {
         ScatterOptions {
             samples_per_interval: 8,
+            sidedness_test: true,
             spindle_test: true,
             normal_cone_test: true,
             distance_factor: DistanceFactor::Interpolated,
@@ -220,6 +223,15 @@ pub fn triangle_contribution(
     stats.triangles_visited += 1;
     let sphere = mesh.triangle_sphere(ti);
     let mut range = (0.0, eye.length);
+    if options.sidedness_test {
+        match sidedness_test(mesh.triangle(ti), eye, range, light) {
+            Some(r) => range = r,
+            None => {
+                stats.triangles_pruned_sidedness += 1;
+                return 0.0;
+            }
+        }
+    }
     if options.spindle_test && !spindle_test(sphere, eye, range, light, medium.eta) {
         stats.triangles_pruned_spindle += 1;
         return 0.0;

@@ -47,6 +47,14 @@ pub fn seeds_at(c: &Constraint, x: f64) -> SmallVec<[DVec2; 6]> {
     s
 }
 
+/// The seeds of the range-end solves (made for every triangle that survives pruning, so kept
+/// short): the straight-line guess, V's foot when V is close, and the centroid.
+fn end_seeds(c: &Constraint, x: f64) -> SmallVec<[DVec2; 6]> {
+    let mut s = seeds_at(c, x);
+    s.truncate(s.len() - (SEEDS.len() - 1));
+    s
+}
+
 /// A piece of the eye segment where the triangle holds `multiplicity` refraction points.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SupportInterval {
@@ -172,8 +180,8 @@ pub fn triangle_support(
     // (the contribution is bounded there, so the inset changes the integral by ~1e-7 of a piece).
     let inset = 1e-7 * (x_hi - x_lo);
     let (xs, xe) = (x_lo + inset, x_hi - inset);
-    let start = solutions_at(c, xs, &seeds_at(c, xs), false, settings, interior);
-    let end = solutions_at(c, xe, &seeds_at(c, xe), false, settings, interior);
+    let start = solutions_at(c, xs, &end_seeds(c, xs), false, settings, interior);
+    let end = solutions_at(c, xe, &end_seeds(c, xe), false, settings, interior);
     let mut events: SmallVec<[(f64, i32, DVec2); 6]> = SmallVec::new();
     let mut consistent = true;
     for cr in &crossings {
