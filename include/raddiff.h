@@ -132,7 +132,7 @@
 #define EDGE_SCAN_INTERVALS 6
 
 // Maximum number of sub-arcs the normal-cone test examines before giving up (keeping the rest).
-#define NORMAL_CONE_BUDGET 48
+#define NORMAL_CONE_BUDGET 12
 
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
