@@ -45,7 +45,7 @@ pub struct Gathered {
 }
 
 /// Steps along each gather direction at which in-scattering is sampled in a medium.
-const MEDIA_STEPS: usize = 24;
+const MEDIA_STEPS: usize = 16;
 
 /// What the rays of one gather found.
 pub struct Traced {
@@ -122,7 +122,7 @@ impl Gatherer {
                 for s in 0..MEDIA_STEPS {
                     let ts = (s as f64 + 0.5) * media_step;
                     let v = if ts < t {
-                        scene.inscattered(position + ts * *d)
+                        lightmap.inscattered(scene, position + ts * *d)
                     } else {
                         DVec3::ZERO
                     };
