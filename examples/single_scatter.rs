@@ -2,7 +2,7 @@
 //! per-triangle interval method, beside the straight-line approximation renderers commonly use, and
 //! writes `out/single_scatter.png` (left: accurate, right: straight line; same exposure).
 //!
-//! `cargo run --release --example single_scatter [size] [frequency]` (default 96 pixels square,
+//! `cargo run --release --example single_scatter [size] [frequency]` (default 64 pixels square,
 //! geodesic frequency 22). Prints the time and the pruning statistics.
 
 use std::time::Instant;
@@ -21,7 +21,7 @@ fn chord(mesh: &RefractiveMesh, origin: DVec3, dir: DVec3) -> Option<(DVec3, DVe
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let size: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(96);
+    let size: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(64);
     let frequency: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(22);
     let data = scene::bumpy_sphere(frequency, 0.05, 6.0);
     let mesh = data.build()?;

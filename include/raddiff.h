@@ -119,21 +119,6 @@
 // Flag in [`Topology::triangle_edges`]: the triangle runs the edge backwards.
 #define REVERSED (1 << 31)
 
-// Maximum triangles per leaf.
-#define LEAF_SIZE 4
-
-// Two converged solutions closer than this in barycentric coordinates are one. Near a fold of the
-// solution curve (a caustic) J is nearly singular and a 1e-10 residual leaves ~1e-5 of slack in
-// (α, β); two genuine solutions that close are within ~1e-8 (relative) in x of the fold, where
-// dropping one changes the integral negligibly.
-#define DISTINCT 1e-4
-
-// Number of sub-intervals of an edge scanned for sign changes of g before the bracketed solves.
-#define EDGE_SCAN_INTERVALS 6
-
-// Maximum number of sub-arcs the normal-cone test examines before giving up (keeping the rest).
-#define NORMAL_CONE_BUDGET 12
-
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
 typedef enum raddiff_status {

@@ -3,7 +3,7 @@
 //! pruning tests' invariance (they change the time, never the result).
 //!
 //! The default run uses a coarse sphere (320 triangles) so it stays fast unoptimized; the full-size
-//! comparison (9680 triangles, 2000 samples, a few minutes) runs with `cargo test --release --test scatter_bumpy --
+//! comparison (9680 triangles, 2000 samples, ~25 min on one core) runs with `cargo test --release --test scatter_bumpy --
 //! --ignored` and prints its figures.
 
 mod scatter_common;

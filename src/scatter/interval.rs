@@ -101,7 +101,7 @@ pub fn crossing_is_lower_bound(c: &Constraint, cr: &EdgeCrossing) -> Option<bool
 /// solution curve (a caustic) J is nearly singular and a 1e-10 residual leaves ~1e-5 of slack in
 /// (α, β); two genuine solutions that close are within ~1e-8 (relative) in x of the fold, where
 /// dropping one changes the integral negligibly.
-pub const DISTINCT: f64 = 1e-4;
+pub(crate) const DISTINCT: f64 = 1e-4;
 
 /// Whether the path through (α, β) to V(x) is physical: the light on the outer side and V on the
 /// inner side of both the geometric and the shading normal (Walter et al.'s sidedness agreement).

@@ -199,7 +199,7 @@ pub fn sidedness_test(
 }
 
 /// Maximum number of sub-arcs the normal-cone test examines before giving up (keeping the rest).
-pub const NORMAL_CONE_BUDGET: usize = 12;
+pub(crate) const NORMAL_CONE_BUDGET: usize = 12;
 
 /// Shading-normal cone test: `None` if no refracted path through a triangle with bounding sphere
 /// `sphere` and shading normals in `cone` can reach the eye sub-segment `x_range` (prune); otherwise
