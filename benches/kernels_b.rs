@@ -9,7 +9,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::{DMat3, DVec3};
-use num_dual::{DualNum, DualStruct, HyperDual64};
+use num_dual::{DualNum, HyperDual64};
 use raddiff::{kernels, Deriv3, Order};
 
 /// The clipped form factor's value formula, generic over dual numbers (for the AD baseline).

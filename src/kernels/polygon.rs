@@ -349,51 +349,119 @@ fn near_plane_value(
     Ok(Some(n_par * parallel + transverse))
 }
 
-/// Signed form factor of the clipped loop by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` over fan triangles
-/// (Duffy map), with analytic derivatives of the integrand. Accurate when x is far from the loop.
-fn far_field(verts: &[ClipVertex], n: DVec3, order: Order) -> Deriv3 {
+/// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, 8x8
+/// Gauss-Legendre), with analytic derivatives of the integrand. Accurate when x is far from the
+/// triangle compared with its size. Signed by the triangle's orientation (`N` right-handed).
+fn triangle_rule(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, n: DVec3, order: Order) -> Deriv3 {
     let rule = gauss_legendre();
     let mut out = Deriv3::constant(0.0);
-    let a = verts[0];
-    for k in 1..verts.len() - 1 {
-        let ab = verts[k].u - a.u;
-        let bc = verts[k + 1].u - verts[k].u;
-        let normal = ab.cross(verts[k + 1].u - a.u); // 2·area·N̂
-        let c_t = normal.dot(a.r);
-        let mut q0 = 0.0;
-        let mut q1 = DVec3::ZERO;
-        let mut q2 = DMat3::ZERO;
-        for &(s, ws) in rule {
-            for &(t, wt) in rule {
-                let weight = ws * wt * s;
-                let r = a.r + s * ab + (s * t) * bc;
-                let inv2 = 1.0 / r.length_squared();
-                let inv4 = inv2 * inv2;
-                let nr = n.dot(r);
-                q0 += weight * nr * inv4;
-                if order.gradient() {
-                    let inv6 = inv4 * inv2;
-                    q1 += weight * (4.0 * nr * inv6 * r - inv4 * n);
-                    if order.hessian() {
-                        let inv8 = inv4 * inv4;
-                        q2 += (outer_self(r) * (24.0 * nr * inv8)
-                            - sym_outer(n, r) * (4.0 * inv6)
-                            - DMat3::IDENTITY * (4.0 * nr * inv6))
-                            * weight;
-                    }
+    let ab = b.u - a.u;
+    let bc = c.u - b.u;
+    let normal = ab.cross(c.u - a.u); // 2·area·N̂
+    let c_t = normal.dot(a.r);
+    let mut q0 = 0.0;
+    let mut q1 = DVec3::ZERO;
+    let mut q2 = DMat3::ZERO;
+    for &(s, ws) in rule {
+        for &(t, wt) in rule {
+            let weight = ws * wt * s;
+            let r = a.r + s * ab + (s * t) * bc;
+            let inv2 = 1.0 / r.length_squared();
+            let inv4 = inv2 * inv2;
+            let nr = n.dot(r);
+            q0 += weight * nr * inv4;
+            if order.gradient() {
+                let inv6 = inv4 * inv2;
+                q1 += weight * (4.0 * nr * inv6 * r - inv4 * n);
+                if order.hessian() {
+                    let inv8 = inv4 * inv4;
+                    q2 += (outer_self(r) * (24.0 * nr * inv8)
+                        - sym_outer(n, r) * (4.0 * inv6)
+                        - DMat3::IDENTITY * (4.0 * nr * inv6))
+                        * weight;
                 }
             }
         }
-        out.value += FRAC_1_PI * c_t * q0;
-        if order.gradient() {
-            out.gradient += FRAC_1_PI * (c_t * q1 - q0 * normal);
-            if order.hessian() {
-                out.hessian += (q2 * c_t - sym_outer(normal, q1)) * FRAC_1_PI;
-            }
+    }
+    out.value = FRAC_1_PI * c_t * q0;
+    if order.gradient() {
+        out.gradient = FRAC_1_PI * (c_t * q1 - q0 * normal);
+        if order.hessian() {
+            out.hessian = (q2 * c_t - sym_outer(normal, q1)) * FRAC_1_PI;
         }
     }
     out
 }
+
+fn accumulate(sum: &mut Deriv3, d: Deriv3) {
+    sum.value += d.value;
+    sum.gradient += d.gradient;
+    sum.hessian += d.hessian;
+}
+
+/// Signed form factor of the clipped loop by [`triangle_rule`] on its fan triangles.
+fn far_field(verts: &[ClipVertex], n: DVec3, order: Order) -> Deriv3 {
+    let mut out = Deriv3::constant(0.0);
+    for k in 1..verts.len() - 1 {
+        accumulate(
+            &mut out,
+            triangle_rule(&verts[0], &verts[k], &verts[k + 1], n, order),
+        );
+    }
+    out
+}
+
+/// Most triangles [`subdivided_quadrature`] may use before giving up.
+const MAX_PIECES: usize = 256;
+
+/// The fan triangles of the loop, bisected along their longest edge until each is far from x
+/// (centroid distance ≥ [`FAR_FIELD_RATIO`] × radius), then integrated by [`triangle_rule`].
+/// For polygons whose edge sum cancels (slivers, x near the plane) while x is not close to them.
+/// `None` if that would take more than [`MAX_PIECES`] triangles.
+fn subdivided_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {
+    let mut stack: SmallVec<[[ClipVertex; 3]; 16]> = SmallVec::new();
+    for k in 1..verts.len() - 1 {
+        stack.push([verts[0], verts[k], verts[k + 1]]);
+    }
+    let mut out = Deriv3::constant(0.0);
+    let mut pieces = 0;
+    while let Some(t) = stack.pop() {
+        let centroid = (t[0].r + t[1].r + t[2].r) / 3.0;
+        let radius = t
+            .iter()
+            .map(|v| (v.r - centroid).length())
+            .fold(0.0, f64::max);
+        if centroid.length() >= FAR_FIELD_RATIO * radius {
+            pieces += 1;
+            if pieces > MAX_PIECES {
+                return None;
+            }
+            accumulate(&mut out, triangle_rule(&t[0], &t[1], &t[2], n, order));
+            continue;
+        }
+        if stack.len() + pieces >= MAX_PIECES {
+            return None;
+        }
+        // bisect the longest edge (keeps the orientation of both halves)
+        let len = |i: usize| (t[(i + 1) % 3].u - t[i].u).length_squared();
+        let i = (0..3)
+            .max_by(|&p, &q| len(p).total_cmp(&len(q)))
+            .unwrap_or(0);
+        let (p, q, o) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+        let m = ClipVertex {
+            u: (p.u + q.u) * 0.5,
+            r: (p.r + q.r) * 0.5,
+            on_line: false,
+        };
+        stack.push([p, m, o]);
+        stack.push([m, q, o]);
+    }
+    Some(out)
+}
+
+/// Above this ratio of `Σ|edge term|` to `|Σ edge term|` (the edge sum has lost more than ~1e4 ulps
+/// to cancellation), [`subdivided_quadrature`] is tried instead.
+const CANCELLATION_LIMIT: f64 = 1e2;
 
 /// The Hessian term from the motion of the clip line ℓ:
 /// `n nᵀ (|h_P| / (π ‖n_t‖)) ∫_{P∩ℓ} ds/‖r‖⁴`, with `P∩ℓ` the oriented clip edges (bridges of
@@ -453,10 +521,12 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         .map(|v| (v.r - centroid).length())
         .fold(0.0, f64::max);
     let far = centroid.length() >= FAR_FIELD_RATIO * radius;
+    let mut used_quadrature = far;
     let mut d = if far {
         far_field(&verts, n, order)
     } else {
         let mut sum = Deriv3::constant(0.0);
+        let mut magnitude = 0.0;
         for i in 0..verts.len() {
             let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
             let t = if cut && a.on_line && b.on_line {
@@ -464,14 +534,25 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
             } else {
                 edge_term(a.r, b.u - a.u, n, order)?
             };
-            sum.value += t.value;
-            sum.gradient += t.gradient;
-            sum.hessian += t.hessian;
+            magnitude += t.value.abs();
+            accumulate(&mut sum, t);
         }
-        if let Some(v) = near_plane_value(&verts, n, plane.normal, h_p)? {
-            sum.value = v;
+        let mut quadrature = None;
+        if magnitude > CANCELLATION_LIMIT * sum.value.abs() {
+            quadrature = subdivided_quadrature(&verts, n, order);
         }
-        sum
+        match quadrature {
+            Some(q) => {
+                used_quadrature = true;
+                q
+            }
+            None => {
+                if let Some(v) = near_plane_value(&verts, n, plane.normal, h_p)? {
+                    sum.value = v;
+                }
+                sum
+            }
+        }
     };
     // The edge sum is positive when the polygon's right-hand normal points away from x.
     if h_p < 0.0 {
@@ -479,7 +560,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         d.gradient = -d.gradient;
         d.hessian = -d.hessian;
     }
-    if far && cut && order.hessian() {
+    if used_quadrature && cut && order.hessian() {
         d.hessian += clip_line_hessian(&verts, n, plane.normal, h_p)?;
     }
     // The clipped, visible part satisfies 0 ≤ F ≤ 1; rounding may step outside by an ulp.

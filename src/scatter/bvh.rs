@@ -97,7 +97,7 @@ pub struct SphereHierarchy {
 }
 
 /// Maximum triangles per leaf.
-pub const LEAF_SIZE: usize = 4;
+pub(crate) const LEAF_SIZE: usize = 4;
 
 impl SphereHierarchy {
     /// Builds the hierarchy by median splits along the widest axis of the triangle centroids.
