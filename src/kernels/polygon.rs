@@ -359,9 +359,15 @@ fn triangle_rule(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, n: DVec3, order
     let bc = c.u - b.u;
     let normal = ab.cross(c.u - a.u); // 2·area·N̂
     let c_t = normal.dot(a.r);
+    // Moments of the integrand's derivatives, assembled once after the loop:
+    // ∇q = 4 (n·r) r/‖r‖⁶ − n/‖r‖⁴,
+    // Hq = 24 (n·r) r rᵀ/‖r‖⁸ − 4 (n rᵀ + r nᵀ)/‖r‖⁶ − 4 (n·r) 𝟙/‖r‖⁶.
     let mut q0 = 0.0;
-    let mut q1 = DVec3::ZERO;
-    let mut q2 = DMat3::ZERO;
+    let mut s4 = 0.0; // Σ w/‖r‖⁴
+    let mut u6 = DVec3::ZERO; // Σ w (n·r) r/‖r‖⁶
+    let mut v6 = DVec3::ZERO; // Σ w r/‖r‖⁶
+    let mut s6 = 0.0; // Σ w (n·r)/‖r‖⁶
+    let (mut xx, mut yy, mut zz, mut xy, mut xz, mut yz) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     for &(s, ws) in rule {
         for &(t, wt) in rule {
             let weight = ws * wt * s;
@@ -371,18 +377,31 @@ fn triangle_rule(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, n: DVec3, order
             let nr = n.dot(r);
             q0 += weight * nr * inv4;
             if order.gradient() {
-                let inv6 = inv4 * inv2;
-                q1 += weight * (4.0 * nr * inv6 * r - inv4 * n);
+                let w6 = weight * inv4 * inv2;
+                s4 += weight * inv4;
+                u6 += (w6 * nr) * r;
                 if order.hessian() {
-                    let inv8 = inv4 * inv4;
-                    q2 += (outer_self(r) * (24.0 * nr * inv8)
-                        - sym_outer(n, r) * (4.0 * inv6)
-                        - DMat3::IDENTITY * (4.0 * nr * inv6))
-                        * weight;
+                    v6 += w6 * r;
+                    s6 += w6 * nr;
+                    let w8 = w6 * nr * inv2;
+                    xx += w8 * r.x * r.x;
+                    yy += w8 * r.y * r.y;
+                    zz += w8 * r.z * r.z;
+                    xy += w8 * r.x * r.y;
+                    xz += w8 * r.x * r.z;
+                    yz += w8 * r.y * r.z;
                 }
             }
         }
     }
+    let q1 = 4.0 * u6 - s4 * n;
+    let q2 = DMat3::from_cols(
+        DVec3::new(xx, xy, xz),
+        DVec3::new(xy, yy, yz),
+        DVec3::new(xz, yz, zz),
+    ) * 24.0
+        - sym_outer(n, v6) * 4.0
+        - DMat3::IDENTITY * (4.0 * s6);
     out.value = FRAC_1_PI * c_t * q0;
     if order.gradient() {
         out.gradient = FRAC_1_PI * (c_t * q1 - q0 * normal);
