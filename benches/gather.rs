@@ -1,7 +1,7 @@
 //! Cost of a gather evaluation against the cost of generating its directions (the baseline), for
 //! 16x32, 32x64 and 64x128 cosine-polar layouts, 3 channels: irradiance only, irradiance with
 //! translational and rotational gradients, and both with an absorbing, scattering medium marched in
-//! 16 steps per direction (with media radiance gradients). After the criterion groups, a summary
+//! 16 steps per direction (with media radiance gradients); and the concentric layout's gradients. After the criterion groups, a summary
 //! table in ns per sample and as ratios to the direction generation, timed in the same run as
 //! on-CPU time of the thread (robust on a shared machine; criterion's figures are wall time).
 //! `RADDIFF_BENCH_SUMMARY_ONLY=1` skips the criterion groups.
@@ -32,7 +32,11 @@ struct Scene {
 
 impl Scene {
     fn new(m: u32, n: u32) -> Scene {
-        let layout = Layout::new(LayoutKind::CosinePolar, m, n, 1).unwrap();
+        Scene::new_kind(LayoutKind::CosinePolar, m, n)
+    }
+
+    fn new_kind(kind: LayoutKind, m: u32, n: u32) -> Scene {
+        let layout = Layout::new(kind, m, n, 1).unwrap();
         let frame = Frame::new(DVec3::new(0.3, 0.2, 0.0), DVec3::Z, DVec3::X).unwrap();
         let dirs = layout.directions(&frame).unwrap();
         let cells = layout.len();
@@ -115,6 +119,14 @@ fn cases(s: &Scene) -> Vec<Case<'_>> {
             }),
         ));
     }
+    let concentric = Scene::new_kind(LayoutKind::Concentric, s.layout.m, s.layout.n);
+    v.push((
+        "concentric gradients",
+        Box::new(move || {
+            let s = &concentric;
+            black_box(evaluate(&s.layout, &s.frame, &s.input(false), GRADIENTS).unwrap());
+        }),
+    ));
     v
 }
 
@@ -176,9 +188,9 @@ fn summary() {
         "\nCPU ns per sample (ratio to generating the directions), {CHANNELS} channels, {STEPS} media steps:"
     );
     println!(
-        "| layout | directions | irradiance | + gradients | irradiance + media | gradients + media | gradient cost |"
+        "| layout | directions | irradiance | + gradients | irradiance + media | gradients + media | gradient cost | concentric + gradients |"
     );
-    println!("|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
     for (m, n) in SIZES {
         let scene = Scene::new(m, n);
         let samples = (m * n) as f64;
@@ -188,13 +200,14 @@ fn summary() {
             .collect();
         let cell = |x: f64| format!("{x:.1} ({:.2}x)", x / t[0]);
         println!(
-            "| {m}x{n} | {:.1} | {} | {} | {} | {} | +{:.1} ns |",
+            "| {m}x{n} | {:.1} | {} | {} | {} | {} | +{:.1} ns | {} |",
             t[0],
             cell(t[1]),
             cell(t[2]),
             cell(t[3]),
             cell(t[4]),
-            t[2] - t[1]
+            t[2] - t[1],
+            cell(t[5])
         );
     }
 }

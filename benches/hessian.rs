@@ -13,7 +13,9 @@ use hessian_common::{scene, SceneGather};
 use raddiff::gather::hessian::{
     mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle, LayoutKind, Topology,
 };
+use raddiff::gather::hessian_fill::occlusion_outputs;
 use raddiff::gather::radii::{surface_radii, ErrorMode};
+use raddiff::gather::{Frame, GatherInput, Layout, ValidGather, Wanted};
 use raddiff::Order;
 
 fn bench(c: &mut Criterion) {
@@ -74,6 +76,50 @@ fn bench(c: &mut Criterion) {
                 surface_radii(black_box(*h), DVec3::Z, e, 0.05, ErrorMode::Relative, 2.0).unwrap()
             })
         });
+    }
+    group.finish();
+
+    // Polar layout: the occlusion-aware Hessian against the Ward-Heckbert gradient of the same gather.
+    let mut group = c.benchmark_group("hessian vs ward-heckbert (polar)");
+    for (m, n) in [(16u32, 64u32), (32, 128), (64, 256)] {
+        let samples = (m * n) as usize;
+        let layout = Layout::new(LayoutKind::CosinePolar, m, n, 0).unwrap();
+        let frame = Frame::new(x, DVec3::Z, DVec3::X).unwrap();
+        let sg = SceneGather::new(
+            LayoutKind::CosinePolar,
+            m as usize,
+            n as usize,
+            0,
+            x,
+            &scene::rects(),
+            0.5,
+        );
+        let input = GatherInput {
+            directions: &sg.directions,
+            distance: &sg.distance,
+            radiance: &sg.radiance,
+            channels: 1,
+            sigma_t: 0.0,
+            media: None,
+        };
+        let valid = ValidGather::new(&layout, &frame, &input).unwrap();
+        group.throughput(Throughput::Elements(samples as u64));
+        let wh = Wanted {
+            irradiance: true,
+            gradient: true,
+            rotation_gradient: false,
+            distances: false,
+        };
+        group.bench_with_input(
+            BenchmarkId::new("ward-heckbert gradient", samples),
+            &valid,
+            |b, v| b.iter(|| black_box(v).evaluate(wh).unwrap()),
+        );
+        group.bench_with_input(
+            BenchmarkId::new("occlusion-aware hessian", samples),
+            &valid,
+            |b, v| b.iter(|| occlusion_outputs(black_box(v), true).unwrap()),
+        );
     }
     group.finish();
 }

@@ -28,7 +28,7 @@ int main(void) {
   raddiff_frame frame = {{0.5, -1.0, 2.0}, {0.0, 0.0, 1.0}, {1.0, 0.0, 0.0}};
   raddiff_gather_input in;
   raddiff_gather_output out;
-  double e[2], g[6], rg[6];
+  double e[2], g[6], rg[6], hess[18];
   int i;
 
   /* directions: stratum centres, unit, index j*n + k */
@@ -123,8 +123,9 @@ int main(void) {
     bad.m = RADDIFF_GATHER_MAX_STRATA_PER_AXIS + 1;
     CHECK_STATUS(raddiff_gather_evaluate(&bad, &frame, &in, &out), RADDIFF_ERROR_INVALID_ARGUMENT);
     bad = layout;
-    bad.kind = RADDIFF_LAYOUT_CONCENTRIC; /* and the directions no longer match their strata */
+    bad.kind = RADDIFF_LAYOUT_SPHERE; /* the directions no longer match their strata */
     CHECK_STATUS(raddiff_gather_evaluate(&bad, &frame, &in, &out), RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(raddiff_last_error(), "stratum") != NULL);
   }
   {
     raddiff_frame bad = frame;
@@ -164,8 +165,52 @@ int main(void) {
     CHECK(strstr(raddiff_last_error(), "directions[0]") != NULL);
     dirs[0] = saved;
   }
-  /* occlusion_gradient and hessian outputs: tested in ffi-tests/radii.cpp */
+  /* a failing call leaves the occlusion-aware outputs alone too (their values: ffi-tests/radii.cpp) */
+  for (i = 0; i < 18; i++) hess[i] = 42.0;
+  out.hessian = hess;
+  dist[3] = -1.0;
+  CHECK_STATUS(raddiff_gather_evaluate(&layout, &frame, &in, &out), RADDIFF_ERROR_INVALID_ARGUMENT);
+  CHECK(hess[0] == 42.0 && hess[17] == 42.0);
+  dist[3] = 1.0;
+  out.hessian = NULL;
   CHECK(e[0] == 42.0 && out.min_distance == 42.0);
+
+  /* occlusion-aware gradient and Hessian (the Hessian pass) from the same validated input: the
+     half-dome again; the occlusion gradient agrees in sign with Ward-Heckbert's, the Hessian is
+     symmetric */
+  {
+    double og[6], h[18];
+    raddiff_gather_output o3;
+    for (i = 0; i < CELLS; i++) {
+      int k = i % N;
+      dist[i] = k < N / 2 ? 1.0 : INFINITY;
+      rad[2 * i] = k < N / 2 ? 1.0f : 0.0f;
+    }
+    memset(&o3, 0, sizeof o3);
+    o3.gradient = g;
+    o3.occlusion_gradient = og;
+    o3.hessian = h;
+    CHECK_STATUS(raddiff_gather_evaluate(&layout, &frame, &in, &o3), RADDIFF_OK);
+    CHECK(og[1] > 0.0 && g[1] > 0.0);
+    CHECK_CLOSE(h[1], h[3], 1e-12);
+    CHECK_CLOSE(h[2], h[6], 1e-12);
+    CHECK_CLOSE(h[9 + 5], h[9 + 7], 1e-12);
+  }
+
+  /* the concentric layout: irradiance and both gradients too */
+  {
+    raddiff_gather_layout cl = {RADDIFF_LAYOUT_CONCENTRIC, M, N, 5};
+    CHECK_STATUS(raddiff_gather_directions(&cl, &frame, dirs), RADDIFF_OK);
+    for (i = 0; i < CELLS; i++) {
+      dist[i] = dirs[i].y > 0.0 ? 1.0 : INFINITY;
+      rad[2 * i] = dirs[i].y > 0.0 ? 1.0f : 0.0f;
+    }
+    CHECK_STATUS(raddiff_gather_evaluate(&cl, &frame, &in, &out), RADDIFF_OK);
+    CHECK(e[0] > 1.0 && e[0] < 2.2);
+    CHECK(g[1] > 0.0);
+    CHECK(rg[0] < 0.0);
+    CHECK_STATUS(raddiff_gather_directions(&layout, &frame, dirs), RADDIFF_OK);
+  }
 
   /* a medium: marched emissive radiance, no surfaces hit: E = pi q (1 - exp(-sigma T)) / sigma */
   {

@@ -112,11 +112,17 @@ int main() {
     CHECK_STATUS(raddiff_gather_evaluate(&layout, &frame, &in, &out), RADDIFF_OK);
     CHECK(e == 0.0 && std::isfinite(h[8]));
 
-    // Hemisphere gathers with marched media radiance: refused, outputs untouched.
+    // Marched media radiance adds one hemisphere ring per step: still finite and symmetric.
     std::vector<float> media(t.rad.size() * 2, 0.1f);
     in.media_radiance = media.data();
     in.steps = 2;
     in.step = 0.1;
+    CHECK_STATUS(raddiff_gather_evaluate(&layout, &frame, &in, &out), RADDIFF_OK);
+    CHECK(e > 0.0 && std::isfinite(h[0]) && std::isfinite(og[0]));
+    CHECK_CLOSE(h[1], h[3], 1e-12);
+
+    // Error path: a negative extinction is refused and nothing is written.
+    in.sigma_t = -1.0;
     h[0] = 42.0;
     e = 42.0;
     CHECK_STATUS(raddiff_gather_evaluate(&layout, &frame, &in, &out), RADDIFF_ERROR_INVALID_ARGUMENT);

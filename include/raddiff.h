@@ -77,8 +77,8 @@
 // Ward-Heckbert cosine-weighted polar strata: `theta_j = asin(sqrt((j+u)/m))`, `phi_k = 2 pi (k+v)/n`.
 #define RADDIFF_LAYOUT_COSINE_POLAR 0
 
-// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (irradiance and
-// rotational gradient only: translational gradients need a polar or sphere layout).
+// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (its walls are the
+// images of the grid lines; their Ward-Heckbert terms are integrated numerically).
 #define RADDIFF_LAYOUT_CONCENTRIC 1
 
 // Whole sphere, m x n equal solid-angle strata (`cos theta_j = 1 - 2(j+u)/m`), for points in a medium.
@@ -122,11 +122,17 @@
 // Maximum triangles per leaf.
 #define LEAF_SIZE 4
 
+// Two converged solutions closer than this in barycentric coordinates are one. Near a fold of the
+// solution curve (a caustic) J is nearly singular and a 1e-10 residual leaves ~1e-5 of slack in
+// (α, β); two genuine solutions that close are within ~1e-8 (relative) in x of the fold, where
+// dropping one changes the integral negligibly.
+#define DISTINCT 1e-4
+
 // Number of sub-intervals of an edge scanned for sign changes of g before the bracketed solves.
 #define EDGE_SCAN_INTERVALS 6
 
 // Maximum number of sub-arcs the normal-cone test examines before giving up (keeping the rest).
-#define NORMAL_CONE_BUDGET 48
+#define NORMAL_CONE_BUDGET 12
 
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
@@ -275,12 +281,12 @@ typedef struct raddiff_gather_output {
   // channels: irradiance (hemisphere layouts) or scalar fluence (sphere).
   double *irradiance;
   // 3*channels: Ward-Heckbert translational gradient (world axes, all three components), with the
-  // participating-media terms of Jarosz et al. 2008 when a medium is given. Polar/sphere layouts.
+  // participating-media terms of Jarosz et al. 2008 when a medium is given.
   double *gradient;
   // 3*channels: rotational gradient (world axes); zero for the sphere layout.
   double *rotation_gradient;
   // 3*channels: occlusion-aware gradient of the triangulated environment (thesis ch. 6; Marco et
-  // al. 2018 sec. 4 for the sphere layout). Hemisphere layouts need no media_radiance.
+  // al. 2018 sec. 4 for the sphere layout and for marched media radiance).
   double *occlusion_gradient;
   // 9*channels: occlusion-aware 3x3 translation Hessian, row-major; for hemisphere layouts with
   // the thesis' robustness terms (1% of the irradiance on every triangle, geometric Hessian for an

@@ -117,3 +117,13 @@ fn reference_for_the_cpp_test() {
     assert!((e - 0.3040080277).abs() < 1e-9);
     assert!((g - DVec3::new(-0.6510830, -0.0671441, 0.2474822)).length() < 1e-6);
 }
+
+/// Jittered strata (seed != 0) converge like the stratum centres.
+#[test]
+fn jittered_layout_converges() {
+    let mut scene = Scene::new(vec![emitter(), occluder_a(), occluder_b()]);
+    scene.env = 0.05;
+    let (ee, ge) = convergence("two occluders, jittered", &scene, &[8, 16, 32, 64], 7);
+    assert!(ee[3] < 1e-2 && ge[3] < 3e-2, "{ee:?} {ge:?}");
+    assert!(ge[3] < ge[0] / 3.0);
+}

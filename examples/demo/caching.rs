@@ -167,7 +167,7 @@ impl<'a> GatherStore<'a> {
     pub fn get(&self, pixel: usize) -> Option<&Gathered> {
         self.slots[pixel]
             .get_or_init(|| {
-                let sp = self.gbuffer.pixels[pixel].surface?;
+                let sp = self.gbuffer.pixels[pixel].shaded()?;
                 self.gatherer
                     .gather(
                         self.scene,
@@ -238,7 +238,7 @@ pub fn run(store: &GatherStore, metric: Metric, parameter: f64) -> Result<Run, r
     let mut records = Vec::new();
     let mut record_pixels = Vec::new();
     let mut cache_seconds = 0.0;
-    let covered = |cache: &Cache<[f32; 3]>, i: usize| match gb.pixels[i].surface {
+    let covered = |cache: &Cache<[f32; 3]>, i: usize| match gb.pixels[i].shaded() {
         Some(sp) => cache.lookup(sp.position, sp.normal).is_ok(),
         None => true,
     };
@@ -299,7 +299,7 @@ pub fn run(store: &GatherStore, metric: Metric, parameter: f64) -> Result<Run, r
     let image: Vec<Option<DVec3>> = gb
         .pixels
         .iter()
-        .map(|p| match p.surface {
+        .map(|p| match p.shaded() {
             Some(sp) => cache
                 .lookup(sp.position, sp.normal)
                 .ok()
@@ -382,11 +382,11 @@ pub fn tune(store: &GatherStore, metric: Metric, target: usize) -> Result<Run, r
     Ok(best)
 }
 
-/// RMS error of luminance over the covered pixels, and that divided by the RMS of the reference.
+/// RMS error of luminance over the shaded pixels (see [`crate::render::Pixel::shaded`]), and that divided by the RMS of the reference.
 pub fn rms_error(image: &[DVec3], reference: &[DVec3], gbuffer: &GBuffer) -> (f64, f64) {
     let (mut e2, mut r2, mut n) = (0.0, 0.0, 0usize);
     for ((v, r), p) in image.iter().zip(reference).zip(&gbuffer.pixels) {
-        if p.surface.is_none() {
+        if p.shaded().is_none() {
             continue;
         }
         let (lv, lr) = (crate::image::luminance(*v), crate::image::luminance(*r));

@@ -4,7 +4,7 @@
 
 use glam::{DMat3, DVec3};
 use raddiff::gather::hessian::{occlusion_derivatives, HemisphereGather};
-use raddiff::gather::hessian_mesh::{Connectivity, Topology};
+use raddiff::gather::hessian_mesh::Topology;
 use raddiff::gather::hessian_unaware::unaware_derivatives;
 use raddiff::gather::{
     evaluate, Frame, GatherInput, GatherValues, Layout, LayoutKind, MediaRadiance, Wanted,
@@ -45,7 +45,7 @@ pub struct Gathered {
 }
 
 /// Steps along each gather direction at which in-scattering is sampled in a medium.
-const MEDIA_STEPS: usize = 24;
+const MEDIA_STEPS: usize = 16;
 
 /// What the rays of one gather found.
 pub struct Traced {
@@ -82,7 +82,7 @@ impl Gatherer {
         Ok(Gatherer {
             m: m as u32,
             n: n as u32,
-            topology: Topology::new(Connectivity::Polar, m, n)?,
+            topology: Topology::new(LayoutKind::CosinePolar, m, n)?,
             hessian,
         })
     }
@@ -122,7 +122,7 @@ impl Gatherer {
                 for s in 0..MEDIA_STEPS {
                     let ts = (s as f64 + 0.5) * media_step;
                     let v = if ts < t {
-                        scene.inscattered(position + ts * *d)
+                        lightmap.inscattered(scene, position + ts * *d)
                     } else {
                         DVec3::ZERO
                     };

@@ -14,6 +14,76 @@ use crate::scene::Scene;
 pub struct LightMap {
     /// Per primitive: texels along u and v, and RGB outgoing radiance row-major (v outer).
     maps: Vec<(usize, usize, Vec<DVec3>)>,
+    /// In a medium: the in-scattered radiance on a voxel grid.
+    volume: Option<VolumeMap>,
+}
+
+/// In-scattered radiance σ_s·L_i (single scattering of the sun, with its shadow) at voxel centres
+/// of the medium's box, interpolated trilinearly: like the surface light map, it makes the media
+/// radiance a smooth deterministic function that the reference and the caches share.
+struct VolumeMap {
+    lo: DVec3,
+    cell: DVec3,
+    dims: [usize; 3],
+    values: Vec<DVec3>,
+}
+
+/// Voxels along the medium box's longest side.
+const VOLUME_RESOLUTION: usize = 64;
+
+impl VolumeMap {
+    fn build(scene: &Scene) -> Option<VolumeMap> {
+        let m = scene.medium?;
+        let size = m.hi - m.lo;
+        let h = size.max_element() / VOLUME_RESOLUTION as f64;
+        let dims = [
+            ((size.x / h).ceil() as usize).max(2),
+            ((size.y / h).ceil() as usize).max(2),
+            ((size.z / h).ceil() as usize).max(2),
+        ];
+        let cell = size / DVec3::new(dims[0] as f64, dims[1] as f64, dims[2] as f64);
+        let values = (0..dims[0] * dims[1] * dims[2])
+            .into_par_iter()
+            .map(|i| {
+                let (x, y, z) = (
+                    i % dims[0],
+                    (i / dims[0]) % dims[1],
+                    i / (dims[0] * dims[1]),
+                );
+                let p = m.lo + cell * DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5);
+                scene.inscattered(p)
+            })
+            .collect();
+        Some(VolumeMap {
+            lo: m.lo,
+            cell,
+            dims,
+            values,
+        })
+    }
+
+    fn lookup(&self, p: DVec3) -> DVec3 {
+        let g = (p - self.lo) / self.cell - DVec3::splat(0.5);
+        let mut idx = [0usize; 3];
+        let mut frac = [0.0f64; 3];
+        for a in 0..3 {
+            let max = (self.dims[a] - 1) as f64;
+            let v = g[a].clamp(0.0, max);
+            idx[a] = (v.floor() as usize).min(self.dims[a] - 2);
+            frac[a] = v - idx[a] as f64;
+        }
+        let at =
+            |x: usize, y: usize, z: usize| self.values[(z * self.dims[1] + y) * self.dims[0] + x];
+        let mut sum = DVec3::ZERO;
+        for corner in 0..8 {
+            let (dx, dy, dz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
+            let w = (if dx == 1 { frac[0] } else { 1.0 - frac[0] })
+                * (if dy == 1 { frac[1] } else { 1.0 - frac[1] })
+                * (if dz == 1 { frac[2] } else { 1.0 - frac[2] });
+            sum += at(idx[0] + dx, idx[1] + dy, idx[2] + dz) * w;
+        }
+        sum
+    }
 }
 
 /// Texels per unit length (the scenes' L); the Cornell box walls get 48 × 48.
@@ -52,7 +122,10 @@ impl LightMap {
                 scene.direct_irradiance(texel_point(texel), prim.normal, 16)
             })
             .collect();
-        let mut direct_map = LightMap { maps: Vec::new() };
+        let mut direct_map = LightMap {
+            maps: Vec::new(),
+            volume: VolumeMap::build(scene),
+        };
         let mut offset = 0;
         for (i, &(nu, nv)) in dims.iter().enumerate() {
             let albedo = scene.materials[i].albedo / std::f64::consts::PI;
@@ -102,6 +175,14 @@ impl LightMap {
             offset += count;
         }
         direct_map
+    }
+
+    /// In-scattered radiance σ_s·L_i (RGB, per unit length) at a point: zero outside the medium.
+    pub fn inscattered(&self, scene: &Scene, p: DVec3) -> DVec3 {
+        match (&self.volume, scene.medium) {
+            (Some(v), Some(m)) if p.cmpge(m.lo).all() && p.cmple(m.hi).all() => v.lookup(p),
+            _ => DVec3::ZERO,
+        }
     }
 
     /// Outgoing (reflected, non-emitted) radiance at (s, t) of a primitive, bilinear over texel

@@ -52,7 +52,7 @@ fn load_or_compute_reference(
     out: &Path,
 ) -> std::io::Result<(Vec<DVec3>, f64)> {
     let path = out.join(format!(
-        "{}-reference-{}x{}-{}.f64",
+        "{}-reference-v3-{}x{}-{}.f64",
         scene.kind.name(),
         gbuffer.width,
         gbuffer.height,
@@ -107,7 +107,7 @@ fn run() -> Result<(), String> {
         );
         let start = Instant::now();
         let lightmap = LightMap::build(&scene, &progress("light map"));
-        let gbuffer = GBuffer::build(&scene, options.width, options.height);
+        let gbuffer = GBuffer::build(&scene, &lightmap, options.width, options.height);
         println!(
             "   light map and primary hits: {:.2} s",
             start.elapsed().as_secs_f64()

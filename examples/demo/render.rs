@@ -20,6 +20,19 @@ pub struct Pixel {
     pub indirect_weight: DVec3,
 }
 
+impl Pixel {
+    /// The surface point, if indirect light is visible there (a surface with non-zero albedo):
+    /// the pixels irradiance caching serves and the error is measured on. Emitters and black
+    /// surfaces show no indirect light, so a renderer computes none for them.
+    pub fn shaded(&self) -> Option<SurfacePoint> {
+        if self.indirect_weight.max_element() > 0.0 {
+            self.surface
+        } else {
+            None
+        }
+    }
+}
+
 pub struct GBuffer {
     pub width: usize,
     pub height: usize,
@@ -30,12 +43,12 @@ pub struct GBuffer {
 const CAMERA_MARCH_STEPS: usize = 96;
 
 impl GBuffer {
-    pub fn build(scene: &Scene, width: usize, height: usize) -> GBuffer {
+    pub fn build(scene: &Scene, lightmap: &LightMap, width: usize, height: usize) -> GBuffer {
         let pixels = (0..width * height)
             .into_par_iter()
             .map(|i| {
                 let ray = scene.camera.ray(i % width, i / width, width, height);
-                primary(scene, &ray, i as u64)
+                primary(scene, lightmap, &ray, i as u64)
             })
             .collect();
         GBuffer {
@@ -46,7 +59,7 @@ impl GBuffer {
     }
 }
 
-fn primary(scene: &Scene, ray: &Ray, seed: u64) -> Pixel {
+fn primary(scene: &Scene, lightmap: &LightMap, ray: &Ray, seed: u64) -> Pixel {
     let surface = scene.intersect(ray);
     let distance = surface.map_or(f64::INFINITY, |s| s.hit.distance);
     let mut base = DVec3::ZERO;
@@ -60,7 +73,7 @@ fn primary(scene: &Scene, ray: &Ray, seed: u64) -> Pixel {
         for s in 0..CAMERA_MARCH_STEPS {
             let t = (s as f64 + jitter) * step;
             let p = ray.origin + t * ray.direction;
-            base += scene.inscattered(p) * ((-m.sigma_t() * t).exp() * step);
+            base += lightmap.inscattered(scene, p) * ((-m.sigma_t() * t).exp() * step);
         }
     }
     let Some(sp) = surface else {
@@ -105,7 +118,8 @@ pub fn incident(
     let jitter = rng.next_f64();
     for s in 0..march {
         let t = (s as f64 + jitter) * step;
-        l += scene.inscattered(ray.origin + t * ray.direction) * ((-m.sigma_t() * t).exp() * step);
+        l += lightmap.inscattered(scene, ray.origin + t * ray.direction)
+            * ((-m.sigma_t() * t).exp() * step);
     }
     (distance, l)
 }
@@ -127,7 +141,7 @@ pub fn reference(
         .enumerate()
         .map(|(i, px)| {
             progress.inc(1);
-            let Some(sp) = px.surface else {
+            let Some(sp) = px.shaded() else {
                 return DVec3::ZERO;
             };
             let mut rng = Rng::new(0x5EED_0000 + i as u64);

@@ -22,10 +22,11 @@
 //! # Concurrency and determinism
 //! `Cache` is `Sync`: any number of threads call [`Cache::lookup`] and [`Cache::insert`] through a
 //! shared reference. Lookups never lock and never wait for each other or for inserts; inserts are
-//! serialized by one mutex (an insert costs ~1 µs, a gather that produces a record hundreds of µs)
-//! and are visible to every lookup that starts after the insert returns. Records are immutable
-//! once inserted and are stored in an append-only arena; the index is an octree of immutable
-//! published nodes (see `index.rs`).
+//! serialized by one mutex (an insert costs ~12k instructions, the gather that produces a record
+//! hundreds of µs) and are visible to every lookup that starts after the insert returns. Records
+//! are immutable once inserted and live in an append-only arena; the index is an octree whose
+//! child links and entry arrays are published with release/acquire atomics and never freed while
+//! readers may hold them ([`Cache::compact`] reclaims the replaced arrays under `&mut`).
 //!
 //! The value returned for a query depends only on the set of records covering it: covering
 //! records are sorted by their identity key before the weighted sum, so neither insertion order nor

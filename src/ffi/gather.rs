@@ -11,8 +11,8 @@ use crate::Error;
 
 /// Ward-Heckbert cosine-weighted polar strata: `theta_j = asin(sqrt((j+u)/m))`, `phi_k = 2 pi (k+v)/n`.
 pub const RADDIFF_LAYOUT_COSINE_POLAR: u32 = 0;
-/// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (irradiance and
-/// rotational gradient only: translational gradients need a polar or sphere layout).
+/// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (its walls are the
+/// images of the grid lines; their Ward-Heckbert terms are integrated numerically).
 pub const RADDIFF_LAYOUT_CONCENTRIC: u32 = 1;
 /// Whole sphere, m x n equal solid-angle strata (`cos theta_j = 1 - 2(j+u)/m`), for points in a medium.
 pub const RADDIFF_LAYOUT_SPHERE: u32 = 2;
@@ -89,12 +89,12 @@ pub struct raddiff_gather_output {
     /// channels: irradiance (hemisphere layouts) or scalar fluence (sphere).
     pub irradiance: *mut f64,
     /// 3*channels: Ward-Heckbert translational gradient (world axes, all three components), with the
-    /// participating-media terms of Jarosz et al. 2008 when a medium is given. Polar/sphere layouts.
+    /// participating-media terms of Jarosz et al. 2008 when a medium is given.
     pub gradient: *mut f64,
     /// 3*channels: rotational gradient (world axes); zero for the sphere layout.
     pub rotation_gradient: *mut f64,
     /// 3*channels: occlusion-aware gradient of the triangulated environment (thesis ch. 6; Marco et
-    /// al. 2018 sec. 4 for the sphere layout). Hemisphere layouts need no media_radiance.
+    /// al. 2018 sec. 4 for the sphere layout and for marched media radiance).
     pub occlusion_gradient: *mut f64,
     /// 9*channels: occlusion-aware 3x3 translation Hessian, row-major; for hemisphere layouts with
     /// the thesis' robustness terms (1% of the irradiance on every triangle, geometric Hessian for an
@@ -230,26 +230,16 @@ pub extern "C" fn raddiff_gather_evaluate(
             rotation_gradient: !output.rotation_gradient.is_null(),
             distances: true,
         };
-        let values = gather::evaluate(&layout, &frame, &input, wanted)?;
-        let occlusion = if output.occlusion_gradient.is_null() && output.hessian.is_null() {
-            None
-        } else {
-            let valid = gather::ValidGather::new(&layout, &frame, &input)?;
-            Some(gather::hessian_fill::occlusion_outputs(
-                &valid,
-                !output.hessian.is_null(),
-            )?)
-        };
+        // Validate once; the evaluation and the occlusion-aware pass share it.
+        let valid = gather::ValidGather::new(&layout, &frame, &input)?;
+        let values = valid.evaluate(wanted)?;
         unsafe {
-            if let Some((gradients, hessians)) = &occlusion {
-                write_vec3(output.occlusion_gradient, gradients);
-                if !output.hessian.is_null() {
-                    let out = std::slice::from_raw_parts_mut(output.hessian, 9 * hessians.len());
-                    for (o, h) in out.chunks_exact_mut(9).zip(hessians) {
-                        o.copy_from_slice(&mat3_to_row_major(*h));
-                    }
-                }
-            }
+            let occlusion_gradient = (!output.occlusion_gradient.is_null())
+                .then(|| std::slice::from_raw_parts_mut(output.occlusion_gradient, 3 * ch));
+            let hessian = (!output.hessian.is_null())
+                .then(|| std::slice::from_raw_parts_mut(output.hessian, 9 * ch));
+            // Computes before writing: on failure nothing has been written.
+            gather::hessian_fill::fill_from_gather(&valid, occlusion_gradient, hessian)?;
             write(output.irradiance, &values.irradiance);
             write_vec3(output.gradient, &values.gradient);
             write_vec3(output.rotation_gradient, &values.rotation_gradient);

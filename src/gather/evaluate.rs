@@ -3,10 +3,15 @@
 //! * Value: stratified Monte Carlo with weight `A_{j,k}·cosθ = π/(MN)` per stratum for the
 //!   cosine-weighted hemisphere layouts and `4π/(MN)` for the sphere (fluence) — Jarosz et al. 2008
 //!   Table 2 with ERRATA 4: the cell area is `(MN)⁻¹ pdf⁻¹`.
-//! * Translational gradient: Ward-Heckbert wall motion (see [`super::walls`]) on the attenuated
-//!   surface radiance, plus the cell-radiance term `∇T·L` through a homogeneous medium
-//!   (Jarosz 2008 eq. 14-18), plus, with media radiance, the in-scattered radiance gradient and the
-//!   visibility gradient of surfaces occluding the medium (eq. 19-26, Algorithm 1).
+//! * Translational gradient: Ward-Heckbert wall motion (see [`super::walls`]) on the radiance
+//!   reaching x through each stratum, plus the cell-radiance term `∇T·L` through a homogeneous
+//!   medium (Jarosz 2008 eq. 14-18), plus, with media radiance, the gradient of each stratum's
+//!   marched segment with its hit point fixed. Media radiance enters the wall terms with the surface
+//!   radiance, so the visibility gradient of surfaces occluding the medium (eq. 22-26) arises at
+//!   silhouettes, where the shells between the occluder and the farther hit move with the occluder.
+//!   Applying eq. 24 at every depth difference instead (Algorithm 1 taken literally) also moves the
+//!   iso-distance contours of smooth surfaces as if they were silhouettes, which biased the gradient
+//!   by 18-50% in the reference tests; the segment model converges (README, "Gathers").
 //! * Rotational gradient (thesis eq. 3.23-3.24): `∫ L (n × ω) dω`, integrated exactly over each
 //!   polar stratum (no `tanθ` blow-up at the horizon); Monte Carlo for the concentric layout.
 
@@ -16,7 +21,7 @@ use glam::DVec3;
 
 use super::input::{GatherInput, MediaRadiance};
 use super::layout::{Frame, Layout, LayoutKind};
-use super::walls::Walls;
+use super::walls::{ConcentricWalls, Walls};
 use crate::error::{Error, Result};
 use crate::{kernels, Order};
 
@@ -121,17 +126,8 @@ impl<'a> ValidGather<'a> {
 
     /// Computes what `wanted` asks for.
     ///
-    /// `InvalidArgument` if a translational gradient is asked of a [`LayoutKind::Concentric`]
-    /// layout: its walls are not θ/φ lines, and Ward-Heckbert's wall terms are implemented for the
-    /// polar and sphere layouts only. `Degenerate` if a result overflows (e.g. hits at ~1e-300 L).
+    /// `Degenerate` if a result overflows (e.g. hits at ~1e-300 L).
     pub fn evaluate(&self, wanted: Wanted) -> Result<GatherValues> {
-        if wanted.gradient && self.layout.kind == LayoutKind::Concentric {
-            return Err(Error::InvalidArgument(
-                "translational gradients need RADDIFF_LAYOUT_COSINE_POLAR or RADDIFF_LAYOUT_SPHERE: \
-                 the concentric layout's cell walls are not theta/phi lines"
-                    .into(),
-            ));
-        }
         let mut out = GatherValues::default();
         let ch = self.input.channels;
         let weight = self.stratum_weight();
@@ -166,11 +162,17 @@ impl<'a> ValidGather<'a> {
                 }
                 out.irradiance = e.into_iter().map(|e| e * weight).collect();
             }
-            let walls =
-                (self.layout.kind != LayoutKind::Concentric).then(|| Walls::new(&self.layout));
+            let walls = (self.layout.kind != LayoutKind::Concentric
+                && (wanted.gradient || wanted.rotation_gradient))
+                .then(|| Walls::new(&self.layout));
             if wanted.gradient {
-                let walls = walls.as_ref().expect("walls exist for polar layouts");
-                let local = self.wall_gradient(walls, &rad);
+                let local = match &walls {
+                    Some(walls) => self.wall_gradient(walls, &rad),
+                    None => {
+                        let walls = ConcentricWalls::cached(&self.layout);
+                        self.concentric_wall_gradient(&walls, &rad)
+                    }
+                };
                 if out.gradient.is_empty() {
                     out.gradient = vec![DVec3::ZERO; ch];
                 }
@@ -361,6 +363,43 @@ impl<'a> ValidGather<'a> {
                 let (az, rg) = (azimuth[k * ch + c], ring[k * ch + c]);
                 g.x += rg * c1 - az * sin_k;
                 g.y += rg * c2 + az * cos_k;
+            }
+        }
+        g
+    }
+
+    /// The same wall terms for the concentric layout, whose wall vectors are computed by quadrature
+    /// along the images of the grid lines (see [`ConcentricWalls`]).
+    fn concentric_wall_gradient(&self, walls: &ConcentricWalls, rad: &[f64]) -> Vec<DVec3> {
+        let (m, n) = (self.layout.m as usize, self.layout.n as usize);
+        let ch = self.input.channels;
+        let inv_r: Vec<f64> = self.input.distance.iter().map(|&r| 1.0 / r).collect();
+        let mut g = vec![DVec3::ZERO; ch];
+        let mut wall = |a: usize, b: usize, w: DVec3| {
+            let s = inv_r[a].max(inv_r[b]);
+            if s == 0.0 {
+                return;
+            }
+            for (c, g) in g.iter_mut().enumerate() {
+                *g += w * ((rad[a * ch + c] - rad[b * ch + c]) * s);
+            }
+        };
+        for j in 1..m {
+            for k in 0..n {
+                wall(
+                    j * n + k,
+                    (j - 1) * n + k,
+                    walls.first_axis[(j - 1) * n + k],
+                );
+            }
+        }
+        for j in 0..m {
+            for k in 1..n {
+                wall(
+                    j * n + k,
+                    j * n + k - 1,
+                    walls.second_axis[j * (n - 1) + k - 1],
+                );
             }
         }
         g

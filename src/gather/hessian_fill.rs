@@ -6,10 +6,10 @@ use std::rc::Rc;
 
 use glam::{DMat3, DVec3};
 
-use super::hessian::{occlusion_derivatives, HemisphereGather};
+use super::hessian::{occlusion_derivatives, HemisphereGather, OcclusionDerivatives};
 use super::hessian_media::{media_derivatives, MediaGather, MediaSteps};
 use super::hessian_mesh::Topology;
-use super::{GatherInput, Layout, LayoutKind, ValidGather};
+use super::{GatherInput, Layout, LayoutKind, MediaRadiance, ValidGather};
 use crate::error::{Error, Result};
 use crate::Order;
 
@@ -51,11 +51,11 @@ pub fn cached_topology(layout: &Layout) -> Result<Rc<Topology>> {
 
 /// Occlusion-aware gradient and Hessian of one validated gather, per channel.
 ///
-/// * Hemisphere layouts (irradiance): [`occlusion_derivatives`]; the Hessian returned is
-///   [`super::hessian::OcclusionDerivatives::robust_hessian`] (1% of the irradiance added to every
+/// * Hemisphere layouts (irradiance): [`occlusion_derivatives`], plus one hemisphere ring per
+///   march step when media radiance is given (its gradient, if any, is not used); the Hessian
+///   returned is [`OcclusionDerivatives::robust_hessian`] (1% of the irradiance added to every
 ///   triangle; the geometric Hessian for a channel whose rays all returned black), the form record
-///   radii need. Marched media radiance is not part of the hemisphere triangulation:
-///   `InvalidArgument` if it is given.
+///   radii need.
 /// * Sphere layout (fluence at a point in a medium): [`media_derivatives`] (the media radiance
 ///   gradient, if given, is not used: Marco et al. hold radiance constant per triangle).
 ///
@@ -71,13 +71,6 @@ pub fn occlusion_outputs(gather: &ValidGather, hessian: bool) -> Result<(Vec<DVe
         Order::Gradient
     };
     if layout.kind.is_hemisphere() {
-        if input.media.is_some() {
-            return Err(Error::InvalidArgument(
-                "occlusion_gradient/hessian of a hemisphere gather do not include marched media \
-                 radiance: use the sphere layout at points in a medium, or pass no media_radiance"
-                    .into(),
-            ));
-        }
         let g = HemisphereGather {
             normal: frame.normal,
             directions: input.directions,
@@ -86,7 +79,10 @@ pub fn occlusion_outputs(gather: &ValidGather, hessian: bool) -> Result<(Vec<DVe
             channels: input.channels,
             sigma_t: input.sigma_t,
         };
-        let d = occlusion_derivatives(&topo, &g, order)?;
+        let mut d = occlusion_derivatives(&topo, &g, order)?;
+        if let Some(media) = &input.media {
+            add_media_rings(&topo, &g, media, order, &mut d)?;
+        }
         let hessians = (0..input.channels)
             .map(|c| {
                 if hessian {
@@ -116,6 +112,54 @@ pub fn occlusion_outputs(gather: &ValidGather, hessian: bool) -> Result<(Vec<DVe
             d.channels.iter().map(|c| c.hessian).collect(),
         ))
     }
+}
+
+/// Adds the marched media of a hemisphere gather: one hemisphere mesh per step `s` with vertices at
+/// `min(t_s, d_i)` carrying the in-scattered radiance, or zero where a surface occludes the ring
+/// (Marco et al. Fig. 2e with the surface form factor instead of the solid angle), weighted by the
+/// step (`1/pdf`) and attenuated to each triangle's farthest vertex.
+fn add_media_rings(
+    topo: &Topology,
+    g: &HemisphereGather,
+    media: &MediaRadiance,
+    order: Order,
+    total: &mut OcclusionDerivatives,
+) -> Result<()> {
+    let count = g.directions.len();
+    let ch = g.channels;
+    let mut distance = vec![0.0f64; count];
+    let mut radiance = vec![0.0f32; count * ch];
+    for s in 0..media.steps {
+        let t = (s as f64 + 0.5) * media.step;
+        if !g.distance.iter().any(|&d| t < d) {
+            break;
+        }
+        for i in 0..count {
+            let visible = t < g.distance[i];
+            distance[i] = if visible { t } else { g.distance[i] };
+            for c in 0..ch {
+                radiance[i * ch + c] = if visible {
+                    media.radiance[(i * media.steps + s) * ch + c]
+                } else {
+                    0.0
+                };
+            }
+        }
+        let ring = HemisphereGather {
+            distance: &distance,
+            radiance: &radiance,
+            ..*g
+        };
+        let d = occlusion_derivatives(topo, &ring, order)?;
+        let w = media.step;
+        for c in 0..ch {
+            total.irradiance[c] += w * d.irradiance[c];
+            total.gradient[c] += d.gradient[c] * w;
+            total.hessian[c] += d.hessian[c] * w;
+            total.all_black[c] &= d.all_black[c];
+        }
+    }
+    Ok(())
 }
 
 /// Fills the caller's `occlusion_gradient` (`3·channels`, `[3c + axis]`) and `hessian`

@@ -19,8 +19,10 @@
 
 use std::f64::consts::TAU;
 
-#[cfg(test)]
-use glam::DVec3;
+use std::sync::{Arc, Mutex};
+
+use glam::{DVec2, DVec3};
+use smallvec::SmallVec;
 
 use super::layout::{Layout, LayoutKind};
 
@@ -122,9 +124,215 @@ impl Walls {
     }
 }
 
+/// Wall vectors `∫_wall w ν dl` (w = cosθ) of the concentric layout, whose walls are the images of
+/// the grid lines of `[−1, 1]²` under the Shirley-Chiu map, lifted to the hemisphere.
+///
+/// For a wall traced as `ω(t)` with `t ∈ [0, 1]` along its grid line, `ν dl = ∓(ω × ω') dt` (the
+/// sign picks the side). With `ω = (d, z)`, `z = sqrt(1 − |d|²)` and `z' = −(d·d')/z`, the integrand
+/// `z (ω × ω')` is `(−(d_y (d·d') + z² d_y'), z² d_x' + d_x (d·d'), z (d × d'))`: bounded up to the
+/// horizon. The map is smooth inside each of its four wedges and only continuous across the
+/// diagonals `|a| = |b|`, so each wall is split there and integrated by 4-point Gauss-Legendre
+/// per piece.
+pub(crate) struct ConcentricWalls {
+    /// Wall between `(j−1, k)` and `(j, k)`, index `(j−1)·N + k`, pointing into `(j, k)`.
+    pub(crate) first_axis: Vec<DVec3>,
+    /// Wall between `(j, k−1)` and `(j, k)`, index `j·(N−1) + k − 1`, pointing into `(j, k)`.
+    pub(crate) second_axis: Vec<DVec3>,
+}
+
+/// Recently used concentric wall sets, keyed by (M, N): they depend on the grid only, and a
+/// renderer gathers with the same layout again and again.
+static CONCENTRIC_CACHE: Mutex<Vec<(u32, u32, Arc<ConcentricWalls>)>> = Mutex::new(Vec::new());
+const CONCENTRIC_CACHE_SIZE: usize = 4;
+
+impl ConcentricWalls {
+    /// The wall set of an M×N concentric grid, from a small process-wide cache (computed on a miss).
+    pub(crate) fn cached(layout: &Layout) -> Arc<ConcentricWalls> {
+        let key = (layout.m, layout.n);
+        let lock = || CONCENTRIC_CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(hit) = lock().iter().find(|e| (e.0, e.1) == key) {
+            return Arc::clone(&hit.2);
+        }
+        let walls = Arc::new(ConcentricWalls::new(layout));
+        let mut cache = lock();
+        if cache.len() >= CONCENTRIC_CACHE_SIZE {
+            cache.remove(0);
+        }
+        cache.push((key.0, key.1, Arc::clone(&walls)));
+        walls
+    }
+
+    pub(crate) fn new(layout: &Layout) -> ConcentricWalls {
+        let (m, n) = (layout.m as usize, layout.n as usize);
+        let sa = |j: usize| 2.0 * j as f64 / m as f64 - 1.0;
+        let sb = |k: usize| 2.0 * k as f64 / n as f64 - 1.0;
+        let mut first_axis = Vec::with_capacity((m - 1) * n);
+        for j in 1..m {
+            for k in 0..n {
+                // Travelling towards +b, the cell with the larger a lies on the right.
+                let s0 = DVec2::new(sa(j), sb(k));
+                let s1 = DVec2::new(sa(j), sb(k + 1));
+                first_axis.push(-grid_line_integral(s0, s1));
+            }
+        }
+        let mut second_axis = Vec::with_capacity(m * (n - 1));
+        for j in 0..m {
+            for k in 1..n {
+                // Travelling towards +a, the cell with the larger b lies on the left.
+                let s0 = DVec2::new(sa(j), sb(k));
+                let s1 = DVec2::new(sa(j + 1), sb(k));
+                second_axis.push(grid_line_integral(s0, s1));
+            }
+        }
+        ConcentricWalls {
+            first_axis,
+            second_axis,
+        }
+    }
+}
+
+/// `∫ z (ω × ω') dt` along the image of the axis-aligned segment `s0 → s1` of the square.
+fn grid_line_integral(s0: DVec2, s1: DVec2) -> DVec3 {
+    let delta = s1 - s0;
+    // Split where the segment crosses a diagonal |a| = |b| (a kink of the concentric map).
+    let mut cuts: SmallVec<[f64; 4]> = SmallVec::new();
+    cuts.push(0.0);
+    let (fixed, moving0, moving_len) = if delta.x == 0.0 {
+        (s0.x, s0.y, delta.y)
+    } else {
+        (s0.y, s0.x, delta.x)
+    };
+    for target in [fixed.abs(), -fixed.abs()] {
+        let t = (target - moving0) / moving_len;
+        if t > 0.0 && t < 1.0 && !cuts.contains(&t) {
+            cuts.push(t);
+        }
+    }
+    cuts.push(1.0);
+    cuts.sort_by(f64::total_cmp);
+    const X: [f64; 2] = [0.339_981_043_584_856, 0.861_136_311_594_053];
+    const W: [f64; 2] = [0.652_145_154_862_546, 0.347_854_845_137_454];
+    let on_horizon = |t: f64| {
+        let p = s0 + delta * t;
+        p.x.abs().max(p.y.abs()) >= 1.0 - 1e-12
+    };
+    let mut sum = DVec3::ZERO;
+    for piece in cuts.windows(2) {
+        let (t0, t1) = (piece[0], piece[1]);
+        // z ~ sqrt(distance to the horizon) at a horizon end: substitute t = end ∓ len·u² there,
+        // which makes the integrand smooth again.
+        let end = if on_horizon(t1) {
+            Some((t1, -1.0))
+        } else if on_horizon(t0) {
+            Some((t0, 1.0))
+        } else {
+            None
+        };
+        for (x, w) in X.iter().zip(W) {
+            for u in [0.5 - 0.5 * x, 0.5 + 0.5 * x] {
+                let (t, jac) = match end {
+                    Some((e, sign)) => {
+                        let len = t1 - t0;
+                        (e + sign * len * u * u, 2.0 * len * u)
+                    }
+                    None => (t0 + (t1 - t0) * u, t1 - t0),
+                };
+                sum += integrand(s0 + delta * t, delta) * (0.5 * w * jac);
+            }
+        }
+    }
+    sum
+}
+
+/// `z (ω × ω')` at square point `s` for the velocity `ds/dt = v`.
+fn integrand(s: DVec2, v: DVec2) -> DVec3 {
+    use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+    let (a, b) = (s.x, s.y);
+    // d and its derivatives ∂d/∂a, ∂d/∂b inside the wedge that contains s.
+    let (d, da, db) = if a.abs() > b.abs() {
+        let (sp, cp) = (FRAC_PI_4 * (b / a)).sin_cos();
+        let radial = DVec2::new(cp, sp);
+        let tangential = DVec2::new(-sp, cp);
+        (
+            radial * a,
+            radial - tangential * (FRAC_PI_4 * b / a),
+            tangential * FRAC_PI_4,
+        )
+    } else if b != 0.0 {
+        let (sp, cp) = (FRAC_PI_2 - FRAC_PI_4 * (a / b)).sin_cos();
+        let radial = DVec2::new(cp, sp);
+        let tangential = DVec2::new(-sp, cp);
+        (
+            radial * b,
+            -tangential * FRAC_PI_4,
+            radial + tangential * (FRAC_PI_4 * a / b),
+        )
+    } else {
+        // The centre: never a quadrature node (nodes are interior to each piece).
+        return DVec3::ZERO;
+    };
+    let dd = da * v.x + db * v.y;
+    let z2 = (1.0 - d.length_squared()).max(0.0);
+    let dot = d.dot(dd);
+    DVec3::new(
+        -(d.y * dot + z2 * dd.y),
+        z2 * dd.x + d.x * dot,
+        z2.sqrt() * d.perp_dot(dd),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Concentric wall vectors against a dense midpoint rule on the map itself, with tangents by
+    /// central differences and the sign fixed by the side of the cell it points into. (The midpoint
+    /// rule is first-order across the map's kinks at the diagonals: 1e-4 relative.)
+    #[test]
+    fn concentric_wall_vectors_match_dense_quadrature() {
+        use super::super::layout::concentric_to_local;
+        let layout = Layout::new(LayoutKind::Concentric, 5, 7, 0).unwrap();
+        let walls = ConcentricWalls::new(&layout);
+        let dense = |s0: DVec2, s1: DVec2| {
+            let q = 20000;
+            let mut sum = DVec3::ZERO;
+            for i in 0..q {
+                let t = (i as f64 + 0.5) / q as f64;
+                let h = 1e-7;
+                let w = concentric_to_local(s0 + (s1 - s0) * t);
+                let dw = (concentric_to_local(s0 + (s1 - s0) * (t + h))
+                    - concentric_to_local(s0 + (s1 - s0) * (t - h)))
+                    / (2.0 * h);
+                sum += w.cross(dw) * (w.z / q as f64);
+            }
+            sum
+        };
+        let sa = |j: usize| 2.0 * j as f64 / 5.0 - 1.0;
+        let sb = |k: usize| 2.0 * k as f64 / 7.0 - 1.0;
+        for (j, k) in [(1, 0), (2, 3), (3, 6), (4, 2)] {
+            let want = -dense(DVec2::new(sa(j), sb(k)), DVec2::new(sa(j), sb(k + 1)));
+            let got = walls.first_axis[(j - 1) * 7 + k];
+            assert!(
+                (got - want).length() < 1e-4 * want.length().max(1e-3),
+                "{got} {want}"
+            );
+            // it points from (j-1, k) into (j, k)
+            let from = layout.grid_to_local(j as f64 - 0.5, k as f64 + 0.5);
+            let into = layout.grid_to_local(j as f64 + 0.5, k as f64 + 0.5);
+            assert!(got.dot(into - from) > 0.0);
+        }
+        for (j, k) in [(0, 1), (2, 3), (4, 6), (2, 4)] {
+            let want = dense(DVec2::new(sa(j), sb(k)), DVec2::new(sa(j + 1), sb(k)));
+            let got = walls.second_axis[j * 6 + k - 1];
+            assert!(
+                (got - want).length() < 1e-4 * want.length().max(1e-3),
+                "{got} {want}"
+            );
+            let from = layout.grid_to_local(j as f64 + 0.5, k as f64 - 0.5);
+            let into = layout.grid_to_local(j as f64 + 0.5, k as f64 + 0.5);
+            assert!(got.dot(into - from) > 0.0);
+        }
+    }
 
     /// Numerical ∫ w ν dl along the walls, by midpoint quadrature on θ and φ.
     #[test]

@@ -9,7 +9,7 @@ use super::contribution::{path_contribution, DistanceFactor, Medium};
 use super::interval::{seeds_at, solutions_at, triangle_support, SupportInterval};
 use super::mesh::RefractiveMesh;
 use super::newton::NewtonSettings;
-use super::prune::{normal_cone_test, spindle_test};
+use super::prune::{normal_cone_test, sidedness_test, spindle_test};
 use super::stats::ScatterStats;
 use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 
@@ -19,6 +19,8 @@ pub struct ScatterOptions {
     /// Gauss-Legendre nodes per support piece (≥ 1). The contribution of one triangle is smooth on
     /// its support, so a few nodes suffice: 8 gives ~1e-6 relative error on the bumpy sphere.
     pub samples_per_interval: usize,
+    /// Apply the sidedness test to triangles (also clips the x range to where V is below the plane).
+    pub sidedness_test: bool,
     /// Apply the spindle test to hierarchy nodes and triangles.
     pub spindle_test: bool,
     /// Apply the shading-normal cone test to triangles (also narrows the x range searched).
@@ -33,6 +35,7 @@ impl Default for ScatterOptions {
     fn default() -> Self {
         ScatterOptions {
             samples_per_interval: 8,
+            sidedness_test: true,
             spindle_test: true,
             normal_cone_test: true,
             distance_factor: DistanceFactor::Interpolated,
@@ -220,6 +223,15 @@ pub fn triangle_contribution(
     stats.triangles_visited += 1;
     let sphere = mesh.triangle_sphere(ti);
     let mut range = (0.0, eye.length);
+    if options.sidedness_test {
+        match sidedness_test(mesh.triangle(ti), eye, range, light) {
+            Some(r) => range = r,
+            None => {
+                stats.triangles_pruned_sidedness += 1;
+                return 0.0;
+            }
+        }
+    }
     if options.spindle_test && !spindle_test(sphere, eye, range, light, medium.eta) {
         stats.triangles_pruned_spindle += 1;
         return 0.0;
@@ -280,21 +292,44 @@ fn integrate_piece(
     stats: &mut ScatterStats,
     paths: &mut u64,
 ) -> f64 {
-    let half = 0.5 * (piece.x1 - piece.x0);
-    let mid = 0.5 * (piece.x1 + piece.x0);
+    let width = piece.x1 - piece.x0;
+    // Nodes in order of increasing distance from the regular end, so that continuation seeding
+    // walks along one branch. A fold end gets the substitution x = x_fold ± width s², which turns
+    // its 1/√ singularity into a smooth integrand.
+    let fold_at_start = piece.folds[0] && !piece.folds[1];
+    let fold_at_end = piece.folds[1] && !piece.folds[0];
+    let mut order: SmallVec<[usize; 32]> = (0..nodes.len()).collect();
+    if fold_at_start {
+        order.reverse();
+    }
     let mut sum = 0.0;
-    let mut previous: Option<DVec2> = None;
-    for (z, w) in nodes.iter().zip(weights) {
-        let x = mid + half * z;
-        stats.samples += 1;
-        let s = (z + 1.0) * 0.5;
-        let guess = match piece.ends {
-            [Some(a), Some(b)] => Some(a + s * (b - a)),
-            [Some(a), None] => previous.or(Some(a)),
-            [None, Some(b)] => previous.or(Some(b)),
-            [None, None] => previous,
+    let mut previous: Option<DVec2> = if fold_at_start {
+        piece.ends[1]
+    } else {
+        piece.ends[0]
+    };
+    for &k in &order {
+        let (z, w) = (nodes[k], weights[k]);
+        let s = 0.5 * (z + 1.0);
+        let (x, jac) = if fold_at_end {
+            // x = x1 - width (1 - s)^2 ... expressed from the regular end x0.
+            let t = 1.0 - s;
+            (piece.x1 - width * t * t, 2.0 * width * t)
+        } else if fold_at_start {
+            (piece.x0 + width * s * s, 2.0 * width * s)
+        } else {
+            (piece.x0 + width * s, width)
         };
-        let mut seeds: SmallVec<[DVec2; 6]> = SmallVec::new();
+        stats.samples += 1;
+        let guess = if piece.folds == [false, false] {
+            match piece.ends {
+                [Some(a), Some(b)] if piece.multiplicity == 1 => Some(a + s * (b - a)),
+                _ => previous,
+            }
+        } else {
+            previous
+        };
+        let mut seeds: SmallVec<[DVec2; 8]> = SmallVec::new();
         seeds.extend(guess);
         seeds.extend(seeds_at(c, x));
         let all = piece.multiplicity > 1;
@@ -323,14 +358,14 @@ fn integrate_piece(
                 medium,
                 options.distance_factor,
             ) {
-                sum += w * p.value;
+                sum += 0.5 * w * jac * p.value;
                 stats.paths += 1;
                 *paths += 1;
             }
         }
         previous = found.first().copied().or(previous);
     }
-    sum * half
+    sum
 }
 
 /// Settings of the brute-force reference [`single_scatter_brute_force`].
@@ -376,7 +411,9 @@ pub fn subdivision_seeds(k: usize) -> Vec<DVec2> {
 }
 
 /// The reference of Walter et al. 2009 without pruning: `samples` midpoint-rule points along the
-/// eye segment, Newton from every seed on every triangle at each, distinct solutions summed.
+/// eye segment, Newton from every seed on every triangle at each, distinct solutions summed. Seeds:
+/// the previous sample's solutions on the triangle (continuation), the straight-line guess, then
+/// the `seeds²` sub-triangle centroids.
 /// Converges like O(1/samples) (each triangle's contribution jumps at its support's ends).
 pub fn single_scatter_brute_force(
     mesh: &RefractiveMesh,
@@ -414,10 +451,23 @@ pub fn single_scatter_brute_force(
             eta: medium.eta,
         };
         let mut contributed = false;
+        let mut previous: SmallVec<[DVec2; 2]> = SmallVec::new();
         for k in 0..options.samples {
             let x = (k as f64 + 0.5) * dx;
             stats.samples += 1;
-            for ab in solutions_at(&c, x, &seeds, true, &options.newton, &mut stats.interior) {
+            // Continuation: the solutions at the previous sample come first, then the fixed seeds.
+            let mut all_seeds: Vec<DVec2> = previous.to_vec();
+            all_seeds.extend(seeds_at(&c, x));
+            all_seeds.extend_from_slice(&seeds);
+            previous = solutions_at(
+                &c,
+                x,
+                &all_seeds,
+                true,
+                &options.newton,
+                &mut stats.interior,
+            );
+            for &ab in &previous {
                 if let Some(p) = path_contribution(
                     tri,
                     ab,

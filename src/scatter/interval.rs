@@ -21,8 +21,8 @@ use smallvec::SmallVec;
 
 use super::constraint::Constraint;
 use super::newton::{
-    edge_crossings, inside_triangle, pinv_solve, solve_interior, straight_line_seed, EdgeCrossing,
-    NewtonCounters, NewtonSettings,
+    edge_crossings, foot_seed, inside_triangle, pinv_solve, solve_interior, straight_line_seed,
+    EdgeCrossing, NewtonCounters, NewtonSettings,
 };
 
 /// Seeds for interior solves without a better guess: the centroid, then the centroids of the corner
@@ -34,11 +34,24 @@ pub const SEEDS: [DVec2; 4] = [
     DVec2::new(1.0 / 6.0, 1.0 / 6.0),
 ];
 
-/// The straight-line seed at `x` (see [`straight_line_seed`]) followed by [`SEEDS`].
+/// The straight-line seed at `x` (see [`straight_line_seed`]), then V's foot on the plane when V is
+/// within 10% of the triangle's size from it ([`foot_seed`]), then [`SEEDS`].
 pub fn seeds_at(c: &Constraint, x: f64) -> SmallVec<[DVec2; 6]> {
     let mut s: SmallVec<[DVec2; 6]> = SmallVec::new();
     s.extend(straight_line_seed(c, x));
+    let height = (c.eye.at(x) - c.tri.p0).dot(c.tri.geometric_normal).abs();
+    if height < 0.1 * c.tri.e1.length().max(c.tri.e2.length()) {
+        s.extend(foot_seed(c, x));
+    }
     s.extend(SEEDS);
+    s
+}
+
+/// The seeds of the range-end solves (made for every triangle that survives pruning, so kept
+/// short): the straight-line guess, V's foot when V is close, and the centroid.
+fn end_seeds(c: &Constraint, x: f64) -> SmallVec<[DVec2; 6]> {
+    let mut s = seeds_at(c, x);
+    s.truncate(s.len() - (SEEDS.len() - 1));
     s
 }
 
@@ -54,6 +67,9 @@ pub struct SupportInterval {
     pub multiplicity: u32,
     /// Barycentric coordinates of the solution at x0 and x1 when known (seeds for the samples).
     pub ends: [Option<DVec2>; 2],
+    /// Whether the piece ends at a fold of the solution curve (a caustic, where the contribution
+    /// has an integrable 1/√ singularity) at x0 / x1: the quadrature then clusters its nodes there.
+    pub folds: [bool; 2],
 }
 
 /// The result of a triangle's interval analysis.
@@ -81,7 +97,26 @@ pub fn crossing_is_lower_bound(c: &Constraint, cr: &EdgeCrossing) -> Option<bool
     (key.abs() > 1e-12 * scale).then_some(key > 0.0)
 }
 
-/// Interior solutions inside the triangle at `x`: the first seed that converges decides (a small
+/// Two converged solutions closer than this in barycentric coordinates are one. Near a fold of the
+/// solution curve (a caustic) J is nearly singular and a 1e-10 residual leaves ~1e-5 of slack in
+/// (α, β); two genuine solutions that close are within ~1e-8 (relative) in x of the fold, where
+/// dropping one changes the integral negligibly.
+pub const DISTINCT: f64 = 1e-4;
+
+/// Whether the path through (α, β) to V(x) is physical: the light on the outer side and V on the
+/// inner side of both the geometric and the shading normal (Walter et al.'s sidedness agreement).
+/// f = 0 also holds on mirrored configurations (light and V both inside), which must not count.
+pub fn is_physical(c: &Constraint, x: f64, ab: DVec2) -> bool {
+    let p = c.tri.point(ab);
+    let Some(ns) = c.tri.raw_normal(ab).try_normalize() else {
+        return false;
+    };
+    let ng = c.tri.geometric_normal;
+    let (l, v) = (c.light - p, c.eye.at(x) - p);
+    l.dot(ns) > 0.0 && l.dot(ng) > 0.0 && v.dot(ns) < 0.0 && v.dot(ng) < 0.0
+}
+
+/// Physical interior solutions inside the triangle at `x`: the first seed that converges decides (a small
 /// triangle holds at most one solution away from caustics); with `all`, every seed is tried and
 /// distinct solutions are collected.
 pub fn solutions_at(
@@ -95,7 +130,10 @@ pub fn solutions_at(
     let mut out: SmallVec<[DVec2; 2]> = SmallVec::new();
     for &seed in seeds {
         if let Some(ab) = solve_interior(c, x, seed, settings, counters) {
-            if inside_triangle(ab) && out.iter().all(|q| (*q - ab).length() > 1e-7) {
+            if inside_triangle(ab)
+                && is_physical(c, x, ab)
+                && out.iter().all(|q| (*q - ab).length() > DISTINCT)
+            {
                 out.push(ab);
             }
             if !all {
@@ -104,6 +142,25 @@ pub fn solutions_at(
         }
     }
     out
+}
+
+/// Follows the solution curve from (x_from, ab_from) to x_to in up to 16 continuation steps, each
+/// solve seeded by the previous solution; the solution at x_to if it stays inside the triangle.
+pub fn follow_curve(
+    c: &Constraint,
+    x_from: f64,
+    ab_from: DVec2,
+    x_to: f64,
+    settings: &NewtonSettings,
+    counters: &mut NewtonCounters,
+) -> Option<DVec2> {
+    const STEPS: usize = 16;
+    let mut ab = ab_from;
+    for k in 1..=STEPS {
+        let x = x_from + (x_to - x_from) * k as f64 / STEPS as f64;
+        ab = solve_interior(c, x, ab, settings, counters)?;
+    }
+    inside_triangle(ab).then_some(ab)
 }
 
 /// The support of the triangle's contribution within `[x_lo, x_hi]`.
@@ -118,8 +175,13 @@ pub fn triangle_support(
     for e in 0..3 {
         edge_crossings(c, e, x_lo, x_hi, settings, edge, &mut crossings);
     }
-    let start = solutions_at(c, x_lo, &seeds_at(c, x_lo), false, settings, interior);
-    let end = solutions_at(c, x_hi, &seeds_at(c, x_hi), false, settings, interior);
+    // The segment's ends usually lie on the mesh: on a triangle holding one, V(x) → P and the Newton
+    // basin shrinks to nothing. The end solves are therefore made a relative 1e-7 inside the range
+    // (the contribution is bounded there, so the inset changes the integral by ~1e-7 of a piece).
+    let inset = 1e-7 * (x_hi - x_lo);
+    let (xs, xe) = (x_lo + inset, x_hi - inset);
+    let start = solutions_at(c, xs, &end_seeds(c, xs), false, settings, interior);
+    let end = solutions_at(c, xe, &end_seeds(c, xe), false, settings, interior);
     let mut events: SmallVec<[(f64, i32, DVec2); 6]> = SmallVec::new();
     let mut consistent = true;
     for cr in &crossings {
@@ -144,6 +206,7 @@ pub fn triangle_support(
                 x1: x,
                 multiplicity: count as u32,
                 ends: [prev_ab, Some(ab)],
+                folds: [false; 2],
             });
         }
         count += delta;
@@ -159,10 +222,23 @@ pub fn triangle_support(
             x1: x_hi,
             multiplicity: count as u32,
             ends: [prev_ab, end.first().copied()],
+            folds: [false; 2],
         });
     }
     if count != end.len() as i32 {
-        consistent = false;
+        // The end solve may have missed a solution whose Newton basin is small (V close to the
+        // triangle's plane): follow the curve from the last event to the end before giving up.
+        let followed = events
+            .last()
+            .and_then(|&(x, _, ab)| follow_curve(c, x, ab, x_hi, settings, interior));
+        match followed {
+            Some(ab) if count == end.len() as i32 + 1 => {
+                if let Some(last) = intervals.last_mut() {
+                    last.ends[1] = Some(ab);
+                }
+            }
+            _ => consistent = false,
+        }
     }
     if consistent {
         return Support {
@@ -170,31 +246,127 @@ pub fn triangle_support(
             consistent,
         };
     }
-    // Fallback: the hull of everything found, open towards an end where the counts say a branch
-    // may continue.
-    let first_is_upper = events.first().is_some_and(|e| e.1 <= 0);
-    let last_is_lower = events.last().is_some_and(|e| e.1 >= 0);
-    let lo = if !start.is_empty() || first_is_upper {
-        x_lo
-    } else {
-        events.first().map_or(x_lo, |e| e.0)
-    };
-    let hi = if !end.is_empty() || last_is_lower {
-        x_hi
-    } else {
-        events.last().map_or(x_hi, |e| e.0)
-    };
-    let mut intervals = SmallVec::new();
-    if hi > lo {
+    // Fallback: the curve folds back in x inside the triangle. Trace every branch from its event
+    // (or from a solution at a range end) into the triangle by continuation, up to the next event
+    // or to the fold, located by bisection.
+    let mut anchors: SmallVec<[(f64, f64, DVec2); 8]> = SmallVec::new();
+    for &(x, delta, ab) in &events {
+        match delta {
+            1 => anchors.push((x, 1.0, ab)),
+            -1 => anchors.push((x, -1.0, ab)),
+            _ => {
+                anchors.push((x, 1.0, ab));
+                anchors.push((x, -1.0, ab));
+            }
+        }
+    }
+    anchors.extend(start.iter().map(|&ab| (xs, 1.0, ab)));
+    anchors.extend(end.iter().map(|&ab| (xe, -1.0, ab)));
+    let mut intervals: SmallVec<[SupportInterval; 4]> = SmallVec::new();
+    let mut consumed: SmallVec<[bool; 8]> = smallvec::smallvec![false; anchors.len()];
+    for i in 0..anchors.len() {
+        if consumed[i] {
+            continue;
+        }
+        let (x0, dir, ab0) = anchors[i];
+        let limit = if dir > 0.0 { x_hi } else { x_lo };
+        let Some(b) = trace_branch(c, x0, ab0, limit, settings, interior) else {
+            continue;
+        };
+        // A branch that reaches another anchor from the opposite side is the same branch.
+        let mut end_x = b.x;
+        let mut end_ab = b.ab;
+        let mut fold = b.fold;
+        if let Some(j) = (0..anchors.len()).find(|&j| {
+            j != i
+                && !consumed[j]
+                && anchors[j].1 == -dir
+                && (anchors[j].0 - b.x).abs() <= 1e-6 * (x_hi - x_lo)
+                && (anchors[j].2 - b.ab).length() < 1e-3
+        }) {
+            consumed[j] = true;
+            end_x = anchors[j].0;
+            end_ab = anchors[j].2;
+            fold = false;
+        }
+        if (end_x - x0).abs() == 0.0 {
+            continue;
+        }
+        let (lo, hi, ends, folds) = if dir > 0.0 {
+            (x0, end_x, [Some(ab0), Some(end_ab)], [false, fold])
+        } else {
+            (end_x, x0, [Some(end_ab), Some(ab0)], [fold, false])
+        };
         intervals.push(SupportInterval {
             x0: lo,
             x1: hi,
-            multiplicity: 2,
-            ends: [None, None],
+            multiplicity: 1,
+            ends,
+            folds,
         });
     }
     Support {
         intervals,
         consistent: false,
+    }
+}
+
+/// Where a traced branch ends.
+#[derive(Debug, Clone, Copy)]
+struct BranchEnd {
+    x: f64,
+    ab: DVec2,
+    fold: bool,
+}
+
+/// Follows the solution curve from (x0, ab0) towards `limit` by continuation until it leaves the
+/// triangle (end: the last point inside, refined by bisection), reaches `limit`, or stops existing
+/// (a fold, located by bisection to 1e-9 of the range).
+fn trace_branch(
+    c: &Constraint,
+    x0: f64,
+    ab0: DVec2,
+    limit: f64,
+    settings: &NewtonSettings,
+    counters: &mut NewtonCounters,
+) -> Option<BranchEnd> {
+    let span = limit - x0;
+    if span == 0.0 {
+        return None;
+    }
+    let min_step = 1e-9 * span.abs();
+    let mut h = span / 16.0;
+    let (mut x, mut ab) = (x0, ab0);
+    let mut steps = 0;
+    loop {
+        steps += 1;
+        if steps > 400 {
+            return Some(BranchEnd { x, ab, fold: false });
+        }
+        let xn = if (x + h - x0).abs() >= span.abs() {
+            limit
+        } else {
+            x + h
+        };
+        match solve_interior(c, xn, ab, settings, counters) {
+            Some(abn) if inside_triangle(abn) && is_physical(c, xn, abn) => {
+                x = xn;
+                ab = abn;
+                if x == limit {
+                    return Some(BranchEnd { x, ab, fold: false });
+                }
+            }
+            outcome => {
+                if h.abs() <= min_step {
+                    // Still inside and no solution ahead: a fold; a solution outside: an edge.
+                    return Some(BranchEnd {
+                        x,
+                        ab,
+                        fold: outcome.is_none(),
+                    });
+                }
+                h *= 0.5;
+            }
+        }
     }
 }

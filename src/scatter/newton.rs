@@ -13,6 +13,9 @@
 //!   that wanders more than one triangle away is abandoned. Edge solves are bracketed by a sign
 //!   change of the coplanarity function g(t) (below) and fall back to bisection of that bracket
 //!   whenever a Newton step leaves it or does not decrease |f|, so they cannot diverge.
+//! * The residual floor of double precision grows as V approaches P (ω_V turns by ε|P|/|V − P| per
+//!   rounding of P): the convergence test is |f| ≤ max(tolerance, [`precision_floor`]), which only
+//!   matters within ~1e-5 (relative) of the surface, e.g. at the eye segment's ends.
 //! * A singular normal matrix (det(JᵀJ) ≤ 1e-13 ‖J‖⁴), a non-finite value or an exhausted iteration
 //!   budget (default 24) ends the solve as a failure: no NaN can escape.
 
@@ -87,6 +90,20 @@ pub fn straight_line_seed(c: &Constraint, x: f64) -> Option<DVec2> {
         .then(|| ab.clamp(DVec2::splat(-1.0), DVec2::splat(2.0)))
 }
 
+/// The barycentric coordinates of the orthogonal projection of V(x) on the triangle's plane: the
+/// refraction point tends to it as V approaches the surface (where the straight-line seed is poor
+/// and the Newton basin small). Clamped like [`straight_line_seed`].
+pub fn foot_seed(c: &Constraint, x: f64) -> Option<DVec2> {
+    let p = c.eye.at(x) - c.tri.p0;
+    let (e1, e2) = (c.tri.e1, c.tri.e2);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (r1, r2) = (p.dot(e1), p.dot(e2));
+    let det = d11 * d22 - d12 * d12;
+    let ab = DVec2::new(d22 * r1 - d12 * r2, d11 * r2 - d12 * r1) / det;
+    ab.is_finite()
+        .then(|| ab.clamp(DVec2::splat(-1.0), DVec2::splat(2.0)))
+}
+
 /// Whether (α, β) lies in the closed triangle.
 #[inline]
 pub fn inside_triangle(ab: DVec2) -> bool {
@@ -113,10 +130,10 @@ pub fn solve_interior(
     };
     let mut r = value.f.length();
     for _ in 0..settings.max_iterations {
-        counters.iterations += 1;
-        if r <= settings.tolerance {
+        if r <= settings.tolerance.max(precision_floor(c, x, ab)) {
             return Some(ab);
         }
+        counters.iterations += 1;
         let j = value.jacobian;
         let Some(step) = pinv_solve(j.y_axis, j.z_axis, value.f) else {
             break;
@@ -147,12 +164,23 @@ pub fn solve_interior(
         value = v;
         r = rc;
     }
-    if r <= settings.tolerance {
-        counters.iterations += 1;
+    if r <= settings.tolerance.max(precision_floor(c, x, ab)) {
         return Some(ab);
     }
     counters.failures += 1;
     None
+}
+
+/// The smallest |f| double precision can resolve at (x, α, β): rounding P and V (or L) by
+/// ε (|P| + |V|) turns ω_V by that over |V − P|, and the residual floor is a small multiple of it.
+/// It exceeds the tolerance only when V (or L) is within ~1e-5 of the triangle's size of P, as at
+/// an eye segment's end on the mesh.
+pub fn precision_floor(c: &Constraint, x: f64, ab: DVec2) -> f64 {
+    let p = c.tri.point(ab);
+    let v = c.eye.at(x);
+    let near = (v - p).length().min((c.light - p).length());
+    let magnitude = p.abs().max_element() + v.abs().max_element() + c.light.abs().max_element();
+    64.0 * f64::EPSILON * magnitude / near
 }
 
 /// A triangle edge as a segment of the (α, β) plane: (α, β)(t) = start + t dir, t in [0, 1].

@@ -164,8 +164,42 @@ pub fn spindle_test(
     s.min_angle_to_arc(-s.u_l) <= limit * (1.0 + 1e-12) + 1e-12
 }
 
+/// Sidedness agreement (Walter et al. 2009), exact and cheap: a physical path through a triangle
+/// needs the light strictly on the outer side of its plane and V strictly on the inner side. Returns
+/// the part of `x_range` where V is on the inner side, or `None` (prune) if the light is not outside
+/// or no such part exists.
+pub fn sidedness_test(
+    triangle: &super::constraint::TriangleGeometry,
+    eye: &EyeSegment,
+    (x0, x1): (f64, f64),
+    light: DVec3,
+) -> Option<(f64, f64)> {
+    let n = triangle.geometric_normal;
+    if !((light - triangle.p0).dot(n) > 0.0) {
+        return None;
+    }
+    // Signed height of V(x) above the plane: h0 + x dh.
+    let h0 = (eye.origin - triangle.p0).dot(n);
+    let dh = eye.dir.dot(n);
+    let (h_lo, h_hi) = (h0 + x0 * dh, h0 + x1 * dh);
+    if h_lo >= 0.0 && h_hi >= 0.0 {
+        return None;
+    }
+    if h_lo < 0.0 && h_hi < 0.0 {
+        return Some((x0, x1));
+    }
+    // The crossing, padded outwards by a relative 1e-9 so rounding cannot cut a contribution.
+    let xc = -h0 / dh;
+    let pad = 1e-9 * (x1 - x0);
+    if h_lo < 0.0 {
+        Some((x0, (xc + pad).min(x1)))
+    } else {
+        Some(((xc - pad).max(x0), x1))
+    }
+}
+
 /// Maximum number of sub-arcs the normal-cone test examines before giving up (keeping the rest).
-pub const NORMAL_CONE_BUDGET: usize = 48;
+pub const NORMAL_CONE_BUDGET: usize = 12;
 
 /// Shading-normal cone test: `None` if no refracted path through a triangle with bounding sphere
 /// `sphere` and shading normals in `cone` can reach the eye sub-segment `x_range` (prune); otherwise

@@ -15,6 +15,8 @@ pub struct ScatterStats {
     pub nodes_pruned_spindle: u64,
     /// Triangles reached in the leaves (or all triangles for the brute force).
     pub triangles_visited: u64,
+    /// Triangles discarded by the sidedness test (light not outside, or V never inside).
+    pub triangles_pruned_sidedness: u64,
     /// Triangles discarded by the spindle test on their bounding sphere.
     pub triangles_pruned_spindle: u64,
     /// Triangles discarded by the shading-normal cone test.
@@ -63,6 +65,7 @@ impl AddAssign for ScatterStats {
         self.nodes_visited += o.nodes_visited;
         self.nodes_pruned_spindle += o.nodes_pruned_spindle;
         self.triangles_visited += o.triangles_visited;
+        self.triangles_pruned_sidedness += o.triangles_pruned_sidedness;
         self.triangles_pruned_spindle += o.triangles_pruned_spindle;
         self.triangles_pruned_normal_cone += o.triangles_pruned_normal_cone;
         self.triangles_without_support += o.triangles_without_support;
