@@ -299,7 +299,7 @@ fn hard_slivers_grazing_huge_tiny() {
         let ts = [t[0] * f + off, t[1] * f + off, t[2] * f + off];
         check_polygon(&mut big, x * f + off, n, &ts, &mut coords);
     }
-    ok &= report("hard: slivers", &sliver, HARD, (3e-8, 1e-8, 1e-8));
+    ok &= report("hard: slivers", &sliver, HARD, HARD);
     ok &= report("hard: grazing (clipped)", &grazing, HARD, HARD);
     ok &= report("hard: huge/tiny coordinates", &coords, HARD, HARD);
     assert!(ok, "errors exceed the targets");

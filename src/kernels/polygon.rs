@@ -150,6 +150,8 @@ struct Plane {
     normal: DVec3,
     /// `‖Σ u_i × u_{i+1}‖` (twice the area).
     twice_area: f64,
+    /// Largest distance from the first vertex.
+    extent: f64,
 }
 
 impl Plane {
@@ -178,7 +180,11 @@ impl Plane {
         if count > 3 {
             check_simple(u, normal)?;
         }
-        Ok(Plane { normal, twice_area })
+        Ok(Plane {
+            normal,
+            twice_area,
+            extent,
+        })
     }
 }
 
@@ -393,26 +399,20 @@ fn near_plane_value(
 /// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, 8x8
 /// Gauss-Legendre), with analytic derivatives of the integrand. Accurate when x is far from the
 /// triangle compared with its size. Signed by the triangle's orientation (`N` right-handed).
-///
-/// `near_plane` (the polygon's unit normal and the accurate signed height of x over its plane)
-/// replaces the rounded `N·r_a` when x is near the plane.
+/// `geometry` is the triangle's `(2·area·N̂, 2·area·N̂·r_a)` from [`fan_geometry`].
 fn triangle_rule(
     a: &ClipVertex,
     b: &ClipVertex,
     c: &ClipVertex,
     n: DVec3,
     order: Order,
-    near_plane: Option<(DVec3, f64)>,
+    geometry: (DVec3, f64),
 ) -> Deriv3 {
     let rule = gauss_legendre();
     let mut out = Deriv3::constant(0.0);
     let ab = b.u - a.u;
     let bc = c.u - b.u;
-    let normal = ab.cross(c.u - a.u); // 2·area·N̂
-    let c_t = match near_plane {
-        Some((plane_n, h_p)) => normal.dot(plane_n) * h_p,
-        None => normal.dot(a.r),
-    };
+    let (normal, c_t) = geometry;
     // Moments of the integrand's derivatives, assembled once after the loop:
     // ∇q = 4 (n·r) r/‖r‖⁶ − n/‖r‖⁴,
     // Hq = 24 (n·r) r rᵀ/‖r‖⁸ − 4 (n rᵀ + r nᵀ)/‖r‖⁶ − 4 (n·r) 𝟙/‖r‖⁶.
@@ -473,20 +473,36 @@ fn accumulate(sum: &mut Deriv3, d: Deriv3) {
 }
 
 /// Signed form factor of the clipped loop by [`triangle_rule`] on its fan triangles.
-fn far_field(
-    verts: &[ClipVertex],
-    n: DVec3,
-    order: Order,
-    near_plane: Option<(DVec3, f64)>,
-) -> Deriv3 {
+fn far_field(verts: &[ClipVertex], n: DVec3, order: Order, exact: bool) -> Deriv3 {
     let mut out = Deriv3::constant(0.0);
     for k in 1..verts.len() - 1 {
-        accumulate(
-            &mut out,
-            triangle_rule(&verts[0], &verts[k], &verts[k + 1], n, order, near_plane),
-        );
+        let (a, b, c) = (&verts[0], &verts[k], &verts[k + 1]);
+        let geometry = fan_geometry(a, b, c, exact);
+        accumulate(&mut out, triangle_rule(a, b, c, n, order, geometry));
     }
     out
+}
+
+/// A triangle awaiting quadrature, with its [`fan_geometry`].
+type Piece = ([ClipVertex; 3], (DVec3, f64));
+
+/// `(2·area·N̂, 2·area·N̂·r_a)` of the triangle `(a, b, c)` (`N̂` right-handed). With `exact`,
+/// from the exact differences in double-double: for slivers and for x near the plane these two
+/// lose digits in f64 (the normal of a sliver, the height of a point near its plane), and they
+/// multiply the whole integral.
+fn fan_geometry(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, exact: bool) -> (DVec3, f64) {
+    if !exact {
+        let normal = (b.u - a.u).cross(c.u - a.u);
+        return (normal, normal.dot(a.r));
+    }
+    let (ra, rb, rc) = (
+        dd::Dd3::new(a.r, a.r_lo),
+        dd::Dd3::new(b.r, b.r_lo),
+        dd::Dd3::new(c.r, c.r_lo),
+    );
+    let bc = rb.cross(&rc);
+    let normal = ra.cross(&rb).add(&bc).add(&rc.cross(&ra));
+    (normal.to_dvec3(), ra.dot(&bc).to_f64())
 }
 
 /// Most triangles [`subdivided_quadrature`] may use before giving up.
@@ -500,15 +516,18 @@ fn subdivided_quadrature(
     verts: &[ClipVertex],
     n: DVec3,
     order: Order,
-    near_plane: Option<(DVec3, f64)>,
+    exact: bool,
 ) -> Option<Deriv3> {
-    let mut stack: SmallVec<[[ClipVertex; 3]; 16]> = SmallVec::new();
+    // Each piece carries its (2·area·N̂, 2·area·N̂·r_a): bisection halves both exactly, so the
+    // pieces inherit the accuracy of the fan triangles' geometry.
+    let mut stack: SmallVec<[Piece; 16]> = SmallVec::new();
     for k in 1..verts.len() - 1 {
-        stack.push([verts[0], verts[k], verts[k + 1]]);
+        let (a, b, c) = (verts[0], verts[k], verts[k + 1]);
+        stack.push(([a, b, c], fan_geometry(&a, &b, &c, exact)));
     }
     let mut out = Deriv3::constant(0.0);
     let mut pieces = 0;
-    while let Some(t) = stack.pop() {
+    while let Some((t, geometry)) = stack.pop() {
         let centroid = (t[0].r + t[1].r + t[2].r) / 3.0;
         let radius = t
             .iter()
@@ -521,7 +540,7 @@ fn subdivided_quadrature(
             }
             accumulate(
                 &mut out,
-                triangle_rule(&t[0], &t[1], &t[2], n, order, near_plane),
+                triangle_rule(&t[0], &t[1], &t[2], n, order, geometry),
             );
             continue;
         }
@@ -540,8 +559,9 @@ fn subdivided_quadrature(
             r_lo: DVec3::ZERO,
             on_line: false,
         };
-        stack.push([p, m, o]);
-        stack.push([m, q, o]);
+        let half = (geometry.0 * 0.5, geometry.1 * 0.5);
+        stack.push(([p, m, o], half));
+        stack.push(([m, q, o], half));
     }
     Some(out)
 }
@@ -576,6 +596,10 @@ fn clip_line_hessian(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) -
     }
     Ok(outer_self(n) * (h_p.abs() * FRAC_1_PI / nt_len * integral))
 }
+
+/// Below this `2·area / extent²` a polygon counts as thin (a sliver): its normal, computed from
+/// rounded edge vectors, has lost more than ~2 digits.
+const THIN_POLYGON: f64 = 1e-2;
 
 /// Below this `|h_P| / max ‖r‖`, the height of x over the polygon's plane is recomputed by
 /// [`exact_height`] (the rounded one has lost more than ~3 digits).
@@ -617,12 +641,12 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     }
     // Near the plane the rounded N·r has lost digits to cancellation (relative error ~ε r/h_P), and
     // the height multiplies the whole value: recompute it from the exact differences.
-    let near_plane = if h_p.abs() < NEAR_PLANE_HEIGHT * r_max {
+    let near_plane = h_p.abs() < NEAR_PLANE_HEIGHT * r_max;
+    if near_plane {
         h_p = exact_height(s, plane.twice_area);
-        Some((plane.normal, h_p))
-    } else {
-        None
-    };
+    }
+    // Quadrature geometry from exact differences near the plane and for slivers.
+    let exact = near_plane || plane.twice_area < THIN_POLYGON * plane.extent * plane.extent;
     let (verts, cut) = clip(&s.u, &s.r, &s.r_lo, n);
     if verts.len() < 3 {
         return Ok(Deriv3::constant(0.0));
@@ -638,7 +662,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     let far = centroid.length() >= FAR_FIELD_RATIO * radius;
     let mut used_quadrature = far;
     let mut d = if far {
-        far_field(&verts, n, order, near_plane)
+        far_field(&verts, n, order, exact)
     } else {
         let mut sum = Deriv3::constant(0.0);
         let mut magnitude = 0.0;
@@ -666,7 +690,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         }
         let mut quadrature = None;
         if magnitude > CANCELLATION_LIMIT * sum.value.abs() {
-            quadrature = subdivided_quadrature(&verts, n, order, near_plane);
+            quadrature = subdivided_quadrature(&verts, n, order, exact);
         }
         match quadrature {
             Some(q) => {
