@@ -133,9 +133,13 @@ pub fn triangle_form_factor(
 ///   instead with an 8x8 Gauss-Legendre rule per fan triangle (Duffy map), whose error falls like
 ///   (size/d)^16; both sides of the switch meet 1e-12. When the edge sum cancels by more than 100x
 ///   for another reason (slivers, `x` near the plane, a thin visible part), the fan triangles are
-///   bisected until each is 16 radii away and integrated the same way (at most 256 pieces; otherwise
-///   the edge sum is kept, with the parallel part of the value recomputed without cancellation when
-///   `x` is near the plane). Measured worst errors per regime are in the README.
+///   bisected until each is 16 radii away and integrated the same way (at most 256 pieces, or 4096
+///   when `x` is near the plane and the polygon is clipped, which costs up to ~1 ms; otherwise the
+///   edge sum is kept, with the parallel part of the value recomputed without cancellation when
+///   `x` is near the plane). Near-singular quantities (the cross product `r_a × r_b` near an
+///   edge's line, the height over the plane near it, a sliver's normal, the clip points) are
+///   computed in double-double from the exact differences `v − x`, only when needed. Measured
+///   worst errors per regime are in the README.
 /// * **Validation.** `x`, `n` and every vertex must be finite; `n` unit length within a relative
 ///   1e-6 (it is renormalized); at least 3 vertices; planar within 1e-8 of the polygon's extent;
 ///   simple (no two non-adjacent edges touch; checked in O(count²) for count > 3). Violations give

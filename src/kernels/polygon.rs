@@ -507,16 +507,23 @@ fn fan_geometry(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, exact: bool) -> 
 
 /// Most triangles [`subdivided_quadrature`] may use before giving up.
 const MAX_PIECES: usize = 256;
+/// The same for x near the polygon's plane with part of the polygon clipped away, where the edge
+/// sum cancels for an intrinsic reason (the clip line passes within ~h_P of x, and the edge terms
+/// of size O(1) sum to the small integral over a region where n·r is small) that neither exact
+/// inputs nor the near-plane split remove. Graded refinement towards x takes ~1500 pieces at
+/// h_P = 1e-6 (about a millisecond for the Hessian): the price of a rare configuration.
+const MAX_PIECES_NEAR_PLANE: usize = 4096;
 
 /// The fan triangles of the loop, bisected along their longest edge until each is far from x
 /// (centroid distance ≥ [`FAR_FIELD_RATIO`] × radius), then integrated by [`triangle_rule`].
 /// For polygons whose edge sum cancels (slivers, x near the plane) while x is not close to them.
-/// `None` if that would take more than [`MAX_PIECES`] triangles.
+/// `None` if that would take more than `max_pieces` triangles.
 fn subdivided_quadrature(
     verts: &[ClipVertex],
     n: DVec3,
     order: Order,
     exact: bool,
+    max_pieces: usize,
 ) -> Option<Deriv3> {
     // Each piece carries its (2·area·N̂, 2·area·N̂·r_a): bisection halves both exactly, so the
     // pieces inherit the accuracy of the fan triangles' geometry.
@@ -535,7 +542,7 @@ fn subdivided_quadrature(
             .fold(0.0, f64::max);
         if centroid.length() >= FAR_FIELD_RATIO * radius {
             pieces += 1;
-            if pieces > MAX_PIECES {
+            if pieces > max_pieces {
                 return None;
             }
             accumulate(
@@ -544,7 +551,7 @@ fn subdivided_quadrature(
             );
             continue;
         }
-        if stack.len() + pieces >= MAX_PIECES {
+        if stack.len() + pieces >= max_pieces {
             return None;
         }
         // bisect the longest edge (keeps the orientation of both halves)
@@ -690,7 +697,12 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         }
         let mut quadrature = None;
         if magnitude > CANCELLATION_LIMIT * sum.value.abs() {
-            quadrature = subdivided_quadrature(&verts, n, order, exact);
+            let max_pieces = if near_plane && cut {
+                MAX_PIECES_NEAR_PLANE
+            } else {
+                MAX_PIECES
+            };
+            quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
         }
         match quadrature {
             Some(q) => {
