@@ -87,7 +87,14 @@ pub fn edge_form_factor(x: DVec3, n: DVec3, a: DVec3, b: DVec3, order: Order) ->
     ensure_finite3(b, "b")?;
     let n = polygon::unit_normal(n)?;
     let scaled = polygon::Scaled::new(x, &[a, b])?;
-    let d = edge_term(scaled.r[0], scaled.u[1] - scaled.u[0], n, order)?;
+    let ends = scaled.exact_ends(0, 1);
+    let d = edge_term_exact(
+        scaled.r[0],
+        scaled.u[1] - scaled.u[0],
+        n,
+        order,
+        Some(&ends),
+    )?;
     scaled.finish(d, order)
 }
 
@@ -126,9 +133,13 @@ pub fn triangle_form_factor(
 ///   instead with an 8x8 Gauss-Legendre rule per fan triangle (Duffy map), whose error falls like
 ///   (size/d)^16; both sides of the switch meet 1e-12. When the edge sum cancels by more than 100x
 ///   for another reason (slivers, `x` near the plane, a thin visible part), the fan triangles are
-///   bisected until each is 16 radii away and integrated the same way (at most 256 pieces; otherwise
-///   the edge sum is kept, with the parallel part of the value recomputed without cancellation when
-///   `x` is near the plane). Measured worst errors per regime are in the README.
+///   bisected until each is 16 radii away and integrated the same way (at most 256 pieces, or 4096
+///   when `x` is near the plane and the polygon is clipped, which costs up to ~1 ms; otherwise the
+///   edge sum is kept, with the parallel part of the value recomputed without cancellation when
+///   `x` is near the plane). Near-singular quantities (the cross product `r_a × r_b` near an
+///   edge's line, the height over the plane near it, a sliver's normal, the clip points) are
+///   computed in double-double from the exact differences `v − x`, only when needed. Measured
+///   worst errors per regime are in the README.
 /// * **Validation.** `x`, `n` and every vertex must be finite; `n` unit length within a relative
 ///   1e-6 (it is renormalized); at least 3 vertices; planar within 1e-8 of the polygon's extent;
 ///   simple (no two non-adjacent edges touch; checked in O(count²) for count > 3). Violations give
@@ -180,18 +191,42 @@ pub(crate) struct EdgeFrame {
     pub sb: f64,
 }
 
+/// Below this `‖w‖ / (‖r_a‖ ‖e‖)` (the sine of the angle between `r_a` and the edge), the f64 cross
+/// product `w = r_a × e` has lost more than ~1% of its digits to the rounding of `r_a` and `e`, and
+/// [`EdgeFrame::with_exact_ends`] recomputes it in double-double from the exact endpoints.
+const NEAR_LINE_SINE: f64 = 1e-2;
+
 impl EdgeFrame {
     /// `None` for a zero-length edge.
     pub(crate) fn new(r_a: DVec3, e: DVec3) -> Option<Self> {
+        Self::with_exact_ends(r_a, e, None)
+    }
+
+    /// As [`EdgeFrame::new`]; when `x` is near the edge's line and `ends` gives the endpoints
+    /// relative to `x` exactly (as unevaluated sums `hi + lo`), `w`, `h` and `p` are taken from a
+    /// double-double cross product instead of the rounded `r_a × e`.
+    pub(crate) fn with_exact_ends(r_a: DVec3, e: DVec3, ends: Option<&ExactEnds>) -> Option<Self> {
         let len = e.length();
         if len == 0.0 {
             return None;
         }
         let e_hat = e / len;
-        let w = r_a.cross(e);
+        let mut w = r_a.cross(e);
+        let mut sa = r_a.dot(e_hat);
+        let mut sb = sa + len;
+        let mut p = r_a - sa * e_hat;
+        if let Some(ends) = ends {
+            let bound = NEAR_LINE_SINE * len;
+            if w.length_squared() < bound * bound * r_a.length_squared() {
+                w = ends.cross();
+                // w = p × e, so e × w = p ‖e‖² (no cancellation once w is accurate).
+                p = e.cross(w) / (len * len);
+                // x near the line is often near an endpoint too, where `s_a + L` cancels.
+                sa = ends.a[0].dot(e_hat) + ends.a[1].dot(e_hat);
+                sb = ends.b[0].dot(e_hat) + ends.b[1].dot(e_hat);
+            }
+        }
         let h = w.length() / len;
-        let sa = r_a.dot(e_hat);
-        let p = r_a - sa * e_hat;
         Some(EdgeFrame {
             e_hat,
             len,
@@ -199,7 +234,7 @@ impl EdgeFrame {
             w,
             h,
             sa,
-            sb: sa + len,
+            sb,
         })
     }
 
@@ -312,8 +347,14 @@ pub(crate) fn outer_self(a: DVec3) -> DMat3 {
 /// clip-line term `n nᵀ |h_P| A_2/(π‖n_t‖)` (with `|h_P| = h ‖n_t‖`) has cancelled the `n nᵀ`
 /// part. The general expressions reach these as differences of terms of size `1/h` (`1/h²`) when x
 /// is near the clip line, which is where the clip line always passes when x is near the plane.
-pub(crate) fn clip_edge_term(r_a: DVec3, e: DVec3, n: DVec3, order: Order) -> Result<Deriv3> {
-    let Some(f) = EdgeFrame::new(r_a, e) else {
+pub(crate) fn clip_edge_term(
+    r_a: DVec3,
+    e: DVec3,
+    n: DVec3,
+    order: Order,
+    ends: Option<&ExactEnds>,
+) -> Result<Deriv3> {
+    let Some(f) = EdgeFrame::with_exact_ends(r_a, e, ends) else {
         return Ok(Deriv3::constant(0.0));
     };
     let m = f.moments(Order::Value)?;
@@ -345,7 +386,18 @@ pub(crate) fn clip_edge_term(r_a: DVec3, e: DVec3, n: DVec3, order: Order) -> Re
 
 /// The edge term for `r_a = a − x` and `e = b − a` (in any consistent length unit), unit `n`.
 pub(crate) fn edge_term(r_a: DVec3, e: DVec3, n: DVec3, order: Order) -> Result<Deriv3> {
-    let Some(f) = EdgeFrame::new(r_a, e) else {
+    edge_term_exact(r_a, e, n, order, None)
+}
+
+/// [`edge_term`], with the exact endpoints (when known) for `x` near the edge's line.
+pub(crate) fn edge_term_exact(
+    r_a: DVec3,
+    e: DVec3,
+    n: DVec3,
+    order: Order,
+    ends: Option<&ExactEnds>,
+) -> Result<Deriv3> {
+    let Some(f) = EdgeFrame::with_exact_ends(r_a, e, ends) else {
         return Ok(Deriv3::constant(0.0));
     };
     let m = f.moments(order)?;
@@ -366,4 +418,156 @@ pub(crate) fn edge_term(r_a: DVec3, e: DVec3, n: DVec3, order: Order) -> Result<
         out.hessian = (sym_outer(n_x_e, g) * 2.0 + hi * nu) * INV_2PI;
     }
     Ok(out)
+}
+
+/// The endpoints of an edge relative to `x`, each exactly `hi + lo` (from an error-free difference
+/// of the input coordinates).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ExactEnds {
+    pub a: [DVec3; 2],
+    pub b: [DVec3; 2],
+}
+
+impl ExactEnds {
+    /// `r_a × r_b` (= `r_a × e`) in double-double, rounded once.
+    fn cross(&self) -> DVec3 {
+        let a = dd::Dd3::new(self.a[0], self.a[1]);
+        let b = dd::Dd3::new(self.b[0], self.b[1]);
+        a.cross(&b).to_dvec3()
+    }
+}
+
+/// Double-double arithmetic (`hi + lo`, ~106 bits) from the error-free transformations two-sum and
+/// two-product (fused multiply-add), for the few near-singular quantities that need it.
+pub(crate) mod dd {
+    use glam::DVec3;
+
+    /// `a + b = s + err` exactly.
+    pub(crate) fn two_sum(a: f64, b: f64) -> (f64, f64) {
+        let s = a + b;
+        let bb = s - a;
+        (s, (a - (s - bb)) + (b - bb))
+    }
+
+    #[derive(Debug, Clone, Copy)]
+    pub(crate) struct Dd {
+        pub hi: f64,
+        pub lo: f64,
+    }
+
+    impl Dd {
+        pub(crate) fn new(hi: f64, lo: f64) -> Dd {
+            let (hi, lo) = two_sum(hi, lo);
+            Dd { hi, lo }
+        }
+
+        pub(crate) fn add(self, o: Dd) -> Dd {
+            let (s, e) = two_sum(self.hi, o.hi);
+            let e = e + self.lo + o.lo;
+            let hi = s + e;
+            Dd {
+                hi,
+                lo: e - (hi - s),
+            }
+        }
+
+        pub(crate) fn neg(self) -> Dd {
+            Dd {
+                hi: -self.hi,
+                lo: -self.lo,
+            }
+        }
+
+        pub(crate) fn mul(self, o: Dd) -> Dd {
+            let p = self.hi * o.hi;
+            let e = self.hi.mul_add(o.hi, -p) + (self.hi * o.lo + self.lo * o.hi);
+            let hi = p + e;
+            Dd {
+                hi,
+                lo: e - (hi - p),
+            }
+        }
+
+        pub(crate) fn div(self, o: Dd) -> Dd {
+            let q1 = self.hi / o.hi;
+            let rem = self.add(o.mul(Dd { hi: q1, lo: 0.0 }).neg());
+            let q2 = rem.hi / o.hi;
+            let (hi, lo) = two_sum(q1, q2);
+            Dd { hi, lo }
+        }
+
+        pub(crate) fn to_f64(self) -> f64 {
+            self.hi + self.lo
+        }
+    }
+
+    #[derive(Debug, Clone, Copy)]
+    pub(crate) struct Dd3 {
+        pub x: Dd,
+        pub y: Dd,
+        pub z: Dd,
+    }
+
+    impl Dd3 {
+        pub(crate) fn new(hi: DVec3, lo: DVec3) -> Dd3 {
+            Dd3 {
+                x: Dd::new(hi.x, lo.x),
+                y: Dd::new(hi.y, lo.y),
+                z: Dd::new(hi.z, lo.z),
+            }
+        }
+
+        pub(crate) fn cross(&self, o: &Dd3) -> Dd3 {
+            Dd3 {
+                x: self.y.mul(o.z).add(self.z.mul(o.y).neg()),
+                y: self.z.mul(o.x).add(self.x.mul(o.z).neg()),
+                z: self.x.mul(o.y).add(self.y.mul(o.x).neg()),
+            }
+        }
+
+        pub(crate) fn add(&self, o: &Dd3) -> Dd3 {
+            Dd3 {
+                x: self.x.add(o.x),
+                y: self.y.add(o.y),
+                z: self.z.add(o.z),
+            }
+        }
+
+        pub(crate) fn sub(&self, o: &Dd3) -> Dd3 {
+            Dd3 {
+                x: self.x.add(o.x.neg()),
+                y: self.y.add(o.y.neg()),
+                z: self.z.add(o.z.neg()),
+            }
+        }
+
+        pub(crate) fn scale(&self, f: Dd) -> Dd3 {
+            Dd3 {
+                x: self.x.mul(f),
+                y: self.y.mul(f),
+                z: self.z.mul(f),
+            }
+        }
+
+        /// `self · v` for an f64 vector.
+        pub(crate) fn dot_f64(&self, v: DVec3) -> Dd {
+            self.dot(&Dd3::new(v, DVec3::ZERO))
+        }
+
+        /// The leading parts (`hi`) and the remainders (`lo`).
+        pub(crate) fn split(&self) -> (DVec3, DVec3) {
+            (
+                DVec3::new(self.x.hi, self.y.hi, self.z.hi),
+                DVec3::new(self.x.lo, self.y.lo, self.z.lo),
+            )
+        }
+
+        pub(crate) fn dot(&self, o: &Dd3) -> Dd {
+            self.x.mul(o.x).add(self.y.mul(o.y)).add(self.z.mul(o.z))
+        }
+
+        pub(crate) fn to_dvec3(self) -> DVec3 {
+            DVec3::new(self.x.to_f64(), self.y.to_f64(), self.z.to_f64())
+        }
+    }
 }

@@ -14,7 +14,9 @@ use smallvec::SmallVec;
 use crate::error::{ensure_finite3, Error, Result};
 use crate::{Deriv3, Order};
 
-use super::form_factor::{clip_edge_term, edge_term, outer_self, sym_outer, EdgeFrame};
+use super::form_factor::{
+    clip_edge_term, dd, edge_term_exact, outer_self, sym_outer, EdgeFrame, ExactEnds,
+};
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).
 pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;
@@ -62,6 +64,8 @@ fn exponent(v: f64) -> i32 {
 pub(crate) struct Scaled {
     pub u: Points,
     pub r: Points,
+    /// The rounding errors of `r`: `r + r_lo` is exactly `(v − x)` in scaled units.
+    pub r_lo: Points,
     /// d(scaled coordinate)/d(world coordinate).
     inv_scale: f64,
 }
@@ -83,6 +87,17 @@ impl Scaled {
             pre = pow2(-4);
             (u, r) = attempt(pre);
         }
+        // The rounding error of each difference (two-sum): cheap, and lets near-singular
+        // configurations be evaluated from exact coordinate differences.
+        let xs = x * pre;
+        let mut r_lo: Points = vertices
+            .iter()
+            .map(|v| {
+                let vs = *v * pre;
+                let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
+                DVec3::new(err(vs.x, xs.x), err(vs.y, xs.y), err(vs.z, xs.z))
+            })
+            .collect();
         let max_abs = u
             .iter()
             .chain(r.iter())
@@ -93,14 +108,23 @@ impl Scaled {
         }
         let k = exponent(max_abs);
         let s = pow2(-k);
-        for v in u.iter_mut().chain(r.iter_mut()) {
+        for v in u.iter_mut().chain(r.iter_mut()).chain(r_lo.iter_mut()) {
             *v *= s;
         }
         Ok(Scaled {
             u,
             r,
+            r_lo,
             inv_scale: pre * s,
         })
+    }
+
+    /// The exact endpoints of the edge from vertex `i` to vertex `j`, relative to `x`.
+    pub(crate) fn exact_ends(&self, i: usize, j: usize) -> ExactEnds {
+        ExactEnds {
+            a: [self.r[i], self.r_lo[i]],
+            b: [self.r[j], self.r_lo[j]],
+        }
     }
 
     /// Converts derivatives in scaled units back to world units; non-finite results are refused.
@@ -124,6 +148,10 @@ impl Scaled {
 /// The polygon's plane, checked for area, planarity and simplicity.
 struct Plane {
     normal: DVec3,
+    /// `‖Σ u_i × u_{i+1}‖` (twice the area).
+    twice_area: f64,
+    /// Largest distance from the first vertex.
+    extent: f64,
 }
 
 impl Plane {
@@ -152,7 +180,11 @@ impl Plane {
         if count > 3 {
             check_simple(u, normal)?;
         }
-        Ok(Plane { normal })
+        Ok(Plane {
+            normal,
+            twice_area,
+            extent,
+        })
     }
 }
 
@@ -217,34 +249,44 @@ struct ClipVertex {
     u: DVec3,
     /// Relative to x.
     r: DVec3,
+    /// Rounding error of `r` (`r + r_lo` exact) for input vertices; zero for clip vertices.
+    r_lo: DVec3,
     /// On the clip line (created by clipping, or an input vertex exactly on the tangent plane).
     on_line: bool,
 }
 
 /// Sutherland-Hodgman clip by the half-space `n·r ≥ 0`. Returns the clipped loop and whether any
 /// vertex was cut away.
-fn clip(u: &[DVec3], r: &[DVec3], n: DVec3) -> (SmallVec<[ClipVertex; 10]>, bool) {
+fn clip(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3) -> (SmallVec<[ClipVertex; 10]>, bool) {
     let count = u.len();
-    let d: SmallVec<[f64; 8]> = r.iter().map(|r| n.dot(*r)).collect();
+    let exact = |i: usize| dd::Dd3::new(r[i], r_lo[i]);
+    // Heights over the tangent plane in double-double, so that the clip points (which land near
+    // x whenever x is near the polygon's plane) are placed from exact data.
+    let d: SmallVec<[dd::Dd; 8]> = (0..count).map(|i| exact(i).dot_f64(n)).collect();
     let mut out = SmallVec::new();
     let mut cut = false;
     for i in 0..count {
         let j = (i + 1) % count;
-        if d[i] >= 0.0 {
+        let (di, dj) = (d[i].hi, d[j].hi);
+        if di >= 0.0 {
             out.push(ClipVertex {
                 u: u[i],
                 r: r[i],
-                on_line: d[i] == 0.0,
+                r_lo: r_lo[i],
+                on_line: di == 0.0,
             });
         } else {
             cut = true;
         }
-        if (d[i] > 0.0 && d[j] < 0.0) || (d[i] < 0.0 && d[j] > 0.0) {
-            let t = d[i] / (d[i] - d[j]);
+        if (di > 0.0 && dj < 0.0) || (di < 0.0 && dj > 0.0) {
+            let t = d[i].div(d[i].add(d[j].neg()));
+            let (ri, rj) = (exact(i), exact(j));
+            let (rc, rc_lo) = ri.add(&rj.sub(&ri).scale(t)).split();
             let e = u[j] - u[i];
             out.push(ClipVertex {
-                u: u[i] + t * e,
-                r: r[i] + t * e,
+                u: u[i] + t.hi * e,
+                r: rc,
+                r_lo: rc_lo,
                 on_line: true,
             });
         }
@@ -342,7 +384,12 @@ fn near_plane_value(
         g *= (psi_b - psi_a).abs();
         turning += dpsi;
         small += g.copysign(dpsi);
-        transverse += edge_term(a.r, e, n_t, Order::Value)?.value;
+        // n_t·(r_a × e) = h_P n_t·(N × e): the in-plane part of r_a × e is exactly h_P N × e, and
+        // taking it from the plane avoids the cancellation against the large N part.
+        if let Some(frame) = EdgeFrame::new(a.r, e) {
+            let nu_t = h_p * n_t.dot(plane_n.cross(e_hat));
+            transverse += 0.5 * FRAC_1_PI * nu_t * frame.moments(Order::Value)?.a1;
+        }
     }
     let winding = (turning / std::f64::consts::TAU).round();
     let parallel = winding - small * (0.5 * FRAC_1_PI);
@@ -352,16 +399,29 @@ fn near_plane_value(
 /// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, 8x8
 /// Gauss-Legendre), with analytic derivatives of the integrand. Accurate when x is far from the
 /// triangle compared with its size. Signed by the triangle's orientation (`N` right-handed).
-fn triangle_rule(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, n: DVec3, order: Order) -> Deriv3 {
+/// `geometry` is the triangle's `(2·area·N̂, 2·area·N̂·r_a)` from [`fan_geometry`].
+fn triangle_rule(
+    a: &ClipVertex,
+    b: &ClipVertex,
+    c: &ClipVertex,
+    n: DVec3,
+    order: Order,
+    geometry: (DVec3, f64),
+) -> Deriv3 {
     let rule = gauss_legendre();
     let mut out = Deriv3::constant(0.0);
     let ab = b.u - a.u;
     let bc = c.u - b.u;
-    let normal = ab.cross(c.u - a.u); // 2·area·N̂
-    let c_t = normal.dot(a.r);
+    let (normal, c_t) = geometry;
+    // Moments of the integrand's derivatives, assembled once after the loop:
+    // ∇q = 4 (n·r) r/‖r‖⁶ − n/‖r‖⁴,
+    // Hq = 24 (n·r) r rᵀ/‖r‖⁸ − 4 (n rᵀ + r nᵀ)/‖r‖⁶ − 4 (n·r) 𝟙/‖r‖⁶.
     let mut q0 = 0.0;
-    let mut q1 = DVec3::ZERO;
-    let mut q2 = DMat3::ZERO;
+    let mut s4 = 0.0; // Σ w/‖r‖⁴
+    let mut u6 = DVec3::ZERO; // Σ w (n·r) r/‖r‖⁶
+    let mut v6 = DVec3::ZERO; // Σ w r/‖r‖⁶
+    let mut s6 = 0.0; // Σ w (n·r)/‖r‖⁶
+    let (mut xx, mut yy, mut zz, mut xy, mut xz, mut yz) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     for &(s, ws) in rule {
         for &(t, wt) in rule {
             let weight = ws * wt * s;
@@ -371,18 +431,31 @@ fn triangle_rule(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, n: DVec3, order
             let nr = n.dot(r);
             q0 += weight * nr * inv4;
             if order.gradient() {
-                let inv6 = inv4 * inv2;
-                q1 += weight * (4.0 * nr * inv6 * r - inv4 * n);
+                let w6 = weight * inv4 * inv2;
+                s4 += weight * inv4;
+                u6 += (w6 * nr) * r;
                 if order.hessian() {
-                    let inv8 = inv4 * inv4;
-                    q2 += (outer_self(r) * (24.0 * nr * inv8)
-                        - sym_outer(n, r) * (4.0 * inv6)
-                        - DMat3::IDENTITY * (4.0 * nr * inv6))
-                        * weight;
+                    v6 += w6 * r;
+                    s6 += w6 * nr;
+                    let w8 = w6 * nr * inv2;
+                    xx += w8 * r.x * r.x;
+                    yy += w8 * r.y * r.y;
+                    zz += w8 * r.z * r.z;
+                    xy += w8 * r.x * r.y;
+                    xz += w8 * r.x * r.z;
+                    yz += w8 * r.y * r.z;
                 }
             }
         }
     }
+    let q1 = 4.0 * u6 - s4 * n;
+    let q2 = DMat3::from_cols(
+        DVec3::new(xx, xy, xz),
+        DVec3::new(xy, yy, yz),
+        DVec3::new(xz, yz, zz),
+    ) * 24.0
+        - sym_outer(n, v6) * 4.0
+        - DMat3::IDENTITY * (4.0 * s6);
     out.value = FRAC_1_PI * c_t * q0;
     if order.gradient() {
         out.gradient = FRAC_1_PI * (c_t * q1 - q0 * normal);
@@ -400,32 +473,68 @@ fn accumulate(sum: &mut Deriv3, d: Deriv3) {
 }
 
 /// Signed form factor of the clipped loop by [`triangle_rule`] on its fan triangles.
-fn far_field(verts: &[ClipVertex], n: DVec3, order: Order) -> Deriv3 {
+fn far_field(verts: &[ClipVertex], n: DVec3, order: Order, exact: bool) -> Deriv3 {
     let mut out = Deriv3::constant(0.0);
     for k in 1..verts.len() - 1 {
-        accumulate(
-            &mut out,
-            triangle_rule(&verts[0], &verts[k], &verts[k + 1], n, order),
-        );
+        let (a, b, c) = (&verts[0], &verts[k], &verts[k + 1]);
+        let geometry = fan_geometry(a, b, c, exact);
+        accumulate(&mut out, triangle_rule(a, b, c, n, order, geometry));
     }
     out
 }
 
+/// A triangle awaiting quadrature, with its [`fan_geometry`].
+type Piece = ([ClipVertex; 3], (DVec3, f64));
+
+/// `(2·area·N̂, 2·area·N̂·r_a)` of the triangle `(a, b, c)` (`N̂` right-handed). With `exact`,
+/// from the exact differences in double-double: for slivers and for x near the plane these two
+/// lose digits in f64 (the normal of a sliver, the height of a point near its plane), and they
+/// multiply the whole integral.
+fn fan_geometry(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, exact: bool) -> (DVec3, f64) {
+    if !exact {
+        let normal = (b.u - a.u).cross(c.u - a.u);
+        return (normal, normal.dot(a.r));
+    }
+    let (ra, rb, rc) = (
+        dd::Dd3::new(a.r, a.r_lo),
+        dd::Dd3::new(b.r, b.r_lo),
+        dd::Dd3::new(c.r, c.r_lo),
+    );
+    let bc = rb.cross(&rc);
+    let normal = ra.cross(&rb).add(&bc).add(&rc.cross(&ra));
+    (normal.to_dvec3(), ra.dot(&bc).to_f64())
+}
+
 /// Most triangles [`subdivided_quadrature`] may use before giving up.
 const MAX_PIECES: usize = 256;
+/// The same for x near the polygon's plane with part of the polygon clipped away, where the edge
+/// sum cancels for an intrinsic reason (the clip line passes within ~h_P of x, and the edge terms
+/// of size O(1) sum to the small integral over a region where n·r is small) that neither exact
+/// inputs nor the near-plane split remove. Graded refinement towards x takes ~1500 pieces at
+/// h_P = 1e-6 (about a millisecond for the Hessian): the price of a rare configuration.
+const MAX_PIECES_NEAR_PLANE: usize = 4096;
 
 /// The fan triangles of the loop, bisected along their longest edge until each is far from x
 /// (centroid distance ≥ [`FAR_FIELD_RATIO`] × radius), then integrated by [`triangle_rule`].
 /// For polygons whose edge sum cancels (slivers, x near the plane) while x is not close to them.
-/// `None` if that would take more than [`MAX_PIECES`] triangles.
-fn subdivided_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {
-    let mut stack: SmallVec<[[ClipVertex; 3]; 16]> = SmallVec::new();
+/// `None` if that would take more than `max_pieces` triangles.
+fn subdivided_quadrature(
+    verts: &[ClipVertex],
+    n: DVec3,
+    order: Order,
+    exact: bool,
+    max_pieces: usize,
+) -> Option<Deriv3> {
+    // Each piece carries its (2·area·N̂, 2·area·N̂·r_a): bisection halves both exactly, so the
+    // pieces inherit the accuracy of the fan triangles' geometry.
+    let mut stack: SmallVec<[Piece; 16]> = SmallVec::new();
     for k in 1..verts.len() - 1 {
-        stack.push([verts[0], verts[k], verts[k + 1]]);
+        let (a, b, c) = (verts[0], verts[k], verts[k + 1]);
+        stack.push(([a, b, c], fan_geometry(&a, &b, &c, exact)));
     }
     let mut out = Deriv3::constant(0.0);
     let mut pieces = 0;
-    while let Some(t) = stack.pop() {
+    while let Some((t, geometry)) = stack.pop() {
         let centroid = (t[0].r + t[1].r + t[2].r) / 3.0;
         let radius = t
             .iter()
@@ -433,13 +542,16 @@ fn subdivided_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) -> Option
             .fold(0.0, f64::max);
         if centroid.length() >= FAR_FIELD_RATIO * radius {
             pieces += 1;
-            if pieces > MAX_PIECES {
+            if pieces > max_pieces {
                 return None;
             }
-            accumulate(&mut out, triangle_rule(&t[0], &t[1], &t[2], n, order));
+            accumulate(
+                &mut out,
+                triangle_rule(&t[0], &t[1], &t[2], n, order, geometry),
+            );
             continue;
         }
-        if stack.len() + pieces >= MAX_PIECES {
+        if stack.len() + pieces >= max_pieces {
             return None;
         }
         // bisect the longest edge (keeps the orientation of both halves)
@@ -451,10 +563,12 @@ fn subdivided_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) -> Option
         let m = ClipVertex {
             u: (p.u + q.u) * 0.5,
             r: (p.r + q.r) * 0.5,
+            r_lo: DVec3::ZERO,
             on_line: false,
         };
-        stack.push([p, m, o]);
-        stack.push([m, q, o]);
+        let half = (geometry.0 * 0.5, geometry.1 * 0.5);
+        stack.push(([p, m, o], half));
+        stack.push(([m, q, o], half));
     }
     Some(out)
 }
@@ -490,6 +604,30 @@ fn clip_line_hessian(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) -
     Ok(outer_self(n) * (h_p.abs() * FRAC_1_PI / nt_len * integral))
 }
 
+/// Below this `2·area / extent²` a polygon counts as thin (a sliver): its normal, computed from
+/// rounded edge vectors, has lost more than ~2 digits.
+const THIN_POLYGON: f64 = 1e-2;
+
+/// Below this `|h_P| / max ‖r‖`, the height of x over the polygon's plane is recomputed by
+/// [`exact_height`] (the rounded one has lost more than ~3 digits).
+const NEAR_PLANE_HEIGHT: f64 = 1e-3;
+
+/// The signed height of x over the polygon's plane (along the Newell normal), from the exact
+/// differences `r_i = v_i − x`: `r_0 · Σ_i r_i × r_{i+1} / (2·area)` with the triple products
+/// `det(r_0, r_i, r_{i+1})` summed in double-double.
+fn exact_height(s: &Scaled, twice_area: f64) -> f64 {
+    let r = |i: usize| dd::Dd3::new(s.r[i], s.r_lo[i]);
+    let r0 = r(0);
+    let mut volume = dd::Dd::new(0.0, 0.0);
+    let mut prev = r(1);
+    for i in 2..s.r.len() {
+        let next = r(i);
+        volume = volume.add(r0.dot(&prev.cross(&next)));
+        prev = next;
+    }
+    volume.to_f64() / twice_area
+}
+
 /// The form factor in scaled units (see `polygon_form_factor`).
 fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     let plane = Plane::new(&s.u)?;
@@ -498,7 +636,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
             .min_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
             .copied()
             .unwrap_or_default();
-    let h_p = plane.normal.dot(nearest);
+    let mut h_p = plane.normal.dot(nearest);
     let r_max = s.r.iter().map(|r| r.length()).fold(0.0, f64::max);
     if h_p.abs() <= 4.0 * f64::EPSILON * r_max {
         if order.gradient() {
@@ -508,7 +646,15 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         }
         return Ok(Deriv3::constant(0.0));
     }
-    let (verts, cut) = clip(&s.u, &s.r, n);
+    // Near the plane the rounded N·r has lost digits to cancellation (relative error ~ε r/h_P), and
+    // the height multiplies the whole value: recompute it from the exact differences.
+    let near_plane = h_p.abs() < NEAR_PLANE_HEIGHT * r_max;
+    if near_plane {
+        h_p = exact_height(s, plane.twice_area);
+    }
+    // Quadrature geometry from exact differences near the plane and for slivers.
+    let exact = near_plane || plane.twice_area < THIN_POLYGON * plane.extent * plane.extent;
+    let (verts, cut) = clip(&s.u, &s.r, &s.r_lo, n);
     if verts.len() < 3 {
         return Ok(Deriv3::constant(0.0));
     }
@@ -523,23 +669,40 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     let far = centroid.length() >= FAR_FIELD_RATIO * radius;
     let mut used_quadrature = far;
     let mut d = if far {
-        far_field(&verts, n, order)
+        far_field(&verts, n, order, exact)
     } else {
         let mut sum = Deriv3::constant(0.0);
         let mut magnitude = 0.0;
         for i in 0..verts.len() {
             let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
-            let t = if cut && a.on_line && b.on_line {
-                clip_edge_term(a.r, b.u - a.u, n, order)?
+            let ends = ExactEnds {
+                a: [a.r, a.r_lo],
+                b: [b.r, b.r_lo],
+            };
+            // A clip point's `u` is rounded independently of its (exact) `r`: take the edge
+            // vector from the exact ends so that both describe the same segment.
+            let e = if a.on_line || b.on_line {
+                let (ra, rb) = (dd::Dd3::new(a.r, a.r_lo), dd::Dd3::new(b.r, b.r_lo));
+                rb.sub(&ra).to_dvec3()
             } else {
-                edge_term(a.r, b.u - a.u, n, order)?
+                b.u - a.u
+            };
+            let t = if cut && a.on_line && b.on_line {
+                clip_edge_term(a.r, e, n, order, Some(&ends))?
+            } else {
+                edge_term_exact(a.r, e, n, order, Some(&ends))?
             };
             magnitude += t.value.abs();
             accumulate(&mut sum, t);
         }
         let mut quadrature = None;
         if magnitude > CANCELLATION_LIMIT * sum.value.abs() {
-            quadrature = subdivided_quadrature(&verts, n, order);
+            let max_pieces = if near_plane && cut {
+                MAX_PIECES_NEAR_PLANE
+            } else {
+                MAX_PIECES
+            };
+            quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
         }
         match quadrature {
             Some(q) => {
