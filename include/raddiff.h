@@ -74,6 +74,22 @@
 // Compute the value, the gradient and the Hessian.
 #define RADDIFF_ORDER_HESSIAN 2
 
+// Ward-Heckbert cosine-weighted polar strata: `theta_j = asin(sqrt((j+u)/m))`, `phi_k = 2 pi (k+v)/n`.
+#define RADDIFF_LAYOUT_COSINE_POLAR 0
+
+// Cosine-weighted strata from the Shirley-Chiu concentric map of an m x n grid (its walls are the
+// images of the grid lines; their Ward-Heckbert terms are integrated numerically).
+#define RADDIFF_LAYOUT_CONCENTRIC 1
+
+// Whole sphere, m x n equal solid-angle strata (`cos theta_j = 1 - 2(j+u)/m`), for points in a medium.
+#define RADDIFF_LAYOUT_SPHERE 2
+
+// Largest m or n of a gather layout.
+#define RADDIFF_GATHER_MAX_STRATA_PER_AXIS 65536
+
+// Largest m*n of a gather layout.
+#define RADDIFF_GATHER_MAX_STRATA 16777216
+
 // `error` bounds the integrated absolute error over the record.
 #define RADDIFF_ERROR_ABSOLUTE 0
 
@@ -82,6 +98,26 @@
 
 // Largest radius the radii functions return (caller's length unit), e.g. for a zero Hessian.
 #define RADDIFF_MAX_RADIUS 1e30
+
+// Misses are placed at this multiple of the largest finite hit distance (2^20: the occlusion
+// terms of the distant environment converge like `1/FAR_DISTANCE_FACTOR`, about 1e-6 relative).
+#define FAR_DISTANCE_FACTOR 1048576.0
+
+// Fraction of the irradiance added to every triangle radiance by
+// [`OcclusionDerivatives::robust_hessian`] (thesis sec. 6.3).
+#define ROBUST_FRACTION 0.01
+
+// No triangle (the right side of a horizon edge).
+#define NONE UINT32_MAX
+
+// Marks the synthesized pole vertex in [`Topology::vertex_source`] (the north pole, θ = 0).
+#define POLE UINT32_MAX
+
+// Marks the synthesized south pole vertex (θ = π) of a [`LayoutKind::Sphere`] mesh.
+#define SOUTH_POLE (UINT32_MAX - 1)
+
+// Flag in [`Topology::triangle_edges`]: the triangle runs the edge backwards.
+#define REVERSED (1 << 31)
 
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
@@ -103,6 +139,9 @@ typedef enum raddiff_status {
   // A Rust panic was caught at the boundary (a bug in raddiff: please report it).
   RADDIFF_ERROR_PANIC = 7,
 } raddiff_status;
+
+// Which results [`ValidGather::evaluate`] computes; work for the others is skipped.
+typedef struct Wanted Wanted;
 
 // A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
 // `raddiff_cache_insert` on the same handle at once (lookups never block).
@@ -150,8 +189,8 @@ typedef struct raddiff_cache_record {
   // Nullable: 3*channels floats, rotational gradient (derivative with respect to the rotation
   // vector of the normal, Ward-Heckbert convention), channel-major; surface domain only.
   const float *rotation_gradient;
-  // Surface: radii[0..1] along axes[0] (projected to the tangent plane) and normal x axes[0];
-  // radii[2] unused. Volume: ellipsoid radii along axes[0..2]. In [1e-30, 1e30].
+  // Surface: `radii[0..1]` along `axes[0]` (projected to the tangent plane) and `normal x axes[0]`;
+  // `radii[2]` unused. Volume: ellipsoid radii along `axes[0..2]`. Each in 1e-30..=1e30.
   double radii[3];
   // Principal axes (need not be unit; may be zero for isotropic radii).
   struct raddiff_vec3 axes[3];
@@ -166,6 +205,83 @@ typedef struct raddiff_deriv3 {
   // The Hessian, row-major (0 when not requested).
   double hessian[9];
 } raddiff_deriv3;
+
+// An m x n stratified layout: `kind` is a `RADDIFF_LAYOUT_*` constant; 1 <= m, n <=
+// `RADDIFF_GATHER_MAX_STRATA_PER_AXIS`, m*n <= `RADDIFF_GATHER_MAX_STRATA`. Seed 0: stratum centres;
+// any other seed: deterministic jitter, identical on every platform.
+typedef struct raddiff_gather_layout {
+  // `RADDIFF_LAYOUT_COSINE_POLAR`, `_CONCENTRIC` or `_SPHERE`.
+  uint32_t kind;
+  // Strata along theta (or the first concentric grid axis).
+  uint32_t m;
+  // Strata along phi (or the second concentric grid axis).
+  uint32_t n;
+  // 0 for stratum centres, otherwise jitter seed.
+  uint64_t seed;
+} raddiff_gather_layout;
+
+// The frame of a gather: `position`, unit `normal`, unit `tangent` perpendicular to it (each within
+// 1e-6); the bitangent is `normal x tangent`. Local direction (lx, ly, lz) is
+// `lx*tangent + ly*bitangent + lz*normal`.
+typedef struct raddiff_frame {
+  // The gather point.
+  struct raddiff_vec3 position;
+  // Unit normal: the pole of the layout.
+  struct raddiff_vec3 normal;
+  // Unit tangent, perpendicular to the normal: azimuth 0.
+  struct raddiff_vec3 tangent;
+} raddiff_frame;
+
+// What the rays found. Index `i = j*n + k`.
+typedef struct raddiff_gather_input {
+  // m*n world directions as returned by `raddiff_gather_directions`.
+  const struct raddiff_vec3 *directions;
+  // m*n hit distances (> 0); `INFINITY` for a miss (distant environment).
+  const double *distance;
+  // m*n*channels radiance leaving each hit towards x (environment radiance for a miss), before
+  // attenuation; index `i*channels + c`.
+  const float *radiance;
+  // Values per direction (>= 1).
+  uint32_t channels;
+  // Homogeneous extinction (1/L) between x and the hits, >= 0; 0 = no medium. With a medium a miss
+  // is attenuated to zero.
+  double sigma_t;
+  // Nullable: m*n*steps*channels in-scattered radiance `sigma_s*L_i` (plus emission) at
+  // `t_s = (s + 0.5)*step` along each direction, before attenuation; index
+  // `(i*steps + s)*channels + c`. Sample s stands for `[s*step, (s+1)*step]`; samples beyond a
+  // direction's hit are not read.
+  const float *media_radiance;
+  // Nullable: m*n*steps*3*channels world-space gradient of `media_radiance`; index
+  // `((i*steps + s)*channels + c)*3 + axis`.
+  const float *media_radiance_gradient;
+  // Media march steps per direction (>= 1 when `media_radiance` is given).
+  uint32_t steps;
+  // Media march step length (> 0 when `media_radiance` is given).
+  double step;
+} raddiff_gather_input;
+
+// Caller-owned outputs; a NULL array means "not wanted" and its work is skipped. Per-channel
+// vectors are stored channel by channel: `gradient[3*c + axis]`, `hessian[9*c + 3*row + col]`.
+typedef struct raddiff_gather_output {
+  // channels: irradiance (hemisphere layouts) or scalar fluence (sphere).
+  double *irradiance;
+  // 3*channels: Ward-Heckbert translational gradient (world axes, all three components), with the
+  // participating-media terms of Jarosz et al. 2008 when a medium is given.
+  double *gradient;
+  // 3*channels: rotational gradient (world axes); zero for the sphere layout.
+  double *rotation_gradient;
+  // 3*channels: occlusion-aware gradient of the triangulated environment (thesis ch. 6; Marco et
+  // al. 2018 sec. 4 for the sphere layout and for marched media radiance).
+  double *occlusion_gradient;
+  // 9*channels: occlusion-aware 3x3 translation Hessian, row-major; for hemisphere layouts with
+  // the thesis' robustness terms (1% of the irradiance on every triangle, geometric Hessian for an
+  // all-black channel), ready for raddiff_surface_radii.
+  double *hessian;
+  // Harmonic mean of the hit distances, m*n / sum(1/r); INFINITY if every ray missed.
+  double harmonic_mean_distance;
+  // Smallest hit distance; INFINITY if every ray missed.
+  double min_distance;
+} raddiff_gather_output;
 
 // A 2D vector or point.
 typedef struct raddiff_vec2 {
@@ -196,6 +312,10 @@ typedef struct raddiff_medium {
   // Henyey-Greenstein asymmetry in (-1, 1); 0 is isotropic.
   double g;
 } raddiff_medium;
+
+
+
+
 
 #ifdef __cplusplus
 extern "C" {
@@ -284,6 +404,18 @@ enum raddiff_status raddiff_polygon_form_factor(struct raddiff_vec3 x,
                                                 size_t count,
                                                 uint32_t order,
                                                 struct raddiff_deriv3 *out);
+
+// Writes the m*n world directions of `layout` at `frame` (index `j*n + k`) to `directions`.
+enum raddiff_status raddiff_gather_directions(const struct raddiff_gather_layout *layout,
+                                              const struct raddiff_frame *frame,
+                                              struct raddiff_vec3 *directions);
+
+// Irradiance (or fluence) and its derivatives from a traced gather (see `gather::evaluate`).
+// Every output array that is non-NULL is written on success; nothing is written on failure.
+enum raddiff_status raddiff_gather_evaluate(const struct raddiff_gather_layout *layout,
+                                            const struct raddiff_frame *frame,
+                                            const struct raddiff_gather_input *input,
+                                            struct raddiff_gather_output *output);
 
 // `exp(-sigma_t |x - y|)` and its derivatives with respect to `x` (see the Rust
 // `kernels::transmittance`). `RADDIFF_ERROR_DEGENERATE` for a gradient at `x == y`.

@@ -48,7 +48,7 @@ impl TryFrom<u32> for Order {
 /// A scalar function of a 3D point with its gradient and (symmetric) Hessian at that point.
 ///
 /// Units: if the value has unit U and positions unit L, the gradient has U/L and the Hessian U/L².
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Deriv3 {
     /// The function value.
     pub value: f64,
@@ -56,6 +56,14 @@ pub struct Deriv3 {
     pub gradient: DVec3,
     /// ∂²f/∂x_i∂x_j (zero when not requested). Symmetric, so row- and column-major agree.
     pub hessian: DMat3,
+}
+
+/// All zero. (Not derived: glam's default matrix is the identity, which would make a zero-initialized
+/// accumulator carry a spurious identity Hessian.)
+impl Default for Deriv3 {
+    fn default() -> Self {
+        Deriv3::constant(0.0)
+    }
 }
 
 impl Deriv3 {
@@ -75,7 +83,7 @@ impl Deriv3 {
 }
 
 /// A scalar function of a 2D point with its gradient and (symmetric) Hessian at that point.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Deriv2 {
     /// The function value.
     pub value: f64,
@@ -83,6 +91,13 @@ pub struct Deriv2 {
     pub gradient: DVec2,
     /// ∂²f/∂x_i∂x_j (zero when not requested). Symmetric.
     pub hessian: DMat2,
+}
+
+/// All zero (see [`Deriv3`]'s `Default`).
+impl Default for Deriv2 {
+    fn default() -> Self {
+        Deriv2::constant(0.0)
+    }
 }
 
 impl Deriv2 {
@@ -98,5 +113,27 @@ impl Deriv2 {
     /// Whether every component is finite.
     pub fn is_finite(&self) -> bool {
         self.value.is_finite() && self.gradient.is_finite() && self.hessian.is_finite()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_is_all_zero() {
+        let d = Deriv3::default();
+        assert_eq!(d.value, 0.0);
+        assert_eq!(d.gradient, DVec3::ZERO);
+        assert_eq!(d.hessian, DMat3::ZERO);
+        let d = Deriv2::default();
+        assert_eq!(d.hessian, DMat2::ZERO);
+    }
+
+    #[test]
+    fn order_parses_and_rejects() {
+        assert_eq!(Order::try_from(2).unwrap(), Order::Hessian);
+        assert!(Order::try_from(3).is_err());
+        assert!(Order::Hessian.gradient() && !Order::Value.gradient());
     }
 }

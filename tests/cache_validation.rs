@@ -12,13 +12,12 @@
 //! Each metric fills a cache greedily (a record wherever a grid point is not covered yet, in a
 //! fixed pseudo-random order); its tolerance is bisected until the record count is within a few
 //! percent of the same target for all metrics; the RMS error of the interpolated field over the
-//! grid is then compared. The Hessian radii are computed here (relative error, thesis eq. 6.9 /
-//! Marco eq. 21: Rₖ = (4 ε E / (π |λₖ|))^¼ along the tangent Hessian's eigenvectors, anisotropy
-//! at most 2) because `gather::radii` is not on this branch yet.
+//! grid is then compared. The Hessian radii come from `cache::metric::hessian_surface` (i.e.
+//! `gather::radii::surface_radii`, relative error, anisotropy at most 2, thesis eq. 6.7-6.9).
 //!
 //! Run with `--nocapture` to print the README table.
 
-use glam::{DMat2, DVec2, DVec3};
+use glam::{DMat2, DMat3, DVec2, DVec3};
 use raddiff::cache::{metric, Cache, CacheConfig, Extent, Interpolation, Record};
 
 const H_OCC: f64 = 0.1;
@@ -95,33 +94,15 @@ fn extent(metric: Metric, param: f64, p: DVec2) -> Extent {
             Extent::isotropic(clamp.clamp(r))
         }
         Metric::Hessian => {
-            // symmetric 2×2 eigen-decomposition in closed form
-            let (a, b, c) = (h.x_axis.x, h.x_axis.y, h.y_axis.y);
-            let mean = 0.5 * (a + c);
-            let rad = (0.25 * (a - c) * (a - c) + b * b).sqrt();
-            let (l1, l2) = (mean + rad, mean - rad);
-            let v1 = if b.abs() > 1e-300 || (a - c).abs() > 1e-300 {
-                let theta = 0.5 * (2.0 * b).atan2(a - c);
-                DVec2::new(theta.cos(), theta.sin())
-            } else {
-                DVec2::X
-            };
-            let radius = |l: f64| {
-                if l.abs() < 1e-300 {
-                    R_MAX
-                } else {
-                    (4.0 * param * e / (std::f64::consts::PI * l.abs())).powf(0.25)
-                }
-            };
-            let mut r1 = clamp.clamp(radius(l1));
-            let mut r2 = clamp.clamp(radius(l2));
-            // the thesis caps the major axis at twice the minor one
-            r1 = r1.min(2.0 * r2);
-            r2 = r2.min(2.0 * r1);
-            Extent {
-                radii: [r1, r2, 0.0],
-                axes: [DVec3::new(v1.x, v1.y, 0.0), DVec3::ZERO, DVec3::ZERO],
-            }
+            let h3 = DMat3::from_cols(
+                DVec3::new(h.x_axis.x, h.x_axis.y, 0.0),
+                DVec3::new(h.y_axis.x, h.y_axis.y, 0.0),
+                DVec3::ZERO,
+            );
+            let e =
+                metric::hessian_surface(h3, DVec3::Z, e, param, metric::ErrorMode::Relative, 2.0)
+                    .unwrap();
+            clamp.apply(&e)
         }
     }
 }

@@ -155,7 +155,9 @@ fn hard_near_plane_edge_vertex() {
     let mut ok = true;
     let mut rng = Rng(3);
     let (mut plane, mut edge, mut vertex) = (Worst::default(), Worst::default(), Worst::default());
-    for _ in 0..30 {
+    let mut plane_inside = Worst::default();
+    let mut plane_unclipped = Worst::default();
+    for _ in 0..40 {
         let s = scale(&mut rng);
         let t = random_triangle(&mut rng, s);
         let normal = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
@@ -164,7 +166,32 @@ fn hard_near_plane_edge_vertex() {
         let p = t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]);
         let x = p + normal * s * 1e-6 * if rng.uniform() < 0.5 { 1.0 } else { -1.0 };
         let n = facing_normal(&mut rng, x, &t);
-        check_polygon(&mut big, x, n, &t, &mut plane);
+        let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0;
+        check_polygon(
+            &mut big,
+            x,
+            n,
+            &t,
+            if inside {
+                &mut plane_inside
+            } else {
+                &mut plane
+            },
+        );
+        if !inside {
+            // the same point, tangent plane tilted towards the triangle so that nothing is clipped
+            let side = if normal.dot(t[0] - x) > 0.0 {
+                normal
+            } else {
+                -normal
+            };
+            let c = (t[0] + t[1] + t[2]) / 3.0;
+            let towards = (c - x) - normal * normal.dot(c - x);
+            let n = (side + towards.normalize() * rng.range(0.0, 1.0)).normalize();
+            if t.iter().all(|v| n.dot(*v - x) > 0.0) {
+                check_polygon(&mut big, x, n, &t, &mut plane_unclipped);
+            }
+        }
         // within 1e-5 of an edge
         let i = (rng.next_u64() % 3) as usize;
         let q = t[i] + rng.range(0.05, 0.95) * (t[(i + 1) % 3] - t[i]);
@@ -176,7 +203,19 @@ fn hard_near_plane_edge_vertex() {
         let n = facing_normal(&mut rng, x, &t);
         check_polygon(&mut big, x, n, &t, &mut vertex);
     }
-    ok &= report("hard: 1e-6 from plane", &plane, HARD, (3e-8, 1e-9, 1e-8));
+    ok &= report("hard: 1e-6 above the polygon", &plane_inside, HARD, HARD);
+    ok &= report(
+        "hard: 1e-6 from plane, outside",
+        &plane,
+        HARD,
+        (1e-6, 1e-9, 1e-8),
+    );
+    ok &= report(
+        "hard: same, nothing clipped",
+        &plane_unclipped,
+        HARD,
+        (1e-9, 1e-9, 1e-8),
+    );
     ok &= report("hard: 1e-5 from edge", &edge, HARD, (1e-5, 1e-8, 1e-8));
     ok &= report("hard: 1e-5 from vertex", &vertex, HARD, (1e-7, 1e-7, 1e-8));
     assert!(ok, "errors exceed the targets");
@@ -276,7 +315,8 @@ fn edge_term_generic_and_near_line() {
     let mut big = Big::new();
     let mut ok = true;
     let mut rng = Rng(6);
-    let (mut generic, mut axial) = (Worst::default(), Worst::default());
+    let (mut generic, mut axial, mut extreme) =
+        (Worst::default(), Worst::default(), Worst::default());
     for k in 0..60 {
         let s = scale(&mut rng);
         let a = rng.vec(s);
@@ -287,8 +327,14 @@ fn edge_term_generic_and_near_line() {
         } else {
             // near the extension of the edge's line, beyond a vertex
             let dir = (b - a).normalize();
-            let off = dir.any_orthonormal_vector() * s * 10f64.powf(rng.range(-9.0, -1.0));
-            (a - dir * s * rng.range(0.01, 2.0) + off, &mut axial)
+            let exponent = rng.range(-9.0, -1.0);
+            let off = dir.any_orthonormal_vector() * s * 10f64.powf(exponent);
+            let w = if exponent < -5.0 {
+                &mut extreme
+            } else {
+                &mut axial
+            };
+            (a - dir * s * rng.range(0.01, 2.0) + off, w)
         };
         let reference = big.edge_reference(x, n, a, b);
         let d = kernels::edge_form_factor(x, n, a, b, Order::Hessian).unwrap();
@@ -299,6 +345,12 @@ fn edge_term_generic_and_near_line() {
         );
     }
     ok &= report("edge term generic", &generic, GENERIC, GENERIC);
-    ok &= report("edge term near its line", &axial, HARD, (3e-7, 1e-9, 1e-8));
+    ok &= report("edge term 1e-5..1e-1 off its line", &axial, HARD, HARD);
+    ok &= report(
+        "edge term 1e-9..1e-5 off its line",
+        &extreme,
+        HARD,
+        (3e-7, 1e-9, 1e-8),
+    );
     assert!(ok, "errors exceed the targets");
 }

@@ -259,3 +259,143 @@ fn far_field_switch_is_continuous() {
     let (below, above) = (at(16.0 * (1.0 - 1e-14)), at(16.0 * (1.0 + 1e-14)));
     assert!(close(&below, &above, 1e-12), "{below:?} vs {above:?}");
 }
+
+#[test]
+fn polygon_validation() {
+    use raddiff::Error;
+    let x = DVec3::new(0.1, 0.2, -1.0);
+    let sq = [
+        DVec3::new(0., 0., 0.),
+        DVec3::new(1., 0., 0.),
+        DVec3::new(1., 1., 0.),
+        DVec3::new(0., 1., 0.),
+    ];
+    assert!(kernels::polygon_form_factor(x, DVec3::Z, &sq, Order::Hessian).is_ok());
+    // fewer than 3 vertices
+    assert!(matches!(
+        kernels::polygon_form_factor(x, DVec3::Z, &sq[..2], Order::Value),
+        Err(Error::InvalidArgument(_))
+    ));
+    // not planar beyond 1e-8 of the extent; within it is accepted
+    let mut bent = sq;
+    bent[2].z = 1e-6;
+    assert!(
+        matches!(kernels::polygon_form_factor(x, DVec3::Z, &bent, Order::Value), Err(Error::InvalidArgument(m)) if m.contains("planar"))
+    );
+    bent[2].z = 1e-9;
+    assert!(kernels::polygon_form_factor(x, DVec3::Z, &bent, Order::Value).is_ok());
+    // self-intersecting
+    let bow = [sq[0], DVec3::new(1.3, 1.1, 0.0), sq[1], sq[3]];
+    assert!(
+        matches!(kernels::polygon_form_factor(x, DVec3::Z, &bow, Order::Value), Err(Error::InvalidArgument(m)) if m.contains("simple"))
+    );
+    // non-finite vertex
+    let mut nan = sq;
+    nan[1].y = f64::INFINITY;
+    assert!(matches!(
+        kernels::polygon_form_factor(x, DVec3::Z, &nan, Order::Value),
+        Err(Error::InvalidArgument(_))
+    ));
+    // zero area (collinear) is degenerate
+    let line = [DVec3::ZERO, DVec3::X, DVec3::X * 2.0];
+    assert!(matches!(
+        kernels::polygon_form_factor(x, DVec3::Z, &line, Order::Value),
+        Err(Error::Degenerate(_))
+    ));
+    // a non-convex (L-shaped) polygon equals the sum of its two rectangles, clipped or not
+    let l_shape = [
+        DVec3::new(0., 0., 0.),
+        DVec3::new(2., 0., 0.),
+        DVec3::new(2., 1., 0.),
+        DVec3::new(1., 1., 0.),
+        DVec3::new(1., 2., 0.),
+        DVec3::new(0., 2., 0.),
+    ];
+    let a = [
+        DVec3::new(0., 0., 0.),
+        DVec3::new(2., 0., 0.),
+        DVec3::new(2., 1., 0.),
+        DVec3::new(0., 1., 0.),
+    ];
+    let b = [
+        DVec3::new(0., 1., 0.),
+        DVec3::new(1., 1., 0.),
+        DVec3::new(1., 2., 0.),
+        DVec3::new(0., 2., 0.),
+    ];
+    for n in [
+        DVec3::Z,
+        DVec3::new(0.6, 0.0, 0.8),
+        DVec3::new(-0.3, 0.9, 0.3).normalize(),
+    ] {
+        let x = DVec3::new(0.7, 0.9, -0.4);
+        let l = kernels::polygon_form_factor(x, n, &l_shape, Order::Hessian).unwrap();
+        let pa = kernels::polygon_form_factor(x, n, &a, Order::Hessian).unwrap();
+        let pb = kernels::polygon_form_factor(x, n, &b, Order::Hessian).unwrap();
+        let sum = Deriv3 {
+            value: pa.value + pb.value,
+            gradient: pa.gradient + pb.gradient,
+            hessian: pa.hessian + pb.hessian,
+        };
+        assert!(close(&l, &sum, 1e-12), "{n:?}: {l:?} vs {sum:?}");
+    }
+}
+
+/// Over a closed mesh every edge appears twice with opposite directions, so the signed edge terms
+/// cancel exactly (value and derivatives): the property the occlusion-aware Hessian relies on when it
+/// keeps one term per shared edge weighted by the radiance difference of the adjacent triangles.
+#[test]
+fn edge_terms_of_a_closed_mesh_cancel() {
+    let c = |i: usize| {
+        DVec3::new(
+            if i & 1 == 0 { -1.0 } else { 1.3 },
+            if i & 2 == 0 { -0.8 } else { 1.1 },
+            if i & 4 == 0 { -0.7 } else { 0.9 },
+        )
+    };
+    let faces = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let x = DVec3::new(0.1, -0.05, 0.2);
+    let n = DVec3::new(0.3, -0.2, 0.9).normalize();
+    let mut total = Deriv3::constant(0.0);
+    for f in faces {
+        for k in 0..4 {
+            let e = kernels::edge_form_factor(x, n, c(f[k]), c(f[(k + 1) % 4]), Order::Hessian)
+                .unwrap();
+            total.value += e.value;
+            total.gradient += e.gradient;
+            total.hessian += e.hessian;
+        }
+    }
+    assert!(total.value.abs() < 1e-15 && total.gradient.abs().max_element() < 1e-14);
+    assert!(total
+        .hessian
+        .to_cols_array()
+        .iter()
+        .all(|v| v.abs() < 1e-13));
+}
+
+#[test]
+fn arvo_jacobian_limits() {
+    let t = [
+        DVec3::new(0., 0., 1.),
+        DVec3::new(1., 0., 1.),
+        DVec3::new(0., 1., 1.),
+    ];
+    assert!(matches!(
+        kernels::vector_form_factor_jacobian(t[0], &t),
+        Err(raddiff::Error::Degenerate(_))
+    ));
+    assert!(matches!(
+        kernels::vector_form_factor_jacobian(DVec3::ZERO, &t[..2]),
+        Err(raddiff::Error::InvalidArgument(_))
+    ));
+    let j = kernels::vector_form_factor_jacobian(DVec3::new(0.2, 0.1, 0.0), &t).unwrap();
+    assert!(j.is_finite());
+}

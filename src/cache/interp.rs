@@ -38,7 +38,7 @@ use glam::DVec3;
 use super::record::{Channel, Domain, Head};
 use crate::error::{ensure_finite, Error, Result};
 
-/// How covering records are weighted and extrapolated (see the [module docs](self) for formulas).
+/// How covering records are weighted and extrapolated (formulas in the [module docs](crate::cache::interp)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Interpolation {
     /// Ward-Heckbert first-order extrapolation with Křivánek-Gautron weights 1/(t+ρ) − 1
@@ -175,59 +175,63 @@ pub(crate) struct Used<'a> {
     pub channels: &'a [Channel],
 }
 
-/// Weighted sum of the extrapolations of `used` (already in a deterministic order) at (x, n),
-/// written to `out` (one float per channel). Returns the weight sum.
+/// Channels accumulated per pass over the records (stack buffers, no allocation).
+const BLOCK: usize = 16;
+
+/// Weighted sum of the extrapolations of `used` (already in a deterministic order, weights summing
+/// to `weight_sum` > 0) at (x, n), written to `out` (one float per channel).
 pub(crate) fn blend(
     kernel: &Kernel,
     used: &[Used<'_>],
+    weight_sum: f64,
     x: DVec3,
     n: DVec3,
     out: &mut [f32],
-) -> f64 {
-    let channels = out.len();
-    let mut linear: smallvec::SmallVec<[f64; 32]> = smallvec::smallvec![0.0; channels];
+) {
     let log = kernel.interpolation == Interpolation::Log;
-    let mut logs: smallvec::SmallVec<[f64; 32]> =
-        smallvec::smallvec![0.0; if log { channels } else { 0 }];
-    let mut log_ok: smallvec::SmallVec<[bool; 32]> = smallvec::smallvec![log; channels];
     let surface = kernel.domain == Domain::Surface;
-    let mut weight_sum = 0.0;
-    for u in used {
-        let dx = x - u.head.position();
-        let dn = if surface {
-            u.head.axis(2).cross(n)
-        } else {
-            DVec3::ZERO
-        };
-        let gs = u.head.gradient_scale;
-        let rs = u.head.rotation_scale;
-        weight_sum += u.weight;
-        for (c, ch) in u.channels.iter().enumerate() {
-            let v = ch.value as f64;
-            let mut delta = 0.0;
-            if gs != 0.0 {
-                delta += dx.dot(ch.gradient(gs));
-            }
-            if surface && rs != 0.0 {
-                delta += dn.dot(ch.rotation(rs));
-            }
-            linear[c] += u.weight * (v + delta);
-            if log {
-                if v > 0.0 {
-                    logs[c] += u.weight * (v.ln() + delta / v);
-                } else {
-                    log_ok[c] = false;
+    let inv_sum = 1.0 / weight_sum;
+    // Per record: offset and normal change, decoded once for all channel blocks.
+    for (block, out) in out.chunks_mut(BLOCK).enumerate() {
+        let base = block * BLOCK;
+        let mut linear = [0.0f64; BLOCK];
+        let mut logs = [0.0f64; BLOCK];
+        let mut log_ok = [log; BLOCK];
+        for u in used {
+            let dx = x - u.head.position();
+            // offsets pre-multiplied by the records' binary16 scales (see Channel::gradient_unscaled)
+            let dx = (u.head.gradient_scale != 0.0)
+                .then(|| dx * super::record::packed_scale(u.head.gradient_scale));
+            let dn = (surface && u.head.rotation_scale != 0.0).then(|| {
+                u.head.axis(2).cross(n) * super::record::packed_scale(u.head.rotation_scale)
+            });
+            let w = u.weight;
+            for (c, ch) in u.channels[base..base + out.len()].iter().enumerate() {
+                let v = ch.value as f64;
+                let mut delta = 0.0;
+                if let Some(dx) = dx {
+                    delta += dx.dot(ch.gradient_unscaled());
+                }
+                if let Some(dn) = dn {
+                    delta += dn.dot(ch.rotation_unscaled());
+                }
+                linear[c] += w * (v + delta);
+                if log {
+                    if v > 0.0 {
+                        logs[c] += w * (v.ln() + delta / v);
+                    } else {
+                        log_ok[c] = false;
+                    }
                 }
             }
         }
+        for (c, o) in out.iter_mut().enumerate() {
+            let value = if log_ok[c] {
+                (logs[c] * inv_sum).min(LOG_EXPONENT_MAX).exp()
+            } else {
+                linear[c] * inv_sum
+            };
+            *o = value.clamp(-(f32::MAX as f64), f32::MAX as f64) as f32;
+        }
     }
-    for c in 0..channels {
-        let value = if log_ok[c] {
-            (logs[c] / weight_sum).min(LOG_EXPONENT_MAX).exp()
-        } else {
-            linear[c] / weight_sum
-        };
-        out[c] = value.clamp(-(f32::MAX as f64), f32::MAX as f64) as f32;
-    }
-    weight_sum
 }

@@ -7,12 +7,16 @@
 //!   1992, Křivánek et al.): the split sphere predicts a gradient of about E/R; when the measured
 //!   |∇E| is larger, R is replaced by E/|∇E| (thesis 3.5.2).
 //! * [`gradient_metric`]: Jarosz et al. 2008 for media, R = ε ΣLⱼ / Σ‖∇Lⱼ‖ (Marco et al. eq. 5).
-//! * Hessian metrics (ellipse/ellipsoid radii from the Hessian's eigen-decomposition) live in
-//!   `gather::radii`; pass their radii and axes in an [`Extent`].
+//! * [`hessian_surface`] and [`hessian_volume`]: the ellipse in the tangent plane / the ellipsoid
+//!   over which the second-order error of first-order extrapolation stays within a tolerance
+//!   (thesis ch. 4 and eq. 6.7-6.9, Marco eq. 20-22), computed by [`crate::gather::radii`] (see
+//!   its module docs for the exact bound) and returned as an [`Extent`].
 //! * [`RadiusLimits`]: minimum and maximum radius clamps; neighbour clamping (thesis 3.5.4) is
 //!   [`Cache::clamp_to_neighbours`](super::Cache::clamp_to_neighbours).
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
+
+pub use crate::gather::radii::ErrorMode;
 
 use super::record::Extent;
 use crate::error::{ensure_finite, ensure_finite3, Error, Result};
@@ -118,6 +122,53 @@ pub fn gradient_metric(epsilon: f64, values: &[f64], gradients: &[DVec3]) -> Res
     }
 }
 
+fn nonzero(extent: Extent) -> Result<Extent> {
+    if extent.radii.iter().any(|&r| r <= 0.0) {
+        return Err(Error::Degenerate(
+            "zero tolerance with a non-zero Hessian gives a zero radius".into(),
+        ));
+    }
+    Ok(extent)
+}
+
+/// Hessian metric for a surface record: [`crate::gather::radii::surface_radii`] as an
+/// [`Extent`] (radii ascending along the tangent eigenvectors). `hessian` is the 3x3 translation
+/// Hessian (value/L²), `normal` unit length, `error` the tolerance (relative: divided by |value|),
+/// `max_anisotropy` ≥ 1 the largest axis ratio (the thesis uses 2). A vanishing Hessian gives the
+/// radius [`crate::gather::radii::MAX_RADIUS`]: apply [`RadiusLimits`]. A zero tolerance is
+/// [`Error::Degenerate`].
+pub fn hessian_surface(
+    hessian: DMat3,
+    normal: DVec3,
+    value: f64,
+    error: f64,
+    mode: ErrorMode,
+    max_anisotropy: f64,
+) -> Result<Extent> {
+    let r =
+        crate::gather::radii::surface_radii(hessian, normal, value, error, mode, max_anisotropy)?;
+    nonzero(Extent {
+        radii: [r.radii[0], r.radii[1], r.radii[0]],
+        axes: [r.axes[0], r.axes[1], normal],
+    })
+}
+
+/// Hessian metric for a media record: [`crate::gather::radii::volume_radii`] as an ellipsoid
+/// [`Extent`]. Same conventions and limits as [`hessian_surface`].
+pub fn hessian_volume(
+    hessian: DMat3,
+    value: f64,
+    error: f64,
+    mode: ErrorMode,
+    max_anisotropy: f64,
+) -> Result<Extent> {
+    let r = crate::gather::radii::volume_radii(hessian, value, error, mode, max_anisotropy)?;
+    nonzero(Extent {
+        radii: r.radii,
+        axes: r.axes,
+    })
+}
+
 /// Minimum and maximum radius clamps (L), applied to every radius of an extent.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RadiusLimits {
@@ -199,6 +250,33 @@ mod tests {
             Err(Error::Degenerate(_))
         ));
         assert!(gradient_metric(0.5, &[1.0], &[]).is_err());
+    }
+
+    #[test]
+    fn hessian_extents_follow_gather_radii() {
+        // isotropic tangent Hessian 3: R = (4 τ/(π 3))^¼ with τ = 0.02 (thesis eq. 4.19)
+        let h = DMat3::from_diagonal(DVec3::new(3.0, 3.0, 7.0));
+        let e = hessian_surface(h, DVec3::Z, 1.0, 0.02, ErrorMode::Absolute, 2.0).unwrap();
+        let expect = (4.0 * 0.02 / (std::f64::consts::PI * 3.0)).powf(0.25);
+        assert!((e.radii[0] - expect).abs() < 1e-12 && (e.radii[1] - expect).abs() < 1e-12);
+        // anisotropic: the short axis lies along the strong curvature (x)
+        let h = DMat3::from_diagonal(DVec3::new(8.0, 1.0, 0.0));
+        let e = hessian_surface(h, DVec3::Z, 1.0, 0.02, ErrorMode::Absolute, 4.0).unwrap();
+        assert!(e.radii[0] < e.radii[1] && e.axes[0].x.abs() > 0.999);
+        let e = hessian_volume(
+            DMat3::from_diagonal(DVec3::splat(-2.0)),
+            4.0,
+            0.1,
+            ErrorMode::Relative,
+            2.0,
+        )
+        .unwrap();
+        let ours = (5.0 * 0.4 / (2.0 * std::f64::consts::PI * 2.0)).powf(0.2);
+        assert!(e.radii.iter().all(|r| (r - ours).abs() < 1e-12));
+        assert!(matches!(
+            hessian_volume(DMat3::IDENTITY, 1.0, 0.0, ErrorMode::Absolute, 2.0),
+            Err(Error::Degenerate(_))
+        ));
     }
 
     #[test]

@@ -22,10 +22,11 @@
 //! # Concurrency and determinism
 //! `Cache` is `Sync`: any number of threads call [`Cache::lookup`] and [`Cache::insert`] through a
 //! shared reference. Lookups never lock and never wait for each other or for inserts; inserts are
-//! serialized by one mutex (an insert costs ~1 µs, a gather that produces a record hundreds of µs)
-//! and are visible to every lookup that starts after the insert returns. Records are immutable
-//! once inserted and are stored in an append-only arena; the index is an octree of immutable
-//! published nodes (see `index.rs`).
+//! serialized by one mutex (an insert costs ~12k instructions, the gather that produces a record
+//! hundreds of µs) and are visible to every lookup that starts after the insert returns. Records
+//! are immutable once inserted and live in an append-only arena; the index is an octree whose
+//! child links and entry arrays are published with release/acquire atomics and never freed while
+//! readers may hold them ([`Cache::compact`] reclaims the replaced arrays under `&mut`).
 //!
 //! The value returned for a query depends only on the set of records covering it: covering
 //! records are sorted by their identity key before the weighted sum, so neither insertion order nor
@@ -67,7 +68,7 @@
 //! [`Error::Corrupt`] (or [`Error::Io`]) with the reason; it never panics on any input.
 
 mod index;
-mod interp;
+pub mod interp;
 pub mod metric;
 mod persist;
 mod record;
@@ -245,6 +246,13 @@ impl<V: CacheValue> Cache<V> {
         }
     }
 
+    /// Releases index memory kept only for concurrent readers: entry arrays replaced while growing
+    /// (kept so that lookups never wait) and growth slack. Needs exclusive access; [`Cache::load`]
+    /// and [`Cache::from_bytes`] return compacted caches. Typically halves the index.
+    pub fn compact(&mut self) {
+        self.index.compact();
+    }
+
     /// Record `id` (< len, published).
     #[inline]
     fn stored(&self, id: u32) -> (&Head, &[Channel]) {
@@ -378,24 +386,30 @@ impl<V: CacheValue> Cache<V> {
             )));
         }
         used.sort_unstable_by_key(|u| u.key);
-        let mut tmp: SmallVec<[f32; 32]> = SmallVec::from_elem(0.0, out.len());
-        let weight_sum = interp::blend(&self.kernel, &used, position, n, &mut tmp);
+        let weight_sum: f64 = used.iter().map(|u| u.weight).sum();
         if !(weight_sum > 0.0 && weight_sum.is_finite()) {
             return Err(Error::NotFound(format!(
                 "the records covering {position} have zero total weight"
             )));
         }
-        out.copy_from_slice(&tmp);
+        interp::blend(&self.kernel, &used, weight_sum, position, n, out);
         Ok((weight_sum, used.len()))
     }
 
     /// Interpolates at `position` with surface normal `normal` (ignored in volumes).
     /// `NotFound` when no record covers the point.
     pub fn lookup(&self, position: DVec3, normal: DVec3) -> Result<Lookup<V>> {
-        let mut out: SmallVec<[f32; 32]> = SmallVec::from_elem(0.0, self.config.channels);
-        let (weight_sum, records) = self.lookup_into(position, normal, &mut out)?;
+        let mut buf = [0.0f32; 32];
+        let mut heap = Vec::new();
+        let out: &mut [f32] = if self.config.channels <= buf.len() {
+            &mut buf[..self.config.channels]
+        } else {
+            heap.resize(self.config.channels, 0.0);
+            &mut heap
+        };
+        let (weight_sum, records) = self.lookup_into(position, normal, out)?;
         Ok(Lookup {
-            value: V::from_channels(&out),
+            value: V::from_channels(out),
             weight_sum,
             records,
         })

@@ -122,7 +122,7 @@ impl<V: CacheValue> Cache<V> {
             interpolation,
             max_normal_deviation,
         };
-        let cache = Cache::new(config).map_err(|e| Error::Corrupt(format!("header: {e}")))?;
+        let mut cache = Cache::new(config).map_err(|e| Error::Corrupt(format!("header: {e}")))?;
         let mut previous: Option<u64> = None;
         for i in 0..count as usize {
             let at = HEADER_BYTES + i * stride;
@@ -136,6 +136,7 @@ impl<V: CacheValue> Cache<V> {
                 .insert_stored(&head, &chans)
                 .map_err(|e| Error::Corrupt(format!("record {i}: {e}")))?;
         }
+        cache.compact();
         Ok(cache)
     }
 

@@ -358,3 +358,38 @@ fn gradients_survive_binary16_storage() {
     }
     assert_eq!(back.value, [1.0, 2.0]);
 }
+
+#[test]
+fn many_channels_cross_the_accumulation_blocks() {
+    // 27 channels (e.g. RGB order-2 spherical harmonics): channel c has value c and d/dx = c/100
+    let c: Cache<Vec<f32>> = Cache::new(CacheConfig::volume(27)).unwrap();
+    let value: Vec<f32> = (0..27).map(|i| i as f32).collect();
+    let gx: Vec<f32> = (0..27).map(|i| i as f32 / 100.0).collect();
+    let r = Record {
+        position: DVec3::ZERO,
+        normal: DVec3::ZERO,
+        value: value.clone(),
+        gradient: Some([gx, vec![0.0; 27], vec![0.0; 27]]),
+        rotation_gradient: None,
+        extent: Extent::isotropic(1.0),
+    };
+    c.insert(&r).unwrap();
+    let l = c.lookup(DVec3::new(0.5, 0.0, 0.0), DVec3::ZERO).unwrap();
+    for (i, v) in l.value.iter().enumerate() {
+        // binary16 gradients relative to the largest (0.26): error below 0.26·2^-11·0.5
+        close(*v as f64, i as f64 * (1.0 + 0.005), 1e-4);
+    }
+    let mut out = vec![0.0f32; 26];
+    assert!(matches!(
+        c.lookup_into(DVec3::ZERO, DVec3::ZERO, &mut out),
+        Err(Error::InvalidArgument(_))
+    ));
+}
+
+#[test]
+fn caches_are_send_and_sync() {
+    fn shared<T: Send + Sync>() {}
+    shared::<Cache<f32>>();
+    shared::<Cache<[f32; 9]>>();
+    shared::<Cache<Vec<f32>>>();
+}

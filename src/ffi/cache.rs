@@ -69,8 +69,8 @@ pub struct raddiff_cache_record {
     /// Nullable: 3*channels floats, rotational gradient (derivative with respect to the rotation
     /// vector of the normal, Ward-Heckbert convention), channel-major; surface domain only.
     pub rotation_gradient: *const f32,
-    /// Surface: radii[0..1] along axes[0] (projected to the tangent plane) and normal x axes[0];
-    /// radii[2] unused. Volume: ellipsoid radii along axes[0..2]. In [1e-30, 1e30].
+    /// Surface: `radii[0..1]` along `axes[0]` (projected to the tangent plane) and `normal x axes[0]`;
+    /// `radii[2]` unused. Volume: ellipsoid radii along `axes[0..2]`. Each in 1e-30..=1e30.
     pub radii: [f64; 3],
     /// Principal axes (need not be unit; may be zero for isotropic radii).
     pub axes: [raddiff_vec3; 3],

@@ -30,7 +30,8 @@ pub unsafe extern "C" fn raddiff_triangle_form_factor(
     guard(|| {
         let out = unsafe { out_ref(out, "out")? };
         let order = order_from_c(order)?;
-        let d = kernels::triangle_form_factor(x.into(), n.into(), a.into(), b.into(), c.into(), order)?;
+        let d =
+            kernels::triangle_form_factor(x.into(), n.into(), a.into(), b.into(), c.into(), order)?;
         *out = d.into();
         Ok(())
     })

@@ -52,15 +52,15 @@ pub extern "C" fn raddiff_transmittance_marched(
             .into());
         }
         let sigma = unsafe { in_slice(sigma_t, count, "sigma_t")? };
-        let gradient: Option<Vec<glam::DVec3>> = if sigma_t_gradient.is_null() {
+        // raddiff_vec3 and glam's DVec3 are both #[repr(C)] { x, y, z: f64 } (checked below), so
+        // the caller's array is read in place, without a per-call allocation.
+        let gradient = if sigma_t_gradient.is_null() {
             None
         } else {
-            let g = unsafe { in_slice(sigma_t_gradient, count, "sigma_t_gradient")? };
-            Some(g.iter().map(|&v| v.into()).collect())
+            let g = sigma_t_gradient.cast::<glam::DVec3>();
+            Some(unsafe { in_slice(g, count, "sigma_t_gradient")? })
         };
-        *out =
-            kernels::transmittance_marched(x.into(), y.into(), sigma, gradient.as_deref(), order)?
-                .into();
+        *out = kernels::transmittance_marched(x.into(), y.into(), sigma, gradient, order)?.into();
         Ok(())
     })
 }
@@ -105,3 +105,10 @@ pub extern "C" fn raddiff_segment_form_factor_2d(
         Ok(())
     })
 }
+
+const _: () = {
+    assert!(std::mem::size_of::<raddiff_vec3>() == std::mem::size_of::<glam::DVec3>());
+    assert!(std::mem::align_of::<raddiff_vec3>() == std::mem::align_of::<glam::DVec3>());
+    assert!(std::mem::offset_of!(raddiff_vec3, y) == std::mem::offset_of!(glam::DVec3, y));
+    assert!(std::mem::offset_of!(raddiff_vec3, z) == std::mem::offset_of!(glam::DVec3, z));
+};

@@ -1,1 +1,587 @@
-//! (in progress)
+//! Occlusion-aware irradiance gradients and Hessians from a hemisphere gather (Schwarzhaupt et al.,
+//! thesis ch. 6), and the occlusion-unaware radiometric and geometric Hessians they improve on
+//! (thesis ch. 4, Jarosz et al. 2012).
+//!
+//! # Method
+//!
+//! The hit points of the gather's rays are triangulated with the layout's grid connectivity
+//! ([`Topology`]; horizon ring and, for the polar layout, a pole vertex close the hemisphere).
+//! The mesh is a snapshot of the scene seen from x: where a near occluder meets a far wall, long
+//! "occlusion triangles" join them. Each triangle Δ carries the radiance `L_Δ` of its **farthest**
+//! vertex (what a translation of x disoccludes) and irradiance is `E(x) ≈ Σ_Δ L_Δ F_Δ(x)` with the
+//! point-to-triangle form factors of the mesh held fixed (eq. 6.1); the gradient and Hessian are the
+//! sums of the form-factor gradients and Hessians weighted by `L_Δ` (eq. 6.2-6.3).
+//!
+//! A triangle's form factor is the sum of its three edge terms (`kernels::edge_form_factor`), and
+//! an interior edge appears in its two triangles with opposite orientations, so
+//!
+//! ```text
+//!   Σ_Δ L_Δ F_Δ = Σ_edges (L_left − L_right) f_edge      (L_right = 0 on the horizon)
+//! ```
+//!
+//! Every edge term is computed once (about 3 per sample instead of 6), and edges whose two
+//! triangles carry the same radiance cost nothing. With unit radiance everywhere only the horizon
+//! edges remain: that is the mesh's total form factor and its derivatives ([`Geometric`]), which is
+//! exactly 1 for any mesh whose horizon ring lies in the tangent plane.
+//!
+//! # Misses
+//!
+//! A ray that hits nothing sees a distant environment. Its vertex is placed along its direction
+//! at [`FAR_DISTANCE_FACTOR`] times the largest finite hit distance (times 1 L if nothing was hit).
+//! All positions are relative to x (x is the origin of every kernel call), so nothing is lost to
+//! large world coordinates, and the kernels evaluate near-to-far occlusion edges in the edge's own
+//! frame without cancellation. Edges between two environment vertices with equal radiance cost
+//! nothing and cannot cancel; the far geometry's own derivatives fall like `1/FAR_DISTANCE_FACTOR`.
+//!
+//! # Participating media
+//!
+//! With `sigma_t > 0` every triangle's radiance is attenuated by the transmittance to its farthest
+//! vertex, `L_Δ T(x, y_Δ)`, and the product rule applies per triangle (Marco et al. eq. 17-18 with a
+//! constant phase function): `∇(L T F) = L (T ∇F + F ∇T)`,
+//! `H(L T F) = L (T HF + ∇T ∇Fᵀ + ∇F ∇Tᵀ + F HT)`. Edge terms are still computed once and summed
+//! per triangle. Misses are attenuated to zero (the medium is unbounded).
+//!
+//! # Robustness (thesis sec. 6.3)
+//!
+//! For record radii, [`OcclusionDerivatives::robust_hessian`] adds 1% of the irradiance to every
+//! triangle radiance (= `H + 0.01 E H_geometric`), and uses the geometric Hessian (unit radiance)
+//! for a channel in which every ray returned black.
+
+use glam::{DMat3, DVec3};
+
+pub use super::hessian_mesh::{Edge, Topology};
+use super::hessian_mesh::{NONE, POLE, REVERSED};
+pub use super::layout::LayoutKind;
+use crate::error::{ensure_finite, ensure_finite3, Error, Result};
+use crate::kernels;
+use crate::kernels::form_factor;
+use crate::kernels::solid_angle::pow2_scale;
+use crate::{Deriv3, Order};
+
+/// Misses are placed at this multiple of the largest finite hit distance (2^20: the occlusion
+/// terms of the distant environment converge like `1/FAR_DISTANCE_FACTOR`, about 1e-6 relative).
+pub const FAR_DISTANCE_FACTOR: f64 = 1_048_576.0;
+
+/// Fraction of the irradiance added to every triangle radiance by
+/// [`OcclusionDerivatives::robust_hessian`] (thesis sec. 6.3).
+pub const ROBUST_FRACTION: f64 = 0.01;
+
+/// The rays of one hemisphere gather, as the renderer traced them.
+#[derive(Debug, Clone, Copy)]
+pub struct HemisphereGather<'a> {
+    /// Unit surface normal at x (the layout's pole).
+    pub normal: DVec3,
+    /// Unit world directions, index `j·N + k` (from the layout).
+    pub directions: &'a [DVec3],
+    /// Hit distances (L), > 0, `f64::INFINITY` for a miss.
+    pub distance: &'a [f64],
+    /// Radiance leaving each hit towards x (environment radiance for a miss), before attenuation,
+    /// `channels` values per direction.
+    pub radiance: &'a [f32],
+    /// Values per direction, ≥ 1.
+    pub channels: usize,
+    /// Homogeneous extinction (1/L) between x and the hits, ≥ 0.
+    pub sigma_t: f64,
+}
+
+/// The mesh's unit-radiance terms: irradiance from unit radiance on every triangle (π times the
+/// mesh's total form factor) with its gradient and Hessian: the occlusion-aware geometric Hessian
+/// of the thesis' black-gather case.
+pub type Geometric = Deriv3;
+
+/// Occlusion-aware irradiance derivatives of one gather, per channel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OcclusionDerivatives {
+    /// `π Σ L_Δ F_Δ` (eq. 6.1; F is the form factor, the cosine-weighted solid angle over π): the
+    /// triangulated irradiance estimate, in the gather's units (π for unit radiance everywhere).
+    pub irradiance: Vec<f64>,
+    /// `π Σ L_Δ ∇F_Δ` (eq. 6.2), per L.
+    pub gradient: Vec<DVec3>,
+    /// `π Σ L_Δ H F_Δ` (eq. 6.3), per L², zero unless the Hessian was requested.
+    pub hessian: Vec<DMat3>,
+    /// The mesh with unit radiance on every triangle (transmittance included when in a medium).
+    pub geometric: Geometric,
+    /// Per channel, whether every ray returned exactly zero.
+    pub all_black: Vec<bool>,
+}
+
+impl OcclusionDerivatives {
+    /// The Hessian of channel `c` with the thesis' robustness (sec. 6.3): `H + 0.01 E H_geometric`
+    /// (1% of the irradiance added to every triangle radiance), or `H_geometric` (unit radiance)
+    /// when every ray of the channel returned black.
+    pub fn robust_hessian(&self, c: usize) -> DMat3 {
+        if self.all_black[c] {
+            self.geometric.hessian
+        } else {
+            self.hessian[c] + self.geometric.hessian * (ROBUST_FRACTION * self.irradiance[c])
+        }
+    }
+}
+
+/// Per-gather vertex data of the mesh (positions relative to x).
+#[derive(Debug, Clone)]
+pub struct MeshGeometry {
+    /// Vertex positions relative to x (L).
+    pub positions: Vec<DVec3>,
+    /// Vertex distances from x, misses at the far distance.
+    pub distance: Vec<f64>,
+    /// The distance where misses were placed.
+    pub far_distance: f64,
+    /// Radiance of the synthesized pole vertex, per channel (empty without a pole).
+    pub pole_radiance: Vec<f64>,
+    /// For every triangle, its farthest vertex.
+    pub farthest: Vec<u32>,
+}
+
+fn check_gather(topo: &Topology, g: &HemisphereGather) -> Result<DVec3> {
+    let count = topo.m * topo.n;
+    if g.channels == 0 {
+        return Err(Error::InvalidArgument("channels must be >= 1".into()));
+    }
+    if g.directions.len() != count || g.distance.len() != count {
+        return Err(Error::InvalidArgument(format!(
+            "directions ({}) and distances ({}) must hold m*n = {count} values",
+            g.directions.len(),
+            g.distance.len()
+        )));
+    }
+    if Some(g.radiance.len()) != count.checked_mul(g.channels) {
+        return Err(Error::InvalidArgument(format!(
+            "radiance holds {} values, expected m*n*channels = {count}*{}",
+            g.radiance.len(),
+            g.channels
+        )));
+    }
+    ensure_finite(g.sigma_t, "sigma_t")?;
+    if g.sigma_t < 0.0 {
+        return Err(Error::InvalidArgument(format!(
+            "sigma_t must be >= 0 (got {})",
+            g.sigma_t
+        )));
+    }
+    ensure_finite3(g.normal, "normal")?;
+    let len = g.normal.length();
+    if (len - 1.0).abs() > 1e-6 {
+        return Err(Error::InvalidArgument(format!(
+            "normal must be a unit vector (length {len})"
+        )));
+    }
+    for (i, (&d, w)) in g.distance.iter().zip(g.directions).enumerate() {
+        if d.is_nan() || d <= 0.0 {
+            return Err(Error::InvalidArgument(format!(
+                "distance[{i}] must be > 0 or +inf (got {d})"
+            )));
+        }
+        if !w.is_finite() || (w.length_squared() - 1.0).abs() > 1e-6 {
+            return Err(Error::InvalidArgument(format!(
+                "directions[{i}] is not a unit vector ({w})"
+            )));
+        }
+    }
+    if let Some(i) = g.radiance.iter().position(|v| !v.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "radiance[{i}] is not finite ({})",
+            g.radiance[i]
+        )));
+    }
+    Ok(g.normal / len)
+}
+
+/// Places the mesh vertices of one gather (validating it against `topo`).
+pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeometry> {
+    if topo.connectivity == LayoutKind::Sphere {
+        return Err(Error::InvalidArgument(
+            "a sphere layout is a media gather: use gather::hessian_media".into(),
+        ));
+    }
+    let normal = check_gather(topo, g)?;
+    let largest = g
+        .distance
+        .iter()
+        .filter(|d| d.is_finite())
+        .fold(0.0f64, |m, &d| m.max(d));
+    let far_distance = FAR_DISTANCE_FACTOR * if largest > 0.0 { largest } else { 1.0 };
+    if !far_distance.is_finite() {
+        return Err(Error::InvalidArgument(format!(
+            "hit distances up to {largest:e} leave no room for the environment"
+        )));
+    }
+    let sample_distance = |i: usize| {
+        let d = g.distance[i];
+        if d.is_finite() {
+            d
+        } else {
+            far_distance
+        }
+    };
+    let vcount = topo.vertex_count();
+    let mut positions = Vec::with_capacity(vcount);
+    let mut distance = Vec::with_capacity(vcount);
+    let mut pole_radiance = Vec::new();
+    for (v, &src) in topo.vertex_source.iter().enumerate() {
+        if src == POLE {
+            // The pole was not sampled: harmonic mean of ring 0's distances, mean radiance.
+            let n = topo.n;
+            let inv: f64 = (0..n).map(|k| 1.0 / sample_distance(k)).sum::<f64>() / n as f64;
+            let d = 1.0 / inv;
+            positions.push(normal * d);
+            distance.push(d);
+            pole_radiance = (0..g.channels)
+                .map(|c| {
+                    (0..n)
+                        .map(|k| g.radiance[k * g.channels + c] as f64)
+                        .sum::<f64>()
+                        / n as f64
+                })
+                .collect();
+            continue;
+        }
+        let s = src as usize;
+        let d = sample_distance(s);
+        let w = g.directions[s];
+        let dir = if topo.on_horizon[v] {
+            let flat = w - normal * w.dot(normal);
+            let l = flat.length();
+            if l.is_nan() || l <= 1e-12 {
+                return Err(Error::Degenerate(format!(
+                    "direction {s} on the layout's outer ring points along the normal"
+                )));
+            }
+            flat / l
+        } else {
+            w
+        };
+        positions.push(dir * d);
+        distance.push(d);
+    }
+    let farthest = topo
+        .triangles
+        .iter()
+        .map(|t| {
+            let mut best = t[0];
+            for &v in &t[1..] {
+                if distance[v as usize] > distance[best as usize] {
+                    best = v;
+                }
+            }
+            best
+        })
+        .collect();
+    Ok(MeshGeometry {
+        positions,
+        distance,
+        far_distance,
+        pole_radiance,
+        farthest,
+    })
+}
+
+/// The edge term of `a → b` seen from the origin (x), unit normal `n`, positions already scaled
+/// (see [`Scale`]) and validated.
+///
+/// The kernel's edge integral is measured from its first vertex, so it is called from the nearer
+/// end and negated if that reverses the edge (the term is odd in the direction): for a
+/// near-to-environment edge the other order loses about log10(far/near) digits in the foot point.
+#[inline]
+fn edge_term(n: DVec3, a: DVec3, b: DVec3, order: Order) -> Result<Deriv3> {
+    if a.length_squared() <= b.length_squared() {
+        form_factor::edge_term(a, b - a, n, order)
+    } else {
+        let f = form_factor::edge_term(b, a - b, n, order)?;
+        Ok(Deriv3 {
+            value: -f.value,
+            gradient: -f.gradient,
+            hessian: -f.hessian,
+        })
+    }
+}
+
+/// Exact power-of-two rescaling of a gather's positions so that its largest hit distance is about
+/// 1 (nothing overflows in the edge moments, whatever the scene's unit), and back.
+#[derive(Debug, Clone, Copy)]
+struct Scale {
+    f1: f64,
+    f2: f64,
+}
+
+impl Scale {
+    fn of(mesh: &MeshGeometry) -> Scale {
+        let (f1, f2) = pow2_scale(mesh.far_distance / FAR_DISTANCE_FACTOR);
+        Scale { f1, f2 }
+    }
+
+    #[inline]
+    fn point(&self, p: DVec3) -> DVec3 {
+        p * self.f1 * self.f2
+    }
+
+    fn back(&self, mut d: Deriv3) -> Deriv3 {
+        d.gradient = d.gradient * self.f1 * self.f2;
+        d.hessian = d.hessian * self.f1 * self.f1 * self.f2 * self.f2;
+        d
+    }
+}
+
+fn all_black(g: &HemisphereGather) -> Vec<bool> {
+    (0..g.channels)
+        .map(|c| {
+            g.radiance
+                .iter()
+                .skip(c)
+                .step_by(g.channels)
+                .all(|&v| v == 0.0)
+        })
+        .collect()
+}
+
+/// Radiance of vertex `v` in channel `c` (sample, horizon copy or pole).
+#[inline]
+fn vertex_radiance(
+    topo: &Topology,
+    mesh: &MeshGeometry,
+    g: &HemisphereGather,
+    v: u32,
+    c: usize,
+) -> f64 {
+    let src = topo.vertex_source[v as usize];
+    if src == POLE {
+        mesh.pole_radiance[c]
+    } else {
+        g.radiance[src as usize * g.channels + c] as f64
+    }
+}
+
+fn empty(channels: usize, black: Vec<bool>) -> OcclusionDerivatives {
+    OcclusionDerivatives {
+        irradiance: vec![0.0; channels],
+        gradient: vec![DVec3::ZERO; channels],
+        hessian: vec![DMat3::ZERO; channels],
+        geometric: Deriv3::constant(0.0),
+        all_black: black,
+    }
+}
+
+/// Irradiance is `π Σ L_Δ F_Δ` (F is the cosine-weighted solid angle over π); derivatives are
+/// brought back from the scaled units.
+fn finish(
+    mut out: OcclusionDerivatives,
+    acc: &[Deriv3],
+    scale: Scale,
+) -> Result<OcclusionDerivatives> {
+    use std::f64::consts::PI;
+    for (c, a) in acc.iter().enumerate() {
+        let a = scale.back(*a);
+        out.irradiance[c] = PI * a.value;
+        out.gradient[c] = a.gradient * PI;
+        out.hessian[c] = a.hessian * PI;
+    }
+    let geo = scale.back(out.geometric);
+    out.geometric = Deriv3 {
+        value: geo.value * PI,
+        gradient: geo.gradient * PI,
+        hessian: geo.hessian * PI,
+    };
+    let finite = out.gradient.iter().all(|g| g.is_finite())
+        && out.hessian.iter().all(|h| h.is_finite())
+        && out.irradiance.iter().all(|e| e.is_finite())
+        && out.geometric.is_finite();
+    if !finite {
+        return Err(Error::Degenerate(
+            "occlusion derivatives overflow for this gather".into(),
+        ));
+    }
+    Ok(out)
+}
+
+fn add_scaled(acc: &mut Deriv3, d: &Deriv3, w: f64, order: Order) {
+    acc.value += w * d.value;
+    if order.gradient() {
+        acc.gradient += d.gradient * w;
+    }
+    if order.hessian() {
+        acc.hessian += d.hessian * w;
+    }
+}
+
+/// Occlusion-aware irradiance, gradient and (for [`Order::Hessian`]) Hessian of one gather
+/// (thesis eq. 6.1-6.3; module docs), each edge term computed once.
+///
+/// `order` must be at least [`Order::Gradient`]. Errors: `InvalidArgument` for inconsistent sizes,
+/// non-finite values, non-positive distances or non-unit directions/normal; `Degenerate` if a kernel
+/// cannot evaluate an edge (x on a mesh edge, which valid gathers cannot produce).
+pub fn occlusion_derivatives(
+    topo: &Topology,
+    g: &HemisphereGather,
+    order: Order,
+) -> Result<OcclusionDerivatives> {
+    let mesh = mesh_geometry(topo, g)?;
+    occlusion_derivatives_on(topo, &mesh, g, order)
+}
+
+/// [`occlusion_derivatives`] on an already placed mesh.
+pub fn occlusion_derivatives_on(
+    topo: &Topology,
+    mesh: &MeshGeometry,
+    g: &HemisphereGather,
+    order: Order,
+) -> Result<OcclusionDerivatives> {
+    if !order.gradient() {
+        return Err(Error::InvalidArgument(
+            "occlusion derivatives need order >= RADDIFF_ORDER_GRADIENT".into(),
+        ));
+    }
+    let n = g.normal.normalize();
+    let channels = g.channels;
+    let mut out = empty(channels, all_black(g));
+    if g.sigma_t > 0.0 {
+        return with_medium(topo, mesh, g, order, out);
+    }
+    // Radiance of every triangle (its farthest vertex's), channel-interleaved, plus a zero row that
+    // stands for the outside of the horizon.
+    let tcount = topo.triangles.len();
+    let mut tri = vec![0.0f64; (tcount + 1) * channels];
+    for (t, row) in tri.chunks_exact_mut(channels).take(tcount).enumerate() {
+        for (c, l) in row.iter_mut().enumerate() {
+            *l = vertex_radiance(topo, mesh, g, mesh.farthest[t], c);
+        }
+    }
+    let outside = tcount;
+    let scale = Scale::of(mesh);
+    let mut acc = vec![Deriv3::constant(0.0); channels];
+    let mut delta = vec![0.0f64; channels];
+    for e in &topo.edges {
+        let boundary = e.right == NONE;
+        let right = if boundary { outside } else { e.right as usize };
+        let (l, r) = (e.left as usize * channels, right * channels);
+        let mut any = false;
+        for (c, d) in delta.iter_mut().enumerate() {
+            *d = tri[l + c] - tri[r + c];
+            any |= *d != 0.0;
+        }
+        if !any && !boundary {
+            continue;
+        }
+        let f = edge_term(
+            n,
+            scale.point(mesh.positions[e.a as usize]),
+            scale.point(mesh.positions[e.b as usize]),
+            order,
+        )?;
+        if boundary {
+            add_scaled(&mut out.geometric, &f, 1.0, order);
+        }
+        for (a, &d) in acc.iter_mut().zip(&delta) {
+            if d != 0.0 {
+                add_scaled(a, &f, d, order);
+            }
+        }
+    }
+    finish(out, &acc, scale)
+}
+
+/// The per-triangle form of [`occlusion_derivatives`]: every triangle's three edge terms are
+/// evaluated separately (each interior edge twice). Same result to rounding; the baseline the
+/// shared-edge evaluation is benchmarked against.
+pub fn occlusion_derivatives_per_triangle(
+    topo: &Topology,
+    g: &HemisphereGather,
+    order: Order,
+) -> Result<OcclusionDerivatives> {
+    let mesh = mesh_geometry(topo, g)?;
+    if !order.gradient() {
+        return Err(Error::InvalidArgument(
+            "occlusion derivatives need order >= RADDIFF_ORDER_GRADIENT".into(),
+        ));
+    }
+    let n = g.normal.normalize();
+    let scale = Scale::of(&mesh);
+    let mut out = empty(g.channels, all_black(g));
+    let mut acc = vec![Deriv3::constant(0.0); g.channels];
+    for (t, tri) in topo.triangles.iter().enumerate() {
+        let mut f = Deriv3::constant(0.0);
+        for i in 0..3 {
+            let a = scale.point(mesh.positions[tri[i] as usize]);
+            let b = scale.point(mesh.positions[tri[(i + 1) % 3] as usize]);
+            add_scaled(&mut f, &edge_term(n, a, b, order)?, 1.0, order);
+        }
+        add_scaled(&mut out.geometric, &f, 1.0, order);
+        for (c, a) in acc.iter_mut().enumerate() {
+            let l = vertex_radiance(topo, &mesh, g, mesh.farthest[t], c);
+            add_scaled(a, &f, l, order);
+        }
+    }
+    finish(out, &acc, scale)
+}
+
+/// Medium path: per-triangle form factors from once-computed edge terms, times the transmittance
+/// to the triangle's farthest vertex (product rule).
+fn with_medium(
+    topo: &Topology,
+    mesh: &MeshGeometry,
+    g: &HemisphereGather,
+    order: Order,
+    mut out: OcclusionDerivatives,
+) -> Result<OcclusionDerivatives> {
+    let n = g.normal.normalize();
+    let scale = Scale::of(mesh);
+    // σ_t r is scale-free: σ_t in scaled units is σ_t / (f1 f2).
+    let sigma = g.sigma_t / scale.f1 / scale.f2;
+    let mut edge_terms = Vec::with_capacity(topo.edges.len());
+    for e in &topo.edges {
+        edge_terms.push(edge_term(
+            n,
+            scale.point(mesh.positions[e.a as usize]),
+            scale.point(mesh.positions[e.b as usize]),
+            order,
+        )?);
+    }
+    let mut acc = vec![Deriv3::constant(0.0); g.channels];
+    for (t, codes) in topo.triangle_edges.iter().enumerate() {
+        let far = mesh.farthest[t];
+        let src = topo.vertex_source[far as usize];
+        // Misses (and the pole, if it sits at the far distance) are attenuated to zero.
+        if mesh.distance[far as usize] >= mesh.far_distance {
+            continue;
+        }
+        let mut f = Deriv3::constant(0.0);
+        for &code in codes {
+            let sign = if code & REVERSED != 0 { -1.0 } else { 1.0 };
+            add_scaled(
+                &mut f,
+                &edge_terms[(code & !REVERSED) as usize],
+                sign,
+                order,
+            );
+        }
+        let tr = kernels::transmittance(
+            DVec3::ZERO,
+            scale.point(mesh.positions[far as usize]),
+            sigma,
+            order,
+        )?;
+        let mut p = Deriv3::constant(f.value * tr.value);
+        if order.gradient() {
+            p.gradient = f.gradient * tr.value + tr.gradient * f.value;
+        }
+        if order.hessian() {
+            let cross = DMat3::from_cols(
+                tr.gradient * f.gradient.x + f.gradient * tr.gradient.x,
+                tr.gradient * f.gradient.y + f.gradient * tr.gradient.y,
+                tr.gradient * f.gradient.z + f.gradient * tr.gradient.z,
+            );
+            p.hessian = f.hessian * tr.value + cross + tr.hessian * f.value;
+        }
+        add_scaled(&mut out.geometric, &p, 1.0, order);
+        for (c, a) in acc.iter_mut().enumerate() {
+            let l = if src == POLE {
+                mesh.pole_radiance[c]
+            } else {
+                g.radiance[src as usize * g.channels + c] as f64
+            };
+            if l != 0.0 {
+                add_scaled(a, &p, l, order);
+            }
+        }
+    }
+    finish(out, &acc, scale)
+}

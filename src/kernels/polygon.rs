@@ -252,83 +252,216 @@ fn clip(u: &[DVec3], r: &[DVec3], n: DVec3) -> (SmallVec<[ClipVertex; 10]>, bool
     (out, cut)
 }
 
-/// Gauss-Legendre nodes and weights on [0, 1].
-fn gauss_legendre() -> &'static [(f64, f64); GAUSS_POINTS] {
-    static RULE: OnceLock<[(f64, f64); GAUSS_POINTS]> = OnceLock::new();
-    RULE.get_or_init(|| {
-        let n = GAUSS_POINTS;
-        let mut rule = [(0.0, 0.0); GAUSS_POINTS];
-        for (i, slot) in rule.iter_mut().enumerate() {
-            // Newton on P_n from the Chebyshev-like initial guess.
-            let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-            let mut dp = 1.0;
-            for _ in 0..100 {
-                let (mut p0, mut p1) = (1.0, z);
-                for k in 2..=n {
-                    let kf = k as f64;
-                    let p2 = ((2.0 * kf - 1.0) * z * p1 - (kf - 1.0) * p0) / kf;
-                    p0 = p1;
-                    p1 = p2;
-                }
-                dp = n as f64 * (z * p1 - p0) / (z * z - 1.0);
-                let dz = p1 / dp;
-                z -= dz;
-                if dz.abs() < 1e-17 {
-                    break;
-                }
+/// Gauss-Legendre nodes and weights on [0, 1] (Newton on the Legendre polynomial).
+fn legendre_rule<const N: usize>() -> [(f64, f64); N] {
+    let mut rule = [(0.0, 0.0); N];
+    for (i, slot) in rule.iter_mut().enumerate() {
+        let mut z = (std::f64::consts::PI * (i as f64 + 0.75) / (N as f64 + 0.5)).cos();
+        let mut dp = 1.0;
+        for _ in 0..100 {
+            let (mut p0, mut p1) = (1.0, z);
+            for k in 2..=N {
+                let kf = k as f64;
+                let p2 = ((2.0 * kf - 1.0) * z * p1 - (kf - 1.0) * p0) / kf;
+                p0 = p1;
+                p1 = p2;
             }
-            let w = 2.0 / ((1.0 - z * z) * dp * dp);
-            *slot = (0.5 * (1.0 - z), 0.5 * w);
+            dp = N as f64 * (z * p1 - p0) / (z * z - 1.0);
+            let dz = p1 / dp;
+            z -= dz;
+            if dz.abs() < 1e-17 {
+                break;
+            }
         }
-        rule
-    })
+        let w = 2.0 / ((1.0 - z * z) * dp * dp);
+        *slot = (0.5 * (1.0 - z), 0.5 * w);
+    }
+    rule
 }
 
-/// Signed form factor of the clipped loop by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` over fan triangles
-/// (Duffy map), with analytic derivatives of the integrand. Accurate when x is far from the loop.
-fn far_field(verts: &[ClipVertex], n: DVec3, order: Order) -> Deriv3 {
+fn gauss_legendre() -> &'static [(f64, f64); GAUSS_POINTS] {
+    static RULE: OnceLock<[(f64, f64); GAUSS_POINTS]> = OnceLock::new();
+    RULE.get_or_init(legendre_rule::<GAUSS_POINTS>)
+}
+
+fn gauss_legendre_16() -> &'static [(f64, f64); 16] {
+    static RULE: OnceLock<[(f64, f64); 16]> = OnceLock::new();
+    RULE.get_or_init(legendre_rule::<16>)
+}
+
+/// Below this `|h_P| / d_e` for every edge (x close to the polygon's plane compared with its
+/// distance to every edge line, in the plane), the value is recomputed by [`near_plane_value`].
+const NEAR_PLANE_RATIO: f64 = 0.1;
+
+/// The signed edge-sum value for x near the polygon's plane, without the cancellation of the plain
+/// sum. Split `n = n_N N̂ + n_t`. The `n_t` part has no cancellation (each term is O(h_P)). The `N̂`
+/// part is the parallel-receiver form factor, whose edge terms are O(1) and sum to O(h_P²) outside
+/// the polygon; per edge it equals `(Δψ_e − G_e)/2π` with `Δψ_e` the signed angle the edge subtends
+/// at the foot point of x in the plane and `G_e = ∫ ε cos²ψ/(1 + ε cos²ψ) dψ` over the edge's
+/// angular range (`ε = h_P²/d_e²`, `d_e` the in-plane distance to the edge line). `ΣΔψ_e` is
+/// exactly `2π·winding`, and the `G_e` are small and integrated by a 16-point Gauss rule (the
+/// integrand's poles are `asinh(1/√ε) ≥ 3` away from the real axis). `None` when not applicable.
+fn near_plane_value(
+    verts: &[ClipVertex],
+    n: DVec3,
+    plane_n: DVec3,
+    h_p: f64,
+) -> Result<Option<f64>> {
+    let count = verts.len();
+    let h2 = h_p * h_p;
+    let n_par = n.dot(plane_n);
+    let n_t = n - n_par * plane_n;
+    let mut transverse = 0.0;
+    let mut turning = 0.0;
+    let mut small = 0.0;
+    for i in 0..count {
+        let (a, b) = (verts[i], verts[(i + 1) % count]);
+        let e = b.u - a.u;
+        let len = e.length();
+        if len == 0.0 {
+            continue;
+        }
+        let e_hat = e / len;
+        // in-plane vectors from the foot point of x to the endpoints
+        let qa = a.r - plane_n.dot(a.r) * plane_n;
+        let qb = b.r - plane_n.dot(b.r) * plane_n;
+        let d = plane_n.dot(qa.cross(e_hat));
+        if h_p.abs() >= NEAR_PLANE_RATIO * d.abs() || d.is_nan() {
+            return Ok(None);
+        }
+        let dpsi = plane_n.dot(qa.cross(qb)).atan2(qa.dot(qb));
+        let sa = qa.dot(e_hat);
+        let (psi_a, psi_b) = ((sa / d.abs()).atan(), ((sa + len) / d.abs()).atan());
+        let eps = h2 / (d * d);
+        let mut g = 0.0;
+        for &(t, w) in gauss_legendre_16() {
+            let c = (psi_a + t * (psi_b - psi_a)).cos();
+            let c2e = eps * c * c;
+            g += w * c2e / (1.0 + c2e);
+        }
+        g *= (psi_b - psi_a).abs();
+        turning += dpsi;
+        small += g.copysign(dpsi);
+        transverse += edge_term(a.r, e, n_t, Order::Value)?.value;
+    }
+    let winding = (turning / std::f64::consts::TAU).round();
+    let parallel = winding - small * (0.5 * FRAC_1_PI);
+    Ok(Some(n_par * parallel + transverse))
+}
+
+/// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, 8x8
+/// Gauss-Legendre), with analytic derivatives of the integrand. Accurate when x is far from the
+/// triangle compared with its size. Signed by the triangle's orientation (`N` right-handed).
+fn triangle_rule(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, n: DVec3, order: Order) -> Deriv3 {
     let rule = gauss_legendre();
     let mut out = Deriv3::constant(0.0);
-    let a = verts[0];
-    for k in 1..verts.len() - 1 {
-        let ab = verts[k].u - a.u;
-        let bc = verts[k + 1].u - verts[k].u;
-        let normal = ab.cross(verts[k + 1].u - a.u); // 2·area·N̂
-        let c_t = normal.dot(a.r);
-        let mut q0 = 0.0;
-        let mut q1 = DVec3::ZERO;
-        let mut q2 = DMat3::ZERO;
-        for &(s, ws) in rule {
-            for &(t, wt) in rule {
-                let weight = ws * wt * s;
-                let r = a.r + s * ab + (s * t) * bc;
-                let inv2 = 1.0 / r.length_squared();
-                let inv4 = inv2 * inv2;
-                let nr = n.dot(r);
-                q0 += weight * nr * inv4;
-                if order.gradient() {
-                    let inv6 = inv4 * inv2;
-                    q1 += weight * (4.0 * nr * inv6 * r - inv4 * n);
-                    if order.hessian() {
-                        let inv8 = inv4 * inv4;
-                        q2 += (outer_self(r) * (24.0 * nr * inv8)
-                            - sym_outer(n, r) * (4.0 * inv6)
-                            - DMat3::IDENTITY * (4.0 * nr * inv6))
-                            * weight;
-                    }
+    let ab = b.u - a.u;
+    let bc = c.u - b.u;
+    let normal = ab.cross(c.u - a.u); // 2·area·N̂
+    let c_t = normal.dot(a.r);
+    let mut q0 = 0.0;
+    let mut q1 = DVec3::ZERO;
+    let mut q2 = DMat3::ZERO;
+    for &(s, ws) in rule {
+        for &(t, wt) in rule {
+            let weight = ws * wt * s;
+            let r = a.r + s * ab + (s * t) * bc;
+            let inv2 = 1.0 / r.length_squared();
+            let inv4 = inv2 * inv2;
+            let nr = n.dot(r);
+            q0 += weight * nr * inv4;
+            if order.gradient() {
+                let inv6 = inv4 * inv2;
+                q1 += weight * (4.0 * nr * inv6 * r - inv4 * n);
+                if order.hessian() {
+                    let inv8 = inv4 * inv4;
+                    q2 += (outer_self(r) * (24.0 * nr * inv8)
+                        - sym_outer(n, r) * (4.0 * inv6)
+                        - DMat3::IDENTITY * (4.0 * nr * inv6))
+                        * weight;
                 }
             }
         }
-        out.value += FRAC_1_PI * c_t * q0;
-        if order.gradient() {
-            out.gradient += FRAC_1_PI * (c_t * q1 - q0 * normal);
-            if order.hessian() {
-                out.hessian += (q2 * c_t - sym_outer(normal, q1)) * FRAC_1_PI;
-            }
+    }
+    out.value = FRAC_1_PI * c_t * q0;
+    if order.gradient() {
+        out.gradient = FRAC_1_PI * (c_t * q1 - q0 * normal);
+        if order.hessian() {
+            out.hessian = (q2 * c_t - sym_outer(normal, q1)) * FRAC_1_PI;
         }
     }
     out
 }
+
+fn accumulate(sum: &mut Deriv3, d: Deriv3) {
+    sum.value += d.value;
+    sum.gradient += d.gradient;
+    sum.hessian += d.hessian;
+}
+
+/// Signed form factor of the clipped loop by [`triangle_rule`] on its fan triangles.
+fn far_field(verts: &[ClipVertex], n: DVec3, order: Order) -> Deriv3 {
+    let mut out = Deriv3::constant(0.0);
+    for k in 1..verts.len() - 1 {
+        accumulate(
+            &mut out,
+            triangle_rule(&verts[0], &verts[k], &verts[k + 1], n, order),
+        );
+    }
+    out
+}
+
+/// Most triangles [`subdivided_quadrature`] may use before giving up.
+const MAX_PIECES: usize = 256;
+
+/// The fan triangles of the loop, bisected along their longest edge until each is far from x
+/// (centroid distance ≥ [`FAR_FIELD_RATIO`] × radius), then integrated by [`triangle_rule`].
+/// For polygons whose edge sum cancels (slivers, x near the plane) while x is not close to them.
+/// `None` if that would take more than [`MAX_PIECES`] triangles.
+fn subdivided_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {
+    let mut stack: SmallVec<[[ClipVertex; 3]; 16]> = SmallVec::new();
+    for k in 1..verts.len() - 1 {
+        stack.push([verts[0], verts[k], verts[k + 1]]);
+    }
+    let mut out = Deriv3::constant(0.0);
+    let mut pieces = 0;
+    while let Some(t) = stack.pop() {
+        let centroid = (t[0].r + t[1].r + t[2].r) / 3.0;
+        let radius = t
+            .iter()
+            .map(|v| (v.r - centroid).length())
+            .fold(0.0, f64::max);
+        if centroid.length() >= FAR_FIELD_RATIO * radius {
+            pieces += 1;
+            if pieces > MAX_PIECES {
+                return None;
+            }
+            accumulate(&mut out, triangle_rule(&t[0], &t[1], &t[2], n, order));
+            continue;
+        }
+        if stack.len() + pieces >= MAX_PIECES {
+            return None;
+        }
+        // bisect the longest edge (keeps the orientation of both halves)
+        let len = |i: usize| (t[(i + 1) % 3].u - t[i].u).length_squared();
+        let i = (0..3)
+            .max_by(|&p, &q| len(p).total_cmp(&len(q)))
+            .unwrap_or(0);
+        let (p, q, o) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
+        let m = ClipVertex {
+            u: (p.u + q.u) * 0.5,
+            r: (p.r + q.r) * 0.5,
+            on_line: false,
+        };
+        stack.push([p, m, o]);
+        stack.push([m, q, o]);
+    }
+    Some(out)
+}
+
+/// Above this ratio of `Σ|edge term|` to `|Σ edge term|` (the edge sum has lost more than ~1e4 ulps
+/// to cancellation), [`subdivided_quadrature`] is tried instead.
+const CANCELLATION_LIMIT: f64 = 1e2;
 
 /// The Hessian term from the motion of the clip line ℓ:
 /// `n nᵀ (|h_P| / (π ‖n_t‖)) ∫_{P∩ℓ} ds/‖r‖⁴`, with `P∩ℓ` the oriented clip edges (bridges of
@@ -388,10 +521,12 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         .map(|v| (v.r - centroid).length())
         .fold(0.0, f64::max);
     let far = centroid.length() >= FAR_FIELD_RATIO * radius;
+    let mut used_quadrature = far;
     let mut d = if far {
         far_field(&verts, n, order)
     } else {
         let mut sum = Deriv3::constant(0.0);
+        let mut magnitude = 0.0;
         for i in 0..verts.len() {
             let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
             let t = if cut && a.on_line && b.on_line {
@@ -399,11 +534,25 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
             } else {
                 edge_term(a.r, b.u - a.u, n, order)?
             };
-            sum.value += t.value;
-            sum.gradient += t.gradient;
-            sum.hessian += t.hessian;
+            magnitude += t.value.abs();
+            accumulate(&mut sum, t);
         }
-        sum
+        let mut quadrature = None;
+        if magnitude > CANCELLATION_LIMIT * sum.value.abs() {
+            quadrature = subdivided_quadrature(&verts, n, order);
+        }
+        match quadrature {
+            Some(q) => {
+                used_quadrature = true;
+                q
+            }
+            None => {
+                if let Some(v) = near_plane_value(&verts, n, plane.normal, h_p)? {
+                    sum.value = v;
+                }
+                sum
+            }
+        }
     };
     // The edge sum is positive when the polygon's right-hand normal points away from x.
     if h_p < 0.0 {
@@ -411,7 +560,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         d.gradient = -d.gradient;
         d.hessian = -d.hessian;
     }
-    if far && cut && order.hessian() {
+    if used_quadrature && cut && order.hessian() {
         d.hessian += clip_line_hessian(&verts, n, plane.normal, h_p)?;
     }
     // The clipped, visible part satisfies 0 ≤ F ≤ 1; rounding may step outside by an ulp.

@@ -25,7 +25,8 @@
 //! exact coordinate differences, so points 1e-12 off the plane still get a relative accuracy near
 //! machine precision. Every term of `D`, `∇D`, `HD` and of the quotient rules is of the size of the
 //! result far away (no cancellation), and inputs are rescaled by a power of two so that neither
-//! tiny (1e-300) nor huge (1e300) coordinates overflow or underflow intermediate products.
+//! tiny (1e-300) nor huge (1e300) coordinates overflow or underflow intermediate products (results
+//! that are themselves out of range give `Error::Degenerate`).
 
 use glam::{DMat3, DVec3};
 
@@ -262,10 +263,10 @@ fn robust_a(
         2
     };
     let a_num = r[v].dot(normal);
-    let bound = s[v] * (l2[i] * l2[j]).sqrt();
-    // Relative rounding error of the fast path is below ~4 eps · bound/|A|: accept it when that
-    // is below ~1.5e-14.
-    if a_num.abs() >= bound * (1.0 / 32.0) && normal != DVec3::ZERO {
+    // Relative rounding error of the fast path is below ~4 eps · s_v ‖e_i‖ ‖e_j‖ / |A|: accept it
+    // when that is below ~1.5e-14, i.e. |A| ≥ s_v ‖e_i‖ ‖e_j‖ / 32 (compared squared: no sqrt).
+    let bound2 = s[v] * s[v] * l2[i] * l2[j];
+    if a_num != 0.0 && a_num * a_num * 1024.0 >= bound2 && normal != DVec3::ZERO {
         return (a_num, normal);
     }
     let scale = |v: Dd3| v.scale(sc1).scale(sc2);

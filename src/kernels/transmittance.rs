@@ -91,3 +91,43 @@ fn scaled_length(d: DVec3) -> (DVec3, f64) {
     let len = v.length();
     (v / len, len * m)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn extreme_separations_keep_full_precision() {
+        // 1e-200 apart: the squared length would underflow to 0.
+        let (x, y) = (DVec3::new(3e-200, 0.0, 4e-200), DVec3::ZERO);
+        let d = transmittance(x, y, 1e199, Order::Gradient).unwrap();
+        let t = (-1e199f64 * 5e-200).exp();
+        assert!((d.value - t).abs() <= 1e-15 * t);
+        assert!(
+            (d.gradient - DVec3::new(-0.6, 0.0, -0.8) * 1e199 * t)
+                .abs()
+                .max_element()
+                <= 1e-15 * 1e199
+        );
+        // 5e200 apart: the squared length would overflow.
+        let x = DVec3::new(3e200, 0.0, 4e200);
+        let d = transmittance(x, y, 1e-210, Order::Hessian).unwrap();
+        let t = (-5e-10f64).exp();
+        assert!((d.value - t).abs() <= 1e-15);
+        assert!((d.gradient.x + 0.6e-210 * t).abs() <= 1e-15 * 1e-210);
+        // More than f64::MAX apart: documented limit 0.
+        let far = transmittance(
+            DVec3::splat(f64::MAX),
+            DVec3::splat(-f64::MAX),
+            1.0,
+            Order::Hessian,
+        );
+        assert_eq!(far.unwrap(), Deriv3::constant(0.0));
+        // Coincident points: value 1, derivatives undefined.
+        assert_eq!(transmittance(x, x, 1.0, Order::Value).unwrap().value, 1.0);
+        assert!(matches!(
+            transmittance(x, x, 1.0, Order::Gradient),
+            Err(Error::Degenerate(_))
+        ));
+    }
+}

@@ -1,0 +1,237 @@
+//! Radiance-cache benchmarks: lookups at 10k / 100k / 1M records with ~8 covering records per
+//! query, against a brute-force scan; inserts; 1 vs 2 threads; bytes per record.
+//!
+//! `cargo bench --bench cache -- --warm-up-time 1 --measurement-time 3`
+
+use std::hint::black_box;
+use std::time::{Duration, Instant};
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use glam::DVec3;
+use raddiff::cache::{Cache, CacheConfig, Extent, Record};
+
+const OVERLAP: f64 = 8.0;
+
+fn hash(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d049bb133111eb);
+    x ^ (x >> 31)
+}
+
+fn unit(seed: u64) -> f64 {
+    (hash(seed) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// Side of the square floor holding `n` records (density 1 record per unit area).
+fn side(n: usize) -> f64 {
+    (n as f64).sqrt()
+}
+
+/// Records uniformly on the floor z = 0, radii such that a point is covered by ~8 on average.
+fn record(i: usize, n: usize) -> Record<[f32; 3]> {
+    let s = side(n);
+    let r = (OVERLAP / std::f64::consts::PI).sqrt();
+    let k = i as u64 * 8;
+    Record {
+        position: DVec3::new(unit(k) * s, unit(k + 1) * s, 0.0),
+        normal: DVec3::new(unit(k + 2) * 0.01, unit(k + 3) * 0.01, 1.0),
+        value: [unit(k + 4) as f32, 0.5, 0.25],
+        gradient: Some([[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0; 3]]),
+        rotation_gradient: Some([[0.0; 3], [0.05; 3], [0.0; 3]]),
+        extent: Extent::isotropic(r * (0.8 + 0.4 * unit(k + 5))),
+    }
+}
+
+fn build(n: usize) -> Cache<[f32; 3]> {
+    let mut cache = Cache::new(CacheConfig::surface(3)).unwrap();
+    let t = Instant::now();
+    for i in 0..n {
+        cache.insert(&record(i, n)).unwrap();
+    }
+    let m = cache.memory();
+    let elapsed = t.elapsed();
+    cache.compact();
+    eprintln!(
+        "cache of {n} records built in {elapsed:.2?}: {} B/record stored, {:.0} B/record allocated, \
+         index {:.0} B/record ({:.0} after compact), {:.2} index entries/record",
+        m.bytes_per_record,
+        m.record_bytes as f64 / n as f64,
+        m.index_bytes as f64 / n as f64,
+        cache.memory().index_bytes as f64 / n as f64,
+        m.index_entries as f64 / n as f64
+    );
+    cache
+}
+
+fn queries(n: usize, count: usize) -> Vec<DVec3> {
+    let s = side(n);
+    (0..count as u64)
+        .map(|i| {
+            DVec3::new(
+                unit((1 << 40) | (i * 2)) * s,
+                unit((1 << 40) | (i * 2 + 1)) * s,
+                0.0,
+            )
+        })
+        .collect()
+}
+
+fn mean_covering(cache: &Cache<[f32; 3]>, qs: &[DVec3]) -> f64 {
+    let total: usize = qs
+        .iter()
+        .filter_map(|&q| cache.lookup(q, DVec3::Z).ok())
+        .map(|l| l.records)
+        .sum();
+    total as f64 / qs.len() as f64
+}
+
+fn lookups(c: &mut Criterion) {
+    let mut group = c.benchmark_group("cache_lookup");
+    group.sample_size(20).throughput(Throughput::Elements(1));
+    for n in [10_000usize, 100_000, 1_000_000] {
+        let cache = build(n);
+        let qs = queries(n, 1 << 16);
+        eprintln!(
+            "{n}: {:.2} covering records per query",
+            mean_covering(&cache, &qs)
+        );
+        let mut i = 0;
+        group.bench_function(format!("random/{n}"), |b| {
+            b.iter(|| {
+                i = (i + 1) & (qs.len() - 1);
+                black_box(cache.lookup(qs[i], DVec3::Z).ok())
+            })
+        });
+        if n == 1_000_000 {
+            // scanline-like coherence: successive queries 0.05 apart along rows
+            let s = side(n);
+            let row: Vec<DVec3> = (0..1 << 16)
+                .map(|k| {
+                    DVec3::new(
+                        (k % 4096) as f64 * 0.05 % s,
+                        100.0 + (k / 4096) as f64 * 0.05,
+                        0.0,
+                    )
+                })
+                .collect();
+            let mut j = 0;
+            group.bench_function(format!("coherent/{n}"), |b| {
+                b.iter(|| {
+                    j = (j + 1) & (row.len() - 1);
+                    black_box(cache.lookup(row[j], DVec3::Z).ok())
+                })
+            });
+            // 1 vs 2 threads: wall time for `iters` lookups per thread
+            for threads in [1usize, 2] {
+                group.throughput(Throughput::Elements(threads as u64));
+                group.bench_function(format!("threads/{threads}/{n}"), |b| {
+                    b.iter_custom(|iters| {
+                        let t = Instant::now();
+                        std::thread::scope(|sc| {
+                            for th in 0..threads {
+                                let (cache, qs) = (&cache, &qs);
+                                sc.spawn(move || {
+                                    for k in 0..iters as usize {
+                                        let q = qs[(k * 7 + th * 31) & (qs.len() - 1)];
+                                        black_box(cache.lookup(q, DVec3::Z).ok());
+                                    }
+                                });
+                            }
+                        });
+                        t.elapsed()
+                    })
+                });
+            }
+            group.throughput(Throughput::Elements(1));
+        }
+        if n == 10_000 {
+            // baseline: test every record's bounding sphere (what a cache without an index does)
+            let recs: Vec<(DVec3, f64)> = (0..n)
+                .map(|i| {
+                    let r = record(i, n);
+                    (r.position, r.extent.max_radius())
+                })
+                .collect();
+            let mut k = 0;
+            group.bench_function(format!("brute_force_scan/{n}"), |b| {
+                b.iter(|| {
+                    k = (k + 1) & (qs.len() - 1);
+                    let q = qs[k];
+                    black_box(
+                        recs.iter()
+                            .filter(|(p, r)| (q - *p).length_squared() < r * r)
+                            .count(),
+                    )
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+fn inserts(c: &mut Criterion) {
+    let mut group = c.benchmark_group("cache_insert");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(3));
+    let n = 20_000;
+    let recs: Vec<Record<[f32; 3]>> = (0..n).map(|i| record(i, n)).collect();
+    group.throughput(Throughput::Elements(n as u64));
+    group.bench_function(format!("fill/{n}"), |b| {
+        b.iter(|| {
+            let cache: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3)).unwrap();
+            for r in &recs {
+                cache.insert(r).unwrap();
+            }
+            black_box(cache.len())
+        })
+    });
+    // two threads inserting disjoint halves into one cache
+    group.bench_function(format!("fill_2_threads/{n}"), |b| {
+        b.iter(|| {
+            let cache: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3)).unwrap();
+            std::thread::scope(|sc| {
+                for half in recs.chunks(n / 2) {
+                    let cache = &cache;
+                    sc.spawn(move || {
+                        for r in half {
+                            cache.insert(r).unwrap();
+                        }
+                    });
+                }
+            });
+            black_box(cache.len())
+        })
+    });
+    group.finish();
+    for channels in [1usize, 3, 27] {
+        let cache: Cache<Vec<f32>> = Cache::new(CacheConfig::surface(channels)).unwrap();
+        for i in 0..100_000 {
+            let r = record(i, 100_000);
+            let rec = Record {
+                position: r.position,
+                normal: r.normal,
+                value: vec![1.0; channels],
+                gradient: None,
+                rotation_gradient: None,
+                extent: r.extent,
+            };
+            cache.insert(&rec).unwrap();
+        }
+        let m = cache.memory();
+        eprintln!(
+            "{channels} channels: {} B/record stored (budget {}), {:.0} B/record allocated, index {:.0} B/record",
+            m.bytes_per_record,
+            96 + 16 * channels,
+            m.record_bytes as f64 / 1e5,
+            m.index_bytes as f64 / 1e5
+        );
+    }
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(3));
+    targets = lookups, inserts
+}
+criterion_main!(benches);

@@ -1,0 +1,126 @@
+//! Command-line options of the demo.
+
+use std::path::PathBuf;
+
+use crate::caching::Metric;
+use crate::scene::SceneKind;
+
+pub const USAGE: &str = "\
+raddiff demo: irradiance caching with every error metric against a path-traced reference
+
+USAGE: cargo run --release --example demo -- [OPTIONS]
+
+OPTIONS:
+  --scene NAME        cornell | cornell-black | room | all           [default: cornell]
+  --metric NAME       split-sphere | bounded-split-sphere | gradient | hessian-unaware |
+                      hessian-isotropic | hessian-anisotropic | all  [default: all]
+  --records N         record count every metric is tuned to          [default: 1000]
+  --resolution W[xH]  image size in pixels                           [default: 192]
+  --threads N         worker threads (0: one per core)               [default: 0]
+  --gather MxN        gather strata per record (rays = M*N)          [default: 32x128]
+  --reference N       reference rays per pixel (a square number)     [default: 4096]
+  --thresholds N      error thresholds per metric for the error-against-time plot [default: 4]
+  --out DIR           output directory                               [default: out]
+  -h, --help          this text
+";
+
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub scenes: Vec<SceneKind>,
+    pub metrics: Vec<Metric>,
+    pub records: usize,
+    pub width: usize,
+    pub height: usize,
+    pub threads: usize,
+    pub gather_m: usize,
+    pub gather_n: usize,
+    pub reference_samples: usize,
+    pub thresholds: usize,
+    pub out: PathBuf,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            scenes: vec![SceneKind::Cornell],
+            metrics: Vec::new(),
+            records: 1000,
+            width: 192,
+            height: 192,
+            threads: 0,
+            gather_m: 32,
+            gather_n: 128,
+            reference_samples: 4096,
+            thresholds: 4,
+            out: PathBuf::from("out"),
+        }
+    }
+}
+
+fn number(flag: &str, value: &str) -> Result<usize, String> {
+    value
+        .parse::<usize>()
+        .map_err(|_| format!("{flag} expects a non-negative integer, got {value:?}"))
+}
+
+fn pair(flag: &str, value: &str) -> Result<(usize, usize), String> {
+    match value.split_once('x') {
+        Some((a, b)) => Ok((number(flag, a)?, number(flag, b)?)),
+        None => {
+            let a = number(flag, value)?;
+            Ok((a, a))
+        }
+    }
+}
+
+/// Parses the arguments (without the program name). `Ok(None)` means help was printed.
+pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Options>, String> {
+    let mut o = Options::default();
+    let mut metric = "all".to_string();
+    let mut it = args.into_iter();
+    while let Some(flag) = it.next() {
+        if flag == "-h" || flag == "--help" {
+            print!("{USAGE}");
+            return Ok(None);
+        }
+        let value = it
+            .next()
+            .ok_or_else(|| format!("{flag} needs a value (see --help)"))?;
+        match flag.as_str() {
+            "--scene" => {
+                o.scenes = if value == "all" {
+                    SceneKind::ALL.to_vec()
+                } else {
+                    vec![SceneKind::parse(&value)
+                        .ok_or_else(|| format!("unknown scene {value:?} (see --help)"))?]
+                }
+            }
+            "--metric" => metric = value,
+            "--records" => o.records = number(&flag, &value)?.max(1),
+            "--resolution" => (o.width, o.height) = pair(&flag, &value)?,
+            "--threads" => o.threads = number(&flag, &value)?,
+            "--gather" => (o.gather_m, o.gather_n) = pair(&flag, &value)?,
+            "--reference" => o.reference_samples = number(&flag, &value)?,
+            "--thresholds" => o.thresholds = number(&flag, &value)?.max(1),
+            "--out" => o.out = PathBuf::from(value),
+            _ => return Err(format!("unknown option {flag:?} (see --help)")),
+        }
+    }
+    if o.width == 0 || o.height == 0 || o.width * o.height > 4096 * 4096 {
+        return Err("--resolution must be between 1x1 and 4096x4096".into());
+    }
+    if o.gather_m < 2 || o.gather_n < 3 || o.gather_m * o.gather_n > 1 << 20 {
+        return Err("--gather needs M >= 2, N >= 3 and M*N <= 2^20".into());
+    }
+    let side = (o.reference_samples as f64).sqrt().round() as usize;
+    if side == 0 || side * side != o.reference_samples {
+        return Err("--reference must be a positive square number (e.g. 1024, 4096)".into());
+    }
+    o.metrics = if metric == "all" {
+        Metric::ALL.to_vec()
+    } else {
+        vec![Metric::parse(&metric)
+            .ok_or_else(|| format!("unknown metric {metric:?} (see --help)"))?]
+    };
+    Ok(Some(o))
+}

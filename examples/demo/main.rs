@@ -1,0 +1,239 @@
+//! The raddiff demo: scenes built in code, a path-traced reference of indirect irradiance, and
+//! irradiance caching with every error metric at equal record counts.
+//!
+//! Run `cargo run --release --example demo -- --help` for the options; images, the report and the
+//! plot are written under `out/`.
+
+mod bvh;
+mod caching;
+mod cli;
+mod derivs;
+mod geometry;
+mod image;
+mod lightmap;
+mod outputs;
+mod plot;
+mod render;
+mod report;
+mod scene;
+mod timing;
+
+use std::path::Path;
+use std::time::Instant;
+
+use glam::DVec3;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::caching::GatherStore;
+use crate::lightmap::LightMap;
+use crate::render::GBuffer;
+use crate::scene::Scene;
+
+fn progress(message: &str) -> ProgressBar {
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{msg:>24} [{bar:32}] {percent:>3}% {elapsed_precise} eta {eta}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    bar.set_message(message.to_string());
+    bar
+}
+
+/// The reference is the slow part and depends only on the scene, resolution and sample count: keep
+/// it under out/ and reuse it.
+fn load_or_compute_reference(
+    scene: &Scene,
+    lightmap: &LightMap,
+    gbuffer: &GBuffer,
+    samples: usize,
+    out: &Path,
+) -> std::io::Result<(Vec<DVec3>, f64)> {
+    let path = out.join(format!(
+        "{}-reference-v3-{}x{}-{}.f64",
+        scene.kind.name(),
+        gbuffer.width,
+        gbuffer.height,
+        samples
+    ));
+    let count = gbuffer.width * gbuffer.height;
+    if let Ok(bytes) = std::fs::read(&path) {
+        if bytes.len() == count * 24 + 8 {
+            let f = |i: usize| f64::from_le_bytes(bytes[8 * i..8 * i + 8].try_into().unwrap());
+            let seconds = f(0);
+            let values = (0..count)
+                .map(|p| DVec3::new(f(1 + 3 * p), f(2 + 3 * p), f(3 + 3 * p)))
+                .collect();
+            return Ok((values, seconds));
+        }
+    }
+    let side = (samples as f64).sqrt().round() as usize;
+    let start = Instant::now();
+    let values = render::reference(scene, lightmap, gbuffer, side, side, &progress("reference"));
+    let seconds = start.elapsed().as_secs_f64();
+    let mut bytes = Vec::with_capacity(count * 24 + 8);
+    bytes.extend_from_slice(&seconds.to_le_bytes());
+    for v in &values {
+        for c in v.to_array() {
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    std::fs::write(&path, bytes)?;
+    Ok((values, seconds))
+}
+
+fn run() -> Result<(), String> {
+    let Some(options) = cli::parse(std::env::args().skip(1))? else {
+        return Ok(());
+    };
+    if options.threads > 0 {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(options.threads)
+            .build_global()
+            .map_err(|e| e.to_string())?;
+    }
+    std::fs::create_dir_all(&options.out).map_err(|e| e.to_string())?;
+    for &kind in &options.scenes {
+        let scene = Scene::build(kind);
+        let name = kind.name();
+        println!(
+            "== scene {name}: {} primitives, {}x{} pixels, {} threads",
+            scene.bvh.primitive_count(),
+            options.width,
+            options.height,
+            rayon::current_num_threads()
+        );
+        let start = Instant::now();
+        let lightmap = LightMap::build(&scene, &progress("light map"));
+        let gbuffer = GBuffer::build(&scene, &lightmap, options.width, options.height);
+        println!(
+            "   light map and primary hits: {:.2} s",
+            start.elapsed().as_secs_f64()
+        );
+        let (reference, ref_seconds) = load_or_compute_reference(
+            &scene,
+            &lightmap,
+            &gbuffer,
+            options.reference_samples,
+            &options.out,
+        )
+        .map_err(|e| e.to_string())?;
+        println!(
+            "   reference ({} rays per pixel): {ref_seconds:.2} s",
+            options.reference_samples
+        );
+        let final_image: Vec<DVec3> = gbuffer
+            .pixels
+            .iter()
+            .zip(&reference)
+            .map(|(p, e)| p.base + p.indirect_weight * *e)
+            .collect();
+        let exposure = image::auto_exposure(&final_image);
+        let save = |img: image::Rgb8, file: &str| {
+            let path = options.out.join(format!("{name}-{file}.png"));
+            img.save(&path)
+                .map_err(|e| format!("{}: {e}", path.display()))
+        };
+        save(
+            image::tonemap(options.width, options.height, &final_image, exposure),
+            "reference",
+        )?;
+        save(
+            image::tonemap(
+                options.width,
+                options.height,
+                &reference,
+                image::auto_exposure(&reference),
+            ),
+            "reference-indirect-irradiance",
+        )?;
+
+        let store = GatherStore::new(
+            &scene,
+            &lightmap,
+            &gbuffer,
+            options.gather_m,
+            options.gather_n,
+            options.metrics.iter().any(|m| m.uses_hessian()),
+        )
+        .map_err(|e| e.to_string())?;
+        let mut scene_report = report::SceneReport::new(name, &options, ref_seconds);
+        let bar = progress("caches");
+        bar.set_length((options.metrics.len() * options.thresholds) as u64);
+        for &metric in &options.metrics {
+            if metric == caching::Metric::HessianUnaware && scene.medium.is_some() {
+                println!("   hessian-unaware: not defined in a participating medium, skipped");
+                continue;
+            }
+            let tuned =
+                caching::tune(&store, metric, options.records).map_err(|e| e.to_string())?;
+            let render: Vec<DVec3> = gbuffer
+                .pixels
+                .iter()
+                .zip(&tuned.image)
+                .map(|(p, e)| p.base + p.indirect_weight * *e)
+                .collect();
+            let file = format!("cache-{}", metric.name());
+            save(
+                image::tonemap(options.width, options.height, &render, exposure),
+                &file,
+            )?;
+            save(
+                outputs::records_overlay(
+                    &scene.camera,
+                    &gbuffer,
+                    &render,
+                    exposure,
+                    &tuned.records,
+                ),
+                &format!("{file}-records"),
+            )?;
+            save(
+                outputs::error_map(&gbuffer, &tuned.image, &reference, report::ERROR_MAP_SCALE),
+                &format!("{file}-error"),
+            )?;
+            // Error against time: the same metric at thresholds around the tuned one.
+            let mut sweep = Vec::new();
+            for k in 0..options.thresholds {
+                let factor = 2f64.powf(0.75 * (k as f64 - 1.0));
+                let run = if factor == 1.0 {
+                    None
+                } else {
+                    Some(
+                        caching::run(&store, metric, tuned.parameter * factor)
+                            .map_err(|e| e.to_string())?,
+                    )
+                };
+                let r = run.as_ref().unwrap_or(&tuned);
+                sweep.push(report::Row::new(r, &reference, &gbuffer));
+                bar.inc(1);
+            }
+            scene_report.add(report::Row::new(&tuned, &reference, &gbuffer), sweep);
+        }
+        bar.finish_and_clear();
+        scene_report.overhead(&store, &reference);
+        scene_report
+            .write(&options.out)
+            .map_err(|e| e.to_string())?;
+        plot::error_against_time(
+            &options.out.join(format!("{name}-error-time.png")),
+            &format!(
+                "{name}: error against time, {} rays per record",
+                store.rays_per_gather()
+            ),
+            &scene_report.series(),
+        )
+        .unwrap_or_else(|e| eprintln!("   plot skipped: {e}"));
+        print!("{}", scene_report.markdown());
+    }
+    Ok(())
+}
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("error: {e}");
+        std::process::exit(2);
+    }
+}

@@ -1,0 +1,205 @@
+//! The report: records, time and RMS error against the reference per metric (markdown and CSV),
+//! and the series of the error-against-time plot.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::caching::{rms_error, GatherStore, Run};
+use crate::cli::Options;
+use crate::plot::Series;
+use crate::render::GBuffer;
+
+/// Error maps show |error| / mean reference luminance from 0 to this value.
+pub const ERROR_MAP_SCALE: f64 = 0.1;
+
+/// One cache run's figures.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub metric: &'static str,
+    pub parameter: f64,
+    pub records: usize,
+    pub trace_seconds: f64,
+    pub raddiff_seconds: f64,
+    pub cache_seconds: f64,
+    pub rms: f64,
+    pub relative_rms: f64,
+    pub uncovered: usize,
+}
+
+impl Row {
+    pub fn new(run: &Run, reference: &[DVec3], gbuffer: &GBuffer) -> Row {
+        let (rms, relative_rms) = rms_error(&run.image, reference, gbuffer);
+        Row {
+            metric: run.metric.name(),
+            parameter: run.parameter,
+            records: run.records.len(),
+            trace_seconds: run.trace_seconds,
+            raddiff_seconds: run.raddiff_seconds,
+            cache_seconds: run.cache_seconds,
+            rms,
+            relative_rms,
+            uncovered: run.uncovered,
+        }
+    }
+
+    fn total(&self) -> f64 {
+        self.trace_seconds + self.raddiff_seconds + self.cache_seconds
+    }
+}
+
+pub struct SceneReport {
+    scene: String,
+    settings: String,
+    tuned: Vec<Row>,
+    sweeps: Vec<Vec<Row>>,
+    overhead: String,
+}
+
+impl SceneReport {
+    pub fn new(scene: &str, o: &Options, reference_seconds: f64) -> Self {
+        SceneReport {
+            scene: scene.to_string(),
+            settings: format!(
+                "{}x{} pixels, gathers of {}x{} = {} rays, target {} records, reference {} rays per \
+                 pixel ({reference_seconds:.1} s wall), {} threads",
+                o.width,
+                o.height,
+                o.gather_m,
+                o.gather_n,
+                o.gather_m * o.gather_n,
+                o.records,
+                o.reference_samples,
+                rayon::current_num_threads()
+            ),
+            tuned: Vec::new(),
+            sweeps: Vec::new(),
+            overhead: String::new(),
+        }
+    }
+
+    pub fn add(&mut self, tuned: Row, sweep: Vec<Row>) {
+        self.tuned.push(tuned);
+        self.sweeps.push(sweep);
+    }
+
+    /// raddiff's derivative work against the ray casting of the same gathers.
+    pub fn overhead(&mut self, store: &GatherStore, reference: &[DVec3]) {
+        let (mut trace, mut gradient, mut hessian, mut count) = (0.0, 0.0, 0.0, 0usize);
+        for g in store.computed() {
+            trace += g.trace_seconds;
+            gradient += g.gradient_seconds;
+            hessian += g.hessian_seconds;
+            count += 1;
+        }
+        if count == 0 || trace <= 0.0 {
+            return;
+        }
+        let per = |s: f64| s / count as f64 * 1e6;
+        let mut text = format!(
+            "Per gather of {} rays, over {count} gathers: ray casting (with the hit radiance) \
+             {:.0} µs; raddiff irradiance + Ward-Heckbert gradients {:.0} µs ({:.1}% of ray casting)",
+            store.rays_per_gather(),
+            per(trace),
+            per(gradient),
+            100.0 * gradient / trace,
+        );
+        if hessian > 0.0 {
+            let _ = write!(
+                text,
+                "; raddiff occlusion-aware gradient + Hessian {:.0} µs ({:.1}%); together {:.1}%",
+                per(hessian),
+                100.0 * hessian / trace,
+                100.0 * (gradient + hessian) / trace,
+            );
+        }
+        let _ = writeln!(
+            text,
+            ". The gathers' own irradiance differs from the reference at their pixels by {:.4} \
+             (relative RMS): the noise floor of every cache here.",
+            store.gather_noise(reference)
+        );
+        self.overhead = text;
+    }
+
+    pub fn markdown(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "## Scene `{}`\n\n{}\n", self.scene, self.settings);
+        let _ = writeln!(
+            s,
+            "| metric | parameter | records | CPU time (s) | ray casting (s) | raddiff (s) | cache (s) | RMS error | relative RMS error |\n|---|---|---|---|---|---|---|---|---|"
+        );
+        for r in &self.tuned {
+            let _ = writeln!(
+                s,
+                "| {} | {:.4} | {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.5} | {:.4} |",
+                r.metric,
+                r.parameter,
+                r.records,
+                r.total(),
+                r.trace_seconds,
+                r.raddiff_seconds,
+                r.cache_seconds,
+                r.rms,
+                r.relative_rms
+            );
+        }
+        let _ = writeln!(
+            s,
+            "\nCPU time is the sum of the measured per-record costs (ray casting, raddiff's evaluation) \
+             and the cache's placement and rendering lookups; RMS error is over the luminance of the \
+             indirect irradiance at every pixel, relative RMS error divides it by the reference's RMS.\n"
+        );
+        if !self.overhead.is_empty() {
+            let _ = writeln!(s, "{}", self.overhead);
+        }
+        s
+    }
+
+    pub fn series(&self) -> Vec<Series> {
+        self.sweeps
+            .iter()
+            .filter(|rows| !rows.is_empty())
+            .map(|rows| Series {
+                name: rows[0].metric.to_string(),
+                points: rows.iter().map(|r| (r.total(), r.relative_rms)).collect(),
+            })
+            .collect()
+    }
+
+    /// Writes `<scene>-report.md` and `<scene>-report.csv` (every run of every sweep).
+    pub fn write(&self, out: &Path) -> std::io::Result<()> {
+        std::fs::write(
+            out.join(format!("{}-report.md", self.scene)),
+            self.markdown(),
+        )?;
+        let mut csv = std::fs::File::create(out.join(format!("{}-report.csv", self.scene)))?;
+        writeln!(
+            csv,
+            "scene,metric,tuned,parameter,records,cpu_seconds,trace_seconds,raddiff_seconds,cache_seconds,rms,relative_rms,uncovered_pixels"
+        )?;
+        let tuned = self.tuned.iter().map(|r| (true, r));
+        let swept = self.sweeps.iter().flatten().map(|r| (false, r));
+        for (is_tuned, r) in tuned.chain(swept) {
+            writeln!(
+                csv,
+                "{},{},{},{},{},{},{},{},{},{},{},{}",
+                self.scene,
+                r.metric,
+                is_tuned,
+                r.parameter,
+                r.records,
+                r.total(),
+                r.trace_seconds,
+                r.raddiff_seconds,
+                r.cache_seconds,
+                r.rms,
+                r.relative_rms,
+                r.uncovered
+            )?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,211 @@
+//! What a renderer hands back after tracing a layout's directions, and its validation.
+
+use glam::DVec3;
+
+use super::layout::{Frame, Layout, LayoutKind};
+use crate::error::{ensure_finite, Error, Result};
+
+/// In-scattered (and emitted) radiance of a participating medium, marched along every direction.
+///
+/// Step `s` of direction `i` is the sample at `t_s = (s + 0.5)·step` and stands for the interval
+/// `[s·step, (s+1)·step]`; the medium is marched over `[0, steps·step]`. Entries for steps at or
+/// beyond a direction's hit distance are never read (they may hold anything finite).
+#[derive(Debug, Clone, Copy)]
+pub struct MediaRadiance<'a> {
+    /// `σ_s·L_i (+ emission)` before attenuation, radiance per unit length; `M·N·steps·channels`
+    /// values, index `(i·steps + s)·channels + c`.
+    pub radiance: &'a [f32],
+    /// Optional gradient of `radiance` with respect to the sample position (world axes), per L²;
+    /// `M·N·steps·channels·3` values, index `((i·steps + s)·channels + c)·3 + axis`.
+    pub gradient: Option<&'a [f32]>,
+    /// Number of march steps per direction, ≥ 1.
+    pub steps: usize,
+    /// Step length (L), finite and > 0.
+    pub step: f64,
+}
+
+/// What the rays of one gather found. Index `i = j·N + k` throughout.
+#[derive(Debug, Clone, Copy)]
+pub struct GatherInput<'a> {
+    /// The traced world directions, as returned by [`Layout::directions`] (unit, each inside its
+    /// stratum within [`GatherInput::DIRECTION_TOLERANCE`]).
+    pub directions: &'a [DVec3],
+    /// Hit distances (L), > 0; `f64::INFINITY` for a miss (distant environment).
+    pub distance: &'a [f64],
+    /// Radiance leaving each hit towards x (or the environment's, for a miss), before attenuation;
+    /// `M·N·channels` values, index `i·channels + c`. Any finite value (signed data allowed).
+    pub radiance: &'a [f32],
+    /// Values per direction, ≥ 1.
+    pub channels: usize,
+    /// Homogeneous extinction coefficient (1/L) between x and the hits, finite and ≥ 0. With
+    /// `sigma_t > 0` a miss is attenuated to zero (the medium is unbounded).
+    pub sigma_t: f64,
+    /// Optional marched media radiance (Jarosz et al. 2008, Sec. 5).
+    pub media: Option<MediaRadiance<'a>>,
+}
+
+fn size_error(what: &str, got: usize, want: Option<usize>, formula: &str) -> Error {
+    match want {
+        Some(w) => Error::InvalidArgument(format!(
+            "{what} holds {got} values, expected {formula} = {w}"
+        )),
+        None => Error::InvalidArgument(format!("{what}: {formula} overflows")),
+    }
+}
+
+fn check_len(what: &str, got: usize, want: Option<usize>, formula: &str) -> Result<()> {
+    if want == Some(got) {
+        Ok(())
+    } else {
+        Err(size_error(what, got, want, formula))
+    }
+}
+
+fn check_all_finite(values: &[f32], what: &str) -> Result<()> {
+    // Branch-free per block so the scan vectorizes; locate the culprit only on failure.
+    for (b, block) in values.chunks(256).enumerate() {
+        if block.iter().fold(false, |bad, v| bad | !v.is_finite()) {
+            let i = b * 256 + block.iter().position(|v| !v.is_finite()).unwrap_or(0);
+            return Err(Error::InvalidArgument(format!(
+                "{what}[{i}] is not finite ({})",
+                values[i]
+            )));
+        }
+    }
+    Ok(())
+}
+
+impl GatherInput<'_> {
+    /// How far a traced direction may be from unit length (`| |ω|² − 1 |`) and from its stratum
+    /// (in sin²θ or cosθ across a ring wall, in the sine of the angle across an azimuth wall).
+    ///
+    /// cbindgen:ignore
+    pub const DIRECTION_TOLERANCE: f64 = 1e-6;
+
+    /// Checks sizes and values against `layout` and the (orthonormalized) `frame`.
+    pub(crate) fn validate(&self, layout: &Layout, frame: &Frame) -> Result<()> {
+        let cells = layout.len();
+        if self.channels == 0 {
+            return Err(Error::InvalidArgument("channels must be >= 1".into()));
+        }
+        check_len("directions", self.directions.len(), Some(cells), "m*n")?;
+        check_len("distance", self.distance.len(), Some(cells), "m*n")?;
+        check_len(
+            "radiance",
+            self.radiance.len(),
+            cells.checked_mul(self.channels),
+            "m*n*channels",
+        )?;
+        ensure_finite(self.sigma_t, "sigma_t")?;
+        if self.sigma_t < 0.0 {
+            return Err(Error::InvalidArgument(format!(
+                "sigma_t must be >= 0 (got {})",
+                self.sigma_t
+            )));
+        }
+        for (i, &d) in self.distance.iter().enumerate() {
+            if d.is_nan() || d <= 0.0 {
+                return Err(Error::InvalidArgument(format!(
+                    "distance[{i}] = {d}: distances must be > 0, or INFINITY for a miss"
+                )));
+            }
+        }
+        check_all_finite(self.radiance, "radiance")?;
+        if let Some(media) = &self.media {
+            if media.steps == 0 {
+                return Err(Error::InvalidArgument("media steps must be >= 1".into()));
+            }
+            ensure_finite(media.step, "media step")?;
+            if media.step <= 0.0 || !(media.step * media.steps as f64).is_finite() {
+                return Err(Error::InvalidArgument(format!(
+                    "media step must be > 0 with a finite march length (step = {}, steps = {})",
+                    media.step, media.steps
+                )));
+            }
+            let samples = cells
+                .checked_mul(media.steps)
+                .and_then(|v| v.checked_mul(self.channels));
+            check_len(
+                "media_radiance",
+                media.radiance.len(),
+                samples,
+                "m*n*steps*channels",
+            )?;
+            check_all_finite(media.radiance, "media_radiance")?;
+            if let Some(g) = media.gradient {
+                check_len(
+                    "media_radiance_gradient",
+                    g.len(),
+                    samples.and_then(|v| v.checked_mul(3)),
+                    "m*n*steps*3*channels",
+                )?;
+                check_all_finite(g, "media_radiance_gradient")?;
+            }
+        }
+        check_directions(layout, frame, self.directions)
+    }
+}
+
+/// Every direction unit, in the right half-space, and (polar and sphere layouts) inside its stratum.
+fn check_directions(layout: &Layout, frame: &Frame, directions: &[DVec3]) -> Result<()> {
+    let tol = GatherInput::DIRECTION_TOLERANCE;
+    let (m, n) = (layout.m as usize, layout.n as usize);
+    // Azimuth walls as unit 2D vectors (φ_k = 2πk/N), N+1 of them (the last one is the first).
+    let walls: Vec<(f64, f64)> = if layout.kind == LayoutKind::Concentric || n < 2 {
+        Vec::new()
+    } else {
+        (0..=n)
+            .map(|k| {
+                let (s, c) = (std::f64::consts::TAU * (k % n) as f64 / n as f64).sin_cos();
+                (c, s)
+            })
+            .collect()
+    };
+    let b = frame.bitangent();
+    for (j, row) in directions.chunks_exact(n).enumerate() {
+        // The ring's range in sin²θ (polar) or cosθ (sphere), widened by the tolerance.
+        let (lo, hi) = match layout.kind {
+            LayoutKind::CosinePolar => (j as f64 / m as f64 - tol, (j + 1) as f64 / m as f64 + tol),
+            LayoutKind::Sphere => (
+                1.0 - 2.0 * (j + 1) as f64 / m as f64 - tol,
+                1.0 - 2.0 * j as f64 / m as f64 + tol,
+            ),
+            LayoutKind::Concentric => (f64::NEG_INFINITY, f64::INFINITY),
+        };
+        for (k, &w) in row.iter().enumerate() {
+            let lx = w.dot(frame.tangent);
+            let ly = w.dot(b);
+            let lz = w.dot(frame.normal);
+            let ring = match layout.kind {
+                LayoutKind::Sphere => lz,
+                _ => lx * lx + ly * ly,
+            };
+            let unit = (w.length_squared() - 1.0).abs() <= 2.0 * tol;
+            let above = lz >= -tol || layout.kind == LayoutKind::Sphere;
+            let azimuth = walls.is_empty() || {
+                let (a0, a1) = (walls[k], walls[k + 1]);
+                a0.0 * ly - a0.1 * lx >= -tol && lx * a1.1 - ly * a1.0 >= -tol
+            };
+            // NaN fails every comparison, so one test covers non-finite input too.
+            if unit && above && ring >= lo && ring <= hi && azimuth {
+                continue;
+            }
+            let why = if !w.is_finite() {
+                "is not finite"
+            } else if !unit {
+                "is not unit"
+            } else if !above {
+                "is below the horizon"
+            } else if !(ring >= lo && ring <= hi) {
+                "is outside its stratum's ring (wrong frame or index order?)"
+            } else {
+                "is outside its stratum's azimuth range (wrong frame or index order?)"
+            };
+            return Err(Error::InvalidArgument(format!(
+                "directions[{}] = {w} {why} (j = {j}, k = {k})",
+                j * n + k
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,382 @@
+//! Exact wall integrals of the polar and sphere layouts, for the Ward-Heckbert gradient.
+//!
+//! Model: each stratum shows one piece of the scene with constant radiance. Translating x by δ
+//! moves a scene point at distance r in direction ω by `dω = −(δ − (δ·ω)ω)/r` on the unit sphere,
+//! so a wall between strata a and b drifts, and a gains `∫_wall w(ω) (δ·ν_a)/r dl` of weighted solid
+//! angle (ν_a: the wall's unit normal pointing into a; w = cosθ for irradiance, 1 for fluence).
+//! Ward and Heckbert let the wall move with the closer of the two hits. The gradient is then
+//! `Σ_walls (L_a − L_b)/min(r_a, r_b) · W`, with `W = ∫_wall w ν_a dl` a vector depending on the
+//! layout only. For θ/φ walls it has a closed form:
+//!
+//! * ring wall at `θ_j` between rings j−1 and j, column k (a = ring j, ν_a = e_θ):
+//!   `W = w(θ_j) sinθ_j (cosθ_j (sinφ_{k+1} − sinφ_k), cosθ_j (cosφ_k − cosφ_{k+1}), −sinθ_j Δφ)`;
+//! * azimuth wall at `φ_k` between columns k−1 and k, ring j (a = column k, ν_a = e_φ):
+//!   `W = (−sinφ_k, cosφ_k, 0) ∫_{θ_j}^{θ_{j+1}} w(θ) dθ`.
+//!
+//! These are the exact integrals of Jarosz et al. 2008 eq. (12)-(13) (which approximate them with
+//! centre values; ERRATA 3 fixes the azimuthal wall's distance and sign) extended to all three
+//! axes: the normal component follows from the same wall motion.
+
+use std::f64::consts::TAU;
+
+use std::sync::{Arc, Mutex};
+
+use glam::{DVec2, DVec3};
+use smallvec::SmallVec;
+
+use super::layout::{Layout, LayoutKind};
+
+/// Per-ring and per-column wall data of a polar or sphere layout (local frame).
+pub(crate) struct Walls {
+    /// Per column k: `(cos φ_k, sin φ_k)` of its lower azimuth wall.
+    pub(crate) phi_wall: Vec<(f64, f64)>,
+    /// Per column k: `(sinφ_{k+1} − sinφ_k, cosφ_k − cosφ_{k+1})` = `∫ (cosφ, sinφ) dφ` over the column.
+    pub(crate) column: Vec<(f64, f64)>,
+    /// Per ring wall j (index j, used for j ≥ 1): `(w sinθ cosθ, −w sin²θ Δφ)` at `θ_j`.
+    pub(crate) ring_wall: Vec<(f64, f64)>,
+    /// Per ring j: `∫_{θ_j}^{θ_{j+1}} w(θ) dθ`.
+    pub(crate) ring_span: Vec<f64>,
+    /// Per ring j: `∫_{θ_j}^{θ_{j+1}} sin²θ dθ` (rotational gradient of the cosine-polar layout).
+    pub(crate) ring_sin2: Vec<f64>,
+}
+
+impl Walls {
+    /// Wall data for a [`LayoutKind::CosinePolar`] or [`LayoutKind::Sphere`] layout.
+    pub(crate) fn new(layout: &Layout) -> Walls {
+        debug_assert!(layout.kind != LayoutKind::Concentric);
+        let (m, n) = (layout.m as usize, layout.n as usize);
+        let d_phi = TAU / n as f64;
+        let phi_wall: Vec<(f64, f64)> = (0..n)
+            .map(|k| {
+                let (s, c) = (d_phi * k as f64).sin_cos();
+                (c, s)
+            })
+            .collect();
+        let column = (0..n)
+            .map(|k| {
+                let (c0, s0) = phi_wall[k];
+                let (c1, s1) = phi_wall[(k + 1) % n];
+                (s1 - s0, c0 - c1)
+            })
+            .collect();
+        // (sin θ_j, cos θ_j) at the ring boundaries j = 0..=M.
+        let bound: Vec<(f64, f64)> = (0..=m)
+            .map(|j| {
+                let f = j as f64 / m as f64;
+                match layout.kind {
+                    LayoutKind::Sphere => {
+                        let c = 1.0 - 2.0 * f;
+                        (((1.0 - c) * (1.0 + c)).max(0.0).sqrt(), c)
+                    }
+                    _ => (f.sqrt(), (1.0 - f).max(0.0).sqrt()),
+                }
+            })
+            .collect();
+        let sphere = layout.kind == LayoutKind::Sphere;
+        let weight = |c: f64| if sphere { 1.0 } else { c };
+        let ring_wall = bound
+            .iter()
+            .map(|&(s, c)| (weight(c) * s * c, -weight(c) * s * s * d_phi))
+            .collect();
+        let theta = |(s, c): (f64, f64)| s.atan2(c);
+        let ring_span = (0..m)
+            .map(|j| {
+                if sphere {
+                    theta(bound[j + 1]) - theta(bound[j])
+                } else {
+                    bound[j + 1].0 - bound[j].0
+                }
+            })
+            .collect();
+        // ∫ sin²θ dθ = (θ − sinθ cosθ)/2
+        let g = |b: (f64, f64)| 0.5 * (theta(b) - b.0 * b.1);
+        let ring_sin2 = (0..m).map(|j| g(bound[j + 1]) - g(bound[j])).collect();
+        Walls {
+            phi_wall,
+            column,
+            ring_wall,
+            ring_span,
+            ring_sin2,
+        }
+    }
+
+    /// `∫ w ν dl` of the ring wall at the top of ring `j ≥ 1`, column `k` (local frame).
+    #[cfg(test)]
+    pub(crate) fn ring_wall_vector(&self, j: usize, k: usize) -> DVec3 {
+        let (a, b) = self.ring_wall[j];
+        let (c1, c2) = self.column[k];
+        DVec3::new(a * c1, a * c2, b)
+    }
+
+    /// `∫ w ν dl` of the azimuth wall at the start of column `k`, ring `j` (local frame).
+    #[cfg(test)]
+    pub(crate) fn azimuth_wall_vector(&self, j: usize, k: usize) -> DVec3 {
+        let (c, s) = self.phi_wall[k];
+        let r = self.ring_span[j];
+        DVec3::new(-s * r, c * r, 0.0)
+    }
+
+    /// `∫_cell sinθ e_φ dω` of stratum `(j, k)` (local frame): the rotational-gradient weight.
+    #[cfg(test)]
+    pub(crate) fn rotation_vector(&self, j: usize, k: usize) -> DVec3 {
+        let (c1, c2) = self.column[k];
+        DVec3::new(-c2, c1, 0.0) * self.ring_sin2[j]
+    }
+}
+
+/// Wall vectors `∫_wall w ν dl` (w = cosθ) of the concentric layout, whose walls are the images of
+/// the grid lines of `[−1, 1]²` under the Shirley-Chiu map, lifted to the hemisphere.
+///
+/// For a wall traced as `ω(t)` with `t ∈ [0, 1]` along its grid line, `ν dl = ∓(ω × ω') dt` (the
+/// sign picks the side). With `ω = (d, z)`, `z = sqrt(1 − |d|²)` and `z' = −(d·d')/z`, the integrand
+/// `z (ω × ω')` is `(−(d_y (d·d') + z² d_y'), z² d_x' + d_x (d·d'), z (d × d'))`: bounded up to the
+/// horizon. The map is smooth inside each of its four wedges and only continuous across the
+/// diagonals `|a| = |b|`, so each wall is split there and integrated by 4-point Gauss-Legendre
+/// per piece.
+pub(crate) struct ConcentricWalls {
+    /// Wall between `(j−1, k)` and `(j, k)`, index `(j−1)·N + k`, pointing into `(j, k)`.
+    pub(crate) first_axis: Vec<DVec3>,
+    /// Wall between `(j, k−1)` and `(j, k)`, index `j·(N−1) + k − 1`, pointing into `(j, k)`.
+    pub(crate) second_axis: Vec<DVec3>,
+}
+
+/// Recently used concentric wall sets, keyed by (M, N): they depend on the grid only, and a
+/// renderer gathers with the same layout again and again.
+static CONCENTRIC_CACHE: Mutex<Vec<(u32, u32, Arc<ConcentricWalls>)>> = Mutex::new(Vec::new());
+const CONCENTRIC_CACHE_SIZE: usize = 4;
+
+impl ConcentricWalls {
+    /// The wall set of an M×N concentric grid, from a small process-wide cache (computed on a miss).
+    pub(crate) fn cached(layout: &Layout) -> Arc<ConcentricWalls> {
+        let key = (layout.m, layout.n);
+        let lock = || CONCENTRIC_CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(hit) = lock().iter().find(|e| (e.0, e.1) == key) {
+            return Arc::clone(&hit.2);
+        }
+        let walls = Arc::new(ConcentricWalls::new(layout));
+        let mut cache = lock();
+        if cache.len() >= CONCENTRIC_CACHE_SIZE {
+            cache.remove(0);
+        }
+        cache.push((key.0, key.1, Arc::clone(&walls)));
+        walls
+    }
+
+    pub(crate) fn new(layout: &Layout) -> ConcentricWalls {
+        let (m, n) = (layout.m as usize, layout.n as usize);
+        let sa = |j: usize| 2.0 * j as f64 / m as f64 - 1.0;
+        let sb = |k: usize| 2.0 * k as f64 / n as f64 - 1.0;
+        let mut first_axis = Vec::with_capacity((m - 1) * n);
+        for j in 1..m {
+            for k in 0..n {
+                // Travelling towards +b, the cell with the larger a lies on the right.
+                let s0 = DVec2::new(sa(j), sb(k));
+                let s1 = DVec2::new(sa(j), sb(k + 1));
+                first_axis.push(-grid_line_integral(s0, s1));
+            }
+        }
+        let mut second_axis = Vec::with_capacity(m * (n - 1));
+        for j in 0..m {
+            for k in 1..n {
+                // Travelling towards +a, the cell with the larger b lies on the left.
+                let s0 = DVec2::new(sa(j), sb(k));
+                let s1 = DVec2::new(sa(j + 1), sb(k));
+                second_axis.push(grid_line_integral(s0, s1));
+            }
+        }
+        ConcentricWalls {
+            first_axis,
+            second_axis,
+        }
+    }
+}
+
+/// `∫ z (ω × ω') dt` along the image of the axis-aligned segment `s0 → s1` of the square.
+fn grid_line_integral(s0: DVec2, s1: DVec2) -> DVec3 {
+    let delta = s1 - s0;
+    // Split where the segment crosses a diagonal |a| = |b| (a kink of the concentric map).
+    let mut cuts: SmallVec<[f64; 4]> = SmallVec::new();
+    cuts.push(0.0);
+    let (fixed, moving0, moving_len) = if delta.x == 0.0 {
+        (s0.x, s0.y, delta.y)
+    } else {
+        (s0.y, s0.x, delta.x)
+    };
+    for target in [fixed.abs(), -fixed.abs()] {
+        let t = (target - moving0) / moving_len;
+        if t > 0.0 && t < 1.0 && !cuts.contains(&t) {
+            cuts.push(t);
+        }
+    }
+    cuts.push(1.0);
+    cuts.sort_by(f64::total_cmp);
+    const X: [f64; 2] = [0.339_981_043_584_856, 0.861_136_311_594_053];
+    const W: [f64; 2] = [0.652_145_154_862_546, 0.347_854_845_137_454];
+    let on_horizon = |t: f64| {
+        let p = s0 + delta * t;
+        p.x.abs().max(p.y.abs()) >= 1.0 - 1e-12
+    };
+    let mut sum = DVec3::ZERO;
+    for piece in cuts.windows(2) {
+        let (t0, t1) = (piece[0], piece[1]);
+        // z ~ sqrt(distance to the horizon) at a horizon end: substitute t = end ∓ len·u² there,
+        // which makes the integrand smooth again.
+        let end = if on_horizon(t1) {
+            Some((t1, -1.0))
+        } else if on_horizon(t0) {
+            Some((t0, 1.0))
+        } else {
+            None
+        };
+        for (x, w) in X.iter().zip(W) {
+            for u in [0.5 - 0.5 * x, 0.5 + 0.5 * x] {
+                let (t, jac) = match end {
+                    Some((e, sign)) => {
+                        let len = t1 - t0;
+                        (e + sign * len * u * u, 2.0 * len * u)
+                    }
+                    None => (t0 + (t1 - t0) * u, t1 - t0),
+                };
+                sum += integrand(s0 + delta * t, delta) * (0.5 * w * jac);
+            }
+        }
+    }
+    sum
+}
+
+/// `z (ω × ω')` at square point `s` for the velocity `ds/dt = v`.
+fn integrand(s: DVec2, v: DVec2) -> DVec3 {
+    use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+    let (a, b) = (s.x, s.y);
+    // d and its derivatives ∂d/∂a, ∂d/∂b inside the wedge that contains s.
+    let (d, da, db) = if a.abs() > b.abs() {
+        let (sp, cp) = (FRAC_PI_4 * (b / a)).sin_cos();
+        let radial = DVec2::new(cp, sp);
+        let tangential = DVec2::new(-sp, cp);
+        (
+            radial * a,
+            radial - tangential * (FRAC_PI_4 * b / a),
+            tangential * FRAC_PI_4,
+        )
+    } else if b != 0.0 {
+        let (sp, cp) = (FRAC_PI_2 - FRAC_PI_4 * (a / b)).sin_cos();
+        let radial = DVec2::new(cp, sp);
+        let tangential = DVec2::new(-sp, cp);
+        (
+            radial * b,
+            -tangential * FRAC_PI_4,
+            radial + tangential * (FRAC_PI_4 * a / b),
+        )
+    } else {
+        // The centre: never a quadrature node (nodes are interior to each piece).
+        return DVec3::ZERO;
+    };
+    let dd = da * v.x + db * v.y;
+    let z2 = (1.0 - d.length_squared()).max(0.0);
+    let dot = d.dot(dd);
+    DVec3::new(
+        -(d.y * dot + z2 * dd.y),
+        z2 * dd.x + d.x * dot,
+        z2.sqrt() * d.perp_dot(dd),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Concentric wall vectors against a dense midpoint rule on the map itself, with tangents by
+    /// central differences and the sign fixed by the side of the cell it points into. (The midpoint
+    /// rule is first-order across the map's kinks at the diagonals: 1e-4 relative.)
+    #[test]
+    fn concentric_wall_vectors_match_dense_quadrature() {
+        use super::super::layout::concentric_to_local;
+        let layout = Layout::new(LayoutKind::Concentric, 5, 7, 0).unwrap();
+        let walls = ConcentricWalls::new(&layout);
+        let dense = |s0: DVec2, s1: DVec2| {
+            let q = 20000;
+            let mut sum = DVec3::ZERO;
+            for i in 0..q {
+                let t = (i as f64 + 0.5) / q as f64;
+                let h = 1e-7;
+                let w = concentric_to_local(s0 + (s1 - s0) * t);
+                let dw = (concentric_to_local(s0 + (s1 - s0) * (t + h))
+                    - concentric_to_local(s0 + (s1 - s0) * (t - h)))
+                    / (2.0 * h);
+                sum += w.cross(dw) * (w.z / q as f64);
+            }
+            sum
+        };
+        let sa = |j: usize| 2.0 * j as f64 / 5.0 - 1.0;
+        let sb = |k: usize| 2.0 * k as f64 / 7.0 - 1.0;
+        for (j, k) in [(1, 0), (2, 3), (3, 6), (4, 2)] {
+            let want = -dense(DVec2::new(sa(j), sb(k)), DVec2::new(sa(j), sb(k + 1)));
+            let got = walls.first_axis[(j - 1) * 7 + k];
+            assert!(
+                (got - want).length() < 1e-4 * want.length().max(1e-3),
+                "{got} {want}"
+            );
+            // it points from (j-1, k) into (j, k)
+            let from = layout.grid_to_local(j as f64 - 0.5, k as f64 + 0.5);
+            let into = layout.grid_to_local(j as f64 + 0.5, k as f64 + 0.5);
+            assert!(got.dot(into - from) > 0.0);
+        }
+        for (j, k) in [(0, 1), (2, 3), (4, 6), (2, 4)] {
+            let want = dense(DVec2::new(sa(j), sb(k)), DVec2::new(sa(j + 1), sb(k)));
+            let got = walls.second_axis[j * 6 + k - 1];
+            assert!(
+                (got - want).length() < 1e-4 * want.length().max(1e-3),
+                "{got} {want}"
+            );
+            let from = layout.grid_to_local(j as f64 + 0.5, k as f64 - 0.5);
+            let into = layout.grid_to_local(j as f64 + 0.5, k as f64 + 0.5);
+            assert!(got.dot(into - from) > 0.0);
+        }
+    }
+
+    /// Numerical ∫ w ν dl along the walls, by midpoint quadrature on θ and φ.
+    #[test]
+    fn wall_vectors_match_numerical_wall_integrals() {
+        for kind in [LayoutKind::CosinePolar, LayoutKind::Sphere] {
+            let layout = Layout::new(kind, 5, 6, 0).unwrap();
+            let walls = Walls::new(&layout);
+            let sphere = kind == LayoutKind::Sphere;
+            let w = |t: f64| if sphere { 1.0 } else { t.cos() };
+            let q = 20000;
+            let (j, k) = (2, 4);
+            let super::super::layout::StratumBounds::Polar { theta, phi } =
+                layout.stratum_bounds(j, k)
+            else {
+                panic!()
+            };
+            // ring wall at theta.0: ∫ w(θ) e_θ sinθ dφ
+            let mut ring = DVec3::ZERO;
+            let mut rot = DVec3::ZERO;
+            for i in 0..q {
+                let p = phi.0 + (phi.1 - phi.0) * (i as f64 + 0.5) / q as f64;
+                let t = theta.0;
+                let e_theta = DVec3::new(t.cos() * p.cos(), t.cos() * p.sin(), -t.sin());
+                ring += e_theta * w(t) * t.sin() * (phi.1 - phi.0) / q as f64;
+                for l in 0..200 {
+                    let tt = theta.0 + (theta.1 - theta.0) * (l as f64 + 0.5) / 200.0;
+                    let e_phi = DVec3::new(-p.sin(), p.cos(), 0.0);
+                    rot += e_phi * tt.sin() * tt.sin() * (phi.1 - phi.0) / q as f64
+                        * (theta.1 - theta.0)
+                        / 200.0;
+                }
+            }
+            let got = walls.ring_wall_vector(j as usize, k as usize);
+            assert!((got - ring).length() < 1e-8, "{kind:?} {got} {ring}");
+            let got = walls.rotation_vector(j as usize, k as usize);
+            assert!((got - rot).length() < 1e-6, "{kind:?} {got} {rot}");
+            let mut az = 0.0;
+            for i in 0..q {
+                let t = theta.0 + (theta.1 - theta.0) * (i as f64 + 0.5) / q as f64;
+                az += w(t) * (theta.1 - theta.0) / q as f64;
+            }
+            let e_phi = DVec3::new(-phi.0.sin(), phi.0.cos(), 0.0);
+            let got = walls.azimuth_wall_vector(j as usize, k as usize);
+            assert!((got - e_phi * az).length() < 1e-9, "{kind:?}");
+        }
+    }
+}
