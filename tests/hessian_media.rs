@@ -352,7 +352,7 @@ fn invalid_media_gathers_are_rejected() {
         step: 0.0,
     });
     assert!(flatland_derivatives(&g, Order::Gradient).is_err());
-    let topo = Topology::new(LayoutKind::CosinePolar, 4, 4).unwrap();
+    let topo = Topology::new(LayoutKind::CosinePolar, 4, 8).unwrap();
     let d3 = vec![DVec3::Z; 16];
     let g3 = MediaGather {
         directions: &d3,

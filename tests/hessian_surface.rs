@@ -52,7 +52,7 @@ fn mat_norm(a: DMat3) -> f64 {
 #[test]
 fn all_miss_hemisphere_closes_to_form_factor_one() {
     for kind in KINDS {
-        for (m, n, seed) in [(4, 8, 0u64), (7, 5, 3), (16, 16, 9)] {
+        for (m, n, seed) in [(4, 8, 0u64), (7, 6, 3), (16, 16, 9)] {
             let dirs = hessian_common::directions(kind, m, n, seed, DVec3::Z, DVec3::X);
             let dist = vec![f64::INFINITY; m * n];
             let rad = vec![2.0f32; m * n];
@@ -309,6 +309,47 @@ fn invalid_gathers_are_rejected() {
     let mut g = sg.gather();
     g.radiance = &rad;
     assert!(occlusion_derivatives(&topo, &g, Order::Gradient).is_err());
-    let small = Topology::new(LayoutKind::CosinePolar, 4, 4).unwrap();
+    let small = Topology::new(LayoutKind::CosinePolar, 4, 6).unwrap();
     assert!(occlusion_derivatives(&small, &sg.gather(), Order::Gradient).is_err());
+}
+
+#[test]
+fn fill_from_gather_writes_row_major_per_channel() {
+    use raddiff::gather::hessian_fill::{fill_from_gather, occlusion_outputs};
+    use raddiff::gather::{Frame, GatherInput, Layout, ValidGather};
+    let rects = scene();
+    let x = DVec3::new(0.05, 0.1, 0.0);
+    let sg = SceneGather::new(LayoutKind::Concentric, 8, 8, 0, x, &rects, 0.5);
+    let rgb: Vec<f32> = sg.radiance.iter().flat_map(|&l| [l, 0.5 * l]).collect();
+    let layout = Layout::new(LayoutKind::Concentric, 8, 8, 0).unwrap();
+    let frame = Frame::new(x, DVec3::Z, DVec3::X).unwrap();
+    let input = GatherInput {
+        directions: &sg.directions,
+        distance: &sg.distance,
+        radiance: &rgb,
+        channels: 2,
+        sigma_t: 0.0,
+        media: None,
+    };
+    let valid = ValidGather::new(&layout, &frame, &input).unwrap();
+    let (g, h) = occlusion_outputs(&valid, true).unwrap();
+    let mut og = [0.0; 6];
+    let mut hess = [0.0; 18];
+    fill_from_gather(&valid, Some(&mut og), Some(&mut hess)).unwrap();
+    for c in 0..2 {
+        assert_eq!(&og[3 * c..3 * c + 3], &g[c].to_array());
+        for row in 0..3 {
+            for col in 0..3 {
+                assert_eq!(hess[9 * c + 3 * row + col], h[c].col(col)[row]);
+            }
+        }
+    }
+    assert!((h[1] * 2.0 - h[0])
+        .to_cols_array()
+        .iter()
+        .all(|v| v.abs() < 1e-12 * mat_norm(h[0])));
+    let mut short = [7.0; 5];
+    assert!(fill_from_gather(&valid, Some(&mut short), None).is_err());
+    assert_eq!(short, [7.0; 5]);
+    fill_from_gather(&valid, None, None).unwrap();
 }

@@ -161,8 +161,11 @@ impl Scene {
         if normal.dot(ray.direction) > 0.0 {
             normal = -normal;
         }
+        // The point is pulled back along the ray by a relative 1e-6: where two surfaces meet (a
+        // wall on the floor) a hit can land exactly on the seam, and rays leaving a point on both
+        // planes at once would pass through the neighbouring surface (light leaks into corners).
         Some(SurfacePoint {
-            position: prim.point(hit.s, hit.t),
+            position: ray.origin + ray.direction * (hit.distance * (1.0 - 1e-6)),
             normal,
             hit,
         })

@@ -195,7 +195,7 @@ struct Scene {
       lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
       hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
     }
-    epsilon = 1e-4 * std::sqrt(dot(hi - lo, hi - lo));
+    epsilon = 1e-6 * std::sqrt(dot(hi - lo, hi - lo));  // ray tnear; hit points are pulled back by 1e-4
     for (uint32_t t = 0; t < nt; ++t) {
       const V3 ke = material(t).ke;
       if (ke.x + ke.y + ke.z > 0) emitters.push_back(t);
@@ -320,7 +320,7 @@ bool make_record(const Scene &scene, const Settings &cfg, V3 p, V3 n, uint64_t s
     distance[i] = hit.distance;
     V3 l;
     if (std::isfinite(hit.distance)) {
-      const V3 y = p + d * hit.distance;
+      const V3 y = p + d * (hit.distance * (1 - 1e-4));
       const V3 kd = scene.material(hit.triangle).kd;
       if (kd.x + kd.y + kd.z > 0) l = kd * (1.0 / kPi) * scene.direct(y, hit.normal, 1, mix(seed + i));
     }
@@ -497,7 +497,9 @@ int run(const Settings &cfg) {
     const double py = (1.0 - 2.0 * (i / w + 0.5) / h) * tan_half;
     const V3 d = normalize(fwd + right * px + up * py);
     const Scene::Hit hit = scene.intersect(cfg.eye, d);
-    if (std::isfinite(hit.distance)) primary[i] = {true, cfg.eye + d * hit.distance, hit.normal};
+    // Pull the point back along the ray (relative 1e-4): a hit exactly on a seam (wall on floor)
+    // would otherwise send gather rays through the neighbouring surface (light leaking into corners).
+    if (std::isfinite(hit.distance)) primary[i] = {true, cfg.eye + d * (hit.distance * (1 - 1e-4)), hit.normal};
   });
 
   // Pass 1: fill the cache coarse to fine; all threads look up and insert concurrently.

@@ -1,6 +1,6 @@
 //! Occlusion-aware irradiance gradients and Hessians from a hemisphere gather (Schwarzhaupt et al.,
 //! thesis ch. 6), and the occlusion-unaware radiometric and geometric Hessians they improve on
-//! (thesis ch. 4, Jarosz et al. 2012).
+//! (thesis ch. 4, Jarosz et al. 2012; in [`super::hessian_unaware`]).
 //!
 //! # Method
 //!
@@ -9,11 +9,13 @@
 //! The mesh is a snapshot of the scene seen from x: where a near occluder meets a far wall, long
 //! "occlusion triangles" join them. Each triangle Δ carries the radiance `L_Δ` of its **farthest**
 //! vertex (what a translation of x disoccludes) and irradiance is `E(x) ≈ Σ_Δ L_Δ F_Δ(x)` with the
-//! point-to-triangle form factors of the mesh held fixed (eq. 6.1); the gradient and Hessian are the
-//! sums of the form-factor gradients and Hessians weighted by `L_Δ` (eq. 6.2-6.3).
+//! point-to-triangle form factors of the mesh held fixed (eq. 6.1; reported times π, in the
+//! gather's irradiance units); the gradient and Hessian are the sums of the form-factor gradients and
+//! Hessians weighted by `L_Δ` (eq. 6.2-6.3).
 //!
-//! A triangle's form factor is the sum of its three edge terms (`kernels::edge_form_factor`), and
-//! an interior edge appears in its two triangles with opposite orientations, so
+//! A triangle's form factor is the sum of its three edge terms (the closed-form edge integral
+//! behind `kernels::edge_form_factor`, called directly on validated, power-of-two rescaled
+//! positions), and an interior edge appears in its two triangles with opposite orientations, so
 //!
 //! ```text
 //!   Σ_Δ L_Δ F_Δ = Σ_edges (L_left − L_right) f_edge      (L_right = 0 on the horizon)
@@ -22,15 +24,17 @@
 //! Every edge term is computed once (about 3 per sample instead of 6), and edges whose two
 //! triangles carry the same radiance cost nothing. With unit radiance everywhere only the horizon
 //! edges remain: that is the mesh's total form factor and its derivatives ([`Geometric`]), which is
-//! exactly 1 for any mesh whose horizon ring lies in the tangent plane.
+//! exactly 1 for any mesh whose horizon ring lies in the tangent plane (within 1e-13 in the tests).
+//! The edge terms are signed, so quads folded over by jitter cancel correctly.
 //!
 //! # Misses
 //!
 //! A ray that hits nothing sees a distant environment. Its vertex is placed along its direction
 //! at [`FAR_DISTANCE_FACTOR`] times the largest finite hit distance (times 1 L if nothing was hit).
 //! All positions are relative to x (x is the origin of every kernel call), so nothing is lost to
-//! large world coordinates, and the kernels evaluate near-to-far occlusion edges in the edge's own
-//! frame without cancellation. Edges between two environment vertices with equal radiance cost
+//! large world coordinates, and every edge is measured from its nearer end, so near-to-far
+//! occlusion edges keep full precision (from the far end the edge's foot point would lose about
+//! log10(far/near) digits). Edges between two environment vertices with equal radiance cost
 //! nothing and cannot cancel; the far geometry's own derivatives fall like `1/FAR_DISTANCE_FACTOR`.
 //!
 //! # Participating media

@@ -69,8 +69,10 @@ pub struct Topology {
 pub const REVERSED: u32 = 1 << 31;
 
 impl Topology {
-    /// The mesh of an `m`×`n` layout. Needs at least 3 azimuthal strata for the polar and sphere
-    /// layouts and a 2×2 grid for the concentric one (`InvalidArgument` otherwise).
+    /// The mesh of an `m`×`n` layout. Needs at least 6 azimuthal strata for the polar and sphere
+    /// layouts and a 3×3 grid for the concentric one (`InvalidArgument` otherwise): with jitter,
+    /// two neighbouring samples can be up to two strata apart in azimuth, and the horizon ring only
+    /// winds once around x while every such gap stays well below π.
     pub fn new(connectivity: LayoutKind, m: usize, n: usize) -> Result<Topology> {
         let samples = m
             .checked_mul(n)
@@ -87,9 +89,9 @@ impl Topology {
         };
         match connectivity {
             LayoutKind::CosinePolar => {
-                if m < 1 || n < 3 {
+                if m < 1 || n < 6 {
                     return Err(Error::InvalidArgument(format!(
-                        "a polar layout needs m >= 1 and n >= 3 to be triangulated (got {m}x{n})"
+                        "a polar layout needs m >= 1 and n >= 6 to be triangulated (got {m}x{n})"
                     )));
                 }
                 // Horizon vertices (ring "M") after the samples, then the pole.
@@ -125,9 +127,9 @@ impl Topology {
                 }
             }
             LayoutKind::Sphere => {
-                if m < 1 || n < 3 {
+                if m < 1 || n < 6 {
                     return Err(Error::InvalidArgument(format!(
-                        "a sphere layout needs m >= 1 and n >= 3 to be triangulated (got {m}x{n})"
+                        "a sphere layout needs m >= 1 and n >= 6 to be triangulated (got {m}x{n})"
                     )));
                 }
                 let north = vertex_source.len() as u32;
@@ -154,9 +156,9 @@ impl Topology {
                 }
             }
             LayoutKind::Concentric => {
-                if m < 2 || n < 2 {
+                if m < 3 || n < 3 {
                     return Err(Error::InvalidArgument(format!(
-                        "a concentric layout needs m, n >= 2 to be triangulated (got {m}x{n})"
+                        "a concentric layout needs m, n >= 3 to be triangulated (got {m}x{n})"
                     )));
                 }
                 // Grid axis j runs along the square's x, k along its y: (j, k) → (j+1, k) →
@@ -317,7 +319,7 @@ mod tests {
 
     #[test]
     fn polar_mesh_is_a_consistently_oriented_disc() {
-        for (m, n) in [(1, 3), (2, 5), (8, 32), (3, 4)] {
+        for (m, n) in [(1, 6), (2, 7), (8, 32), (3, 8)] {
             let topo = Topology::new(LayoutKind::CosinePolar, m, n).unwrap();
             assert_eq!(topo.vertex_count(), m * n + n + 1);
             assert_eq!(topo.triangles.len(), n + 2 * m * n);
@@ -327,7 +329,7 @@ mod tests {
 
     #[test]
     fn concentric_mesh_is_a_consistently_oriented_disc() {
-        for (m, n) in [(2, 2), (3, 5), (16, 16), (7, 4)] {
+        for (m, n) in [(3, 3), (3, 5), (16, 16), (7, 4)] {
             let topo = Topology::new(LayoutKind::Concentric, m, n).unwrap();
             let perimeter = 2 * (m + n) - 4;
             assert_eq!(topo.vertex_count(), m * n + perimeter);
@@ -337,7 +339,7 @@ mod tests {
 
     #[test]
     fn sphere_mesh_is_a_closed_consistently_oriented_surface() {
-        for (m, n) in [(1, 3), (4, 8), (16, 32)] {
+        for (m, n) in [(1, 6), (4, 8), (16, 32)] {
             let topo = Topology::new(LayoutKind::Sphere, m, n).unwrap();
             let v = topo.vertex_count() as i64;
             let t = topo.triangles.len() as i64;
@@ -348,7 +350,9 @@ mod tests {
 
     #[test]
     fn too_small_layouts_are_rejected() {
-        assert!(Topology::new(LayoutKind::CosinePolar, 4, 2).is_err());
+        assert!(Topology::new(LayoutKind::CosinePolar, 4, 5).is_err());
+        assert!(Topology::new(LayoutKind::Sphere, 4, 5).is_err());
+        assert!(Topology::new(LayoutKind::Concentric, 2, 8).is_err());
         assert!(Topology::new(LayoutKind::CosinePolar, 0, 8).is_err());
         assert!(Topology::new(LayoutKind::Concentric, 1, 8).is_err());
     }
