@@ -5,8 +5,8 @@
 //! debug build on an idle machine, 2 s on a busy one). The calls run on all cores
 //! (`std::thread::available_parallelism`), each thread with its own random stream. Nine calls in
 //! ten use the 2000-triangle bumpy sphere (`bumpy_sphere(10, ..)`), one in ten the 9680-triangle
-//! one of the report (`bumpy_sphere(22, ..)`); both have interpolated normals, and every call uses the
-//! default [`ScatterOptions`] (nothing is relaxed for speed).
+//! one of the report (`bumpy_sphere(22, ..)`); both have interpolated normals, and every call uses
+//! the default [`ScatterOptions`] (nothing is relaxed for speed).
 //!
 //! Measured in release on the 2-core machine: 1648 calls/s on 2 threads when idle (30 000 calls in
 //! 18.2 s); 1e6 calls passed in 879 s while shared with other jobs (1137 calls/s, 1177
