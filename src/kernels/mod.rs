@@ -1,6 +1,7 @@
 //! Closed-form derivative kernels: pure functions returning value, gradient and Hessian with respect
 //! to an evaluation point `x`. Each takes an [`Order`](crate::Order) and does no work above it.
 
+mod dd;
 pub mod form_factor;
 pub mod marched;
 pub mod polygon;

@@ -14,8 +14,9 @@ use smallvec::SmallVec;
 use crate::error::{ensure_finite3, Error, Result};
 use crate::{Deriv3, Order};
 
+use super::dd;
 use super::form_factor::{
-    clip_edge_term, dd, edge_term_exact, outer_self, sym_outer, EdgeFrame, ExactEnds,
+    clip_edge_term, edge_term_exact, outer_self, sym_outer, EdgeFrame, ExactEnds,
 };
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).

@@ -15,7 +15,8 @@
 
 use glam::{DMat2, DVec2};
 
-use super::solid_angle::{pow2_scale, Dd};
+use super::dd::Dd;
+use super::solid_angle::pow2_scale;
 use crate::error::{ensure_finite2, Error, Result};
 use crate::{Deriv2, Order};
 

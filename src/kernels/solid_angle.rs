@@ -30,6 +30,7 @@
 
 use glam::{DMat3, DVec3};
 
+use super::dd::{Dd, Dd3};
 use crate::error::{ensure_finite3, Error, Result};
 use crate::{Deriv3, Order};
 
@@ -269,12 +270,12 @@ fn robust_a(
     if a_num != 0.0 && a_num * a_num * 1024.0 >= bound2 && normal != DVec3::ZERO {
         return (a_num, normal);
     }
-    let scale = |v: Dd3| v.scale(sc1).scale(sc2);
+    let scale = |v: Dd3| v.scale_pow2(sc1).scale_pow2(sc2);
     let ra = scale(Dd3::diff(y[0], x));
     let eb = scale(Dd3::diff(y[1], y[0]));
     let ec = scale(Dd3::diff(y[2], y[0]));
-    let n = eb.cross(ec);
-    (ra.dot(n).to_f64(), n.to_dvec3())
+    let n = eb.cross(&ec);
+    (ra.dot(&n).to_f64(), n.to_dvec3())
 }
 
 /// D and, if `derivs`, `p_k`, `c_k` and `∇D` (see the module documentation), evaluated in
@@ -287,11 +288,11 @@ struct Refined {
 }
 
 fn refine_near_edge(x: DVec3, y: [DVec3; 3], sc1: f64, sc2: f64, derivs: bool) -> Refined {
-    let r = y.map(|v| Dd3::diff(v, x).scale(sc1).scale(sc2));
-    let s = r.map(|v| v.dot(v).sqrt());
-    let d01 = r[0].dot(r[1]);
-    let d12 = r[1].dot(r[2]);
-    let d20 = r[2].dot(r[0]);
+    let r = y.map(|v| Dd3::diff(v, x).scale_pow2(sc1).scale_pow2(sc2));
+    let s = r.map(|v| v.dot(&v).sqrt());
+    let d01 = r[0].dot(&r[1]);
+    let d12 = r[1].dot(&r[2]);
+    let d20 = r[2].dot(&r[0]);
     let d = s[0]
         .mul(s[1])
         .mul(s[2])
@@ -315,7 +316,10 @@ fn refine_near_edge(x: DVec3, y: [DVec3; 3], sc1: f64, sc2: f64, derivs: bool) -
             p[1].div(s[1]).add(s[2]).add(s[0]),
             p[2].div(s[2]).add(s[0]).add(s[1]),
         ];
-        let g = r[0].mul(c[0]).add(r[1].mul(c[1])).add(r[2].mul(c[2]));
+        let g = r[0]
+            .scale(c[0])
+            .add(&r[1].scale(c[1]))
+            .add(&r[2].scale(c[2]));
         out.p = p.map(Dd::to_f64);
         out.c = c.map(Dd::to_f64);
         out.grad_d = -g.to_dvec3();
@@ -347,152 +351,6 @@ pub(crate) fn rescale(mut d: Deriv3, f1: f64, f2: f64) -> Deriv3 {
 #[inline]
 fn outer(u: DVec3, v: DVec3) -> DMat3 {
     DMat3::from_cols(u * v.x, u * v.y, u * v.z)
-}
-
-/// A double-double number `hi + lo` (~106 significant bits): error-free transformations used to
-/// evaluate orientation determinants accurately in near-singular configurations.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Dd {
-    hi: f64,
-    lo: f64,
-}
-
-impl Dd {
-    /// `a − b` exactly.
-    pub(crate) fn diff(a: f64, b: f64) -> Dd {
-        let (hi, lo) = two_sum(a, -b);
-        Dd { hi, lo }
-    }
-
-    pub(crate) fn add(self, o: Dd) -> Dd {
-        let (s, e) = two_sum(self.hi, o.hi);
-        let e = e + self.lo + o.lo;
-        let hi = s + e;
-        Dd {
-            hi,
-            lo: e - (hi - s),
-        }
-    }
-
-    pub(crate) fn neg(self) -> Dd {
-        Dd {
-            hi: -self.hi,
-            lo: -self.lo,
-        }
-    }
-
-    pub(crate) fn sub(self, o: Dd) -> Dd {
-        self.add(o.neg())
-    }
-
-    pub(crate) fn mul(self, o: Dd) -> Dd {
-        let p = self.hi * o.hi;
-        let e = self.hi.mul_add(o.hi, -p) + (self.hi * o.lo + self.lo * o.hi);
-        let hi = p + e;
-        Dd {
-            hi,
-            lo: e - (hi - p),
-        }
-    }
-
-    /// Square root (one Newton correction of the f64 root); 0 for non-positive input.
-    pub(crate) fn sqrt(self) -> Dd {
-        if self.hi <= 0.0 {
-            return Dd { hi: 0.0, lo: 0.0 };
-        }
-        let s = self.hi.sqrt();
-        let p = s * s;
-        let e = s.mul_add(s, -p);
-        let corr = ((self.hi - p) - e + self.lo) / (2.0 * s);
-        let hi = s + corr;
-        Dd {
-            hi,
-            lo: corr - (hi - s),
-        }
-    }
-
-    pub(crate) fn div(self, o: Dd) -> Dd {
-        let q1 = self.hi / o.hi;
-        let rem = self.sub(o.mul(Dd { hi: q1, lo: 0.0 }));
-        let q2 = rem.hi / o.hi;
-        let (hi, lo) = two_sum(q1, q2);
-        Dd { hi, lo }
-    }
-
-    /// Multiplication by a power of two (exact).
-    pub(crate) fn scale(self, f: f64) -> Dd {
-        Dd {
-            hi: self.hi * f,
-            lo: self.lo * f,
-        }
-    }
-
-    pub(crate) fn to_f64(self) -> f64 {
-        self.hi + self.lo
-    }
-}
-
-fn two_sum(a: f64, b: f64) -> (f64, f64) {
-    let s = a + b;
-    let bb = s - a;
-    (s, (a - (s - bb)) + (b - bb))
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Dd3 {
-    x: Dd,
-    y: Dd,
-    z: Dd,
-}
-
-impl Dd3 {
-    fn diff(a: DVec3, b: DVec3) -> Dd3 {
-        Dd3 {
-            x: Dd::diff(a.x, b.x),
-            y: Dd::diff(a.y, b.y),
-            z: Dd::diff(a.z, b.z),
-        }
-    }
-
-    fn scale(self, f: f64) -> Dd3 {
-        Dd3 {
-            x: self.x.scale(f),
-            y: self.y.scale(f),
-            z: self.z.scale(f),
-        }
-    }
-
-    fn cross(self, o: Dd3) -> Dd3 {
-        Dd3 {
-            x: self.y.mul(o.z).sub(self.z.mul(o.y)),
-            y: self.z.mul(o.x).sub(self.x.mul(o.z)),
-            z: self.x.mul(o.y).sub(self.y.mul(o.x)),
-        }
-    }
-
-    fn mul(self, f: Dd) -> Dd3 {
-        Dd3 {
-            x: self.x.mul(f),
-            y: self.y.mul(f),
-            z: self.z.mul(f),
-        }
-    }
-
-    fn add(self, o: Dd3) -> Dd3 {
-        Dd3 {
-            x: self.x.add(o.x),
-            y: self.y.add(o.y),
-            z: self.z.add(o.z),
-        }
-    }
-
-    fn dot(self, o: Dd3) -> Dd {
-        self.x.mul(o.x).add(self.y.mul(o.y)).add(self.z.mul(o.z))
-    }
-
-    fn to_dvec3(self) -> DVec3 {
-        DVec3::new(self.x.to_f64(), self.y.to_f64(), self.z.to_f64())
-    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,213 @@
+//! Double-double arithmetic (`hi + lo`, ~106 significant bits) from the error-free transformations
+//! two-sum and two-product (fused multiply-add). The kernels use it only for the few quantities that
+//! are near-singular in their inputs (heights over a plane or an edge line, exact coordinate
+//! differences), so the generic paths keep plain `f64` speed.
+
+use glam::DVec3;
+
+/// `a + b = s + err` exactly.
+pub(crate) fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// A double-double number `hi + lo` with `|lo| <= ulp(hi)/2`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Dd {
+    pub hi: f64,
+    pub lo: f64,
+}
+
+impl Dd {
+    /// `hi + lo`, renormalized.
+    pub(crate) fn new(hi: f64, lo: f64) -> Dd {
+        let (hi, lo) = two_sum(hi, lo);
+        Dd { hi, lo }
+    }
+
+    /// `a − b` exactly.
+    pub(crate) fn diff(a: f64, b: f64) -> Dd {
+        Dd::new(a, -b)
+    }
+
+    pub(crate) fn add(self, o: Dd) -> Dd {
+        let (s, e) = two_sum(self.hi, o.hi);
+        let e = e + self.lo + o.lo;
+        let hi = s + e;
+        Dd {
+            hi,
+            lo: e - (hi - s),
+        }
+    }
+
+    pub(crate) fn neg(self) -> Dd {
+        Dd {
+            hi: -self.hi,
+            lo: -self.lo,
+        }
+    }
+
+    pub(crate) fn sub(self, o: Dd) -> Dd {
+        self.add(o.neg())
+    }
+
+    pub(crate) fn mul(self, o: Dd) -> Dd {
+        let p = self.hi * o.hi;
+        let e = self.hi.mul_add(o.hi, -p) + (self.hi * o.lo + self.lo * o.hi);
+        let hi = p + e;
+        Dd {
+            hi,
+            lo: e - (hi - p),
+        }
+    }
+
+    pub(crate) fn div(self, o: Dd) -> Dd {
+        let q1 = self.hi / o.hi;
+        let rem = self.sub(o.mul(Dd { hi: q1, lo: 0.0 }));
+        let q2 = rem.hi / o.hi;
+        Dd::new(q1, q2)
+    }
+
+    /// Square root (one Newton correction of the f64 root); 0 for non-positive input.
+    pub(crate) fn sqrt(self) -> Dd {
+        if self.hi <= 0.0 {
+            return Dd { hi: 0.0, lo: 0.0 };
+        }
+        let s = self.hi.sqrt();
+        let p = s * s;
+        let e = s.mul_add(s, -p);
+        let corr = ((self.hi - p) - e + self.lo) / (2.0 * s);
+        let hi = s + corr;
+        Dd {
+            hi,
+            lo: corr - (hi - s),
+        }
+    }
+
+    /// Multiplication by a power of two (exact).
+    pub(crate) fn scale(self, f: f64) -> Dd {
+        Dd {
+            hi: self.hi * f,
+            lo: self.lo * f,
+        }
+    }
+
+    pub(crate) fn to_f64(self) -> f64 {
+        self.hi + self.lo
+    }
+}
+
+/// A 3-vector of double-double components.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Dd3 {
+    pub x: Dd,
+    pub y: Dd,
+    pub z: Dd,
+}
+
+impl Dd3 {
+    /// `hi + lo` componentwise, renormalized.
+    pub(crate) fn new(hi: DVec3, lo: DVec3) -> Dd3 {
+        Dd3 {
+            x: Dd::new(hi.x, lo.x),
+            y: Dd::new(hi.y, lo.y),
+            z: Dd::new(hi.z, lo.z),
+        }
+    }
+
+    /// `a − b` exactly.
+    pub(crate) fn diff(a: DVec3, b: DVec3) -> Dd3 {
+        Dd3::new(a, -b)
+    }
+
+    pub(crate) fn cross(&self, o: &Dd3) -> Dd3 {
+        Dd3 {
+            x: self.y.mul(o.z).sub(self.z.mul(o.y)),
+            y: self.z.mul(o.x).sub(self.x.mul(o.z)),
+            z: self.x.mul(o.y).sub(self.y.mul(o.x)),
+        }
+    }
+
+    pub(crate) fn add(&self, o: &Dd3) -> Dd3 {
+        Dd3 {
+            x: self.x.add(o.x),
+            y: self.y.add(o.y),
+            z: self.z.add(o.z),
+        }
+    }
+
+    pub(crate) fn sub(&self, o: &Dd3) -> Dd3 {
+        Dd3 {
+            x: self.x.sub(o.x),
+            y: self.y.sub(o.y),
+            z: self.z.sub(o.z),
+        }
+    }
+
+    /// Product with a double-double scalar.
+    pub(crate) fn scale(&self, f: Dd) -> Dd3 {
+        Dd3 {
+            x: self.x.mul(f),
+            y: self.y.mul(f),
+            z: self.z.mul(f),
+        }
+    }
+
+    /// Multiplication by a power of two (exact).
+    pub(crate) fn scale_pow2(&self, f: f64) -> Dd3 {
+        Dd3 {
+            x: self.x.scale(f),
+            y: self.y.scale(f),
+            z: self.z.scale(f),
+        }
+    }
+
+    pub(crate) fn dot(&self, o: &Dd3) -> Dd {
+        self.x.mul(o.x).add(self.y.mul(o.y)).add(self.z.mul(o.z))
+    }
+
+    /// `self · v` for an f64 vector.
+    pub(crate) fn dot_f64(&self, v: DVec3) -> Dd {
+        self.dot(&Dd3::new(v, DVec3::ZERO))
+    }
+
+    /// The leading parts (`hi`) and the remainders (`lo`).
+    pub(crate) fn split(&self) -> (DVec3, DVec3) {
+        (
+            DVec3::new(self.x.hi, self.y.hi, self.z.hi),
+            DVec3::new(self.x.lo, self.y.lo, self.z.lo),
+        )
+    }
+
+    pub(crate) fn to_dvec3(self) -> DVec3 {
+        DVec3::new(self.x.to_f64(), self.y.to_f64(), self.z.to_f64())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn differences_and_products_are_exact() {
+        // 2^-52 + 2^-110 needs 59 bits: f64 loses the small part, the pair keeps it.
+        let d = Dd::diff(1.0 + f64::EPSILON, 1.0).add(Dd::new(2f64.powi(-110), 0.0));
+        assert_eq!(d.hi, f64::EPSILON);
+        assert_eq!(d.lo, 2f64.powi(-110));
+        let third = Dd::new(1.0, 0.0).div(Dd::new(3.0, 0.0));
+        let back = third.mul(Dd::new(3.0, 0.0)).sub(Dd::new(1.0, 0.0));
+        assert!(back.to_f64().abs() < 1e-30);
+        let two = Dd::new(2.0, 0.0).sqrt();
+        assert!(two.mul(two).sub(Dd::new(2.0, 0.0)).to_f64().abs() < 1e-30);
+    }
+
+    #[test]
+    fn cross_product_of_nearly_parallel_vectors_keeps_its_digits() {
+        let a = Dd3::diff(DVec3::new(1.0, 1e-9, 0.0), DVec3::ZERO);
+        let b = Dd3::diff(DVec3::new(1.0 + f64::EPSILON, 1e-9, 0.0), DVec3::ZERO);
+        let z = a.cross(&b).to_dvec3().z;
+        // a.x b.y − a.y b.x = 1e-9 (1 − (1 + eps)) = −1e-9 eps, up to the rounding of 1e-9.
+        assert!((z + 1e-9 * f64::EPSILON).abs() < 1e-40);
+    }
+}
