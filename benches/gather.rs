@@ -214,7 +214,28 @@ fn summary() {
 
 criterion_group!(benches, bench);
 
+/// `RADDIFF_BENCH_PROFILE=<m>x<n>:<case>:<calls>`: runs one case that many times and nothing else,
+/// for `perf` / `valgrind --tool=callgrind` (e.g. `32x64:gradients:1000`).
+fn profile(spec: &str) {
+    let parts: Vec<&str> = spec.split(':').collect();
+    let (m, n) = parts[0].split_once('x').expect("<m>x<n>");
+    let scene = Scene::new(m.parse().unwrap(), n.parse().unwrap());
+    let calls: usize = parts.get(2).map_or(1000, |c| c.parse().unwrap());
+    let cases = cases(&scene);
+    let (_, f) = cases
+        .iter()
+        .find(|(name, _)| *name == parts[1])
+        .expect("case name as in the summary");
+    for _ in 0..calls {
+        f();
+    }
+}
+
 fn main() {
+    if let Ok(spec) = std::env::var("RADDIFF_BENCH_PROFILE") {
+        profile(&spec);
+        return;
+    }
     if std::env::var_os("RADDIFF_BENCH_SUMMARY_ONLY").is_none() {
         benches();
     }

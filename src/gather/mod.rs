@@ -31,6 +31,9 @@
 //! ```
 
 mod evaluate;
+// The previous evaluation, for the equivalence tests and the bench baseline.
+#[doc(hidden)]
+pub mod evaluate_reference;
 mod input;
 pub mod layout;
 mod walls;
