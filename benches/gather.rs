@@ -1,9 +1,11 @@
 //! Cost of a gather evaluation against the cost of generating its directions (the baseline), for
 //! 16x32, 32x64 and 64x128 cosine-polar layouts, 3 channels: irradiance only, irradiance with
 //! translational and rotational gradients, and both with an absorbing, scattering medium marched in
-//! 16 steps per direction (with media radiance gradients); and the concentric layout's gradients. After the criterion groups, a summary
-//! table in ns per sample and as ratios to the direction generation, timed in the same run as
-//! on-CPU time of the thread (robust on a shared machine; criterion's figures are wall time).
+//! 16 steps per direction (with media radiance gradients); and the concentric layout's gradients.
+//! Every evaluation is also timed with the previous implementation (`gather::evaluate_reference`,
+//! cases named "reference ...") as the baseline. After the criterion groups, a summary table in ns
+//! per sample with the speed-up over the previous implementation, timed in the same run as on-CPU
+//! time of the thread (robust on a shared machine; criterion's figures are wall time).
 //! `RADDIFF_BENCH_SUMMARY_ONLY=1` skips the criterion groups.
 //!
 //! `cargo bench --bench gather -- --warm-up-time 1 --measurement-time 3`
@@ -14,11 +16,13 @@ use std::time::Instant;
 
 use criterion::{criterion_group, Criterion, Throughput};
 use glam::DVec3;
-use raddiff::gather::{evaluate, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, Wanted};
+use raddiff::gather::{
+    evaluate, evaluate_reference, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, Wanted,
+};
 
 const CHANNELS: usize = 3;
 const STEPS: usize = 16;
-const SIZES: [(u32, u32); 3] = [(16, 32), (32, 64), (64, 128)];
+const SIZES: [(u32, u32); 4] = [(16, 32), (32, 64), (32, 128), (64, 128)];
 
 struct Scene {
     layout: Layout,
@@ -106,12 +110,7 @@ fn cases(s: &Scene) -> Vec<Case<'_>> {
                 .unwrap()
         }),
     )];
-    for (name, medium, wanted) in [
-        ("irradiance", false, Wanted::IRRADIANCE),
-        ("gradients", false, GRADIENTS),
-        ("irradiance+media", true, Wanted::IRRADIANCE),
-        ("gradients+media", true, GRADIENTS),
-    ] {
+    for (name, medium, wanted) in EVALUATIONS {
         v.push((
             name,
             Box::new(move || {
@@ -120,6 +119,7 @@ fn cases(s: &Scene) -> Vec<Case<'_>> {
         ));
     }
     let concentric = Scene::new_kind(LayoutKind::Concentric, s.layout.m, s.layout.n);
+    let concentric_ref = Scene::new_kind(LayoutKind::Concentric, s.layout.m, s.layout.n);
     v.push((
         "concentric gradients",
         Box::new(move || {
@@ -127,8 +127,44 @@ fn cases(s: &Scene) -> Vec<Case<'_>> {
             black_box(evaluate(&s.layout, &s.frame, &s.input(false), GRADIENTS).unwrap());
         }),
     ));
+    // The previous implementation, as the baseline of the speed-up.
+    for (name, medium, wanted) in REFERENCE_EVALUATIONS {
+        v.push((
+            name,
+            Box::new(move || {
+                let input = s.input(medium);
+                black_box(
+                    evaluate_reference::evaluate(&s.layout, &s.frame, &input, wanted).unwrap(),
+                );
+            }),
+        ));
+    }
+    v.push((
+        "reference concentric gradients",
+        Box::new(move || {
+            let s = &concentric_ref;
+            let input = s.input(false);
+            black_box(
+                evaluate_reference::evaluate(&s.layout, &s.frame, &input, GRADIENTS).unwrap(),
+            );
+        }),
+    ));
     v
 }
+
+const EVALUATIONS: [(&str, bool, Wanted); 4] = [
+    ("irradiance", false, Wanted::IRRADIANCE),
+    ("gradients", false, GRADIENTS),
+    ("irradiance+media", true, Wanted::IRRADIANCE),
+    ("gradients+media", true, GRADIENTS),
+];
+
+const REFERENCE_EVALUATIONS: [(&str, bool, Wanted); 4] = [
+    ("reference irradiance", false, Wanted::IRRADIANCE),
+    ("reference gradients", false, GRADIENTS),
+    ("reference irradiance+media", true, Wanted::IRRADIANCE),
+    ("reference gradients+media", true, GRADIENTS),
+];
 
 fn bench(c: &mut Criterion) {
     for (m, n) in SIZES {
@@ -185,7 +221,7 @@ fn time(f: &dyn Fn()) -> f64 {
 
 fn summary() {
     println!(
-        "\nCPU ns per sample (ratio to generating the directions), {CHANNELS} channels, {STEPS} media steps:"
+        "\nCPU ns per sample, {CHANNELS} channels, {STEPS} media steps: this implementation (the previous one, speed-up):"
     );
     println!(
         "| layout | directions | irradiance | + gradients | irradiance + media | gradients + media | gradient cost | concentric + gradients |"
@@ -198,16 +234,18 @@ fn summary() {
             .iter()
             .map(|(_, f)| time(f.as_ref()) / samples)
             .collect();
-        let cell = |x: f64| format!("{x:.1} ({:.2}x)", x / t[0]);
+        // t: directions, 4 evaluations, concentric, 4 references, reference concentric
+        let cell = |i: usize| format!("{:.1} ({:.1}, {:.2}x)", t[i], t[i + 5], t[i + 5] / t[i]);
         println!(
-            "| {m}x{n} | {:.1} | {} | {} | {} | {} | +{:.1} ns | {} |",
+            "| {m}x{n} | {:.1} | {} | {} | {} | {} | +{:.1} ns (+{:.1}) | {} |",
             t[0],
-            cell(t[1]),
-            cell(t[2]),
-            cell(t[3]),
-            cell(t[4]),
+            cell(1),
+            cell(2),
+            cell(3),
+            cell(4),
             t[2] - t[1],
-            cell(t[5])
+            t[7] - t[6],
+            cell(5)
         );
     }
 }

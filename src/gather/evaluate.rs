@@ -21,7 +21,7 @@ use glam::DVec3;
 
 use super::input::{GatherInput, MediaRadiance};
 use super::layout::{Frame, Layout, LayoutKind};
-use super::walls::{ConcentricWalls, Walls};
+use super::walls::{ConcentricWalls, LayoutTables, Walls};
 use crate::error::{Error, Result};
 use crate::{kernels, Order};
 
@@ -129,20 +129,10 @@ impl<'a> ValidGather<'a> {
     /// `Degenerate` if a result overflows (e.g. hits at ~1e-300 L).
     pub fn evaluate(&self, wanted: Wanted) -> Result<GatherValues> {
         let mut out = GatherValues::default();
-        let ch = self.input.channels;
-        let weight = self.stratum_weight();
         let plain = self.input.sigma_t == 0.0 && self.input.media.is_none();
-        if plain && !wanted.gradient && !wanted.rotation_gradient {
-            // Irradiance straight from the input: no per-stratum array needed.
-            if wanted.irradiance {
-                let mut e = vec![0.0; ch];
-                for cell in self.input.radiance.chunks_exact(ch) {
-                    for (e, &l) in e.iter_mut().zip(cell) {
-                        *e += l as f64;
-                    }
-                }
-                out.irradiance = e.into_iter().map(|e| e * weight).collect();
-            }
+        if plain {
+            // Surface radiance as the renderer gave it: read in place, no per-stratum array.
+            self.sums(self.input.radiance, wanted, &mut out);
         } else {
             // Radiance reaching x through each stratum: attenuated surface radiance plus media.
             let mut rad: Vec<f64> = self.input.radiance.iter().map(|&l| l as f64).collect();
@@ -153,45 +143,7 @@ impl<'a> ValidGather<'a> {
                 let march = March::new(self.input.sigma_t, media.step, media.steps);
                 self.add_media(&mut rad, media, &march, wanted, &mut out);
             }
-            if wanted.irradiance {
-                let mut e = vec![0.0; ch];
-                for cell in rad.chunks_exact(ch) {
-                    for (e, &l) in e.iter_mut().zip(cell) {
-                        *e += l;
-                    }
-                }
-                out.irradiance = e.into_iter().map(|e| e * weight).collect();
-            }
-            let walls = (self.layout.kind != LayoutKind::Concentric
-                && (wanted.gradient || wanted.rotation_gradient))
-                .then(|| Walls::new(&self.layout));
-            if wanted.gradient {
-                let local = match &walls {
-                    Some(walls) => self.wall_gradient(walls, &rad),
-                    None => {
-                        let walls = ConcentricWalls::cached(&self.layout);
-                        self.concentric_wall_gradient(&walls, &rad)
-                    }
-                };
-                if out.gradient.is_empty() {
-                    out.gradient = vec![DVec3::ZERO; ch];
-                }
-                for (g, l) in out.gradient.iter_mut().zip(local) {
-                    *g += self.frame.to_world(l);
-                }
-            }
-            if wanted.rotation_gradient {
-                out.rotation_gradient = self.rotation_gradient(walls.as_ref(), &rad);
-            }
-        }
-        if wanted.distances {
-            let (mut inv_sum, mut min) = (0.0, f64::INFINITY);
-            for &r in self.input.distance {
-                inv_sum += r.recip();
-                min = min.min(r);
-            }
-            out.harmonic_mean_distance = Some(self.layout.len() as f64 / inv_sum);
-            out.min_distance = Some(min);
+            self.sums(&rad, wanted, &mut out);
         }
         let finite = out.irradiance.iter().all(|v| v.is_finite())
             && out.gradient.iter().all(|v| v.is_finite())
@@ -203,6 +155,62 @@ impl<'a> ValidGather<'a> {
             ));
         }
         Ok(out)
+    }
+
+    /// Irradiance, wall and rotational gradients and distances from the radiance reaching x
+    /// through each stratum (`rad`, index `i·channels + c`); the wall gradient is added to what
+    /// `out.gradient` holds (the media terms).
+    fn sums<T: Copy + Into<f64>>(&self, rad: &[T], wanted: Wanted, out: &mut GatherValues) {
+        let ch = self.input.channels;
+        let weight = self.stratum_weight();
+        let gradients = wanted.gradient || wanted.rotation_gradient;
+        let tables = gradients.then(|| LayoutTables::cached(&self.layout));
+        let polar = tables.as_ref().and_then(|t| t.walls.as_ref());
+        // The same summation whatever else is requested, so the irradiance does not depend on it.
+        if wanted.irradiance {
+            out.irradiance = channel_sums(rad, ch)
+                .into_iter()
+                .map(|e| e * weight)
+                .collect();
+        }
+        let local = match polar {
+            Some(walls) => {
+                let s = self.polar_pass(walls, rad, wanted);
+                if wanted.distances {
+                    out.harmonic_mean_distance = Some(self.layout.len() as f64 / s.inv_sum);
+                    out.min_distance = Some(s.min);
+                }
+                if wanted.rotation_gradient {
+                    out.rotation_gradient =
+                        s.rotation.iter().map(|&v| self.frame.to_world(v)).collect();
+                }
+                s.gradient
+            }
+            None => {
+                if wanted.distances {
+                    let (inv_sum, min) = inverse_sum_and_min(self.input.distance);
+                    out.harmonic_mean_distance = Some(self.layout.len() as f64 / inv_sum);
+                    out.min_distance = Some(min);
+                }
+                if wanted.rotation_gradient {
+                    out.rotation_gradient = self.concentric_rotation_gradient(rad);
+                }
+                if wanted.gradient {
+                    let walls = ConcentricWalls::cached(&self.layout);
+                    self.concentric_wall_gradient(&walls, rad)
+                } else {
+                    Vec::new()
+                }
+            }
+        };
+        if wanted.gradient {
+            if out.gradient.is_empty() {
+                out.gradient = vec![DVec3::ZERO; ch];
+            }
+            for (g, l) in out.gradient.iter_mut().zip(local) {
+                *g += self.frame.to_world(l);
+            }
+        }
     }
 
     /// Multiplies each stratum's radiance by the transmittance to its hit (zero for a miss) and
@@ -308,80 +316,155 @@ impl<'a> ValidGather<'a> {
         }
     }
 
-    /// Ward-Heckbert wall terms on the total (surface + media) radiance, local frame, per channel.
+    /// One pass over the rows of a polar or sphere layout: the Ward-Heckbert wall terms on the total
+    /// (surface + media) radiance, the rotational gradient and the distances.
     ///
     /// Each wall contributes `(L_a − L_b)/min(r_a, r_b)` times its wall vector; the vectors factor
-    /// into a per-ring scalar and a per-column vector, so the loop accumulates scalars per column
-    /// and applies the column vectors once at the end.
-    fn wall_gradient(&self, walls: &Walls, rad: &[f64]) -> Vec<DVec3> {
+    /// into a per-ring scalar and a per-column vector, so the pass accumulates scalars per column
+    /// and applies the column vectors once at the end (likewise `∫_cell sinθ e_φ dω` for the
+    /// rotation). Each row is copied channel-major into f64, so every per-column accumulation is a
+    /// contiguous loop the compiler vectorizes; the per-column wall scales `1/min(r_a, r_b)` are
+    /// shared by the channels. The sums over a column run in the same order as a plain loop over
+    /// the walls; only the normal component and the distance sum are
+    /// reassociated (rounding-level differences).
+    fn polar_pass<T: Copy + Into<f64>>(
+        &self,
+        walls: &Walls,
+        rad: &[T],
+        wanted: Wanted,
+    ) -> PolarSums {
         let (m, n) = (self.layout.m as usize, self.layout.n as usize);
         let ch = self.input.channels;
-        let row_len = n * ch;
-        // 1/r, 0 for a miss: 1/min(r_a, r_b) = max(1/r_a, 1/r_b).
-        let inv_r: Vec<f64> = self.input.distance.iter().map(|&r| 1.0 / r).collect();
-        let mut azimuth = vec![0.0; row_len];
-        let mut ring = vec![0.0; row_len];
-        let mut normal = vec![0.0; ch];
+        let plane = ch * n;
+        let grad = wanted.gradient;
+        let rot = wanted.rotation_gradient && self.layout.kind == LayoutKind::CosinePolar;
+        let acc = |on: bool| if on { vec![0.0; plane] } else { Vec::new() };
+        let (mut cur, mut prev) = (vec![0.0; plane], vec![0.0; plane]);
+        let (mut inv, mut inv_prev) = (vec![0.0; n], vec![0.0; n]);
+        let (mut s_az, mut s_ring) = (acc(grad), acc(grad));
+        let (mut azimuth, mut ring, mut normal) = (acc(grad), acc(grad), acc(grad));
+        let mut column = acc(rot);
+        let mut dist = DistanceSums::new();
         for j in 0..m {
-            let row = &rad[j * row_len..(j + 1) * row_len];
-            let inv = &inv_r[j * n..(j + 1) * n];
-            if n >= 2 {
-                let span = walls.ring_span[j];
-                for k in 0..n {
-                    let kp = if k == 0 { n - 1 } else { k - 1 };
-                    let s = inv[k].max(inv[kp]) * span;
-                    if s == 0.0 {
-                        continue;
+            channel_major(&rad[j * plane..(j + 1) * plane], ch, &mut cur);
+            let r = &self.input.distance[j * n..(j + 1) * n];
+            if grad || wanted.distances {
+                for (inv, &r) in inv.iter_mut().zip(r) {
+                    // 1/r, 0 for a miss: 1/min(r_a, r_b) = max(1/r_a, 1/r_b).
+                    *inv = 1.0 / r;
+                }
+            }
+            if wanted.distances {
+                dist.add(r, &inv);
+            }
+            if grad {
+                if n >= 2 {
+                    let span = walls.ring_span[j];
+                    s_az[0] = inv[0].max(inv[n - 1]) * span;
+                    for ((s, &a), &b) in s_az[1..n].iter_mut().zip(&inv[1..]).zip(&inv[..n - 1]) {
+                        *s = a.max(b) * span;
                     }
-                    for c in 0..ch {
-                        azimuth[k * ch + c] += (row[k * ch + c] - row[kp * ch + c]) * s;
+                }
+                if j >= 1 {
+                    for ((s, &a), &b) in s_ring[..n].iter_mut().zip(&inv).zip(&inv_prev) {
+                        *s = a.max(b);
                     }
                 }
             }
-            if j >= 1 {
-                let prev = &rad[(j - 1) * row_len..j * row_len];
-                let inv_prev = &inv_r[(j - 1) * n..j * n];
-                let (a, b) = walls.ring_wall[j];
-                for k in 0..n {
-                    let s = inv[k].max(inv_prev[k]);
-                    if s == 0.0 {
-                        continue;
+            let (ring_a, ring_b) = walls.ring_wall[j];
+            let sin2 = walls.ring_sin2[j];
+            for c in 0..ch {
+                let span = c * n..(c + 1) * n;
+                let (l, lp) = (&cur[span.clone()], &prev[span.clone()]);
+                if grad {
+                    let az = &mut azimuth[span.clone()];
+                    if n >= 2 {
+                        az[0] += (l[0] - l[n - 1]) * s_az[0];
+                        for (((a, &l1), &l0), &s) in az[1..]
+                            .iter_mut()
+                            .zip(&l[1..])
+                            .zip(&l[..n - 1])
+                            .zip(&s_az[1..n])
+                        {
+                            *a += (l1 - l0) * s;
+                        }
                     }
-                    for c in 0..ch {
-                        let d = (row[k * ch + c] - prev[k * ch + c]) * s;
-                        ring[k * ch + c] += d * a;
-                        normal[c] += d * b;
+                    if j >= 1 {
+                        let (rg, nz) = (&mut ring[span.clone()], &mut normal[span.clone()]);
+                        for ((((rg, nz), &l1), &l0), &s) in
+                            rg.iter_mut().zip(nz).zip(l).zip(lp).zip(&s_ring[..n])
+                        {
+                            let d = (l1 - l0) * s;
+                            *rg += d * ring_a;
+                            *nz += d * ring_b;
+                        }
+                    }
+                }
+                if rot {
+                    for (acc, &l) in column[span].iter_mut().zip(l) {
+                        *acc += sin2 * l;
+                    }
+                }
+            }
+            std::mem::swap(&mut cur, &mut prev);
+            std::mem::swap(&mut inv, &mut inv_prev);
+        }
+        let mut out = PolarSums {
+            gradient: Vec::new(),
+            rotation: Vec::new(),
+            inv_sum: 0.0,
+            min: f64::INFINITY,
+        };
+        (out.inv_sum, out.min) = dist.finish();
+        if grad {
+            out.gradient = normal
+                .chunks_exact(n)
+                .map(|z| DVec3::new(0.0, 0.0, pairwise_sum(z)))
+                .collect();
+            for k in 0..n {
+                let (cos_k, sin_k) = walls.phi_wall[k];
+                let (c1, c2) = walls.column[k];
+                for (c, g) in out.gradient.iter_mut().enumerate() {
+                    let (az, rg) = (azimuth[c * n + k], ring[c * n + k]);
+                    g.x += rg * c1 - az * sin_k;
+                    g.y += rg * c2 + az * cos_k;
+                }
+            }
+        }
+        if wanted.rotation_gradient {
+            out.rotation = vec![DVec3::ZERO; ch];
+            if rot {
+                // ∫_cell sinθ e_φ dω = (∫ sin²θ dθ)(∫ e_φ dφ): per-column sums, then the vectors.
+                for k in 0..n {
+                    let (c1, c2) = walls.column[k];
+                    for (c, g) in out.rotation.iter_mut().enumerate() {
+                        *g += DVec3::new(-c2, c1, 0.0) * column[c * n + k];
                     }
                 }
             }
         }
-        let mut g: Vec<DVec3> = normal.iter().map(|&z| DVec3::new(0.0, 0.0, z)).collect();
-        for k in 0..n {
-            let (cos_k, sin_k) = walls.phi_wall[k];
-            let (c1, c2) = walls.column[k];
-            for (c, g) in g.iter_mut().enumerate() {
-                let (az, rg) = (azimuth[k * ch + c], ring[k * ch + c]);
-                g.x += rg * c1 - az * sin_k;
-                g.y += rg * c2 + az * cos_k;
-            }
-        }
-        g
+        out
     }
 
     /// The same wall terms for the concentric layout, whose wall vectors are computed by quadrature
     /// along the images of the grid lines (see [`ConcentricWalls`]).
-    fn concentric_wall_gradient(&self, walls: &ConcentricWalls, rad: &[f64]) -> Vec<DVec3> {
+    fn concentric_wall_gradient<T: Copy + Into<f64>>(
+        &self,
+        walls: &ConcentricWalls,
+        rad: &[T],
+    ) -> Vec<DVec3> {
         let (m, n) = (self.layout.m as usize, self.layout.n as usize);
         let ch = self.input.channels;
         let inv_r: Vec<f64> = self.input.distance.iter().map(|&r| 1.0 / r).collect();
         let mut g = vec![DVec3::ZERO; ch];
+        let l = |i: usize| -> f64 { rad[i].into() };
         let mut wall = |a: usize, b: usize, w: DVec3| {
             let s = inv_r[a].max(inv_r[b]);
             if s == 0.0 {
                 return;
             }
             for (c, g) in g.iter_mut().enumerate() {
-                *g += w * ((rad[a * ch + c] - rad[b * ch + c]) * s);
+                *g += w * ((l(a * ch + c) - l(b * ch + c)) * s);
             }
         };
         for j in 1..m {
@@ -405,44 +488,145 @@ impl<'a> ValidGather<'a> {
         g
     }
 
-    /// `∫ L (n × ω) dω` per channel (world axes).
-    fn rotation_gradient(&self, walls: Option<&Walls>, rad: &[f64]) -> Vec<DVec3> {
+    /// `∫ L (n × ω) dω` per channel (world axes) for the concentric layout, whose strata are not
+    /// θ/φ boxes: Monte Carlo with the cosine pdf, `(n × ω)/cosθ` per sample, cosθ clamped where
+    /// a jittered sample touches the horizon.
+    fn concentric_rotation_gradient<T: Copy + Into<f64>>(&self, rad: &[T]) -> Vec<DVec3> {
         let ch = self.input.channels;
         let mut g = vec![DVec3::ZERO; ch];
-        let n = self.layout.n as usize;
-        match (self.layout.kind, walls) {
-            (LayoutKind::Sphere, _) => {}
-            (LayoutKind::CosinePolar, Some(walls)) => {
-                // ∫_cell sinθ e_φ dω = (∫ sin²θ dθ)(∫ e_φ dφ): per-column sums, then the vectors.
-                let mut column = vec![0.0; n * ch];
-                for (j, row) in rad.chunks_exact(n * ch).enumerate() {
-                    let s = walls.ring_sin2[j];
-                    for (acc, &l) in column.iter_mut().zip(row) {
-                        *acc += s * l;
-                    }
-                }
-                for k in 0..n {
-                    let (c1, c2) = walls.column[k];
-                    for (c, g) in g.iter_mut().enumerate() {
-                        *g += DVec3::new(-c2, c1, 0.0) * column[k * ch + c];
-                    }
-                }
-            }
-            _ => {
-                // Concentric strata are not θ/φ boxes: Monte Carlo with the cosine pdf,
-                // (n × ω)/cosθ per sample, cosθ clamped where a jittered sample touches the horizon.
-                let weight = self.stratum_weight();
-                for (&w, cell) in self.input.directions.iter().zip(rad.chunks_exact(ch)) {
-                    let l = self.frame.to_local(w);
-                    let v = DVec3::new(-l.y, l.x, 0.0) * (weight / l.z.max(1e-6));
-                    for (g, &l) in g.iter_mut().zip(cell) {
-                        *g += v * l;
-                    }
-                }
+        let weight = self.stratum_weight();
+        let (t, b, nrm) = (
+            self.frame.tangent,
+            self.frame.bitangent(),
+            self.frame.normal,
+        );
+        for (&w, cell) in self.input.directions.iter().zip(rad.chunks_exact(ch)) {
+            let l = DVec3::new(w.dot(t), w.dot(b), w.dot(nrm));
+            let v = DVec3::new(-l.y, l.x, 0.0) * (weight / l.z.max(1e-6));
+            for (g, &l) in g.iter_mut().zip(cell) {
+                *g += v * l.into();
             }
         }
         g.into_iter().map(|v| self.frame.to_world(v)).collect()
     }
+}
+
+/// What [`ValidGather::polar_pass`] sums (local frame, before the stratum weight).
+struct PolarSums {
+    gradient: Vec<DVec3>,
+    rotation: Vec<DVec3>,
+    inv_sum: f64,
+    min: f64,
+}
+
+/// Copies one row `[k·ch + c]` into `out[c·n + k]` as f64.
+#[inline]
+fn channel_major<T: Copy + Into<f64>>(row: &[T], ch: usize, out: &mut [f64]) {
+    let n = row.len() / ch;
+    match ch {
+        1 => {
+            for (o, &l) in out.iter_mut().zip(row) {
+                *o = l.into();
+            }
+        }
+        3 => {
+            let (o0, rest) = out.split_at_mut(n);
+            let (o1, o2) = rest.split_at_mut(n);
+            for (((cell, a), b), c) in row.chunks_exact(3).zip(o0).zip(o1).zip(o2) {
+                (*a, *b, *c) = (cell[0].into(), cell[1].into(), cell[2].into());
+            }
+        }
+        _ => {
+            for (k, cell) in row.chunks_exact(ch).enumerate() {
+                for (c, &l) in cell.iter().enumerate() {
+                    out[c * n + k] = l.into();
+                }
+            }
+        }
+    }
+}
+
+/// Sum with a short dependency chain (and an error bound of `log2(len)` ulps of the absolute sum).
+fn pairwise_sum(v: &[f64]) -> f64 {
+    if v.len() <= 8 {
+        return v.iter().sum();
+    }
+    let (a, b) = v.split_at(v.len() / 2);
+    pairwise_sum(a) + pairwise_sum(b)
+}
+
+/// Per-channel sums of `rad` (index `i·ch + c`), accumulated column by column over blocks of
+/// strata so the loop vectorizes.
+fn channel_sums<T: Copy + Into<f64>>(rad: &[T], ch: usize) -> Vec<f64> {
+    const BLOCK: usize = 64;
+    let width = BLOCK * ch;
+    let mut acc = vec![0.0; width];
+    let mut chunks = rad.chunks_exact(width);
+    for block in &mut chunks {
+        for (a, &l) in acc.iter_mut().zip(block) {
+            *a += l.into();
+        }
+    }
+    for (a, &l) in acc.iter_mut().zip(chunks.remainder()) {
+        *a += l.into();
+    }
+    (0..ch)
+        .map(|c| acc.iter().skip(c).step_by(ch).sum())
+        .collect()
+}
+
+/// `(Σ 1/r, min r)` over the hit distances (misses add 0), with four independent partial sums.
+struct DistanceSums {
+    sum: [f64; 4],
+    min: [f64; 4],
+}
+
+impl DistanceSums {
+    fn new() -> Self {
+        DistanceSums {
+            sum: [0.0; 4],
+            min: [f64::INFINITY; 4],
+        }
+    }
+
+    /// Adds distances `r` with their inverses `inv`.
+    #[inline]
+    fn add(&mut self, r: &[f64], inv: &[f64]) {
+        let (rc, ic) = (r.chunks_exact(4), inv.chunks_exact(4));
+        let (rr, ir) = (rc.remainder(), ic.remainder());
+        for (r, inv) in rc.zip(ic) {
+            for l in 0..4 {
+                self.sum[l] += inv[l];
+                self.min[l] = self.min[l].min(r[l]);
+            }
+        }
+        for (l, (&r, &inv)) in rr.iter().zip(ir).enumerate() {
+            self.sum[l] += inv;
+            self.min[l] = self.min[l].min(r);
+        }
+    }
+
+    fn finish(&self) -> (f64, f64) {
+        let s = &self.sum;
+        let m = &self.min;
+        (
+            (s[0] + s[1]) + (s[2] + s[3]),
+            m[0].min(m[1]).min(m[2].min(m[3])),
+        )
+    }
+}
+
+/// `(Σ 1/r, min r)` over all distances.
+fn inverse_sum_and_min(distance: &[f64]) -> (f64, f64) {
+    let mut sums = DistanceSums::new();
+    let mut inv = [0.0; 64];
+    for r in distance.chunks(64) {
+        for (i, &r) in inv.iter_mut().zip(r) {
+            *i = 1.0 / r;
+        }
+        sums.add(r, &inv[..r.len()]);
+    }
+    sums.finish()
 }
 
 /// Irradiance and derivatives from a gather: validates, then [`ValidGather::evaluate`].
@@ -565,8 +749,8 @@ mod tests {
             let v = ValidGather::new(&layout, &frame, &input).unwrap();
             let walls = Walls::new(&layout);
             let r64: Vec<f64> = rad.iter().map(|&l| l as f64).collect();
-            let got = v.wall_gradient(&walls, &r64);
-            let rot = v.rotation_gradient(Some(&walls), &r64);
+            let sums = v.polar_pass(&walls, &r64, Wanted::ALL);
+            let (got, rot) = (sums.gradient, sums.rotation);
             let (m, n) = (5, 7);
             for c in 0..ch {
                 let mut want = DVec3::ZERO;

@@ -62,9 +62,14 @@ fn check_len(what: &str, got: usize, want: Option<usize>, formula: &str) -> Resu
 }
 
 fn check_all_finite(values: &[f32], what: &str) -> Result<()> {
-    // Branch-free per block so the scan vectorizes; locate the culprit only on failure.
+    // Exponent bits all ones means Inf or NaN. A branch-free integer test per block vectorizes;
+    // the culprit is located only on failure.
+    const EXP: u32 = 0x7f80_0000;
     for (b, block) in values.chunks(256).enumerate() {
-        if block.iter().fold(false, |bad, v| bad | !v.is_finite()) {
+        if block
+            .iter()
+            .fold(false, |bad, v| bad | (v.to_bits() & EXP == EXP))
+        {
             let i = b * 256 + block.iter().position(|v| !v.is_finite()).unwrap_or(0);
             return Err(Error::InvalidArgument(format!(
                 "{what}[{i}] is not finite ({})",
@@ -103,12 +108,17 @@ impl GatherInput<'_> {
                 self.sigma_t
             )));
         }
-        for (i, &d) in self.distance.iter().enumerate() {
-            if d.is_nan() || d <= 0.0 {
-                return Err(Error::InvalidArgument(format!(
-                    "distance[{i}] = {d}: distances must be > 0, or INFINITY for a miss"
-                )));
-            }
+        // `d > 0` is false for NaN too; branch-free so the scan vectorizes.
+        if !self.distance.iter().fold(true, |ok, &d| ok & (d > 0.0)) {
+            let i = self
+                .distance
+                .iter()
+                .position(|&d| d.is_nan() || d <= 0.0)
+                .unwrap_or(0);
+            let d = self.distance[i];
+            return Err(Error::InvalidArgument(format!(
+                "distance[{i}] = {d}: distances must be > 0, or INFINITY for a miss"
+            )));
         }
         check_all_finite(self.radiance, "radiance")?;
         if let Some(media) = &self.media {
@@ -142,12 +152,97 @@ impl GatherInput<'_> {
                 check_all_finite(g, "media_radiance_gradient")?;
             }
         }
-        check_directions(layout, frame, self.directions)
+        if directions_ok(layout, frame, self.directions) {
+            Ok(())
+        } else {
+            locate_bad_direction(layout, frame, self.directions)
+        }
     }
 }
 
-/// Every direction unit, in the right half-space, and (polar and sphere layouts) inside its stratum.
-fn check_directions(layout: &Layout, frame: &Frame, directions: &[DVec3]) -> Result<()> {
+/// `(cos φ_k, sin φ_k)` of the azimuth walls `φ_k = 2πk/N`, k = 0..=N (the last one is the
+/// first), as the direction check uses them; empty for the concentric layout and N = 1.
+pub(crate) fn azimuth_bounds(layout: &Layout) -> Vec<(f64, f64)> {
+    let n = layout.n as usize;
+    if layout.kind == LayoutKind::Concentric || n < 2 {
+        return Vec::new();
+    }
+    (0..=n)
+        .map(|k| {
+            let (s, c) = (std::f64::consts::TAU * (k % n) as f64 / n as f64).sin_cos();
+            (c, s)
+        })
+        .collect()
+}
+
+/// The ring's range in sin²θ (polar) or cosθ (sphere), widened by the tolerance.
+#[inline]
+fn ring_range(layout: &Layout, j: usize, tol: f64) -> (f64, f64) {
+    let m = layout.m as f64;
+    match layout.kind {
+        LayoutKind::CosinePolar => (j as f64 / m - tol, (j + 1) as f64 / m + tol),
+        LayoutKind::Sphere => (
+            1.0 - 2.0 * (j + 1) as f64 / m - tol,
+            1.0 - 2.0 * j as f64 / m + tol,
+        ),
+        LayoutKind::Concentric => (f64::NEG_INFINITY, f64::INFINITY),
+    }
+}
+
+/// Whether every direction passes [`locate_bad_direction`]'s tests (the same expressions), without
+/// a branch per direction: rows are scanned with the per-layout azimuth table and the verdict
+/// and-ed, so the common case costs a few flops per direction.
+fn directions_ok(layout: &Layout, frame: &Frame, directions: &[DVec3]) -> bool {
+    let tables = super::walls::LayoutTables::cached(layout);
+    let walls = &tables.azimuth_bounds[..];
+    let n = layout.n as usize;
+    let tol = GatherInput::DIRECTION_TOLERANCE;
+    let axes = (frame.tangent, frame.bitangent(), frame.normal);
+    let sphere = layout.kind == LayoutKind::Sphere;
+    directions.chunks_exact(n).enumerate().all(|(j, row)| {
+        let (lo, hi) = ring_range(layout, j, tol);
+        match (sphere, walls.is_empty()) {
+            (false, true) => row_ok::<false, false>(row, walls, axes, lo, hi, tol),
+            (false, false) => row_ok::<false, true>(row, walls, axes, lo, hi, tol),
+            (true, true) => row_ok::<true, false>(row, walls, axes, lo, hi, tol),
+            (true, false) => row_ok::<true, true>(row, walls, axes, lo, hi, tol),
+        }
+    })
+}
+
+#[inline(always)]
+fn row_ok<const SPHERE: bool, const AZIMUTH: bool>(
+    row: &[DVec3],
+    walls: &[(f64, f64)],
+    (t, b, nrm): (DVec3, DVec3, DVec3),
+    lo: f64,
+    hi: f64,
+    tol: f64,
+) -> bool {
+    let check = |w: DVec3, a: &[(f64, f64)]| {
+        let lx = w.dot(t);
+        let ly = w.dot(b);
+        let lz = w.dot(nrm);
+        let ring = if SPHERE { lz } else { lx * lx + ly * ly };
+        let unit = (w.length_squared() - 1.0).abs() <= 2.0 * tol;
+        let above = SPHERE || lz >= -tol;
+        let azimuth =
+            !AZIMUTH || ((a[0].0 * ly - a[0].1 * lx >= -tol) & (lx * a[1].1 - ly * a[1].0 >= -tol));
+        // NaN fails every comparison, so this covers non-finite input too.
+        unit & above & (ring >= lo) & (ring <= hi) & azimuth
+    };
+    if AZIMUTH {
+        row.iter()
+            .zip(walls.windows(2))
+            .fold(true, |ok, (&w, a)| ok & check(w, a))
+    } else {
+        row.iter().fold(true, |ok, &w| ok & check(w, &[]))
+    }
+}
+
+/// The first direction that is not unit, in the right half-space, and (polar and sphere layouts)
+/// inside its stratum, as an `InvalidArgument` naming it (Ok if there is none).
+fn locate_bad_direction(layout: &Layout, frame: &Frame, directions: &[DVec3]) -> Result<()> {
     let tol = GatherInput::DIRECTION_TOLERANCE;
     let (m, n) = (layout.m as usize, layout.n as usize);
     // Azimuth walls as unit 2D vectors (φ_k = 2πk/N), N+1 of them (the last one is the first).
