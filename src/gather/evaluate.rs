@@ -217,6 +217,7 @@ impl<'a> ValidGather<'a> {
     /// adds the cell-radiance gradient `weight · Σ ∇T·L` (eq. 17-18) to `out.gradient` when wanted.
     fn attenuate(&self, rad: &mut [f64], wanted: Wanted, out: &mut GatherValues) -> Result<()> {
         let ch = self.input.channels;
+        let sigma = self.input.sigma_t;
         let order = if wanted.gradient {
             out.gradient = vec![DVec3::ZERO; ch];
             Order::Gradient
@@ -236,14 +237,30 @@ impl<'a> ValidGather<'a> {
                 continue;
             }
             // Translation invariance: x at the origin keeps r exact however far x is from 0.
-            let d = kernels::transmittance(DVec3::ZERO, w * r, self.input.sigma_t, order)?;
-            if wanted.gradient && d.value != 0.0 {
+            let y = w * r;
+            let d = -y;
+            let m = d.abs().max_element();
+            let lean = (1e-150..1e150).contains(&m).then(|| {
+                // kernels::transmittance's own arithmetic for ordinary distances, inlined.
+                let dist = d.length();
+                let t = (-sigma * dist).exp();
+                (t, (-sigma * t) * (d / dist))
+            });
+            let (t, grad) = match lean {
+                Some((t, g)) if g.is_finite() => (t, g),
+                // Extreme distances (and its overflow error): the kernel itself.
+                _ => {
+                    let d = kernels::transmittance(DVec3::ZERO, y, sigma, order)?;
+                    (d.value, d.gradient)
+                }
+            };
+            if wanted.gradient && t != 0.0 {
                 for (g, &l) in out.gradient.iter_mut().zip(cell.iter()) {
-                    *g += d.gradient * (weight * l);
+                    *g += grad * (weight * l);
                 }
             }
             for l in cell {
-                *l *= d.value;
+                *l *= t;
             }
         }
         Ok(())
@@ -263,13 +280,40 @@ impl<'a> ValidGather<'a> {
         wanted: Wanted,
         out: &mut GatherValues,
     ) {
-        let ch = self.input.channels;
+        // Constant channel counts for the common cases, so the per-step loops unroll.
+        match self.input.channels {
+            1 => self.add_media_channels(rad, media, march, wanted, out, 1),
+            3 => self.add_media_channels(rad, media, march, wanted, out, 3),
+            ch => self.add_media_channels(rad, media, march, wanted, out, ch),
+        }
+    }
+
+    /// [`ValidGather::add_media`] for `ch` channels. Per stratum, the step weights of the visible
+    /// part are computed once and shared by the channels, and the per-step terms are summed
+    /// before the direction-dependent factors are applied:
+    /// `Σ_s ω (q_s a_s / r) = ω (Σ_s q_s a_s) / r` and
+    /// `Σ_s [∇q_s i0_s − (∇q_s − ω(ω·∇q_s)) i1_s / r] = Σ_s ∇q_s (i0_s − i1_s/r) + ω (ω·Σ_s ∇q_s i1_s) / r`.
+    #[inline(always)]
+    fn add_media_channels(
+        &self,
+        rad: &mut [f64],
+        media: &MediaRadiance<'_>,
+        march: &March,
+        wanted: Wanted,
+        out: &mut GatherValues,
+        ch: usize,
+    ) {
         let steps = media.steps;
         let weight = self.stratum_weight();
-        if wanted.gradient && out.gradient.is_empty() {
+        let grad = wanted.gradient;
+        if grad && out.gradient.is_empty() {
             out.gradient = vec![DVec3::ZERO; ch];
         }
-        let end = march.end();
+        // Step weights of one stratum: ∫T, ∫T − σ∫tT, ∫T − ∫tT/r, ∫tT over the visible steps.
+        let mut w0: Vec<f64> = march.full.iter().map(|w| w.0).collect();
+        let mut w1: Vec<f64> = march.full.iter().map(|w| w.1).collect();
+        let (mut wa, mut wg) = (vec![0.0; steps], vec![0.0; steps]);
+        let mut total = vec![DVec3::ZERO; ch];
         for (i, (&r, &w)) in self
             .input
             .distance
@@ -277,42 +321,116 @@ impl<'a> ValidGather<'a> {
             .zip(self.input.directions)
             .enumerate()
         {
-            let e = &mut rad[i * ch..(i + 1) * ch];
-            if !wanted.gradient {
-                march.visit(0.0, r, |s, i0, _| {
-                    let q = &media.radiance[(i * steps + s) * ch..(i * steps + s + 1) * ch];
-                    for (e, &q) in e.iter_mut().zip(q) {
-                        *e += q as f64 * i0;
-                    }
-                });
+            let used = march.weights(r, &mut w0, &mut w1);
+            let visible = used.0;
+            if visible == 0 {
                 continue;
             }
-            let inv_r = if r.is_finite() { 1.0 / r } else { 0.0 };
-            let hit_inside = r <= end;
-            march.visit(0.0, r, |s, i0, i1| {
-                let base = (i * steps + s) * ch;
-                for (c, e) in e.iter_mut().enumerate() {
-                    let q = media.radiance[base + c] as f64;
-                    *e += q * i0;
-                    let mut g = DVec3::ZERO;
-                    if hit_inside {
-                        // d/dx of ∫_0^r e^{-σt} Q dt with the far end fixed (s-parametrization).
-                        g -= w * (q * (i0 - march.sigma * i1) * inv_r);
-                    }
-                    if let Some(grad) = media.gradient {
-                        let k = (base + c) * 3;
-                        let gq = DVec3::new(grad[k] as f64, grad[k + 1] as f64, grad[k + 2] as f64);
-                        g += if hit_inside {
-                            gq * (i0 - i1 * inv_r)
-                        } else {
-                            // Hit beyond the march (or a miss): the marched points keep their depth
-                            // t and turn with the direction to the fixed hit, dω/dx = −(I − ωωᵀ)/r.
-                            gq * i0 - (gq - w * w.dot(gq)) * (i1 * inv_r)
-                        };
-                    }
-                    out.gradient[c] += g * weight;
+            self.media_stratum(
+                &mut rad[i * ch..(i + 1) * ch],
+                media,
+                march,
+                wanted,
+                (i, r, w),
+                (&w0[..visible], &w1[..visible]),
+                (&mut wa, &mut wg),
+                &mut total,
+                ch,
+            );
+            march.restore(&mut w0, &mut w1, used);
+        }
+        if grad {
+            for (g, t) in out.gradient.iter_mut().zip(total) {
+                *g += t * weight;
+            }
+        }
+    }
+
+    /// The media terms of stratum `i` (see [`ValidGather::add_media_channels`]).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn media_stratum(
+        &self,
+        rad: &mut [f64],
+        media: &MediaRadiance<'_>,
+        march: &March,
+        wanted: Wanted,
+        (i, r, w): (usize, f64, DVec3),
+        (w0, w1): (&[f64], &[f64]),
+        (wa, wg): (&mut [f64], &mut [f64]),
+        total: &mut [DVec3],
+        ch: usize,
+    ) {
+        const GROUP: usize = 4;
+        let (steps, end, sigma, grad) = (media.steps, march.end(), march.sigma, wanted.gradient);
+        let visible = w0.len();
+        let q = &media.radiance[i * steps * ch..(i * steps + visible) * ch];
+        let inv_r = if r.is_finite() { 1.0 / r } else { 0.0 };
+        let hit_inside = r <= end;
+        if grad {
+            for ((a, g), (&i0, &i1)) in wa.iter_mut().zip(wg.iter_mut()).zip(w0.iter().zip(w1)) {
+                *a = i0 - sigma * i1;
+                *g = i0 - i1 * inv_r;
+            }
+        }
+        let (wa, wg) = (&wa[..visible], &wg[..visible]);
+        for c0 in (0..ch).step_by(GROUP) {
+            let cw = GROUP.min(ch - c0);
+            let mut e = [0.0; GROUP];
+            let mut a = [0.0; GROUP];
+            for (s, &i0) in w0.iter().enumerate() {
+                let q = &q[s * ch + c0..s * ch + c0 + cw];
+                for (e, &q) in e.iter_mut().zip(q) {
+                    *e += q as f64 * i0;
                 }
-            });
+                if grad && hit_inside {
+                    for (a, &q) in a.iter_mut().zip(q) {
+                        *a += q as f64 * wa[s];
+                    }
+                }
+            }
+            for (l, e) in rad[c0..c0 + cw].iter_mut().zip(e) {
+                *l += e;
+            }
+            if !grad {
+                continue;
+            }
+            let total = &mut total[c0..c0 + cw];
+            if hit_inside {
+                // d/dx of ∫_0^r e^{-σt} Q dt with the far end fixed (s-parametrization).
+                for (t, a) in total.iter_mut().zip(a) {
+                    *t -= w * (a * inv_r);
+                }
+            }
+            let Some(gq) = media.gradient else {
+                continue;
+            };
+            let gq = &gq[i * steps * ch * 3..(i * steps + visible) * ch * 3];
+            let mut g = [[0.0; 3]; GROUP];
+            let mut h = [[0.0; 3]; GROUP];
+            for (s, (&cg, &i1)) in wg.iter().zip(w1).enumerate() {
+                let gq = &gq[(s * ch + c0) * 3..(s * ch + c0 + cw) * 3];
+                for (g, gq) in g.iter_mut().zip(gq.chunks_exact(3)) {
+                    for (g, &v) in g.iter_mut().zip(gq) {
+                        *g += v as f64 * cg;
+                    }
+                }
+                if !hit_inside {
+                    for (h, gq) in h.iter_mut().zip(gq.chunks_exact(3)) {
+                        for (h, &v) in h.iter_mut().zip(gq) {
+                            *h += v as f64 * i1;
+                        }
+                    }
+                }
+            }
+            for ((t, g), h) in total.iter_mut().zip(g).zip(h) {
+                *t += DVec3::from_array(g);
+                if !hit_inside {
+                    // Hit beyond the march (or a miss): the marched points keep their depth
+                    // t and turn with the direction to the fixed hit, dω/dx = −(I − ωωᵀ)/r.
+                    *t += w * (w.dot(DVec3::from_array(h)) * inv_r);
+                }
+            }
         }
     }
 
@@ -674,6 +792,8 @@ struct March {
     steps: usize,
     /// `(∫ exp(−σt) dt, ∫ t exp(−σt) dt)` over each full step.
     full: Vec<(f64, f64)>,
+    /// `exp(−σ·s·Δ)`: the transmittance to the start of each step.
+    start: Vec<f64>,
 }
 
 impl March {
@@ -683,7 +803,11 @@ impl March {
             step,
             steps,
             full: Vec::new(),
+            start: Vec::new(),
         };
+        m.start = (0..steps)
+            .map(|s| (-sigma * (s as f64 * step)).exp())
+            .collect();
         m.full = (0..steps)
             .map(|s| m.segment(s as f64 * step, step))
             .collect();
@@ -715,9 +839,81 @@ impl March {
         (ta * j0, ta * (a * j0 + j1))
     }
 
-    /// Calls `f(s, ∫ exp(−σt) dt, ∫ t exp(−σt) dt)` over `[lo, hi) ∩ step s` for every step
-    /// overlapping `[lo, hi)`.
+    /// [`March::segment`] from the start of step `s` (`a = s·Δ`), with the transmittance to `a`
+    /// from the table: the same value.
     #[inline]
+    fn segment_from_step(&self, s: usize, a: f64, len: f64) -> (f64, f64) {
+        let x = self.sigma * len;
+        let (j0, j1) = if x < 1e-3 {
+            (
+                len * (1.0 - x / 2.0 + x * x / 6.0),
+                len * len * (0.5 - x / 3.0 + x * x / 8.0),
+            )
+        } else {
+            let em = (-x).exp();
+            (
+                -(-x).exp_m1() / self.sigma,
+                (1.0 - em * (1.0 + x)) / (self.sigma * self.sigma),
+            )
+        };
+        let ta = self.start[s];
+        (ta * j0, ta * (a * j0 + j1))
+    }
+
+    /// The weights [`March::visit`] gives over `[0, r)`, as `(i0[k], i1[k])` for `k < count`
+    /// (all visible from 0: only the last one or two partly). `i0` and `i1` must hold the
+    /// full-step weights ([`March::full`]) at `k < first`; entries from `first` on are written and
+    /// must be restored with [`March::restore`]. Returns `(count, first)`.
+    #[inline]
+    fn weights(&self, r: f64, i0: &mut [f64], i1: &mut [f64]) -> (usize, usize) {
+        let hi = r.min(self.end());
+        if hi.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+            return (0, 0);
+        }
+        let q = hi / self.step;
+        // ceil(q) for finite q ≥ 0, without a libm call.
+        let last = {
+            let t = q as usize;
+            if (t as f64) < q {
+                t + 1
+            } else {
+                t
+            }
+        }
+        .min(self.steps);
+        // Steps s with (s·Δ + Δ) <= hi are full; the predicate is monotone in s, so the count
+        // follows from the estimate ⌊q⌋ corrected by the predicate itself.
+        let full = |s: usize| s as f64 * self.step + self.step <= hi;
+        let mut first = (q as usize).min(last);
+        while first > 0 && !full(first - 1) {
+            first -= 1;
+        }
+        while first < last && full(first) {
+            first += 1;
+        }
+        let mut count = first;
+        for s in first..last {
+            let a = s as f64 * self.step;
+            if hi <= a {
+                continue;
+            }
+            (i0[count], i1[count]) = self.segment_from_step(s, a, hi - a);
+            count += 1;
+        }
+        (count, first)
+    }
+
+    /// Puts the full-step weights back at `first..count` after [`March::weights`].
+    #[inline]
+    fn restore(&self, i0: &mut [f64], i1: &mut [f64], (count, first): (usize, usize)) {
+        for k in first..count {
+            (i0[k], i1[k]) = self.full[k];
+        }
+    }
+
+    /// Calls `f(s, ∫ exp(−σt) dt, ∫ t exp(−σt) dt)` over `[lo, hi) ∩ step s` for every step
+    /// overlapping `[lo, hi)`. (The evaluation uses [`March::weights`], the case `lo = 0`.)
+    #[cfg(test)]
     fn visit(&self, lo: f64, hi: f64, mut f: impl FnMut(usize, f64, f64)) {
         let hi = hi.min(self.end());
         if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
@@ -833,6 +1029,25 @@ mod tests {
                 let (e0, e1) = reference(sigma, lo, hi.min(3.0));
                 assert!((t0 - e0).abs() < 1e-10, "{sigma} {t0} {e0}");
                 assert!((t1 - e1).abs() < 1e-10, "{sigma} {t1} {e1}");
+            }
+        }
+        // weights() is visit() from 0, step by step
+        for sigma in [0.0, 1e-5, 0.7, 3.0] {
+            let m = March::new(sigma, 0.3, 10);
+            for r in [1e-3, 0.3, 0.45, 0.6, 2.05, 2.999, 3.0, 7.0, f64::INFINITY] {
+                let i0_full: Vec<f64> = m.full.iter().map(|w| w.0).collect();
+                let i1_full: Vec<f64> = m.full.iter().map(|w| w.1).collect();
+                let (mut i0, mut i1) = (i0_full.clone(), i1_full.clone());
+                let used = m.weights(r, &mut i0, &mut i1);
+                let count = used.0;
+                let mut want = Vec::new();
+                m.visit(0.0, r, |s, a, b| want.push((s, a, b)));
+                assert_eq!(count, want.len());
+                for (k, &(s, a, b)) in want.iter().enumerate() {
+                    assert_eq!((k, i0[k], i1[k]), (s, a, b), "{sigma} {r}");
+                }
+                m.restore(&mut i0, &mut i1, used);
+                assert_eq!((i0, i1), (i0_full, i1_full));
             }
         }
         let m = March::new(0.0, 0.25, 4);
