@@ -192,12 +192,16 @@ impl<'a> ValidGather<'a> {
                     out.harmonic_mean_distance = Some(self.layout.len() as f64 / inv_sum);
                     out.min_distance = Some(min);
                 }
-                if wanted.rotation_gradient {
-                    out.rotation_gradient = self.concentric_rotation_gradient(rad);
-                }
-                if wanted.gradient {
+                if wanted.gradient || wanted.rotation_gradient {
                     let walls = ConcentricWalls::cached(&self.layout);
-                    self.concentric_wall_gradient(&walls, rad)
+                    let (gradient, rotation) = self.concentric_pass(&walls, rad, wanted);
+                    if wanted.rotation_gradient {
+                        out.rotation_gradient = rotation
+                            .into_iter()
+                            .map(|v| self.frame.to_world(v))
+                            .collect();
+                    }
+                    gradient
                 } else {
                     Vec::new()
                 }
@@ -483,15 +487,21 @@ impl<'a> ValidGather<'a> {
         let plane = ch * n;
         let grad = wanted.gradient;
         let rot = wanted.rotation_gradient && self.layout.kind == LayoutKind::CosinePolar;
-        let acc = |on: bool| if on { vec![0.0; plane] } else { Vec::new() };
-        let (mut cur, mut prev) = (vec![0.0; plane], vec![0.0; plane]);
-        let (mut inv, mut inv_prev) = (vec![0.0; n], vec![0.0; n]);
-        let (mut s_az, mut s_ring) = (acc(grad), acc(grad));
-        let (mut azimuth, mut ring, mut normal) = (acc(grad), acc(grad), acc(grad));
-        let mut column = acc(rot);
+        // All row buffers and column accumulators in one allocation.
+        let planes = |on: bool, count: usize| if on { count * plane } else { 0 };
+        let mut scratch = vec![0.0; 2 * plane + 4 * n + planes(grad, 3) + planes(rot, 1)];
+        let (mut cur, rest) = scratch.split_at_mut(plane);
+        let (mut prev, rest) = rest.split_at_mut(plane);
+        let (mut inv, rest) = rest.split_at_mut(n);
+        let (mut inv_prev, rest) = rest.split_at_mut(n);
+        let (s_az, rest) = rest.split_at_mut(n);
+        let (s_ring, rest) = rest.split_at_mut(n);
+        let (azimuth, rest) = rest.split_at_mut(planes(grad, 1));
+        let (ring, rest) = rest.split_at_mut(planes(grad, 1));
+        let (normal, column) = rest.split_at_mut(planes(grad, 1));
         let mut dist = DistanceSums::new();
         for j in 0..m {
-            channel_major(&rad[j * plane..(j + 1) * plane], ch, &mut cur);
+            channel_major(&rad[j * plane..(j + 1) * plane], ch, cur);
             let r = &self.input.distance[j * n..(j + 1) * n];
             if grad || wanted.distances {
                 for (inv, &r) in inv.iter_mut().zip(r) {
@@ -500,7 +510,7 @@ impl<'a> ValidGather<'a> {
                 }
             }
             if wanted.distances {
-                dist.add(r, &inv);
+                dist.add(r, inv);
             }
             if grad {
                 if n >= 2 {
@@ -511,7 +521,7 @@ impl<'a> ValidGather<'a> {
                     }
                 }
                 if j >= 1 {
-                    for ((s, &a), &b) in s_ring[..n].iter_mut().zip(&inv).zip(&inv_prev) {
+                    for ((s, &a), &b) in s_ring.iter_mut().zip(inv.iter()).zip(inv_prev.iter()) {
                         *s = a.max(b);
                     }
                 }
@@ -592,67 +602,176 @@ impl<'a> ValidGather<'a> {
     }
 
     /// The same wall terms for the concentric layout, whose wall vectors are computed by quadrature
-    /// along the images of the grid lines (see [`ConcentricWalls`]).
-    fn concentric_wall_gradient<T: Copy + Into<f64>>(
+    /// along the images of the grid lines (see [`ConcentricWalls`]), and its rotational gradient
+    /// `∫ L (n × ω) dω`; both local frame, per channel, empty when not wanted.
+    fn concentric_pass<T: Copy + Into<f64>>(
         &self,
         walls: &ConcentricWalls,
         rad: &[T],
-    ) -> Vec<DVec3> {
-        let (m, n) = (self.layout.m as usize, self.layout.n as usize);
-        let ch = self.input.channels;
-        let inv_r: Vec<f64> = self.input.distance.iter().map(|&r| 1.0 / r).collect();
-        let mut g = vec![DVec3::ZERO; ch];
-        let l = |i: usize| -> f64 { rad[i].into() };
-        let mut wall = |a: usize, b: usize, w: DVec3| {
-            let s = inv_r[a].max(inv_r[b]);
-            if s == 0.0 {
-                return;
-            }
-            for (c, g) in g.iter_mut().enumerate() {
-                *g += w * ((l(a * ch + c) - l(b * ch + c)) * s);
-            }
-        };
-        for j in 1..m {
-            for k in 0..n {
-                wall(
-                    j * n + k,
-                    (j - 1) * n + k,
-                    walls.first_axis[(j - 1) * n + k],
-                );
-            }
+        wanted: Wanted,
+    ) -> (Vec<DVec3>, Vec<DVec3>) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2. (No FMA: results are bitwise those of the SSE2 build.)
+            return unsafe { self.concentric_pass_avx2(walls, rad, wanted) };
         }
-        for j in 0..m {
-            for k in 1..n {
-                wall(
-                    j * n + k,
-                    j * n + k - 1,
-                    walls.second_axis[j * (n - 1) + k - 1],
-                );
-            }
-        }
-        g
+        self.concentric_pass_any(walls, rad, wanted)
     }
 
-    /// `∫ L (n × ω) dω` per channel (world axes) for the concentric layout, whose strata are not
-    /// θ/φ boxes: Monte Carlo with the cosine pdf, `(n × ω)/cosθ` per sample, cosθ clamped where
-    /// a jittered sample touches the horizon.
-    fn concentric_rotation_gradient<T: Copy + Into<f64>>(&self, rad: &[T]) -> Vec<DVec3> {
+    /// [`ValidGather::concentric_pass`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn concentric_pass_avx2<T: Copy + Into<f64>>(
+        &self,
+        walls: &ConcentricWalls,
+        rad: &[T],
+        wanted: Wanted,
+    ) -> (Vec<DVec3>, Vec<DVec3>) {
+        self.concentric_pass_any(walls, rad, wanted)
+    }
+
+    /// Row by row like [`ValidGather::polar_pass`]: each wall's `(L_a − L_b)/min(r_a, r_b)` times
+    /// its vector, accumulated per column and axis (contiguous loops), summed over the columns
+    /// at the end. Concentric strata are not θ/φ boxes, so the rotational gradient is the Monte
+    /// Carlo estimate with the cosine pdf: `(n × ω)/cosθ` per sample, cosθ clamped where a
+    /// jittered sample touches the horizon.
+    #[inline(always)]
+    fn concentric_pass_any<T: Copy + Into<f64>>(
+        &self,
+        walls: &ConcentricWalls,
+        rad: &[T],
+        wanted: Wanted,
+    ) -> (Vec<DVec3>, Vec<DVec3>) {
+        let (grad, rot) = (wanted.gradient, wanted.rotation_gradient);
+        let (m, n) = (self.layout.m as usize, self.layout.n as usize);
         let ch = self.input.channels;
-        let mut g = vec![DVec3::ZERO; ch];
+        let plane = ch * n;
+        let planes = |on: bool, count: usize| if on { count * plane } else { 0 };
+        let mut scratch = vec![0.0; 2 * plane + 6 * n + planes(grad, 3) + planes(rot, 2)];
+        let (mut cur, rest) = scratch.split_at_mut(plane);
+        let (mut prev, rest) = rest.split_at_mut(plane);
+        let (mut inv, rest) = rest.split_at_mut(n);
+        let (mut inv_prev, rest) = rest.split_at_mut(n);
+        let (s1, rest) = rest.split_at_mut(n);
+        let (s2, rest) = rest.split_at_mut(n);
+        let (rot_x, rest) = rest.split_at_mut(n);
+        let (rot_y, rest) = rest.split_at_mut(n);
+        let (acc_x, rest) = rest.split_at_mut(planes(grad, 1));
+        let (acc_y, rest) = rest.split_at_mut(planes(grad, 1));
+        let (acc_z, rest) = rest.split_at_mut(planes(grad, 1));
+        let (racc_x, racc_y) = rest.split_at_mut(planes(rot, 1));
         let weight = self.stratum_weight();
         let (t, b, nrm) = (
             self.frame.tangent,
             self.frame.bitangent(),
             self.frame.normal,
         );
-        for (&w, cell) in self.input.directions.iter().zip(rad.chunks_exact(ch)) {
-            let l = DVec3::new(w.dot(t), w.dot(b), w.dot(nrm));
-            let v = DVec3::new(-l.y, l.x, 0.0) * (weight / l.z.max(1e-6));
-            for (g, &l) in g.iter_mut().zip(cell) {
-                *g += v * l.into();
+        let [f_x, f_y, f_z] = &walls.first_by_axis;
+        let [s_x, s_y, s_z] = &walls.second_by_axis;
+        for j in 0..m {
+            channel_major(&rad[j * plane..(j + 1) * plane], ch, cur);
+            if rot {
+                let dirs = &self.input.directions[j * n..(j + 1) * n];
+                for ((&w, vx), vy) in dirs.iter().zip(rot_x.iter_mut()).zip(rot_y.iter_mut()) {
+                    let scale = weight / w.dot(nrm).max(1e-6);
+                    (*vx, *vy) = (-w.dot(b) * scale, w.dot(t) * scale);
+                }
+                for c in 0..ch {
+                    let span = c * n..(c + 1) * n;
+                    let l = &cur[span.clone()];
+                    let (ax, ay) = (&mut racc_x[span.clone()], &mut racc_y[span]);
+                    for ((((ax, ay), &l), &vx), &vy) in ax
+                        .iter_mut()
+                        .zip(ay.iter_mut())
+                        .zip(l)
+                        .zip(rot_x.iter())
+                        .zip(rot_y.iter())
+                    {
+                        *ax += vx * l;
+                        *ay += vy * l;
+                    }
+                }
             }
+            if !grad {
+                continue;
+            }
+            for (inv, &r) in inv.iter_mut().zip(&self.input.distance[j * n..(j + 1) * n]) {
+                *inv = 1.0 / r;
+            }
+            if j >= 1 {
+                for ((s, &a), &b) in s1.iter_mut().zip(inv.iter()).zip(inv_prev.iter()) {
+                    *s = a.max(b);
+                }
+            }
+            for ((s, &a), &b) in s2[1..].iter_mut().zip(&inv[1..]).zip(&inv[..n - 1]) {
+                *s = a.max(b);
+            }
+            // Wall vectors of the walls below row j (first axis) and inside row j (second axis).
+            let below = if j >= 1 { (j - 1) * n..j * n } else { 0..0 };
+            let (fx, fy, fz) = (&f_x[below.clone()], &f_y[below.clone()], &f_z[below]);
+            let inside = j * (n - 1)..(j + 1) * (n - 1);
+            let (sx, sy, sz) = (&s_x[inside.clone()], &s_y[inside.clone()], &s_z[inside]);
+            for c in 0..ch {
+                let span = c * n..(c + 1) * n;
+                let (l, lp) = (&cur[span.clone()], &prev[span.clone()]);
+                let ax = &mut acc_x[span.clone()];
+                let ay = &mut acc_y[span.clone()];
+                let az = &mut acc_z[span];
+                if j >= 1 {
+                    let diff = l
+                        .iter()
+                        .zip(lp)
+                        .zip(s1.iter())
+                        .map(|((&a, &b), &s)| (a - b) * s);
+                    let vectors = fx.iter().zip(fy).zip(fz);
+                    for (((d, ((wx, wy), wz)), ax), (ay, az)) in diff
+                        .zip(vectors)
+                        .zip(ax.iter_mut())
+                        .zip(ay.iter_mut().zip(az.iter_mut()))
+                    {
+                        *ax += wx * d;
+                        *ay += wy * d;
+                        *az += wz * d;
+                    }
+                }
+                let diff = l[1..]
+                    .iter()
+                    .zip(&l[..n - 1])
+                    .zip(&s2[1..])
+                    .map(|((&a, &b), &s)| (a - b) * s);
+                let vectors = sx.iter().zip(sy).zip(sz);
+                for (((d, ((wx, wy), wz)), ax), (ay, az)) in diff
+                    .zip(vectors)
+                    .zip(ax[1..].iter_mut())
+                    .zip(ay[1..].iter_mut().zip(az[1..].iter_mut()))
+                {
+                    *ax += wx * d;
+                    *ay += wy * d;
+                    *az += wz * d;
+                }
+            }
+            std::mem::swap(&mut cur, &mut prev);
+            std::mem::swap(&mut inv, &mut inv_prev);
         }
-        g.into_iter().map(|v| self.frame.to_world(v)).collect()
+        let sums = |on: bool, x: &[f64], y: &[f64], z: Option<&[f64]>| -> Vec<DVec3> {
+            if !on {
+                return Vec::new();
+            }
+            (0..ch)
+                .map(|c| {
+                    let span = c * n..(c + 1) * n;
+                    DVec3::new(
+                        pairwise_sum(&x[span.clone()]),
+                        pairwise_sum(&y[span.clone()]),
+                        z.map_or(0.0, |z| pairwise_sum(&z[span])),
+                    )
+                })
+                .collect()
+        };
+        (
+            sums(grad, acc_x, acc_y, Some(acc_z)),
+            sums(rot, racc_x, racc_y, None),
+        )
     }
 }
 

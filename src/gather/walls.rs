@@ -183,6 +183,19 @@ pub(crate) struct ConcentricWalls {
     pub(crate) first_axis: Vec<DVec3>,
     /// Wall between `(j, k−1)` and `(j, k)`, index `j·(N−1) + k − 1`, pointing into `(j, k)`.
     pub(crate) second_axis: Vec<DVec3>,
+    /// `first_axis` by component (x, y, z arrays), for contiguous per-row loops.
+    pub(crate) first_by_axis: [Vec<f64>; 3],
+    /// `second_axis` by component.
+    pub(crate) second_by_axis: [Vec<f64>; 3],
+}
+
+/// The x, y and z components of `v` as three arrays.
+fn by_axis(v: &[DVec3]) -> [Vec<f64>; 3] {
+    [
+        v.iter().map(|w| w.x).collect(),
+        v.iter().map(|w| w.y).collect(),
+        v.iter().map(|w| w.z).collect(),
+    ]
 }
 
 /// Recently used concentric wall sets, keyed by (M, N): they depend on the grid only, and a
@@ -230,6 +243,8 @@ impl ConcentricWalls {
             }
         }
         ConcentricWalls {
+            first_by_axis: by_axis(&first_axis),
+            second_by_axis: by_axis(&second_axis),
             first_axis,
             second_axis,
         }
