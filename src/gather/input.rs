@@ -359,3 +359,42 @@ fn locate_bad_direction(layout: &Layout, frame: &Frame, directions: &[DVec3]) ->
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The AVX2 builds of the scans give the portable build's verdicts.
+    #[test]
+    fn avx2_scans_match_the_portable_scans() {
+        let mut values: Vec<f32> = (0..3000).map(|i| i as f32 * 0.37 - 100.0).collect();
+        values.push(f32::MAX);
+        values.push(f32::MIN_POSITIVE / 2.0);
+        assert!(all_finite(&values) && all_finite_any(&values));
+        for bad in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN, -f32::NAN] {
+            for at in [0, 1023, 1024, 2047, 3001] {
+                let mut v = values.clone();
+                v[at] = bad;
+                assert!(!all_finite(&v) && !all_finite_any(&v), "{bad} at {at}");
+            }
+        }
+        let frame = Frame::new(DVec3::ZERO, DVec3::new(0.0, 0.6, 0.8), DVec3::X).unwrap();
+        for kind in [
+            LayoutKind::CosinePolar,
+            LayoutKind::Sphere,
+            LayoutKind::Concentric,
+        ] {
+            let layout = Layout::new(kind, 5, 9, 3).unwrap();
+            let dirs = layout.directions(&frame).unwrap();
+            assert!(directions_ok(&layout, &frame, &dirs));
+            assert!(directions_ok_any(&layout, &frame, &dirs));
+            for (i, scale) in [(0, 1.0 + 1e-5), (17, -1.0), (44, 1.0 + 1e-7)] {
+                let mut d = dirs.clone();
+                d[i] *= scale;
+                let want = locate_bad_direction(&layout, &frame, &d).is_ok();
+                assert_eq!(directions_ok(&layout, &frame, &d), want, "{kind:?} {i}");
+                assert_eq!(directions_ok_any(&layout, &frame, &d), want, "{kind:?} {i}");
+            }
+        }
+    }
+}
