@@ -531,6 +531,36 @@ impl<'a> ValidGather<'a> {
             for c in 0..ch {
                 let span = c * n..(c + 1) * n;
                 let (l, lp) = (&cur[span.clone()], &prev[span.clone()]);
+                if grad && rot && n >= 2 && j >= 1 {
+                    // The common case in one loop: each element sees the same operations in the
+                    // same order as in the separate loops below.
+                    let az = &mut azimuth[span.clone()];
+                    let (rg, nz) = (&mut ring[span.clone()], &mut normal[span.clone()]);
+                    let col = &mut column[span];
+                    az[0] += (l[0] - l[n - 1]) * s_az[0];
+                    let d = (l[0] - lp[0]) * s_ring[0];
+                    rg[0] += d * ring_a;
+                    nz[0] += d * ring_b;
+                    col[0] += sin2 * l[0];
+                    let accumulators = az[1..]
+                        .iter_mut()
+                        .zip(rg[1..].iter_mut())
+                        .zip(nz[1..].iter_mut().zip(col[1..].iter_mut()));
+                    let inputs = l[1..]
+                        .iter()
+                        .zip(&l[..n - 1])
+                        .zip(lp[1..].iter().zip(&s_az[1..]).zip(&s_ring[1..]));
+                    for (((az, rg), (nz, col)), ((&l1, &l0), ((&lp1, &sa), &sr))) in
+                        accumulators.zip(inputs)
+                    {
+                        *az += (l1 - l0) * sa;
+                        let d = (l1 - lp1) * sr;
+                        *rg += d * ring_a;
+                        *nz += d * ring_b;
+                        *col += sin2 * l1;
+                    }
+                    continue;
+                }
                 if grad {
                     let az = &mut azimuth[span.clone()];
                     if n >= 2 {
