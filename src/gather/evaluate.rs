@@ -284,6 +284,37 @@ impl<'a> ValidGather<'a> {
         wanted: Wanted,
         out: &mut GatherValues,
     ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2. (No FMA: results are bitwise those of the SSE2 build.)
+            return unsafe { self.add_media_avx2(rad, media, march, wanted, out) };
+        }
+        self.add_media_any(rad, media, march, wanted, out)
+    }
+
+    /// [`ValidGather::add_media`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn add_media_avx2(
+        &self,
+        rad: &mut [f64],
+        media: &MediaRadiance<'_>,
+        march: &March,
+        wanted: Wanted,
+        out: &mut GatherValues,
+    ) {
+        self.add_media_any(rad, media, march, wanted, out)
+    }
+
+    #[inline(always)]
+    fn add_media_any(
+        &self,
+        rad: &mut [f64],
+        media: &MediaRadiance<'_>,
+        march: &March,
+        wanted: Wanted,
+        out: &mut GatherValues,
+    ) {
         // Constant channel counts for the common cases, so the per-step loops unroll.
         match self.input.channels {
             1 => self.add_media_channels(rad, media, march, wanted, out, 1),
@@ -381,16 +412,9 @@ impl<'a> ValidGather<'a> {
         for c0 in (0..ch).step_by(GROUP) {
             let cw = GROUP.min(ch - c0);
             let mut e = [0.0; GROUP];
-            let mut a = [0.0; GROUP];
-            for (s, &i0) in w0.iter().enumerate() {
-                let q = &q[s * ch + c0..s * ch + c0 + cw];
-                for (e, &q) in e.iter_mut().zip(q) {
+            for (q, &i0) in q.chunks_exact(ch).zip(w0) {
+                for (e, &q) in e.iter_mut().zip(&q[c0..c0 + cw]) {
                     *e += q as f64 * i0;
-                }
-                if grad && hit_inside {
-                    for (a, &q) in a.iter_mut().zip(q) {
-                        *a += q as f64 * wa[s];
-                    }
                 }
             }
             for (l, e) in rad[c0..c0 + cw].iter_mut().zip(e) {
@@ -401,6 +425,12 @@ impl<'a> ValidGather<'a> {
             }
             let total = &mut total[c0..c0 + cw];
             if hit_inside {
+                let mut a = [0.0; GROUP];
+                for (q, &wa) in q.chunks_exact(ch).zip(wa) {
+                    for (a, &q) in a.iter_mut().zip(&q[c0..c0 + cw]) {
+                        *a += q as f64 * wa;
+                    }
+                }
                 // d/dx of ∫_0^r e^{-σt} Q dt with the far end fixed (s-parametrization).
                 for (t, a) in total.iter_mut().zip(a) {
                     *t -= w * (a * inv_r);
@@ -410,29 +440,31 @@ impl<'a> ValidGather<'a> {
                 continue;
             };
             let gq = &gq[i * steps * ch * 3..(i * steps + visible) * ch * 3];
-            let mut g = [[0.0; 3]; GROUP];
-            let mut h = [[0.0; 3]; GROUP];
-            for (s, (&cg, &i1)) in wg.iter().zip(w1).enumerate() {
-                let gq = &gq[(s * ch + c0) * 3..(s * ch + c0 + cw) * 3];
-                for (g, gq) in g.iter_mut().zip(gq.chunks_exact(3)) {
-                    for (g, &v) in g.iter_mut().zip(gq) {
-                        *g += v as f64 * cg;
-                    }
+            // ∇q of the group's channels, flat: [3·c + axis].
+            let mut g = [0.0; 3 * GROUP];
+            for (gq, &cg) in gq.chunks_exact(3 * ch).zip(wg) {
+                for (g, &v) in g.iter_mut().zip(&gq[3 * c0..3 * (c0 + cw)]) {
+                    *g += v as f64 * cg;
                 }
-                if !hit_inside {
-                    for (h, gq) in h.iter_mut().zip(gq.chunks_exact(3)) {
-                        for (h, &v) in h.iter_mut().zip(gq) {
-                            *h += v as f64 * i1;
-                        }
+            }
+            let mut h = [0.0; 3 * GROUP];
+            if !hit_inside {
+                for (gq, &i1) in gq.chunks_exact(3 * ch).zip(w1) {
+                    for (h, &v) in h.iter_mut().zip(&gq[3 * c0..3 * (c0 + cw)]) {
+                        *h += v as f64 * i1;
                     }
                 }
             }
-            for ((t, g), h) in total.iter_mut().zip(g).zip(h) {
-                *t += DVec3::from_array(g);
+            for ((t, g), h) in total
+                .iter_mut()
+                .zip(g.chunks_exact(3))
+                .zip(h.chunks_exact(3))
+            {
+                *t += DVec3::from_slice(g);
                 if !hit_inside {
                     // Hit beyond the march (or a miss): the marched points keep their depth
                     // t and turn with the direction to the fixed hit, dω/dx = −(I − ωωᵀ)/r.
-                    *t += w * (w.dot(DVec3::from_array(h)) * inv_r);
+                    *t += w * (w.dot(DVec3::from_slice(h)) * inv_r);
                 }
             }
         }
@@ -990,7 +1022,7 @@ impl March {
 
     /// [`March::segment`] from the start of step `s` (`a = s·Δ`), with the transmittance to `a`
     /// from the table: the same value.
-    #[inline]
+    #[inline(always)]
     fn segment_from_step(&self, s: usize, a: f64, len: f64) -> (f64, f64) {
         let x = self.sigma * len;
         let (j0, j1) = if x < 1e-3 {
@@ -1013,7 +1045,7 @@ impl March {
     /// (all visible from 0: only the last one or two partly). `i0` and `i1` must hold the
     /// full-step weights ([`March::full`]) at `k < first`; entries from `first` on are written and
     /// must be restored with [`March::restore`]. Returns `(count, first)`.
-    #[inline]
+    #[inline(always)]
     fn weights(&self, r: f64, i0: &mut [f64], i1: &mut [f64]) -> (usize, usize) {
         let hi = r.min(self.end());
         if hi.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
@@ -1053,7 +1085,7 @@ impl March {
     }
 
     /// Puts the full-step weights back at `first..count` after [`March::weights`].
-    #[inline]
+    #[inline(always)]
     fn restore(&self, i0: &mut [f64], i1: &mut [f64], (count, first): (usize, usize)) {
         for k in first..count {
             (i0[k], i1[k]) = self.full[k];
