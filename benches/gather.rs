@@ -1,12 +1,15 @@
-//! Cost of a gather evaluation against the cost of generating its directions (the baseline), for
-//! 16x32, 32x64 and 64x128 cosine-polar layouts, 3 channels: irradiance only, irradiance with
-//! translational and rotational gradients, and both with an absorbing, scattering medium marched in
-//! 16 steps per direction (with media radiance gradients); and the concentric layout's gradients.
-//! Every evaluation is also timed with the previous implementation (`gather::evaluate_reference`,
-//! cases named "reference ...") as the baseline. After the criterion groups, a summary table in ns
-//! per sample with the speed-up over the previous implementation, timed in the same run as on-CPU
-//! time of the thread (robust on a shared machine; criterion's figures are wall time).
-//! `RADDIFF_BENCH_SUMMARY_ONLY=1` skips the criterion groups.
+//! Cost of a gather evaluation against the cost of generating its directions, for 16x32, 32x64,
+//! 32x128 (the demo's 4096 rays) and 64x128 cosine-polar layouts, 3 channels: irradiance only,
+//! irradiance with translational and rotational gradients, both with an absorbing, scattering
+//! medium marched in 16 steps per direction (with media radiance gradients), the gradients with
+//! the marched radiance but without its gradient (the demo's room), and the concentric layout's
+//! gradients. Every evaluation is also timed with the previous implementation
+//! (`gather::evaluate_reference`, cases named "reference ...") as the baseline. After the criterion
+//! groups, a summary table in ns per sample with the speed-up over the previous implementation,
+//! timed in the same run as on-CPU time of the thread (robust on a shared machine; criterion's
+//! figures are wall time).
+//! `RADDIFF_BENCH_SUMMARY_ONLY=1` skips the criterion groups;
+//! `RADDIFF_BENCH_PROFILE=32x128:gradients:1000` runs one case only (for `perf`/callgrind).
 //!
 //! `cargo bench --bench gather -- --warm-up-time 1 --measurement-time 3`
 
@@ -74,7 +77,8 @@ impl Scene {
         }
     }
 
-    fn input(&self, medium: bool) -> GatherInput<'_> {
+    /// With `medium`, the media radiance gradient only if `media_gradient`.
+    fn input_with(&self, medium: bool, media_gradient: bool) -> GatherInput<'_> {
         GatherInput {
             directions: &self.dirs,
             distance: &self.dist,
@@ -83,7 +87,7 @@ impl Scene {
             sigma_t: if medium { 0.2 } else { 0.0 },
             media: medium.then_some(MediaRadiance {
                 radiance: &self.media,
-                gradient: Some(&self.media_grad),
+                gradient: media_gradient.then_some(&self.media_grad[..]),
                 steps: STEPS,
                 step: 0.2,
             }),
@@ -98,73 +102,70 @@ const GRADIENTS: Wanted = Wanted {
     distances: true,
 };
 
-type Case<'a> = (&'static str, Box<dyn Fn() + 'a>);
+type Case<'a> = (String, Box<dyn Fn() + 'a>);
 
+/// An evaluation to time: name, concentric layout (else cosine-polar), medium, media radiance
+/// gradient, outputs.
+type Evaluation = (&'static str, bool, bool, bool, Wanted);
+
+const EVALUATIONS: [Evaluation; 6] = [
+    ("irradiance", false, false, false, Wanted::IRRADIANCE),
+    ("gradients", false, false, false, GRADIENTS),
+    ("irradiance+media", false, true, true, Wanted::IRRADIANCE),
+    ("gradients+media", false, true, true, GRADIENTS),
+    // The demo's room: marched in-scattering without its gradient.
+    (
+        "gradients+media without its gradient",
+        false,
+        true,
+        false,
+        GRADIENTS,
+    ),
+    ("concentric gradients", true, false, false, GRADIENTS),
+];
+
+/// The direction generation, then every evaluation with this implementation and with the previous
+/// one (`gather::evaluate_reference`, named "reference ..."), the baseline of the speed-up.
 fn cases(s: &Scene) -> Vec<Case<'_>> {
     let buf = RefCell::new(vec![DVec3::ZERO; s.layout.len()]);
     let mut v: Vec<Case<'_>> = vec![(
-        "directions",
+        "directions".into(),
         Box::new(move || {
             s.layout
                 .directions_into(&s.frame, black_box(&mut buf.borrow_mut()))
                 .unwrap()
         }),
     )];
-    for (name, medium, wanted) in EVALUATIONS {
-        v.push((
-            name,
-            Box::new(move || {
-                black_box(evaluate(&s.layout, &s.frame, &s.input(medium), wanted).unwrap());
-            }),
-        ));
-    }
-    let concentric = Scene::new_kind(LayoutKind::Concentric, s.layout.m, s.layout.n);
-    let concentric_ref = Scene::new_kind(LayoutKind::Concentric, s.layout.m, s.layout.n);
-    v.push((
-        "concentric gradients",
-        Box::new(move || {
-            let s = &concentric;
-            black_box(evaluate(&s.layout, &s.frame, &s.input(false), GRADIENTS).unwrap());
-        }),
+    let concentric = std::rc::Rc::new(Scene::new_kind(
+        LayoutKind::Concentric,
+        s.layout.m,
+        s.layout.n,
     ));
-    // The previous implementation, as the baseline of the speed-up.
-    for (name, medium, wanted) in REFERENCE_EVALUATIONS {
-        v.push((
-            name,
-            Box::new(move || {
-                let input = s.input(medium);
-                black_box(
-                    evaluate_reference::evaluate(&s.layout, &s.frame, &input, wanted).unwrap(),
-                );
-            }),
-        ));
+    for reference in [false, true] {
+        for (name, conc, medium, media_gradient, wanted) in EVALUATIONS {
+            let scene = conc.then(|| std::rc::Rc::clone(&concentric));
+            let name = if reference {
+                format!("reference {name}")
+            } else {
+                name.to_string()
+            };
+            v.push((
+                name,
+                Box::new(move || {
+                    let s = scene.as_deref().unwrap_or(s);
+                    let input = s.input_with(medium, media_gradient);
+                    let values = if reference {
+                        evaluate_reference::evaluate(&s.layout, &s.frame, &input, wanted)
+                    } else {
+                        evaluate(&s.layout, &s.frame, &input, wanted)
+                    };
+                    black_box(values.unwrap());
+                }),
+            ));
+        }
     }
-    v.push((
-        "reference concentric gradients",
-        Box::new(move || {
-            let s = &concentric_ref;
-            let input = s.input(false);
-            black_box(
-                evaluate_reference::evaluate(&s.layout, &s.frame, &input, GRADIENTS).unwrap(),
-            );
-        }),
-    ));
     v
 }
-
-const EVALUATIONS: [(&str, bool, Wanted); 4] = [
-    ("irradiance", false, Wanted::IRRADIANCE),
-    ("gradients", false, GRADIENTS),
-    ("irradiance+media", true, Wanted::IRRADIANCE),
-    ("gradients+media", true, GRADIENTS),
-];
-
-const REFERENCE_EVALUATIONS: [(&str, bool, Wanted); 4] = [
-    ("reference irradiance", false, Wanted::IRRADIANCE),
-    ("reference gradients", false, GRADIENTS),
-    ("reference irradiance+media", true, Wanted::IRRADIANCE),
-    ("reference gradients+media", true, GRADIENTS),
-];
 
 fn bench(c: &mut Criterion) {
     for (m, n) in SIZES {
@@ -172,17 +173,23 @@ fn bench(c: &mut Criterion) {
         let mut group = c.benchmark_group(format!("gather_{m}x{n}"));
         group.throughput(Throughput::Elements((m * n) as u64));
         for (name, f) in cases(&scene) {
-            group.bench_function(name, |b| b.iter(&f));
+            group.bench_function(&name, |b| b.iter(&f));
         }
         group.finish();
     }
 }
 
-/// On-CPU time of this thread in ns (Linux `schedstat`): unlike wall time, it does not count the
-/// time other processes hold the core, so the figures survive a busy machine. Wall time elsewhere.
+/// On-CPU time of this thread in ns (`CLOCK_THREAD_CPUTIME_ID`): unlike wall time, it does not
+/// count the time other processes hold the core, so the figures survive a busy machine. Wall time
+/// where the clock is missing.
 fn cpu_ns() -> Option<u64> {
-    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    s.split_whitespace().next()?.parse().ok()
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: a valid clock id and a valid out-pointer.
+    let ok = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) } == 0;
+    ok.then(|| ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64)
 }
 
 fn now_ns(start: Instant) -> f64 {
@@ -224,28 +231,26 @@ fn summary() {
         "\nCPU ns per sample, {CHANNELS} channels, {STEPS} media steps: this implementation (the previous one, speed-up):"
     );
     println!(
-        "| layout | directions | irradiance | + gradients | irradiance + media | gradients + media | gradient cost | concentric + gradients |"
+        "| layout | directions | irradiance | + gradients | irradiance + media | gradients + media | gradients + media without its gradient | concentric, + gradients |"
     );
     println!("|---|---|---|---|---|---|---|---|");
     for (m, n) in SIZES {
         let scene = Scene::new(m, n);
         let samples = (m * n) as f64;
-        let t: Vec<f64> = cases(&scene)
+        let t: Vec<(String, f64)> = cases(&scene)
             .iter()
-            .map(|(_, f)| time(f.as_ref()) / samples)
+            .map(|(name, f)| (name.clone(), time(f.as_ref()) / samples))
             .collect();
-        // t: directions, 4 evaluations, concentric, 4 references, reference concentric
-        let cell = |i: usize| format!("{:.1} ({:.1}, {:.2}x)", t[i], t[i + 5], t[i + 5] / t[i]);
+        let get = |name: &str| t.iter().find(|(n, _)| n == name).map(|(_, t)| *t).unwrap();
+        let cell = |name: &str| {
+            let (new, old) = (get(name), get(&format!("reference {name}")));
+            format!("{new:.1} ({old:.1}, {:.1}x)", old / new)
+        };
+        let cells: Vec<String> = EVALUATIONS.iter().map(|e| cell(e.0)).collect();
         println!(
-            "| {m}x{n} | {:.1} | {} | {} | {} | {} | +{:.1} ns (+{:.1}) | {} |",
-            t[0],
-            cell(1),
-            cell(2),
-            cell(3),
-            cell(4),
-            t[2] - t[1],
-            t[7] - t[6],
-            cell(5)
+            "| {m}x{n} | {:.1} | {} |",
+            get("directions"),
+            cells.join(" | ")
         );
     }
 }
@@ -262,7 +267,7 @@ fn profile(spec: &str) {
     let cases = cases(&scene);
     let (_, f) = cases
         .iter()
-        .find(|(name, _)| *name == parts[1])
+        .find(|(name, _)| name == parts[1])
         .expect("case name as in the summary");
     for _ in 0..calls {
         f();
