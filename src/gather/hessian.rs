@@ -53,6 +53,8 @@
 
 use glam::{DMat3, DVec3};
 
+mod edges;
+
 pub use super::hessian_mesh::{Edge, Topology};
 use super::hessian_mesh::{NONE, POLE, REVERSED};
 pub use super::layout::LayoutKind;
@@ -440,8 +442,39 @@ pub fn occlusion_derivatives_on(
     if g.sigma_t > 0.0 {
         return with_medium(topo, mesh, g, order, out);
     }
-    // Radiance of every triangle (its farthest vertex's), channel-interleaved, plus a zero row that
-    // stands for the outside of the horizon.
+    let tri = triangle_radiance(topo, mesh, g);
+    let outside = topo.triangles.len();
+    let scale = Scale::of(mesh);
+    let points: Vec<DVec3> = mesh.positions.iter().map(|&p| scale.point(p)).collect();
+    let squared: Vec<f64> = points.iter().map(|p| p.length_squared()).collect();
+    let mut sums = edges::EdgeSums::new(n, order, channels);
+    let mut delta = vec![0.0f64; channels];
+    for e in &topo.edges {
+        let boundary = e.right == NONE;
+        let right = if boundary { outside } else { e.right as usize };
+        let (l, r) = (e.left as usize * channels, right * channels);
+        let mut any = false;
+        for (c, d) in delta.iter_mut().enumerate() {
+            *d = tri[l + c] - tri[r + c];
+            any |= *d != 0.0;
+        }
+        if !any && !boundary {
+            continue;
+        }
+        let (a, b) = (e.a as usize, e.b as usize);
+        sums.push(
+            points[a], points[b], squared[a], squared[b], &delta, boundary,
+        )?;
+    }
+    let (acc, geometric) = sums.finish()?;
+    out.geometric = geometric;
+    finish(out, &acc, scale)
+}
+
+/// Radiance of every triangle (its farthest vertex's), channel-interleaved, plus a zero row that
+/// stands for the outside of the horizon.
+fn triangle_radiance(topo: &Topology, mesh: &MeshGeometry, g: &HemisphereGather) -> Vec<f64> {
+    let channels = g.channels;
     let tcount = topo.triangles.len();
     let mut tri = vec![0.0f64; (tcount + 1) * channels];
     for (t, row) in tri.chunks_exact_mut(channels).take(tcount).enumerate() {
@@ -449,7 +482,40 @@ pub fn occlusion_derivatives_on(
             *l = vertex_radiance(topo, mesh, g, mesh.farthest[t], c);
         }
     }
-    let outside = tcount;
+    tri
+}
+
+/// [`occlusion_derivatives`] with every edge evaluated by the general edge kernel
+/// (`kernels::edge_form_factor`'s closed form, one call per edge): the reference the
+/// gather-specialised edge evaluation is tested and benchmarked against.
+pub fn occlusion_derivatives_reference(
+    topo: &Topology,
+    g: &HemisphereGather,
+    order: Order,
+) -> Result<OcclusionDerivatives> {
+    let mesh = mesh_geometry(topo, g)?;
+    reference_on(topo, &mesh, g, order)
+}
+
+fn reference_on(
+    topo: &Topology,
+    mesh: &MeshGeometry,
+    g: &HemisphereGather,
+    order: Order,
+) -> Result<OcclusionDerivatives> {
+    if !order.gradient() {
+        return Err(Error::InvalidArgument(
+            "occlusion derivatives need order >= RADDIFF_ORDER_GRADIENT".into(),
+        ));
+    }
+    let n = g.normal.normalize();
+    let channels = g.channels;
+    let mut out = empty(channels, all_black(g));
+    if g.sigma_t > 0.0 {
+        return with_medium(topo, mesh, g, order, out);
+    }
+    let tri = triangle_radiance(topo, mesh, g);
+    let outside = topo.triangles.len();
     let scale = Scale::of(mesh);
     let mut acc = vec![Deriv3::constant(0.0); channels];
     let mut delta = vec![0.0f64; channels];
