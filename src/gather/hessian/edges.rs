@@ -21,6 +21,7 @@
 
 use glam::{DMat3, DVec3};
 
+use super::super::hessian_mesh::{Edge, NONE};
 use crate::error::{Error, Result};
 use crate::{Deriv3, Order};
 
@@ -44,6 +45,10 @@ const AXIAL_RATIO_SQUARED_INV: f64 = 16.0;
 /// form's foot point and `1/h` powers lose more than about 1e-8 relative (4 digits): the edge goes
 /// to the general kernel so that the result is the reference's.
 const NEAR_LINE_SINE_SQUARED: f64 = 1e-8;
+
+/// Below this `L·hL·ρ_a²ρ_b²` an edge goes to the general kernel (the reciprocal would lose
+/// precision to subnormals; it takes hits 1e-75 times closer than the farthest).
+const TINY_DENOMINATOR: f64 = 1e-250;
 
 /// `general` flags of a lane.
 const CLOSED_FORM: f64 = 0.0;
@@ -229,14 +234,24 @@ fn evaluate_lanes<const FMA: bool, const HESSIAN: bool, const AXIAL_LANES: bool>
         let sign = if swap { -1.0 } else { 1.0 };
         let len2 = fmadd::<FMA>(ex, ex, fmadd::<FMA>(ey, ey, ez * ez));
         let len = len2.sqrt();
-        let il = 1.0 / len;
-        let (hx, hy, hz) = (ex * il, ey * il, ez * il);
         // w = r × e
         let wx = fmadd::<FMA>(ry, ez, -(rz * ey));
         let wy = fmadd::<FMA>(rz, ex, -(rx * ez));
         let wz = fmadd::<FMA>(rx, ey, -(ry * ex));
         let w2 = fmadd::<FMA>(wx, wx, fmadd::<FMA>(wy, wy, wz * wz));
-        let wl = w2.sqrt(); // h·L
+        // hL
+        let wl = w2.sqrt();
+        // One division for 1/L, 1/h = L/(hL) and 1/(ρ_a² ρ_b²). The product stays far from
+        // overflow (positions are scaled to about 1, misses to 2^20); lanes where it could
+        // underflow go to the general kernel.
+        let rab2 = ra2 * rb2;
+        let lw = len * wl;
+        let denominator = lw * rab2;
+        let q = 1.0 / denominator;
+        let il = wl * rab2 * q;
+        let ih = len * len * rab2 * q;
+        let irab = lw * q;
+        let (hx, hy, hz) = (ex * il, ey * il, ez * il);
         let h = wl * il;
         let h2 = h * h;
         let sa = fmadd::<FMA>(rx, hx, fmadd::<FMA>(ry, hy, rz * hz));
@@ -250,11 +265,8 @@ fn evaluate_lanes<const FMA: bool, const HESSIAN: bool, const AXIAL_LANES: bool>
         let (near, far) = (sa.abs().min(sb.abs()), sa.abs().max(sb.abs()));
         let axial = sab > 0.0 && AXIAL_RATIO_SQUARED_INV * h2 < near * near;
         let near_line = w2 < NEAR_LINE_SINE_SQUARED * ra2 * len2;
-        let ih = len / wl;
         // atan2 is accurate for small angles too, so A_1 needs no series in the axial regime.
         let a1 = atan2_upper::<FMA>(wl, d) * ih;
-        let rab2 = ra2 * rb2;
-        let irab = 1.0 / rab2;
         let ssum = sa + sb;
         let lsum = len * ssum;
         let b2 = 0.5 * lsum * irab;
@@ -325,7 +337,7 @@ fn evaluate_lanes<const FMA: bool, const HESSIAN: bool, const AXIAL_LANES: bool>
         if HESSIAN {
             total += hs[0] + hs[1] + hs[2] + hs[3] + hs[4] + hs[5];
         }
-        let general = near_line || len2 == 0.0 || !total.is_finite();
+        let general = near_line || denominator <= TINY_DENOMINATOR || !total.is_finite();
         let axial_flag = axial && !AXIAL_LANES;
         b.general[i] = if general {
             GENERAL
@@ -403,15 +415,67 @@ unsafe fn run_batch_avx2<const AXIAL_LANES: bool>(
     run_batch::<true, AXIAL_LANES>(b, n, hessian, weights, sums)
 }
 
-/// Whether the AVX2 + FMA version of the batch code runs on this CPU.
-fn has_avx2_fma() -> bool {
+#[cfg(all(target_arch = "x86_64", raddiff_avx512))]
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,fma")]
+unsafe fn run_batch_avx512<const AXIAL_LANES: bool>(
+    b: &mut Batch,
+    n: DVec3,
+    hessian: bool,
+    weights: &[[f64; BATCH]],
+    sums: &mut [Sums],
+) {
+    run_batch::<true, AXIAL_LANES>(b, n, hessian, weights, sums)
+}
+
+/// The instruction sets the batch code is compiled for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Isa {
+    Portable,
     #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
+    Avx2,
+    #[cfg(all(target_arch = "x86_64", raddiff_avx512))]
+    Avx512,
+}
+
+/// The best [`Isa`] this CPU runs (`RADDIFF_SIMD=avx2` or `portable` caps it, read once: for
+/// comparing the versions).
+fn best_isa() -> Isa {
+    static BEST: std::sync::OnceLock<Isa> = std::sync::OnceLock::new();
+    *BEST.get_or_init(|| {
+        let cap = std::env::var("RADDIFF_SIMD").unwrap_or_default();
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            let avx2 = has!("avx2") && has!("fma");
+            #[cfg(raddiff_avx512)]
+            if avx2 && has!("avx512f") && has!("avx512vl") && has!("avx512dq") && cap.is_empty() {
+                return Isa::Avx512;
+            }
+            if avx2 && cap != "portable" {
+                return Isa::Avx2;
+            }
+        }
+        let _ = cap;
+        Isa::Portable
+    })
+}
+
+fn run_batch_on<const AXIAL_LANES: bool>(
+    isa: Isa,
+    b: &mut Batch,
+    n: DVec3,
+    hessian: bool,
+    weights: &[[f64; BATCH]],
+    sums: &mut [Sums],
+) {
+    match isa {
+        Isa::Portable => run_batch::<false, AXIAL_LANES>(b, n, hessian, weights, sums),
+        // SAFETY: `best_isa` (or the caller) checked that the CPU has these features.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { run_batch_avx2::<AXIAL_LANES>(b, n, hessian, weights, sums) },
+        // SAFETY: as above.
+        #[cfg(all(target_arch = "x86_64", raddiff_avx512))]
+        Isa::Avx512 => unsafe { run_batch_avx512::<AXIAL_LANES>(b, n, hessian, weights, sums) },
     }
 }
 
@@ -422,15 +486,7 @@ fn run_batch_dispatch<const AXIAL_LANES: bool>(
     weights: &[[f64; BATCH]],
     sums: &mut [Sums],
 ) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if has_avx2_fma() {
-            // SAFETY: the CPU supports AVX2 and FMA (checked above).
-            unsafe { run_batch_avx2::<AXIAL_LANES>(b, n, hessian, weights, sums) };
-            return;
-        }
-    }
-    run_batch::<false, AXIAL_LANES>(b, n, hessian, weights, sums)
+    run_batch_on::<AXIAL_LANES>(best_isa(), b, n, hessian, weights, sums)
 }
 
 /// Edges waiting for evaluation, with their per-channel weights.
@@ -521,6 +577,42 @@ impl EdgeSums {
         if self.main.add((a, b, a2, b2), delta, boundary) {
             self.flush_main()?;
         }
+        Ok(())
+    }
+
+    /// Adds the mesh's edges for one channel: weight `tri[left] − tri[right]` (`right` = the last
+    /// entry of `tri` on the horizon), edges of weight 0 skipped except on the boundary; `points`
+    /// and `squared` as in [`EdgeSums::push`]. The same as pushing them one by one, in one tight
+    /// loop.
+    pub(crate) fn add_edges_one_channel(
+        &mut self,
+        edges: &[Edge],
+        tri: &[f64],
+        points: &[DVec3],
+        squared: &[f64],
+    ) -> Result<()> {
+        let outside = tri.len() - 1;
+        let mut i = self.main.len;
+        for e in edges {
+            let boundary = e.right == NONE;
+            let right = if boundary { outside } else { e.right as usize };
+            let d = tri[e.left as usize] - tri[right];
+            if d == 0.0 && !boundary {
+                continue;
+            }
+            let (a, b) = (e.a as usize, e.b as usize);
+            let q = &mut self.main;
+            q.batch.set(i, points[a], points[b], squared[a], squared[b]);
+            q.weights[0][i] = d;
+            q.boundary[i] = boundary;
+            i += 1;
+            if i == BATCH {
+                self.main.len = BATCH;
+                self.flush_main()?;
+                i = 0;
+            }
+        }
+        self.main.len = i;
         Ok(())
     }
 
@@ -689,8 +781,25 @@ mod tests {
         }
     }
 
+    fn available_isas() -> Vec<Isa> {
+        #[allow(unused_mut)]
+        let mut isas = vec![Isa::Portable];
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::is_x86_feature_detected as has;
+            if has!("avx2") && has!("fma") {
+                isas.push(Isa::Avx2);
+                #[cfg(raddiff_avx512)]
+                if has!("avx512f") && has!("avx512vl") && has!("avx512dq") {
+                    isas.push(Isa::Avx512);
+                }
+            }
+        }
+        isas
+    }
+
     /// Every lane against `hessian::edge_term` (the general kernel from the nearer end), in both
-    /// code paths (dispatched and portable), for both regimes' batches.
+    /// compiled versions this CPU runs, for both regimes' batches.
     #[test]
     fn batch_lanes_match_the_general_kernel() {
         let mut rng = Rng(0x2545_f491_4f6c_dd1d);
@@ -713,20 +822,27 @@ mod tests {
                     ends.push((a, c));
                 }
                 let (w, mut s) = ([[0.0; BATCH]; 1], vec![[[0.0; LANES]; OUTPUTS]; 1]);
-                let mut axial = b.clone();
-                run_batch_dispatch::<false>(&mut b, n, order.hessian(), &w, &mut s);
-                run_batch_dispatch::<true>(&mut axial, n, order.hessian(), &w, &mut s);
-                let mut portable = b.clone();
-                run_batch::<false, false>(&mut portable, n, order.hessian(), &w, &mut s);
+                // Every compiled version this CPU runs, for both batch kinds.
+                let mut main = Vec::new();
+                let mut axial = Vec::new();
+                for isa in available_isas() {
+                    let mut m = b.clone();
+                    run_batch_on::<false>(isa, &mut m, n, order.hessian(), &w, &mut s);
+                    let mut x = b.clone();
+                    run_batch_on::<true>(isa, &mut x, n, order.hessian(), &w, &mut s);
+                    main.push(m);
+                    axial.push(x);
+                }
                 for (i, &(a, c)) in ends.iter().enumerate() {
-                    let flag = b.general[i];
+                    let flag = main[0].general[i];
+                    assert!(main.iter().all(|m| m.general[i] == flag));
                     seen[flag as usize] += 1;
                     let want = super::super::edge_term(n, a, c, order).unwrap();
                     let lanes: Vec<&Batch> = if flag == CLOSED_FORM {
-                        vec![&b, &portable]
+                        main.iter().map(|m| &**m).collect()
                     } else if flag == AXIAL {
-                        assert_eq!(axial.general[i], CLOSED_FORM);
-                        vec![&axial]
+                        assert!(axial.iter().all(|x| x.general[i] == CLOSED_FORM));
+                        axial.iter().map(|x| &**x).collect()
                     } else {
                         vec![]
                     };
