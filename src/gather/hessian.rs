@@ -467,8 +467,13 @@ pub fn occlusion_derivatives_on(
     let tri = triangle_radiance(topo, mesh, g);
     let outside = topo.triangles.len();
     let scale = Scale::of(mesh);
-    let points: Vec<DVec3> = mesh.positions.iter().map(|&p| scale.point(p)).collect();
-    let squared: Vec<f64> = points.iter().map(|p| p.length_squared()).collect();
+    let mut points = Vec::with_capacity(mesh.positions.len());
+    let mut squared = Vec::with_capacity(mesh.positions.len());
+    for &p in &mesh.positions {
+        let q = scale.point(p);
+        points.push(q);
+        squared.push(q.length_squared());
+    }
     let mut sums = edges::EdgeSums::new(n, order, channels);
     if channels == 1 {
         sums.add_edges_one_channel(&topo.edges, &tri, &points, &squared)?;

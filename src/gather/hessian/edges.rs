@@ -31,6 +31,9 @@ pub(crate) const BATCH: usize = 64;
 /// Width of the partial sums (the widest vector of f64 the batch code targets).
 const LANES: usize = 4;
 
+/// Intermediate values per edge (foot point, edge direction, moments, ν, sign).
+const MID: usize = 14;
+
 /// Outputs per edge: value, gradient (3), Hessian (xx, xy, xz, yy, yz, zz).
 const OUTPUTS: usize = 10;
 
@@ -51,9 +54,9 @@ const NEAR_LINE_SINE_SQUARED: f64 = 1e-8;
 const TINY_DENOMINATOR: f64 = 1e-250;
 
 /// `general` flags of a lane.
-const CLOSED_FORM: f64 = 0.0;
-const AXIAL: f64 = 1.0;
-const GENERAL: f64 = 2.0;
+const CLOSED_FORM: u64 = 0;
+const AXIAL: u64 = 1;
+const GENERAL: u64 = 2;
 
 /// Structure-of-arrays storage of one batch: the edges' end points relative to x (scaled) with
 /// their squared lengths, and the outputs.
@@ -65,9 +68,11 @@ struct Batch {
     b2: [f64; BATCH],
     /// Per edge: value, gradient, Hessian (6 entries) of the edge term `a → b`, times 2π.
     out: [[f64; BATCH]; OUTPUTS],
+    /// Per-lane intermediate results between the two passes of [`evaluate_lanes`].
+    mid: [[f64; BATCH]; MID],
     /// [`CLOSED_FORM`], or [`AXIAL`] / [`GENERAL`] where the lane's outputs are 0 and the edge must
     /// be evaluated by the axial batch or the general kernel.
-    general: [f64; BATCH],
+    general: [u64; BATCH],
 }
 
 impl Batch {
@@ -78,7 +83,8 @@ impl Batch {
             a2: [0.0; BATCH],
             b2: [0.0; BATCH],
             out: [[0.0; BATCH]; OUTPUTS],
-            general: [0.0; BATCH],
+            mid: [[0.0; BATCH]; MID],
+            general: [0; BATCH],
         })
     }
 
@@ -279,8 +285,61 @@ fn evaluate_lanes<const FMA: bool, const HESSIAN: bool, const AXIAL_LANES: bool>
         } else {
             fmadd::<FMA>(len * (h2 - sab), irab, a1) * half_ih2
         };
-        // ν = n·w / L and u = n × ê.
+        // ν = n·w / L.
         let nu = fmadd::<FMA>(n.x, wx, fmadd::<FMA>(n.y, wy, n.z * wz)) * il;
+        let (mut a3, mut b3, mut c3) = (0.0, 0.0, 0.0);
+        if HESSIAN {
+            let irab2 = irab * irab;
+            b3 = 0.25 * lsum * (ra2 + rb2) * irab2;
+            a3 = if AXIAL_LANES {
+                let e3 = |y: f64, inv: f64| {
+                    let inv2 = inv * inv;
+                    horner::<FMA, 22>(&AXIAL_T3, y) * (inv2 * inv2 * inv)
+                };
+                e3(y_near, inv_near) - e3(y_far, inv_far)
+            } else {
+                let bracket = h2 * h2
+                    - 2.0 * sab * h2
+                    - sab * fmadd::<FMA>(sa, sa, fmadd::<FMA>(sa, sb, sb * sb));
+                fmadd::<FMA>(len * bracket, irab2, 3.0 * a2) * (0.5 * half_ih2)
+            };
+            c3 = fmadd::<FMA>(-h2, a3, a2);
+        }
+        let general = near_line || denominator <= TINY_DENOMINATOR;
+        let axial_flag = axial && !AXIAL_LANES;
+        b.general[i] = if general {
+            GENERAL
+        } else if axial_flag {
+            AXIAL
+        } else {
+            CLOSED_FORM
+        };
+        let m = &mut b.mid;
+        m[0][i] = px;
+        m[1][i] = py;
+        m[2][i] = pz;
+        m[3][i] = hx;
+        m[4][i] = hy;
+        m[5][i] = hz;
+        m[6][i] = a1;
+        m[7][i] = a2;
+        m[8][i] = b2;
+        m[9][i] = nu;
+        m[10][i] = sign;
+        if HESSIAN {
+            m[11][i] = a3;
+            m[12][i] = b3;
+            m[13][i] = c3;
+        }
+    }
+    // Second pass (fewer values live at once than in one loop: no spills with 16 registers).
+    for i in 0..BATCH {
+        let m = &b.mid;
+        let (px, py, pz) = (m[0][i], m[1][i], m[2][i]);
+        let (hx, hy, hz) = (m[3][i], m[4][i], m[5][i]);
+        let (a1, a2, b2, nu, sign) = (m[6][i], m[7][i], m[8][i], m[9][i], m[10][i]);
+        let (a3, b3, c3) = (m[11][i], m[12][i], m[13][i]);
+        // u = n × ê.
         let ux = fmadd::<FMA>(n.y, hz, -(n.z * hy));
         let uy = fmadd::<FMA>(n.z, hx, -(n.x * hz));
         let uz = fmadd::<FMA>(n.x, hy, -(n.y * hx));
@@ -295,21 +354,6 @@ fn evaluate_lanes<const FMA: bool, const HESSIAN: bool, const AXIAL_LANES: bool>
         let g2 = fmadd::<FMA>(uz, a1, two_nu * gz);
         let mut hs = [0.0; 6];
         if HESSIAN {
-            let irab2 = irab * irab;
-            let b3 = 0.25 * lsum * (ra2 + rb2) * irab2;
-            let a3 = if AXIAL_LANES {
-                let e3 = |y: f64, inv: f64| {
-                    let inv2 = inv * inv;
-                    horner::<FMA, 22>(&AXIAL_T3, y) * (inv2 * inv2 * inv)
-                };
-                e3(y_near, inv_near) - e3(y_far, inv_far)
-            } else {
-                let bracket = h2 * h2
-                    - 2.0 * sab * h2
-                    - sab * fmadd::<FMA>(sa, sa, fmadd::<FMA>(sa, sb, sb * sb));
-                fmadd::<FMA>(len * bracket, irab2, 3.0 * a2) * (0.5 * half_ih2)
-            };
-            let c3 = fmadd::<FMA>(-h2, a3, a2);
             // H = 2 sym(u, g) + ν (−2 A_2 𝟙 + 8 (A_3 p pᵀ + B_3 sym(p, ê) + C_3 ê êᵀ))
             //   = 2 sym(u, g) + p Pᵀ + ê Qᵀ − 2 ν A_2 𝟙,
             // P = 8ν (A_3 p + B_3 ê), Q = 8ν (B_3 p + C_3 ê).
@@ -337,17 +381,14 @@ fn evaluate_lanes<const FMA: bool, const HESSIAN: bool, const AXIAL_LANES: bool>
         if HESSIAN {
             total += hs[0] + hs[1] + hs[2] + hs[3] + hs[4] + hs[5];
         }
-        let general = near_line || denominator <= TINY_DENOMINATOR || !total.is_finite();
-        let axial_flag = axial && !AXIAL_LANES;
-        b.general[i] = if general {
-            GENERAL
-        } else if axial_flag {
-            AXIAL
+        let flag = if total.is_finite() {
+            b.general[i]
         } else {
-            CLOSED_FORM
+            GENERAL
         };
+        b.general[i] = flag;
         // A select, not a product: the lanes left out may hold NaN.
-        let skip = general || axial_flag;
+        let skip = flag != CLOSED_FORM;
         let keep = |x: f64| if skip { 0.0 } else { sign * x };
         b.out[0][i] = keep(v);
         b.out[1][i] = keep(g0);
@@ -494,6 +535,8 @@ struct Queue {
     batch: Box<Batch>,
     weights: Vec<[f64; BATCH]>,
     boundary: [bool; BATCH],
+    /// How many of the queued edges are boundary edges.
+    boundaries: usize,
     len: usize,
 }
 
@@ -503,6 +546,7 @@ impl Queue {
             batch: Batch::new(),
             weights: vec![[0.0; BATCH]; channels],
             boundary: [false; BATCH],
+            boundaries: 0,
             len: 0,
         }
     }
@@ -516,6 +560,7 @@ impl Queue {
             w[i] = d;
         }
         self.boundary[i] = boundary;
+        self.boundaries += boundary as usize;
         self.len += 1;
         self.len == BATCH
     }
@@ -605,6 +650,7 @@ impl EdgeSums {
             q.batch.set(i, points[a], points[b], squared[a], squared[b]);
             q.weights[0][i] = d;
             q.boundary[i] = boundary;
+            q.boundaries += boundary as usize;
             i += 1;
             if i == BATCH {
                 self.main.len = BATCH;
@@ -625,6 +671,12 @@ impl EdgeSums {
         let hessian = self.order.hessian();
         let q = &mut self.main;
         run_batch_dispatch::<false>(&mut q.batch, self.n, hessian, &q.weights, &mut self.sums);
+        // Most batches have neither flagged nor boundary edges (an OR reduction vectorises).
+        let flagged = q.batch.general.iter().fold(0, |f, &g| f | g) != CLOSED_FORM;
+        if !flagged && q.boundaries == 0 {
+            q.len = 0;
+            return Ok(());
+        }
         for i in 0..count {
             let flag = self.main.batch.general[i];
             let boundary = self.main.boundary[i];
@@ -652,6 +704,7 @@ impl EdgeSums {
             }
         }
         self.main.len = 0;
+        self.main.boundaries = 0;
         Ok(())
     }
 
@@ -679,6 +732,7 @@ impl EdgeSums {
             }
         }
         self.axial.len = 0;
+        self.axial.boundaries = 0;
         Ok(())
     }
 
