@@ -7,16 +7,34 @@ mod hessian_common;
 
 use std::hint::black_box;
 
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
 use glam::DVec3;
 use hessian_common::{scene, SceneGather};
 use raddiff::gather::hessian::{
-    mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle, LayoutKind, Topology,
+    mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle,
+    occlusion_derivatives_reference, LayoutKind, Topology,
 };
 use raddiff::gather::hessian_fill::occlusion_outputs;
 use raddiff::gather::radii::{surface_radii, ErrorMode};
 use raddiff::gather::{Frame, GatherInput, Layout, ValidGather, Wanted};
 use raddiff::Order;
+
+/// The Ward-Heckbert baseline: irradiance and translational gradient.
+const WH: Wanted = Wanted {
+    irradiance: true,
+    gradient: true,
+    rotation_gradient: false,
+    distances: false,
+};
+
+/// Every sample a different radiance (a path-traced gather), so no edge can be skipped.
+fn noisy_radiance(radiance: &[f32]) -> Vec<f32> {
+    radiance
+        .iter()
+        .enumerate()
+        .map(|(i, l)| l + 0.01 * ((i * 7919 % 101) as f32))
+        .collect()
+}
 
 fn bench(c: &mut Criterion) {
     let x = DVec3::new(-0.3, -0.2, 0.0);
@@ -55,12 +73,7 @@ fn bench(c: &mut Criterion) {
             },
         );
         // Worst case: every sample a different radiance, so no edge can be skipped.
-        let noisy: Vec<f32> = sg
-            .radiance
-            .iter()
-            .enumerate()
-            .map(|(i, l)| l + 0.01 * ((i * 7919 % 101) as f32))
-            .collect();
+        let noisy = noisy_radiance(&sg.radiance);
         let mut gn = g;
         gn.radiance = &noisy;
         group.bench_with_input(
@@ -124,5 +137,146 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
+/// CPU time of one call of `f` (thread CPU clock: the machine is shared, wall time is not stable):
+/// the smallest of 5 averages over runs of about `budget / 5` seconds each (interference from other
+/// processes only ever adds time).
+fn cpu_time_per_call(budget: f64, mut f: impl FnMut()) -> f64 {
+    fn thread_cpu() -> f64 {
+        let mut ts = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: `ts` is a valid timespec to write into.
+        unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+        ts.tv_sec as f64 + 1e-9 * ts.tv_nsec as f64
+    }
+    f();
+    let round = budget / 5.0;
+    let mut calls = 1usize;
+    loop {
+        let t0 = thread_cpu();
+        for _ in 0..calls {
+            f();
+        }
+        let t = thread_cpu() - t0;
+        if t >= round {
+            break;
+        }
+        calls = (calls * 2).max((calls as f64 * round / t.max(1e-6) * 1.2) as usize);
+    }
+    (0..5)
+        .map(|_| {
+            let t0 = thread_cpu();
+            for _ in 0..calls {
+                f();
+            }
+            (thread_cpu() - t0) / calls as f64
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// `RADDIFF_HESSIAN_CPU=1 cargo bench --bench hessian`: prints the README's CPU-time table (polar
+/// layouts with N = 4M) instead of running criterion.
+fn cpu_table() {
+    let x = DVec3::new(-0.3, -0.2, 0.0);
+    let budget = 0.5;
+    println!("| rays | triangulation | gradient | Hessian (scene) | Hessian (noisy) | previous Hessian (noisy) | Ward-Heckbert gradient | Hessian / WH (scene, noisy) |");
+    for (m, n) in [(16usize, 64usize), (32, 128), (64, 256)] {
+        let kind = LayoutKind::CosinePolar;
+        let sg = SceneGather::new(kind, m, n, 0, x, &scene::rects(), 0.5);
+        let g = sg.gather();
+        let noisy = noisy_radiance(&sg.radiance);
+        let mut gn = g;
+        gn.radiance = &noisy;
+        let topo = Topology::new(kind, m, n).unwrap();
+        let us = 1e6;
+        let tri = us
+            * cpu_time_per_call(budget, || {
+                black_box(mesh_geometry(&topo, black_box(&g)).unwrap());
+            });
+        let grad = us
+            * cpu_time_per_call(budget, || {
+                black_box(occlusion_derivatives(&topo, black_box(&g), Order::Gradient).unwrap());
+            });
+        let hs = us
+            * cpu_time_per_call(budget, || {
+                black_box(occlusion_derivatives(&topo, black_box(&g), Order::Hessian).unwrap());
+            });
+        let hn = us
+            * cpu_time_per_call(budget, || {
+                black_box(occlusion_derivatives(&topo, black_box(&gn), Order::Hessian).unwrap());
+            });
+        let old = us
+            * cpu_time_per_call(budget, || {
+                black_box(
+                    occlusion_derivatives_reference(&topo, black_box(&gn), Order::Hessian).unwrap(),
+                );
+            });
+        let layout = Layout::new(kind, m as u32, n as u32, 0).unwrap();
+        let frame = Frame::new(x, DVec3::Z, DVec3::X).unwrap();
+        let input = GatherInput {
+            directions: &sg.directions,
+            distance: &sg.distance,
+            radiance: &noisy,
+            channels: 1,
+            sigma_t: 0.0,
+            media: None,
+        };
+        let valid = ValidGather::new(&layout, &frame, &input).unwrap();
+        let wh = us
+            * cpu_time_per_call(budget, || {
+                black_box(black_box(&valid).evaluate(WH).unwrap());
+            });
+        println!(
+            "| {} | {tri:.1} µs | {grad:.1} µs | {hs:.1} µs | {hn:.1} µs | {old:.1} µs | {wh:.1} µs | {:.1}x, {:.1}x |",
+            m * n,
+            hs / wh,
+            hn / wh
+        );
+    }
+}
+
+/// `RADDIFF_HESSIAN_PROFILE=noisy|scene|gradient|triangulation cargo bench --bench hessian`: runs
+/// one operation on the 4096-ray polar gather for about 3 s (for `perf record`).
+fn profile_loop(what: &str) {
+    let x = DVec3::new(-0.3, -0.2, 0.0);
+    let (m, n) = (32, 128);
+    let kind = LayoutKind::CosinePolar;
+    let sg = SceneGather::new(kind, m, n, 0, x, &scene::rects(), 0.5);
+    let noisy = noisy_radiance(&sg.radiance);
+    let mut g = sg.gather();
+    if what == "noisy" {
+        g.radiance = &noisy;
+    }
+    let topo = Topology::new(kind, m, n).unwrap();
+    let order = if what == "gradient" {
+        Order::Gradient
+    } else {
+        Order::Hessian
+    };
+    let start = std::time::Instant::now();
+    while start.elapsed().as_secs_f64() < 3.0 {
+        for _ in 0..100 {
+            if what == "triangulation" {
+                black_box(mesh_geometry(&topo, black_box(&g)).unwrap());
+            } else {
+                black_box(occlusion_derivatives(&topo, black_box(&g), order).unwrap());
+            }
+        }
+    }
+}
+
 criterion_group!(benches, bench);
-criterion_main!(benches);
+
+fn main() {
+    if let Some(what) = std::env::var_os("RADDIFF_HESSIAN_PROFILE") {
+        profile_loop(what.to_str().unwrap_or(""));
+        return;
+    }
+    if std::env::var_os("RADDIFF_HESSIAN_CPU").is_some() {
+        cpu_table();
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

@@ -53,6 +53,8 @@
 
 use glam::{DMat3, DVec3};
 
+mod edges;
+
 pub use super::hessian_mesh::{Edge, Topology};
 use super::hessian_mesh::{NONE, POLE, REVERSED};
 pub use super::layout::LayoutKind;
@@ -170,19 +172,34 @@ fn check_gather(topo: &Topology, g: &HemisphereGather) -> Result<DVec3> {
             "normal must be a unit vector (length {len})"
         )));
     }
-    for (i, (&d, w)) in g.distance.iter().zip(g.directions).enumerate() {
-        if d.is_nan() || d <= 0.0 {
-            return Err(Error::InvalidArgument(format!(
-                "distance[{i}] must be > 0 or +inf (got {d})"
-            )));
-        }
-        if !w.is_finite() || (w.length_squared() - 1.0).abs() > 1e-6 {
-            return Err(Error::InvalidArgument(format!(
-                "directions[{i}] is not a unit vector ({w})"
-            )));
+    // One branch-free pass (it vectorises); the failing index is searched only on failure.
+    let bad_distance = |d: f64| d.is_nan() | (d <= 0.0);
+    let bad_sample = |d: f64, w: &DVec3| {
+        // A non-finite w gives an infinite or NaN deviation.
+        let deviation = (w.length_squared() - 1.0).abs();
+        bad_distance(d) | deviation.is_nan() | (deviation > 1e-6)
+    };
+    let any_bad = g
+        .distance
+        .iter()
+        .zip(g.directions)
+        .fold(false, |bad, (&d, w)| bad | bad_sample(d, w));
+    if any_bad {
+        for (i, (&d, w)) in g.distance.iter().zip(g.directions).enumerate() {
+            if bad_distance(d) {
+                return Err(Error::InvalidArgument(format!(
+                    "distance[{i}] must be > 0 or +inf (got {d})"
+                )));
+            }
+            if bad_sample(d, w) {
+                return Err(Error::InvalidArgument(format!(
+                    "directions[{i}] is not a unit vector ({w})"
+                )));
+            }
         }
     }
-    if let Some(i) = g.radiance.iter().position(|v| !v.is_finite()) {
+    if !g.radiance.iter().fold(true, |ok, v| ok & v.is_finite()) {
+        let i = g.radiance.iter().position(|v| !v.is_finite()).unwrap_or(0);
         return Err(Error::InvalidArgument(format!(
             "radiance[{i}] is not finite ({})",
             g.radiance[i]
@@ -202,31 +219,33 @@ pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeomet
     let largest = g
         .distance
         .iter()
-        .filter(|d| d.is_finite())
-        .fold(0.0f64, |m, &d| m.max(d));
+        .fold(0.0f64, |m, &d| if d.is_finite() { m.max(d) } else { m });
     let far_distance = FAR_DISTANCE_FACTOR * if largest > 0.0 { largest } else { 1.0 };
     if !far_distance.is_finite() {
         return Err(Error::InvalidArgument(format!(
             "hit distances up to {largest:e} leave no room for the environment"
         )));
     }
-    let sample_distance = |i: usize| {
-        let d = g.distance[i];
-        if d.is_finite() {
-            d
-        } else {
-            far_distance
-        }
-    };
+    let sample_distance = |d: f64| if d.is_finite() { d } else { far_distance };
     let vcount = topo.vertex_count();
-    let mut positions = Vec::with_capacity(vcount);
-    let mut distance = Vec::with_capacity(vcount);
+    let samples = g.distance.len();
+    // Vertices 0..M·N are the samples themselves (`Topology`), placed in one vectorisable pass.
+    let mut distance: Vec<f64> = g.distance.iter().map(|&d| sample_distance(d)).collect();
+    let mut positions: Vec<DVec3> = g
+        .directions
+        .iter()
+        .zip(&distance)
+        .map(|(&w, &d)| w * d)
+        .collect();
+    distance.reserve(vcount - samples);
+    positions.reserve(vcount - samples);
     let mut pole_radiance = Vec::new();
-    for (v, &src) in topo.vertex_source.iter().enumerate() {
+    for v in samples..vcount {
+        let src = topo.vertex_source[v];
         if src == POLE {
             // The pole was not sampled: harmonic mean of ring 0's distances, mean radiance.
             let n = topo.n;
-            let inv: f64 = (0..n).map(|k| 1.0 / sample_distance(k)).sum::<f64>() / n as f64;
+            let inv: f64 = distance[..n].iter().map(|d| 1.0 / d).sum::<f64>() / n as f64;
             let d = 1.0 / inv;
             positions.push(normal * d);
             distance.push(d);
@@ -241,7 +260,7 @@ pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeomet
             continue;
         }
         let s = src as usize;
-        let d = sample_distance(s);
+        let d = distance[s];
         let w = g.directions[s];
         let dir = if topo.on_horizon[v] {
             let flat = w - normal * w.dot(normal);
@@ -258,17 +277,22 @@ pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeomet
         positions.push(dir * d);
         distance.push(d);
     }
+    // Branch-free: the distances are noise to the branch predictor.
     let farthest = topo
         .triangles
         .iter()
         .map(|t| {
-            let mut best = t[0];
-            for &v in &t[1..] {
-                if distance[v as usize] > distance[best as usize] {
-                    best = v;
-                }
+            let (d0, d1, d2) = (
+                distance[t[0] as usize],
+                distance[t[1] as usize],
+                distance[t[2] as usize],
+            );
+            let (best, db) = if d1 > d0 { (t[1], d1) } else { (t[0], d0) };
+            if d2 > db {
+                t[2]
+            } else {
+                best
             }
-            best
         })
         .collect();
     Ok(MeshGeometry {
@@ -440,16 +464,102 @@ pub fn occlusion_derivatives_on(
     if g.sigma_t > 0.0 {
         return with_medium(topo, mesh, g, order, out);
     }
-    // Radiance of every triangle (its farthest vertex's), channel-interleaved, plus a zero row that
-    // stands for the outside of the horizon.
-    let tcount = topo.triangles.len();
-    let mut tri = vec![0.0f64; (tcount + 1) * channels];
-    for (t, row) in tri.chunks_exact_mut(channels).take(tcount).enumerate() {
-        for (c, l) in row.iter_mut().enumerate() {
-            *l = vertex_radiance(topo, mesh, g, mesh.farthest[t], c);
+    let tri = triangle_radiance(topo, mesh, g);
+    let outside = topo.triangles.len();
+    let scale = Scale::of(mesh);
+    let mut points = Vec::with_capacity(mesh.positions.len());
+    let mut squared = Vec::with_capacity(mesh.positions.len());
+    for &p in &mesh.positions {
+        let q = scale.point(p);
+        points.push(q);
+        squared.push(q.length_squared());
+    }
+    let mut sums = edges::EdgeSums::new(n, order, channels);
+    if channels == 1 {
+        sums.add_edges_one_channel(&topo.edges, &tri, &points, &squared)?;
+    } else {
+        let mut delta = vec![0.0f64; channels];
+        for e in &topo.edges {
+            let boundary = e.right == NONE;
+            let right = if boundary { outside } else { e.right as usize };
+            let (l, r) = (e.left as usize * channels, right * channels);
+            let mut any = false;
+            for (c, d) in delta.iter_mut().enumerate() {
+                *d = tri[l + c] - tri[r + c];
+                any |= *d != 0.0;
+            }
+            if any || boundary {
+                let (a, b) = (e.a as usize, e.b as usize);
+                sums.push(
+                    points[a], points[b], squared[a], squared[b], &delta, boundary,
+                )?;
+            }
         }
     }
-    let outside = tcount;
+    let (acc, geometric) = sums.finish()?;
+    out.geometric = geometric;
+    finish(out, &acc, scale)
+}
+
+/// Radiance of every triangle (its farthest vertex's), channel-interleaved, plus a zero row that
+/// stands for the outside of the horizon.
+fn triangle_radiance(topo: &Topology, mesh: &MeshGeometry, g: &HemisphereGather) -> Vec<f64> {
+    let channels = g.channels;
+    let samples = g.radiance.len();
+    // Per-vertex radiance first (samples, then horizon copies and the pole), so the triangles'
+    // lookups are plain indexing.
+    let mut vertex: Vec<f64> = g.radiance.iter().map(|&l| l as f64).collect();
+    vertex.reserve(topo.vertex_count() * channels - samples);
+    for v in samples / channels..topo.vertex_count() {
+        for c in 0..channels {
+            vertex.push(vertex_radiance(topo, mesh, g, v as u32, c));
+        }
+    }
+    let tcount = topo.triangles.len();
+    let mut tri = Vec::with_capacity((tcount + 1) * channels);
+    if channels == 1 {
+        tri.extend(mesh.farthest.iter().map(|&f| vertex[f as usize]));
+    } else {
+        for &f in &mesh.farthest {
+            let f = f as usize * channels;
+            tri.extend_from_slice(&vertex[f..f + channels]);
+        }
+    }
+    tri.resize((tcount + 1) * channels, 0.0);
+    tri
+}
+
+/// [`occlusion_derivatives`] with every edge evaluated by the general edge kernel
+/// (`kernels::edge_form_factor`'s closed form, one call per edge): the reference the
+/// gather-specialised edge evaluation is tested and benchmarked against.
+pub fn occlusion_derivatives_reference(
+    topo: &Topology,
+    g: &HemisphereGather,
+    order: Order,
+) -> Result<OcclusionDerivatives> {
+    let mesh = mesh_geometry(topo, g)?;
+    reference_on(topo, &mesh, g, order)
+}
+
+fn reference_on(
+    topo: &Topology,
+    mesh: &MeshGeometry,
+    g: &HemisphereGather,
+    order: Order,
+) -> Result<OcclusionDerivatives> {
+    if !order.gradient() {
+        return Err(Error::InvalidArgument(
+            "occlusion derivatives need order >= RADDIFF_ORDER_GRADIENT".into(),
+        ));
+    }
+    let n = g.normal.normalize();
+    let channels = g.channels;
+    let mut out = empty(channels, all_black(g));
+    if g.sigma_t > 0.0 {
+        return with_medium(topo, mesh, g, order, out);
+    }
+    let tri = triangle_radiance(topo, mesh, g);
+    let outside = topo.triangles.len();
     let scale = Scale::of(mesh);
     let mut acc = vec![Deriv3::constant(0.0); channels];
     let mut delta = vec![0.0f64; channels];
