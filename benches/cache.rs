@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::DVec3;
-use raddiff::cache::{Cache, CacheConfig, Extent, Record};
+use raddiff::cache::{Cache, CacheConfig, Cursor, Extent, Record};
 
 const OVERLAP: f64 = 8.0;
 
@@ -121,6 +121,15 @@ fn lookups(c: &mut Criterion) {
                     black_box(cache.lookup(row[j], DVec3::Z).ok())
                 })
             });
+            // the same queries through a per-thread cursor (identical results)
+            let mut cursor = Cursor::new();
+            let mut j = 0;
+            group.bench_function(format!("coherent_cursor/{n}"), |b| {
+                b.iter(|| {
+                    j = (j + 1) & (row.len() - 1);
+                    black_box(cache.lookup_with(&mut cursor, row[j], DVec3::Z).ok())
+                })
+            });
             // 1 vs 2 threads: wall time for `iters` lookups per thread
             for threads in [1usize, 2] {
                 group.throughput(Throughput::Elements(threads as u64));
@@ -205,9 +214,10 @@ fn inserts(c: &mut Criterion) {
     });
     group.finish();
     for channels in [1usize, 3, 27] {
-        let cache: Cache<Vec<f32>> = Cache::new(CacheConfig::surface(channels)).unwrap();
-        for i in 0..100_000 {
-            let r = record(i, 100_000);
+        let mut cache: Cache<Vec<f32>> = Cache::new(CacheConfig::surface(channels)).unwrap();
+        let n = 100_000;
+        for i in 0..n {
+            let r = record(i, n);
             let rec = Record {
                 position: r.position,
                 normal: r.normal,
@@ -218,13 +228,17 @@ fn inserts(c: &mut Criterion) {
             };
             cache.insert(&rec).unwrap();
         }
+        let filling = cache.memory();
+        cache.compact();
         let m = cache.memory();
         eprintln!(
-            "{channels} channels: {} B/record stored (budget {}), {:.0} B/record allocated, index {:.0} B/record",
+            "{channels} channels: {} B/record stored + index {:.1} B/record after compact = {:.1} \
+             (budget {}); index while filling {:.1} B/record",
             m.bytes_per_record,
+            m.index_bytes as f64 / n as f64,
+            m.bytes_per_record as f64 + m.index_bytes as f64 / n as f64,
             96 + 16 * channels,
-            m.record_bytes as f64 / 1e5,
-            m.index_bytes as f64 / 1e5
+            filling.index_bytes as f64 / n as f64
         );
     }
 }

@@ -98,6 +98,26 @@ int main(int argc, char **argv) {
   CHECK_STATUS(raddiff_cache_lookup(NULL, p, n, out, NULL), RADDIFF_ERROR_NULL_POINTER);
   CHECK_STATUS(raddiff_cache_lookup(cache, p, n, NULL, NULL), RADDIFF_ERROR_NULL_POINTER);
   {
+    /* the cursor path: same result bit for bit, NULL checks, compaction keeps results */
+    raddiff_cache_cursor *cursor = raddiff_cache_cursor_new();
+    float out3[3] = {0.0f, 0.0f, 0.0f};
+    double w3 = 0.0;
+    CHECK(cursor != NULL);
+    CHECK_STATUS(raddiff_cache_lookup_with(cache, cursor, p, n, out3, &w3), RADDIFF_OK);
+    CHECK(memcmp(out3, out, sizeof out3) == 0 && w3 == wsum);
+    CHECK_STATUS(raddiff_cache_lookup_with(cache, cursor, p, n, out3, &w3), RADDIFF_OK);
+    CHECK(memcmp(out3, out, sizeof out3) == 0 && w3 == wsum);
+    CHECK_STATUS(raddiff_cache_lookup_with(cache, NULL, p, n, out3, NULL), RADDIFF_ERROR_NULL_POINTER);
+    CHECK_STATUS(raddiff_cache_lookup_with(NULL, cursor, p, n, out3, NULL), RADDIFF_ERROR_NULL_POINTER);
+    CHECK_STATUS(raddiff_cache_lookup_with(cache, cursor, p, n, NULL, NULL), RADDIFF_ERROR_NULL_POINTER);
+    CHECK_STATUS(raddiff_cache_compact(NULL), RADDIFF_ERROR_NULL_POINTER);
+    CHECK_STATUS(raddiff_cache_compact(cache), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_lookup_with(cache, cursor, p, n, out3, &w3), RADDIFF_OK);
+    CHECK(memcmp(out3, out, sizeof out3) == 0 && w3 == wsum);
+    raddiff_cache_cursor_free(cursor);
+    raddiff_cache_cursor_free(NULL);
+  }
+  {
     raddiff_vec3 nanp = {NAN, 0.0, 0.0}, zero = {0.0, 0.0, 0.0};
     CHECK_STATUS(raddiff_cache_lookup(cache, nanp, n, out2, NULL), RADDIFF_ERROR_INVALID_ARGUMENT);
     CHECK_STATUS(raddiff_cache_lookup(cache, p, zero, out2, NULL), RADDIFF_ERROR_INVALID_ARGUMENT);

@@ -52,6 +52,31 @@ int main() {
     });
   }
   for (auto &th : threads) th.join();
+  // a lookup-only phase: compact once, then every thread walks the line with its own cursor and
+  // must get exactly what the plain lookup gives
+  CHECK(raddiff_cache_compact(cache) == RADDIFF_OK);
+  threads.clear();
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      raddiff_cache_cursor *cursor = raddiff_cache_cursor_new();
+      if (cursor == nullptr) {
+        failures++;
+        return;
+      }
+      for (int i = 0; i < 4000; ++i) {
+        raddiff_vec3 q{0.0051 * i + 0.0007 * t, 0.001 * t, 0.0};
+        const raddiff_vec3 n{0.0, 0.0, 1.0};
+        float a = -1.0f, b = -2.0f;
+        double wa = 0.0, wb = 1.0;
+        raddiff_status sa = raddiff_cache_lookup(cache, q, n, &a, &wa);
+        raddiff_status sb = raddiff_cache_lookup_with(cache, cursor, q, n, &b, &wb);
+        if (sa != sb) failures++;
+        if (sa == RADDIFF_OK && (std::memcmp(&a, &b, sizeof a) != 0 || wa != wb)) failures++;
+      }
+      raddiff_cache_cursor_free(cursor);
+    });
+  }
+  for (auto &th : threads) th.join();
   CHECK(failures.load() == 0);
   CHECK(found.load() > 0);
   CHECK(raddiff_cache_len(cache) == static_cast<size_t>(kThreads * kPerThread));

@@ -11,32 +11,14 @@
 #include <stddef.h>
 #include <stdint.h>
 
-// Largest channel count per record.
-#define MAX_CHANNELS 4096
-
-// Current (and only accepted) format version.
-#define FORMAT_VERSION 1
-
-// Smallest and largest accepted radius and position magnitude (L).
-#define RADIUS_MIN 1e-30
-
-// Largest accepted radius (L).
-#define RADIUS_MAX 1e30
-
-// Largest accepted absolute position coordinate (L).
-#define POSITION_MAX 1e30
-
-// Size of the fixed part of a stored record (bytes).
-#define HEAD_BYTES 88
-
-// Size of each channel's part of a stored record (bytes).
-#define CHANNEL_BYTES 16
-
 // Records on surfaces: ellipses in the tangent plane, normals compared at lookup.
 #define RADDIFF_DOMAIN_SURFACE 0
 
 // Records in participating media: ellipsoids, normals ignored.
 #define RADDIFF_DOMAIN_VOLUME 1
+
+// Largest channel count `raddiff_cache_new` accepts.
+#define RADDIFF_CACHE_MAX_CHANNELS 4096
 
 // Ward-Heckbert first-order extrapolation with Krivanek-Gautron weights 1/(t+rho) - 1.
 #define RADDIFF_INTERP_WARD 0
@@ -99,26 +81,6 @@
 // Largest radius the radii functions return (caller's length unit), e.g. for a zero Hessian.
 #define RADDIFF_MAX_RADIUS 1e30
 
-// Misses are placed at this multiple of the largest finite hit distance (2^20: the occlusion
-// terms of the distant environment converge like `1/FAR_DISTANCE_FACTOR`, about 1e-6 relative).
-#define FAR_DISTANCE_FACTOR 1048576.0
-
-// Fraction of the irradiance added to every triangle radiance by
-// [`OcclusionDerivatives::robust_hessian`] (thesis sec. 6.3).
-#define ROBUST_FRACTION 0.01
-
-// No triangle (the right side of a horizon edge).
-#define NONE UINT32_MAX
-
-// Marks the synthesized pole vertex in [`Topology::vertex_source`] (the north pole, θ = 0).
-#define POLE UINT32_MAX
-
-// Marks the synthesized south pole vertex (θ = π) of a [`LayoutKind::Sphere`] mesh.
-#define SOUTH_POLE (UINT32_MAX - 1)
-
-// Flag in [`Topology::triangle_edges`]: the triangle runs the edge backwards.
-#define REVERSED (1 << 31)
-
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
 typedef enum raddiff_status {
@@ -140,12 +102,14 @@ typedef enum raddiff_status {
   RADDIFF_ERROR_PANIC = 7,
 } raddiff_status;
 
-// Which results [`ValidGather::evaluate`] computes; work for the others is skipped.
-typedef struct Wanted Wanted;
-
 // A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
 // `raddiff_cache_insert` on the same handle at once (lookups never block).
 typedef struct raddiff_cache raddiff_cache;
+
+// Per-thread state for spatially coherent lookups (pixels of a tile, steps along a ray): it
+// remembers the records around recent queries so that nearby lookups skip the spatial index.
+// Not thread-safe: one per thread. It holds no reference to a cache and may be used with any.
+typedef struct raddiff_cache_cursor raddiff_cache_cursor;
 
 // A refractive triangle mesh with per-vertex shading normals and its bounding-sphere hierarchy
 // (opaque). Create with `raddiff_refractive_mesh_new`, release with `raddiff_refractive_mesh_free`.
@@ -343,6 +307,27 @@ enum raddiff_status raddiff_cache_lookup(const struct raddiff_cache *cache,
                                          struct raddiff_vec3 normal,
                                          float *value,
                                          double *weight_sum);
+
+// A new cursor for `raddiff_cache_lookup_with`; free it with `raddiff_cache_cursor_free`.
+struct raddiff_cache_cursor *raddiff_cache_cursor_new(void);
+
+// Frees a cursor (NULL is ignored).
+void raddiff_cache_cursor_free(struct raddiff_cache_cursor *cursor);
+
+// `raddiff_cache_lookup` through this thread's `cursor`: the same results bit for bit, faster
+// when successive queries are close to each other. The cache may be shared by threads as with
+// `raddiff_cache_lookup`; the cursor may not.
+enum raddiff_status raddiff_cache_lookup_with(const struct raddiff_cache *cache,
+                                              struct raddiff_cache_cursor *cursor,
+                                              struct raddiff_vec3 position,
+                                              struct raddiff_vec3 normal,
+                                              float *value,
+                                              double *weight_sum);
+
+// Prepares a cache for a lookup-only phase: frees memory kept for concurrent readers while it
+// was filled and stores its records in index order (faster lookups). Changes no result.
+// **Not thread-safe**: no other thread may use the cache during the call.
+enum raddiff_status raddiff_cache_compact(struct raddiff_cache *cache);
 
 // Number of records (0 for NULL).
 size_t raddiff_cache_len(const struct raddiff_cache *cache);

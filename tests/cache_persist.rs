@@ -117,24 +117,29 @@ fn header_and_record_damage_is_named() {
     b[0] = b'X';
     assert!(corrupt_reason(&b).contains("magic"));
     let mut b = good.clone();
-    b[8] = 2;
+    b[8] = 3;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("version"));
     let mut b = good.clone();
     b[100] ^= 1;
     assert!(corrupt_reason(&b).contains("checksum"));
-    // a resealed file with a NaN radius (record 0 radii start at 48 + 60)
+    // a resealed file with a NaN radius (record 0 radii start at 48 + 40)
     let mut b = good.clone();
-    b[48 + 60..48 + 64].copy_from_slice(&f32::NAN.to_le_bytes());
+    b[48 + 40..48 + 44].copy_from_slice(&f32::NAN.to_le_bytes());
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("radius"));
-    // a resealed file whose value changed without its identity key
+    // a frame quaternion that is not a rotation (record 0 quaternion at 48 + 24)
     let mut b = good.clone();
-    b[48 + 88..48 + 92].copy_from_slice(&7.5f32.to_le_bytes());
+    b[48 + 24..48 + 28].copy_from_slice(&2.0f32.to_le_bytes());
     reseal(&mut b);
-    assert!(corrupt_reason(&b).contains("key"));
-    // records swapped: keys no longer increasing
-    let stride = 88 + 16 * 3;
+    assert!(corrupt_reason(&b).contains("quaternion"));
+    // the reserved field of a record (48 + 60)
+    let mut b = good.clone();
+    b[48 + 60] = 1;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("reserved"));
+    // records swapped: no longer in content order
+    let stride = 64 + 16 * 3;
     let mut b = good.clone();
     let (r0, r1) = (48..48 + stride, 48 + stride..48 + 2 * stride);
     let first: Vec<u8> = b[r0.clone()].to_vec();
@@ -142,6 +147,16 @@ fn header_and_record_damage_is_named() {
     b[r1].copy_from_slice(&first);
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("increasing"));
+    // a duplicated record is not increasing either
+    let mut b = good.clone();
+    b.copy_within(48..48 + stride, 48 + stride);
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("increasing"));
+    // version 1 files are named as such
+    let mut b = good.clone();
+    b[8] = 1;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("version 1"));
     // domain out of range
     let mut b = good.clone();
     b[16] = 9;
@@ -176,11 +191,15 @@ proptest! {
         if b != good {
             match result.unwrap() {
                 Err(Error::Corrupt(_)) => {}
-                // with a valid checksum, only the freely editable header settings (interpolation,
-                // normal deviation) may change; the records must then be exactly the original ones
+                // only a file whose checksum was recomputed after the damage can pass, and only if
+                // every field is still valid: it is then exactly the file this library writes for
+                // the cache it loaded (nothing out of range, out of order or non-canonical)
                 Ok(c) => {
                     prop_assert!(reseal_after, "damaged file accepted ({} records)", c.len());
-                    prop_assert_eq!(c.keys(), sample(6).keys());
+                    prop_assert_eq!(c.to_bytes(), b.clone());
+                    for r in c.records() {
+                        prop_assert!(c.lookup(r.position, r.normal).is_ok());
+                    }
                 }
                 Err(e) => prop_assert!(false, "unexpected error {e}"),
             }

@@ -26,3 +26,46 @@ fn committed_header_matches_generated() {
         "include/raddiff.h is stale: run `RADDIFF_UPDATE_HEADER=1 cargo test --test header` and commit it"
     );
 }
+
+/// Every macro, type and function the header declares is in the raddiff namespace (C has no
+/// namespaces: a bare `NONE` or `MAX_CHANNELS` would collide with a renderer's own names).
+#[test]
+fn every_declared_name_is_prefixed() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let header = std::fs::read_to_string(root.join("include/raddiff.h")).unwrap();
+    let mut bad = Vec::new();
+    for line in header.lines() {
+        let line = line.trim();
+        if let Some(rest) = line.strip_prefix("#define ") {
+            let name = rest.split_whitespace().next().unwrap_or("");
+            if !name.starts_with("RADDIFF_") {
+                bad.push(name.to_string());
+            }
+        }
+        if let Some(rest) = line.strip_prefix("typedef struct ") {
+            let name = rest.split_whitespace().next().unwrap_or("");
+            if !name.starts_with("raddiff_") {
+                bad.push(name.to_string());
+            }
+        }
+        if line.contains('(') && !line.starts_with("//") && !line.starts_with('#') {
+            // a declaration line: `type name(args` or `type *name(args`
+            if let Some(open) = line.find('(') {
+                let before = &line[..open];
+                if let Some(name) = before.split([' ', '*']).next_back() {
+                    if !name.is_empty()
+                        && !name.starts_with("raddiff_")
+                        && before.contains(' ')
+                        && line.ends_with([';', ',', '('])
+                    {
+                        bad.push(name.to_string());
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "unprefixed names in include/raddiff.h: {bad:?}"
+    );
+}

@@ -35,7 +35,9 @@
 
 use glam::DVec3;
 
-use super::record::{Channel, Domain, Head};
+#[cfg(not(target_arch = "x86_64"))]
+use super::record::f16_unscaled;
+use super::record::{packed_scale, Channel, Domain, Head};
 use crate::error::{ensure_finite, Error, Result};
 
 /// How covering records are weighted and extrapolated (formulas in the [module docs](crate::cache::interp)).
@@ -169,8 +171,11 @@ impl Kernel {
 /// A covering record met during a lookup.
 #[derive(Clone, Copy)]
 pub(crate) struct Used<'a> {
-    pub key: u64,
+    /// The bits of the record's x coordinate: the first key of the content order.
+    pub order: u64,
     pub weight: f64,
+    /// The record's unit normal (surface domain).
+    pub normal: DVec3,
     pub head: &'a Head,
     pub channels: &'a [Channel],
 }
@@ -188,7 +193,101 @@ pub(crate) fn blend(
     n: DVec3,
     out: &mut [f32],
 ) {
-    let log = kernel.interpolation == Interpolation::Log;
+    if kernel.interpolation == Interpolation::Log {
+        return blend_log(kernel, used, weight_sum, x, n, out);
+    }
+    let surface = kernel.domain == Domain::Surface;
+    let mut stack = [0.0f64; 16];
+    let mut heap = Vec::new();
+    let acc: &mut [f64] = if out.len() <= stack.len() {
+        &mut stack[..out.len()]
+    } else {
+        heap.resize(out.len(), 0.0);
+        &mut heap
+    };
+    for u in used {
+        // offset and normal change times the record's gradient scales: the extrapolation of a
+        // channel is then six products with its stored binary16 components (|h| ≤ 1)
+        let dx = (x - u.head.position()) * u.head.gradient_scale as f64;
+        let dn = if surface {
+            u.normal.cross(n) * u.head.rotation_scale as f64
+        } else {
+            DVec3::ZERO
+        };
+        let q = [dx.x, dx.y, dx.z, dn.x, dn.y, dn.z].map(|v| v.clamp(-F32_MAX, F32_MAX) as f32);
+        let w = u.weight;
+        for (a, ch) in acc.iter_mut().zip(u.channels) {
+            *a += w * (ch.value as f64 + channel_delta(ch, &q) as f64);
+        }
+    }
+    let inv_sum = 1.0 / weight_sum;
+    for (o, a) in out.iter_mut().zip(acc.iter()) {
+        *o = (a * inv_sum).clamp(-F32_MAX, F32_MAX) as f32;
+    }
+}
+
+const F32_MAX: f64 = f32::MAX as f64;
+
+/// Σₖ qₖ hₖ over a channel's six binary16 gradient components hₖ, in `f32` (the components carry
+/// 11 bits; the products cannot overflow since |hₖ| ≤ 1 and |qₖ| ≤ `f32::MAX`, and the sum can
+/// only saturate, never become NaN). The portable and SSE2 versions round identically: lanes
+/// (0, q₀h₀, …) are added as two four-lane halves, then pairwise.
+#[inline(always)]
+fn channel_delta(ch: &Channel, q: &[f32; 6]) -> f32 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of x86_64; `Channel` is 16 bytes (value, then six u16 halves).
+        unsafe {
+            let raw = _mm_loadu_si128(ch as *const Channel as *const __m128i);
+            let zero = _mm_setzero_si128();
+            let decode = |h: __m128i| {
+                let sign = _mm_slli_epi32(_mm_and_si128(h, _mm_set1_epi32(0x8000)), 16);
+                let mag = _mm_slli_epi32(_mm_and_si128(h, _mm_set1_epi32(0x7fff)), 13);
+                // times 2^112: the binary16 value itself (|h| ≤ 1 here, so no overflow)
+                _mm_mul_ps(
+                    _mm_castsi128_ps(_mm_or_si128(sign, mag)),
+                    _mm_set1_ps(REBIAS_F32),
+                )
+            };
+            let lo = decode(_mm_unpacklo_epi16(raw, zero)); // value halves, g0, g1
+            let hi = decode(_mm_unpackhi_epi16(raw, zero)); // g2, r0, r1, r2
+            let s = _mm_add_ps(
+                _mm_mul_ps(lo, _mm_setr_ps(0.0, 0.0, q[0], q[1])),
+                _mm_mul_ps(hi, _mm_setr_ps(q[2], q[3], q[4], q[5])),
+            );
+            let t = _mm_add_ps(s, _mm_movehl_ps(s, s));
+            _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)))
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let h = |b: u16| f16_unscaled(b) as f32 * REBIAS_F32;
+        let lo = [0.0, 0.0, q[0] * h(ch.gradient[0]), q[1] * h(ch.gradient[1])];
+        let hi = [
+            q[2] * h(ch.gradient[2]),
+            q[3] * h(ch.rotation[0]),
+            q[4] * h(ch.rotation[1]),
+            q[5] * h(ch.rotation[2]),
+        ];
+        let s = [lo[0] + hi[0], lo[1] + hi[1], lo[2] + hi[2], lo[3] + hi[3]];
+        (s[0] + s[2]) + (s[1] + s[3])
+    }
+}
+
+/// 2^112 in `f32` (see [`f16_unscaled`]).
+const REBIAS_F32: f32 = 5192296858534827628530496329220096.0;
+
+/// [`blend`] for log-space extrapolation.
+fn blend_log(
+    kernel: &Kernel,
+    used: &[Used<'_>],
+    weight_sum: f64,
+    x: DVec3,
+    n: DVec3,
+    out: &mut [f32],
+) {
+    let log = true;
     let surface = kernel.domain == Domain::Surface;
     let inv_sum = 1.0 / weight_sum;
     // Per record: offset and normal change, decoded once for all channel blocks.
@@ -200,11 +299,10 @@ pub(crate) fn blend(
         for u in used {
             let dx = x - u.head.position();
             // offsets pre-multiplied by the records' binary16 scales (see Channel::gradient_unscaled)
-            let dx = (u.head.gradient_scale != 0.0)
-                .then(|| dx * super::record::packed_scale(u.head.gradient_scale));
-            let dn = (surface && u.head.rotation_scale != 0.0).then(|| {
-                u.head.axis(2).cross(n) * super::record::packed_scale(u.head.rotation_scale)
-            });
+            let dx =
+                (u.head.gradient_scale != 0.0).then(|| dx * packed_scale(u.head.gradient_scale));
+            let dn = (surface && u.head.rotation_scale != 0.0)
+                .then(|| u.normal.cross(n) * packed_scale(u.head.rotation_scale));
             let w = u.weight;
             for (c, ch) in u.channels[base..base + out.len()].iter().enumerate() {
                 let v = ch.value as f64;

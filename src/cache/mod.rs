@@ -24,49 +24,56 @@
 //! shared reference. Lookups never lock and never wait for each other or for inserts; inserts are
 //! serialized by one mutex (an insert costs ~12k instructions, the gather that produces a record
 //! hundreds of µs) and are visible to every lookup that starts after the insert returns. Records
-//! are immutable once inserted and live in an append-only arena; the index is an octree whose
-//! child links and entry arrays are published with release/acquire atomics and never freed while
-//! readers may hold them ([`Cache::compact`] reclaims the replaced arrays under `&mut`).
+//! are immutable once inserted and live in an append-only arena; the index is a hashed grid whose
+//! table and entry lists are published with release/acquire atomics and never freed while readers
+//! may hold them ([`Cache::compact`] reclaims the replaced ones under `&mut`).
 //!
 //! The value returned for a query depends only on the set of records covering it: covering
-//! records are sorted by their identity key before the weighted sum, so neither insertion order nor
-//! thread timing changes a single bit. Inserting a record whose stored bits equal an existing
-//! record's is a no-op (returns `false`), so the cache is a set.
+//! records are summed in their content order (position bits, then the remaining stored bytes), so
+//! neither insertion order nor thread timing changes a single bit. Inserting a record whose stored
+//! bits equal an existing record's is a no-op (returns `false`), so the cache is a set.
 //!
 //! # Record identity
-//! The identity key of a record is the FNV-1a 64-bit hash of its stored bytes in the file layout
-//! below, without the key field: position (3×f64), frame (9×f32), radii (3×f32), gradient scales
-//! (2×f32) and, per channel, value (f32) and six binary16 gradient components, all little-endian.
-//! Two records are duplicates when all of these bytes are equal (checked byte for byte, not only by
-//! key), which is exactly what inserting the same gather twice, on any machine, produces.
+//! Two records are duplicates when their stored bytes (the record layout below) are equal, which
+//! is exactly what inserting the same gather twice, on any machine, produces. [`Cache::keys`]
+//! reports each record's identity key, the FNV-1a 64-bit hash of those bytes.
 //!
-//! # File format (version 1, little-endian)
+//! # Memory
+//! A record costs [`HEAD_BYTES`] (64) + [`CHANNEL_BYTES`] (16) per channel in the record arena, plus
+//! one 20-byte index entry and its share of the index's hash table (about 25 bytes per record in
+//! all after [`Cache::compact`] at typical overlaps; see [`Cache::memory`]).
+//!
+//! # File format (version 2, little-endian)
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic `RDFCACHE` |
-//! | 8 | 4 | format version, u32 = 1 |
+//! | 8 | 4 | format version, u32 = 2 |
 //! | 12 | 4 | channels, u32 ≥ 1 |
 //! | 16 | 4 | domain, u32 (0 surface, 1 volume) |
 //! | 20 | 4 | interpolation, u32 (`RADDIFF_INTERP_*`) |
 //! | 24 | 8 | max normal deviation, f64 radians |
 //! | 32 | 8 | record count N, u64 |
-//! | 40 | 4 | record size S = 88 + 16·channels, u32 |
+//! | 40 | 4 | record size S = 64 + 16·channels, u32 |
 //! | 44 | 4 | reserved, 0 |
-//! | 48 | N·S | records, sorted by strictly increasing identity key |
+//! | 48 | N·S | records, in strictly increasing content order |
 //! | 48 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
 //!
-//! Record (S bytes): position 3×f64; frame 3×3 f32 (rows: surface axis 0, axis 1 = n × axis 0,
-//! normal; volume: axes 0, 1, 2); radii 3×f32 (surface: radius along axis 0, axis 1, and their
-//! minimum for the normal direction); translational and rotational gradient scales 2×f32; identity
-//! key u64; then per channel: value f32, translational gradient 3×binary16, rotational gradient
-//! 3×binary16, the gradients relative to their scale.
+//! Record (S bytes): position 3×f64; frame as a unit quaternion 4×f32 (x, y, z, w with w ≥ 0,
+//! rotating the world axes onto the frame: surface axis 0, axis 1 = n × axis 0, normal n; volume
+//! axes 0-2); radii 3×f32 (surface: radius along axis 0, axis 1, and their minimum for the normal
+//! direction); translational and rotational gradient scales 2×f32; reserved u32 = 0; then per
+//! channel: value f32, translational gradient 3×binary16, rotational gradient 3×binary16, the
+//! gradients relative to their scale. Content order: position bit patterns (x, then y, then z,
+//! as u64), then the record's bytes compared lexicographically. Version 1 files (88-byte heads
+//! with three `f32` axes and a stored key) are rejected with a message naming the version.
 //!
 //! [`Cache::save`] writes a temporary file in the same directory, `fsync`s it, renames it over the
 //! target and `fsync`s the directory: a crash leaves either the old or the new file. [`Cache::load`]
 //! checks the magic, version, header fields, exact length, checksum, every record (finite numbers,
-//! radii in range, orthonormal frame, key matching the contents) and the key order, and reports
+//! radii in range, unit quaternion, reserved fields) and the record order, and reports
 //! [`Error::Corrupt`] (or [`Error::Io`]) with the reason; it never panics on any input.
 
+mod cursor;
 mod index;
 pub mod interp;
 pub mod metric;
@@ -82,6 +89,7 @@ use std::sync::Mutex;
 use glam::DVec3;
 use smallvec::SmallVec;
 
+pub use cursor::Cursor;
 pub use interp::Interpolation;
 pub use record::{
     Domain, Extent, Record, CHANNEL_BYTES, HEAD_BYTES, POSITION_MAX, RADIUS_MAX, RADIUS_MIN,
@@ -155,11 +163,13 @@ pub struct Lookup<V> {
 pub struct MemoryUsage {
     /// Bytes per stored record: `HEAD_BYTES + CHANNEL_BYTES * channels`.
     pub bytes_per_record: usize,
-    /// Bytes allocated for records (the arena grows in doubling chunks).
+    /// Address space reserved for records (the arena grows in doubling chunks of zeroed pages,
+    /// so the unused tail of the last chunk is not resident).
     pub record_bytes: usize,
-    /// Bytes held by the spatial index (nodes and entry arrays, including retired arrays).
+    /// Bytes held by the spatial index (hash table and entry lists, including those retired
+    /// while filling, which [`Cache::compact`] frees).
     pub index_bytes: usize,
-    /// Index entries (each record is listed in one or more octree nodes).
+    /// Index entries (one per record).
     pub index_entries: usize,
 }
 
@@ -169,8 +179,11 @@ pub struct Cache<V: CacheValue> {
     kernel: Kernel,
     records: store::Chunks<u64>,
     len: AtomicUsize,
-    index: index::Octree,
+    index: index::Grid,
     writer: Mutex<()>,
+    /// Process-unique identity and compaction count: what a [`Cursor`] was filled from.
+    identity: u64,
+    generation: u64,
     _value: PhantomData<fn() -> V>,
 }
 
@@ -183,8 +196,11 @@ impl<V: CacheValue> std::fmt::Debug for Cache<V> {
     }
 }
 
-/// Records are positioned exactly in `f64` octree cubes only while |x| / radius stays below this.
-const PRECISION_RATIO: f64 = (1u64 << 50) as f64;
+static NEXT_IDENTITY: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+/// The index places records exactly only while |x| / radius stays below this (2^40: a record
+/// 10⁶ units from the origin may be as small as 10⁻⁶).
+const PRECISION_RATIO: f64 = (1u64 << 40) as f64;
 
 impl<V: CacheValue> Cache<V> {
     /// An empty cache. `InvalidArgument` for 0 or more than [`MAX_CHANNELS`] channels, a channel
@@ -215,8 +231,10 @@ impl<V: CacheValue> Cache<V> {
             kernel,
             records: store::Chunks::new(words),
             len: AtomicUsize::new(0),
-            index: index::Octree::new(),
+            index: index::Grid::new(),
             writer: Mutex::new(()),
+            identity: NEXT_IDENTITY.fetch_add(1, Ordering::Relaxed),
+            generation: 0,
             _value: PhantomData,
         })
     }
@@ -246,11 +264,32 @@ impl<V: CacheValue> Cache<V> {
         }
     }
 
-    /// Releases index memory kept only for concurrent readers: entry arrays replaced while growing
-    /// (kept so that lookups never wait) and growth slack. Needs exclusive access; [`Cache::load`]
-    /// and [`Cache::from_bytes`] return compacted caches. Typically halves the index.
+    /// Prepares the cache for a lookup-heavy phase: releases index memory kept only for
+    /// concurrent readers (entry lists replaced while growing, kept so that lookups never wait,
+    /// and growth slack) and stores the records in index order, so that the records a lookup
+    /// meets lie together in memory instead of in insertion order. Needs exclusive access;
+    /// [`Cache::load`] and [`Cache::from_bytes`] return compacted caches. Changes no result.
     pub fn compact(&mut self) {
-        self.index.compact();
+        let order = self.index.ids_in_cell_order();
+        debug_assert_eq!(order.len(), self.len());
+        let words = self.records.slot_len();
+        let fresh = store::Chunks::new(words);
+        let mut new_id = vec![0u32; order.len()];
+        for (new, &old) in order.iter().enumerate() {
+            fresh.ensure(new);
+            // SAFETY: distinct allocations; both slots hold `words` u64s; exclusive access.
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    self.records.slot_ptr(old as usize),
+                    fresh.slot_ptr(new),
+                    words,
+                )
+            };
+            new_id[old as usize] = new as u32;
+        }
+        self.records = fresh;
+        self.index.compact(&new_id);
+        self.generation += 1;
     }
 
     /// Record `id` (< len, published).
@@ -259,7 +298,7 @@ impl<V: CacheValue> Cache<V> {
         let slot = self.records.slot(id as usize);
         let ptr = slot.as_ptr();
         // SAFETY: a slot is `words` u64s (8-aligned) holding a `Head` followed by `channels`
-        // `Channel`s (4-aligned, at byte 88), written before the id was published.
+        // `Channel`s (4-aligned, at byte HEAD_BYTES), written before the id was published.
         unsafe {
             let head = &*(ptr as *const Head);
             let chans = std::slice::from_raw_parts(
@@ -272,8 +311,8 @@ impl<V: CacheValue> Cache<V> {
 
     /// Inserts a record. Returns `false` (and changes nothing) if an identical record is already
     /// stored. `InvalidArgument` for non-finite or out-of-range input, a zero surface normal,
-    /// degenerate axes with anisotropic radii, or a radius below |position|·2⁻⁵⁰ (beyond `f64`
-    /// resolution of the index).
+    /// degenerate axes with anisotropic radii, or a largest radius below |position|·2⁻⁴⁰ (beyond
+    /// the index's resolution).
     pub fn insert(&self, record: &Record<V>) -> Result<bool> {
         let g = record.gradient.as_ref().map(record::channel_major);
         let r = record.rotation_gradient.as_ref().map(record::channel_major);
@@ -297,8 +336,8 @@ impl<V: CacheValue> Cache<V> {
         let radius = head.max_radius();
         if position.abs().max_element() > radius * PRECISION_RATIO {
             return Err(Error::InvalidArgument(format!(
-                "record radius {radius:e} is below 2^-50 of its position {position}: \
-                 beyond the index's f64 resolution"
+                "record radius {radius:e} is below 2^-40 of its position {position}: \
+                 beyond the index's resolution"
             )));
         }
         let _guard = self.writer.lock().unwrap_or_else(|e| e.into_inner());
@@ -332,6 +371,17 @@ impl<V: CacheValue> Cache<V> {
         Ok(true)
     }
 
+    /// [`Cache::check_query`] plus the output length.
+    fn check_lookup(&self, position: DVec3, normal: DVec3, out_len: usize) -> Result<DVec3> {
+        if out_len != self.config.channels {
+            return Err(Error::InvalidArgument(format!(
+                "output has {out_len} floats, the cache has {} channels",
+                self.config.channels
+            )));
+        }
+        self.check_query(position, normal)
+    }
+
     fn check_query(&self, position: DVec3, normal: DVec3) -> Result<DVec3> {
         ensure_finite3(position, "query position")?;
         if self.config.domain == Domain::Volume {
@@ -356,36 +406,126 @@ impl<V: CacheValue> Cache<V> {
         normal: DVec3,
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
-        let n = self.check_query(position, normal)?;
-        if out.len() != self.config.channels {
-            return Err(Error::InvalidArgument(format!(
-                "output has {} floats, the cache has {} channels",
-                out.len(),
-                self.config.channels
+        let n = self.check_lookup(position, normal, out.len())?;
+        // candidates first (their records prefetched), then the records: their misses overlap
+        let mut ids: SmallVec<[u32; 32]> = SmallVec::new();
+        self.index.query(position, |id| {
+            self.prefetch_record(id);
+            ids.push(id);
+        });
+        self.interpolate(position, n, &ids, out)
+    }
+
+    /// [`Cache::lookup_into`] for spatially coherent queries: `cursor` (one per thread, see
+    /// [`Cursor`]) remembers the records around recent queries so that nearby queries skip the
+    /// index. Results are bit for bit those of [`Cache::lookup_into`].
+    pub fn lookup_into_with(
+        &self,
+        cursor: &mut Cursor,
+        position: DVec3,
+        normal: DVec3,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
+        let n = self.check_lookup(position, normal, out.len())?;
+        let Some(finest) = self.index.finest_side() else {
+            return Err(Error::NotFound(format!(
+                "no cache record covers {position}"
             )));
+        };
+        let source = (self.identity, self.generation, self.len());
+        match cursor.plan(source, position, finest) {
+            cursor::Plan::Plain => return self.lookup_into(position, normal, out),
+            cursor::Plan::Anchor(reach) => {
+                // remembered in content order, so that the hits of later lookups arrive sorted
+                // and their sort below is a single pass
+                let mut found: SmallVec<[(u64, u32, DVec3, f64); 64]> = SmallVec::new();
+                self.index.query_ball(position, reach, |id, c, r| {
+                    found.push((self.stored(id).0.position[0].to_bits(), id, c, r))
+                });
+                found.sort_unstable_by(|a, b| match a.0.cmp(&b.0) {
+                    std::cmp::Ordering::Equal => {
+                        record::content_order(self.stored(a.1), self.stored(b.1))
+                    }
+                    unequal => unequal,
+                });
+                cursor.reset(source, position, reach);
+                for (_, id, c, r) in found {
+                    cursor.push(id, c, r);
+                }
+                cursor.seal();
+            }
+            cursor::Plan::Remembered => {}
         }
+        let mut ids: SmallVec<[u32; 32]> = SmallVec::new();
+        cursor.candidates(position, |id| {
+            self.prefetch_record(id);
+            ids.push(id);
+        });
+        self.interpolate(position, n, &ids, out)
+    }
+
+    /// [`Cache::lookup`] for spatially coherent queries (see [`Cache::lookup_into_with`]).
+    pub fn lookup_with(
+        &self,
+        cursor: &mut Cursor,
+        position: DVec3,
+        normal: DVec3,
+    ) -> Result<Lookup<V>> {
+        self.lookup_via(|out| self.lookup_into_with(cursor, position, normal, out))
+    }
+
+    #[inline(always)]
+    fn prefetch_record(&self, id: u32) {
+        let slot = self.records.slot_ptr(id as usize) as *const u8;
+        index::prefetch(slot);
+        index::prefetch(slot.wrapping_add(HEAD_BYTES)); // the first channels
+    }
+
+    /// The weighted extrapolation of the records among `ids` (a superset of those covering
+    /// `position`; `n` the unit query normal) into `out`.
+    fn interpolate(
+        &self,
+        position: DVec3,
+        n: DVec3,
+        ids: &[u32],
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
         let surface = self.config.domain == Domain::Surface;
         let mut used: SmallVec<[Used<'_>; 16]> = SmallVec::new();
-        self.index.query(position, |id| {
+        for &id in ids {
             let (head, channels) = self.stored(id);
-            let t = head.normalized_distance(position);
-            let cos_n = if surface { head.axis(2).dot(n) } else { 1.0 };
+            // isotropic records (the common case) need only the normal, not the whole frame
+            let (t, normal) = if head.is_isotropic() {
+                let t = (position - head.position()).length() / head.radii[0] as f64;
+                (t, if surface { head.axis2() } else { DVec3::ZERO })
+            } else {
+                let frame = head.frame();
+                (head.normalized_distance(&frame, position), frame.0[2])
+            };
+            let cos_n = if surface { normal.dot(n) } else { 1.0 };
             let weight = self.kernel.weight(t, cos_n);
             if weight > 0.0 {
                 used.push(Used {
-                    key: head.key,
+                    order: head.position[0].to_bits(),
                     weight,
+                    normal,
                     head,
                     channels,
                 });
             }
-        });
+        }
         if used.is_empty() {
             return Err(Error::NotFound(format!(
                 "no cache record covers {position}"
             )));
         }
-        used.sort_unstable_by_key(|u| u.key);
+        // the content order makes the sum independent of insertion order and thread timing
+        used.sort_unstable_by(|a, b| match a.order.cmp(&b.order) {
+            std::cmp::Ordering::Equal => {
+                record::content_order((a.head, a.channels), (b.head, b.channels))
+            }
+            unequal => unequal,
+        });
         let weight_sum: f64 = used.iter().map(|u| u.weight).sum();
         if !(weight_sum > 0.0 && weight_sum.is_finite()) {
             return Err(Error::NotFound(format!(
@@ -399,6 +539,14 @@ impl<V: CacheValue> Cache<V> {
     /// Interpolates at `position` with surface normal `normal` (ignored in volumes).
     /// `NotFound` when no record covers the point.
     pub fn lookup(&self, position: DVec3, normal: DVec3) -> Result<Lookup<V>> {
+        self.lookup_via(|out| self.lookup_into(position, normal, out))
+    }
+
+    /// Runs a `lookup_into` variant on a stack buffer and wraps the result.
+    fn lookup_via(
+        &self,
+        into: impl FnOnce(&mut [f32]) -> Result<(f64, usize)>,
+    ) -> Result<Lookup<V>> {
         let mut buf = [0.0f32; 32];
         let mut heap = Vec::new();
         let out: &mut [f32] = if self.config.channels <= buf.len() {
@@ -407,7 +555,7 @@ impl<V: CacheValue> Cache<V> {
             heap.resize(self.config.channels, 0.0);
             &mut heap
         };
-        let (weight_sum, records) = self.lookup_into(position, normal, out)?;
+        let (weight_sum, records) = into(out)?;
         Ok(Lookup {
             value: V::from_channels(out),
             weight_sum,
@@ -426,7 +574,10 @@ impl<V: CacheValue> Cache<V> {
         let mut limit = f64::INFINITY;
         self.index.query(position, |id| {
             let (head, _) = self.stored(id);
-            limit = limit.min(head.max_radius() + (position - head.position()).length());
+            let distance = (position - head.position()).length();
+            if distance <= head.max_radius() {
+                limit = limit.min(head.max_radius() + distance);
+            }
         });
         let r = extent.max_radius();
         Ok(if r > limit {
@@ -439,7 +590,10 @@ impl<V: CacheValue> Cache<V> {
     /// Identity keys of all records, sorted (equal for two caches holding the same records).
     pub fn keys(&self) -> Vec<u64> {
         let mut keys: Vec<u64> = (0..self.len() as u32)
-            .map(|i| self.stored(i).0.key)
+            .map(|i| {
+                let (h, c) = self.stored(i);
+                record::identity(h, c)
+            })
             .collect();
         keys.sort_unstable();
         keys
@@ -467,15 +621,16 @@ impl<V: CacheValue> Cache<V> {
                     V::from_channels(&v)
                 };
                 let surface = self.config.domain == Domain::Surface;
+                let frame = h.frame();
                 Record {
                     position: h.position(),
-                    normal: if surface { h.axis(2) } else { DVec3::ZERO },
+                    normal: if surface { frame.0[2] } else { DVec3::ZERO },
                     value: V::from_channels(&values),
                     gradient: Some(std::array::from_fn(|k| axis(k, false))),
                     rotation_gradient: surface.then(|| std::array::from_fn(|k| axis(k, true))),
                     extent: Extent {
                         radii: h.radii.map(|r| r as f64),
-                        axes: std::array::from_fn(|k| h.axis(k)),
+                        axes: frame.0,
                     },
                 }
             })

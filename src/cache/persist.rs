@@ -12,19 +12,17 @@ use crate::error::{Error, Result};
 /// File magic.
 pub const MAGIC: [u8; 8] = *b"RDFCACHE";
 /// Current (and only accepted) format version.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 const HEADER_BYTES: usize = 48;
 const CHECKSUM_BYTES: usize = 8;
 
 impl<V: CacheValue> Cache<V> {
-    /// The cache in the documented binary format (records sorted by identity key, so equal
-    /// record sets give byte-identical output whatever the insertion order).
+    /// The cache in the documented binary format (records in content order, so equal record
+    /// sets give byte-identical output whatever the insertion order).
     pub fn to_bytes(&self) -> Vec<u8> {
         let count = self.len();
-        let mut ids: Vec<(u64, u32)> = (0..count as u32)
-            .map(|i| (self.stored(i).0.key, i))
-            .collect();
-        ids.sort_unstable();
+        let mut ids: Vec<u32> = (0..count as u32).collect();
+        ids.sort_unstable_by(|&a, &b| record::content_order(self.stored(a), self.stored(b)));
         let stride = HEAD_BYTES + CHANNEL_BYTES * self.config.channels;
         let mut out = Vec::with_capacity(HEADER_BYTES + count * stride + CHECKSUM_BYTES);
         out.extend_from_slice(&MAGIC);
@@ -36,7 +34,7 @@ impl<V: CacheValue> Cache<V> {
         out.extend_from_slice(&(count as u64).to_le_bytes());
         out.extend_from_slice(&(stride as u32).to_le_bytes());
         out.extend_from_slice(&0u32.to_le_bytes());
-        for (_, id) in ids {
+        for id in ids {
             let (head, chans) = self.stored(id);
             record::serialize(head, chans, &mut out);
         }
@@ -123,18 +121,22 @@ impl<V: CacheValue> Cache<V> {
             max_normal_deviation,
         };
         let mut cache = Cache::new(config).map_err(|e| Error::Corrupt(format!("header: {e}")))?;
-        let mut previous: Option<u64> = None;
+        let mut previous: Option<(record::Head, record::Channels)> = None;
         for i in 0..count as usize {
             let at = HEADER_BYTES + i * stride;
             let (head, chans) = record::deserialize(domain, &bytes[at..at + stride])
                 .map_err(|e| Error::Corrupt(format!("record {i}: {e}")))?;
-            if previous.is_some_and(|p| p >= head.key) {
-                return corrupt(format!("record {i}: keys not strictly increasing"));
+            if let Some((h, c)) = &previous {
+                if record::content_order((h, c), (&head, &chans)).is_ge() {
+                    return corrupt(format!(
+                        "record {i}: records not in strictly increasing content order"
+                    ));
+                }
             }
-            previous = Some(head.key);
             cache
                 .insert_stored(&head, &chans)
                 .map_err(|e| Error::Corrupt(format!("record {i}: {e}")))?;
+            previous = Some((head, chans));
         }
         cache.compact();
         Ok(cache)

@@ -1,8 +1,8 @@
 //! Records: what a caller inserts ([`Record`], [`Extent`]) and the compact form the cache stores.
 //!
-//! Stored form (88 bytes + 16 bytes per channel, see the [module docs](super) for the file layout):
-//! position as `f64` (extrapolation distances stay exact in large scenes), the orthonormal frame and
-//! the radii as `f32`, and per channel the value as `f32` and the six gradient components as IEEE
+//! Stored form (64 bytes + 16 bytes per channel, see the [module docs](super) for the file layout):
+//! position as `f64` (extrapolation distances stay exact in large scenes), the frame as an `f32`
+//! unit quaternion, the radii as `f32`, and per channel the value as `f32` and the six gradient components as IEEE
 //! binary16 relative to a per-record scale (the largest absolute translational, resp. rotational,
 //! gradient component over all channels), i.e. a relative precision of 2^-11 of that scale.
 
@@ -134,21 +134,29 @@ impl<V: CacheValue> Record<V> {
 }
 
 /// Size of the fixed part of a stored record (bytes).
-pub const HEAD_BYTES: usize = 88;
+pub const HEAD_BYTES: usize = 64;
 /// Size of each channel's part of a stored record (bytes).
 pub const CHANNEL_BYTES: usize = 16;
 
-/// Fixed part of a stored record. Frame rows: surface (axis 0, axis 1, normal); volume (axes 0-2).
+/// Fixed part of a stored record.
+///
+/// The frame is a unit quaternion (x, y, z, w), w ≥ 0, rotating the world axes onto the frame's
+/// axes: surface (axis 0, axis 1 = n × axis 0, normal n), volume (axes 0-2). It costs 16 bytes
+/// instead of the 36 of three `f32` axes, is orthonormal by construction, and decodes in ~25 flops.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct Head {
     pub position: [f64; 3],
-    pub frame: [[f32; 3]; 3],
+    pub rotation: [f32; 4],
     pub radii: [f32; 3],
     pub gradient_scale: f32,
     pub rotation_scale: f32,
-    pub key: u64,
+    /// Always 0 (keeps the head a multiple of 8 bytes; reserved for flags).
+    pub reserved: u32,
 }
+
+const _: () = assert!(std::mem::size_of::<Head>() == HEAD_BYTES);
+const _: () = assert!(std::mem::size_of::<Channel>() == CHANNEL_BYTES);
 
 /// One channel of a stored record: value and binary16 gradients relative to the head's scales.
 #[repr(C)]
@@ -159,8 +167,36 @@ pub(crate) struct Channel {
     pub rotation: [u16; 3],
 }
 
-const _: () = assert!(std::mem::size_of::<Head>() == HEAD_BYTES);
-const _: () = assert!(std::mem::size_of::<Channel>() == CHANNEL_BYTES);
+/// A decoded record frame: the three axes (rows of the rotation).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Frame(pub [DVec3; 3]);
+
+impl Frame {
+    /// The frame of the quaternion `q` (need not be normalized: s = 2/|q|² keeps it exactly
+    /// orthonormal up to rounding).
+    #[inline]
+    pub(crate) fn from_quaternion(q: [f32; 4]) -> Frame {
+        let [x, y, z, w] = q.map(|c| c as f64);
+        let s = 2.0 / (x * x + y * y + z * z + w * w);
+        let (xs, ys, zs) = (x * s, y * s, z * s);
+        let (wx, wy, wz) = (w * xs, w * ys, w * zs);
+        let (xx, xy, xz) = (x * xs, x * ys, x * zs);
+        let (yy, yz, zz) = (y * ys, y * zs, z * zs);
+        Frame([
+            DVec3::new(1.0 - (yy + zz), xy + wz, xz - wy),
+            DVec3::new(xy - wz, 1.0 - (xx + zz), yz + wx),
+            DVec3::new(xz + wy, yz - wx, 1.0 - (xx + yy)),
+        ])
+    }
+}
+
+/// The quaternion (x, y, z, w), w ≥ 0, of the right-handed orthonormal frame `axes`.
+fn quaternion_of(axes: [DVec3; 3]) -> [f32; 4] {
+    let m = glam::DMat3::from_cols(axes[0], axes[1], axes[2]);
+    let q = glam::DQuat::from_mat3(&m).normalize();
+    let q = if q.w < 0.0 { -q } else { q };
+    [q.x as f32, q.y as f32, q.z as f32, q.w as f32]
+}
 
 impl Head {
     #[inline]
@@ -169,9 +205,26 @@ impl Head {
     }
 
     #[inline]
-    pub(crate) fn axis(&self, i: usize) -> DVec3 {
-        let a = self.frame[i];
-        DVec3::new(a[0] as f64, a[1] as f64, a[2] as f64)
+    pub(crate) fn frame(&self) -> Frame {
+        Frame::from_quaternion(self.rotation)
+    }
+
+    /// The frame's third axis (the normal of a surface record), without decoding the others.
+    #[inline]
+    pub(crate) fn axis2(&self) -> DVec3 {
+        let [x, y, z, w] = self.rotation.map(|c| c as f64);
+        let s = 2.0 / (x * x + y * y + z * z + w * w);
+        DVec3::new(
+            s * (x * z + w * y),
+            s * (y * z - w * x),
+            1.0 - s * (x * x + y * y),
+        )
+    }
+
+    /// Whether every radius is the same (then t is the distance over the radius, in any frame).
+    #[inline]
+    pub(crate) fn is_isotropic(&self) -> bool {
+        self.radii[0] == self.radii[1] && self.radii[1] == self.radii[2]
     }
 
     /// Bounding-sphere radius.
@@ -180,16 +233,15 @@ impl Head {
         self.radii[0].max(self.radii[1]).max(self.radii[2]) as f64
     }
 
-    /// Normalized ellipsoid distance t (thesis eq. 6.12): 1 on the boundary of the record.
+    /// Normalized ellipsoid distance t (thesis eq. 6.12) of `p` in the frame `f` of this record:
+    /// 1 on the boundary of the record.
     #[inline]
-    pub(crate) fn normalized_distance(&self, p: DVec3) -> f64 {
+    pub(crate) fn normalized_distance(&self, f: &Frame, p: DVec3) -> f64 {
         let d = p - self.position();
-        let mut t2 = 0.0;
-        for i in 0..3 {
-            let u = d.dot(self.axis(i)) / self.radii[i] as f64;
-            t2 += u * u;
-        }
-        t2.sqrt()
+        let u0 = d.dot(f.0[0]) / self.radii[0] as f64;
+        let u1 = d.dot(f.0[1]) / self.radii[1] as f64;
+        let u2 = d.dot(f.0[2]) / self.radii[2] as f64;
+        (u0 * u0 + u1 * u1 + u2 * u2).sqrt()
     }
 }
 
@@ -224,13 +276,16 @@ pub(crate) fn packed_scale(scale: f32) -> f64 {
     scale as f64 * F16_REBIAS
 }
 
+/// A binary16 value times 2^-112 (see [`f16_to_f64`]); multiply by [`packed_scale`].
+#[inline(always)]
+pub(crate) fn f16_unscaled(h: u16) -> f64 {
+    let h = h as u32;
+    f32::from_bits(((h & 0x8000) << 16) | ((h & 0x7fff) << 13)) as f64
+}
+
 #[inline]
 fn unpack_unscaled(h: [u16; 3]) -> DVec3 {
-    let raw = |h: u16| {
-        let h = h as u32;
-        f32::from_bits(((h & 0x8000) << 16) | ((h & 0x7fff) << 13)) as f64
-    };
-    DVec3::new(raw(h[0]), raw(h[1]), raw(h[2]))
+    DVec3::new(f16_unscaled(h[0]), f16_unscaled(h[1]), f16_unscaled(h[2]))
 }
 
 /// 2^112: rebias from the binary16 exponent (bias 15) to the binary32 one (bias 127).
@@ -325,7 +380,7 @@ fn check_radius(r: f64, i: usize) -> Result<f32> {
     Ok(r as f32)
 }
 
-/// Validates a record and converts it to the stored form (key filled in).
+/// Validates a record and converts it to the stored form.
 pub(crate) fn encode(
     domain: Domain,
     channels: usize,
@@ -406,13 +461,13 @@ pub(crate) fn encode(
         Domain::Surface => pack_gradients(input.rotation, channels),
         Domain::Volume => pack_gradients(None, channels),
     };
-    let mut head = Head {
+    let head = Head {
         position: input.position.to_array(),
-        frame: frame.map(|a| a.as_vec3().to_array()),
+        rotation: quaternion_of(frame),
         radii,
         gradient_scale,
         rotation_scale,
-        key: 0,
+        reserved: 0,
     };
     let chans: Channels = (0..channels)
         .map(|c| Channel {
@@ -421,7 +476,6 @@ pub(crate) fn encode(
             rotation: rots[c],
         })
         .collect();
-    head.key = identity(&head, &chans);
     Ok((head, chans))
 }
 
@@ -440,28 +494,15 @@ pub(crate) const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 /// Appends the little-endian serialization of a record (the file format's record layout, which is
 /// also the in-memory layout on little-endian machines).
 pub(crate) fn serialize(head: &Head, chans: &[Channel], out: &mut Vec<u8>) {
-    write_head_fields(head, out);
-    out.extend_from_slice(&head.key.to_le_bytes());
-    write_channels(chans, out);
-}
-
-fn write_head_fields(head: &Head, out: &mut Vec<u8>) {
     for p in head.position {
         out.extend_from_slice(&p.to_le_bytes());
     }
-    for a in head.frame {
-        for x in a {
-            out.extend_from_slice(&x.to_le_bytes());
-        }
-    }
-    for r in head.radii {
-        out.extend_from_slice(&r.to_le_bytes());
+    for x in head.rotation.iter().chain(&head.radii) {
+        out.extend_from_slice(&x.to_le_bytes());
     }
     out.extend_from_slice(&head.gradient_scale.to_le_bytes());
     out.extend_from_slice(&head.rotation_scale.to_le_bytes());
-}
-
-fn write_channels(chans: &[Channel], out: &mut Vec<u8>) {
+    out.extend_from_slice(&head.reserved.to_le_bytes());
     for c in chans {
         out.extend_from_slice(&c.value.to_le_bytes());
         for h in c.gradient.iter().chain(&c.rotation) {
@@ -470,19 +511,33 @@ fn write_channels(chans: &[Channel], out: &mut Vec<u8>) {
     }
 }
 
-/// A record's identity: FNV-1a 64 of its little-endian stored bytes without the key field
-/// (position, frame, radii, scales, then the channels). Two records are duplicates iff every
-/// stored bit agrees, which is what inserting the same gather twice (on any machine) produces.
+/// A record's identity key: FNV-1a 64 of its serialized bytes. Equal records have equal keys on
+/// every machine; the cache itself decides duplicates by comparing the bytes.
 pub(crate) fn identity(head: &Head, chans: &[Channel]) -> u64 {
     let mut buf = Vec::with_capacity(HEAD_BYTES + chans.len() * CHANNEL_BYTES);
-    write_head_fields(head, &mut buf);
-    write_channels(chans, &mut buf);
+    serialize(head, chans, &mut buf);
     fnv1a(FNV_OFFSET, &buf)
 }
 
+/// The total order in which covering records are summed and files list records: by position
+/// (bit patterns of x, y, z), then by the remaining fields, then by the channels. It depends only
+/// on the records' contents, so sums are the same whatever the insertion order; equal records
+/// compare equal.
+#[inline(never)] // called on ties of the x bits only, in lookups
+pub(crate) fn content_order(a: (&Head, &[Channel]), b: (&Head, &[Channel])) -> std::cmp::Ordering {
+    let bits = |h: &Head| h.position.map(f64::to_bits);
+    bits(a.0).cmp(&bits(b.0)).then_with(|| {
+        let mut x = Vec::with_capacity(HEAD_BYTES + a.1.len() * CHANNEL_BYTES);
+        let mut y = Vec::with_capacity(HEAD_BYTES + b.1.len() * CHANNEL_BYTES);
+        serialize(a.0, a.1, &mut x);
+        serialize(b.0, b.1, &mut y);
+        x.cmp(&y)
+    })
+}
+
 /// Parses one serialized record (length `HEAD_BYTES + channels * CHANNEL_BYTES`) and checks that
-/// it could have been produced by [`encode`]: finite numbers, radii in range, orthonormal frame,
-/// finite binary16 gradients, matching key.
+/// it could have been produced by [`encode`]: finite numbers, radii in range, unit frame
+/// quaternion, reserved field 0, finite binary16 gradients.
 pub(crate) fn deserialize(domain: Domain, bytes: &[u8]) -> Result<(Head, Channels)> {
     let f64_at = |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
     let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
@@ -491,14 +546,17 @@ pub(crate) fn deserialize(domain: Domain, bytes: &[u8]) -> Result<(Head, Channel
     let mut head = Head::default();
     for i in 0..3 {
         head.position[i] = f64_at(8 * i);
-        for k in 0..3 {
-            head.frame[i][k] = f32_at(24 + 12 * i + 4 * k);
-        }
-        head.radii[i] = f32_at(60 + 4 * i);
+        head.radii[i] = f32_at(40 + 4 * i);
     }
-    head.gradient_scale = f32_at(72);
-    head.rotation_scale = f32_at(76);
-    head.key = u64::from_le_bytes(bytes[80..88].try_into().unwrap_or([0; 8]));
+    for k in 0..4 {
+        head.rotation[k] = f32_at(24 + 4 * k);
+    }
+    head.gradient_scale = f32_at(52);
+    head.rotation_scale = f32_at(56);
+    head.reserved = u32::from_le_bytes(bytes[60..64].try_into().unwrap_or([0; 4]));
+    if head.reserved != 0 {
+        return Err(corrupt("reserved field is not 0"));
+    }
     if !head
         .position
         .iter()
@@ -518,16 +576,10 @@ pub(crate) fn deserialize(domain: Domain, bytes: &[u8]) -> Result<(Head, Channel
             return Err(corrupt("gradient scale invalid"));
         }
     }
-    let frame: [DVec3; 3] = std::array::from_fn(|i| head.axis(i));
-    for (i, a) in frame.iter().enumerate() {
-        if !a.is_finite() || (a.length() - 1.0).abs() > 1e-5 {
-            return Err(corrupt("frame axis not unit length"));
-        }
-        for b in &frame[i + 1..] {
-            if a.dot(*b).abs() > 1e-5 {
-                return Err(corrupt("frame not orthogonal"));
-            }
-        }
+    let q = head.rotation;
+    let norm2: f64 = q.iter().map(|&c| c as f64 * c as f64).sum();
+    if !q.iter().all(|c| c.is_finite()) || (norm2 - 1.0).abs() > 1e-5 || q[3] < 0.0 {
+        return Err(corrupt("frame quaternion not unit length with w >= 0"));
     }
     let channels = (bytes.len() - HEAD_BYTES) / CHANNEL_BYTES;
     let mut chans = Channels::with_capacity(channels);
@@ -553,9 +605,6 @@ pub(crate) fn deserialize(domain: Domain, bytes: &[u8]) -> Result<(Head, Channel
             return Err(corrupt("gradient not finite"));
         }
         chans.push(ch);
-    }
-    if identity(&head, &chans) != head.key {
-        return Err(corrupt("identity key does not match its contents"));
     }
     Ok((head, chans))
 }

@@ -33,7 +33,13 @@ fn chunk_items(k: usize) -> usize {
     (1usize << FIRST_LOG2) << k
 }
 
-impl<T: Default> Chunks<T> {
+/// Element types whose all-zero bit pattern is a valid value, so chunks come from `alloc_zeroed`:
+/// the operating system maps such pages lazily, so a chunk's unused tail costs address space,
+/// not memory.
+pub(crate) trait Zeroable: Copy {}
+impl Zeroable for u64 {}
+
+impl<T: Zeroable> Chunks<T> {
     /// Storage for items of `slot` values of `T` each.
     pub(crate) fn new(slot: usize) -> Self {
         Chunks {
@@ -42,14 +48,23 @@ impl<T: Default> Chunks<T> {
         }
     }
 
-    /// Makes sure item `index` has memory (writer only). Items start as `T::default()`.
+    /// Values of `T` per item.
+    pub(crate) fn slot_len(&self) -> usize {
+        self.slot
+    }
+
+    /// Makes sure item `index` has memory (writer only). Items start as all-zero bytes.
     pub(crate) fn ensure(&self, index: usize) {
         let (k, _) = locate(index);
         assert!(k < MAX_CHUNKS, "cache storage exhausted");
         if self.chunks[k].load(Ordering::Acquire).is_null() {
             let len = chunk_items(k) * self.slot;
-            let chunk: Box<[T]> = (0..len).map(|_| T::default()).collect();
-            let ptr = Box::into_raw(chunk) as *mut T;
+            let layout = std::alloc::Layout::array::<T>(len).expect("chunk size");
+            // SAFETY: non-zero size; all-zero bytes are a valid `T` (`Zeroable`).
+            let ptr = unsafe { std::alloc::alloc_zeroed(layout) } as *mut T;
+            if ptr.is_null() {
+                std::alloc::handle_alloc_error(layout);
+            }
             self.chunks[k].store(ptr, Ordering::Release);
         }
     }
@@ -81,13 +96,15 @@ impl<T: Default> Chunks<T> {
 }
 
 impl<T> Drop for Chunks<T> {
+    // Frees with the layout `ensure` allocated with.
     fn drop(&mut self) {
         for (k, chunk) in self.chunks.iter().enumerate() {
             let ptr = chunk.load(Ordering::Relaxed);
             if !ptr.is_null() {
                 let len = chunk_items(k) * self.slot;
-                // SAFETY: allocated in `ensure` as a boxed slice of exactly this length.
-                drop(unsafe { Box::from_raw(std::ptr::slice_from_raw_parts_mut(ptr, len)) });
+                let layout = std::alloc::Layout::array::<T>(len).expect("chunk size");
+                // SAFETY: allocated in `ensure` with exactly this layout.
+                unsafe { std::alloc::dealloc(ptr as *mut u8, layout) };
             }
         }
     }

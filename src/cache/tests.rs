@@ -23,6 +23,17 @@ fn rec(p: DVec3, value: f32, gradient: [f32; 3], r: f64) -> Record<f32> {
     }
 }
 
+/// A deterministic uniform generator on [0, 1).
+fn lcg(seed: u64) -> impl FnMut() -> f64 {
+    let mut s = seed;
+    move || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 fn close(a: f64, b: f64, tol: f64) {
     assert!((a - b).abs() <= tol * b.abs().max(1.0), "{a} vs {b}");
 }
@@ -231,8 +242,8 @@ fn invalid_records_are_rejected() {
         axes: [DVec3::Z, DVec3::ZERO, DVec3::ZERO],
     };
     assert!(c.insert(&r).is_err());
-    // below the index's resolution
-    let r = rec(DVec3::new(1e6, 0.0, 0.0), 1.0, [0.0; 3], 1e-12);
+    // below the index's resolution (2^-40 of the position)
+    let r = rec(DVec3::new(1e6, 0.0, 0.0), 1.0, [0.0; 3], 5e-7);
     assert!(c.insert(&r).is_err());
     assert!(c.is_empty());
     assert!(Cache::<f32>::new(CacheConfig::surface(2)).is_err());
@@ -247,13 +258,7 @@ fn invalid_records_are_rejected() {
 #[test]
 fn duplicates_are_detected_and_order_does_not_matter() {
     let mut recs = Vec::new();
-    let mut s = 7u64;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = lcg(7);
     for _ in 0..400 {
         let p = DVec3::new(rnd() * 4.0, rnd() * 4.0, 0.0);
         let g = [rnd() as f32 - 0.5, rnd() as f32 - 0.5, 0.0];
@@ -307,11 +312,35 @@ fn duplicates_are_detected_and_order_does_not_matter() {
 
 #[test]
 fn bytes_per_record_meet_the_budget() {
-    for (channels, expected) in [(1usize, 104usize), (3, 136), (27, 520)] {
-        let c: Cache<Vec<f32>> = Cache::new(CacheConfig::surface(channels)).unwrap();
+    // records uniformly on a floor with ~8 covering each point (the benchmark's overlap), index
+    // included, after compaction
+    let n = 20_000usize;
+    let side = (n as f64).sqrt();
+    let mut rnd = lcg(3);
+    let radius = (8.0 / std::f64::consts::PI).sqrt();
+    let spots: Vec<(DVec3, f64)> = (0..n)
+        .map(|_| {
+            (
+                DVec3::new(rnd() * side, rnd() * side, 0.0),
+                radius * (0.8 + 0.4 * rnd()),
+            )
+        })
+        .collect();
+    for (channels, stored) in [(1usize, 80usize), (3, 112), (27, 496)] {
+        let mut c: Cache<Vec<f32>> = Cache::new(CacheConfig::surface(channels)).unwrap();
+        for (p, r) in &spots {
+            let rec = Record::new(*p, DVec3::Z, vec![1.0; channels], Extent::isotropic(*r));
+            c.insert(&rec).unwrap();
+        }
+        c.compact();
         let m = c.memory();
-        assert_eq!(m.bytes_per_record, expected);
-        assert!(m.bytes_per_record <= 96 + 16 * channels);
+        assert_eq!(m.bytes_per_record, stored);
+        assert_eq!(m.index_entries, n);
+        let total = (m.bytes_per_record * n + m.index_bytes) as f64 / n as f64;
+        assert!(
+            total <= (96 + 16 * channels) as f64,
+            "{channels} channels: {total} bytes per record"
+        );
     }
 }
 
@@ -392,4 +421,133 @@ fn caches_are_send_and_sync() {
     shared::<Cache<f32>>();
     shared::<Cache<[f32; 9]>>();
     shared::<Cache<Vec<f32>>>();
+}
+
+#[test]
+fn compaction_reorders_records_without_changing_any_result() {
+    let mut c: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3)).unwrap();
+    let mut rnd = lcg(11);
+    for i in 0..3000 {
+        let p = DVec3::new(rnd() * 30.0, rnd() * 30.0, (i % 3) as f64 * 0.01);
+        let mut r = Record::new(
+            p,
+            DVec3::new(rnd() * 0.1, 0.0, 1.0),
+            [rnd() as f32, 0.5, 0.25],
+            Extent {
+                radii: [0.5 + rnd(), 0.5 + rnd(), 0.0],
+                axes: [DVec3::new(1.0, rnd(), 0.0), DVec3::ZERO, DVec3::ZERO],
+            },
+        );
+        r.gradient = Some([[rnd() as f32; 3], [0.1; 3], [0.0; 3]]);
+        r.rotation_gradient = Some([[0.0; 3], [rnd() as f32; 3], [0.0; 3]]);
+        c.insert(&r).unwrap();
+    }
+    let probes: Vec<DVec3> = (0..2000)
+        .map(|_| DVec3::new(rnd() * 30.0, rnd() * 30.0, 0.0))
+        .collect();
+    let bits = |c: &Cache<[f32; 3]>| -> Vec<Option<([u32; 3], u64, usize)>> {
+        probes
+            .iter()
+            .map(|&p| {
+                c.lookup(p, DVec3::Z)
+                    .ok()
+                    .map(|l| (l.value.map(f32::to_bits), l.weight_sum.to_bits(), l.records))
+            })
+            .collect()
+    };
+    let before = bits(&c);
+    let bytes = c.to_bytes();
+    let index_before = c.memory().index_bytes;
+    c.compact();
+    assert_eq!(bits(&c), before);
+    assert_eq!(c.to_bytes(), bytes);
+    assert!(c.memory().index_bytes < index_before);
+    assert!(before.iter().filter(|b| b.is_some()).count() > 1500);
+    // still a working cache
+    let extra = Record::new(
+        probes[0],
+        DVec3::Z,
+        [9.0, 9.0, 9.0],
+        Extent::isotropic(1e-3),
+    );
+    assert!(c.insert(&extra).unwrap());
+    assert_eq!(c.lookup(probes[0], DVec3::Z).unwrap().value[0], 9.0);
+}
+
+#[test]
+fn cursor_lookups_equal_plain_lookups_bit_for_bit() {
+    let mut rnd = lcg(5);
+    for domain in [Domain::Surface, Domain::Volume] {
+        let config = match domain {
+            Domain::Surface => CacheConfig::surface(3),
+            Domain::Volume => CacheConfig::volume(3),
+        };
+        let mut c: Cache<[f32; 3]> = Cache::new(config).unwrap();
+        // radii over two decades (several index levels), some anisotropic, a far offset
+        let base = DVec3::new(1e5, -2e5, 3e4);
+        let insert = |c: &Cache<[f32; 3]>, rnd: &mut dyn FnMut() -> f64| {
+            let p = base + DVec3::new(rnd() * 20.0, rnd() * 20.0, rnd() * 2.0);
+            let r = 0.05 * 10f64.powf(2.0 * rnd());
+            let mut rec = Record::new(
+                p,
+                DVec3::new(rnd() - 0.5, rnd() - 0.5, 2.0),
+                [rnd() as f32, 1.0, 0.5],
+                Extent {
+                    radii: [r, r * (1.0 + rnd()), r * (1.0 + rnd())],
+                    axes: [
+                        DVec3::new(1.0, rnd(), 0.0),
+                        DVec3::new(0.0, 1.0, rnd()),
+                        DVec3::ZERO,
+                    ],
+                },
+            );
+            rec.gradient = Some([[rnd() as f32; 3], [0.2; 3], [-0.1; 3]]);
+            rec.rotation_gradient = Some([[0.1; 3], [rnd() as f32; 3], [0.0; 3]]);
+            c.insert(&rec).unwrap();
+        };
+        for _ in 0..3000 {
+            insert(&c, &mut rnd);
+        }
+        let mut cursor = Cursor::new();
+        let mut p = base + DVec3::new(10.0, 10.0, 1.0);
+        let mut served = 0;
+        for step in 0..20_000 {
+            // mostly a random walk in small steps, sometimes a jump; inserts now and then
+            if step % 500 == 0 {
+                p = base + DVec3::new(rnd() * 20.0, rnd() * 20.0, rnd() * 2.0);
+            } else {
+                p += DVec3::new(rnd() - 0.5, rnd() - 0.5, 0.1 * (rnd() - 0.5)) * 0.03;
+            }
+            if step % 3000 == 1500 {
+                insert(&c, &mut rnd);
+            }
+            if step == 10_000 {
+                c.compact();
+            }
+            let n = DVec3::new(0.1 * (rnd() - 0.5), 0.1 * (rnd() - 0.5), 1.0);
+            let plain = c.lookup(p, n);
+            let with = c.lookup_with(&mut cursor, p, n);
+            match (plain, with) {
+                (Ok(a), Ok(b)) => {
+                    served += 1;
+                    assert_eq!(a.value.map(f32::to_bits), b.value.map(f32::to_bits), "{p}");
+                    assert_eq!(a.weight_sum.to_bits(), b.weight_sum.to_bits());
+                    assert_eq!(a.records, b.records);
+                }
+                (Err(Error::NotFound(_)), Err(Error::NotFound(_))) => {}
+                (a, b) => panic!("{domain:?} at {p}: plain {a:?}, cursor {b:?}"),
+            }
+        }
+        assert!(served > 10_000, "{domain:?}: {served}");
+        // the remembered candidates served most lookups; anchoring and the plain path were used
+        let [remembered, anchored, plain] = cursor.served;
+        assert!(remembered > 15 * anchored, "{:?}", cursor.served);
+        assert!(anchored > 40 && plain >= 4, "{:?}", cursor.served);
+        // one cursor moved to another cache re-anchors instead of reusing candidates
+        let other: Cache<[f32; 3]> = Cache::new(config).unwrap();
+        assert!(matches!(
+            other.lookup_with(&mut cursor, p, DVec3::Z),
+            Err(Error::NotFound(_))
+        ));
+    }
 }

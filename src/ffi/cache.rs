@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use glam::DVec3;
 
 use super::common::*;
-use crate::cache::{Cache, CacheConfig, Domain, Extent, Interpolation};
+use crate::cache::{Cache, CacheConfig, Cursor, Domain, Extent, Interpolation};
 #[cfg(not(unix))]
 use crate::Error;
 
@@ -18,6 +18,9 @@ use crate::Error;
 pub const RADDIFF_DOMAIN_SURFACE: u32 = 0;
 /// Records in participating media: ellipsoids, normals ignored.
 pub const RADDIFF_DOMAIN_VOLUME: u32 = 1;
+/// Largest channel count `raddiff_cache_new` accepts.
+pub const RADDIFF_CACHE_MAX_CHANNELS: u32 = 4096;
+const _: () = assert!(RADDIFF_CACHE_MAX_CHANNELS as usize == crate::cache::MAX_CHANNELS);
 
 /// Ward-Heckbert first-order extrapolation with Krivanek-Gautron weights 1/(t+rho) - 1.
 pub const RADDIFF_INTERP_WARD: u32 = 0;
@@ -174,19 +177,99 @@ pub extern "C" fn raddiff_cache_lookup(
 ) -> raddiff_status {
     guard(|| {
         let cache = unsafe { in_ref(cache, "cache")? };
-        if value.is_null() {
-            return Err(FfiError::Null("value"));
-        }
-        let channels = cache.inner.config().channels;
-        let mut tmp = vec![0.0f32; channels];
-        let (sum, _) = cache
-            .inner
-            .lookup_into(position.into(), normal.into(), &mut tmp)?;
-        // SAFETY: the caller provides `channels` writable floats at `value`.
-        unsafe { std::ptr::copy_nonoverlapping(tmp.as_ptr(), value, channels) };
-        if let Some(w) = unsafe { weight_sum.as_mut() } {
-            *w = sum;
-        }
+        lookup_to_c(cache, value, weight_sum, |out| {
+            cache.inner.lookup_into(position.into(), normal.into(), out)
+        })
+    })
+}
+
+/// Per-thread state for spatially coherent lookups (pixels of a tile, steps along a ray): it
+/// remembers the records around recent queries so that nearby lookups skip the spatial index.
+/// Not thread-safe: one per thread. It holds no reference to a cache and may be used with any.
+pub struct raddiff_cache_cursor {
+    inner: Cursor,
+}
+
+/// A new cursor for `raddiff_cache_lookup_with`; free it with `raddiff_cache_cursor_free`.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_cursor_new() -> *mut raddiff_cache_cursor {
+    guard_ptr(|| {
+        Ok(Box::into_raw(Box::new(raddiff_cache_cursor {
+            inner: Cursor::new(),
+        })))
+    })
+}
+
+/// Frees a cursor (NULL is ignored).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_cursor_free(cursor: *mut raddiff_cache_cursor) {
+    if !cursor.is_null() {
+        // SAFETY: `cursor` came from `raddiff_cache_cursor_new` and is freed once.
+        drop(unsafe { Box::from_raw(cursor) });
+    }
+}
+
+/// `raddiff_cache_lookup` through this thread's `cursor`: the same results bit for bit, faster
+/// when successive queries are close to each other. The cache may be shared by threads as with
+/// `raddiff_cache_lookup`; the cursor may not.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_lookup_with(
+    cache: *const raddiff_cache,
+    cursor: *mut raddiff_cache_cursor,
+    position: raddiff_vec3,
+    normal: raddiff_vec3,
+    value: *mut f32,
+    weight_sum: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        // SAFETY: NULL or a live cursor used by this thread only (the header's contract).
+        let cursor = unsafe { out_ref(cursor, "cursor")? };
+        lookup_to_c(cache, value, weight_sum, |out| {
+            cache
+                .inner
+                .lookup_into_with(&mut cursor.inner, position.into(), normal.into(), out)
+        })
+    })
+}
+
+/// Runs a lookup into a stack buffer (heap beyond 32 channels) and copies it to the caller.
+fn lookup_to_c(
+    cache: &raddiff_cache,
+    value: *mut f32,
+    weight_sum: *mut f64,
+    lookup: impl FnOnce(&mut [f32]) -> crate::Result<(f64, usize)>,
+) -> Result<(), FfiError> {
+    if value.is_null() {
+        return Err(FfiError::Null("value"));
+    }
+    let channels = cache.inner.config().channels;
+    let mut stack = [0.0f32; 32];
+    let mut heap = Vec::new();
+    let tmp: &mut [f32] = if channels <= stack.len() {
+        &mut stack[..channels]
+    } else {
+        heap.resize(channels, 0.0);
+        &mut heap
+    };
+    let (sum, _) = lookup(tmp)?;
+    // SAFETY: the caller provides `channels` writable floats at `value`.
+    unsafe { std::ptr::copy_nonoverlapping(tmp.as_ptr(), value, channels) };
+    if let Some(w) = unsafe { weight_sum.as_mut() } {
+        *w = sum;
+    }
+    Ok(())
+}
+
+/// Prepares a cache for a lookup-only phase: frees memory kept for concurrent readers while it
+/// was filled and stores its records in index order (faster lookups). Changes no result.
+/// **Not thread-safe**: no other thread may use the cache during the call.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_compact(cache: *mut raddiff_cache) -> raddiff_status {
+    guard(|| {
+        // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
+        let cache = unsafe { out_ref(cache, "cache")? };
+        cache.inner.compact();
         Ok(())
     })
 }
