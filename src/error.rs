@@ -45,14 +45,20 @@ pub(crate) fn ensure_finite(v: f64, what: &str) -> Result<()> {
 }
 
 /// Returns `InvalidArgument` naming `what` unless every component of `v` is finite.
+#[inline]
 pub(crate) fn ensure_finite3(v: glam::DVec3, what: &str) -> Result<()> {
     if v.is_finite() {
         Ok(())
     } else {
-        Err(Error::InvalidArgument(format!(
-            "{what} is not finite ({v})"
-        )))
+        Err(not_finite3(v, what))
     }
+}
+
+// Out of line: the check above sits on hot paths (cache lookups), the message never does.
+#[cold]
+#[inline(never)]
+fn not_finite3(v: glam::DVec3, what: &str) -> Error {
+    Error::InvalidArgument(format!("{what} is not finite ({v})"))
 }
 
 /// Returns `InvalidArgument` naming `what` unless every component of `v` is finite.

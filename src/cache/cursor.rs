@@ -32,7 +32,9 @@ pub struct Cursor {
     y: Vec<f32>,
     z: Vec<f32>,
     radius2: Vec<f32>,
-    ids: Vec<u32>,
+    /// The remembered records' slot addresses (valid while `source` matches the cache: records
+    /// move only in `Cache::compact`, which changes the generation).
+    slots: Vec<usize>,
     /// How many lookups each plan served (remembered, anchored, plain): for tests and tuning.
     pub(crate) served: [usize; 3],
 }
@@ -85,11 +87,11 @@ impl Cursor {
         self.y.clear();
         self.z.clear();
         self.radius2.clear();
-        self.ids.clear();
+        self.slots.clear();
     }
 
-    /// Remembers record `id` with listed bounding sphere (center, radius).
-    pub(crate) fn push(&mut self, id: u32, center: DVec3, radius: f64) {
+    /// Remembers the record at slot address `slot` with listed bounding sphere (center, radius).
+    pub(crate) fn push(&mut self, slot: usize, center: DVec3, radius: f64) {
         let off = center - self.anchor;
         // conservative in f32: covers the rounding of the offsets, of the query and of the test
         let r = radius * (1.0 + 1e-5) + 1e-6 * (off.length() + self.reach);
@@ -101,29 +103,29 @@ impl Cursor {
         self.y.push(off.y as f32);
         self.z.push(off.z as f32);
         self.radius2.push(r2);
-        self.ids.push(id);
+        self.slots.push(slot);
     }
 
     /// Pads the candidate arrays to whole lanes with spheres that contain nothing.
     pub(crate) fn seal(&mut self) {
-        while self.ids.len() % LANES != 0 {
+        while self.slots.len() % LANES != 0 {
             self.x.push(0.0);
             self.y.push(0.0);
             self.z.push(0.0);
             self.radius2.push(-1.0);
-            self.ids.push(u32::MAX);
+            self.slots.push(0);
         }
     }
 
-    /// Calls `f(id)` for every remembered record whose sphere contains `p`.
+    /// Calls `f(slot)` for every remembered record whose sphere contains `p`.
     #[inline]
-    pub(crate) fn candidates(&self, p: DVec3, mut f: impl FnMut(u32)) {
+    pub(crate) fn candidates(&self, p: DVec3, mut f: impl FnMut(usize)) {
         let q = (p - self.anchor).as_vec3();
         let q = [q.x, q.y, q.z];
         let lane = |a: &[f32], base: usize| -> [f32; LANES] {
             a[base..base + LANES].try_into().unwrap_or([0.0; LANES])
         };
-        for base in (0..self.ids.len()).step_by(LANES) {
+        for base in (0..self.slots.len()).step_by(LANES) {
             let mut mask = hits(
                 lane(&self.x, base),
                 lane(&self.y, base),
@@ -132,7 +134,7 @@ impl Cursor {
                 q,
             );
             while mask != 0 {
-                f(self.ids[base + mask.trailing_zeros() as usize]);
+                f(self.slots[base + mask.trailing_zeros() as usize]);
                 mask &= mask - 1;
             }
         }

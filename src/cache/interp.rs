@@ -87,13 +87,13 @@ impl TryFrom<u32> for Interpolation {
 pub(crate) struct Kernel {
     pub interpolation: Interpolation,
     pub domain: Domain,
-    cos_max: f64,
-    inv_a: f64,
+    pub(crate) cos_max: f64,
+    pub(crate) inv_a: f64,
 }
 
 /// Floor of t + ρ in Ward's weights: at a record's exact position and normal the weight is
 /// 10⁹ (finite) instead of infinite, so that record dominates as the limit demands.
-const WARD_FLOOR: f64 = 1e-9;
+pub(crate) const WARD_FLOOR: f64 = 1e-9;
 
 /// Largest exponent accepted in log-space extrapolation: keeps exp() a finite f32.
 const LOG_EXPONENT_MAX: f64 = 88.0;
@@ -196,6 +196,55 @@ pub(crate) fn blend(
     if kernel.interpolation == Interpolation::Log {
         return blend_log(kernel, used, weight_sum, x, n, out);
     }
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("f16c") && std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU has AVX and F16C (checked just above).
+        return unsafe { blend_f16c(kernel, used, weight_sum, x, n, out) };
+    }
+    blend_linear(kernel, used, weight_sum, x, n, out, channel_delta)
+}
+
+/// [`blend_linear`] with the binary16 components converted by F16C: one instruction instead of
+/// the bit manipulation of [`channel_delta`], the same exact values and the same additions, so
+/// the result is bit for bit the portable one.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx,f16c")]
+unsafe fn blend_f16c(
+    kernel: &Kernel,
+    used: &[Used<'_>],
+    weight_sum: f64,
+    x: DVec3,
+    n: DVec3,
+    out: &mut [f32],
+) {
+    blend_linear(kernel, used, weight_sum, x, n, out, |ch, q| {
+        use std::arch::x86_64::*;
+        // SAFETY: `Channel` is 16 bytes (value, then six binary16 components); AVX and F16C are
+        // enabled on this function.
+        unsafe {
+            let raw = _mm_loadu_si128(ch as *const Channel as *const __m128i);
+            // the value's two halves become +0 (as bits they could read as NaN halves)
+            let raw = _mm_and_si128(raw, _mm_set_epi32(-1, -1, -1, 0));
+            let p = _mm256_mul_ps(_mm256_cvtph_ps(raw), _mm256_loadu_ps(q.as_ptr()));
+            let s = _mm_add_ps(_mm256_castps256_ps128(p), _mm256_extractf128_ps(p, 1));
+            let t = _mm_add_ps(s, _mm_movehl_ps(s, s));
+            _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)))
+        }
+    })
+}
+
+/// Linear-space blend; `delta(ch, q)` is Σₖ qₖ hₖ over the channel's six binary16 components
+/// with `q` = (0, 0, q₀, …, q₅).
+#[inline(always)]
+fn blend_linear(
+    kernel: &Kernel,
+    used: &[Used<'_>],
+    weight_sum: f64,
+    x: DVec3,
+    n: DVec3,
+    out: &mut [f32],
+    delta: impl Fn(&Channel, &[f32; 8]) -> f32,
+) {
     let surface = kernel.domain == Domain::Surface;
     let mut stack = [0.0f64; 16];
     let mut heap = Vec::new();
@@ -214,10 +263,20 @@ pub(crate) fn blend(
         } else {
             DVec3::ZERO
         };
-        let q = [dx.x, dx.y, dx.z, dn.x, dn.y, dn.z].map(|v| v.clamp(-F32_MAX, F32_MAX) as f32);
+        let c = |v: f64| v.clamp(-F32_MAX, F32_MAX) as f32;
+        let q = [
+            0.0,
+            0.0,
+            c(dx.x),
+            c(dx.y),
+            c(dx.z),
+            c(dn.x),
+            c(dn.y),
+            c(dn.z),
+        ];
         let w = u.weight;
         for (a, ch) in acc.iter_mut().zip(u.channels) {
-            *a += w * (ch.value as f64 + channel_delta(ch, &q) as f64);
+            *a += w * (ch.value as f64 + delta(ch, &q) as f64);
         }
     }
     let inv_sum = 1.0 / weight_sum;
@@ -233,7 +292,7 @@ const F32_MAX: f64 = f32::MAX as f64;
 /// only saturate, never become NaN). The portable and SSE2 versions round identically: lanes
 /// (0, q₀h₀, …) are added as two four-lane halves, then pairwise.
 #[inline(always)]
-fn channel_delta(ch: &Channel, q: &[f32; 6]) -> f32 {
+fn channel_delta(ch: &Channel, q: &[f32; 8]) -> f32 {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::*;
@@ -253,8 +312,8 @@ fn channel_delta(ch: &Channel, q: &[f32; 6]) -> f32 {
             let lo = decode(_mm_unpacklo_epi16(raw, zero)); // value halves, g0, g1
             let hi = decode(_mm_unpackhi_epi16(raw, zero)); // g2, r0, r1, r2
             let s = _mm_add_ps(
-                _mm_mul_ps(lo, _mm_setr_ps(0.0, 0.0, q[0], q[1])),
-                _mm_mul_ps(hi, _mm_setr_ps(q[2], q[3], q[4], q[5])),
+                _mm_mul_ps(lo, _mm_loadu_ps(q.as_ptr())),
+                _mm_mul_ps(hi, _mm_loadu_ps(q.as_ptr().add(4))),
             );
             let t = _mm_add_ps(s, _mm_movehl_ps(s, s));
             _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)))
@@ -263,12 +322,12 @@ fn channel_delta(ch: &Channel, q: &[f32; 6]) -> f32 {
     #[cfg(not(target_arch = "x86_64"))]
     {
         let h = |b: u16| f16_unscaled(b) as f32 * REBIAS_F32;
-        let lo = [0.0, 0.0, q[0] * h(ch.gradient[0]), q[1] * h(ch.gradient[1])];
+        let lo = [0.0, 0.0, q[2] * h(ch.gradient[0]), q[3] * h(ch.gradient[1])];
         let hi = [
-            q[2] * h(ch.gradient[2]),
-            q[3] * h(ch.rotation[0]),
-            q[4] * h(ch.rotation[1]),
-            q[5] * h(ch.rotation[2]),
+            q[4] * h(ch.gradient[2]),
+            q[5] * h(ch.rotation[0]),
+            q[6] * h(ch.rotation[1]),
+            q[7] * h(ch.rotation[2]),
         ];
         let s = [lo[0] + hi[0], lo[1] + hi[1], lo[2] + hi[2], lo[3] + hi[3]];
         (s[0] + s[2]) + (s[1] + s[3])
@@ -330,6 +389,80 @@ fn blend_log(
                 linear[c] * inv_sum
             };
             *o = value.clamp(-(f32::MAX as f64), f32::MAX as f64) as f32;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The dispatched blend (F16C where the CPU has it) equals the bit-manipulation decode bit for
+    /// bit, over random binary16 components (normal, subnormal, zero, ±1) and value bits that
+    /// read as NaN or infinite halves.
+    #[test]
+    fn f16c_blend_equals_portable_blend() {
+        let mut state = 0x1234_5678_9abc_def0u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 33) as u32
+        };
+        let half = |r: u32| -> u16 {
+            match r % 5 {
+                0 => 0x3c00 | ((r >> 8) as u16 & 0x8000), // ±1
+                1 => (r >> 4) as u16 & 0x83ff,            // subnormal
+                2 => 0,
+                _ => ((r >> 4) as u16 & 0x83ff) | (((r >> 16) % 15) as u16) << 10,
+            }
+        };
+        let kernel = Kernel::new(Interpolation::Ward, Domain::Surface, 0.5).unwrap();
+        for round in 0..200 {
+            let heads: Vec<Head> = (0..6)
+                .map(|k| Head {
+                    position: [k as f64 * 0.1, -0.05 * k as f64, 0.01],
+                    rotation: [0.0, 0.0, 0.0, 1.0],
+                    radii: [1.0; 3],
+                    gradient_scale: (next() % 1000) as f32 * 0.01,
+                    rotation_scale: (next() % 1000) as f32 * 0.001,
+                    reserved: 0,
+                })
+                .collect();
+            let channels: Vec<Channel> = (0..6 * 5)
+                .map(|_| Channel {
+                    value: if round % 3 == 0 {
+                        f32::from_bits(0x7c00_7e00 | next() & 0x0001_0001) // halves read as NaN / Inf
+                    } else {
+                        (next() % 1000) as f32 * 0.01
+                    },
+                    gradient: [half(next()), half(next()), half(next())],
+                    rotation: [half(next()), half(next()), half(next())],
+                })
+                .collect();
+            let used: Vec<Used> = heads
+                .iter()
+                .enumerate()
+                .map(|(k, h)| Used {
+                    order: k as u64,
+                    weight: 0.5 + k as f64,
+                    normal: DVec3::new(0.1 * k as f64, 0.2, 1.0).normalize(),
+                    head: h,
+                    channels: &channels[k * 5..k * 5 + 5],
+                })
+                .collect();
+            let x = DVec3::new(0.3, 0.2, 0.0);
+            let n = DVec3::new(0.05, -0.1, 1.0).normalize();
+            let sum: f64 = used.iter().map(|u| u.weight).sum();
+            let (mut fast, mut portable) = ([0.0f32; 5], [0.0f32; 5]);
+            blend(&kernel, &used, sum, x, n, &mut fast);
+            blend_linear(&kernel, &used, sum, x, n, &mut portable, channel_delta);
+            assert_eq!(
+                fast.map(f32::to_bits),
+                portable.map(f32::to_bits),
+                "round {round}"
+            );
+            assert!(fast.iter().all(|v| v.is_finite()));
         }
     }
 }

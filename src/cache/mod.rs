@@ -81,6 +81,7 @@ mod persist;
 mod record;
 mod store;
 mod value;
+mod weigh;
 
 use std::marker::PhantomData;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -97,7 +98,7 @@ pub use record::{
 pub use value::CacheValue;
 
 use crate::error::{ensure_finite3, Error, Result};
-use interp::{Kernel, Used};
+use interp::Kernel;
 pub(crate) use record::RecordInput;
 use record::{Channel, Head};
 
@@ -295,14 +296,24 @@ impl<V: CacheValue> Cache<V> {
     /// Record `id` (< len, published).
     #[inline]
     fn stored(&self, id: u32) -> (&Head, &[Channel]) {
-        let slot = self.records.slot(id as usize);
-        let ptr = slot.as_ptr();
+        // SAFETY: the slot of a published id.
+        unsafe { self.stored_at(self.records.slot_ptr(id as usize) as usize) }
+    }
+
+    /// The record in the slot at address `slot`.
+    ///
+    /// # Safety
+    /// `slot` is the [`store::Chunks::slot_ptr`] of a published record of this cache, taken
+    /// since its last [`Cache::compact`].
+    #[inline(always)]
+    unsafe fn stored_at(&self, slot: usize) -> (&Head, &[Channel]) {
+        let ptr = slot as *const u8;
         // SAFETY: a slot is `words` u64s (8-aligned) holding a `Head` followed by `channels`
         // `Channel`s (4-aligned, at byte HEAD_BYTES), written before the id was published.
         unsafe {
             let head = &*(ptr as *const Head);
             let chans = std::slice::from_raw_parts(
-                (ptr as *const u8).add(HEAD_BYTES) as *const Channel,
+                ptr.add(HEAD_BYTES) as *const Channel,
                 self.config.channels,
             );
             (head, chans)
@@ -408,12 +419,11 @@ impl<V: CacheValue> Cache<V> {
     ) -> Result<(f64, usize)> {
         let n = self.check_lookup(position, normal, out.len())?;
         // candidates first (their records prefetched), then the records: their misses overlap
-        let mut ids: SmallVec<[u32; 32]> = SmallVec::new();
+        let mut slots: SmallVec<[usize; 32]> = SmallVec::new();
         self.index.query(position, |id| {
-            self.prefetch_record(id);
-            ids.push(id);
+            slots.push(self.prefetch_record(self.records.slot_ptr(id as usize) as usize));
         });
-        self.interpolate(position, n, &ids, out)
+        self.interpolate(position, n, &slots, out)
     }
 
     /// [`Cache::lookup_into`] for spatially coherent queries: `cursor` (one per thread, see
@@ -450,18 +460,15 @@ impl<V: CacheValue> Cache<V> {
                 });
                 cursor.reset(source, position, reach);
                 for (_, id, c, r) in found {
-                    cursor.push(id, c, r);
+                    cursor.push(self.records.slot_ptr(id as usize) as usize, c, r);
                 }
                 cursor.seal();
             }
             cursor::Plan::Remembered => {}
         }
-        let mut ids: SmallVec<[u32; 32]> = SmallVec::new();
-        cursor.candidates(position, |id| {
-            self.prefetch_record(id);
-            ids.push(id);
-        });
-        self.interpolate(position, n, &ids, out)
+        let mut slots: SmallVec<[usize; 32]> = SmallVec::new();
+        cursor.candidates(position, |slot| slots.push(self.prefetch_record(slot)));
+        self.interpolate(position, n, &slots, out)
     }
 
     /// [`Cache::lookup`] for spatially coherent queries (see [`Cache::lookup_into_with`]).
@@ -474,58 +481,44 @@ impl<V: CacheValue> Cache<V> {
         self.lookup_via(|out| self.lookup_into_with(cursor, position, normal, out))
     }
 
+    /// Prefetches the record in the slot at address `slot`, and returns `slot`.
     #[inline(always)]
-    fn prefetch_record(&self, id: u32) {
-        let slot = self.records.slot_ptr(id as usize) as *const u8;
-        index::prefetch(slot);
-        index::prefetch(slot.wrapping_add(HEAD_BYTES)); // the first channels
+    fn prefetch_record(&self, slot: usize) -> usize {
+        let ptr = slot as *const u8;
+        index::prefetch(ptr);
+        index::prefetch(ptr.wrapping_add(HEAD_BYTES)); // the first channels
+        slot
     }
 
-    /// The weighted extrapolation of the records among `ids` (a superset of those covering
-    /// `position`; `n` the unit query normal) into `out`.
+    /// The weighted extrapolation of the records in `slots` (slot addresses of records that are a
+    /// superset of those covering `position`; `n` the unit query normal) into `out`.
     fn interpolate(
         &self,
         position: DVec3,
         n: DVec3,
-        ids: &[u32],
+        slots: &[usize],
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
-        let surface = self.config.domain == Domain::Surface;
-        let mut used: SmallVec<[Used<'_>; 16]> = SmallVec::new();
-        for &id in ids {
-            let (head, channels) = self.stored(id);
-            // isotropic records (the common case) need only the normal, not the whole frame
-            let (t, normal) = if head.is_isotropic() {
-                let t = (position - head.position()).length() / head.radii[0] as f64;
-                (t, if surface { head.axis2() } else { DVec3::ZERO })
-            } else {
-                let frame = head.frame();
-                (head.normalized_distance(&frame, position), frame.0[2])
-            };
-            let cos_n = if surface { normal.dot(n) } else { 1.0 };
-            let weight = self.kernel.weight(t, cos_n);
-            if weight > 0.0 {
-                used.push(Used {
-                    order: head.position[0].to_bits(),
-                    weight,
-                    normal,
-                    head,
-                    channels,
-                });
-            }
-        }
+        let mut used = weigh::UsedRecords::new();
+        // SAFETY: every slot was taken from this cache's storage during this lookup or by a
+        // cursor whose source (identity, generation, length) matches this cache.
+        let stored = |slot: usize| unsafe { self.stored_at(slot) };
+        weigh::weigh(&self.kernel, position, n, slots, stored, &mut used);
         if used.is_empty() {
             return Err(Error::NotFound(format!(
                 "no cache record covers {position}"
             )));
         }
         // the content order makes the sum independent of insertion order and thread timing
-        used.sort_unstable_by(|a, b| match a.order.cmp(&b.order) {
-            std::cmp::Ordering::Equal => {
-                record::content_order((a.head, a.channels), (b.head, b.channels))
-            }
-            unequal => unequal,
-        });
+        // (through a cursor the records already arrive in it: one pass checks that)
+        if !used.windows(2).all(|w| w[0].order < w[1].order) {
+            used.sort_unstable_by(|a, b| match a.order.cmp(&b.order) {
+                std::cmp::Ordering::Equal => {
+                    record::content_order((a.head, a.channels), (b.head, b.channels))
+                }
+                unequal => unequal,
+            });
+        }
         let weight_sum: f64 = used.iter().map(|u| u.weight).sum();
         if !(weight_sum > 0.0 && weight_sum.is_finite()) {
             return Err(Error::NotFound(format!(

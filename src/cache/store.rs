@@ -79,13 +79,6 @@ impl<T: Zeroable> Chunks<T> {
         unsafe { base.add(off * self.slot) }
     }
 
-    /// The item `index` as a shared slice (the item must have been published to this thread).
-    #[inline]
-    pub(crate) fn slot(&self, index: usize) -> &[T] {
-        // SAFETY: see the type's contract: a published item is never written again.
-        unsafe { std::slice::from_raw_parts(self.slot_ptr(index), self.slot) }
-    }
-
     /// Bytes allocated so far.
     pub(crate) fn allocated_bytes(&self) -> usize {
         (0..MAX_CHUNKS)
@@ -136,8 +129,10 @@ mod tests {
             }
         }
         for i in 0..5000usize {
+            // SAFETY: item i has 3 initialized u64s.
+            let slot = unsafe { std::slice::from_raw_parts(c.slot_ptr(i), 3) };
             assert_eq!(
-                c.slot(i),
+                slot,
                 &[(i * 3) as u64, (i * 3 + 1) as u64, (i * 3 + 2) as u64]
             );
         }

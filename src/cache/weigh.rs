@@ -1,0 +1,315 @@
+//! The first step of a lookup: the weight of every candidate record at the query (0 for those
+//! that do not cover it), and the records with a positive weight.
+//!
+//! The candidates of a lookup are few (about eight) but each needs a distance, a normal decoded
+//! from the record's quaternion and the kernel's weight: two square roots and three divisions. On
+//! x86-64 with AVX, four candidates are weighed at once; every lane performs the same IEEE
+//! operations in the same order as the scalar code (no fused multiply-add), so the weights are
+//! bit for bit those of [`record_weight`] and results do not depend on the CPU.
+
+use glam::DVec3;
+use smallvec::SmallVec;
+
+use super::interp::{Interpolation, Kernel, Used, WARD_FLOOR};
+use super::record::{Channel, Domain, Head};
+
+/// The candidates with a positive weight, in candidate order.
+pub(crate) type UsedRecords<'a> = SmallVec<[Used<'a>; 16]>;
+
+/// Weight and normal of one record at query `x` with unit normal `n` (surface domain; ignored in
+/// volumes). The normal is the record's third frame axis (zero for isotropic volume records).
+#[inline]
+pub(crate) fn record_weight(kernel: &Kernel, head: &Head, x: DVec3, n: DVec3) -> (f64, DVec3) {
+    let surface = kernel.domain == Domain::Surface;
+    // isotropic records (the common case) need only the normal, not the whole frame
+    let (t, normal) = if head.is_isotropic() {
+        let t = (x - head.position()).length() / head.radii[0] as f64;
+        (t, if surface { head.axis2() } else { DVec3::ZERO })
+    } else {
+        let frame = head.frame();
+        (head.normalized_distance(&frame, x), frame.0[2])
+    };
+    let cos_n = if surface { normal.dot(n) } else { 1.0 };
+    (kernel.weight(t, cos_n), normal)
+}
+
+/// Appends to `used` every record among `ids` (slot addresses, resolved by `stored`) with a positive weight at
+/// (`x`, `n`).
+#[inline(always)]
+pub(crate) fn weigh<'a>(
+    kernel: &Kernel,
+    x: DVec3,
+    n: DVec3,
+    ids: &[usize],
+    stored: impl Fn(usize) -> (&'a Head, &'a [Channel]),
+    used: &mut UsedRecords<'a>,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if ids.len() >= 2 && std::arch::is_x86_feature_detected!("avx") {
+        // SAFETY: the CPU has AVX (checked just above).
+        return unsafe { weigh_avx(kernel, x, n, ids, stored, used) };
+    }
+    for &id in ids {
+        let (head, channels) = stored(id);
+        push(used, record_weight(kernel, head, x, n), head, channels);
+    }
+}
+
+#[inline(always)]
+fn push<'a>(
+    used: &mut UsedRecords<'a>,
+    (weight, normal): (f64, DVec3),
+    head: &'a Head,
+    channels: &'a [Channel],
+) {
+    if weight > 0.0 {
+        used.push(Used {
+            order: head.position[0].to_bits(),
+            weight,
+            normal,
+            head,
+            channels,
+        });
+    }
+}
+
+/// [`weigh`] four candidates at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn weigh_avx<'a>(
+    kernel: &Kernel,
+    x: DVec3,
+    n: DVec3,
+    ids: &[usize],
+    stored: impl Fn(usize) -> (&'a Head, &'a [Channel]),
+    used: &mut UsedRecords<'a>,
+) {
+    for group in ids.chunks(4) {
+        let last = group.len() - 1;
+        let records: [(&Head, &[Channel]); 4] = std::array::from_fn(|k| stored(group[k.min(last)]));
+        let heads = records.map(|r| r.0);
+        // SAFETY: AVX is enabled on this function.
+        let (weights, normals) = unsafe { weigh4(kernel, x, n, heads) };
+        for (k, &(head, channels)) in records.iter().enumerate().take(group.len()) {
+            let lane = if head.is_isotropic() {
+                (weights[k], normals[k])
+            } else {
+                record_weight(kernel, head, x, n)
+            };
+            push(used, lane, head, channels);
+        }
+    }
+}
+
+/// Weights and normals of four isotropic records (lanes of anisotropic records are computed, and
+/// replaced by the caller). Same operations, in the same order, as [`record_weight`].
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn weigh4(kernel: &Kernel, x: DVec3, n: DVec3, h: [&Head; 4]) -> ([f64; 4], [DVec3; 4]) {
+    use std::arch::x86_64::*;
+    let surface = kernel.domain == Domain::Surface;
+    let lanes = |f: &dyn Fn(&Head) -> f64| _mm256_setr_pd(f(h[0]), f(h[1]), f(h[2]), f(h[3]));
+    let dx = _mm256_sub_pd(_mm256_set1_pd(x.x), lanes(&|h| h.position[0]));
+    let dy = _mm256_sub_pd(_mm256_set1_pd(x.y), lanes(&|h| h.position[1]));
+    let dz = _mm256_sub_pd(_mm256_set1_pd(x.z), lanes(&|h| h.position[2]));
+    let d2 = _mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
+        _mm256_mul_pd(dz, dz),
+    );
+    let radius = _mm256_cvtps_pd(_mm_setr_ps(
+        h[0].radii[0],
+        h[1].radii[0],
+        h[2].radii[0],
+        h[3].radii[0],
+    ));
+    let t = _mm256_div_pd(_mm256_sqrt_pd(d2), radius);
+    let one = _mm256_set1_pd(1.0);
+    let zero = _mm256_setzero_pd();
+    let (mut ax, mut ay, mut az, cos_n) = (zero, zero, zero, one);
+    let cos_n = if surface {
+        // the quaternions, one per row, transposed to one component per vector
+        let q = h.map(|h| _mm_loadu_ps(h.rotation.as_ptr()));
+        let lo01 = _mm_unpacklo_ps(q[0], q[1]); // x0 x1 y0 y1
+        let lo23 = _mm_unpacklo_ps(q[2], q[3]);
+        let hi01 = _mm_unpackhi_ps(q[0], q[1]); // z0 z1 w0 w1
+        let hi23 = _mm_unpackhi_ps(q[2], q[3]);
+        let qx = _mm256_cvtps_pd(_mm_movelh_ps(lo01, lo23));
+        let qy = _mm256_cvtps_pd(_mm_movehl_ps(lo23, lo01));
+        let qz = _mm256_cvtps_pd(_mm_movelh_ps(hi01, hi23));
+        let qw = _mm256_cvtps_pd(_mm_movehl_ps(hi23, hi01));
+        let (xx, yy) = (_mm256_mul_pd(qx, qx), _mm256_mul_pd(qy, qy));
+        let xx_yy = _mm256_add_pd(xx, yy);
+        let norm2 = _mm256_add_pd(
+            _mm256_add_pd(xx_yy, _mm256_mul_pd(qz, qz)),
+            _mm256_mul_pd(qw, qw),
+        );
+        let s = _mm256_div_pd(_mm256_set1_pd(2.0), norm2);
+        ax = _mm256_mul_pd(
+            s,
+            _mm256_add_pd(_mm256_mul_pd(qx, qz), _mm256_mul_pd(qw, qy)),
+        );
+        ay = _mm256_mul_pd(
+            s,
+            _mm256_sub_pd(_mm256_mul_pd(qy, qz), _mm256_mul_pd(qw, qx)),
+        );
+        az = _mm256_sub_pd(one, _mm256_mul_pd(s, xx_yy));
+        _mm256_add_pd(
+            _mm256_add_pd(
+                _mm256_mul_pd(ax, _mm256_set1_pd(n.x)),
+                _mm256_mul_pd(ay, _mm256_set1_pd(n.y)),
+            ),
+            _mm256_mul_pd(az, _mm256_set1_pd(n.z)),
+        )
+    } else {
+        cos_n
+    };
+    let weight = match kernel.interpolation {
+        Interpolation::Ward | Interpolation::WardClassic | Interpolation::WardTabellion => {
+            let rho = if surface {
+                _mm256_mul_pd(
+                    _mm256_sqrt_pd(_mm256_max_pd(_mm256_sub_pd(one, cos_n), zero)),
+                    _mm256_set1_pd(kernel.inv_a),
+                )
+            } else {
+                zero
+            };
+            let s = _mm256_add_pd(t, rho);
+            let covers = _mm256_cmp_pd::<_CMP_LT_OQ>(s, one);
+            let inv = || _mm256_div_pd(one, _mm256_max_pd(s, _mm256_set1_pd(WARD_FLOOR)));
+            let w = match kernel.interpolation {
+                Interpolation::Ward => _mm256_sub_pd(inv(), one),
+                Interpolation::WardClassic => inv(),
+                _ => _mm256_sub_pd(one, s),
+            };
+            _mm256_and_pd(w, covers)
+        }
+        Interpolation::Tent | Interpolation::Cubic | Interpolation::Log => {
+            let mut covers = _mm256_cmp_pd::<_CMP_LT_OQ>(t, one);
+            let kn = if surface {
+                let cos_max = _mm256_set1_pd(kernel.cos_max);
+                covers = _mm256_and_pd(covers, _mm256_cmp_pd::<_CMP_GT_OQ>(cos_n, cos_max));
+                _mm256_min_pd(
+                    _mm256_div_pd(_mm256_sub_pd(cos_n, cos_max), _mm256_sub_pd(one, cos_max)),
+                    one,
+                )
+            } else {
+                one
+            };
+            let d = _mm256_sub_pd(one, t);
+            let kx = if kernel.interpolation == Interpolation::Tent {
+                d
+            } else {
+                _mm256_mul_pd(
+                    _mm256_mul_pd(d, d),
+                    _mm256_sub_pd(_mm256_set1_pd(3.0), _mm256_mul_pd(_mm256_set1_pd(2.0), d)),
+                )
+            };
+            _mm256_and_pd(_mm256_mul_pd(kx, kn), covers)
+        }
+    };
+    let store = |v: __m256d| {
+        let mut a = [0.0f64; 4];
+        _mm256_storeu_pd(a.as_mut_ptr(), v);
+        a
+    };
+    let (ax, ay, az) = (store(ax), store(ay), store(az));
+    (
+        store(weight),
+        std::array::from_fn(|k| DVec3::new(ax[k], ay[k], az[k])),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cache::record::Frame;
+
+    fn head(seed: u64, isotropic: bool) -> Head {
+        let u = |k: u64| {
+            let mut z = seed.wrapping_mul(0x9e3779b97f4a7c15).wrapping_add(k);
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58476d1ce4e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d049bb133111eb);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let q = glam::DQuat::from_axis_angle(
+            DVec3::new(u(0) - 0.5, u(1) - 0.5, u(2) - 0.5).normalize(),
+            u(3) * 0.6,
+        );
+        let r = 0.5 + u(4) as f32;
+        Head {
+            position: [u(5) - 0.5, u(6) - 0.5, u(7) * 0.1],
+            rotation: [q.x as f32, q.y as f32, q.z as f32, q.w as f32],
+            radii: if isotropic {
+                [r; 3]
+            } else {
+                [r, r * 0.6, r * 0.6]
+            },
+            ..Head::default()
+        }
+    }
+
+    /// The four-lane weights equal the scalar ones bit for bit, for every kernel and domain,
+    /// including records that do not cover the query and anisotropic ones.
+    #[test]
+    fn vector_weights_equal_scalar_weights() {
+        let heads: Vec<Head> = (0..64).map(|s| head(s, s % 5 != 3)).collect();
+        let channels: Vec<Channel> = vec![Channel::default(); 64];
+        let ids: Vec<usize> = (0..heads.len()).collect();
+        let n = Frame::from_quaternion(heads[0].rotation).0[2];
+        for domain in [Domain::Surface, Domain::Volume] {
+            for interpolation in [
+                Interpolation::Ward,
+                Interpolation::WardClassic,
+                Interpolation::WardTabellion,
+                Interpolation::Tent,
+                Interpolation::Cubic,
+                Interpolation::Log,
+            ] {
+                let kernel = Kernel::new(interpolation, domain, 0.5).unwrap();
+                for x in [
+                    DVec3::ZERO,
+                    DVec3::new(0.2, -0.1, 0.05),
+                    DVec3::new(0.9, 0.9, 0.0),
+                ] {
+                    let mut fast = UsedRecords::new();
+                    weigh(
+                        &kernel,
+                        x,
+                        n,
+                        &ids,
+                        |i| (&heads[i], &channels[i..i + 1]),
+                        &mut fast,
+                    );
+                    let slow: Vec<(u64, u64, [u64; 3])> = heads
+                        .iter()
+                        .map(|h| (h, record_weight(&kernel, h, x, n)))
+                        .filter(|(_, (w, _))| *w > 0.0)
+                        .map(|(h, (w, nn))| {
+                            (
+                                h.position[0].to_bits(),
+                                w.to_bits(),
+                                nn.to_array().map(f64::to_bits),
+                            )
+                        })
+                        .collect();
+                    let fast: Vec<(u64, u64, [u64; 3])> = fast
+                        .iter()
+                        .map(|u| {
+                            (
+                                u.order,
+                                u.weight.to_bits(),
+                                u.normal.to_array().map(f64::to_bits),
+                            )
+                        })
+                        .collect();
+                    assert!(
+                        !slow.is_empty(),
+                        "{domain:?} {interpolation:?} {x}: nothing covered"
+                    );
+                    assert_eq!(fast, slow, "{domain:?} {interpolation:?} at {x}");
+                }
+            }
+        }
+    }
+}
