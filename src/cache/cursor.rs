@@ -2,10 +2,11 @@
 //!
 //! A renderer's successive lookups are close to each other (pixels of a tile, steps along a ray).
 //! A [`Cursor`] remembers the records whose bounding spheres meet a small ball around an anchor
-//! point; while queries stay in that ball and the cache is unchanged, a lookup tests those few
-//! spheres (eight at a time) instead of probing the index. The records found, their order and so
-//! every result are exactly those of [`Cache::lookup`](super::Cache::lookup): a record that covers
-//! a query point in the ball is always among the remembered ones.
+//! point, already decoded (position, radii, frame); while queries stay in that ball and the cache
+//! is unchanged, a lookup weighs those few records (four at a time) instead of probing the index
+//! and decoding each candidate. The records used, their order and so every result are exactly
+//! those of [`Cache::lookup`](super::Cache::lookup): a record that covers a query point in the ball
+//! is always among the remembered ones, and its weight is computed with the same operations.
 //!
 //! The cursor re-anchors when a query leaves the ball, the cache has grown since it anchored, or
 //! it is used with another cache (or after [`Cache::compact`](super::Cache::compact)). While a
@@ -14,7 +15,33 @@
 
 use glam::DVec3;
 
-use super::index::{hits, LANES};
+use super::interp::{Kernel, Used};
+use super::record::{Channel, Domain, Head};
+use super::weigh::{record_weight, UsedRecords};
+
+/// Records per group (the lanes of the vector code).
+const GROUP: usize = 4;
+
+/// Up to [`GROUP`] remembered records, decoded, one lane each (structure of arrays).
+#[derive(Debug, Clone, Copy, Default)]
+struct Group {
+    position: [[f64; GROUP]; 3],
+    /// Isotropic records: the radius.
+    radius: [f64; GROUP],
+    /// The square of a radius slightly larger than the bounding radius: a lane whose squared
+    /// distance exceeds it cannot cover the query (lets a group skip its square roots and
+    /// divisions).
+    reach2: [f64; GROUP],
+    /// The normal the weight uses (the frame's third axis; zero for isotropic volume records).
+    normal: [[f64; GROUP]; 3],
+    /// Anisotropic records: the first two frame axes and the three radii.
+    axes: [[[f64; GROUP]; 3]; 2],
+    radii: [[f64; GROUP]; 3],
+    /// Bit k: lane k holds an anisotropic record.
+    anisotropic: u8,
+    slots: [usize; GROUP],
+    len: u8,
+}
 
 /// Per-thread state that makes coherent lookups cheaper (see the [module docs](self)).
 /// Create one per thread with [`Cursor::new`] and pass it to
@@ -27,14 +54,10 @@ pub struct Cursor {
     last_len: usize,
     anchor: DVec3,
     reach: f64,
-    /// Candidate spheres relative to the anchor, `f32`, padded to whole lanes with empty spheres.
-    x: Vec<f32>,
-    y: Vec<f32>,
-    z: Vec<f32>,
-    radius2: Vec<f32>,
-    /// The remembered records' slot addresses (valid while `source` matches the cache: records
-    /// move only in `Cache::compact`, which changes the generation).
-    slots: Vec<usize>,
+    /// The remembered records in content order, decoded; their slot addresses stay valid while
+    /// `source` matches the cache (records move only in `Cache::compact`, which changes the
+    /// generation).
+    groups: Vec<Group>,
     /// How many lookups each plan served (remembered, anchored, plain): for tests and tuning.
     pub(crate) served: [usize; 3],
 }
@@ -83,59 +106,179 @@ impl Cursor {
         self.source = Some(source);
         self.anchor = anchor;
         self.reach = reach;
-        self.x.clear();
-        self.y.clear();
-        self.z.clear();
-        self.radius2.clear();
-        self.slots.clear();
+        self.groups.clear();
     }
 
-    /// Remembers the record at slot address `slot` with listed bounding sphere (center, radius).
-    pub(crate) fn push(&mut self, slot: usize, center: DVec3, radius: f64) {
-        let off = center - self.anchor;
-        // conservative in f32: covers the rounding of the offsets, of the query and of the test
-        let r = radius * (1.0 + 1e-5) + 1e-6 * (off.length() + self.reach);
-        let mut r2 = (r * r) as f32;
-        if (r2 as f64) < r * r {
-            r2 = f32::from_bits(r2.to_bits() + 1);
+    /// Remembers `head`, the record at slot address `slot` (records must come in content order).
+    pub(crate) fn push(&mut self, domain: Domain, head: &Head, slot: usize) {
+        if !matches!(self.groups.last(), Some(g) if (g.len as usize) < GROUP) {
+            self.groups.push(Group::default());
         }
-        self.x.push(off.x as f32);
-        self.y.push(off.y as f32);
-        self.z.push(off.z as f32);
-        self.radius2.push(r2);
-        self.slots.push(slot);
-    }
-
-    /// Pads the candidate arrays to whole lanes with spheres that contain nothing.
-    pub(crate) fn seal(&mut self) {
-        while self.slots.len() % LANES != 0 {
-            self.x.push(0.0);
-            self.y.push(0.0);
-            self.z.push(0.0);
-            self.radius2.push(-1.0);
-            self.slots.push(0);
-        }
-    }
-
-    /// Calls `f(slot)` for every remembered record whose sphere contains `p`.
-    #[inline]
-    pub(crate) fn candidates(&self, p: DVec3, mut f: impl FnMut(usize)) {
-        let q = (p - self.anchor).as_vec3();
-        let q = [q.x, q.y, q.z];
-        let lane = |a: &[f32], base: usize| -> [f32; LANES] {
-            a[base..base + LANES].try_into().unwrap_or([0.0; LANES])
+        let Some(g) = self.groups.last_mut() else {
+            return;
         };
-        for base in (0..self.slots.len()).step_by(LANES) {
-            let mut mask = hits(
-                lane(&self.x, base),
-                lane(&self.y, base),
-                lane(&self.z, base),
-                lane(&self.radius2, base),
-                q,
-            );
-            while mask != 0 {
-                f(self.slots[base + mask.trailing_zeros() as usize]);
-                mask &= mask - 1;
+        let k = g.len as usize;
+        g.len += 1;
+        g.slots[k] = slot;
+        for i in 0..3 {
+            g.position[i][k] = head.position[i];
+        }
+        g.reach2[k] = (head.max_radius() * (1.0 + 1e-9)).powi(2);
+        // exactly what `record_weight` computes from the stored record
+        let normal = if head.is_isotropic() {
+            g.radius[k] = head.radii[0] as f64;
+            if domain == Domain::Surface {
+                head.axis2()
+            } else {
+                DVec3::ZERO
+            }
+        } else {
+            g.anisotropic |= 1 << k;
+            let frame = head.frame();
+            for i in 0..3 {
+                g.axes[0][i][k] = frame.0[0][i];
+                g.axes[1][i][k] = frame.0[1][i];
+                g.radii[i][k] = head.radii[i] as f64;
+            }
+            frame.0[2]
+        };
+        for i in 0..3 {
+            g.normal[i][k] = normal[i];
+        }
+    }
+
+    /// Fills the unused lanes of the last group with records that cover nothing.
+    pub(crate) fn seal(&mut self) {
+        if let Some(g) = self.groups.last_mut() {
+            for k in g.len as usize..GROUP {
+                // far away with a tiny radius: t is infinite, the weight 0
+                g.position[0][k] = f64::MAX;
+                g.radius[k] = f64::MIN_POSITIVE;
+                g.reach2[k] = -1.0;
+                g.slots[k] = g.slots[0];
+            }
+        }
+    }
+
+    /// Appends to `used`, in content order, every remembered record with a positive weight at
+    /// (`x`, `n`); `stored` resolves a slot address.
+    #[inline]
+    pub(crate) fn weigh<'a>(
+        &self,
+        kernel: &Kernel,
+        x: DVec3,
+        n: DVec3,
+        stored: impl Fn(usize) -> (&'a Head, &'a [Channel]),
+        used: &mut UsedRecords<'a>,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU has AVX (checked just above).
+            return unsafe { self.weigh_avx(kernel, x, n, stored, used) };
+        }
+        for g in &self.groups {
+            for &slot in &g.slots[..g.len as usize] {
+                let (head, channels) = stored(slot);
+                let (weight, normal) = record_weight(kernel, head, x, n);
+                if weight > 0.0 {
+                    used.push(Used {
+                        order: head.position[0].to_bits(),
+                        weight,
+                        normal,
+                        head,
+                        channels,
+                    });
+                }
+            }
+        }
+    }
+
+    /// [`Cursor::weigh`] four records at a time, the operations of [`record_weight`] lane by lane.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn weigh_avx<'a>(
+        &self,
+        kernel: &Kernel,
+        x: DVec3,
+        n: DVec3,
+        stored: impl Fn(usize) -> (&'a Head, &'a [Channel]),
+        used: &mut UsedRecords<'a>,
+    ) {
+        use std::arch::x86_64::*;
+        let surface = kernel.domain == Domain::Surface;
+        let load = |a: &[f64; GROUP]| {
+            // SAFETY: four f64 (unaligned load).
+            unsafe { _mm256_loadu_pd(a.as_ptr()) }
+        };
+        let (qx, qy, qz) = (
+            _mm256_set1_pd(x.x),
+            _mm256_set1_pd(x.y),
+            _mm256_set1_pd(x.z),
+        );
+        let (nx, ny, nz) = (
+            _mm256_set1_pd(n.x),
+            _mm256_set1_pd(n.y),
+            _mm256_set1_pd(n.z),
+        );
+        for g in &self.groups {
+            let dx = _mm256_sub_pd(qx, load(&g.position[0]));
+            let dy = _mm256_sub_pd(qy, load(&g.position[1]));
+            let dz = _mm256_sub_pd(qz, load(&g.position[2]));
+            let dot = |a: [__m256d; 3]| {
+                _mm256_add_pd(
+                    _mm256_add_pd(_mm256_mul_pd(dx, a[0]), _mm256_mul_pd(dy, a[1])),
+                    _mm256_mul_pd(dz, a[2]),
+                )
+            };
+            let d2 = dot([dx, dy, dz]);
+            if _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LE_OQ>(d2, load(&g.reach2))) == 0 {
+                continue;
+            }
+            let mut t = _mm256_div_pd(_mm256_sqrt_pd(d2), load(&g.radius));
+            let normal = g.normal.each_ref().map(load);
+            if g.anisotropic != 0 {
+                let u = |a: [__m256d; 3], r: &[f64; GROUP]| _mm256_div_pd(dot(a), load(r));
+                let u0 = u(g.axes[0].each_ref().map(load), &g.radii[0]);
+                let u1 = u(g.axes[1].each_ref().map(load), &g.radii[1]);
+                let u2 = u(normal, &g.radii[2]);
+                let ta = _mm256_sqrt_pd(_mm256_add_pd(
+                    _mm256_add_pd(_mm256_mul_pd(u0, u0), _mm256_mul_pd(u1, u1)),
+                    _mm256_mul_pd(u2, u2),
+                ));
+                let bit = |k: u8| -(((g.anisotropic >> k) & 1) as i64);
+                let lanes = _mm256_castsi256_pd(_mm256_setr_epi64x(bit(0), bit(1), bit(2), bit(3)));
+                t = _mm256_blendv_pd(t, ta, lanes);
+            }
+            let cos_n = if surface {
+                _mm256_add_pd(
+                    _mm256_add_pd(_mm256_mul_pd(normal[0], nx), _mm256_mul_pd(normal[1], ny)),
+                    _mm256_mul_pd(normal[2], nz),
+                )
+            } else {
+                _mm256_set1_pd(1.0)
+            };
+            let w = super::weigh::kernel_weights(kernel, surface, t, cos_n);
+            let mut hits = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(w, _mm256_setzero_pd()))
+                as u32
+                & ((1u32 << g.len) - 1);
+            if hits == 0 {
+                continue;
+            }
+            let mut weights = [0.0f64; GROUP];
+            // SAFETY: four f64.
+            unsafe { _mm256_storeu_pd(weights.as_mut_ptr(), w) };
+            while hits != 0 {
+                let k = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let (head, channels) = stored(g.slots[k]);
+                super::index::prefetch(channels.as_ptr() as *const u8);
+                used.push(Used {
+                    order: g.position[0][k].to_bits(),
+                    weight: weights[k],
+                    normal: DVec3::new(g.normal[0][k], g.normal[1][k], g.normal[2][k]),
+                    head,
+                    channels,
+                });
             }
         }
     }

@@ -35,8 +35,7 @@
 
 use glam::DVec3;
 
-#[cfg(not(target_arch = "x86_64"))]
-use super::record::f16_unscaled;
+use super::blend;
 use super::record::{packed_scale, Channel, Domain, Head};
 use crate::error::{ensure_finite, Error, Result};
 
@@ -196,146 +195,15 @@ pub(crate) fn blend(
     if kernel.interpolation == Interpolation::Log {
         return blend_log(kernel, used, weight_sum, x, n, out);
     }
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("f16c") && std::arch::is_x86_feature_detected!("avx") {
-        // SAFETY: the CPU has AVX and F16C (checked just above).
-        return unsafe { blend_f16c(kernel, used, weight_sum, x, n, out) };
-    }
-    blend_linear(kernel, used, weight_sum, x, n, out, channel_delta)
+    blend::blend_linear(
+        kernel.domain == Domain::Surface,
+        used,
+        weight_sum,
+        x,
+        n,
+        out,
+    )
 }
-
-/// [`blend_linear`] with the binary16 components converted by F16C: one instruction instead of
-/// the bit manipulation of [`channel_delta`], the same exact values and the same additions, so
-/// the result is bit for bit the portable one.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx,f16c")]
-unsafe fn blend_f16c(
-    kernel: &Kernel,
-    used: &[Used<'_>],
-    weight_sum: f64,
-    x: DVec3,
-    n: DVec3,
-    out: &mut [f32],
-) {
-    blend_linear(kernel, used, weight_sum, x, n, out, |ch, q| {
-        use std::arch::x86_64::*;
-        // SAFETY: `Channel` is 16 bytes (value, then six binary16 components); AVX and F16C are
-        // enabled on this function.
-        unsafe {
-            let raw = _mm_loadu_si128(ch as *const Channel as *const __m128i);
-            // the value's two halves become +0 (as bits they could read as NaN halves)
-            let raw = _mm_and_si128(raw, _mm_set_epi32(-1, -1, -1, 0));
-            let p = _mm256_mul_ps(_mm256_cvtph_ps(raw), _mm256_loadu_ps(q.as_ptr()));
-            let s = _mm_add_ps(_mm256_castps256_ps128(p), _mm256_extractf128_ps(p, 1));
-            let t = _mm_add_ps(s, _mm_movehl_ps(s, s));
-            _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)))
-        }
-    })
-}
-
-/// Linear-space blend; `delta(ch, q)` is Σₖ qₖ hₖ over the channel's six binary16 components
-/// with `q` = (0, 0, q₀, …, q₅).
-#[inline(always)]
-fn blend_linear(
-    kernel: &Kernel,
-    used: &[Used<'_>],
-    weight_sum: f64,
-    x: DVec3,
-    n: DVec3,
-    out: &mut [f32],
-    delta: impl Fn(&Channel, &[f32; 8]) -> f32,
-) {
-    let surface = kernel.domain == Domain::Surface;
-    let mut stack = [0.0f64; 16];
-    let mut heap = Vec::new();
-    let acc: &mut [f64] = if out.len() <= stack.len() {
-        &mut stack[..out.len()]
-    } else {
-        heap.resize(out.len(), 0.0);
-        &mut heap
-    };
-    for u in used {
-        // offset and normal change times the record's gradient scales: the extrapolation of a
-        // channel is then six products with its stored binary16 components (|h| ≤ 1)
-        let dx = (x - u.head.position()) * u.head.gradient_scale as f64;
-        let dn = if surface {
-            u.normal.cross(n) * u.head.rotation_scale as f64
-        } else {
-            DVec3::ZERO
-        };
-        let c = |v: f64| v.clamp(-F32_MAX, F32_MAX) as f32;
-        let q = [
-            0.0,
-            0.0,
-            c(dx.x),
-            c(dx.y),
-            c(dx.z),
-            c(dn.x),
-            c(dn.y),
-            c(dn.z),
-        ];
-        let w = u.weight;
-        for (a, ch) in acc.iter_mut().zip(u.channels) {
-            *a += w * (ch.value as f64 + delta(ch, &q) as f64);
-        }
-    }
-    let inv_sum = 1.0 / weight_sum;
-    for (o, a) in out.iter_mut().zip(acc.iter()) {
-        *o = (a * inv_sum).clamp(-F32_MAX, F32_MAX) as f32;
-    }
-}
-
-const F32_MAX: f64 = f32::MAX as f64;
-
-/// Σₖ qₖ hₖ over a channel's six binary16 gradient components hₖ, in `f32` (the components carry
-/// 11 bits; the products cannot overflow since |hₖ| ≤ 1 and |qₖ| ≤ `f32::MAX`, and the sum can
-/// only saturate, never become NaN). The portable and SSE2 versions round identically: lanes
-/// (0, q₀h₀, …) are added as two four-lane halves, then pairwise.
-#[inline(always)]
-fn channel_delta(ch: &Channel, q: &[f32; 8]) -> f32 {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::*;
-        // SAFETY: SSE2 is part of x86_64; `Channel` is 16 bytes (value, then six u16 halves).
-        unsafe {
-            let raw = _mm_loadu_si128(ch as *const Channel as *const __m128i);
-            let zero = _mm_setzero_si128();
-            let decode = |h: __m128i| {
-                let sign = _mm_slli_epi32(_mm_and_si128(h, _mm_set1_epi32(0x8000)), 16);
-                let mag = _mm_slli_epi32(_mm_and_si128(h, _mm_set1_epi32(0x7fff)), 13);
-                // times 2^112: the binary16 value itself (|h| ≤ 1 here, so no overflow)
-                _mm_mul_ps(
-                    _mm_castsi128_ps(_mm_or_si128(sign, mag)),
-                    _mm_set1_ps(REBIAS_F32),
-                )
-            };
-            let lo = decode(_mm_unpacklo_epi16(raw, zero)); // value halves, g0, g1
-            let hi = decode(_mm_unpackhi_epi16(raw, zero)); // g2, r0, r1, r2
-            let s = _mm_add_ps(
-                _mm_mul_ps(lo, _mm_loadu_ps(q.as_ptr())),
-                _mm_mul_ps(hi, _mm_loadu_ps(q.as_ptr().add(4))),
-            );
-            let t = _mm_add_ps(s, _mm_movehl_ps(s, s));
-            _mm_cvtss_f32(_mm_add_ss(t, _mm_shuffle_ps(t, t, 1)))
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let h = |b: u16| f16_unscaled(b) as f32 * REBIAS_F32;
-        let lo = [0.0, 0.0, q[2] * h(ch.gradient[0]), q[3] * h(ch.gradient[1])];
-        let hi = [
-            q[4] * h(ch.gradient[2]),
-            q[5] * h(ch.rotation[0]),
-            q[6] * h(ch.rotation[1]),
-            q[7] * h(ch.rotation[2]),
-        ];
-        let s = [lo[0] + hi[0], lo[1] + hi[1], lo[2] + hi[2], lo[3] + hi[3]];
-        (s[0] + s[2]) + (s[1] + s[3])
-    }
-}
-
-/// 2^112 in `f32` (see [`f16_unscaled`]).
-const REBIAS_F32: f32 = 5192296858534827628530496329220096.0;
 
 /// [`blend`] for log-space extrapolation.
 fn blend_log(
@@ -397,11 +265,12 @@ fn blend_log(
 mod tests {
     use super::*;
 
-    /// The dispatched blend (F16C where the CPU has it) equals the bit-manipulation decode bit for
-    /// bit, over random binary16 components (normal, subnormal, zero, ±1) and value bits that
-    /// read as NaN or infinite halves.
+    /// The dispatched blend (AVX and F16C where the CPU has them) equals the portable one bit for
+    /// bit, over random binary16 components (normal, subnormal, zero, ±1), value bits that read as
+    /// NaN or infinite halves, every group size (1-6 records: full and partial lane groups), and
+    /// gradient scales large enough to saturate the offsets.
     #[test]
-    fn f16c_blend_equals_portable_blend() {
+    fn vector_blend_equals_portable_blend() {
         let mut state = 0x1234_5678_9abc_def0u64;
         let mut next = || {
             state = state
@@ -417,22 +286,30 @@ mod tests {
                 _ => ((r >> 4) as u16 & 0x83ff) | (((r >> 16) % 15) as u16) << 10,
             }
         };
-        let kernel = Kernel::new(Interpolation::Ward, Domain::Surface, 0.5).unwrap();
-        for round in 0..200 {
-            let heads: Vec<Head> = (0..6)
+        for round in 0..400 {
+            let surface = round % 4 != 3;
+            let domain = if surface {
+                Domain::Surface
+            } else {
+                Domain::Volume
+            };
+            let kernel = Kernel::new(Interpolation::Ward, domain, 0.5).unwrap();
+            let records = 1 + round % 6;
+            let huge = round % 7 == 0; // offsets past Q_MAX: saturated, still finite
+            let heads: Vec<Head> = (0..records)
                 .map(|k| Head {
                     position: [k as f64 * 0.1, -0.05 * k as f64, 0.01],
                     rotation: [0.0, 0.0, 0.0, 1.0],
                     radii: [1.0; 3],
-                    gradient_scale: (next() % 1000) as f32 * 0.01,
-                    rotation_scale: (next() % 1000) as f32 * 0.001,
+                    gradient_scale: (next() % 1000) as f32 * if huge { 1e36 } else { 0.01 },
+                    rotation_scale: (next() % 1000) as f32 * if huge { 1e36 } else { 0.001 },
                     reserved: 0,
                 })
                 .collect();
-            let channels: Vec<Channel> = (0..6 * 5)
+            let channels: Vec<Channel> = (0..records * 5)
                 .map(|_| Channel {
                     value: if round % 3 == 0 {
-                        f32::from_bits(0x7c00_7e00 | next() & 0x0001_0001) // halves read as NaN / Inf
+                        f32::from_bits(0x7c00_7e00 | next() & 0x0001_0001)
                     } else {
                         (next() % 1000) as f32 * 0.01
                     },
@@ -456,7 +333,7 @@ mod tests {
             let sum: f64 = used.iter().map(|u| u.weight).sum();
             let (mut fast, mut portable) = ([0.0f32; 5], [0.0f32; 5]);
             blend(&kernel, &used, sum, x, n, &mut fast);
-            blend_linear(&kernel, &used, sum, x, n, &mut portable, channel_delta);
+            blend::blend_portable(surface, &used, sum, x, n, &mut portable);
             assert_eq!(
                 fast.map(f32::to_bits),
                 portable.map(f32::to_bits),

@@ -73,6 +73,7 @@
 //! radii in range, unit quaternion, reserved fields) and the record order, and reports
 //! [`Error::Corrupt`] (or [`Error::Io`]) with the reason; it never panics on any input.
 
+mod blend;
 mod cursor;
 mod index;
 pub mod interp;
@@ -446,11 +447,11 @@ impl<V: CacheValue> Cache<V> {
         match cursor.plan(source, position, finest) {
             cursor::Plan::Plain => return self.lookup_into(position, normal, out),
             cursor::Plan::Anchor(reach) => {
-                // remembered in content order, so that the hits of later lookups arrive sorted
-                // and their sort below is a single pass
-                let mut found: SmallVec<[(u64, u32, DVec3, f64); 64]> = SmallVec::new();
-                self.index.query_ball(position, reach, |id, c, r| {
-                    found.push((self.stored(id).0.position[0].to_bits(), id, c, r))
+                // remembered in content order, so that the records of later lookups arrive
+                // sorted and their sort below is a single check
+                let mut found: SmallVec<[(u64, u32); 64]> = SmallVec::new();
+                self.index.query_ball(position, reach, |id, _, _| {
+                    found.push((self.stored(id).0.position[0].to_bits(), id))
                 });
                 found.sort_unstable_by(|a, b| match a.0.cmp(&b.0) {
                     std::cmp::Ordering::Equal => {
@@ -459,16 +460,20 @@ impl<V: CacheValue> Cache<V> {
                     unequal => unequal,
                 });
                 cursor.reset(source, position, reach);
-                for (_, id, c, r) in found {
-                    cursor.push(self.records.slot_ptr(id as usize) as usize, c, r);
+                for (_, id) in found {
+                    let slot = self.records.slot_ptr(id as usize) as usize;
+                    cursor.push(self.config.domain, self.stored(id).0, slot);
                 }
                 cursor.seal();
             }
             cursor::Plan::Remembered => {}
         }
-        let mut slots: SmallVec<[usize; 32]> = SmallVec::new();
-        cursor.candidates(position, |slot| slots.push(self.prefetch_record(slot)));
-        self.interpolate(position, n, &slots, out)
+        let mut used = weigh::UsedRecords::new();
+        // SAFETY: the cursor's source (identity, generation, length) matches this cache, so its
+        // slot addresses are this cache's current ones.
+        let stored = |slot: usize| unsafe { self.stored_at(slot) };
+        cursor.weigh(&self.kernel, position, n, stored, &mut used);
+        self.blend_used(position, n, used, out)
     }
 
     /// [`Cache::lookup`] for spatially coherent queries (see [`Cache::lookup_into_with`]).
@@ -500,10 +505,20 @@ impl<V: CacheValue> Cache<V> {
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
         let mut used = weigh::UsedRecords::new();
-        // SAFETY: every slot was taken from this cache's storage during this lookup or by a
-        // cursor whose source (identity, generation, length) matches this cache.
+        // SAFETY: every slot was taken from this cache's storage during this lookup.
         let stored = |slot: usize| unsafe { self.stored_at(slot) };
         weigh::weigh(&self.kernel, position, n, slots, stored, &mut used);
+        self.blend_used(position, n, used, out)
+    }
+
+    /// The weighted extrapolation of the covering records `used` (any order) into `out`.
+    fn blend_used(
+        &self,
+        position: DVec3,
+        n: DVec3,
+        mut used: weigh::UsedRecords<'_>,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
         if used.is_empty() {
             return Err(Error::NotFound(format!(
                 "no cache record covers {position}"

@@ -477,21 +477,31 @@ fn compaction_reorders_records_without_changing_any_result() {
 #[test]
 fn cursor_lookups_equal_plain_lookups_bit_for_bit() {
     let mut rnd = lcg(5);
-    for domain in [Domain::Surface, Domain::Volume] {
+    let cases = [
+        (Domain::Surface, Interpolation::Ward),
+        (Domain::Volume, Interpolation::Ward),
+        (Domain::Surface, Interpolation::Tent),
+        (Domain::Volume, Interpolation::Cubic),
+        (Domain::Surface, Interpolation::Log),
+        (Domain::Surface, Interpolation::WardClassic),
+        (Domain::Volume, Interpolation::WardTabellion),
+    ];
+    for (domain, interpolation) in cases {
         let config = match domain {
             Domain::Surface => CacheConfig::surface(3),
             Domain::Volume => CacheConfig::volume(3),
-        };
+        }
+        .with_interpolation(interpolation);
         let mut c: Cache<[f32; 3]> = Cache::new(config).unwrap();
         // radii over two decades (several index levels), some anisotropic, a far offset
         let base = DVec3::new(1e5, -2e5, 3e4);
         let insert = |c: &Cache<[f32; 3]>, rnd: &mut dyn FnMut() -> f64| {
             let p = base + DVec3::new(rnd() * 20.0, rnd() * 20.0, rnd() * 2.0);
             let r = 0.05 * 10f64.powf(2.0 * rnd());
-            let mut rec = Record::new(
-                p,
-                DVec3::new(rnd() - 0.5, rnd() - 0.5, 2.0),
-                [rnd() as f32, 1.0, 0.5],
+            // half isotropic (the common case, with its own fast path), half anisotropic
+            let extent = if rnd() < 0.5 {
+                Extent::isotropic(r)
+            } else {
                 Extent {
                     radii: [r, r * (1.0 + rnd()), r * (1.0 + rnd())],
                     axes: [
@@ -499,7 +509,13 @@ fn cursor_lookups_equal_plain_lookups_bit_for_bit() {
                         DVec3::new(0.0, 1.0, rnd()),
                         DVec3::ZERO,
                     ],
-                },
+                }
+            };
+            let mut rec = Record::new(
+                p,
+                DVec3::new(rnd() - 0.5, rnd() - 0.5, 2.0),
+                [rnd() as f32 + 0.1, 1.0, 0.5],
+                extent,
             );
             rec.gradient = Some([[rnd() as f32; 3], [0.2; 3], [-0.1; 3]]);
             rec.rotation_gradient = Some([[0.1; 3], [rnd() as f32; 3], [0.0; 3]]);
@@ -530,12 +546,13 @@ fn cursor_lookups_equal_plain_lookups_bit_for_bit() {
             match (plain, with) {
                 (Ok(a), Ok(b)) => {
                     served += 1;
-                    assert_eq!(a.value.map(f32::to_bits), b.value.map(f32::to_bits), "{p}");
+                    let bits = |v: [f32; 3]| v.map(f32::to_bits);
+                    assert_eq!(bits(a.value), bits(b.value), "{interpolation:?} {p}");
                     assert_eq!(a.weight_sum.to_bits(), b.weight_sum.to_bits());
                     assert_eq!(a.records, b.records);
                 }
                 (Err(Error::NotFound(_)), Err(Error::NotFound(_))) => {}
-                (a, b) => panic!("{domain:?} at {p}: plain {a:?}, cursor {b:?}"),
+                (a, b) => panic!("{domain:?} {interpolation:?} at {p}: plain {a:?}, cursor {b:?}"),
             }
         }
         assert!(served > 10_000, "{domain:?}: {served}");

@@ -164,7 +164,35 @@ unsafe fn weigh4(kernel: &Kernel, x: DVec3, n: DVec3, h: [&Head; 4]) -> ([f64; 4
     } else {
         cos_n
     };
-    let weight = match kernel.interpolation {
+    let weight = kernel_weights(kernel, surface, t, cos_n);
+    let store = |v: __m256d| {
+        let mut a = [0.0f64; 4];
+        _mm256_storeu_pd(a.as_mut_ptr(), v);
+        a
+    };
+    let (ax, ay, az) = (store(ax), store(ay), store(az));
+    (
+        store(weight),
+        std::array::from_fn(|k| DVec3::new(ax[k], ay[k], az[k])),
+    )
+}
+
+/// Kernel weights (0 where a record does not cover the query) from four normalized distances `t`
+/// and normal cosines `cos_n` (ignored in volumes): [`Kernel::weight`] lane by lane, the same
+/// operations in the same order.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+pub(crate) fn kernel_weights(
+    kernel: &Kernel,
+    surface: bool,
+    t: std::arch::x86_64::__m256d,
+    cos_n: std::arch::x86_64::__m256d,
+) -> std::arch::x86_64::__m256d {
+    use std::arch::x86_64::*;
+    let one = _mm256_set1_pd(1.0);
+    let zero = _mm256_setzero_pd();
+    match kernel.interpolation {
         Interpolation::Ward | Interpolation::WardClassic | Interpolation::WardTabellion => {
             let rho = if surface {
                 _mm256_mul_pd(
@@ -207,17 +235,7 @@ unsafe fn weigh4(kernel: &Kernel, x: DVec3, n: DVec3, h: [&Head; 4]) -> ([f64; 4
             };
             _mm256_and_pd(_mm256_mul_pd(kx, kn), covers)
         }
-    };
-    let store = |v: __m256d| {
-        let mut a = [0.0f64; 4];
-        _mm256_storeu_pd(a.as_mut_ptr(), v);
-        a
-    };
-    let (ax, ay, az) = (store(ax), store(ay), store(az));
-    (
-        store(weight),
-        std::array::from_fn(|k| DVec3::new(ax[k], ay[k], az[k])),
-    )
+    }
 }
 
 #[cfg(test)]
