@@ -191,6 +191,22 @@ impl MediaView {
             .collect()
     }
 
+    /// Radiance at the camera, per pixel, of a field f marched with `steps` midpoints per ray (the
+    /// directly computed single scattering, for the context image).
+    pub fn march(&self, steps: usize, f: impl Fn(DVec3) -> DVec3) -> Vec<DVec3> {
+        (0..self.directions.len())
+            .map(|p| {
+                let dt = self.lengths[p] / steps as f64;
+                (0..steps)
+                    .map(|k| {
+                        let t = (k as f64 + 0.5) * dt;
+                        f(self.origin + self.directions[p] * t) * ((-self.sigma_t * t).exp() * dt)
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+
     /// Pixel coordinates of a world point, if in front of the camera.
     pub fn project(&self, scene: &Scene, x: DVec3) -> Option<(usize, usize)> {
         let c = &scene.camera;
@@ -280,14 +296,19 @@ pub struct MediaRun {
     pub metric: MediaMetric,
     pub parameter: f64,
     pub records: Vec<Record<[f32; 3]>>,
-    /// q from the cache at every point.
+    /// q from the cache at every point (what the render integrates: [`MediaRun::image`]).
     pub points: Vec<DVec3>,
-    /// The in-scattered radiance reaching the camera per pixel (`MediaView::integrate`).
-    pub image: Vec<DVec3>,
     pub trace_seconds: f64,
     pub raddiff_seconds: f64,
     pub cache_seconds: f64,
     pub uncovered: usize,
+}
+
+impl MediaRun {
+    /// The cached term reaching the camera per pixel.
+    pub fn image(&self, view: &MediaView) -> Vec<DVec3> {
+        view.integrate(&self.points)
+    }
 }
 
 /// Record radii are clamped to [MIN, MAX] × the scene size, as on the surfaces.
@@ -412,7 +433,6 @@ pub fn run(
             }
         })
         .collect();
-    let image = view.integrate(&points);
     cache_seconds += start.seconds();
     let (mut trace_seconds, mut raddiff_seconds) = (0.0, 0.0);
     for &id in &record_ids {
@@ -430,7 +450,6 @@ pub fn run(
         parameter,
         records,
         points,
-        image,
         trace_seconds,
         raddiff_seconds,
         cache_seconds,

@@ -55,6 +55,9 @@ struct Traced {
     distance: Vec<f64>,
     radiance: Vec<f32>,
     media: Vec<f32>,
+    /// ∇(σ_s L_i) at every media sample, index `((i·steps + s)·3 + c)·3 + axis` (record gathers
+    /// only; empty for the reference's).
+    media_gradient: Vec<f32>,
 }
 
 /// Per-gather constants: the sphere layout's size, the march and the triangulation.
@@ -92,10 +95,6 @@ impl MediaGatherer {
         })
     }
 
-    pub fn rays(&self) -> usize {
-        (self.m * self.n) as usize
-    }
-
     /// Traces an M×N sphere layout at x (jittered by `seed`), marching the in-scattered radiance.
     fn trace(
         &self,
@@ -105,6 +104,7 @@ impl MediaGatherer {
         m: u32,
         n: u32,
         seed: u64,
+        with_gradient: bool,
     ) -> Result<Traced, raddiff::Error> {
         let layout = Layout::new(LayoutKind::Sphere, m, n, seed)?;
         // A sphere gather has no normal: any frame.
@@ -114,6 +114,11 @@ impl MediaGatherer {
         let mut distance = Vec::with_capacity(count);
         let mut radiance = Vec::with_capacity(3 * count);
         let mut media = Vec::with_capacity(3 * count * MEDIA_STEPS);
+        let mut media_gradient = Vec::with_capacity(if with_gradient {
+            9 * count * MEDIA_STEPS
+        } else {
+            0
+        });
         for d in &directions {
             let (t, l) = lightmap.trace(
                 scene,
@@ -126,12 +131,22 @@ impl MediaGatherer {
             radiance.extend([l.x as f32, l.y as f32, l.z as f32]);
             for s in 0..MEDIA_STEPS {
                 let ts = (s as f64 + 0.5) * self.step;
-                let v = if ts < t {
-                    lightmap.inscattered(scene, x + ts * *d)
+                // Without its gradient, raddiff's media terms would hold the in-scattered
+                // radiance fixed along each ray, and the gradient would miss the light shaft's
+                // boundary (Jarosz et al. 2008 differentiate the in-scattering too).
+                let (v, g) = if ts >= t {
+                    (DVec3::ZERO, [DVec3::ZERO; 3])
+                } else if with_gradient {
+                    lightmap.inscattered_with_gradient(scene, x + ts * *d)
                 } else {
-                    DVec3::ZERO
+                    (lightmap.inscattered(scene, x + ts * *d), [DVec3::ZERO; 3])
                 };
                 media.extend([v.x as f32, v.y as f32, v.z as f32]);
+                if with_gradient {
+                    for gc in g {
+                        media_gradient.extend([gc.x as f32, gc.y as f32, gc.z as f32]);
+                    }
+                }
             }
         }
         Ok(Traced {
@@ -141,6 +156,7 @@ impl MediaGatherer {
             distance,
             radiance,
             media,
+            media_gradient,
         })
     }
 
@@ -153,7 +169,7 @@ impl MediaGatherer {
             sigma_t: self.sigma_t,
             media: Some(MediaRadiance {
                 radiance: &t.media,
-                gradient: None,
+                gradient: (!t.media_gradient.is_empty()).then_some(&t.media_gradient[..]),
                 steps: MEDIA_STEPS,
                 step: self.step,
             }),
@@ -170,7 +186,7 @@ impl MediaGatherer {
         n: u32,
         seed: u64,
     ) -> Result<DVec3, raddiff::Error> {
-        let t = self.trace(scene, lightmap, x, m, n, seed)?;
+        let t = self.trace(scene, lightmap, x, m, n, seed, false)?;
         let v = evaluate(&t.layout, &t.frame, &self.input(&t), Wanted::IRRADIANCE)?;
         Ok(DVec3::new(v.irradiance[0], v.irradiance[1], v.irradiance[2]) * self.phase)
     }
@@ -184,7 +200,7 @@ impl MediaGatherer {
         seed: u64,
     ) -> Result<MediaGathered, raddiff::Error> {
         let start = ThreadTimer::start();
-        let t = self.trace(scene, lightmap, x, self.m, self.n, seed)?;
+        let t = self.trace(scene, lightmap, x, self.m, self.n, seed, true)?;
         let trace_seconds = start.seconds();
 
         let start = ThreadTimer::start();

@@ -16,7 +16,7 @@ use crate::scene::Scene;
 
 impl Row {
     pub fn media(run: &MediaRun, reference: &[DVec3], view: &MediaView) -> Row {
-        let (rms, relative_rms) = media_cache::rms_error(&run.image, reference, view);
+        let (rms, relative_rms) = media_cache::rms_error(&run.image(view), reference, view);
         Row {
             metric: run.metric.report_name(),
             parameter: run.parameter,
@@ -131,12 +131,9 @@ pub fn run(
         "reference",
     )?;
     // Context: the sun's single scattering along the same camera rays (the light shafts, computed
-    // directly) plus the reference of the cached indirect term.
-    let direct: Vec<DVec3> = (0..view.points())
-        .map(|id| lightmap.inscattered(scene, view.point(id)))
-        .collect();
+    // directly, marched finely) plus the reference of the cached indirect term.
     let shafts: Vec<DVec3> = view
-        .integrate(&direct)
+        .march(256, |x| lightmap.inscattered(scene, x))
         .iter()
         .zip(&reference)
         .map(|(a, b)| *a + *b)
@@ -157,16 +154,16 @@ pub fn run(
     for &metric in &o.media_metrics {
         let tuned =
             media_cache::tune(&store, metric, o.media_records).map_err(|e| e.to_string())?;
+        let tuned_image = tuned.image(&view);
         save(
-            image::tonemap(view.width, view.height, &tuned.image, exposure),
+            image::tonemap(view.width, view.height, &tuned_image, exposure),
             metric.name(),
         )?;
         save(
-            records_overlay(scene, &view, &tuned.image, exposure, &tuned),
+            records_overlay(scene, &view, &tuned_image, exposure, &tuned),
             &format!("{}-records", metric.name()),
         )?;
-        let errors: Vec<f64> = tuned
-            .image
+        let errors: Vec<f64> = tuned_image
             .iter()
             .zip(&reference)
             .map(|(v, r)| (image::luminance(*v) - image::luminance(*r)).abs() / mean.max(1e-300))
