@@ -95,18 +95,16 @@ impl MediaGatherer {
         })
     }
 
-    /// Traces an M×N sphere layout at x (jittered by `seed`), marching the in-scattered radiance.
+    /// Traces a sphere layout at x, marching the in-scattered radiance (and its gradient, for
+    /// record gathers).
     fn trace(
         &self,
         scene: &Scene,
         lightmap: &LightMap,
         x: DVec3,
-        m: u32,
-        n: u32,
-        seed: u64,
+        layout: Layout,
         with_gradient: bool,
     ) -> Result<Traced, raddiff::Error> {
-        let layout = Layout::new(LayoutKind::Sphere, m, n, seed)?;
         // A sphere gather has no normal: any frame.
         let frame = Frame::new(x, DVec3::Y, DVec3::X)?;
         let directions = layout.directions(&frame)?;
@@ -186,7 +184,8 @@ impl MediaGatherer {
         n: u32,
         seed: u64,
     ) -> Result<DVec3, raddiff::Error> {
-        let t = self.trace(scene, lightmap, x, m, n, seed, false)?;
+        let layout = Layout::new(LayoutKind::Sphere, m, n, seed)?;
+        let t = self.trace(scene, lightmap, x, layout, false)?;
         let v = evaluate(&t.layout, &t.frame, &self.input(&t), Wanted::IRRADIANCE)?;
         Ok(DVec3::new(v.irradiance[0], v.irradiance[1], v.irradiance[2]) * self.phase)
     }
@@ -200,7 +199,8 @@ impl MediaGatherer {
         seed: u64,
     ) -> Result<MediaGathered, raddiff::Error> {
         let start = ThreadTimer::start();
-        let t = self.trace(scene, lightmap, x, self.m, self.n, seed, true)?;
+        let layout = Layout::new(LayoutKind::Sphere, self.m, self.n, seed)?;
+        let t = self.trace(scene, lightmap, x, layout, true)?;
         let trace_seconds = start.seconds();
 
         let start = ThreadTimer::start();
