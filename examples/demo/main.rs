@@ -234,9 +234,10 @@ fn run() -> Result<(), String> {
         .unwrap_or_else(|e| eprintln!("   plot skipped: {e}"));
         let media_series = scene_report.media_series();
         if !media_series.is_empty() {
-            plot::error_against_time(
+            plot::error_against_time_of(
                 &options.out.join(format!("{name}-media-error-time.png")),
                 &format!("{name}: media caches, error against time"),
+                "indirect in-scattering",
                 &media_series,
             )
             .unwrap_or_else(|e| eprintln!("   plot skipped: {e}"));

@@ -169,9 +169,15 @@ impl SceneReport {
         series(&self.sweeps)
     }
 
-    /// The media caches' error-against-time lines.
+    /// The media caches' error-against-time lines (named without the `media-` prefix of the CSV).
     pub fn media_series(&self) -> Vec<Series> {
-        series(&self.media_sweeps)
+        let mut lines = series(&self.media_sweeps);
+        for line in &mut lines {
+            if let Some(name) = line.name.strip_prefix("media-") {
+                line.name = name.to_string();
+            }
+        }
+        lines
     }
 
     /// Writes `<scene>-report.md` and `<scene>-report.csv` (every run of every sweep).
