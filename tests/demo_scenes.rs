@@ -17,6 +17,8 @@ mod lightmap;
 mod media_cache;
 #[path = "../examples/demo/media_gather.rs"]
 mod media_gather;
+#[path = "../examples/demo/media_view.rs"]
+mod media_view;
 #[path = "../examples/demo/scene.rs"]
 mod scene;
 #[path = "../examples/demo/timing.rs"]

@@ -14,6 +14,7 @@ mod lightmap;
 mod media_cache;
 mod media_gather;
 mod media_report;
+mod media_view;
 mod outputs;
 mod plot;
 mod render;
