@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use crate::caching::Metric;
+use crate::media_cache::MediaMetric;
 use crate::scene::SceneKind;
 
 pub const USAGE: &str = "\
@@ -21,6 +22,15 @@ OPTIONS:
   --reference N       reference rays per pixel (a square number)     [default: 4096]
   --thresholds N      error thresholds per metric for the error-against-time plot [default: 4]
   --out DIR           output directory                               [default: out]
+
+MEDIA (VOLUME) CACHES, scenes with a medium (room) only:
+  --media-metric NAME split-sphere | gradient | hessian-isotropic | hessian-anisotropic |
+                      all | none                                     [default: all]
+  --media-records N   record count every media metric is tuned to    [default: 300]
+  --media-resolution W[xH]  media image size in pixels               [default: 64]
+  --media-steps N     march points per camera ray (record candidates) [default: 16]
+  --media-gather MxN  sphere gather strata per media record          [default: 16x32]
+  --media-reference MxN  sphere gather strata per reference point    [default: 32x64]
   -h, --help          this text
 ";
 
@@ -37,6 +47,15 @@ pub struct Options {
     pub reference_samples: usize,
     pub thresholds: usize,
     pub out: PathBuf,
+    pub media_metrics: Vec<MediaMetric>,
+    pub media_records: usize,
+    pub media_width: usize,
+    pub media_height: usize,
+    pub media_steps: usize,
+    pub media_gather_m: usize,
+    pub media_gather_n: usize,
+    pub media_reference_m: usize,
+    pub media_reference_n: usize,
 }
 
 impl Default for Options {
@@ -53,6 +72,15 @@ impl Default for Options {
             reference_samples: 4096,
             thresholds: 4,
             out: PathBuf::from("out"),
+            media_metrics: MediaMetric::ALL.to_vec(),
+            media_records: 300,
+            media_width: 64,
+            media_height: 64,
+            media_steps: 16,
+            media_gather_m: 16,
+            media_gather_n: 32,
+            media_reference_m: 32,
+            media_reference_n: 64,
         }
     }
 }
@@ -103,6 +131,21 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Options>, 
             "--reference" => o.reference_samples = number(&flag, &value)?,
             "--thresholds" => o.thresholds = number(&flag, &value)?.max(1),
             "--out" => o.out = PathBuf::from(value),
+            "--media-metric" => {
+                o.media_metrics = match value.as_str() {
+                    "all" => MediaMetric::ALL.to_vec(),
+                    "none" => Vec::new(),
+                    _ => vec![MediaMetric::parse(&value)
+                        .ok_or_else(|| format!("unknown media metric {value:?} (see --help)"))?],
+                }
+            }
+            "--media-records" => o.media_records = number(&flag, &value)?.max(1),
+            "--media-resolution" => (o.media_width, o.media_height) = pair(&flag, &value)?,
+            "--media-steps" => o.media_steps = number(&flag, &value)?.max(1),
+            "--media-gather" => (o.media_gather_m, o.media_gather_n) = pair(&flag, &value)?,
+            "--media-reference" => {
+                (o.media_reference_m, o.media_reference_n) = pair(&flag, &value)?
+            }
             _ => return Err(format!("unknown option {flag:?} (see --help)")),
         }
     }
@@ -111,6 +154,21 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Options>, 
     }
     if o.gather_m < 2 || o.gather_n < 3 || o.gather_m * o.gather_n > 1 << 20 {
         return Err("--gather needs M >= 2, N >= 3 and M*N <= 2^20".into());
+    }
+    if o.media_width == 0 || o.media_height == 0 || o.media_width * o.media_height > 1024 * 1024 {
+        return Err("--media-resolution must be between 1x1 and 1024x1024".into());
+    }
+    for (flag, m, n) in [
+        ("--media-gather", o.media_gather_m, o.media_gather_n),
+        (
+            "--media-reference",
+            o.media_reference_m,
+            o.media_reference_n,
+        ),
+    ] {
+        if m < 2 || n < 3 || m * n > 1 << 20 {
+            return Err(format!("{flag} needs M >= 2, N >= 3 and M*N <= 2^20"));
+        }
     }
     let side = (o.reference_samples as f64).sqrt().round() as usize;
     if side == 0 || side * side != o.reference_samples {

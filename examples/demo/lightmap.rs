@@ -63,26 +63,48 @@ impl VolumeMap {
     }
 
     fn lookup(&self, p: DVec3) -> DVec3 {
+        self.lookup_with_gradient(p).0
+    }
+
+    /// The trilinear value and its exact gradient (per channel, per L): what a gather needs to
+    /// differentiate the in-scattered radiance it marches (zero along an axis clamped at the edge).
+    fn lookup_with_gradient(&self, p: DVec3) -> (DVec3, [DVec3; 3]) {
         let g = (p - self.lo) / self.cell - DVec3::splat(0.5);
         let mut idx = [0usize; 3];
         let mut frac = [0.0f64; 3];
+        let mut slope = [0.0f64; 3];
         for a in 0..3 {
             let max = (self.dims[a] - 1) as f64;
             let v = g[a].clamp(0.0, max);
             idx[a] = (v.floor() as usize).min(self.dims[a] - 2);
             frac[a] = v - idx[a] as f64;
+            slope[a] = if g[a] > 0.0 && g[a] < max {
+                1.0 / self.cell[a]
+            } else {
+                0.0
+            };
         }
         let at =
             |x: usize, y: usize, z: usize| self.values[(z * self.dims[1] + y) * self.dims[0] + x];
         let mut sum = DVec3::ZERO;
+        let mut gradient = [DVec3::ZERO; 3];
         for corner in 0..8 {
-            let (dx, dy, dz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
-            let w = (if dx == 1 { frac[0] } else { 1.0 - frac[0] })
-                * (if dy == 1 { frac[1] } else { 1.0 - frac[1] })
-                * (if dz == 1 { frac[2] } else { 1.0 - frac[2] });
-            sum += at(idx[0] + dx, idx[1] + dy, idx[2] + dz) * w;
+            let bit = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
+            // Per axis: the weight and its derivative along that axis.
+            let w = [0, 1, 2].map(|a| if bit[a] == 1 { frac[a] } else { 1.0 - frac[a] });
+            let dw = [0, 1, 2].map(|a| if bit[a] == 1 { slope[a] } else { -slope[a] });
+            let v = at(idx[0] + bit[0], idx[1] + bit[1], idx[2] + bit[2]);
+            sum += v * (w[0] * w[1] * w[2]);
+            let d = DVec3::new(
+                dw[0] * w[1] * w[2],
+                w[0] * dw[1] * w[2],
+                w[0] * w[1] * dw[2],
+            );
+            for (c, gc) in gradient.iter_mut().enumerate() {
+                *gc += d * v[c];
+            }
         }
-        sum
+        (sum, gradient)
     }
 }
 
@@ -182,6 +204,16 @@ impl LightMap {
         match (&self.volume, scene.medium) {
             (Some(v), Some(m)) if p.cmpge(m.lo).all() && p.cmple(m.hi).all() => v.lookup(p),
             _ => DVec3::ZERO,
+        }
+    }
+
+    /// [`LightMap::inscattered`] and its gradient per channel (per L²), zero outside the medium.
+    pub fn inscattered_with_gradient(&self, scene: &Scene, p: DVec3) -> (DVec3, [DVec3; 3]) {
+        match (&self.volume, scene.medium) {
+            (Some(v), Some(m)) if p.cmpge(m.lo).all() && p.cmple(m.hi).all() => {
+                v.lookup_with_gradient(p)
+            }
+            _ => (DVec3::ZERO, [DVec3::ZERO; 3]),
         }
     }
 

@@ -11,6 +11,10 @@ mod derivs;
 mod geometry;
 mod image;
 mod lightmap;
+mod media_cache;
+mod media_gather;
+mod media_report;
+mod media_view;
 mod outputs;
 mod plot;
 mod render;
@@ -214,6 +218,9 @@ fn run() -> Result<(), String> {
         }
         bar.finish_and_clear();
         scene_report.overhead(&store, &reference);
+        if scene.medium.is_some() {
+            media_report::run(&scene, &lightmap, &options, &mut scene_report, progress)?;
+        }
         scene_report
             .write(&options.out)
             .map_err(|e| e.to_string())?;
@@ -226,6 +233,16 @@ fn run() -> Result<(), String> {
             &scene_report.series(),
         )
         .unwrap_or_else(|e| eprintln!("   plot skipped: {e}"));
+        let media_series = scene_report.media_series();
+        if !media_series.is_empty() {
+            plot::error_against_time_of(
+                &options.out.join(format!("{name}-media-error-time.png")),
+                &format!("{name}: media caches, error against time"),
+                "indirect in-scattering",
+                &media_series,
+            )
+            .unwrap_or_else(|e| eprintln!("   plot skipped: {e}"));
+        }
         print!("{}", scene_report.markdown());
     }
     Ok(())

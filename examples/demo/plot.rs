@@ -128,6 +128,16 @@ const COLOURS: [RGBColor; 6] = [
 
 /// Writes a plot of relative RMS error against CPU time to `path` (PNG).
 pub fn error_against_time(path: &Path, title: &str, series: &[Series]) -> Result<(), String> {
+    error_against_time_of(path, title, "indirect irradiance", series)
+}
+
+/// [`error_against_time`] of another quantity (named on the y axis).
+pub fn error_against_time_of(
+    path: &Path,
+    title: &str,
+    quantity: &str,
+    series: &[Series],
+) -> Result<(), String> {
     let (w, h) = (900u32, 600u32);
     let mut buffer = vec![0u8; (w * h * 3) as usize];
     {
@@ -154,7 +164,7 @@ pub fn error_against_time(path: &Path, title: &str, series: &[Series]) -> Result
         chart
             .configure_mesh()
             .x_desc("CPU time: ray casting + raddiff + cache (s)")
-            .y_desc("relative RMS error of indirect irradiance")
+            .y_desc(format!("relative RMS error of {quantity}"))
             .label_style(("sans-serif", 15))
             .x_labels(8)
             .y_labels(10)

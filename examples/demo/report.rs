@@ -56,6 +56,10 @@ pub struct SceneReport {
     tuned: Vec<Row>,
     sweeps: Vec<Vec<Row>>,
     overhead: String,
+    /// The volume (media) caches' tuned rows, sweeps and settings (room only).
+    media: Vec<Row>,
+    media_sweeps: Vec<Vec<Row>>,
+    media_settings: String,
 }
 
 impl SceneReport {
@@ -77,12 +81,24 @@ impl SceneReport {
             tuned: Vec::new(),
             sweeps: Vec::new(),
             overhead: String::new(),
+            media: Vec::new(),
+            media_sweeps: Vec::new(),
+            media_settings: String::new(),
         }
     }
 
     pub fn add(&mut self, tuned: Row, sweep: Vec<Row>) {
         self.tuned.push(tuned);
         self.sweeps.push(sweep);
+    }
+
+    pub fn add_media(&mut self, tuned: Row, sweep: Vec<Row>) {
+        self.media.push(tuned);
+        self.media_sweeps.push(sweep);
+    }
+
+    pub fn media_settings(&mut self, text: String) {
+        self.media_settings = text;
     }
 
     /// raddiff's derivative work against the ray casting of the same gathers.
@@ -127,25 +143,7 @@ impl SceneReport {
     pub fn markdown(&self) -> String {
         let mut s = String::new();
         let _ = writeln!(s, "## Scene `{}`\n\n{}\n", self.scene, self.settings);
-        let _ = writeln!(
-            s,
-            "| metric | parameter | records | CPU time (s) | ray casting (s) | raddiff (s) | cache (s) | RMS error | relative RMS error |\n|---|---|---|---|---|---|---|---|---|"
-        );
-        for r in &self.tuned {
-            let _ = writeln!(
-                s,
-                "| {} | {:.4} | {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.5} | {:.4} |",
-                r.metric,
-                r.parameter,
-                r.records,
-                r.total(),
-                r.trace_seconds,
-                r.raddiff_seconds,
-                r.cache_seconds,
-                r.rms,
-                r.relative_rms
-            );
-        }
+        table(&mut s, &self.tuned);
         let _ = writeln!(
             s,
             "\nCPU time is the sum of the measured per-record costs (ray casting, raddiff's evaluation) \
@@ -155,18 +153,31 @@ impl SceneReport {
         if !self.overhead.is_empty() {
             let _ = writeln!(s, "{}", self.overhead);
         }
+        if !self.media.is_empty() {
+            let _ = writeln!(s, "### Media caches\n\n{}\n", self.media_settings);
+            table(&mut s, &self.media);
+            let _ = writeln!(
+                s,
+                "\nErrors are over the luminance of the cached term integrated along every camera ray \
+                 (all pixels cross the medium), against the same integral of the reference.\n"
+            );
+        }
         s
     }
 
     pub fn series(&self) -> Vec<Series> {
-        self.sweeps
-            .iter()
-            .filter(|rows| !rows.is_empty())
-            .map(|rows| Series {
-                name: rows[0].metric.to_string(),
-                points: rows.iter().map(|r| (r.total(), r.relative_rms)).collect(),
-            })
-            .collect()
+        series(&self.sweeps)
+    }
+
+    /// The media caches' error-against-time lines (named without the `media-` prefix of the CSV).
+    pub fn media_series(&self) -> Vec<Series> {
+        let mut lines = series(&self.media_sweeps);
+        for line in &mut lines {
+            if let Some(name) = line.name.strip_prefix("media-") {
+                line.name = name.to_string();
+            }
+        }
+        lines
     }
 
     /// Writes `<scene>-report.md` and `<scene>-report.csv` (every run of every sweep).
@@ -180,8 +191,13 @@ impl SceneReport {
             csv,
             "scene,metric,tuned,parameter,records,cpu_seconds,trace_seconds,raddiff_seconds,cache_seconds,rms,relative_rms,uncovered_pixels"
         )?;
-        let tuned = self.tuned.iter().map(|r| (true, r));
-        let swept = self.sweeps.iter().flatten().map(|r| (false, r));
+        let tuned = self.tuned.iter().chain(&self.media).map(|r| (true, r));
+        let swept = self
+            .sweeps
+            .iter()
+            .chain(&self.media_sweeps)
+            .flatten()
+            .map(|r| (false, r));
         for (is_tuned, r) in tuned.chain(swept) {
             writeln!(
                 csv,
@@ -201,5 +217,40 @@ impl SceneReport {
             )?;
         }
         Ok(())
+    }
+}
+
+/// One line per sweep: (CPU seconds, relative RMS error) of each run.
+fn series(sweeps: &[Vec<Row>]) -> Vec<Series> {
+    sweeps
+        .iter()
+        .filter(|rows| !rows.is_empty())
+        .map(|rows| Series {
+            name: rows[0].metric.to_string(),
+            points: rows.iter().map(|r| (r.total(), r.relative_rms)).collect(),
+        })
+        .collect()
+}
+
+/// The markdown table of tuned rows.
+fn table(s: &mut String, rows: &[Row]) {
+    let _ = writeln!(
+        s,
+        "| metric | parameter | records | CPU time (s) | ray casting (s) | raddiff (s) | cache (s) | RMS error | relative RMS error |\n|---|---|---|---|---|---|---|---|---|"
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "| {} | {:.4} | {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.5} | {:.4} |",
+            r.metric,
+            r.parameter,
+            r.records,
+            r.total(),
+            r.trace_seconds,
+            r.raddiff_seconds,
+            r.cache_seconds,
+            r.rms,
+            r.relative_rms
+        );
     }
 }
