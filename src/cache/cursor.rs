@@ -53,7 +53,7 @@ pub struct Cursor {
     /// Record count seen by the previous lookup (anchoring waits until it stops changing).
     last_len: usize,
     anchor: DVec3,
-    reach: f64,
+    pub(crate) reach: f64,
     /// The remembered records in content order, decoded; their slot addresses stay valid while
     /// `source` matches the cache (records move only in `Cache::compact`, which changes the
     /// generation).
@@ -176,6 +176,19 @@ impl Cursor {
             // SAFETY: the CPU has AVX (checked just above).
             return unsafe { self.weigh_avx(kernel, x, n, stored, used) };
         }
+        self.weigh_portable(kernel, x, n, stored, used)
+    }
+
+    /// [`Cursor::weigh`] one record at a time, from the stored records (the reference for the
+    /// vector code and the path of CPUs without AVX).
+    pub(crate) fn weigh_portable<'a>(
+        &self,
+        kernel: &Kernel,
+        x: DVec3,
+        n: DVec3,
+        stored: impl Fn(usize) -> (&'a Head, &'a [Channel]),
+        used: &mut UsedRecords<'a>,
+    ) {
         for g in &self.groups {
             for &slot in &g.slots[..g.len as usize] {
                 let (head, channels) = stored(slot);

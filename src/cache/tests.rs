@@ -568,3 +568,74 @@ fn cursor_lookups_equal_plain_lookups_bit_for_bit() {
         ));
     }
 }
+
+/// A cursor's vector weighing (four remembered records at a time, from their decoded copies)
+/// finds the same records with the same weights and normals, bit for bit, as its portable
+/// weighing from the stored records, for every scheme, both domains, isotropic and anisotropic
+/// records, and queries across the cursor's ball (its edge included).
+#[test]
+fn cursor_vector_weighing_equals_portable_weighing() {
+    let mut rnd = lcg(11);
+    for interpolation in [
+        Interpolation::Ward,
+        Interpolation::Tent,
+        Interpolation::Cubic,
+        Interpolation::WardTabellion,
+    ] {
+        for config in [CacheConfig::surface(2), CacheConfig::volume(2)] {
+            let c: Cache<[f32; 2]> = Cache::new(config.with_interpolation(interpolation)).unwrap();
+            for _ in 0..1500 {
+                let r = 0.2 + rnd();
+                let extent = if rnd() < 0.5 {
+                    Extent::isotropic(r)
+                } else {
+                    Extent {
+                        radii: [r, r * (0.4 + rnd()), r * (0.4 + rnd())],
+                        axes: [
+                            DVec3::new(1.0, rnd() - 0.5, 0.2),
+                            DVec3::new(rnd() - 0.5, 1.0, 0.1),
+                            DVec3::ZERO,
+                        ],
+                    }
+                };
+                let p = DVec3::new(2.0 + rnd() * 4.0, 2.0 + rnd() * 4.0, rnd() * 0.3);
+                let n = DVec3::new(0.3 * (rnd() - 0.5), 0.3 * (rnd() - 0.5), 1.0);
+                c.insert(&Record::new(p, n, [1.0, 2.0], extent)).unwrap();
+            }
+            let mut cursor = Cursor::new();
+            let anchor = DVec3::new(4.0, 4.0, 0.25);
+            // the first lookup sees a grown cache (plain path), the second anchors
+            for _ in 0..2 {
+                let _ = c.lookup_with(&mut cursor, anchor, DVec3::Z);
+            }
+            assert_eq!(cursor.served, [0, 1, 1]);
+            let mut compared = 0;
+            for _ in 0..300 {
+                let q = anchor
+                    + DVec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * (1.15 * cursor.reach);
+                let n = DVec3::new(0.3 * (rnd() - 0.5), 0.3 * (rnd() - 0.5), 1.0).normalize();
+                // SAFETY: the cursor was anchored on this cache, unchanged since.
+                let stored = |slot: usize| unsafe { c.stored_at(slot) };
+                let (mut fast, mut portable) =
+                    (weigh::UsedRecords::new(), weigh::UsedRecords::new());
+                cursor.weigh(&c.kernel, q, n, stored, &mut fast);
+                cursor.weigh_portable(&c.kernel, q, n, stored, &mut portable);
+                let key = |u: &interp::Used| {
+                    (
+                        u.order,
+                        u.weight.to_bits(),
+                        u.normal.to_array().map(f64::to_bits),
+                    )
+                };
+                let fast: Vec<_> = fast.iter().map(key).collect();
+                let portable: Vec<_> = portable.iter().map(key).collect();
+                assert_eq!(fast, portable, "{interpolation:?} at {q}");
+                compared += fast.len();
+            }
+            assert!(
+                compared > 1500,
+                "{interpolation:?}: only {compared} records weighed"
+            );
+        }
+    }
+}
