@@ -103,6 +103,16 @@ fn lookups(c: &mut Criterion) {
             })
         });
         if n == 1_000_000 {
+            // incoherent queries through a cursor: it should fall back to about a plain lookup
+            let mut cursor = Cursor::new();
+            group.bench_function(format!("random_cursor/{n}"), |b| {
+                b.iter(|| {
+                    i = (i + 1) & (qs.len() - 1);
+                    black_box(cache.lookup_with(&mut cursor, qs[i], DVec3::Z).ok())
+                })
+            });
+        }
+        if n == 1_000_000 {
             // scanline-like coherence: successive queries 0.05 apart along rows
             let s = side(n);
             let row: Vec<DVec3> = (0..1 << 16)

@@ -294,14 +294,16 @@ pub fn run(store: &GatherStore, metric: Metric, parameter: f64) -> Result<Run, r
         }
         step /= 2;
     }
-    // Render the indirect irradiance from the cache.
+    // Render the indirect irradiance from the cache, in scanline order through a cursor (the
+    // same results as plain lookups, faster for neighbouring pixels).
     let start = ThreadTimer::start();
+    let mut cursor = raddiff::cache::Cursor::new();
     let image: Vec<Option<DVec3>> = gb
         .pixels
         .iter()
         .map(|p| match p.shaded() {
             Some(sp) => cache
-                .lookup(sp.position, sp.normal)
+                .lookup_with(&mut cursor, sp.position, sp.normal)
                 .ok()
                 .map(|l| DVec3::new(l.value[0] as f64, l.value[1] as f64, l.value[2] as f64)),
             None => Some(DVec3::ZERO),

@@ -314,12 +314,14 @@ pub fn run(
     // q at every point from the cache (first-order extrapolation may undershoot: q ≥ 0).
     let start = ThreadTimer::start();
     let mut uncovered = 0;
+    // successive points are steps along one camera ray: a cursor serves them (same results)
+    let mut cursor = raddiff::cache::Cursor::new();
     let points: Vec<DVec3> = (0..view.points())
         .map(|id| {
             if !view.in_medium(id / k) {
                 return DVec3::ZERO;
             }
-            match cache.lookup(view.point(id), DVec3::Y) {
+            match cache.lookup_with(&mut cursor, view.point(id), DVec3::Y) {
                 Ok(l) => DVec3::new(l.value[0] as f64, l.value[1] as f64, l.value[2] as f64)
                     .max(DVec3::ZERO),
                 Err(_) => {

@@ -11,7 +11,9 @@
 //! The cursor re-anchors when a query leaves the ball, the cache has grown since it anchored, or
 //! it is used with another cache (or after [`Cache::compact`](super::Cache::compact)). While a
 //! cache grows between successive lookups (the fill phase of a render), anchoring would be wasted
-//! work, so those lookups take the plain path.
+//! work, so those lookups take the plain path; so do the lookups after an anchor that served
+//! almost none (incoherent queries), for a cool-down that doubles with every further wasted anchor
+//! and ends early when two successive queries are close again.
 
 use glam::DVec3;
 
@@ -58,9 +60,32 @@ pub struct Cursor {
     /// `source` matches the cache (records move only in `Cache::compact`, which changes the
     /// generation).
     groups: Vec<Group>,
+    /// Lookups the current anchor has served (the anchoring one included).
+    uses: usize,
+    /// Whether the current anchor's usefulness has been judged (at the first query outside it).
+    judged: bool,
+    /// The previous query (a query close to it ends a cool-down: coherence is back).
+    last_query: DVec3,
+    /// Plain lookups still to make before anchoring again (after an anchor that served too few).
+    cool_down: usize,
+    /// The next cool-down: doubles after each wasted anchor (up to [`MAX_COOL_DOWN`]), back to
+    /// [`COOL_DOWN`] after a useful one.
+    backoff: usize,
     /// How many lookups each plan served (remembered, anchored, plain): for tests and tuning.
     pub(crate) served: [usize; 3],
 }
+
+/// An anchor that served fewer lookups than this was wasted work (anchoring costs about one and a
+/// half plain lookups): the queries are not coherent at the cursor's scale.
+const MIN_USES: usize = 3;
+
+/// Plain lookups made after a wasted anchor before the cursor tries anchoring again (doubling
+/// after each further wasted anchor, up to [`MAX_COOL_DOWN`]), so that incoherent queries cost
+/// about a plain lookup each, and coherence that comes back is used again.
+const COOL_DOWN: usize = 4;
+
+/// Upper bound of the cool-down.
+const MAX_COOL_DOWN: usize = 256;
 
 /// What a lookup should do with its cursor.
 pub(crate) enum Plan {
@@ -84,9 +109,11 @@ impl Cursor {
         let len = source.2;
         let stable = len == self.last_len;
         self.last_len = len;
-        if self.source == Some(source)
-            && (p - self.anchor).length_squared() <= self.reach * self.reach
-        {
+        let step2 = (p - self.last_query).length_squared();
+        self.last_query = p;
+        let current = self.source == Some(source);
+        if current && (p - self.anchor).length_squared() <= self.reach * self.reach {
+            self.uses += 1;
             self.served[0] += 1;
             return Plan::Remembered;
         }
@@ -95,6 +122,25 @@ impl Cursor {
             self.served[2] += 1;
             return Plan::Plain;
         }
+        if current && !self.judged {
+            self.judged = true;
+            if self.uses < MIN_USES {
+                self.backoff = self.backoff.clamp(COOL_DOWN / 2, MAX_COOL_DOWN / 2) * 2;
+                self.cool_down = self.backoff;
+            } else {
+                self.backoff = COOL_DOWN;
+            }
+        }
+        if self.cool_down > 0 && step2 < 0.0625 * self.reach * self.reach {
+            self.cool_down = 0;
+        }
+        if self.cool_down > 0 {
+            self.cool_down -= 1;
+            self.served[2] += 1;
+            return Plan::Plain;
+        }
+        self.uses = 1;
+        self.judged = false;
         self.served[1] += 1;
         // half the finest cell side: the ball query then visits at most 3 cells per axis and
         // level, and the ball stays smaller than the smallest record's bounding sphere

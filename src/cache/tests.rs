@@ -639,3 +639,40 @@ fn cursor_vector_weighing_equals_portable_weighing() {
         }
     }
 }
+
+/// Incoherent queries through a cursor cost about a plain lookup: after an anchor that served too
+/// few lookups the cursor makes plain lookups for a while instead of re-anchoring at every query,
+/// and it anchors again (and serves from its records) once the queries become coherent.
+#[test]
+fn cursor_falls_back_to_plain_lookups_for_incoherent_queries() {
+    let mut rnd = lcg(21);
+    let c: Cache<f32> = surface(Interpolation::Ward);
+    for _ in 0..2000 {
+        let p = DVec3::new(rnd() * 40.0, rnd() * 40.0, 0.0);
+        c.insert(&rec(p, 1.0, [0.0; 3], 0.8 + rnd())).unwrap();
+    }
+    let mut cursor = Cursor::new();
+    let mut hits = 0;
+    for _ in 0..800 {
+        let p = DVec3::new(rnd() * 40.0, rnd() * 40.0, 0.0);
+        let with = c.lookup_with(&mut cursor, p, DVec3::Z);
+        let plain = c.lookup(p, DVec3::Z);
+        if let (Ok(a), Ok(b)) = (&with, &plain) {
+            assert_eq!(a.value.to_bits(), b.value.to_bits());
+            hits += 1;
+        }
+        assert_eq!(with.is_ok(), plain.is_ok());
+    }
+    assert!(hits > 600, "{hits}");
+    let [remembered, anchored, plain] = cursor.served;
+    assert!(anchored * 6 < plain, "{:?}", cursor.served);
+    assert!(remembered < 40, "{:?}", cursor.served);
+    // coherent again: a slow walk is served from remembered records
+    let before = cursor.served;
+    for k in 0..400 {
+        let p = DVec3::new(20.0 + k as f64 * 1e-3, 20.0, 0.0);
+        c.lookup_with(&mut cursor, p, DVec3::Z).unwrap();
+    }
+    let remembered = cursor.served[0] - before[0];
+    assert!(remembered > 380, "{:?} -> {:?}", before, cursor.served);
+}
