@@ -19,6 +19,8 @@ mod media_cache;
 mod media_gather;
 #[path = "../examples/demo/media_view.rs"]
 mod media_view;
+#[path = "../examples/demo/placement.rs"]
+mod placement;
 #[path = "../examples/demo/scene.rs"]
 mod scene;
 #[path = "../examples/demo/timing.rs"]

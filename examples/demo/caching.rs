@@ -16,6 +16,7 @@ use rayon::prelude::*;
 
 use crate::derivs::{Gathered, Gatherer};
 use crate::lightmap::LightMap;
+use crate::placement::{clamped_extent, level_pixels};
 use crate::render::GBuffer;
 use crate::scene::Scene;
 use crate::timing::ThreadTimer;
@@ -222,10 +223,6 @@ pub struct Run {
     pub uncovered: usize,
 }
 
-/// Record radii are clamped to [MIN, MAX] × the scene size (Křivánek et al.'s clamps, in scene units).
-const RADIUS_MIN: f64 = 0.004;
-const RADIUS_MAX: f64 = 0.25;
-
 /// Places records coarse to fine (pixel grids of step 16, 8, …, 1): at every level the pixels no
 /// record covers get a gather, and their records are inserted in pixel order, skipping those that
 /// a record inserted earlier at the same level already covers. Deterministic for any thread count.
@@ -244,11 +241,7 @@ pub fn run(store: &GatherStore, metric: Metric, parameter: f64) -> Result<Run, r
     };
     let mut step = 16;
     loop {
-        let level: Vec<usize> = (0..h)
-            .step_by(step)
-            .flat_map(|y| (0..w).step_by(step).map(move |x| y * w + x))
-            .filter(|&i| step == 16 || (i % w) % (2 * step) != 0 || (i / w) % (2 * step) != 0)
-            .collect();
+        let level = level_pixels(w, h, step);
         // Lookups run on this thread so that the thread clock measures them (they cost
         // microseconds; the gathers below are what needs the threads).
         let start = ThreadTimer::start();
@@ -267,20 +260,7 @@ pub fn run(store: &GatherStore, metric: Metric, parameter: f64) -> Result<Run, r
                 continue;
             }
             let Some(g) = store.get(i) else { continue };
-            let extent = metric
-                .extent(g, parameter)
-                .unwrap_or_else(|_| Extent::isotropic(RADIUS_MAX * size));
-            let clamp = |r: f64| {
-                if r.is_finite() {
-                    r.clamp(RADIUS_MIN * size, RADIUS_MAX * size)
-                } else {
-                    RADIUS_MAX * size
-                }
-            };
-            let extent = Extent {
-                radii: extent.radii.map(clamp),
-                axes: extent.axes,
-            };
+            let extent = clamped_extent(metric.extent(g, parameter).ok(), size);
             let mut record = Record::new(g.position, g.normal, g.value, extent);
             record.gradient = Some(g.gradient);
             record.rotation_gradient = Some(g.rotation_gradient);

@@ -16,6 +16,7 @@ mod media_gather;
 mod media_report;
 mod media_view;
 mod outputs;
+mod placement;
 mod plot;
 mod render;
 mod report;

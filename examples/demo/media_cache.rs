@@ -18,6 +18,7 @@ use rayon::prelude::*;
 use crate::lightmap::LightMap;
 use crate::media_gather::{MediaGathered, MediaGatherer};
 pub use crate::media_view::MediaView;
+use crate::placement::{clamped_extent, level_pixels};
 use crate::scene::Scene;
 use crate::timing::ThreadTimer;
 
@@ -207,10 +208,6 @@ impl MediaRun {
     }
 }
 
-/// Record radii are clamped to [MIN, MAX] × the scene size, as on the surfaces.
-pub const RADIUS_MIN: f64 = 0.004;
-pub const RADIUS_MAX: f64 = 0.25;
-
 /// Candidates are gathered in parallel in fixed chunks of this many, then inserted in order: the
 /// records do not depend on the thread count, and gathers a record of the same chunk makes
 /// unnecessary are bounded by the chunk.
@@ -249,13 +246,6 @@ pub fn run(
     let cache: Cache<[f32; 3]> =
         Cache::new(CacheConfig::volume(3).with_interpolation(metric.interpolation()))?;
     let size = store.scene.size;
-    let clamp = |r: f64| {
-        if r.is_finite() {
-            r.clamp(RADIUS_MIN * size, RADIUS_MAX * size)
-        } else {
-            RADIUS_MAX * size
-        }
-    };
     let covered = |cache: &Cache<[f32; 3]>, id: usize| {
         !view.in_medium(id / k) || cache.lookup(view.point(id), DVec3::Y).is_ok()
     };
@@ -265,11 +255,7 @@ pub fn run(
     let mut cache_seconds = 0.0;
     let mut step = 16;
     loop {
-        let pixels: Vec<usize> = (0..h)
-            .step_by(step)
-            .flat_map(|y| (0..w).step_by(step).map(move |x| y * w + x))
-            .filter(|&i| step == 16 || (i % w) % (2 * step) != 0 || (i / w) % (2 * step) != 0)
-            .collect();
+        let pixels = level_pixels(w, h, step);
         let candidates: Vec<usize> = depth
             .iter()
             .flat_map(|&d| pixels.iter().map(move |&p| p * k + d))
@@ -291,13 +277,7 @@ pub fn run(
                     continue;
                 }
                 let Some(g) = store.get(id) else { continue };
-                let extent = metric
-                    .extent(g, parameter)
-                    .unwrap_or_else(|_| Extent::isotropic(RADIUS_MAX * size));
-                let extent = Extent {
-                    radii: extent.radii.map(clamp),
-                    axes: extent.axes,
-                };
+                let extent = clamped_extent(metric.extent(g, parameter).ok(), size);
                 let mut record = Record::new(g.position, DVec3::Y, g.value, extent);
                 record.gradient = Some(g.gradient);
                 cache.insert(&record)?;

@@ -17,9 +17,9 @@
 
 use glam::DVec3;
 
-use super::interp::{Kernel, Used};
+use super::interp::Kernel;
 use super::record::{Channel, Domain, Head};
-use super::weigh::{record_weight, UsedRecords};
+use super::weigh::{push, record_weight, UsedRecords};
 
 /// Records per group (the lanes of the vector code).
 const GROUP: usize = 4;
@@ -238,16 +238,7 @@ impl Cursor {
         for g in &self.groups {
             for &slot in &g.slots[..g.len as usize] {
                 let (head, channels) = stored(slot);
-                let (weight, normal) = record_weight(kernel, head, x, n);
-                if weight > 0.0 {
-                    used.push(Used {
-                        order: head.position[0].to_bits(),
-                        weight,
-                        normal,
-                        head,
-                        channels,
-                    });
-                }
+                push(used, record_weight(kernel, head, x, n), head, channels);
             }
         }
     }
@@ -331,13 +322,8 @@ impl Cursor {
                 hits &= hits - 1;
                 let (head, channels) = stored(g.slots[k]);
                 super::index::prefetch(channels.as_ptr() as *const u8);
-                used.push(Used {
-                    order: g.position[0][k].to_bits(),
-                    weight: weights[k],
-                    normal: DVec3::new(g.normal[0][k], g.normal[1][k], g.normal[2][k]),
-                    head,
-                    channels,
-                });
+                let normal = DVec3::new(g.normal[0][k], g.normal[1][k], g.normal[2][k]);
+                push(used, (weights[k], normal), head, channels);
             }
         }
     }

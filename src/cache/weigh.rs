@@ -55,8 +55,9 @@ pub(crate) fn weigh<'a>(
     }
 }
 
+/// Appends the record to `used` if its weight is positive (the covering records).
 #[inline(always)]
-fn push<'a>(
+pub(crate) fn push<'a>(
     used: &mut UsedRecords<'a>,
     (weight, normal): (f64, DVec3),
     head: &'a Head,
