@@ -12,7 +12,10 @@
 //! That order is what four records at a time in AVX registers compute (F16C converts the binary16
 //! components); the portable code performs the same operations one record at a time.
 
+use std::marker::PhantomData;
+
 use glam::DVec3;
+use smallvec::SmallVec;
 
 use super::interp::Used;
 use super::record::{f16_to_f64, Channel};
@@ -29,9 +32,151 @@ const F32_MAX: f64 = f32::MAX as f64;
 /// Channel accumulators kept on the stack up to this many channels.
 const STACK_CHANNELS: usize = 16;
 
-/// Writes the blend of `used` (content order, weights summing to `weight_sum` > 0) at query `x`
-/// with unit normal `n` (`surface`: whether the rotational term applies) into `out`.
+/// Four covering records, one per lane, as the blend reads them (structure of arrays, so that
+/// the vector code loads each quantity of four records at once).
+#[derive(Debug, Clone, Copy)]
+struct Lanes {
+    weight: [f64; LANES],
+    position: [[f64; LANES]; 3],
+    /// The record's unit normal (surface domain; unused in volumes).
+    normal: [[f64; LANES]; 3],
+    gradient_scale: [f32; LANES],
+    rotation_scale: [f32; LANES],
+    /// The records' first channels (null in the unused lanes of the last block).
+    channels: [*const Channel; LANES],
+}
+
+impl Default for Lanes {
+    fn default() -> Self {
+        Self {
+            weight: [0.0; LANES],
+            position: [[0.0; LANES]; 3],
+            normal: [[0.0; LANES]; 3],
+            gradient_scale: [0.0; LANES],
+            rotation_scale: [0.0; LANES],
+            channels: [std::ptr::null(); LANES],
+        }
+    }
+}
+
+/// The covering records of one lookup in content order, the k-th in lane k mod 4 of block k / 4,
+/// with the sum of their weights (added in the same order).
+pub(crate) struct Covering<'a> {
+    blocks: SmallVec<[Lanes; 4]>,
+    len: usize,
+    channels: usize,
+    weight_sum: f64,
+    /// The channels pointed to are borrowed from the cache for `'a`.
+    records: PhantomData<&'a [Channel]>,
+}
+
+impl<'a> Covering<'a> {
+    /// An empty list for records of `channels` channels.
+    #[inline]
+    pub(crate) fn new(channels: usize) -> Self {
+        Self {
+            blocks: SmallVec::new(),
+            len: 0,
+            channels,
+            weight_sum: 0.0,
+            records: PhantomData,
+        }
+    }
+
+    /// Appends a record (the next in content order) with its weight at the query, position,
+    /// unit normal, gradient scales and channels.
+    #[inline(always)]
+    pub(crate) fn push(
+        &mut self,
+        weight: f64,
+        position: [f64; 3],
+        normal: [f64; 3],
+        (gradient_scale, rotation_scale): (f32, f32),
+        channels: &'a [Channel],
+    ) {
+        // the blend reads `self.channels` channels behind every pointer
+        assert_eq!(channels.len(), self.channels);
+        let lane = self.len % LANES;
+        if lane == 0 {
+            self.blocks.push(Lanes::default());
+        }
+        let Some(b) = self.blocks.last_mut() else {
+            return;
+        };
+        b.weight[lane] = weight;
+        for i in 0..3 {
+            b.position[i][lane] = position[i];
+            b.normal[i][lane] = normal[i];
+        }
+        b.gradient_scale[lane] = gradient_scale;
+        b.rotation_scale[lane] = rotation_scale;
+        b.channels[lane] = channels.as_ptr();
+        self.len += 1;
+        self.weight_sum += weight;
+    }
+
+    /// The records of `used` (in content order).
+    pub(crate) fn from_used(used: &[Used<'a>], channels: usize) -> Self {
+        let mut covering = Self::new(channels);
+        for u in used {
+            covering.push(
+                u.weight,
+                u.head.position,
+                u.normal.to_array(),
+                (u.head.gradient_scale, u.head.rotation_scale),
+                u.channels,
+            );
+        }
+        covering
+    }
+
+    /// Number of records.
+    #[inline]
+    pub(crate) fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Σ wᵢ, added in content order.
+    #[inline]
+    pub(crate) fn weight_sum(&self) -> f64 {
+        self.weight_sum
+    }
+
+    /// The k-th record: (block, lane).
+    #[inline(always)]
+    fn record(&self, k: usize) -> (&Lanes, usize) {
+        (&self.blocks[k / LANES], k % LANES)
+    }
+}
+
+/// Writes the blend of `covering` (weights summing to `covering.weight_sum()` > 0) at query `x`
+/// with unit normal `n` (`surface`: whether the rotational term applies) into `out` (one float
+/// per channel, as many as the records have).
 pub(crate) fn blend_linear(
+    surface: bool,
+    covering: &Covering<'_>,
+    x: DVec3,
+    n: DVec3,
+    out: &mut [f32],
+) {
+    assert_eq!(out.len(), covering.channels);
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("f16c") {
+        let groups = covering.blocks.len();
+        // SAFETY: the CPU has AVX and F16C (checked just above); `push` checked that every
+        // record has `out.len()` channels.
+        return unsafe {
+            blend_avx(surface, groups, covering.weight_sum, x, n, out, |i| {
+                GroupInputs::of_lanes(&covering.blocks[i], (covering.len - i * LANES).min(LANES))
+            })
+        };
+    }
+    blend_portable(surface, covering, x, n, out)
+}
+
+/// [`blend_linear`] of the records `used` (in content order, weights summing to `weight_sum`
+/// > 0): the same operations, gathering each record's data from its `Used` entry.
+pub(crate) fn blend_linear_used(
     surface: bool,
     used: &[Used<'_>],
     weight_sum: f64,
@@ -39,23 +184,31 @@ pub(crate) fn blend_linear(
     n: DVec3,
     out: &mut [f32],
 ) {
+    let channels = out.len();
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("f16c") {
-        // SAFETY: the CPU has AVX and F16C (checked just above).
-        return unsafe { blend_avx(surface, used, weight_sum, x, n, out) };
+        // every record has `channels` channels (the cache's count): the loads rely on it
+        assert!(used.iter().all(|u| u.channels.len() == channels));
+        let groups = used.len().div_ceil(LANES);
+        // SAFETY: the CPU has AVX and F16C (checked just above); channel counts checked above.
+        return unsafe {
+            blend_avx(surface, groups, weight_sum, x, n, out, |i| {
+                GroupInputs::of_used(&used[i * LANES..used.len().min(i * LANES + LANES)])
+            })
+        };
     }
-    blend_portable(surface, used, weight_sum, x, n, out)
+    blend_portable(surface, &Covering::from_used(used, channels), x, n, out)
 }
 
-/// The offsets qₖ of one record, rounded to `f32` (see the module docs).
+/// The offsets qₖ of lane `l` of `b`, rounded to `f32` (see the module docs).
 #[inline(always)]
-fn offsets(surface: bool, u: &Used<'_>, x: DVec3, n: DVec3) -> [f32; 6] {
-    let gs = u.head.gradient_scale as f64;
-    let d = x - u.head.position();
+fn offsets(surface: bool, b: &Lanes, l: usize, x: DVec3, n: DVec3) -> [f32; 6] {
+    let gs = b.gradient_scale[l] as f64;
+    let d = x - DVec3::new(b.position[0][l], b.position[1][l], b.position[2][l]);
     let t = [d.x * gs, d.y * gs, d.z * gs];
     let r = if surface {
-        let rs = u.head.rotation_scale as f64;
-        let c = u.normal.cross(n);
+        let rs = b.rotation_scale[l] as f64;
+        let c = DVec3::new(b.normal[0][l], b.normal[1][l], b.normal[2][l]).cross(n);
         [c.x * rs, c.y * rs, c.z * rs]
     } else {
         [0.0; 3]
@@ -90,8 +243,7 @@ fn finish(acc: [f64; LANES], inv_sum: f64) -> f32 {
 /// Record at a time: the reference for the vector code and the path of CPUs without AVX/F16C.
 pub(crate) fn blend_portable(
     surface: bool,
-    used: &[Used<'_>],
-    weight_sum: f64,
+    covering: &Covering<'_>,
     x: DVec3,
     n: DVec3,
     out: &mut [f32],
@@ -104,28 +256,112 @@ pub(crate) fn blend_portable(
         heap.resize(out.len(), [0.0; LANES]);
         &mut heap
     };
-    for (k, u) in used.iter().enumerate() {
-        let q = offsets(surface, u, x, n);
-        for (a, ch) in acc.iter_mut().zip(u.channels) {
-            a[k % LANES] += u.weight * (ch.value as f64 + extrapolation(ch, &q) as f64);
+    for k in 0..covering.len() {
+        let (b, l) = covering.record(k);
+        let q = offsets(surface, b, l, x, n);
+        // SAFETY: `push` checked that the record has `covering.channels` = `out.len()` channels,
+        // borrowed for the covering's lifetime.
+        let channels = unsafe { std::slice::from_raw_parts(b.channels[l], out.len()) };
+        for (a, ch) in acc.iter_mut().zip(channels) {
+            a[l] += b.weight[l] * (ch.value as f64 + extrapolation(ch, &q) as f64);
         }
     }
-    let inv_sum = 1.0 / weight_sum;
+    let inv_sum = 1.0 / covering.weight_sum();
     for (o, a) in out.iter_mut().zip(acc.iter()) {
         *o = finish(*a, inv_sum);
     }
 }
 
-/// Four records at a time (AVX, F16C), the same operations as [`blend_portable`].
+/// One group of up to four records, the records across the vectors (f64 lanes).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct GroupInputs {
+    /// Records in the group (1-4); the other lanes are masked out.
+    count: usize,
+    weight: std::arch::x86_64::__m256d,
+    position: [std::arch::x86_64::__m256d; 3],
+    normal: [std::arch::x86_64::__m256d; 3],
+    gradient_scale: std::arch::x86_64::__m256d,
+    rotation_scale: std::arch::x86_64::__m256d,
+    /// The records' first channels (unused lanes repeat a valid record).
+    channels: [*const Channel; LANES],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl GroupInputs {
+    /// From a block of [`Covering`]: one load per quantity.
+    #[target_feature(enable = "avx")]
+    #[inline]
+    fn of_lanes(b: &Lanes, count: usize) -> Self {
+        use std::arch::x86_64::*;
+        let load = |a: &[f64; LANES]| {
+            // SAFETY: four f64 (unaligned load).
+            unsafe { _mm256_loadu_pd(a.as_ptr()) }
+        };
+        let load_ps = |a: &[f32; LANES]| {
+            // SAFETY: four f32 (unaligned load).
+            unsafe { _mm256_cvtps_pd(_mm_loadu_ps(a.as_ptr())) }
+        };
+        Self {
+            count,
+            weight: load(&b.weight),
+            position: b.position.each_ref().map(load),
+            normal: b.normal.each_ref().map(load),
+            gradient_scale: load_ps(&b.gradient_scale),
+            rotation_scale: load_ps(&b.rotation_scale),
+            channels: std::array::from_fn(|k| b.channels[if k < count { k } else { 0 }]),
+        }
+    }
+
+    /// From 1-4 `Used` entries: one gather per quantity.
+    #[target_feature(enable = "avx")]
+    #[inline]
+    fn of_used(group: &[Used<'_>]) -> Self {
+        use std::arch::x86_64::*;
+        let last = group.len() - 1;
+        // lanes past the group's end repeat its last record (masked out)
+        let r: [&Used; LANES] = std::array::from_fn(|k| &group[k.min(last)]);
+        let pd = |f: &dyn Fn(&Used) -> f64| _mm256_setr_pd(f(r[0]), f(r[1]), f(r[2]), f(r[3]));
+        let ps = |f: &dyn Fn(&Used) -> f32| {
+            _mm256_cvtps_pd(_mm_setr_ps(f(r[0]), f(r[1]), f(r[2]), f(r[3])))
+        };
+        Self {
+            count: group.len(),
+            weight: pd(&|u| u.weight),
+            position: [
+                pd(&|u| u.head.position[0]),
+                pd(&|u| u.head.position[1]),
+                pd(&|u| u.head.position[2]),
+            ],
+            normal: [
+                pd(&|u| u.normal.x),
+                pd(&|u| u.normal.y),
+                pd(&|u| u.normal.z),
+            ],
+            gradient_scale: ps(&|u| u.head.gradient_scale),
+            rotation_scale: ps(&|u| u.head.rotation_scale),
+            channels: r.map(|u| u.channels.as_ptr()),
+        }
+    }
+}
+
+/// Four records at a time (AVX, F16C), the same operations as [`blend_portable`]; `group(i)`
+/// gives the i-th of `groups` groups (records 4i..4i+4 in content order).
+///
+/// # Safety
+/// The CPU must have AVX and F16C, and every record's channel pointer must point to `out.len()`
+/// channels.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx,f16c")]
+#[inline]
 unsafe fn blend_avx(
     surface: bool,
-    used: &[Used<'_>],
+    groups: usize,
     weight_sum: f64,
     x: DVec3,
     n: DVec3,
     out: &mut [f32],
+    group: impl Fn(usize) -> GroupInputs,
 ) {
     use std::arch::x86_64::*;
     let channels = out.len();
@@ -137,33 +373,32 @@ unsafe fn blend_avx(
         heap.resize(channels, _mm256_setzero_pd());
         &mut heap
     };
-    // every record has `channels` channels (the cache's count): the loads below rely on it
-    assert!(used.iter().all(|u| u.channels.len() == channels));
-    for group in used.chunks(LANES) {
-        let last = group.len() - 1;
-        // lanes past the group's end repeat its last record and are masked out
-        let r: [&Used; LANES] = std::array::from_fn(|k| &group[k.min(last)]);
+    for i in 0..groups {
+        let g = group(i);
         let valid = _mm256_castsi256_pd(_mm256_setr_epi64x(
             -1,
-            -((last >= 1) as i64),
-            -((last >= 2) as i64),
-            -((last >= 3) as i64),
+            -((g.count > 1) as i64),
+            -((g.count > 2) as i64),
+            -((g.count > 3) as i64),
         ));
-        let w = lanes_pd(&r, |u| u.weight);
-        let gs = _mm256_cvtps_pd(lanes_ps(&r, |u| u.head.gradient_scale));
-        let tx = _mm256_sub_pd(_mm256_set1_pd(x.x), lanes_pd(&r, |u| u.head.position[0]));
-        let ty = _mm256_sub_pd(_mm256_set1_pd(x.y), lanes_pd(&r, |u| u.head.position[1]));
-        let tz = _mm256_sub_pd(_mm256_set1_pd(x.z), lanes_pd(&r, |u| u.head.position[2]));
+        let gs = g.gradient_scale;
         let t = [
-            clamp_round(_mm256_mul_pd(tx, gs)),
-            clamp_round(_mm256_mul_pd(ty, gs)),
-            clamp_round(_mm256_mul_pd(tz, gs)),
+            clamp_round(_mm256_mul_pd(
+                _mm256_sub_pd(_mm256_set1_pd(x.x), g.position[0]),
+                gs,
+            )),
+            clamp_round(_mm256_mul_pd(
+                _mm256_sub_pd(_mm256_set1_pd(x.y), g.position[1]),
+                gs,
+            )),
+            clamp_round(_mm256_mul_pd(
+                _mm256_sub_pd(_mm256_set1_pd(x.z), g.position[2]),
+                gs,
+            )),
         ];
         let rot = if surface {
-            let rs = _mm256_cvtps_pd(lanes_ps(&r, |u| u.head.rotation_scale));
-            let ux = lanes_pd(&r, |u| u.normal.x);
-            let uy = lanes_pd(&r, |u| u.normal.y);
-            let uz = lanes_pd(&r, |u| u.normal.z);
+            let rs = g.rotation_scale;
+            let [ux, uy, uz] = g.normal;
             let (nx, ny, nz) = (
                 _mm256_set1_pd(n.x),
                 _mm256_set1_pd(n.y),
@@ -187,10 +422,10 @@ unsafe fn blend_avx(
         let q01 = _mm256_set_m128(t[1], t[0]);
         let q23 = _mm256_set_m128(rot[0], t[2]);
         let q45 = _mm256_set_m128(rot[2], rot[1]);
-        let base = r.map(|u| u.channels.as_ptr() as *const __m128i);
+        let base = g.channels.map(|p| p as *const __m128i);
         for (c, a) in acc.iter_mut().enumerate() {
-            // SAFETY: c < channels = every record's channel count (asserted above); a `Channel` is
-            // 16 bytes: value (binary16 slots 0-1), gradient (2-4), rotation (5-7).
+            // SAFETY: c < channels, each record's channel count (the caller's contract); a
+            // `Channel` is 16 bytes: value (binary16 slots 0-1), gradient (2-4), rotation (5-7).
             let (h0, h1, h2, h3) = unsafe {
                 (
                     _mm_loadu_si128(base[0].add(c)),
@@ -218,7 +453,7 @@ unsafe fn blend_avx(
                 _mm_unpacklo_epi32(h2, h3),
             ));
             let term = _mm256_add_pd(_mm256_cvtps_pd(value), _mm256_cvtps_pd(delta));
-            *a = _mm256_add_pd(*a, _mm256_and_pd(_mm256_mul_pd(w, term), valid));
+            *a = _mm256_add_pd(*a, _mm256_and_pd(_mm256_mul_pd(g.weight, term), valid));
         }
     }
     let inv_sum = 1.0 / weight_sum;
@@ -227,22 +462,6 @@ unsafe fn blend_avx(
         _mm256_storeu_pd(lanes.as_mut_ptr(), *a);
         *o = finish(lanes, inv_sum);
     }
-}
-
-/// One `f64` per record, the records across the vector.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[inline]
-fn lanes_pd(r: &[&Used<'_>; LANES], f: impl Fn(&Used<'_>) -> f64) -> std::arch::x86_64::__m256d {
-    std::arch::x86_64::_mm256_setr_pd(f(r[0]), f(r[1]), f(r[2]), f(r[3]))
-}
-
-/// One `f32` per record, the records across the vector.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-#[inline]
-fn lanes_ps(r: &[&Used<'_>; LANES], f: impl Fn(&Used<'_>) -> f32) -> std::arch::x86_64::__m128 {
-    std::arch::x86_64::_mm_setr_ps(f(r[0]), f(r[1]), f(r[2]), f(r[3]))
 }
 
 /// Clamps to ±[`Q_MAX`] and rounds to `f32`, as [`offsets`] does (`min` then `max`: a NaN lane

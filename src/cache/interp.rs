@@ -35,7 +35,6 @@
 
 use glam::DVec3;
 
-use super::blend;
 use super::record::{packed_scale, Channel, Domain, Head};
 use crate::error::{ensure_finite, Error, Result};
 
@@ -182,31 +181,10 @@ pub(crate) struct Used<'a> {
 /// Channels accumulated per pass over the records (stack buffers, no allocation).
 const BLOCK: usize = 16;
 
-/// Weighted sum of the extrapolations of `used` (already in a deterministic order, weights summing
-/// to `weight_sum` > 0) at (x, n), written to `out` (one float per channel).
-pub(crate) fn blend(
-    kernel: &Kernel,
-    used: &[Used<'_>],
-    weight_sum: f64,
-    x: DVec3,
-    n: DVec3,
-    out: &mut [f32],
-) {
-    if kernel.interpolation == Interpolation::Log {
-        return blend_log(kernel, used, weight_sum, x, n, out);
-    }
-    blend::blend_linear(
-        kernel.domain == Domain::Surface,
-        used,
-        weight_sum,
-        x,
-        n,
-        out,
-    )
-}
-
-/// [`blend`] for log-space extrapolation.
-fn blend_log(
+/// Weighted sum of the log-space extrapolations of `used` (in content order, weights summing to
+/// `weight_sum` > 0) at (x, n), written to `out` (one float per channel). The linear-space
+/// schemes blend through [`blend_linear`](super::blend::blend_linear).
+pub(crate) fn blend_log(
     kernel: &Kernel,
     used: &[Used<'_>],
     weight_sum: f64,
@@ -263,12 +241,14 @@ fn blend_log(
 
 #[cfg(test)]
 mod tests {
+    use super::super::blend;
     use super::*;
 
-    /// The dispatched blend (AVX and F16C where the CPU has them) equals the portable one bit for
-    /// bit, over random binary16 components (normal, subnormal, zero, ±1), value bits that read as
-    /// NaN or infinite halves, every group size (1-6 records: full and partial lane groups), and
-    /// gradient scales large enough to saturate the offsets.
+    /// The dispatched blends (AVX and F16C where the CPU has them; from the lanes of a `Covering`
+    /// and gathered from `Used` entries) equal the portable one bit for bit, over random binary16
+    /// components (normal, subnormal, zero, ±1), value bits that read as NaN or infinite halves,
+    /// every group size (1-6 records: full and partial lane groups), and gradient scales large
+    /// enough to saturate the offsets.
     #[test]
     fn vector_blend_equals_portable_blend() {
         let mut state = 0x1234_5678_9abc_def0u64;
@@ -288,12 +268,6 @@ mod tests {
         };
         for round in 0..400 {
             let surface = round % 4 != 3;
-            let domain = if surface {
-                Domain::Surface
-            } else {
-                Domain::Volume
-            };
-            let kernel = Kernel::new(Interpolation::Ward, domain, 0.5).unwrap();
             let records = 1 + round % 6;
             let huge = round % 7 == 0; // offsets past Q_MAX: saturated, still finite
             let heads: Vec<Head> = (0..records)
@@ -330,16 +304,17 @@ mod tests {
                 .collect();
             let x = DVec3::new(0.3, 0.2, 0.0);
             let n = DVec3::new(0.05, -0.1, 1.0).normalize();
+            let covering = blend::Covering::from_used(&used, 5);
             let sum: f64 = used.iter().map(|u| u.weight).sum();
-            let (mut fast, mut portable) = ([0.0f32; 5], [0.0f32; 5]);
-            blend(&kernel, &used, sum, x, n, &mut fast);
-            blend::blend_portable(surface, &used, sum, x, n, &mut portable);
-            assert_eq!(
-                fast.map(f32::to_bits),
-                portable.map(f32::to_bits),
-                "round {round}"
-            );
-            assert!(fast.iter().all(|v| v.is_finite()));
+            assert_eq!(sum.to_bits(), covering.weight_sum().to_bits());
+            let (mut lanes, mut gathered, mut portable) = ([0.0f32; 5], [0.0f32; 5], [0.0f32; 5]);
+            blend::blend_linear(surface, &covering, x, n, &mut lanes);
+            blend::blend_linear_used(surface, &used, sum, x, n, &mut gathered);
+            blend::blend_portable(surface, &covering, x, n, &mut portable);
+            let bits = |v: [f32; 5]| v.map(f32::to_bits);
+            assert_eq!(bits(lanes), bits(portable), "round {round}");
+            assert_eq!(bits(gathered), bits(portable), "round {round}");
+            assert!(lanes.iter().all(|v| v.is_finite()));
         }
     }
 }

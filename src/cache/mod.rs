@@ -468,12 +468,18 @@ impl<V: CacheValue> Cache<V> {
             }
             cursor::Plan::Remembered => {}
         }
-        let mut used = weigh::UsedRecords::new();
         // SAFETY: the cursor's source (identity, generation, length) matches this cache, so its
         // slot addresses are this cache's current ones.
         let stored = |slot: usize| unsafe { self.stored_at(slot) };
-        cursor.weigh(&self.kernel, position, n, stored, &mut used);
-        self.blend_used(position, n, used, out)
+        if self.kernel.interpolation == Interpolation::Log {
+            let mut used = weigh::UsedRecords::new();
+            cursor.weigh(&self.kernel, position, n, stored, &mut used);
+            return self.blend_used(position, n, &mut used, out);
+        }
+        // the records come in content order: straight into the blend's lanes
+        let mut covering = blend::Covering::new(self.config.channels);
+        cursor.weigh_covering(&self.kernel, position, n, stored, &mut covering);
+        self.blend_covering(position, n, &covering, out)
     }
 
     /// [`Cache::lookup`] for spatially coherent queries (see [`Cache::lookup_into_with`]).
@@ -508,7 +514,7 @@ impl<V: CacheValue> Cache<V> {
         // SAFETY: every slot was taken from this cache's storage during this lookup.
         let stored = |slot: usize| unsafe { self.stored_at(slot) };
         weigh::weigh(&self.kernel, position, n, slots, stored, &mut used);
-        self.blend_used(position, n, used, out)
+        self.blend_used(position, n, &mut used, out)
     }
 
     /// The weighted extrapolation of the covering records `used` (any order) into `out`.
@@ -516,7 +522,7 @@ impl<V: CacheValue> Cache<V> {
         &self,
         position: DVec3,
         n: DVec3,
-        mut used: weigh::UsedRecords<'_>,
+        used: &mut weigh::UsedRecords<'_>,
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
         if used.is_empty() {
@@ -535,13 +541,39 @@ impl<V: CacheValue> Cache<V> {
             });
         }
         let weight_sum: f64 = used.iter().map(|u| u.weight).sum();
-        if !(weight_sum > 0.0 && weight_sum.is_finite()) {
+        check_weight_sum(weight_sum, position)?;
+        if self.kernel.interpolation == Interpolation::Log {
+            interp::blend_log(&self.kernel, used, weight_sum, position, n, out);
+            return Ok((weight_sum, used.len()));
+        }
+        let surface = self.config.domain == Domain::Surface;
+        blend::blend_linear_used(surface, used, weight_sum, position, n, out);
+        Ok((weight_sum, used.len()))
+    }
+
+    /// The weighted extrapolation of the covering records (in content order) into `out`, for the
+    /// linear-space schemes.
+    fn blend_covering(
+        &self,
+        position: DVec3,
+        n: DVec3,
+        covering: &blend::Covering<'_>,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
+        if covering.len() == 0 {
             return Err(Error::NotFound(format!(
-                "the records covering {position} have zero total weight"
+                "no cache record covers {position}"
             )));
         }
-        interp::blend(&self.kernel, &used, weight_sum, position, n, out);
-        Ok((weight_sum, used.len()))
+        check_weight_sum(covering.weight_sum(), position)?;
+        blend::blend_linear(
+            self.config.domain == Domain::Surface,
+            covering,
+            position,
+            n,
+            out,
+        );
+        Ok((covering.weight_sum(), covering.len()))
     }
 
     /// Interpolates at `position` with surface normal `normal` (ignored in volumes).
@@ -669,6 +701,17 @@ impl<V: CacheValue> Cache<V> {
             }
         }
         Ok(added)
+    }
+}
+
+/// `NotFound` unless the covering records' weights sum to a positive finite number.
+fn check_weight_sum(weight_sum: f64, position: DVec3) -> Result<()> {
+    if weight_sum > 0.0 && weight_sum.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::NotFound(format!(
+            "the records covering {position} have zero total weight"
+        )))
     }
 }
 

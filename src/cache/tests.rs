@@ -558,7 +558,7 @@ fn cursor_lookups_equal_plain_lookups_bit_for_bit() {
         assert!(served > 10_000, "{domain:?}: {served}");
         // the remembered candidates served most lookups; anchoring and the plain path were used
         let [remembered, anchored, plain] = cursor.served;
-        assert!(remembered > 15 * anchored, "{:?}", cursor.served);
+        assert!(remembered > 8 * anchored, "{:?}", cursor.served);
         assert!(anchored > 40 && plain >= 4, "{:?}", cursor.served);
         // one cursor moved to another cache re-anchors instead of reusing candidates
         let other: Cache<[f32; 3]> = Cache::new(config).unwrap();
