@@ -115,11 +115,10 @@ impl<'a> Covering<'a> {
         self.weight_sum += weight;
     }
 
-    /// The records of `used` (in content order).
-    pub(crate) fn from_used(used: &[Used<'a>], channels: usize) -> Self {
-        let mut covering = Self::new(channels);
+    /// Appends the records of `used` (the next ones in content order).
+    pub(crate) fn extend_from_used(&mut self, used: &[Used<'a>]) {
         for u in used {
-            covering.push(
+            self.push(
                 u.weight,
                 u.head.position,
                 u.normal.to_array(),
@@ -127,6 +126,12 @@ impl<'a> Covering<'a> {
                 u.channels,
             );
         }
+    }
+
+    /// The records of `used` (in content order).
+    pub(crate) fn from_used(used: &[Used<'a>], channels: usize) -> Self {
+        let mut covering = Self::new(channels);
+        covering.extend_from_used(used);
         covering
     }
 

@@ -269,15 +269,7 @@ impl Cursor {
         }
         let mut used = UsedRecords::new();
         self.weigh_portable(kernel, x, n, stored, &mut used);
-        for u in &used {
-            covering.push(
-                u.weight,
-                u.head.position,
-                u.normal.to_array(),
-                (u.head.gradient_scale, u.head.rotation_scale),
-                u.channels,
-            );
-        }
+        covering.extend_from_used(&used);
     }
 
     /// [`Cursor::weigh`] one record at a time, from the stored records (the reference for the
