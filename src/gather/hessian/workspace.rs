@@ -1,0 +1,377 @@
+//! The evaluation of [`super::occlusion_derivatives`] on reusable buffers.
+//!
+//! A 4096-ray gather needs about 1 MB of per-vertex, per-triangle and per-edge scratch data; kept in
+//! an [`OcclusionWorkspace`] (one per thread behind [`super::occlusion_derivatives`]) it is neither
+//! allocated nor faulted in again for every gather, and the vertices are placed directly in the
+//! scaled units the edge kernel reads.
+
+use glam::{DMat3, DVec3};
+
+use super::edges::EdgeSums;
+use super::{
+    add_scaled, all_black, empty, farthest_vertices, finish, place, validate, HemisphereGather,
+    MeshGeometry, OcclusionDerivatives, Scale, Topology,
+};
+use crate::error::{Error, Result};
+use crate::gather::hessian_mesh::{NONE, POLE, REVERSED};
+use crate::kernels::transmittance::separation;
+use crate::{Deriv3, Order};
+
+/// Reusable scratch memory for [`super::occlusion_derivatives_with`]: keep one per thread and pass
+/// it to every gather to avoid allocating about 250 bytes per ray for each of them.
+///
+/// A workspace holds no results between calls, only capacity (it grows to the largest gather seen;
+/// [`OcclusionWorkspace::new`] starts empty).
+#[derive(Default)]
+pub struct OcclusionWorkspace {
+    /// Vertex distances from x (L), misses at the far distance.
+    distance: Vec<f64>,
+    /// Vertex positions relative to x, scaled (see [`Scale`]).
+    points: Vec<DVec3>,
+    /// Their squared lengths.
+    squared: Vec<f64>,
+    /// For every triangle, its farthest vertex.
+    farthest: Vec<u32>,
+    pole_radiance: Vec<f64>,
+    /// Radiance per vertex and channel.
+    vertex: Vec<f64>,
+    /// Per triangle and channel: radiance (surface path) or `L_Δ T_Δ` and `T_Δ` (medium path),
+    /// plus a zero row for the outside of the horizon.
+    triangle: Vec<f64>,
+    delta: Vec<f64>,
+    /// Medium path: the transmittance of every vertex that is the farthest of some triangle.
+    transmittance: Vec<VertexTransmittance>,
+    sums: Option<EdgeSums>,
+}
+
+impl std::fmt::Debug for OcclusionWorkspace {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OcclusionWorkspace")
+            .field("vertices", &self.points.capacity())
+            .field("triangles", &self.farthest.capacity())
+            .finish_non_exhaustive()
+    }
+}
+
+/// Transmittance from x to a vertex with the coefficients of its derivatives:
+/// `∇T = gradient`, `HT = radial_tangential u uᵀ − tangential 𝟙`.
+#[derive(Debug, Clone, Copy, Default)]
+struct VertexTransmittance {
+    value: f64,
+    gradient: DVec3,
+    u: DVec3,
+    radial_tangential: f64,
+    tangential: f64,
+}
+
+impl OcclusionWorkspace {
+    /// An empty workspace (buffers grow on first use).
+    pub fn new() -> OcclusionWorkspace {
+        OcclusionWorkspace::default()
+    }
+
+    /// Vertices the workspace currently has room for (its memory is about 250 bytes per vertex).
+    pub(super) fn vertex_capacity(&self) -> usize {
+        self.points.capacity()
+    }
+
+    /// Validates and places a gather (vertices in scaled units).
+    /// Returns the scale and the distance where misses were placed.
+    pub(super) fn place_gather(
+        &mut self,
+        topo: &Topology,
+        g: &HemisphereGather,
+    ) -> Result<(Scale, f64)> {
+        let (normal, far_distance) = validate(topo, g)?;
+        let scale = Scale::of_far(far_distance);
+        place(
+            topo,
+            g,
+            normal,
+            far_distance,
+            (scale.f1, scale.f2),
+            &mut self.distance,
+            &mut self.points,
+            &mut self.pole_radiance,
+        )?;
+        self.squared.clear();
+        self.squared
+            .extend(self.points.iter().map(|q| q.length_squared()));
+        farthest_vertices(topo, &self.distance, &mut self.farthest);
+        Ok((scale, far_distance))
+    }
+
+    /// Takes an already placed mesh.
+    pub(super) fn place_mesh(&mut self, mesh: &MeshGeometry) -> Scale {
+        let scale = Scale::of(mesh);
+        self.points.clear();
+        self.points
+            .extend(mesh.positions.iter().map(|&p| scale.point(p)));
+        self.squared.clear();
+        self.squared
+            .extend(self.points.iter().map(|q| q.length_squared()));
+        self.distance.clone_from(&mesh.distance);
+        self.farthest.clone_from(&mesh.farthest);
+        self.pole_radiance.clone_from(&mesh.pole_radiance);
+        scale
+    }
+
+    /// The derivatives of the placed mesh (module docs of [`super`]).
+    pub(super) fn derivatives(
+        &mut self,
+        topo: &Topology,
+        g: &HemisphereGather,
+        order: Order,
+        scale: Scale,
+        far_distance: f64,
+    ) -> Result<OcclusionDerivatives> {
+        if !order.gradient() {
+            return Err(Error::InvalidArgument(
+                "occlusion derivatives need order >= RADDIFF_ORDER_GRADIENT".into(),
+            ));
+        }
+        let n = g.normal.normalize();
+        let channels = g.channels;
+        let out = empty(channels, all_black(g));
+        self.vertex_radiance(topo, g);
+        let mut sums = self
+            .sums
+            .take()
+            .unwrap_or_else(|| EdgeSums::new(n, order, 1));
+        let result = if g.sigma_t > 0.0 {
+            self.medium(topo, g, order, scale, far_distance, &mut sums, out)
+        } else {
+            self.surface(topo, g, order, scale, &mut sums, out)
+        };
+        self.sums = Some(sums);
+        result
+    }
+
+    /// Radiance of every vertex (samples, then horizon copies and the pole), channel-interleaved.
+    fn vertex_radiance(&mut self, topo: &Topology, g: &HemisphereGather) {
+        let ch = g.channels;
+        self.vertex.clear();
+        self.vertex.reserve(topo.vertex_count() * ch);
+        self.vertex.extend(g.radiance.iter().map(|&l| l as f64));
+        for v in g.radiance.len() / ch..topo.vertex_count() {
+            let src = topo.vertex_source[v];
+            if src == POLE {
+                self.vertex.extend_from_slice(&self.pole_radiance[..ch]);
+            } else {
+                let s = src as usize * ch;
+                self.vertex
+                    .extend(g.radiance[s..s + ch].iter().map(|&l| l as f64));
+            }
+        }
+    }
+
+    fn surface(
+        &mut self,
+        topo: &Topology,
+        g: &HemisphereGather,
+        order: Order,
+        scale: Scale,
+        sums: &mut EdgeSums,
+        mut out: OcclusionDerivatives,
+    ) -> Result<OcclusionDerivatives> {
+        let channels = g.channels;
+        let n = g.normal.normalize();
+        // Radiance of every triangle (its farthest vertex's), plus the zero row of the outside.
+        let tri = &mut self.triangle;
+        tri.clear();
+        let tcount = topo.triangles.len();
+        if channels == 1 {
+            let vertex = &self.vertex;
+            tri.extend(self.farthest.iter().map(|&f| vertex[f as usize]));
+        } else {
+            for &f in &self.farthest {
+                let f = f as usize * channels;
+                tri.extend_from_slice(&self.vertex[f..f + channels]);
+            }
+        }
+        tri.resize((tcount + 1) * channels, 0.0);
+        let outside = tcount;
+        sums.reset(n, order, channels, 0);
+        let (points, squared) = (&self.points, &self.squared);
+        if channels == 1 {
+            sums.add_edges_one_channel(&topo.edges, tri, points, squared)?;
+        } else {
+            let delta = &mut self.delta;
+            delta.clear();
+            delta.resize(channels, 0.0);
+            for e in &topo.edges {
+                let boundary = e.right == NONE;
+                let right = if boundary { outside } else { e.right as usize };
+                let (l, r) = (e.left as usize * channels, right * channels);
+                let mut any = false;
+                for (c, d) in delta.iter_mut().enumerate() {
+                    *d = tri[l + c] - tri[r + c];
+                    any |= *d != 0.0;
+                }
+                if any || boundary {
+                    let (a, b) = (e.a as usize, e.b as usize);
+                    sums.push(
+                        points[a], points[b], squared[a], squared[b], delta, boundary,
+                    )?;
+                }
+            }
+        }
+        let (acc, geometric) = sums.finish()?;
+        out.geometric = geometric;
+        finish(out, &acc, scale)
+    }
+
+    /// Medium path. Each triangle carries `L_Δ T_Δ F_Δ` with `T_Δ` the transmittance to its
+    /// farthest vertex, so by the product rule
+    ///
+    /// ```text
+    ///   value  Σ_e f_e (W_left − W_right)                                    W_Δ = L_Δ T_Δ
+    ///   ∇      Σ_e ∇f_e (W_left − W_right) + Σ_Δ L_Δ F_Δ ∇T_Δ
+    ///   H      Σ_e Hf_e (W_left − W_right) + Σ_Δ L_Δ (∇T_Δ ∇F_Δᵀ + ∇F_Δ ∇T_Δᵀ + F_Δ HT_Δ)
+    /// ```
+    ///
+    /// The edge sums are the surface path's with transmittance-weighted radiance (the batched edge
+    /// kernel; the geometric terms are one more channel, of weight `T_Δ`); only each triangle's own
+    /// form factor and gradient are summed per triangle, from the edges' kept values and gradients.
+    /// Misses (and the pole, if it sits at the far distance) are attenuated to zero.
+    #[allow(clippy::too_many_arguments)]
+    fn medium(
+        &mut self,
+        topo: &Topology,
+        g: &HemisphereGather,
+        order: Order,
+        scale: Scale,
+        far_distance: f64,
+        sums: &mut EdgeSums,
+        mut out: OcclusionDerivatives,
+    ) -> Result<OcclusionDerivatives> {
+        let n = g.normal.normalize();
+        // σ_t r is scale-free: σ_t in scaled units is σ_t / (f1 f2).
+        let sigma = g.sigma_t / scale.f1 / scale.f2;
+        let ch = g.channels;
+        let rows = ch + 1;
+        let vcount = topo.vertex_count();
+        // The transmittance of every vertex that some triangle takes its radiance from (each is
+        // the farthest of about two triangles); zero marks the others and the misses.
+        let tr = &mut self.transmittance;
+        tr.clear();
+        tr.resize(vcount, VertexTransmittance::default());
+        for &far in &self.farthest {
+            let v = far as usize;
+            if self.distance[v] < far_distance && tr[v].value == 0.0 {
+                tr[v] = vertex_transmittance(self.points[v], sigma, order)?;
+            }
+        }
+        // Per triangle `W_Δ` per channel and `T_Δ`, plus a zero row for the outside.
+        let tcount = topo.triangles.len();
+        let weight = &mut self.triangle;
+        weight.clear();
+        weight.resize((tcount + 1) * rows, 0.0);
+        for (w, &far) in weight.chunks_exact_mut(rows).zip(&self.farthest) {
+            let far = far as usize;
+            let t = tr[far].value;
+            for (w, &l) in w[..ch].iter_mut().zip(&self.vertex[far * ch..]) {
+                *w = l * t;
+            }
+            w[ch] = t;
+        }
+        sums.reset(n, order, rows, topo.edges.len());
+        let delta = &mut self.delta;
+        delta.clear();
+        delta.resize(rows, 0.0);
+        for (index, e) in topo.edges.iter().enumerate() {
+            let right = if e.right == NONE {
+                tcount
+            } else {
+                e.right as usize
+            };
+            let (l, r) = (e.left as usize * rows, right * rows);
+            // An edge between two dark triangles (T = 0) adds nothing, to the sums or to either
+            // triangle.
+            if weight[l + ch] == 0.0 && weight[r + ch] == 0.0 {
+                continue;
+            }
+            for (c, d) in delta.iter_mut().enumerate() {
+                *d = weight[l + c] - weight[r + c];
+            }
+            let (a, b) = (e.a as usize, e.b as usize);
+            sums.push_kept(
+                self.points[a],
+                self.points[b],
+                self.squared[a],
+                self.squared[b],
+                delta,
+                false,
+                index as u32,
+            )?;
+        }
+        let (mut acc, _) = sums.finish()?;
+        let terms = sums.terms();
+        let mut geometric = acc.pop().unwrap_or_default();
+        for (t, codes) in topo.triangle_edges.iter().enumerate() {
+            let far = self.farthest[t] as usize;
+            let tv = &tr[far];
+            if tv.value == 0.0 {
+                continue;
+            }
+            let mut f = [0.0f64; 4];
+            for &code in codes {
+                let e = &terms[(code & !REVERSED) as usize];
+                let s = if code & REVERSED != 0 { -1.0 } else { 1.0 };
+                for (f, e) in f.iter_mut().zip(e) {
+                    *f += s * e;
+                }
+            }
+            let value = f[0];
+            let gradient = DVec3::new(f[1], f[2], f[3]);
+            let mut p = Deriv3::constant(0.0);
+            p.gradient = tv.gradient * value;
+            if order.hessian() {
+                let (a, u) = (tv.gradient, tv.u);
+                let k = tv.radial_tangential * value;
+                let cross = DMat3::from_cols(
+                    a * gradient.x + gradient * a.x + u * (u.x * k),
+                    a * gradient.y + gradient * a.y + u * (u.y * k),
+                    a * gradient.z + gradient * a.z + u * (u.z * k),
+                );
+                p.hessian = cross - DMat3::from_diagonal(DVec3::splat(tv.tangential * value));
+            }
+            add_scaled(&mut geometric, &p, 1.0, order);
+            for (a, &l) in acc.iter_mut().zip(&self.vertex[far * ch..(far + 1) * ch]) {
+                if l != 0.0 {
+                    add_scaled(a, &p, l, order);
+                }
+            }
+        }
+        out.geometric = geometric;
+        finish(out, &acc, scale)
+    }
+}
+
+/// Transmittance from x (the origin) to a vertex at scaled position `p`, with the expressions of
+/// `kernels::transmittance` but without its validation (positions are validated and scaled).
+#[inline]
+fn vertex_transmittance(p: DVec3, sigma: f64, order: Order) -> Result<VertexTransmittance> {
+    let (u, dist) = separation(DVec3::ZERO, p);
+    if dist == 0.0 {
+        return Err(Error::Degenerate(
+            "transmittance gradient is undefined at x == y".into(),
+        ));
+    }
+    let t = (-sigma * dist).exp();
+    if t == 0.0 {
+        return Ok(VertexTransmittance::default());
+    }
+    let mut out = VertexTransmittance {
+        value: t,
+        gradient: -sigma * t * u,
+        u,
+        ..VertexTransmittance::default()
+    };
+    if order.hessian() {
+        let radial = sigma * sigma * t;
+        out.tangential = sigma * t / dist;
+        out.radial_tangential = radial + out.tangential;
+    }
+    Ok(out)
+}
