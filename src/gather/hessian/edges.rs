@@ -719,6 +719,49 @@ impl EdgeSums {
         Ok(())
     }
 
+    /// The medium path's edges for one channel: `weight` holds `W_Δ = L_Δ T_Δ` and `T_Δ` for every
+    /// triangle (and a zero pair for the outside of the horizon); each edge is weighted by the
+    /// differences of both across it and kept under its index, and skipped only when `T` is 0 on
+    /// both sides. The same as pushing them one by one with [`EdgeSums::push_kept`], in one tight
+    /// loop.
+    pub(crate) fn add_edges_medium_one_channel(
+        &mut self,
+        edges: &[Edge],
+        weight: &[f64],
+        points: &[DVec3],
+        squared: &[f64],
+    ) -> Result<()> {
+        let outside = weight.len() / 2 - 1;
+        let mut i = self.main.len;
+        for (index, e) in edges.iter().enumerate() {
+            let right = if e.right == NONE {
+                outside
+            } else {
+                e.right as usize
+            };
+            let (l, r) = (2 * e.left as usize, 2 * right);
+            let (tl, tr) = (weight[l + 1], weight[r + 1]);
+            if tl == 0.0 && tr == 0.0 {
+                continue;
+            }
+            let (a, b) = (e.a as usize, e.b as usize);
+            let q = &mut self.main;
+            q.batch.set(i, points[a], points[b], squared[a], squared[b]);
+            q.weights[0][i] = weight[l] - weight[r];
+            q.weights[1][i] = tl - tr;
+            q.boundary[i] = false;
+            q.index[i] = index as u32;
+            i += 1;
+            if i == BATCH {
+                self.main.len = BATCH;
+                self.flush_main()?;
+                i = 0;
+            }
+        }
+        self.main.len = i;
+        Ok(())
+    }
+
     fn flush_main(&mut self) -> Result<()> {
         let count = self.main.len;
         if count == 0 {

@@ -276,34 +276,38 @@ impl OcclusionWorkspace {
             w[ch] = t;
         }
         sums.reset(n, order, rows, topo.edges.len());
-        let delta = &mut self.delta;
-        delta.clear();
-        delta.resize(rows, 0.0);
-        for (index, e) in topo.edges.iter().enumerate() {
-            let right = if e.right == NONE {
-                tcount
-            } else {
-                e.right as usize
-            };
-            let (l, r) = (e.left as usize * rows, right * rows);
-            // An edge between two dark triangles (T = 0) adds nothing, to the sums or to either
-            // triangle.
-            if weight[l + ch] == 0.0 && weight[r + ch] == 0.0 {
-                continue;
+        if ch == 1 {
+            sums.add_edges_medium_one_channel(&topo.edges, weight, &self.points, &self.squared)?;
+        } else {
+            let delta = &mut self.delta;
+            delta.clear();
+            delta.resize(rows, 0.0);
+            for (index, e) in topo.edges.iter().enumerate() {
+                let right = if e.right == NONE {
+                    tcount
+                } else {
+                    e.right as usize
+                };
+                let (l, r) = (e.left as usize * rows, right * rows);
+                // An edge between two dark triangles (T = 0) adds nothing, to the sums or to
+                // either triangle.
+                if weight[l + ch] == 0.0 && weight[r + ch] == 0.0 {
+                    continue;
+                }
+                for (c, d) in delta.iter_mut().enumerate() {
+                    *d = weight[l + c] - weight[r + c];
+                }
+                let (a, b) = (e.a as usize, e.b as usize);
+                sums.push_kept(
+                    self.points[a],
+                    self.points[b],
+                    self.squared[a],
+                    self.squared[b],
+                    delta,
+                    false,
+                    index as u32,
+                )?;
             }
-            for (c, d) in delta.iter_mut().enumerate() {
-                *d = weight[l + c] - weight[r + c];
-            }
-            let (a, b) = (e.a as usize, e.b as usize);
-            sums.push_kept(
-                self.points[a],
-                self.points[b],
-                self.squared[a],
-                self.squared[b],
-                delta,
-                false,
-                index as u32,
-            )?;
         }
         let (mut acc, _) = sums.finish()?;
         let terms = sums.terms();
