@@ -517,7 +517,7 @@ pub fn occlusion_derivatives_on(
     })
 }
 
-/// The per-thread workspace keeps at most this many mesh vertices' worth of memory (about 250 bytes
+/// The per-thread workspace keeps at most this many mesh vertices' worth of memory (100 to 250 bytes
 /// each) between calls; larger gathers release theirs.
 pub const KEPT_WORKSPACE_VERTICES: usize = 1 << 16;
 

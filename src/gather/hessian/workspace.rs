@@ -18,7 +18,7 @@ use crate::kernels::transmittance::separation;
 use crate::{Deriv3, Order};
 
 /// Reusable scratch memory for [`super::occlusion_derivatives_with`]: keep one per thread and pass
-/// it to every gather to avoid allocating about 250 bytes per ray for each of them.
+/// it to every gather to avoid allocating 100 (surface) to 250 (medium) bytes per ray for each.
 ///
 /// A workspace holds no results between calls, only capacity (it grows to the largest gather seen;
 /// [`OcclusionWorkspace::new`] starts empty).
@@ -70,7 +70,7 @@ impl OcclusionWorkspace {
         OcclusionWorkspace::default()
     }
 
-    /// Vertices the workspace currently has room for (its memory is about 250 bytes per vertex).
+    /// Vertices the workspace currently has room for (its memory is 100 to 250 bytes per vertex).
     pub(super) fn vertex_capacity(&self) -> usize {
         self.points.capacity()
     }
