@@ -9,13 +9,13 @@ use glam::{DMat3, DVec3};
 
 use super::edges::EdgeSums;
 use super::{
-    add_scaled, all_black, empty, farthest_vertices, finish, place, validate, HemisphereGather,
-    MeshGeometry, OcclusionDerivatives, Scale, Topology,
+    all_black, empty, farthest_vertices, finish, place, validate, HemisphereGather, MeshGeometry,
+    OcclusionDerivatives, Scale, Topology,
 };
 use crate::error::{Error, Result};
 use crate::gather::hessian_mesh::{NONE, POLE, REVERSED};
 use crate::kernels::transmittance::separation;
-use crate::{Deriv3, Order};
+use crate::Order;
 
 /// Reusable scratch memory for [`super::occlusion_derivatives_with`]: keep one per thread and pass
 /// it to every gather to avoid allocating 100 (surface) to 250 (medium) bytes per ray for each.
@@ -39,7 +39,9 @@ pub struct OcclusionWorkspace {
     /// plus a zero row for the outside of the horizon.
     triangle: Vec<f64>,
     delta: Vec<f64>,
-    /// Medium path: the transmittance of every vertex that is the farthest of some triangle.
+    /// Medium path: which vertices are the farthest of some triangle.
+    lit: Vec<bool>,
+    /// Medium path: the transmittance of every such vertex.
     transmittance: Vec<VertexTransmittance>,
     sums: Option<EdgeSums>,
 }
@@ -252,14 +254,20 @@ impl OcclusionWorkspace {
         let rows = ch + 1;
         let vcount = topo.vertex_count();
         // The transmittance of every vertex that some triangle takes its radiance from (each is
-        // the farthest of about two triangles); zero marks the others and the misses.
+        // the farthest of about two triangles); zero marks the others and the misses. Marked
+        // first, then computed in vertex order (random access to the 72-byte entries was slower).
+        let lit = &mut self.lit;
+        lit.clear();
+        lit.resize(vcount, false);
+        for &far in &self.farthest {
+            lit[far as usize] = true;
+        }
         let tr = &mut self.transmittance;
         tr.clear();
         tr.resize(vcount, VertexTransmittance::default());
-        for &far in &self.farthest {
-            let v = far as usize;
-            if self.distance[v] < far_distance && tr[v].value == 0.0 {
-                tr[v] = vertex_transmittance(self.points[v], sigma, order)?;
+        for (v, t) in tr.iter_mut().enumerate() {
+            if lit[v] && self.distance[v] < far_distance {
+                *t = vertex_transmittance(self.points[v], sigma, order)?;
             }
         }
         // Per triangle `W_Δ` per channel and `T_Δ`, plus a zero row for the outside.
@@ -311,9 +319,12 @@ impl OcclusionWorkspace {
         }
         let (mut acc, _) = sums.finish()?;
         let terms = sums.terms();
-        let mut geometric = acc.pop().unwrap_or_default();
-        for (t, codes) in topo.triangle_edges.iter().enumerate() {
-            let far = self.farthest[t] as usize;
+        // Per row (channels, then the geometric terms): gradient (3) and the Hessian's unique
+        // entries xx, xy, xz, yy, yz, zz of `L_Δ (F_Δ ∇T + ∇T ∇F_Δᵀ + ∇F_Δ ∇Tᵀ + F_Δ HT)`.
+        let hessian = order.hessian();
+        let mut extra = vec![[0.0f64; 9]; rows];
+        for (codes, &far) in topo.triangle_edges.iter().zip(&self.farthest) {
+            let far = far as usize;
             let tv = &tr[far];
             if tv.value == 0.0 {
                 continue;
@@ -326,25 +337,43 @@ impl OcclusionWorkspace {
                     *f += s * e;
                 }
             }
-            let value = f[0];
-            let gradient = DVec3::new(f[1], f[2], f[3]);
-            let mut p = Deriv3::constant(0.0);
-            p.gradient = tv.gradient * value;
-            if order.hessian() {
-                let (a, u) = (tv.gradient, tv.u);
+            let [value, gx, gy, gz] = f;
+            let (a, u) = (tv.gradient, tv.u);
+            let mut p = [0.0f64; 9];
+            p[0] = a.x * value;
+            p[1] = a.y * value;
+            p[2] = a.z * value;
+            if hessian {
                 let k = tv.radial_tangential * value;
-                let cross = DMat3::from_cols(
-                    a * gradient.x + gradient * a.x + u * (u.x * k),
-                    a * gradient.y + gradient * a.y + u * (u.y * k),
-                    a * gradient.z + gradient * a.z + u * (u.z * k),
-                );
-                p.hessian = cross - DMat3::from_diagonal(DVec3::splat(tv.tangential * value));
+                let d = tv.tangential * value;
+                let h = |ai: f64, gi: f64, ui: f64, aj: f64, gj: f64, uj: f64| {
+                    ai * gj + gi * aj + ui * (uj * k)
+                };
+                p[3] = h(a.x, gx, u.x, a.x, gx, u.x) - d;
+                p[4] = h(a.x, gx, u.x, a.y, gy, u.y);
+                p[5] = h(a.x, gx, u.x, a.z, gz, u.z);
+                p[6] = h(a.y, gy, u.y, a.y, gy, u.y) - d;
+                p[7] = h(a.y, gy, u.y, a.z, gz, u.z);
+                p[8] = h(a.z, gz, u.z, a.z, gz, u.z) - d;
             }
-            add_scaled(&mut geometric, &p, 1.0, order);
-            for (a, &l) in acc.iter_mut().zip(&self.vertex[far * ch..(far + 1) * ch]) {
-                if l != 0.0 {
-                    add_scaled(a, &p, l, order);
+            for (e, p) in extra[ch].iter_mut().zip(&p) {
+                *e += p;
+            }
+            for (row, &l) in extra.iter_mut().zip(&self.vertex[far * ch..(far + 1) * ch]) {
+                for (e, p) in row.iter_mut().zip(&p) {
+                    *e += l * p;
                 }
+            }
+        }
+        let mut geometric = acc.pop().unwrap_or_default();
+        for (d, e) in acc.iter_mut().chain([&mut geometric]).zip(&extra) {
+            d.gradient += DVec3::new(e[0], e[1], e[2]);
+            if hessian {
+                d.hessian += DMat3::from_cols(
+                    DVec3::new(e[3], e[4], e[5]),
+                    DVec3::new(e[4], e[6], e[7]),
+                    DVec3::new(e[5], e[7], e[8]),
+                );
             }
         }
         out.geometric = geometric;
