@@ -16,7 +16,7 @@ use raddiff::gather::hessian::{
 };
 use raddiff::gather::hessian_fill::occlusion_outputs;
 use raddiff::gather::radii::{surface_radii, ErrorMode};
-use raddiff::gather::{Frame, GatherInput, Layout, ValidGather, Wanted};
+use raddiff::gather::{Frame, GatherInput, Layout, MediaRadiance, ValidGather, Wanted};
 use raddiff::Order;
 
 /// The Ward-Heckbert baseline: irradiance and translational gradient.
@@ -175,8 +175,8 @@ fn cpu_time_per_call(budget: f64, mut f: impl FnMut()) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// `RADDIFF_HESSIAN_CPU=1 cargo bench --bench hessian`: prints the README's CPU-time table (polar
-/// layouts with N = 4M) instead of running criterion.
+/// `RADDIFF_HESSIAN_CPU=1 cargo bench --bench hessian`: prints the README's CPU-time tables (polar
+/// layouts with N = 4M; surfaces, then media) instead of running criterion.
 fn cpu_table() {
     let x = DVec3::new(-0.3, -0.2, 0.0);
     let budget = 0.5;
@@ -232,6 +232,65 @@ fn cpu_table() {
             m * n,
             hs / wh,
             hn / wh
+        );
+    }
+    media_table(budget);
+}
+
+/// The Hessian of a surface point in a medium (`sigma_t > 0`, noisy radiance), through
+/// `occlusion_derivatives` and through its reference (the general kernel per edge and the product
+/// rule per triangle), and the C ABI's hemisphere gather with 16 media march steps (one ring of
+/// triangles per step, `occlusion_outputs`).
+fn media_table(budget: f64) {
+    let x = DVec3::new(-0.3, -0.2, 0.0);
+    println!();
+    println!("| rays | Hessian in a medium | reference (previous) | with 16 media rings |");
+    for (m, n) in [(16usize, 64usize), (32, 128), (64, 256)] {
+        let kind = LayoutKind::CosinePolar;
+        let sg = SceneGather::new(kind, m, n, 0, x, &scene::rects(), 0.5);
+        let noisy = noisy_radiance(&sg.radiance);
+        let mut g = sg.gather();
+        g.radiance = &noisy;
+        g.sigma_t = 0.5;
+        let topo = Topology::new(kind, m, n).unwrap();
+        let us = 1e6;
+        let medium = us
+            * cpu_time_per_call(budget, || {
+                black_box(occlusion_derivatives(&topo, black_box(&g), Order::Hessian).unwrap());
+            });
+        let reference = us
+            * cpu_time_per_call(budget, || {
+                black_box(
+                    occlusion_derivatives_reference(&topo, black_box(&g), Order::Hessian).unwrap(),
+                );
+            });
+        let steps = 16;
+        let media: Vec<f32> = (0..m * n * steps)
+            .map(|i| 0.1 + 0.001 * ((i * 31 % 17) as f32))
+            .collect();
+        let layout = Layout::new(kind, m as u32, n as u32, 0).unwrap();
+        let frame = Frame::new(x, DVec3::Z, DVec3::X).unwrap();
+        let input = GatherInput {
+            directions: &sg.directions,
+            distance: &sg.distance,
+            radiance: &noisy,
+            channels: 1,
+            sigma_t: 0.5,
+            media: Some(MediaRadiance {
+                radiance: &media,
+                gradient: None,
+                steps,
+                step: 0.15,
+            }),
+        };
+        let valid = ValidGather::new(&layout, &frame, &input).unwrap();
+        let rings = us
+            * cpu_time_per_call(budget, || {
+                black_box(occlusion_outputs(black_box(&valid), true).unwrap());
+            });
+        println!(
+            "| {} | {medium:.1} µs | {reference:.1} µs | {rings:.0} µs |",
+            m * n
         );
     }
 }

@@ -1,7 +1,8 @@
 //! The batched edge evaluation of `occlusion_derivatives` against the reference (every edge through
-//! the general closed-form kernel, `occlusion_derivatives_reference`): random and adversarial
-//! gathers (near-grazing directions, mixed near hits and misses, tiny and huge scales, x close to
-//! mesh edges), several channels, both orders.
+//! the general closed-form kernel, `occlusion_derivatives_reference`, and in a medium the
+//! per-triangle product rule): random and adversarial gathers (near-grazing directions, mixed near
+//! hits and misses, tiny and huge scales, x close to mesh edges, with and without a medium),
+//! several channels, both orders; and the reuse of one workspace across gathers of every shape.
 
 mod hessian_common;
 
@@ -9,8 +10,8 @@ use glam::{DMat3, DVec3};
 use hessian_common::{scene, SceneGather};
 use proptest::prelude::*;
 use raddiff::gather::hessian::{
-    occlusion_derivatives, occlusion_derivatives_reference, HemisphereGather, LayoutKind,
-    OcclusionDerivatives, Topology,
+    occlusion_derivatives, occlusion_derivatives_reference, occlusion_derivatives_with,
+    HemisphereGather, LayoutKind, OcclusionDerivatives, OcclusionWorkspace, Topology,
 };
 use raddiff::{Deriv3, Order};
 
@@ -86,6 +87,98 @@ fn evaluation_scene_with_noisy_radiance_matches_the_reference() {
     }
 }
 
+#[test]
+fn evaluation_scene_in_a_medium_matches_the_reference() {
+    let x = DVec3::new(-0.3, -0.2, 0.0);
+    for (kind, m, n) in [
+        (LayoutKind::CosinePolar, 32, 128),
+        (LayoutKind::Concentric, 48, 48),
+        (LayoutKind::CosinePolar, 8, 24),
+    ] {
+        let sg = SceneGather::new(kind, m, n, 3, x, &scene::rects(), 0.5);
+        let noisy: Vec<f32> = sg
+            .radiance
+            .iter()
+            .enumerate()
+            .map(|(i, l)| l + 0.01 * ((i * 7919 % 101) as f32))
+            .collect();
+        let topo = Topology::new(kind, m, n).unwrap();
+        for radiance in [&sg.radiance, &noisy] {
+            // From a thin medium to one that hides everything beyond ~0.01 (T underflows to 0 at
+            // the far wall for the largest).
+            for sigma_t in [1e-6, 0.5, 3.0, 1e5] {
+                let g = HemisphereGather {
+                    radiance,
+                    sigma_t,
+                    ..sg.gather()
+                };
+                for order in [Order::Gradient, Order::Hessian] {
+                    let d = compare(&topo, &g, order);
+                    assert!(
+                        d < TOLERANCE,
+                        "{kind:?} {m}x{n} σ {sigma_t} {order:?}: {d:e}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// One workspace reused across gathers of different layouts, sizes, channel counts, orders and
+/// media gives exactly the per-thread workspace's results (which are checked against the
+/// reference above).
+#[test]
+fn a_reused_workspace_gives_identical_results() {
+    let x = DVec3::new(0.2, -0.2, 0.0);
+    let mut ws = OcclusionWorkspace::new();
+    for round in 0..2 {
+        for (kind, m, n) in [
+            (LayoutKind::CosinePolar, 16, 64),
+            (LayoutKind::Concentric, 9, 9),
+            (LayoutKind::CosinePolar, 32, 128),
+            (LayoutKind::CosinePolar, 3, 6),
+        ] {
+            let sg = SceneGather::new(kind, m, n, round, x, &scene::rects(), 0.5);
+            let topo = Topology::new(kind, m, n).unwrap();
+            let rgb: Vec<f32> = sg
+                .radiance
+                .iter()
+                .flat_map(|&l| [l, 0.5 * l, 0.0])
+                .collect();
+            for (radiance, channels) in [(&sg.radiance, 1), (&rgb, 3)] {
+                for sigma_t in [0.0, 0.7] {
+                    for order in [Order::Gradient, Order::Hessian] {
+                        let g = HemisphereGather {
+                            radiance,
+                            channels,
+                            sigma_t,
+                            ..sg.gather()
+                        };
+                        let mine = occlusion_derivatives_with(&mut ws, &topo, &g, order).unwrap();
+                        let fresh = occlusion_derivatives(&topo, &g, order).unwrap();
+                        assert_eq!(mine, fresh, "{kind:?} {m}x{n} {channels} σ {sigma_t}");
+                    }
+                }
+            }
+        }
+    }
+    // An invalid gather leaves the workspace usable.
+    let sg = SceneGather::new(LayoutKind::CosinePolar, 8, 24, 0, x, &scene::rects(), 0.5);
+    let topo = Topology::new(LayoutKind::CosinePolar, 8, 24).unwrap();
+    let mut bad = sg.distance.clone();
+    bad[5] = -1.0;
+    let g = HemisphereGather {
+        distance: &bad,
+        ..sg.gather()
+    };
+    assert!(occlusion_derivatives_with(&mut ws, &topo, &g, Order::Hessian).is_err());
+    let g = sg.gather();
+    assert_eq!(
+        occlusion_derivatives_with(&mut ws, &topo, &g, Order::Hessian).unwrap(),
+        occlusion_derivatives(&topo, &g, Order::Hessian).unwrap()
+    );
+}
+
 /// Hit distance of sample `i` for a distance pattern: near hits, far hits, misses, and a plane
 /// above x (grazing rays hit it very far away, so occlusion edges run nearly along the rays).
 fn pattern_distance(kind: u8, w: DVec3, normal: DVec3, u: f64, s: f64) -> f64 {
@@ -130,6 +223,8 @@ proptest! {
         us in prop::collection::vec(0.0f64..1.0, 336),
         levels in prop::collection::vec(0u8..4, 336 * 3),
         hessian in any::<bool>(),
+        medium in 0u8..3,
+        sigma_scale in -3i32..4,
     ) {
         let kind = if polar { LayoutKind::CosinePolar } else { LayoutKind::Concentric };
         let normal = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
@@ -150,7 +245,8 @@ proptest! {
             distance: &distance,
             radiance: &radiance,
             channels,
-            sigma_t: 0.0,
+            // A third of the cases in a medium (σ_t · distance from 1e-3 to 1e3).
+            sigma_t: if medium == 0 { 10f64.powi(sigma_scale) / s } else { 0.0 },
         };
         let order = if hessian { Order::Hessian } else { Order::Gradient };
         let d = compare(&topo, &g, order);

@@ -42,8 +42,10 @@
 //! With `sigma_t > 0` every triangle's radiance is attenuated by the transmittance to its farthest
 //! vertex, `L_Δ T(x, y_Δ)`, and the product rule applies per triangle (Marco et al. eq. 17-18 with a
 //! constant phase function): `∇(L T F) = L (T ∇F + F ∇T)`,
-//! `H(L T F) = L (T HF + ∇T ∇Fᵀ + ∇F ∇Tᵀ + F HT)`. Edge terms are still computed once and summed
-//! per triangle. Misses are attenuated to zero (the medium is unbounded).
+//! `H(L T F) = L (T HF + ∇T ∇Fᵀ + ∇F ∇Tᵀ + F HT)`. The `T ∇F` and `T HF` parts are edge sums like
+//! the surface path's (weights `L_left T_left − L_right T_right`, same batched edge kernel); only
+//! `F` and `∇F` of each triangle are summed from its three edges for the other terms. Misses are
+//! attenuated to zero (the medium is unbounded).
 //!
 //! # Robustness (thesis sec. 6.3)
 //!
@@ -54,6 +56,9 @@
 use glam::{DMat3, DVec3};
 
 mod edges;
+mod workspace;
+
+pub use workspace::OcclusionWorkspace;
 
 pub use super::hessian_mesh::{Edge, Topology};
 use super::hessian_mesh::{NONE, POLE, REVERSED};
@@ -210,6 +215,30 @@ fn check_gather(topo: &Topology, g: &HemisphereGather) -> Result<DVec3> {
 
 /// Places the mesh vertices of one gather (validating it against `topo`).
 pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeometry> {
+    let (normal, far_distance) = validate(topo, g)?;
+    let mut mesh = MeshGeometry {
+        positions: Vec::new(),
+        distance: Vec::new(),
+        far_distance,
+        pole_radiance: Vec::new(),
+        farthest: Vec::new(),
+    };
+    place(
+        topo,
+        g,
+        normal,
+        far_distance,
+        (1.0, 1.0),
+        &mut mesh.distance,
+        &mut mesh.positions,
+        &mut mesh.pole_radiance,
+    )?;
+    farthest_vertices(topo, &mesh.distance, &mut mesh.farthest);
+    Ok(mesh)
+}
+
+/// Validates a gather against `topo`: its unit normal and the distance where misses are placed.
+fn validate(topo: &Topology, g: &HemisphereGather) -> Result<(DVec3, f64)> {
     if topo.connectivity == LayoutKind::Sphere {
         return Err(Error::InvalidArgument(
             "a sphere layout is a media gather: use gather::hessian_media".into(),
@@ -226,20 +255,39 @@ pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeomet
             "hit distances up to {largest:e} leave no room for the environment"
         )));
     }
+    Ok((normal, far_distance))
+}
+
+/// Vertex distances and positions relative to x times `factor.0 · factor.1` (powers of two,
+/// applied one after the other as [`Scale::point`] does; 1 for [`MeshGeometry`]), and the pole's
+/// radiance, into the given buffers (their capacity is reused).
+#[allow(clippy::too_many_arguments)]
+fn place(
+    topo: &Topology,
+    g: &HemisphereGather,
+    normal: DVec3,
+    far_distance: f64,
+    factor: (f64, f64),
+    distance: &mut Vec<f64>,
+    positions: &mut Vec<DVec3>,
+    pole_radiance: &mut Vec<f64>,
+) -> Result<()> {
     let sample_distance = |d: f64| if d.is_finite() { d } else { far_distance };
     let vcount = topo.vertex_count();
     let samples = g.distance.len();
     // Vertices 0..M·N are the samples themselves (`Topology`), placed in one vectorisable pass.
-    let mut distance: Vec<f64> = g.distance.iter().map(|&d| sample_distance(d)).collect();
-    let mut positions: Vec<DVec3> = g
-        .directions
-        .iter()
-        .zip(&distance)
-        .map(|(&w, &d)| w * d)
-        .collect();
-    distance.reserve(vcount - samples);
-    positions.reserve(vcount - samples);
-    let mut pole_radiance = Vec::new();
+    distance.clear();
+    distance.reserve(vcount);
+    distance.extend(g.distance.iter().map(|&d| sample_distance(d)));
+    positions.clear();
+    positions.reserve(vcount);
+    positions.extend(
+        g.directions
+            .iter()
+            .zip(distance.iter())
+            .map(|(&w, &d)| w * d * factor.0 * factor.1),
+    );
+    pole_radiance.clear();
     for v in samples..vcount {
         let src = topo.vertex_source[v];
         if src == POLE {
@@ -247,16 +295,14 @@ pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeomet
             let n = topo.n;
             let inv: f64 = distance[..n].iter().map(|d| 1.0 / d).sum::<f64>() / n as f64;
             let d = 1.0 / inv;
-            positions.push(normal * d);
+            positions.push(normal * d * factor.0 * factor.1);
             distance.push(d);
-            pole_radiance = (0..g.channels)
-                .map(|c| {
-                    (0..n)
-                        .map(|k| g.radiance[k * g.channels + c] as f64)
-                        .sum::<f64>()
-                        / n as f64
-                })
-                .collect();
+            pole_radiance.extend((0..g.channels).map(|c| {
+                (0..n)
+                    .map(|k| g.radiance[k * g.channels + c] as f64)
+                    .sum::<f64>()
+                    / n as f64
+            }));
             continue;
         }
         let s = src as usize;
@@ -274,34 +320,29 @@ pub fn mesh_geometry(topo: &Topology, g: &HemisphereGather) -> Result<MeshGeomet
         } else {
             w
         };
-        positions.push(dir * d);
+        positions.push(dir * d * factor.0 * factor.1);
         distance.push(d);
     }
+    Ok(())
+}
+
+/// For every triangle, its farthest vertex (the first of equally far ones).
+fn farthest_vertices(topo: &Topology, distance: &[f64], farthest: &mut Vec<u32>) {
+    farthest.clear();
     // Branch-free: the distances are noise to the branch predictor.
-    let farthest = topo
-        .triangles
-        .iter()
-        .map(|t| {
-            let (d0, d1, d2) = (
-                distance[t[0] as usize],
-                distance[t[1] as usize],
-                distance[t[2] as usize],
-            );
-            let (best, db) = if d1 > d0 { (t[1], d1) } else { (t[0], d0) };
-            if d2 > db {
-                t[2]
-            } else {
-                best
-            }
-        })
-        .collect();
-    Ok(MeshGeometry {
-        positions,
-        distance,
-        far_distance,
-        pole_radiance,
-        farthest,
-    })
+    farthest.extend(topo.triangles.iter().map(|t| {
+        let (d0, d1, d2) = (
+            distance[t[0] as usize],
+            distance[t[1] as usize],
+            distance[t[2] as usize],
+        );
+        let (best, db) = if d1 > d0 { (t[1], d1) } else { (t[0], d0) };
+        if d2 > db {
+            t[2]
+        } else {
+            best
+        }
+    }));
 }
 
 /// The edge term of `a → b` seen from the origin (x), unit normal `n`, positions already scaled
@@ -334,7 +375,11 @@ struct Scale {
 
 impl Scale {
     fn of(mesh: &MeshGeometry) -> Scale {
-        let (f1, f2) = pow2_scale(mesh.far_distance / FAR_DISTANCE_FACTOR);
+        Scale::of_far(mesh.far_distance)
+    }
+
+    fn of_far(far_distance: f64) -> Scale {
+        let (f1, f2) = pow2_scale(far_distance / FAR_DISTANCE_FACTOR);
         Scale { f1, f2 }
     }
 
@@ -437,13 +482,26 @@ fn add_scaled(acc: &mut Deriv3, d: &Deriv3, w: f64, order: Order) {
 /// `order` must be at least [`Order::Gradient`]. Errors: `InvalidArgument` for inconsistent sizes,
 /// non-finite values, non-positive distances or non-unit directions/normal; `Degenerate` if a kernel
 /// cannot evaluate an edge (x on a mesh edge, which valid gathers cannot produce).
+///
+/// Scratch memory comes from a per-thread [`OcclusionWorkspace`] (kept for gathers of up to
+/// [`KEPT_WORKSPACE_VERTICES`] mesh vertices); [`occlusion_derivatives_with`] takes the caller's.
 pub fn occlusion_derivatives(
     topo: &Topology,
     g: &HemisphereGather,
     order: Order,
 ) -> Result<OcclusionDerivatives> {
-    let mesh = mesh_geometry(topo, g)?;
-    occlusion_derivatives_on(topo, &mesh, g, order)
+    with_thread_workspace(|ws| occlusion_derivatives_with(ws, topo, g, order))
+}
+
+/// [`occlusion_derivatives`] with the caller's scratch memory (the same results).
+pub fn occlusion_derivatives_with(
+    workspace: &mut OcclusionWorkspace,
+    topo: &Topology,
+    g: &HemisphereGather,
+    order: Order,
+) -> Result<OcclusionDerivatives> {
+    let (scale, far_distance) = workspace.place_gather(topo, g)?;
+    workspace.derivatives(topo, g, order, scale, far_distance)
 }
 
 /// [`occlusion_derivatives`] on an already placed mesh.
@@ -453,52 +511,31 @@ pub fn occlusion_derivatives_on(
     g: &HemisphereGather,
     order: Order,
 ) -> Result<OcclusionDerivatives> {
-    if !order.gradient() {
-        return Err(Error::InvalidArgument(
-            "occlusion derivatives need order >= RADDIFF_ORDER_GRADIENT".into(),
-        ));
+    with_thread_workspace(|ws| {
+        let scale = ws.place_mesh(mesh);
+        ws.derivatives(topo, g, order, scale, mesh.far_distance)
+    })
+}
+
+/// The per-thread workspace keeps at most this many mesh vertices' worth of memory (100 to 250 bytes
+/// each) between calls; larger gathers release theirs.
+pub const KEPT_WORKSPACE_VERTICES: usize = 1 << 16;
+
+thread_local! {
+    static WORKSPACE: std::cell::Cell<OcclusionWorkspace> =
+        std::cell::Cell::new(OcclusionWorkspace::new());
+}
+
+/// Runs `f` on this thread's workspace, taken out of its slot for the call (so a nested call, or
+/// one during thread teardown, simply starts an empty one).
+fn with_thread_workspace<R>(f: impl FnOnce(&mut OcclusionWorkspace) -> R) -> R {
+    let mut ws = WORKSPACE.try_with(|w| w.take()).unwrap_or_default();
+    let r = f(&mut ws);
+    if ws.vertex_capacity() <= KEPT_WORKSPACE_VERTICES {
+        // Fails only while the thread is being torn down: the memory is then simply freed.
+        let _ = WORKSPACE.try_with(|w| w.set(ws));
     }
-    let n = g.normal.normalize();
-    let channels = g.channels;
-    let mut out = empty(channels, all_black(g));
-    if g.sigma_t > 0.0 {
-        return with_medium(topo, mesh, g, order, out);
-    }
-    let tri = triangle_radiance(topo, mesh, g);
-    let outside = topo.triangles.len();
-    let scale = Scale::of(mesh);
-    let mut points = Vec::with_capacity(mesh.positions.len());
-    let mut squared = Vec::with_capacity(mesh.positions.len());
-    for &p in &mesh.positions {
-        let q = scale.point(p);
-        points.push(q);
-        squared.push(q.length_squared());
-    }
-    let mut sums = edges::EdgeSums::new(n, order, channels);
-    if channels == 1 {
-        sums.add_edges_one_channel(&topo.edges, &tri, &points, &squared)?;
-    } else {
-        let mut delta = vec![0.0f64; channels];
-        for e in &topo.edges {
-            let boundary = e.right == NONE;
-            let right = if boundary { outside } else { e.right as usize };
-            let (l, r) = (e.left as usize * channels, right * channels);
-            let mut any = false;
-            for (c, d) in delta.iter_mut().enumerate() {
-                *d = tri[l + c] - tri[r + c];
-                any |= *d != 0.0;
-            }
-            if any || boundary {
-                let (a, b) = (e.a as usize, e.b as usize);
-                sums.push(
-                    points[a], points[b], squared[a], squared[b], &delta, boundary,
-                )?;
-            }
-        }
-    }
-    let (acc, geometric) = sums.finish()?;
-    out.geometric = geometric;
-    finish(out, &acc, scale)
+    r
 }
 
 /// Radiance of every triangle (its farthest vertex's), channel-interleaved, plus a zero row that
@@ -556,7 +593,7 @@ fn reference_on(
     let channels = g.channels;
     let mut out = empty(channels, all_black(g));
     if g.sigma_t > 0.0 {
-        return with_medium(topo, mesh, g, order, out);
+        return with_medium_reference(topo, mesh, g, order, out);
     }
     let tri = triangle_radiance(topo, mesh, g);
     let outside = topo.triangles.len();
@@ -627,9 +664,10 @@ pub fn occlusion_derivatives_per_triangle(
     finish(out, &acc, scale)
 }
 
-/// Medium path: per-triangle form factors from once-computed edge terms, times the transmittance
-/// to the triangle's farthest vertex (product rule).
-fn with_medium(
+/// The medium path of [`occlusion_derivatives_reference`]: per-triangle form factors from
+/// once-computed general-kernel edge terms, times the transmittance to the triangle's farthest
+/// vertex (product rule).
+fn with_medium_reference(
     topo: &Topology,
     mesh: &MeshGeometry,
     g: &HemisphereGather,

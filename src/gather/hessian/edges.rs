@@ -535,6 +535,8 @@ struct Queue {
     batch: Box<Batch>,
     weights: Vec<[f64; BATCH]>,
     boundary: [bool; BATCH],
+    /// The caller's edge index per lane (where [`EdgeSums`] keeps per-edge terms).
+    index: [u32; BATCH],
     /// How many of the queued edges are boundary edges.
     boundaries: usize,
     len: usize,
@@ -546,6 +548,7 @@ impl Queue {
             batch: Batch::new(),
             weights: vec![[0.0; BATCH]; channels],
             boundary: [false; BATCH],
+            index: [0; BATCH],
             boundaries: 0,
             len: 0,
         }
@@ -553,13 +556,20 @@ impl Queue {
 
     /// Adds an edge; true when the batch is full.
     #[inline(always)]
-    fn add(&mut self, ends: (DVec3, DVec3, f64, f64), delta: &[f64], boundary: bool) -> bool {
+    fn add(
+        &mut self,
+        ends: (DVec3, DVec3, f64, f64),
+        delta: &[f64],
+        boundary: bool,
+        index: u32,
+    ) -> bool {
         let i = self.len;
         self.batch.set(i, ends.0, ends.1, ends.2, ends.3);
         for (w, &d) in self.weights.iter_mut().zip(delta) {
             w[i] = d;
         }
         self.boundary[i] = boundary;
+        self.index[i] = index;
         self.boundaries += boundary as usize;
         self.len += 1;
         self.len == BATCH
@@ -590,6 +600,9 @@ pub(crate) struct EdgeSums {
     /// Per channel sums of the general kernel's terms.
     general: Vec<Deriv3>,
     delta: Vec<f64>,
+    /// Value and gradient of every edge pushed with [`EdgeSums::push_kept`], by its index (empty
+    /// unless asked for: the medium path needs each triangle's own form factor and gradient).
+    terms: Vec<[f64; 4]>,
 }
 
 impl EdgeSums {
@@ -604,7 +617,34 @@ impl EdgeSums {
             geometric: Deriv3::constant(0.0),
             general: vec![Deriv3::constant(0.0); channels],
             delta: vec![0.0; channels],
+            terms: Vec::new(),
         }
+    }
+
+    /// Starts new sums on the same memory, as [`EdgeSums::new`] would; with `kept_edges > 0` the
+    /// value and gradient of each edge pushed by [`EdgeSums::push_kept`] are also kept (indices
+    /// below `kept_edges`; read them with [`EdgeSums::terms`] after [`EdgeSums::finish`]).
+    pub(crate) fn reset(&mut self, n: DVec3, order: Order, channels: usize, kept_edges: usize) {
+        self.n = n;
+        self.order = order;
+        for q in [&mut self.main, &mut self.axial] {
+            q.weights.resize(channels, [0.0; BATCH]);
+            q.len = 0;
+            q.boundaries = 0;
+        }
+        self.sums.clear();
+        self.sums.resize(channels, [[0.0; LANES]; OUTPUTS]);
+        self.geometric = Deriv3::constant(0.0);
+        self.general.clear();
+        self.general.resize(channels, Deriv3::constant(0.0));
+        self.delta.resize(channels, 0.0);
+        self.terms.clear();
+        self.terms.resize(kept_edges, [0.0; 4]);
+    }
+
+    /// The kept values and gradients (scaled units; see [`EdgeSums::reset`]).
+    pub(crate) fn terms(&self) -> &[[f64; 4]] {
+        &self.terms
     }
 
     /// Adds the edge `a → b` (finite positions relative to x, scaled; `a2`, `b2` their squared
@@ -619,7 +659,24 @@ impl EdgeSums {
         delta: &[f64],
         boundary: bool,
     ) -> Result<()> {
-        if self.main.add((a, b, a2, b2), delta, boundary) {
+        self.push_kept(a, b, a2, b2, delta, boundary, 0)
+    }
+
+    /// [`EdgeSums::push`], keeping the edge's value and gradient as edge `index` when the sums were
+    /// reset with room for it ([`EdgeSums::reset`]).
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn push_kept(
+        &mut self,
+        a: DVec3,
+        b: DVec3,
+        a2: f64,
+        b2: f64,
+        delta: &[f64],
+        boundary: bool,
+        index: u32,
+    ) -> Result<()> {
+        if self.main.add((a, b, a2, b2), delta, boundary, index) {
             self.flush_main()?;
         }
         Ok(())
@@ -662,6 +719,49 @@ impl EdgeSums {
         Ok(())
     }
 
+    /// The medium path's edges for one channel: `weight` holds `W_Δ = L_Δ T_Δ` and `T_Δ` for every
+    /// triangle (and a zero pair for the outside of the horizon); each edge is weighted by the
+    /// differences of both across it and kept under its index, and skipped only when `T` is 0 on
+    /// both sides. The same as pushing them one by one with [`EdgeSums::push_kept`], in one tight
+    /// loop.
+    pub(crate) fn add_edges_medium_one_channel(
+        &mut self,
+        edges: &[Edge],
+        weight: &[f64],
+        points: &[DVec3],
+        squared: &[f64],
+    ) -> Result<()> {
+        let outside = weight.len() / 2 - 1;
+        let mut i = self.main.len;
+        for (index, e) in edges.iter().enumerate() {
+            let right = if e.right == NONE {
+                outside
+            } else {
+                e.right as usize
+            };
+            let (l, r) = (2 * e.left as usize, 2 * right);
+            let (tl, tr) = (weight[l + 1], weight[r + 1]);
+            if tl == 0.0 && tr == 0.0 {
+                continue;
+            }
+            let (a, b) = (e.a as usize, e.b as usize);
+            let q = &mut self.main;
+            q.batch.set(i, points[a], points[b], squared[a], squared[b]);
+            q.weights[0][i] = weight[l] - weight[r];
+            q.weights[1][i] = tl - tr;
+            q.boundary[i] = false;
+            q.index[i] = index as u32;
+            i += 1;
+            if i == BATCH {
+                self.main.len = BATCH;
+                self.flush_main()?;
+                i = 0;
+            }
+        }
+        self.main.len = i;
+        Ok(())
+    }
+
     fn flush_main(&mut self) -> Result<()> {
         let count = self.main.len;
         if count == 0 {
@@ -671,6 +771,9 @@ impl EdgeSums {
         let hessian = self.order.hessian();
         let q = &mut self.main;
         run_batch_dispatch::<false>(&mut q.batch, self.n, hessian, &q.weights, &mut self.sums);
+        if !self.terms.is_empty() {
+            keep_terms(&mut self.terms, q, count);
+        }
         // Most batches have neither flagged nor boundary edges (an OR reduction vectorises).
         let flagged = q.batch.general.iter().fold(0, |f, &g| f | g) != CLOSED_FORM;
         if !flagged && q.boundaries == 0 {
@@ -689,13 +792,15 @@ impl EdgeSums {
                 for (d, w) in self.delta.iter_mut().zip(&self.main.weights) {
                     *d = w[i];
                 }
-                if self.axial.add(ends, &self.delta, boundary) {
+                let index = self.main.index[i];
+                if self.axial.add(ends, &self.delta, boundary, index) {
                     self.flush_axial()?;
                 }
             } else {
                 Self::general(
                     &mut self.general,
                     &mut self.geometric,
+                    &mut self.terms,
                     &self.main,
                     i,
                     self.n,
@@ -717,11 +822,15 @@ impl EdgeSums {
         let hessian = self.order.hessian();
         let q = &mut self.axial;
         run_batch_dispatch::<true>(&mut q.batch, self.n, hessian, &q.weights, &mut self.sums);
+        if !self.terms.is_empty() {
+            keep_terms(&mut self.terms, q, count);
+        }
         for i in 0..count {
             if self.axial.batch.general[i] != CLOSED_FORM {
                 Self::general(
                     &mut self.general,
                     &mut self.geometric,
+                    &mut self.terms,
                     &self.axial,
                     i,
                     self.n,
@@ -740,6 +849,7 @@ impl EdgeSums {
     fn general(
         sums: &mut [Deriv3],
         geometric: &mut Deriv3,
+        terms: &mut [[f64; 4]],
         q: &Queue,
         i: usize,
         n: DVec3,
@@ -749,6 +859,9 @@ impl EdgeSums {
         // The general kernel's terms are not scaled by 2π: scale them so that they can share the
         // geometric sum with the lanes' (the general ones are rare).
         let f = super::edge_term(n, a, b, order)?;
+        if let Some(t) = terms.get_mut(q.index[i] as usize) {
+            *t = [f.value, f.gradient.x, f.gradient.y, f.gradient.z];
+        }
         for (acc, w) in sums.iter_mut().zip(&q.weights) {
             add_scaled(acc, &f, w[i], order);
         }
@@ -759,7 +872,7 @@ impl EdgeSums {
     }
 
     /// Per channel sums and the geometric terms (scaled units).
-    pub(crate) fn finish(mut self) -> Result<(Vec<Deriv3>, Deriv3)> {
+    pub(crate) fn finish(&mut self) -> Result<(Vec<Deriv3>, Deriv3)> {
         self.flush_main()?;
         self.flush_axial()?;
         let mut out = Vec::with_capacity(self.sums.len());
@@ -783,6 +896,22 @@ impl EdgeSums {
             ));
         }
         Ok((out, geometric))
+    }
+}
+
+/// Stores the value and gradient of the batch's closed-form lanes (flagged lanes are stored when
+/// the axial batch or the general kernel evaluates them).
+fn keep_terms(terms: &mut [[f64; 4]], q: &Queue, count: usize) {
+    let o = &q.batch.out;
+    for i in 0..count {
+        if q.batch.general[i] == CLOSED_FORM {
+            terms[q.index[i] as usize] = [
+                o[0][i] * INV_2PI,
+                o[1][i] * INV_2PI,
+                o[2][i] * INV_2PI,
+                o[3][i] * INV_2PI,
+            ];
+        }
     }
 }
 
