@@ -293,8 +293,16 @@ fn place(
         if src == POLE {
             // The pole was not sampled: harmonic mean of ring 0's distances, mean radiance.
             let n = topo.n;
-            let inv: f64 = distance[..n].iter().map(|d| 1.0 / d).sum::<f64>() / n as f64;
-            let d = 1.0 / inv;
+            let ring = &distance[..n];
+            let inv: f64 = ring.iter().map(|d| 1.0 / d).sum::<f64>() / n as f64;
+            // Kept within the ring's range, where the mean lies: when ring 0's distances are all
+            // equal (all misses, say) the pole is then exactly as far as they are, and which
+            // vertex is the farthest of a pole triangle no longer depends on rounding (nor, so,
+            // on the scene's unit).
+            let (lo, hi) = ring.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &d| {
+                (lo.min(d), hi.max(d))
+            });
+            let d = (1.0 / inv).clamp(lo, hi);
             positions.push(normal * d * factor.0 * factor.1);
             distance.push(d);
             pole_radiance.extend((0..g.channels).map(|c| {
