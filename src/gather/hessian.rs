@@ -302,7 +302,7 @@ fn place(
             let (lo, hi) = ring.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &d| {
                 (lo.min(d), hi.max(d))
             });
-            let d = (1.0 / inv).clamp(lo, hi);
+            let d = (1.0 / inv).max(lo).min(hi);
             positions.push(normal * d * factor.0 * factor.1);
             distance.push(d);
             pole_radiance.extend((0..g.channels).map(|c| {

@@ -267,7 +267,13 @@ pub fn media_derivatives_from(
                 } else {
                     DVec3::Z
                 };
-                dist[v] = 1.0 / inv;
+                // within the ring's range, as for surface gathers (`hessian::place`): equal
+                // ring distances give the pole exactly theirs, so farthest-vertex ties do not
+                // depend on rounding
+                let (lo, hi) = idx.clone().fold((f64::INFINITY, 0.0f64), |(lo, hi), i| {
+                    (lo.min(ring.distance[i]), hi.max(ring.distance[i]))
+                });
+                dist[v] = (1.0 / inv).max(lo).min(hi);
                 pos[v] = axis * dist[v] - offset;
                 for c in 0..ch {
                     rad[v * ch + c] =

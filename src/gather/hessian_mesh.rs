@@ -8,7 +8,8 @@
 //!   distance, so that the mesh reaches the horizon and the all-miss hemisphere has form factor
 //!   exactly 1;
 //! * for the polar layout, a **pole** vertex along the normal (ring 0 does not reach θ = 0), at the
-//!   harmonic mean of ring 0's distances, with ring 0's mean radiance.
+//!   harmonic mean of ring 0's distances (kept within their range, so that equal distances give
+//!   exactly theirs), with ring 0's mean radiance.
 //!
 //! Triangles are listed counter-clockwise about the normal as seen from its tip (so each triangle's
 //! edge terms `kernels::edge_form_factor` sum to its form factor). Every undirected edge is stored
