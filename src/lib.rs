@@ -24,6 +24,7 @@ pub mod ffi;
 pub mod gather;
 pub mod kernels;
 pub mod scatter;
+mod simd;
 
 pub use deriv::{Deriv2, Deriv3, Order};
 pub use error::{Error, Result};

@@ -166,7 +166,7 @@ pub(crate) fn blend_linear(
 ) {
     assert_eq!(out.len(), covering.channels);
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("f16c") {
+    if crate::simd::avx_f16c() {
         let groups = covering.blocks.len();
         // SAFETY: the CPU has AVX and F16C (checked just above); `push` checked that every
         // record has `out.len()` channels.
@@ -191,7 +191,7 @@ pub(crate) fn blend_linear_used(
 ) {
     let channels = out.len();
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("f16c") {
+    if crate::simd::avx_f16c() {
         // every record has `channels` channels (the cache's count): the loads rely on it
         assert!(used.iter().all(|u| u.channels.len() == channels));
         let groups = used.len().div_ceil(LANES);

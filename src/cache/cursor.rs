@@ -226,7 +226,7 @@ impl Cursor {
         used: &mut UsedRecords<'a>,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
+        if crate::simd::avx() {
             // SAFETY: the CPU has AVX (checked just above).
             return unsafe {
                 self.covering_avx(kernel, x, n, |g, k, weight| {
@@ -251,7 +251,7 @@ impl Cursor {
         covering: &mut Covering<'a>,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
+        if crate::simd::avx() {
             // SAFETY: the CPU has AVX (checked just above).
             return unsafe {
                 self.covering_avx(kernel, x, n, |g, k, weight| {

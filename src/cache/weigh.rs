@@ -45,7 +45,7 @@ pub(crate) fn weigh<'a>(
     used: &mut UsedRecords<'a>,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if ids.len() >= 2 && std::arch::is_x86_feature_detected!("avx") {
+    if ids.len() >= 2 && crate::simd::avx() {
         // SAFETY: the CPU has AVX (checked just above).
         return unsafe { weigh_avx(kernel, x, n, ids, stored, used) };
     }

@@ -285,7 +285,7 @@ impl<'a> ValidGather<'a> {
         out: &mut GatherValues,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::simd::avx2() {
             // SAFETY: the CPU has AVX2. (No FMA: results are bitwise those of the SSE2 build.)
             return unsafe { self.add_media_avx2(rad, media, march, wanted, out) };
         }
@@ -488,7 +488,7 @@ impl<'a> ValidGather<'a> {
         wanted: Wanted,
     ) -> PolarSums {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::simd::avx2() {
             // SAFETY: the CPU has AVX2. (No FMA: results are bitwise those of the SSE2 build.)
             return unsafe { self.polar_pass_avx2(walls, rad, wanted) };
         }
@@ -673,7 +673,7 @@ impl<'a> ValidGather<'a> {
         wanted: Wanted,
     ) -> (Vec<DVec3>, Vec<DVec3>) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::simd::avx2() {
             // SAFETY: the CPU has AVX2. (No FMA: results are bitwise those of the SSE2 build.)
             return unsafe { self.concentric_pass_avx2(walls, rad, wanted) };
         }

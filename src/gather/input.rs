@@ -75,7 +75,7 @@ fn check_all_finite(values: &[f32], what: &str) -> Result<()> {
 /// Whether no value is Inf or NaN.
 fn all_finite(values: &[f32]) -> bool {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if crate::simd::avx2() {
         // SAFETY: the CPU has AVX2.
         return unsafe { all_finite_avx2(values) };
     }
@@ -222,7 +222,7 @@ fn ring_range(layout: &Layout, j: usize, tol: f64) -> (f64, f64) {
 /// and-ed, so the common case costs a few flops per direction.
 fn directions_ok(layout: &Layout, frame: &Frame, directions: &[DVec3]) -> bool {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if crate::simd::avx2() {
         // SAFETY: the CPU has AVX2. (No FMA: the same verdicts as the SSE2 build.)
         return unsafe { directions_ok_avx2(layout, frame, directions) };
     }

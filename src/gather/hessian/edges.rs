@@ -478,27 +478,17 @@ enum Isa {
     Avx512,
 }
 
-/// The best [`Isa`] this CPU runs (`RADDIFF_SIMD=avx2` or `portable` caps it, read once: for
-/// comparing the versions).
+/// The best [`Isa`] this CPU runs and `RADDIFF_SIMD` allows (see `crate::simd`).
 fn best_isa() -> Isa {
-    static BEST: std::sync::OnceLock<Isa> = std::sync::OnceLock::new();
-    *BEST.get_or_init(|| {
-        let cap = std::env::var("RADDIFF_SIMD").unwrap_or_default();
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::is_x86_feature_detected as has;
-            let avx2 = has!("avx2") && has!("fma");
-            #[cfg(raddiff_avx512)]
-            if avx2 && has!("avx512f") && has!("avx512vl") && has!("avx512dq") && cap.is_empty() {
-                return Isa::Avx512;
-            }
-            if avx2 && cap != "portable" {
-                return Isa::Avx2;
-            }
-        }
-        let _ = cap;
-        Isa::Portable
-    })
+    #[cfg(all(target_arch = "x86_64", raddiff_avx512))]
+    if crate::simd::avx512() {
+        return Isa::Avx512;
+    }
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2_fma() {
+        return Isa::Avx2;
+    }
+    Isa::Portable
 }
 
 fn run_batch_on<const AXIAL_LANES: bool>(
