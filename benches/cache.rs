@@ -96,10 +96,17 @@ fn lookups(c: &mut Criterion) {
             mean_covering(&cache, &qs)
         );
         let mut i = 0;
+        // `lookup` keeps per-thread cursors; `lookup_indexed` (the index alone) is its baseline
         group.bench_function(format!("random/{n}"), |b| {
             b.iter(|| {
                 i = (i + 1) & (qs.len() - 1);
                 black_box(cache.lookup(qs[i], DVec3::Z).ok())
+            })
+        });
+        group.bench_function(format!("random_indexed/{n}"), |b| {
+            b.iter(|| {
+                i = (i + 1) & (qs.len() - 1);
+                black_box(cache.lookup_indexed(qs[i], DVec3::Z).ok())
             })
         });
         if n == 1_000_000 {
@@ -129,6 +136,12 @@ fn lookups(c: &mut Criterion) {
                 b.iter(|| {
                     j = (j + 1) & (row.len() - 1);
                     black_box(cache.lookup(row[j], DVec3::Z).ok())
+                })
+            });
+            group.bench_function(format!("coherent_indexed/{n}"), |b| {
+                b.iter(|| {
+                    j = (j + 1) & (row.len() - 1);
+                    black_box(cache.lookup_indexed(row[j], DVec3::Z).ok())
                 })
             });
             // the same queries through a per-thread cursor (identical results)

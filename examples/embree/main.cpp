@@ -533,8 +533,9 @@ int run(const Settings &cfg) {
   const double fill_seconds = std::chrono::duration<double>(clock::now() - t0).count();
 
   // Render from the cache: through a per-thread cursor (successive pixels of a thread are close,
-  // so the cursor's remembered records serve most lookups), or with plain lookups. Both give the
-  // same bits; pass 2 below uses the other one, so its "identical" check covers that too.
+  // so the cursor's remembered records serve most lookups), or with plain lookups (for which the
+  // library keeps a cursor per thread). Both give the same bits; pass 2 below uses the other one,
+  // so its "identical" check covers that too.
   struct Cursor {
     raddiff_cache_cursor *p = raddiff_cache_cursor_new();
     ~Cursor() { raddiff_cache_cursor_free(p); }

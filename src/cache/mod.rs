@@ -81,6 +81,7 @@ pub mod metric;
 mod persist;
 mod record;
 mod store;
+mod thread_cursor;
 mod value;
 mod weigh;
 
@@ -412,13 +413,42 @@ impl<V: CacheValue> Cache<V> {
     /// Interpolates at `position` with surface normal `normal` (ignored in volumes) into `out`
     /// (exactly `channels` floats), returning the weight sum and the number of records used.
     /// `NotFound` when no record covers the point; `out` is written only on success.
+    ///
+    /// Each thread keeps a [`Cursor`] for each of the last four caches it looked up in, so that successive nearby queries (a tile's pixels, a ray's steps) skip
+    /// the index as [`Cache::lookup_into_with`] does; the result is bit for bit that of
+    /// [`Cache::lookup_into_indexed`].
     pub fn lookup_into(
         &self,
         position: DVec3,
         normal: DVec3,
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
+        let mut result = None;
+        thread_cursor::with(self.identity, |cursor| {
+            result = Some(self.lookup_into_with(cursor, position, normal, out));
+        });
+        result.unwrap_or_else(|| self.lookup_into_indexed(position, normal, out))
+    }
+
+    /// [`Cache::lookup_into`] through the index alone, with no per-thread state: the reference
+    /// that the cursor paths are tested and benchmarked against (same results, bit for bit).
+    pub fn lookup_into_indexed(
+        &self,
+        position: DVec3,
+        normal: DVec3,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
         let n = self.check_lookup(position, normal, out.len())?;
+        self.lookup_checked_indexed(position, n, out)
+    }
+
+    /// The index path of a query already validated (`n` the unit normal).
+    fn lookup_checked_indexed(
+        &self,
+        position: DVec3,
+        n: DVec3,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
         // candidates first (their records prefetched), then the records: their misses overlap
         let mut slots: SmallVec<[usize; 32]> = SmallVec::new();
         self.index.query(position, |id| {
@@ -445,7 +475,7 @@ impl<V: CacheValue> Cache<V> {
         };
         let source = (self.identity, self.generation, self.len());
         match cursor.plan(source, position, finest) {
-            cursor::Plan::Plain => return self.lookup_into(position, normal, out),
+            cursor::Plan::Plain => return self.lookup_checked_indexed(position, n, out),
             cursor::Plan::Anchor(reach) => {
                 // remembered in content order, so that the records of later lookups arrive
                 // sorted and their sort below is a single check
@@ -577,9 +607,15 @@ impl<V: CacheValue> Cache<V> {
     }
 
     /// Interpolates at `position` with surface normal `normal` (ignored in volumes).
-    /// `NotFound` when no record covers the point.
+    /// `NotFound` when no record covers the point. Nearby successive queries on a thread are
+    /// served from its cursor (see [`Cache::lookup_into`]).
     pub fn lookup(&self, position: DVec3, normal: DVec3) -> Result<Lookup<V>> {
         self.lookup_via(|out| self.lookup_into(position, normal, out))
+    }
+
+    /// [`Cache::lookup`] through the index alone (see [`Cache::lookup_into_indexed`]).
+    pub fn lookup_indexed(&self, position: DVec3, normal: DVec3) -> Result<Lookup<V>> {
+        self.lookup_via(|out| self.lookup_into_indexed(position, normal, out))
     }
 
     /// Runs a `lookup_into` variant on a stack buffer and wraps the result.

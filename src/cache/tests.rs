@@ -541,7 +541,7 @@ fn cursor_lookups_equal_plain_lookups_bit_for_bit() {
                 c.compact();
             }
             let n = DVec3::new(0.1 * (rnd() - 0.5), 0.1 * (rnd() - 0.5), 1.0);
-            let plain = c.lookup(p, n);
+            let plain = c.lookup_indexed(p, n);
             let with = c.lookup_with(&mut cursor, p, n);
             match (plain, with) {
                 (Ok(a), Ok(b)) => {
@@ -656,7 +656,7 @@ fn cursor_falls_back_to_plain_lookups_for_incoherent_queries() {
     for _ in 0..800 {
         let p = DVec3::new(rnd() * 40.0, rnd() * 40.0, 0.0);
         let with = c.lookup_with(&mut cursor, p, DVec3::Z);
-        let plain = c.lookup(p, DVec3::Z);
+        let plain = c.lookup_indexed(p, DVec3::Z);
         if let (Ok(a), Ok(b)) = (&with, &plain) {
             assert_eq!(a.value.to_bits(), b.value.to_bits());
             hits += 1;
@@ -675,4 +675,73 @@ fn cursor_falls_back_to_plain_lookups_for_incoherent_queries() {
     }
     let remembered = cursor.served[0] - before[0];
     assert!(remembered > 380, "{:?} -> {:?}", before, cursor.served);
+}
+
+/// Plain lookups go through per-thread cursors: on one thread interleaving coherent walks over
+/// more caches than it keeps cursors for (so cursors are evicted and re-created), with caches
+/// dropped and new ones built over the same positions, and on several threads at once, every
+/// lookup equals the index path bit for bit, and the cursors serve most coherent lookups.
+#[test]
+fn plain_lookups_through_thread_cursors_equal_index_lookups() {
+    fn filled(seed: u64, value: f32) -> Cache<[f32; 2]> {
+        let mut rnd = lcg(seed);
+        let c: Cache<[f32; 2]> =
+            Cache::new(CacheConfig::surface(2).with_interpolation(Interpolation::Ward)).unwrap();
+        for _ in 0..1500 {
+            let p = DVec3::new(rnd() * 20.0, rnd() * 20.0, 0.0);
+            let mut r = Record::new(p, DVec3::Z, [value, rnd() as f32], Extent::isotropic(0.6));
+            r.gradient = Some([[0.1, 0.2], [rnd() as f32, 0.0], [0.0; 2]]);
+            c.insert(&r).unwrap();
+        }
+        c
+    }
+    let compare = |c: &Cache<[f32; 2]>, p: DVec3| -> bool {
+        match (c.lookup(p, DVec3::Z), c.lookup_indexed(p, DVec3::Z)) {
+            (Ok(a), Ok(b)) => {
+                assert_eq!(a.value.map(f32::to_bits), b.value.map(f32::to_bits), "{p}");
+                assert_eq!(a.weight_sum.to_bits(), b.weight_sum.to_bits());
+                assert_eq!(a.records, b.records);
+                true
+            }
+            (Err(Error::NotFound(_)), Err(Error::NotFound(_))) => false,
+            (a, b) => panic!("at {p}: thread cursor {a:?}, index {b:?}"),
+        }
+    };
+    let count = thread_cursor::CACHES + 2;
+    let mut caches: Vec<Cache<[f32; 2]>> = (0..count).map(|k| filled(k as u64, k as f32)).collect();
+    let mut found = 0;
+    for round in 0..3 {
+        // stretches of all caches in turn (more caches than cursors: each visit finds its cursor
+        // evicted), then stretches of two caches walked alternately (their cursors stay)
+        for step in 0..3000 {
+            let k = if step % 200 < 100 {
+                step % count
+            } else {
+                step % 2
+            };
+            let t = step as f64 * 4e-3;
+            let p = DVec3::new(2.0 + t, 5.0 + 0.3 * (k as f64) + 0.1 * t.sin(), 0.0);
+            found += compare(&caches[k] as &_, p) as usize;
+        }
+        // a new cache over the same positions with other values in place of one walked in turn
+        caches[2 + round] = filled(2 + round as u64, 100.0 + round as f32);
+    }
+    assert!(found > 8000, "{found}");
+    // the caches walked alternately kept their cursors: most of their lookups were remembered
+    for cache in &caches[..2] {
+        let [remembered, anchored, _] = thread_cursor::served(cache.identity).unwrap();
+        assert!(remembered > 10 * anchored, "{remembered} {anchored}");
+    }
+    // several threads at once, each with its own cursors
+    std::thread::scope(|scope| {
+        for th in 0..3 {
+            let caches = &caches;
+            scope.spawn(move || {
+                for step in 0..2000 {
+                    let p = DVec3::new(1.0 + step as f64 * 5e-3, 3.0 + th as f64, 0.0);
+                    compare(&caches[(step / 50 + th) % count], p);
+                }
+            });
+        }
+    });
 }

@@ -166,7 +166,9 @@ pub extern "C" fn raddiff_cache_insert(
 /// Interpolates the cache at `position` with surface normal `normal` (ignored in volumes) into
 /// `value` (`channels` floats) and, if `weight_sum` is not NULL, the sum of the weights used.
 /// `RADDIFF_ERROR_NOT_FOUND` when no record covers the point (outputs untouched). Thread-safe and
-/// lock-free; the result depends only on the set of records covering the point.
+/// lock-free; the result depends only on the set of records covering the point. Each calling
+/// thread keeps a cursor for each of the last four caches it looked up in, so that nearby
+/// successive queries skip the spatial index (see `raddiff_cache_lookup_with`).
 #[no_mangle]
 pub extern "C" fn raddiff_cache_lookup(
     cache: *const raddiff_cache,
@@ -211,7 +213,9 @@ pub extern "C" fn raddiff_cache_cursor_free(cursor: *mut raddiff_cache_cursor) {
 
 /// `raddiff_cache_lookup` through this thread's `cursor`: the same results bit for bit, faster
 /// when successive queries are close to each other. The cache may be shared by threads as with
-/// `raddiff_cache_lookup`; the cursor may not.
+/// `raddiff_cache_lookup`; the cursor may not. `raddiff_cache_lookup` already keeps a cursor per
+/// thread and cache; an explicit one helps a thread that interleaves more than four caches, or
+/// several coherent query streams in one cache (one cursor each).
 #[no_mangle]
 pub extern "C" fn raddiff_cache_lookup_with(
     cache: *const raddiff_cache,
