@@ -78,6 +78,17 @@ impl Metric {
         }
     }
 
+    /// How a record's radius scales with the parameter: as its first power for the
+    /// split-sphere and gradient metrics, as its fourth root for the Hessian metrics (they bound
+    /// the error integrated over the record's disc, which grows as r⁴).
+    pub fn radius_exponent(self) -> f64 {
+        if self.uses_hessian() {
+            0.25
+        } else {
+            1.0
+        }
+    }
+
     fn interpolation(self) -> Interpolation {
         if self.uses_hessian() {
             Interpolation::Tent

@@ -199,10 +199,11 @@ fn run() -> Result<(), String> {
                 outputs::error_map(&gbuffer, &tuned.image, &reference, report::ERROR_MAP_SCALE),
                 &format!("{file}-error"),
             )?;
-            // Error against time: the same metric at thresholds around the tuned one.
+            // Error against time: the same metric at thresholds around the tuned one, spaced so
+            // that every metric's radii change by the same factors (2^0.75 per step).
             let mut sweep = Vec::new();
             for k in 0..options.thresholds {
-                let factor = 2f64.powf(0.75 * (k as f64 - 1.0));
+                let factor = 2f64.powf(0.75 * (k as f64 - 1.0) / metric.radius_exponent());
                 let run = if factor == 1.0 {
                     None
                 } else {

@@ -84,6 +84,17 @@ impl MediaMetric {
         }
     }
 
+    /// How a record's radius scales with the parameter: as its first power for the
+    /// split-sphere and gradient metrics, as its fifth root for the Hessian metrics (they bound
+    /// the error integrated over the record's ball, which grows as r⁵).
+    pub fn radius_exponent(self) -> f64 {
+        if self.uses_hessian() {
+            0.2
+        } else {
+            1.0
+        }
+    }
+
     fn initial_parameter(self) -> f64 {
         match self {
             MediaMetric::SplitSphere | MediaMetric::Gradient => 0.2,

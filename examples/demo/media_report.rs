@@ -173,8 +173,9 @@ pub fn run(
             &format!("{}-error", metric.name()),
         )?;
         let mut sweep = Vec::new();
+        // radii change by 2^0.75 per step for every metric
         for k in 0..o.thresholds {
-            let factor = 2f64.powf(0.75 * (k as f64 - 1.0));
+            let factor = 2f64.powf(0.75 * (k as f64 - 1.0) / metric.radius_exponent());
             let r = if factor == 1.0 {
                 None
             } else {
