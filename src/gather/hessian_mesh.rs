@@ -231,7 +231,7 @@ fn match_edges(triangles: &[[u32; 3]]) -> Result<(Vec<Edge>, Vec<[u32; 3]>)> {
         }
     }
     let mut triangle_edges = vec![[0u32; 3]; triangles.len()];
-    half.sort_unstable();
+    sort_half_edges(&mut half);
     let mut edges = Vec::with_capacity(half.len() / 2 + 8);
     let mut i = 0;
     while i < half.len() {
@@ -276,9 +276,64 @@ fn match_edges(triangles: &[[u32; 3]]) -> Result<(Vec<Edge>, Vec<[u32; 3]>)> {
     Ok((edges, triangle_edges))
 }
 
+/// Sorts the half-edges `(low, high, slot, forward)` lexicographically, as `sort_unstable` would,
+/// in linear time: vertex ids are dense and every vertex has a handful of edges, so the half-edges
+/// are bucketed by `low` (a counting sort) and each small bucket is sorted on its own (the global
+/// comparison sort took ~55% of building a 4096-sample topology).
+fn sort_half_edges(half: &mut Vec<(u32, u32, u32, bool)>) {
+    let Some(max_low) = half.iter().map(|h| h.0).max() else {
+        return;
+    };
+    let mut start = vec![0usize; max_low as usize + 2];
+    for h in half.iter() {
+        start[h.0 as usize + 1] += 1;
+    }
+    for v in 1..start.len() {
+        start[v] += start[v - 1];
+    }
+    let mut sorted = vec![(0u32, 0u32, 0u32, false); half.len()];
+    let mut next = start.clone();
+    for &h in half.iter() {
+        let at = &mut next[h.0 as usize];
+        sorted[*at] = h;
+        *at += 1;
+    }
+    for bucket in start.windows(2) {
+        sorted[bucket[0]..bucket[1]].sort_unstable();
+    }
+    *half = sorted;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn half_edges_sort_as_a_comparison_sort_does() {
+        for (kind, m, n) in [
+            (LayoutKind::CosinePolar, 1, 6),
+            (LayoutKind::CosinePolar, 7, 13),
+            (LayoutKind::Concentric, 3, 3),
+            (LayoutKind::Concentric, 9, 5),
+            (LayoutKind::Sphere, 4, 6),
+        ] {
+            let topo = Topology::new(kind, m, n).unwrap();
+            let mut half = Vec::new();
+            for (t, tri) in topo.triangles.iter().enumerate() {
+                for i in 0..3 {
+                    let (a, b) = (tri[i], tri[(i + 1) % 3]);
+                    half.push((a.min(b), a.max(b), (3 * t + i) as u32, a < b));
+                }
+            }
+            let mut expected = half.clone();
+            expected.sort_unstable();
+            sort_half_edges(&mut half);
+            assert_eq!(half, expected, "{kind:?} {m}x{n}");
+        }
+        let mut empty = Vec::new();
+        sort_half_edges(&mut empty);
+        assert!(empty.is_empty());
+    }
 
     fn check(topo: &Topology, horizon_vertices: usize) {
         let v = topo.vertex_count();
