@@ -28,6 +28,10 @@
 //! table and entry lists are published with release/acquire atomics and never freed while readers
 //! may hold them ([`Cache::compact`] reclaims the replaced ones under `&mut`).
 //!
+//! Lookups keep per-thread state only to go faster: each thread has a [`Cursor`] for each of the
+//! last four caches it looked up in, which serves nearby successive queries from remembered
+//! records (bit for bit what [`Cache::lookup_indexed`] computes through the index).
+//!
 //! The value returned for a query depends only on the set of records covering it: covering
 //! records are summed in their content order (position bits, then the remaining stored bytes), so
 //! neither insertion order nor thread timing changes a single bit. Inserting a record whose stored
