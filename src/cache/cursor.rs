@@ -49,7 +49,12 @@ struct Group {
     len: u8,
 }
 
-/// Per-thread state that makes coherent lookups cheaper (see the [module docs](self)).
+/// Per-thread state that makes coherent lookups cheaper: it remembers, decoded, the records whose
+/// bounding spheres meet a small ball around an anchor point, and serves queries inside the ball
+/// from them while the cache is unchanged (re-anchoring when a query leaves the ball, the cache
+/// grows or is compacted, or it is used with another cache; after anchors that served almost no
+/// lookups it falls back to the index for a while). The results are bit for bit those of
+/// [`Cache::lookup_indexed`](super::Cache::lookup_indexed).
 /// Create one per thread with [`Cursor::new`] and pass it to
 /// [`Cache::lookup_with`](super::Cache::lookup_with); it holds no reference to any cache.
 #[derive(Debug, Clone, Default)]
