@@ -114,18 +114,33 @@ pub fn exact_gradient(x: DVec3) -> DVec3 {
 
 /// Exact Hessian of the irradiance at x (nested fourth-order differences, symmetrized).
 pub fn exact_hessian(x: DVec3) -> DMat3 {
+    hessian_by_differences(&exact_irradiance, x)
+}
+
+/// The Hessian of `f` at x by nested fourth-order central differences, symmetrized.
+pub fn hessian_by_differences(f: &dyn Fn(DVec3) -> f64, x: DVec3) -> DMat3 {
     let h = 2e-3;
     let mut cols = [DVec3::ZERO; 3];
     for (j, col) in cols.iter_mut().enumerate() {
         let ej = DVec3::AXES[j];
         for i in 0..3 {
             let ei = DVec3::AXES[i];
-            let gi = |p: DVec3| d1(&exact_irradiance, p, ei, h);
+            let gi = |p: DVec3| d1(f, p, ei, h);
             col[i] = d1(&gi, x, ej, h);
         }
     }
     let m = DMat3::from_cols(cols[0], cols[1], cols[2]);
     (m + m.transpose()) * 0.5
+}
+
+/// Exact irradiance at x from the emitter alone, or with the one black occluder `occluder` in
+/// front of it (every shadow on the emitter's plane is an axis-aligned rectangle).
+pub fn irradiance_behind(x: DVec3, occluder: Option<&Rect>) -> f64 {
+    let e = emitter();
+    let em = (e.min, e.max);
+    let f = |r: (DVec2, DVec2)| rect_form_factor(x, r.0, r.1, e.z);
+    let shadowed = occluder.map_or(0.0, |o| f(intersect(em, shadow(x, o, e.z))));
+    PI * EMITTER_RADIANCE as f64 * (f(em) - shadowed)
 }
 
 /// The tangent-plane (xy) block of a Hessian at a point of the receiver and its eigenvalues,
