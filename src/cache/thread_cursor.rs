@@ -36,12 +36,7 @@ impl ThreadCursors {
         let k = match self.slots.iter().position(|s| s.identity == identity) {
             Some(k) => k,
             None => {
-                let (k, _) = self
-                    .slots
-                    .iter()
-                    .enumerate()
-                    .min_by_key(|(_, s)| s.used)
-                    .unwrap_or((0, &self.slots[0]));
+                let k = (0..CACHES).min_by_key(|&k| self.slots[k].used).unwrap_or(0);
                 self.slots[k] = Slot {
                     identity,
                     used: 0,
