@@ -160,6 +160,37 @@ int main(int argc, char **argv) {
   raddiff_cache_free(other);
   raddiff_cache_free(loaded);
 
+  /* RADDIFF_INTERP_NON_NEGATIVE: a record extrapolating below zero gives 0, not 1 - 0.6 * 2;
+     the flag survives save / load; unknown flag bits are refused */
+  {
+    const float one[1] = {1.0f}, steep[3] = {-2.0f, 0.0f, 0.0f};
+    raddiff_vec3 q = {0.6, 0.0, 0.0};
+    raddiff_cache_config flagged = {1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD, 0.2};
+    raddiff_cache *signed_cache = raddiff_cache_new(&flagged), *clamped, *reloaded;
+    float v = 1.0f;
+    flagged.interpolation = RADDIFF_INTERP_WARD | RADDIFF_INTERP_NON_NEGATIVE;
+    clamped = raddiff_cache_new(&flagged);
+    CHECK(signed_cache != NULL && clamped != NULL);
+    rec = make_record(0.0, one, steep);
+    CHECK_STATUS(raddiff_cache_insert(signed_cache, &rec), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_insert(clamped, &rec), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_lookup(signed_cache, q, n, &v, NULL), RADDIFF_OK);
+    CHECK_CLOSE(v, -0.2, 1e-6);
+    CHECK_STATUS(raddiff_cache_lookup(clamped, q, n, &v, NULL), RADDIFF_OK);
+    CHECK(v == 0.0f);
+    CHECK_STATUS(raddiff_cache_save(clamped, path), RADDIFF_OK);
+    reloaded = raddiff_cache_load(path);
+    CHECK(reloaded != NULL);
+    v = 1.0f;
+    CHECK_STATUS(raddiff_cache_lookup(reloaded, q, n, &v, NULL), RADDIFF_OK);
+    CHECK(v == 0.0f);
+    flagged.interpolation = RADDIFF_INTERP_WARD | 0x200;
+    CHECK(raddiff_cache_new(&flagged) == NULL);
+    raddiff_cache_free(reloaded);
+    raddiff_cache_free(clamped);
+    raddiff_cache_free(signed_cache);
+  }
+
   /* unreadable and corrupt files: NULL with an IO / CORRUPT message */
   CHECK(raddiff_cache_load(NULL) == NULL);
   CHECK(raddiff_cache_load(bad_path) == NULL);

@@ -38,6 +38,12 @@
 // Ward-Heckbert extrapolation with Tabellion-Lamorlette weights 1 - (t+rho).
 #define RADDIFF_INTERP_WARD_TABELLION 5
 
+// Flag OR-ed into `raddiff_cache_config.interpolation`: clamp each record's extrapolated value
+// at 0 per channel before blending, so lookups never return negative values (irradiance and
+// radiance cannot be negative; leave it off for signed quantities). `_LOG` is positive anyway.
+// Saved with the cache and restored by `raddiff_cache_load`.
+#define RADDIFF_INTERP_NON_NEGATIVE 256
+
 // Major version of the library this header belongs to.
 #define RADDIFF_VERSION_MAJOR 0
 
@@ -122,7 +128,8 @@ typedef struct raddiff_cache_config {
   uint32_t channels;
   // `RADDIFF_DOMAIN_SURFACE` or `RADDIFF_DOMAIN_VOLUME`.
   uint32_t domain;
-  // `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`).
+  // `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`),
+  // optionally OR-ed with `RADDIFF_INTERP_NON_NEGATIVE`.
   uint32_t interpolation;
   // Radians in (0, pi]: largest normal deviation for a record to be used (surface domain;
   // ignored in volumes). 0.2 is a good default.

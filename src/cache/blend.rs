@@ -156,27 +156,35 @@ impl<'a> Covering<'a> {
 
 /// Writes the blend of `covering` (weights summing to `covering.weight_sum()` > 0) at query `x`
 /// with unit normal `n` (`surface`: whether the rotational term applies) into `out` (one float
-/// per channel, as many as the records have).
+/// per channel, as many as the records have). Each record's extrapolated value is raised to at
+/// least `floor` (0, or −∞ for none) before it is weighted.
 pub(crate) fn blend_linear(
     surface: bool,
     covering: &Covering<'_>,
     x: DVec3,
     n: DVec3,
+    floor: f64,
     out: &mut [f32],
 ) {
     assert_eq!(out.len(), covering.channels);
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx_f16c() {
         let groups = covering.blocks.len();
+        let query = BlendQuery {
+            surface,
+            x,
+            n,
+            floor,
+        };
         // SAFETY: the CPU has AVX and F16C (checked just above); `push` checked that every
         // record has `out.len()` channels.
         return unsafe {
-            blend_avx(surface, groups, covering.weight_sum, x, n, out, |i| {
+            blend_avx(&query, groups, covering.weight_sum, out, |i| {
                 GroupInputs::of_lanes(&covering.blocks[i], (covering.len - i * LANES).min(LANES))
             })
         };
     }
-    blend_portable(surface, covering, x, n, out)
+    blend_portable(surface, covering, x, n, floor, out)
 }
 
 /// [`blend_linear`] of the records `used` (in content order, weights summing to `weight_sum`
@@ -187,6 +195,7 @@ pub(crate) fn blend_linear_used(
     weight_sum: f64,
     x: DVec3,
     n: DVec3,
+    floor: f64,
     out: &mut [f32],
 ) {
     let channels = out.len();
@@ -195,14 +204,27 @@ pub(crate) fn blend_linear_used(
         // every record has `channels` channels (the cache's count): the loads rely on it
         assert!(used.iter().all(|u| u.channels.len() == channels));
         let groups = used.len().div_ceil(LANES);
+        let query = BlendQuery {
+            surface,
+            x,
+            n,
+            floor,
+        };
         // SAFETY: the CPU has AVX and F16C (checked just above); channel counts checked above.
         return unsafe {
-            blend_avx(surface, groups, weight_sum, x, n, out, |i| {
+            blend_avx(&query, groups, weight_sum, out, |i| {
                 GroupInputs::of_used(&used[i * LANES..used.len().min(i * LANES + LANES)])
             })
         };
     }
-    blend_portable(surface, &Covering::from_used(used, channels), x, n, out)
+    blend_portable(
+        surface,
+        &Covering::from_used(used, channels),
+        x,
+        n,
+        floor,
+        out,
+    )
 }
 
 /// The offsets qₖ of lane `l` of `b`, rounded to `f32` (see the module docs).
@@ -251,6 +273,7 @@ pub(crate) fn blend_portable(
     covering: &Covering<'_>,
     x: DVec3,
     n: DVec3,
+    floor: f64,
     out: &mut [f32],
 ) {
     let mut stack = [[0.0f64; LANES]; STACK_CHANNELS];
@@ -268,7 +291,10 @@ pub(crate) fn blend_portable(
         // borrowed for the covering's lifetime.
         let channels = unsafe { std::slice::from_raw_parts(b.channels[l], out.len()) };
         for (a, ch) in acc.iter_mut().zip(channels) {
-            a[l] += b.weight[l] * (ch.value as f64 + extrapolation(ch, &q) as f64);
+            let term = ch.value as f64 + extrapolation(ch, &q) as f64;
+            // `vmaxpd`'s operation (`max` leaves the sign of a zero unspecified)
+            let term = if term > floor { term } else { floor };
+            a[l] += b.weight[l] * term;
         }
     }
     let inv_sum = 1.0 / covering.weight_sum();
@@ -350,6 +376,17 @@ impl GroupInputs {
     }
 }
 
+/// Where and how [`blend_avx`] blends: the query point and unit normal, whether the rotational
+/// term applies, and the floor of each record's extrapolated value.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct BlendQuery {
+    surface: bool,
+    x: DVec3,
+    n: DVec3,
+    floor: f64,
+}
+
 /// Four records at a time (AVX, F16C), the same operations as [`blend_portable`]; `group(i)`
 /// gives the i-th of `groups` groups (records 4i..4i+4 in content order).
 ///
@@ -360,16 +397,22 @@ impl GroupInputs {
 #[target_feature(enable = "avx,f16c")]
 #[inline]
 unsafe fn blend_avx(
-    surface: bool,
+    query: &BlendQuery,
     groups: usize,
     weight_sum: f64,
-    x: DVec3,
-    n: DVec3,
     out: &mut [f32],
     group: impl Fn(usize) -> GroupInputs,
 ) {
     use std::arch::x86_64::*;
+    let BlendQuery {
+        surface,
+        x,
+        n,
+        floor,
+    } = *query;
     let channels = out.len();
+    // max(term, floor) as f64::max: the term (finite) unless the floor is larger
+    let floor_lanes = _mm256_set1_pd(floor);
     let mut stack = [_mm256_setzero_pd(); STACK_CHANNELS];
     let mut heap = Vec::new();
     let acc: &mut [__m256d] = if channels <= STACK_CHANNELS {
@@ -457,7 +500,10 @@ unsafe fn blend_avx(
                 _mm_unpacklo_epi32(h0, h1),
                 _mm_unpacklo_epi32(h2, h3),
             ));
-            let term = _mm256_add_pd(_mm256_cvtps_pd(value), _mm256_cvtps_pd(delta));
+            let term = _mm256_max_pd(
+                _mm256_add_pd(_mm256_cvtps_pd(value), _mm256_cvtps_pd(delta)),
+                floor_lanes,
+            );
             *a = _mm256_add_pd(*a, _mm256_and_pd(_mm256_mul_pd(g.weight, term), valid));
         }
     }

@@ -247,8 +247,9 @@ mod tests {
     /// The dispatched blends (AVX and F16C where the CPU has them; from the lanes of a `Covering`
     /// and gathered from `Used` entries) equal the portable one bit for bit, over random binary16
     /// components (normal, subnormal, zero, ±1), value bits that read as NaN or infinite halves,
-    /// every group size (1-6 records: full and partial lane groups), and gradient scales large
-    /// enough to saturate the offsets.
+    /// every group size (1-6 records: full and partial lane groups), gradient scales large
+    /// enough to saturate the offsets, and with and without the non-negative floor (then no
+    /// output is negative, though values and extrapolations are).
     #[test]
     fn vector_blend_equals_portable_blend() {
         let mut state = 0x1234_5678_9abc_def0u64;
@@ -266,6 +267,7 @@ mod tests {
                 _ => ((r >> 4) as u16 & 0x83ff) | (((r >> 16) % 15) as u16) << 10,
             }
         };
+        let mut negative_seen = false;
         for round in 0..400 {
             let surface = round % 4 != 3;
             let records = 1 + round % 6;
@@ -285,7 +287,7 @@ mod tests {
                     value: if round % 3 == 0 {
                         f32::from_bits(0x7c00_7e00 | next() & 0x0001_0001)
                     } else {
-                        (next() % 1000) as f32 * 0.01
+                        (next() % 1000) as f32 * 0.01 - 2.0
                     },
                     gradient: [half(next()), half(next()), half(next())],
                     rotation: [half(next()), half(next()), half(next())],
@@ -307,14 +309,28 @@ mod tests {
             let covering = blend::Covering::from_used(&used, 5);
             let sum: f64 = used.iter().map(|u| u.weight).sum();
             assert_eq!(sum.to_bits(), covering.weight_sum().to_bits());
+            let floor = if round % 2 == 0 {
+                0.0
+            } else {
+                f64::NEG_INFINITY
+            };
             let (mut lanes, mut gathered, mut portable) = ([0.0f32; 5], [0.0f32; 5], [0.0f32; 5]);
-            blend::blend_linear(surface, &covering, x, n, &mut lanes);
-            blend::blend_linear_used(surface, &used, sum, x, n, &mut gathered);
-            blend::blend_portable(surface, &covering, x, n, &mut portable);
+            blend::blend_linear(surface, &covering, x, n, floor, &mut lanes);
+            blend::blend_linear_used(surface, &used, sum, x, n, floor, &mut gathered);
+            blend::blend_portable(surface, &covering, x, n, floor, &mut portable);
             let bits = |v: [f32; 5]| v.map(f32::to_bits);
             assert_eq!(bits(lanes), bits(portable), "round {round}");
             assert_eq!(bits(gathered), bits(portable), "round {round}");
             assert!(lanes.iter().all(|v| v.is_finite()));
+            if floor == 0.0 {
+                assert!(lanes.iter().all(|&v| v >= 0.0), "round {round}: {lanes:?}");
+            } else {
+                negative_seen |= lanes.iter().any(|&v| v < 0.0);
+            }
         }
+        assert!(
+            negative_seen,
+            "the unclamped rounds must produce negative blends"
+        );
     }
 }

@@ -58,7 +58,7 @@
 //! | 24 | 8 | max normal deviation, f64 radians |
 //! | 32 | 8 | record count N, u64 |
 //! | 40 | 4 | record size S = 64 + 16·channels, u32 |
-//! | 44 | 4 | reserved, 0 |
+//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], the other bits 0 |
 //! | 48 | N·S | records, in strictly increasing content order |
 //! | 48 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
 //!
@@ -123,6 +123,12 @@ pub struct CacheConfig {
     /// Largest angle (radians, in (0, π]) between a record's normal and a query normal for the
     /// record to be used (surface domain; ignored in volumes).
     pub max_normal_deviation: f64,
+    /// Clamp each record's extrapolated value at 0, per channel, before blending (default
+    /// `false`). First-order extrapolation of a steep gradient can go below zero in dark corners;
+    /// with non-negative weights (every scheme's) the blend of clamped values is never negative,
+    /// which irradiance and radiance require. Leave it off for signed quantities. `Log`
+    /// interpolation is positive by construction and ignores it.
+    pub non_negative: bool,
 }
 
 impl CacheConfig {
@@ -134,6 +140,7 @@ impl CacheConfig {
             domain: Domain::Surface,
             interpolation: Interpolation::Ward,
             max_normal_deviation: 0.2,
+            non_negative: false,
         }
     }
 
@@ -144,6 +151,7 @@ impl CacheConfig {
             domain: Domain::Volume,
             interpolation: Interpolation::Cubic,
             max_normal_deviation: 0.2,
+            non_negative: false,
         }
     }
 
@@ -151,6 +159,22 @@ impl CacheConfig {
     pub fn with_interpolation(mut self, interpolation: Interpolation) -> Self {
         self.interpolation = interpolation;
         self
+    }
+
+    /// The same configuration with [`CacheConfig::non_negative`] set to `non_negative`.
+    pub fn with_non_negative(mut self, non_negative: bool) -> Self {
+        self.non_negative = non_negative;
+        self
+    }
+
+    /// The lowest value a record's extrapolation may take: 0 with
+    /// [`CacheConfig::non_negative`], else −∞ (`max(v, −∞)` is `v` bit for bit).
+    pub(crate) fn extrapolation_floor(&self) -> f64 {
+        if self.non_negative {
+            0.0
+        } else {
+            f64::NEG_INFINITY
+        }
     }
 }
 
@@ -581,7 +605,8 @@ impl<V: CacheValue> Cache<V> {
             return Ok((weight_sum, used.len()));
         }
         let surface = self.config.domain == Domain::Surface;
-        blend::blend_linear_used(surface, used, weight_sum, position, n, out);
+        let floor = self.config.extrapolation_floor();
+        blend::blend_linear_used(surface, used, weight_sum, position, n, floor, out);
         Ok((weight_sum, used.len()))
     }
 
@@ -605,6 +630,7 @@ impl<V: CacheValue> Cache<V> {
             covering,
             position,
             n,
+            self.config.extrapolation_floor(),
             out,
         );
         Ok((covering.weight_sum(), covering.len()))

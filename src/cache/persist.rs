@@ -15,6 +15,8 @@ pub const MAGIC: [u8; 8] = *b"RDFCACHE";
 pub const FORMAT_VERSION: u32 = 2;
 const HEADER_BYTES: usize = 48;
 const CHECKSUM_BYTES: usize = 8;
+/// Header flag (offset 44): [`CacheConfig::non_negative`].
+const FLAG_NON_NEGATIVE: u32 = 1;
 
 impl<V: CacheValue> Cache<V> {
     /// The cache in the documented binary format (records in content order, so equal record
@@ -33,7 +35,12 @@ impl<V: CacheValue> Cache<V> {
         out.extend_from_slice(&self.config.max_normal_deviation.to_le_bytes());
         out.extend_from_slice(&(count as u64).to_le_bytes());
         out.extend_from_slice(&(stride as u32).to_le_bytes());
-        out.extend_from_slice(&0u32.to_le_bytes());
+        let flags = if self.config.non_negative {
+            FLAG_NON_NEGATIVE
+        } else {
+            0
+        };
+        out.extend_from_slice(&flags.to_le_bytes());
         for id in ids {
             let (head, chans) = self.stored(id);
             record::serialize(head, chans, &mut out);
@@ -88,8 +95,9 @@ impl<V: CacheValue> Cache<V> {
                 "record size {stride} does not match {channels} channels"
             ));
         }
-        if u32_at(44) != 0 {
-            return corrupt("reserved header field is not 0".into());
+        let flags = u32_at(44);
+        if flags & !FLAG_NON_NEGATIVE != 0 {
+            return corrupt(format!("unknown header flags {flags:#x}"));
         }
         let expected = usize::try_from(count)
             .ok()
@@ -119,6 +127,7 @@ impl<V: CacheValue> Cache<V> {
             domain,
             interpolation,
             max_normal_deviation,
+            non_negative: flags & FLAG_NON_NEGATIVE != 0,
         };
         let mut cache = Cache::new(config).map_err(|e| Error::Corrupt(format!("header: {e}")))?;
         let mut previous: Option<(record::Head, record::Channels)> = None;

@@ -745,3 +745,69 @@ fn plain_lookups_through_thread_cursors_equal_index_lookups() {
         }
     });
 }
+
+#[test]
+fn non_negative_caches_clamp_each_record_before_blending() {
+    // Two records; at the query the first extrapolates to 1 − 0.8·2 = −0.6 and the second to 0.5.
+    let fill = |non_negative: bool| {
+        let config = CacheConfig::surface(1).with_non_negative(non_negative);
+        let c: Cache<f32> = Cache::new(config).unwrap();
+        c.insert(&rec(DVec3::ZERO, 1.0, [-2.0, 0.0, 0.0], 1.0))
+            .unwrap();
+        c.insert(&rec(DVec3::new(1.0, 0.0, 0.0), 0.5, [0.0; 3], 1.0))
+            .unwrap();
+        c
+    };
+    let x = DVec3::new(0.8, 0.0, 0.0);
+    // Ward weights at t = 0.8 and 0.2: 1/0.8 − 1 = 0.25 and 1/0.2 − 1 = 4
+    let (w0, w1) = (0.25, 4.0);
+    let signed = fill(false);
+    let clamped = fill(true);
+    close(
+        signed.lookup(x, DVec3::Z).unwrap().value as f64,
+        (w0 * -0.6 + w1 * 0.5) / (w0 + w1),
+        1e-6,
+    );
+    let expect = (w0 * 0.0 + w1 * 0.5) / (w0 + w1);
+    // every lookup path clamps the same way
+    let mut cursor = Cursor::new();
+    for c in [&clamped, &Cache::from_bytes(&clamped.to_bytes()).unwrap()] {
+        assert!(c.config().non_negative);
+        close(c.lookup(x, DVec3::Z).unwrap().value as f64, expect, 1e-6);
+        close(
+            c.lookup_indexed(x, DVec3::Z).unwrap().value as f64,
+            expect,
+            1e-6,
+        );
+        let via_cursor = c.lookup_with(&mut cursor, x, DVec3::Z).unwrap().value;
+        close(via_cursor as f64, expect, 1e-6);
+    }
+    // where a lone record extrapolates below zero the signed cache goes negative, the clamped one
+    // returns 0
+    let far = DVec3::new(0.6, 0.0, 0.0);
+    let lone = |non_negative| {
+        let config = CacheConfig::surface(1).with_non_negative(non_negative);
+        let c: Cache<f32> = Cache::new(config).unwrap();
+        c.insert(&rec(DVec3::ZERO, 1.0, [-2.0, 0.0, 0.0], 1.0))
+            .unwrap();
+        c.lookup(far, DVec3::Z).unwrap().value
+    };
+    close(lone(false) as f64, -0.2, 1e-6);
+    assert_eq!(lone(true), 0.0);
+    // a cache saved without the flag reads back without it; unknown flags are corrupt
+    let plain = signed.to_bytes();
+    assert_eq!(u32::from_le_bytes(plain[44..48].try_into().unwrap()), 0);
+    assert!(
+        !Cache::<f32>::from_bytes(&plain)
+            .unwrap()
+            .config()
+            .non_negative
+    );
+    let mut unknown = plain.clone();
+    unknown[44] = 2;
+    let body = unknown.len() - 8;
+    let sum = record::fnv1a(record::FNV_OFFSET, &unknown[..body]);
+    unknown[body..].copy_from_slice(&sum.to_le_bytes());
+    let err = Cache::<f32>::from_bytes(&unknown).unwrap_err().to_string();
+    assert!(err.contains("flags"), "{err}");
+}

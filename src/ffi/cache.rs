@@ -34,6 +34,11 @@ pub const RADDIFF_INTERP_LOG: u32 = 3;
 pub const RADDIFF_INTERP_WARD_CLASSIC: u32 = 4;
 /// Ward-Heckbert extrapolation with Tabellion-Lamorlette weights 1 - (t+rho).
 pub const RADDIFF_INTERP_WARD_TABELLION: u32 = 5;
+/// Flag OR-ed into `raddiff_cache_config.interpolation`: clamp each record's extrapolated value
+/// at 0 per channel before blending, so lookups never return negative values (irradiance and
+/// radiance cannot be negative; leave it off for signed quantities). `_LOG` is positive anyway.
+/// Saved with the cache and restored by `raddiff_cache_load`.
+pub const RADDIFF_INTERP_NON_NEGATIVE: u32 = 0x100;
 
 /// A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
 /// `raddiff_cache_insert` on the same handle at once (lookups never block).
@@ -49,7 +54,8 @@ pub struct raddiff_cache_config {
     pub channels: u32,
     /// `RADDIFF_DOMAIN_SURFACE` or `RADDIFF_DOMAIN_VOLUME`.
     pub domain: u32,
-    /// `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`).
+    /// `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`),
+    /// optionally OR-ed with `RADDIFF_INTERP_NON_NEGATIVE`.
     pub interpolation: u32,
     /// Radians in (0, pi]: largest normal deviation for a record to be used (surface domain;
     /// ignored in volumes). 0.2 is a good default.
@@ -83,8 +89,9 @@ fn config_from_c(c: &raddiff_cache_config) -> Result<CacheConfig, FfiError> {
     Ok(CacheConfig {
         channels: c.channels as usize,
         domain: Domain::try_from(c.domain)?,
-        interpolation: Interpolation::try_from(c.interpolation)?,
+        interpolation: Interpolation::try_from(c.interpolation & !RADDIFF_INTERP_NON_NEGATIVE)?,
         max_normal_deviation: c.max_normal_deviation,
+        non_negative: c.interpolation & RADDIFF_INTERP_NON_NEGATIVE != 0,
     })
 }
 
