@@ -233,6 +233,16 @@ fn series(sweeps: &[Vec<Row>]) -> Vec<Series> {
 }
 
 /// The markdown table of tuned rows.
+/// Four significant digits: the split-sphere parameters are ~0.1-1, the Hessian tolerances
+/// ~1e-6-1e-3 (a fixed number of decimals printed those as 0.0000 / 0.0001).
+fn parameter(p: f64) -> String {
+    if p != 0.0 && p.abs() < 0.01 {
+        format!("{p:.3e}")
+    } else {
+        format!("{p:.4}")
+    }
+}
+
 fn table(s: &mut String, rows: &[Row]) {
     let _ = writeln!(
         s,
@@ -241,9 +251,9 @@ fn table(s: &mut String, rows: &[Row]) {
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {:.4} | {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.5} | {:.4} |",
+            "| {} | {} | {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.5} | {:.4} |",
             r.metric,
-            r.parameter,
+            parameter(r.parameter),
             r.records,
             r.total(),
             r.trace_seconds,
