@@ -296,7 +296,8 @@ fn media_table(budget: f64) {
 }
 
 /// `RADDIFF_HESSIAN_PROFILE=noisy|scene|gradient|triangulation cargo bench --bench hessian`: runs
-/// one operation on the 4096-ray polar gather for about 3 s (for `perf record`).
+/// one operation on the 4096-ray polar gather for about 3 s (for `perf record`), and prints the
+/// mean wall time per call.
 fn profile_loop(what: &str) {
     let x = DVec3::new(-0.3, -0.2, 0.0);
     let (m, n) = (32, 128);
@@ -314,7 +315,9 @@ fn profile_loop(what: &str) {
         Order::Hessian
     };
     let start = std::time::Instant::now();
+    let mut calls = 0u32;
     while start.elapsed().as_secs_f64() < 3.0 {
+        calls += 100;
         for _ in 0..100 {
             if what == "triangulation" {
                 black_box(mesh_geometry(&topo, black_box(&g)).unwrap());
@@ -323,6 +326,11 @@ fn profile_loop(what: &str) {
             }
         }
     }
+    let per_call = start.elapsed().as_secs_f64() / calls as f64;
+    println!(
+        "{what}: {:.1} µs per call (wall, {calls} calls)",
+        per_call * 1e6
+    );
 }
 
 criterion_group!(benches, bench);
