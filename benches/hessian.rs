@@ -1,5 +1,7 @@
 //! Occlusion-aware Hessian of a hemisphere gather: triangulation, gradient, Hessian (shared edges
-//! vs per triangle) and radii, for 1024, 4096 and 16384 rays of the thesis evaluation scene.
+//! vs per triangle, and against the peer formulation: Radiance-style scalar per-edge closed forms,
+//! `tests/hessian_common/peer.rs`) and radii, for 1024, 4096 and 16384 rays of the thesis
+//! evaluation scene.
 //! Run: `cargo bench --bench hessian -- --warm-up-time 1 --measurement-time 3`.
 
 #[path = "../tests/hessian_common/mod.rs"]
@@ -8,11 +10,12 @@ mod hessian_common;
 use std::hint::black_box;
 
 use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
+use hessian_common::peer::per_edge_closed_forms;
 use hessian_common::{scene, SceneGather};
 use raddiff::gather::hessian::{
     mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle,
-    occlusion_derivatives_reference, LayoutKind, Topology,
+    occlusion_derivatives_reference, HemisphereGather, LayoutKind, Topology,
 };
 use raddiff::gather::hessian_fill::occlusion_outputs;
 use raddiff::gather::radii::{surface_radii, ErrorMode};
@@ -81,6 +84,11 @@ fn bench(c: &mut Criterion) {
             &gn,
             |b, g| b.iter(|| occlusion_derivatives(&topo, black_box(g), Order::Hessian).unwrap()),
         );
+        group.bench_with_input(
+            BenchmarkId::new("peer per-edge closed forms (noisy radiance)", samples),
+            &gn,
+            |b, g| b.iter(|| peer(&topo, black_box(g))),
+        );
         let d = occlusion_derivatives(&topo, &g, Order::Hessian).unwrap();
         let h = d.robust_hessian(0);
         let e = d.irradiance[0];
@@ -137,6 +145,13 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
+/// The peer formulation's Hessian of a gather, placement of the mesh included (as in
+/// `occlusion_derivatives`).
+fn peer(topo: &Topology, g: &HemisphereGather) -> DMat3 {
+    let mesh = mesh_geometry(topo, g).unwrap();
+    per_edge_closed_forms(topo, &mesh, g, 0).hessian
+}
+
 /// CPU time of one call of `f` (thread CPU clock: the machine is shared, wall time is not stable):
 /// the smallest of 5 averages over runs of about `budget / 5` seconds each (interference from other
 /// processes only ever adds time).
@@ -180,7 +195,7 @@ fn cpu_time_per_call(budget: f64, mut f: impl FnMut()) -> f64 {
 fn cpu_table() {
     let x = DVec3::new(-0.3, -0.2, 0.0);
     let budget = 0.5;
-    println!("| rays | triangulation | gradient | Hessian (scene) | Hessian (noisy) | previous Hessian (noisy) | Ward-Heckbert gradient | Hessian / WH (scene, noisy) |");
+    println!("| rays | triangulation | gradient | Hessian (scene) | Hessian (noisy) | previous Hessian (noisy) | peer per-edge closed forms (scene, noisy) | Ward-Heckbert gradient | Hessian / WH (scene, noisy) |");
     for (m, n) in [(16usize, 64usize), (32, 128), (64, 256)] {
         let kind = LayoutKind::CosinePolar;
         let sg = SceneGather::new(kind, m, n, 0, x, &scene::rects(), 0.5);
@@ -212,6 +227,14 @@ fn cpu_table() {
                     occlusion_derivatives_reference(&topo, black_box(&gn), Order::Hessian).unwrap(),
                 );
             });
+        let peer_scene = us
+            * cpu_time_per_call(budget, || {
+                black_box(peer(&topo, black_box(&g)));
+            });
+        let peer_noisy = us
+            * cpu_time_per_call(budget, || {
+                black_box(peer(&topo, black_box(&gn)));
+            });
         let layout = Layout::new(kind, m as u32, n as u32, 0).unwrap();
         let frame = Frame::new(x, DVec3::Z, DVec3::X).unwrap();
         let input = GatherInput {
@@ -228,7 +251,7 @@ fn cpu_table() {
                 black_box(black_box(&valid).evaluate(WH).unwrap());
             });
         println!(
-            "| {} | {tri:.1} µs | {grad:.1} µs | {hs:.1} µs | {hn:.1} µs | {old:.1} µs | {wh:.1} µs | {:.1}x, {:.1}x |",
+            "| {} | {tri:.1} µs | {grad:.1} µs | {hs:.1} µs | {hn:.1} µs | {old:.1} µs | {peer_scene:.1} µs, {peer_noisy:.1} µs | {wh:.1} µs | {:.1}x, {:.1}x |",
             m * n,
             hs / wh,
             hn / wh

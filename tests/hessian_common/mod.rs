@@ -2,6 +2,7 @@
 //! caster over rectangles, and the thesis evaluation scene.
 #![allow(dead_code)]
 
+pub mod peer;
 pub mod scene;
 
 use glam::{DVec2, DVec3};
