@@ -107,10 +107,19 @@ impl Batch {
         )
     }
 
-    /// Fills lanes `from..` with a harmless edge (weights 0 make them contribute nothing).
-    fn pad(&mut self, from: usize) {
+    /// Fills lanes `from..` with a harmless edge (weights 0 make them contribute nothing): one
+    /// whose every output is finite in the batch kind being filled (`axial`: an edge in the axial
+    /// regime, where the main batch's pad would divide by its zero `s_a`). A pad lane's outputs
+    /// must not rely on the finiteness check to be dropped: `0 × NaN` would poison the sums
+    /// wherever that check is not exact (valgrind's emulation of it is not).
+    fn pad(&mut self, from: usize, axial: bool) {
+        let (a, b) = if axial {
+            (DVec3::X, DVec3::new(2.0, 0.05, 0.0))
+        } else {
+            (DVec3::X, DVec3::new(1.0, 1.0, 0.0))
+        };
         for i in from..BATCH {
-            self.set(i, DVec3::X, DVec3::new(1.0, 1.0, 0.0), 1.0, 2.0);
+            self.set(i, a, b, a.length_squared(), b.length_squared());
         }
     }
 }
@@ -565,10 +574,11 @@ impl Queue {
         self.len == BATCH
     }
 
-    fn pad(&mut self) {
+    /// Pads the batch after its `len` edges (`axial`: the queue of the axial regime).
+    fn pad(&mut self, axial: bool) {
         let count = self.len;
         if count < BATCH {
-            self.batch.pad(count);
+            self.batch.pad(count, axial);
             for w in &mut self.weights {
                 w[count..].fill(0.0);
             }
@@ -757,7 +767,7 @@ impl EdgeSums {
         if count == 0 {
             return Ok(());
         }
-        self.main.pad();
+        self.main.pad(false);
         let hessian = self.order.hessian();
         let q = &mut self.main;
         run_batch_dispatch::<false>(&mut q.batch, self.n, hessian, &q.weights, &mut self.sums);
@@ -808,7 +818,7 @@ impl EdgeSums {
         if count == 0 {
             return Ok(());
         }
-        self.axial.pad();
+        self.axial.pad(true);
         let hessian = self.order.hessian();
         let q = &mut self.axial;
         run_batch_dispatch::<true>(&mut q.batch, self.n, hessian, &q.weights, &mut self.sums);
@@ -969,6 +979,27 @@ mod tests {
             }
         }
         isas
+    }
+
+    /// Pad lanes are evaluated in closed form with finite outputs in both batch kinds and every
+    /// compiled version, so nothing depends on the finiteness check to drop them.
+    #[test]
+    fn pad_lanes_are_finite_closed_form_lanes() {
+        let n = DVec3::new(0.3, -0.2, 0.9).normalize();
+        for isa in available_isas() {
+            let (w, mut s) = ([[0.0; BATCH]; 1], vec![[[0.0; LANES]; OUTPUTS]; 1]);
+            let mut main = Batch::new();
+            main.pad(0, false);
+            run_batch_on::<false>(isa, &mut main, n, true, &w, &mut s);
+            let mut axial = Batch::new();
+            axial.pad(0, true);
+            run_batch_on::<true>(isa, &mut axial, n, true, &w, &mut s);
+            for b in [&main, &axial] {
+                assert!(b.general.iter().all(|&f| f == CLOSED_FORM), "{isa:?}");
+                assert!(b.out.iter().flatten().all(|v| v.is_finite()), "{isa:?}");
+            }
+            assert!(s.iter().flatten().flatten().all(|&v| v == 0.0));
+        }
     }
 
     /// Every lane against `hessian::edge_term` (the general kernel from the nearer end), in both
