@@ -30,8 +30,10 @@ pub enum Metric {
     BoundedSplitSphere,
     /// Jarosz et al. 2008: radius ε·E/|∇E| from the gradient alone.
     Gradient,
-    /// Occlusion-unaware (radiometric) Hessian (thesis ch. 4), anisotropic records like the next.
+    /// Occlusion-unaware (radiometric) Hessian (thesis ch. 4), anisotropic records like the last.
     HessianUnaware,
+    /// Geometric Hessian (thesis eq. 4.23: radiance held at its largest), anisotropic records.
+    HessianGeometric,
     /// Occlusion-aware Hessian (Schwarzhaupt et al.), isotropic (disc) records.
     HessianIsotropic,
     /// Occlusion-aware Hessian, anisotropic (ellipse) records, anisotropy ≤ 2.
@@ -39,11 +41,12 @@ pub enum Metric {
 }
 
 impl Metric {
-    pub const ALL: [Metric; 6] = [
+    pub const ALL: [Metric; 7] = [
         Metric::SplitSphere,
         Metric::BoundedSplitSphere,
         Metric::Gradient,
         Metric::HessianUnaware,
+        Metric::HessianGeometric,
         Metric::HessianIsotropic,
         Metric::HessianAnisotropic,
     ];
@@ -54,6 +57,7 @@ impl Metric {
             Metric::BoundedSplitSphere => "bounded-split-sphere",
             Metric::Gradient => "gradient",
             Metric::HessianUnaware => "hessian-unaware",
+            Metric::HessianGeometric => "hessian-geometric",
             Metric::HessianIsotropic => "hessian-isotropic",
             Metric::HessianAnisotropic => "hessian-anisotropic",
         }
@@ -66,7 +70,10 @@ impl Metric {
     pub fn uses_hessian(self) -> bool {
         matches!(
             self,
-            Metric::HessianUnaware | Metric::HessianIsotropic | Metric::HessianAnisotropic
+            Metric::HessianUnaware
+                | Metric::HessianGeometric
+                | Metric::HessianIsotropic
+                | Metric::HessianAnisotropic
         )
     }
 
@@ -74,7 +81,7 @@ impl Metric {
     fn initial_parameter(self) -> f64 {
         match self {
             Metric::SplitSphere | Metric::BoundedSplitSphere | Metric::Gradient => 0.2,
-            Metric::HessianUnaware | Metric::HessianIsotropic | Metric::HessianAnisotropic => 1e-3,
+            _ => 1e-3,
         }
     }
 
@@ -119,18 +126,23 @@ impl Metric {
                 };
                 Extent::isotropic(r)
             }
-            Metric::HessianUnaware | Metric::HessianIsotropic | Metric::HessianAnisotropic => {
+            Metric::HessianUnaware
+            | Metric::HessianGeometric
+            | Metric::HessianIsotropic
+            | Metric::HessianAnisotropic => {
                 let anisotropy = if self == Metric::HessianIsotropic {
                     1.0
                 } else {
                     2.0
                 };
-                let hessian = if self == Metric::HessianUnaware {
-                    g.unaware_hessian.ok_or_else(|| {
+                let hessian = match self {
+                    Metric::HessianUnaware => g.unaware_hessian.ok_or_else(|| {
                         raddiff::Error::Degenerate("no occlusion-unaware Hessian in media".into())
-                    })?
-                } else {
-                    g.hessian
+                    })?,
+                    Metric::HessianGeometric => g.geometric_hessian.ok_or_else(|| {
+                        raddiff::Error::Degenerate("no geometric Hessian in media".into())
+                    })?,
+                    _ => g.hessian,
                 };
                 let r = surface_radii(
                     hessian,
@@ -316,6 +328,7 @@ pub fn run(store: &GatherStore, metric: Metric, parameter: f64) -> Result<Run, r
         raddiff_seconds += g.gradient_seconds;
         raddiff_seconds += match metric {
             Metric::HessianUnaware => g.unaware_seconds,
+            Metric::HessianGeometric => g.geometric_seconds,
             Metric::HessianIsotropic | Metric::HessianAnisotropic => g.hessian_seconds,
             _ => 0.0,
         };

@@ -14,7 +14,8 @@ USAGE: cargo run --release --example demo -- [OPTIONS]
 OPTIONS:
   --scene NAME        cornell | cornell-black | room | all           [default: cornell]
   --metric NAME       split-sphere | bounded-split-sphere | gradient | hessian-unaware |
-                      hessian-isotropic | hessian-anisotropic | all  [default: all]
+                      hessian-geometric | hessian-isotropic | hessian-anisotropic | all
+                                                                     [default: all]
   --records N         record count every metric is tuned to          [default: 1000]
   --resolution W[xH]  image size in pixels                           [default: 192]
   --threads N         worker threads (0: one per core)               [default: 0]

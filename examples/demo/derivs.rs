@@ -5,7 +5,7 @@
 use glam::{DMat3, DVec3};
 use raddiff::gather::hessian::{occlusion_derivatives, HemisphereGather};
 use raddiff::gather::hessian_mesh::Topology;
-use raddiff::gather::hessian_unaware::unaware_derivatives;
+use raddiff::gather::hessian_unaware::{geometric_hessian, unaware_derivatives};
 use raddiff::gather::{
     evaluate, Frame, GatherInput, GatherValues, Layout, LayoutKind, MediaRadiance, Wanted,
 };
@@ -36,12 +36,16 @@ pub struct Gathered {
     /// Occlusion-unaware (radiometric) Hessian of the luminance; `None` in media or when no
     /// Hessian metric runs.
     pub unaware_hessian: Option<DMat3>,
+    /// Geometric Hessian (thesis eq. 4.23: the radiometric Hessian with every hit's luminance
+    /// replaced by the gather's largest); `None` as `unaware_hessian`.
+    pub geometric_hessian: Option<DMat3>,
     /// Seconds spent: ray casting (including the hit radiance), raddiff's irradiance and
     /// gradients, raddiff's occlusion-aware gradient and Hessian.
     pub trace_seconds: f64,
     pub gradient_seconds: f64,
     pub hessian_seconds: f64,
     pub unaware_seconds: f64,
+    pub geometric_seconds: f64,
 }
 
 /// Steps along each gather direction at which in-scattering is sampled in a medium.
@@ -181,6 +185,20 @@ impl Gatherer {
         Ok(Some(d.hessian[0]))
     }
 
+    /// raddiff's geometric Hessian (thesis eq. 4.23) with the gather's largest hit luminance
+    /// standing in for the scene's largest radiance. Surfaces only, as the unaware one.
+    pub fn geometric_hessian(&self, t: &Traced) -> Result<Option<DMat3>, raddiff::Error> {
+        if t.sigma_t > 0.0 {
+            return Ok(None);
+        }
+        let l_max = t.luminance.iter().fold(0.0f32, |m, &l| m.max(l)) as f64;
+        Ok(Some(geometric_hessian(
+            &self.hemisphere(t),
+            &t.normals,
+            l_max,
+        )?))
+    }
+
     fn hemisphere<'t>(&self, t: &'t Traced) -> HemisphereGather<'t> {
         HemisphereGather {
             normal: t.frame.normal,
@@ -225,6 +243,14 @@ impl Gatherer {
         };
         let unaware_seconds = start.seconds();
 
+        let start = ThreadTimer::start();
+        let geometric = if self.hessian {
+            self.geometric_hessian(&traced)?
+        } else {
+            None
+        };
+        let geometric_seconds = start.seconds();
+
         let e = DVec3::new(
             values.irradiance[0],
             values.irradiance[1],
@@ -252,10 +278,12 @@ impl Gatherer {
             harmonic_mean_distance: values.harmonic_mean_distance.unwrap_or(f64::INFINITY),
             hessian,
             unaware_hessian,
+            geometric_hessian: geometric,
             trace_seconds,
             gradient_seconds,
             hessian_seconds,
             unaware_seconds,
+            geometric_seconds,
         })
     }
 }

@@ -168,8 +168,15 @@ fn run() -> Result<(), String> {
         let bar = progress("caches");
         bar.set_length((options.metrics.len() * options.thresholds) as u64);
         for &metric in &options.metrics {
-            if metric == caching::Metric::HessianUnaware && scene.medium.is_some() {
-                println!("   hessian-unaware: not defined in a participating medium, skipped");
+            let occlusion_unaware = matches!(
+                metric,
+                caching::Metric::HessianUnaware | caching::Metric::HessianGeometric
+            );
+            if occlusion_unaware && scene.medium.is_some() {
+                println!(
+                    "   {}: not defined in a participating medium, skipped",
+                    metric.name()
+                );
                 continue;
             }
             let tuned =

@@ -117,11 +117,13 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
 }
 
-const COLOURS: [RGBColor; 6] = [
+/// One colour per surface metric (seven), so that no two lines share one.
+const COLOURS: [RGBColor; 7] = [
     RGBColor(230, 120, 20),
     RGBColor(200, 40, 40),
     RGBColor(120, 80, 180),
     RGBColor(30, 120, 200),
+    RGBColor(200, 60, 160),
     RGBColor(20, 150, 90),
     RGBColor(90, 90, 90),
 ];
