@@ -12,7 +12,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
 use glam::{DMat3, DVec3};
 use hessian_common::peer::per_edge_closed_forms;
-use hessian_common::{scene, SceneGather};
+use hessian_common::{noisy_radiance, scene, SceneGather};
 use raddiff::gather::hessian::{
     mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle,
     occlusion_derivatives_reference, HemisphereGather, LayoutKind, Topology,
@@ -29,15 +29,6 @@ const WH: Wanted = Wanted {
     rotation_gradient: false,
     distances: false,
 };
-
-/// Every sample a different radiance (a path-traced gather), so no edge can be skipped.
-fn noisy_radiance(radiance: &[f32]) -> Vec<f32> {
-    radiance
-        .iter()
-        .enumerate()
-        .map(|(i, l)| l + 0.01 * ((i * 7919 % 101) as f32))
-        .collect()
-}
 
 fn bench(c: &mut Criterion) {
     let x = DVec3::new(-0.3, -0.2, 0.0);

@@ -67,12 +67,7 @@ fn evaluation_scene_with_noisy_radiance_matches_the_reference() {
         (LayoutKind::CosinePolar, 8, 24),
     ] {
         let sg = SceneGather::new(kind, m, n, 3, x, &scene::rects(), 0.5);
-        let noisy: Vec<f32> = sg
-            .radiance
-            .iter()
-            .enumerate()
-            .map(|(i, l)| l + 0.01 * ((i * 7919 % 101) as f32))
-            .collect();
+        let noisy = hessian_common::noisy_radiance(&sg.radiance);
         let topo = Topology::new(kind, m, n).unwrap();
         for radiance in [&sg.radiance, &noisy] {
             let g = HemisphereGather {
@@ -96,12 +91,7 @@ fn evaluation_scene_in_a_medium_matches_the_reference() {
         (LayoutKind::CosinePolar, 8, 24),
     ] {
         let sg = SceneGather::new(kind, m, n, 3, x, &scene::rects(), 0.5);
-        let noisy: Vec<f32> = sg
-            .radiance
-            .iter()
-            .enumerate()
-            .map(|(i, l)| l + 0.01 * ((i * 7919 % 101) as f32))
-            .collect();
+        let noisy = hessian_common::noisy_radiance(&sg.radiance);
         let topo = Topology::new(kind, m, n).unwrap();
         for radiance in [&sg.radiance, &noisy] {
             // From a thin medium to one that hides everything beyond ~0.01 (T underflows to 0 at

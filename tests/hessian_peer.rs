@@ -14,7 +14,7 @@ mod hessian_common;
 
 use glam::{DMat3, DVec3};
 use hessian_common::peer::per_edge_closed_forms;
-use hessian_common::{scene, SceneGather};
+use hessian_common::{noisy_radiance, scene, SceneGather};
 use raddiff::gather::hessian::{
     mesh_geometry, occlusion_derivatives, HemisphereGather, LayoutKind, Topology,
 };
@@ -22,15 +22,6 @@ use raddiff::Order;
 
 fn norm(m: &DMat3) -> f64 {
     m.to_cols_array().iter().map(|v| v * v).sum::<f64>().sqrt()
-}
-
-/// Every ray a different radiance, as in a path-traced gather.
-fn noisy(radiance: &[f32]) -> Vec<f32> {
-    radiance
-        .iter()
-        .enumerate()
-        .map(|(i, l)| l + 0.01 * ((i * 7919 % 101) as f32))
-        .collect()
 }
 
 #[test]
@@ -47,7 +38,7 @@ fn batched_hessian_equals_the_per_edge_closed_forms() {
                 for x in [DVec3::new(-0.3, -0.2, 0.0), DVec3::new(0.35, 0.1, 0.0)] {
                     let sg = SceneGather::new(kind, m, n, seed, x, &scene::rects(), env);
                     let structured = sg.gather();
-                    let radiance = noisy(&sg.radiance);
+                    let radiance = noisy_radiance(&sg.radiance);
                     let mut shaken = sg.gather();
                     shaken.radiance = &radiance;
                     for g in [&structured, &shaken] {

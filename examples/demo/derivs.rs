@@ -223,33 +223,19 @@ impl Gatherer {
         let traced = self.trace(scene, lightmap, position, normal, seed)?;
         let trace_seconds = start.seconds();
 
-        let start = ThreadTimer::start();
-        let values = self.evaluate(&traced)?;
-        let gradient_seconds = start.seconds();
-
-        let start = ThreadTimer::start();
-        let hessian = if self.hessian {
-            self.hessian(&traced)?
-        } else {
-            DMat3::ZERO
-        };
-        let hessian_seconds = start.seconds();
-
-        let start = ThreadTimer::start();
-        let unaware_hessian = if self.hessian {
-            self.unaware_hessian(&traced)?
-        } else {
-            None
-        };
-        let unaware_seconds = start.seconds();
-
-        let start = ThreadTimer::start();
-        let geometric = if self.hessian {
-            self.geometric_hessian(&traced)?
-        } else {
-            None
-        };
-        let geometric_seconds = start.seconds();
+        let (values, gradient_seconds) = timed(|| self.evaluate(&traced))?;
+        let (hessian, hessian_seconds) = timed(|| match self.hessian {
+            true => self.hessian(&traced),
+            false => Ok(DMat3::ZERO),
+        })?;
+        let (unaware_hessian, unaware_seconds) = timed(|| match self.hessian {
+            true => self.unaware_hessian(&traced),
+            false => Ok(None),
+        })?;
+        let (geometric, geometric_seconds) = timed(|| match self.hessian {
+            true => self.geometric_hessian(&traced),
+            false => Ok(None),
+        })?;
 
         let e = DVec3::new(
             values.irradiance[0],
@@ -286,4 +272,11 @@ impl Gatherer {
             geometric_seconds,
         })
     }
+}
+
+/// Runs `f` and measures its CPU time on this thread (seconds).
+fn timed<T>(f: impl FnOnce() -> Result<T, raddiff::Error>) -> Result<(T, f64), raddiff::Error> {
+    let start = ThreadTimer::start();
+    let value = f()?;
+    Ok((value, start.seconds()))
 }

@@ -9,6 +9,16 @@ use glam::{DVec2, DVec3};
 use raddiff::gather::hessian::HemisphereGather;
 use raddiff::gather::{Frame, Layout, LayoutKind};
 
+/// `radiance` with every ray made different (`+0.01 × (i·7919 mod 101)`), as in a path-traced
+/// gather: no edge of the mesh can be skipped for equal radiance on both sides.
+pub fn noisy_radiance(radiance: &[f32]) -> Vec<f32> {
+    radiance
+        .iter()
+        .enumerate()
+        .map(|(i, l)| l + 0.01 * ((i * 7919 % 101) as f32))
+        .collect()
+}
+
 /// World directions of the gather layout for the frame (normal, tangent), index j*n + k.
 pub fn directions(
     kind: LayoutKind,
