@@ -29,7 +29,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::DVec3;
 
-use crate::derivs::Gatherer;
+use crate::derivs::{Gatherer, Hessians};
 use crate::geometry::Ray;
 use crate::lightmap::LightMap;
 use crate::scene::{Scene, SceneKind};
@@ -51,7 +51,11 @@ fn record_points(scene: &Scene) -> Vec<(DVec3, DVec3)> {
 fn bench(c: &mut Criterion) {
     let scene = Scene::build(SceneKind::Cornell);
     let lightmap = LightMap::build(&scene, &indicatif::ProgressBar::hidden());
-    let gatherer = Gatherer::new(32, 128, true).expect("valid layout");
+    let hessians = Hessians {
+        aware: true,
+        ..Hessians::default()
+    };
+    let gatherer = Gatherer::new(32, 128, hessians).expect("valid layout");
     let points = record_points(&scene);
     let traced: Vec<_> = points
         .iter()

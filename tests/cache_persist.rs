@@ -123,6 +123,11 @@ fn header_and_record_damage_is_named() {
     let mut b = good.clone();
     b[100] ^= 1;
     assert!(corrupt_reason(&b).contains("checksum"));
+    // a header flag this version does not know (bit 0 is the non-negative flag)
+    let mut b = good.clone();
+    b[44] = 2;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("flags"));
     // a resealed file with a NaN radius (record 0 radii start at 48 + 40)
     let mut b = good.clone();
     b[48 + 40..48 + 44].copy_from_slice(&f32::NAN.to_le_bytes());

@@ -38,7 +38,7 @@ fn errors(kind: LayoutKind, m: usize, n: usize, x: DVec3) -> Errors {
     let d = occlusion_derivatives(&topo, &sg.gather(), Order::Hessian).unwrap();
     let normals = vec![-DVec3::Z; m * n];
     let u = unaware_derivatives(&sg.gather(), &normals, Order::Hessian).unwrap();
-    let emitter = scene::rects().iter().fold(0.0f32, |m, r| m.max(r.radiance)) as f64;
+    let emitter = scene::EMITTER_RADIANCE as f64;
     let geo = geometric_hessian(&sg.gather(), &normals, emitter).unwrap();
     let e = scene::exact_irradiance(x);
     let g = exact_gradient(x);

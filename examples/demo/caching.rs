@@ -14,7 +14,7 @@ use raddiff::cache::{metric, Cache, CacheConfig, Extent, Interpolation, Record};
 use raddiff::gather::radii::{surface_radii, ErrorMode};
 use rayon::prelude::*;
 
-use crate::derivs::{Gathered, Gatherer};
+use crate::derivs::{Gathered, Gatherer, Hessians};
 use crate::lightmap::LightMap;
 use crate::placement::{clamped_extent, level_pixels};
 use crate::render::GBuffer;
@@ -65,6 +65,22 @@ impl Metric {
 
     pub fn parse(s: &str) -> Option<Metric> {
         Metric::ALL.into_iter().find(|m| m.name() == s)
+    }
+
+    /// The Hessians the gathers must compute for `metrics`.
+    pub fn hessians(metrics: &[Metric]) -> Hessians {
+        let any = |wanted: &[Metric]| metrics.iter().any(|m| wanted.contains(m));
+        Hessians {
+            aware: any(&[Metric::HessianIsotropic, Metric::HessianAnisotropic]),
+            unaware: any(&[Metric::HessianUnaware]),
+            geometric: any(&[Metric::HessianGeometric]),
+        }
+    }
+
+    /// Whether the metric is defined only on surfaces outside a medium (its Hessian needs the
+    /// hits' normals and ignores attenuation).
+    pub fn surfaces_only(self) -> bool {
+        matches!(self, Metric::HessianUnaware | Metric::HessianGeometric)
     }
 
     pub fn uses_hessian(self) -> bool {
@@ -177,13 +193,13 @@ impl<'a> GatherStore<'a> {
         gbuffer: &'a GBuffer,
         m: usize,
         n: usize,
-        hessian: bool,
+        hessians: Hessians,
     ) -> Result<Self, raddiff::Error> {
         Ok(GatherStore {
             scene,
             lightmap,
             gbuffer,
-            gatherer: Gatherer::new(m, n, hessian)?,
+            gatherer: Gatherer::new(m, n, hessians)?,
             slots: (0..gbuffer.pixels.len()).map(|_| OnceLock::new()).collect(),
         })
     }

@@ -30,14 +30,14 @@ pub struct Gathered {
     pub luminance: f64,
     pub luminance_gradient: DVec3,
     pub harmonic_mean_distance: f64,
-    /// Occlusion-aware Hessian of the luminance with the thesis' 1% robustness term (zero when
-    /// no Hessian metric runs).
+    /// Occlusion-aware Hessian of the luminance with the thesis' 1% robustness term (zero unless
+    /// [`Hessians::aware`]).
     pub hessian: DMat3,
-    /// Occlusion-unaware (radiometric) Hessian of the luminance; `None` in media or when no
-    /// Hessian metric runs.
+    /// Occlusion-unaware (radiometric) Hessian of the luminance; `None` in media or unless
+    /// [`Hessians::unaware`].
     pub unaware_hessian: Option<DMat3>,
     /// Geometric Hessian (thesis eq. 4.23: the radiometric Hessian with every hit's luminance
-    /// replaced by the gather's largest); `None` as `unaware_hessian`.
+    /// replaced by the gather's largest); `None` in media or unless [`Hessians::geometric`].
     pub geometric_hessian: Option<DMat3>,
     /// Seconds spent: ray casting (including the hit radiance), raddiff's irradiance and
     /// gradients, raddiff's occlusion-aware gradient and Hessian.
@@ -68,13 +68,23 @@ pub struct Traced {
     media_step: f64,
 }
 
+/// Which Hessians every gather computes: only those of the metrics that run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Hessians {
+    /// The occlusion-aware Hessian (`gather::hessian`).
+    pub aware: bool,
+    /// The occlusion-unaware (radiometric) Hessian.
+    pub unaware: bool,
+    /// The geometric Hessian (thesis eq. 4.23).
+    pub geometric: bool,
+}
+
 /// Per-gather constants: the layout grid and its triangulation.
 pub struct Gatherer {
     pub m: u32,
     pub n: u32,
     topology: Topology,
-    /// Whether to compute the occlusion-aware Hessian (only the Hessian metrics use it).
-    hessian: bool,
+    hessians: Hessians,
 }
 
 fn lum(c: DVec3) -> f64 {
@@ -82,12 +92,12 @@ fn lum(c: DVec3) -> f64 {
 }
 
 impl Gatherer {
-    pub fn new(m: usize, n: usize, hessian: bool) -> Result<Self, raddiff::Error> {
+    pub fn new(m: usize, n: usize, hessians: Hessians) -> Result<Self, raddiff::Error> {
         Ok(Gatherer {
             m: m as u32,
             n: n as u32,
             topology: Topology::new(LayoutKind::CosinePolar, m, n)?,
-            hessian,
+            hessians,
         })
     }
 
@@ -224,18 +234,20 @@ impl Gatherer {
         let trace_seconds = start.seconds();
 
         let (values, gradient_seconds) = timed(|| self.evaluate(&traced))?;
-        let (hessian, hessian_seconds) = timed(|| match self.hessian {
-            true => self.hessian(&traced),
-            false => Ok(DMat3::ZERO),
-        })?;
-        let (unaware_hessian, unaware_seconds) = timed(|| match self.hessian {
-            true => self.unaware_hessian(&traced),
-            false => Ok(None),
-        })?;
-        let (geometric, geometric_seconds) = timed(|| match self.hessian {
-            true => self.geometric_hessian(&traced),
-            false => Ok(None),
-        })?;
+        // a Hessian no metric asks for is neither computed nor timed (its seconds stay 0)
+        let wanted = self.hessians;
+        let (hessian, hessian_seconds) = match wanted.aware {
+            true => timed(|| self.hessian(&traced))?,
+            false => (DMat3::ZERO, 0.0),
+        };
+        let (unaware_hessian, unaware_seconds) = match wanted.unaware {
+            true => timed(|| self.unaware_hessian(&traced))?,
+            false => (None, 0.0),
+        };
+        let (geometric, geometric_seconds) = match wanted.geometric {
+            true => timed(|| self.geometric_hessian(&traced))?,
+            false => (None, 0.0),
+        };
 
         let e = DVec3::new(
             values.irradiance[0],

@@ -161,18 +161,14 @@ fn run() -> Result<(), String> {
             &gbuffer,
             options.gather_m,
             options.gather_n,
-            options.metrics.iter().any(|m| m.uses_hessian()),
+            caching::Metric::hessians(&options.metrics),
         )
         .map_err(|e| e.to_string())?;
         let mut scene_report = report::SceneReport::new(name, &options, ref_seconds);
         let bar = progress("caches");
         bar.set_length((options.metrics.len() * options.thresholds) as u64);
         for &metric in &options.metrics {
-            let occlusion_unaware = matches!(
-                metric,
-                caching::Metric::HessianUnaware | caching::Metric::HessianGeometric
-            );
-            if occlusion_unaware && scene.medium.is_some() {
+            if metric.surfaces_only() && scene.medium.is_some() {
                 println!(
                     "   {}: not defined in a participating medium, skipped",
                     metric.name()

@@ -232,8 +232,7 @@ fn series(sweeps: &[Vec<Row>]) -> Vec<Series> {
         .collect()
 }
 
-/// The markdown table of tuned rows.
-/// Four significant digits: the split-sphere parameters are ~0.1-1, the Hessian tolerances
+/// A metric's parameter with four significant digits: the split-sphere parameters are ~0.1-1, the Hessian tolerances
 /// ~1e-6-1e-3 (a fixed number of decimals printed those as 0.0000 / 0.0001).
 fn parameter(p: f64) -> String {
     if p != 0.0 && p.abs() < 0.01 {
@@ -243,6 +242,7 @@ fn parameter(p: f64) -> String {
     }
 }
 
+/// The markdown table of tuned rows.
 fn table(s: &mut String, rows: &[Row]) {
     let _ = writeln!(
         s,

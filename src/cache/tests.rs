@@ -794,7 +794,7 @@ fn non_negative_caches_clamp_each_record_before_blending() {
     };
     close(lone(false) as f64, -0.2, 1e-6);
     assert_eq!(lone(true), 0.0);
-    // a cache saved without the flag reads back without it; unknown flags are corrupt
+    // a cache saved without the flag reads back without it (unknown flags: tests/cache_persist.rs)
     let plain = signed.to_bytes();
     assert_eq!(u32::from_le_bytes(plain[44..48].try_into().unwrap()), 0);
     assert!(
@@ -803,11 +803,4 @@ fn non_negative_caches_clamp_each_record_before_blending() {
             .config()
             .non_negative
     );
-    let mut unknown = plain.clone();
-    unknown[44] = 2;
-    let body = unknown.len() - 8;
-    let sum = record::fnv1a(record::FNV_OFFSET, &unknown[..body]);
-    unknown[body..].copy_from_slice(&sum.to_le_bytes());
-    let err = Cache::<f32>::from_bytes(&unknown).unwrap_err().to_string();
-    assert!(err.contains("flags"), "{err}");
 }

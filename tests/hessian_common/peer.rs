@@ -121,8 +121,3 @@ pub fn per_edge_closed_forms(
     }
     out
 }
-
-/// The peer's edge term (value, gradient, Hessian of `½ I₁ (n·c)`), for diagnostics.
-pub fn edge_term(n: DVec3, ra: DVec3, rb: DVec3) -> (f64, DVec3, DMat3) {
-    edge(n, ra, rb)
-}
