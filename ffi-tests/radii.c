@@ -53,6 +53,32 @@ int main(void) {
     CHECK(radii[0] == RADDIFF_MAX_RADIUS && radii[1] == RADDIFF_MAX_RADIUS);
   }
 
+  /* the curvature floor: a flat estimate or a black gather gets (4 eps D^2 / (pi kappa))^(1/4) */
+  {
+    double zero[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    double d = 0.5, eps = 1e-3;
+    double expect = pow(4.0 * eps * d * d / (PI * RADDIFF_CURVATURE_FLOOR_WEIGHT), 0.25);
+    CHECK_STATUS(raddiff_surface_radii_floored(zero, z, 2.0, eps, RADDIFF_ERROR_RELATIVE, 2.0, d,
+                                               RADDIFF_CURVATURE_FLOOR_WEIGHT, radii, axes),
+                 RADDIFF_OK);
+    CHECK_CLOSE(radii[0], expect, 1e-12);
+    CHECK_CLOSE(radii[1], expect, 1e-12);
+    CHECK_STATUS(raddiff_surface_radii_floored(zero, z, 0.0, eps, RADDIFF_ERROR_RELATIVE, 2.0, d,
+                                               RADDIFF_CURVATURE_FLOOR_WEIGHT, radii, axes),
+                 RADDIFF_OK);
+    CHECK_CLOSE(radii[0], expect, 1e-12);
+    /* weight 0: exactly raddiff_surface_radii */
+    CHECK_STATUS(raddiff_surface_radii_floored(h, z, 1.0, 0.02, RADDIFF_ERROR_ABSOLUTE, 2.0, d, 0.0, radii, axes),
+                 RADDIFF_OK);
+    CHECK_CLOSE(radii[0], pow(4.0 * 0.02 / (PI * 3.0), 0.25), 1e-13);
+    radii[0] = 42.0;
+    CHECK_STATUS(raddiff_surface_radii_floored(zero, z, 2.0, eps, RADDIFF_ERROR_RELATIVE, 2.0, 0.0,
+                                               RADDIFF_CURVATURE_FLOOR_WEIGHT, radii, axes),
+                 RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(raddiff_last_error(), "distance") != NULL);
+    CHECK(radii[0] == 42.0);
+  }
+
   /* error paths: outputs untouched */
   radii[0] = radii[1] = radii[2] = 42.0;
   axes[0].x = 42.0;

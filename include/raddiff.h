@@ -87,6 +87,14 @@
 // Largest radius the radii functions return (caller's length unit), e.g. for a zero Hessian.
 #define RADDIFF_MAX_RADIUS 1e30
 
+// Default weight of the curvature floor of `raddiff_surface_radii_floored` (1% of the tangent
+// curvature 4E/D² of irradiance from a small source at distance D straight above).
+#define RADDIFF_CURVATURE_FLOOR_WEIGHT 0.04
+
+// Default weight κ of [`CurvatureFloor`]: 1% of the tangent curvature `4E/D²` of the
+// irradiance from a small source straight above the record at distance `D`.
+#define CURVATURE_FLOOR_WEIGHT 0.04
+
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
 typedef enum raddiff_status {
@@ -475,6 +483,27 @@ enum raddiff_status raddiff_surface_radii(const double *hessian,
                                           double max_anisotropy,
                                           double *radii,
                                           struct raddiff_vec3 *axes);
+
+// `raddiff_surface_radii` with the robustness term (the Rust `gather::radii::surface_radii_floored`):
+// `floor_weight * |value| / floor_distance^2` is added to the magnitude of each tangent eigenvalue,
+// so a record whose estimated Hessian vanishes, or whose gather was black (`value` 0 with
+// `RADDIFF_ERROR_RELATIVE`), gets the finite radius `(4 error D^2 / (pi kappa))^(1/4)` instead of
+// `RADDIFF_MAX_RADIUS`. `floor_distance` (> 0, finite) is the gather's harmonic-mean hit distance
+// (`raddiff_gather_values.harmonic_mean_distance`); `floor_weight` (>= 0, finite) is kappa,
+// `RADDIFF_CURVATURE_FLOOR_WEIGHT` by default, 0 for no floor.
+//
+// # Safety
+// As `raddiff_surface_radii`.
+enum raddiff_status raddiff_surface_radii_floored(const double *hessian,
+                                                  struct raddiff_vec3 normal,
+                                                  double value,
+                                                  double error,
+                                                  uint32_t mode,
+                                                  double max_anisotropy,
+                                                  double floor_distance,
+                                                  double floor_weight,
+                                                  double *radii,
+                                                  struct raddiff_vec3 *axes);
 
 // Ellipsoidal media record from a 3x3 Hessian (row-major; see the Rust `gather::radii::volume_radii`):
 // semi-axes `radii[0] <= radii[1] <= radii[2]` along the orthonormal `axes[0..3]`, chosen so that the

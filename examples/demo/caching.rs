@@ -11,15 +11,66 @@ use std::sync::OnceLock;
 
 use glam::DVec3;
 use raddiff::cache::{metric, Cache, CacheConfig, Extent, Interpolation, Record};
-use raddiff::gather::radii::{surface_radii, ErrorMode};
+use raddiff::gather::radii::{surface_radii, surface_radii_floored, CurvatureFloor, ErrorMode};
 use rayon::prelude::*;
 
 use crate::derivs::{Gathered, Gatherer, Hessians};
 use crate::lightmap::LightMap;
-use crate::placement::{clamped_extent, level_pixels};
+use crate::placement::{clamped_extent_to, level_pixels, RADIUS_MAX, RADIUS_MIN};
 use crate::render::GBuffer;
 use crate::scene::Scene;
 use crate::timing::ThreadTimer;
+#[allow(unused_imports)]
+use crate::shim::{CacheShim, ConfigShim};
+
+/// How records are placed and what the metrics get: the two settings the demo reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Baseline {
+    /// Coarse-to-fine placement (an overture over pixel grids of step 16 to 1), gradients for
+    /// every metric, the cache's gradient limit, two-sided neighbour clamping, the curvature
+    /// floor for the Hessian metrics, radii clamped to [0.004, 0.25] x the scene size.
+    Production,
+    /// The thesis' comparison (sec. 6.4): lazy placement in one scanline pass, Ward 1988's split
+    /// sphere without gradients, a one-pixel minimum radius, the bounded split sphere capped at
+    /// 150 px of an 1800 px image (scaled to this resolution), no maximum for Hessian records
+    /// (the curvature floor, the working form of the thesis' robustness term, keeps them finite).
+    Thesis,
+}
+
+impl Baseline {
+    pub const ALL: [Baseline; 2] = [Baseline::Production, Baseline::Thesis];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Baseline::Production => "production",
+            Baseline::Thesis => "thesis",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Baseline> {
+        Baseline::ALL.into_iter().find(|b| b.name() == s)
+    }
+
+    /// One line for the report.
+    pub fn summary(self) -> &'static str {
+        match self {
+            Baseline::Production => {
+                "overture placement, gradients for every metric, gradient limit, two-sided \
+                 neighbour clamping, curvature floor for the Hessian metrics, radii in \
+                 [0.004, 0.25] x scene size"
+            }
+            Baseline::Thesis => {
+                "lazy scanline placement, Ward 1988 split sphere without gradients, one-pixel \
+                 minimum radius, bounded split sphere capped at 150 px of 1800, no maximum \
+                 radius for Hessian records"
+            }
+        }
+    }
+}
+
+/// Gradient limit c of the production caches (`CacheConfig::gradient_limit`): over its extent a
+/// record's first-order extrapolation moves a channel by at most c times its value.
+pub const GRADIENT_LIMIT: f64 = 0.5;
 
 /// The metrics compared, by command-line name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -122,6 +173,16 @@ impl Metric {
 
     /// The record extent this metric gives a gather, before the radius clamps.
     fn extent(self, g: &Gathered, parameter: f64) -> Result<Extent, raddiff::Error> {
+        self.extent_floored(g, parameter, true)
+    }
+
+    /// [`Metric::extent`], the Hessian metrics' radii with or without the curvature floor.
+    pub fn extent_floored(
+        self,
+        g: &Gathered,
+        parameter: f64,
+        curvature_floor: bool,
+    ) -> Result<Extent, raddiff::Error> {
         let lum = g.luminance.max(1e-12);
         Ok(match self {
             Metric::SplitSphere => {
@@ -160,14 +221,28 @@ impl Metric {
                     })?,
                     _ => g.hessian,
                 };
-                let r = surface_radii(
-                    hessian,
-                    g.normal,
-                    lum,
-                    parameter,
-                    ErrorMode::Relative,
-                    anisotropy,
-                )?;
+                // the floor's distance: Ward's harmonic mean (infinite when every ray missed)
+                let distance = g.harmonic_mean_distance;
+                let r = if curvature_floor && distance.is_finite() {
+                    surface_radii_floored(
+                        hessian,
+                        g.normal,
+                        g.luminance,
+                        parameter,
+                        ErrorMode::Relative,
+                        anisotropy,
+                        CurvatureFloor::new(distance),
+                    )?
+                } else {
+                    surface_radii(
+                        hessian,
+                        g.normal,
+                        lum,
+                        parameter,
+                        ErrorMode::Relative,
+                        anisotropy,
+                    )?
+                };
                 Extent {
                     radii: [r.radii[0], r.radii[1], r.radii[0].min(r.radii[1])],
                     axes: [r.axes[0], r.axes[1], DVec3::ZERO],
@@ -262,78 +337,20 @@ pub struct Run {
     pub uncovered: usize,
 }
 
-/// Places records coarse to fine (pixel grids of step 16, 8, …, 1): at every level the pixels no
-/// record covers get a gather, and their records are inserted in pixel order, skipping those that
-/// a record inserted earlier at the same level already covers. Deterministic for any thread count.
-pub fn run(store: &GatherStore, metric: Metric, parameter: f64) -> Result<Run, raddiff::Error> {
-    let gb = store.gbuffer;
-    let (w, h) = (gb.width, gb.height);
-    let cache: Cache<[f32; 3]> =
-        Cache::new(CacheConfig::surface(3).with_interpolation(metric.interpolation()))?;
-    let size = store.scene.size;
-    let mut records = Vec::new();
-    let mut record_pixels = Vec::new();
-    let mut cache_seconds = 0.0;
-    let covered = |cache: &Cache<[f32; 3]>, i: usize| match gb.pixels[i].shaded() {
-        Some(sp) => cache.lookup(sp.position, sp.normal).is_ok(),
-        None => true,
+/// Builds a cache with `metric` at `parameter` under `baseline`, renders every pixel from it and
+/// sums the records' measured costs. Deterministic for any thread count.
+pub fn run(
+    store: &GatherStore,
+    metric: Metric,
+    parameter: f64,
+    baseline: Baseline,
+) -> Result<Run, raddiff::Error> {
+    let config = CacheConfig::surface(3).with_interpolation(metric.interpolation());
+    let (cache, record_pixels, placement_seconds) = match baseline {
+        Baseline::Production => fill_production(store, metric, parameter, config)?,
+        Baseline::Thesis => fill_thesis(store, metric, parameter, config)?,
     };
-    let mut step = 16;
-    loop {
-        let level = level_pixels(w, h, step);
-        // Lookups run on this thread so that the thread clock measures them (they cost
-        // microseconds; the gathers below are what needs the threads).
-        let start = ThreadTimer::start();
-        let wanted: Vec<usize> = level
-            .iter()
-            .copied()
-            .filter(|&i| !covered(&cache, i))
-            .collect();
-        cache_seconds += start.seconds();
-        wanted.par_iter().for_each(|&i| {
-            store.get(i);
-        });
-        let start = ThreadTimer::start();
-        for &i in &wanted {
-            if covered(&cache, i) {
-                continue;
-            }
-            let Some(g) = store.get(i) else { continue };
-            let extent = clamped_extent(metric.extent(g, parameter).ok(), size);
-            let mut record = Record::new(g.position, g.normal, g.value, extent);
-            record.gradient = Some(g.gradient);
-            record.rotation_gradient = Some(g.rotation_gradient);
-            cache.insert(&record)?;
-            records.push(record);
-            record_pixels.push(i);
-        }
-        cache_seconds += start.seconds();
-        if step == 1 {
-            break;
-        }
-        step /= 2;
-    }
-    // Render the indirect irradiance from the cache, in scanline order through a cursor (the
-    // same results as plain lookups, faster for neighbouring pixels).
-    let start = ThreadTimer::start();
-    let mut cursor = raddiff::cache::Cursor::new();
-    let image: Vec<Option<DVec3>> = gb
-        .pixels
-        .iter()
-        .map(|p| match p.shaded() {
-            Some(sp) => cache
-                .lookup_with(&mut cursor, sp.position, sp.normal)
-                .ok()
-                .map(|l| DVec3::new(l.value[0] as f64, l.value[1] as f64, l.value[2] as f64)),
-            None => Some(DVec3::ZERO),
-        })
-        .collect();
-    cache_seconds += start.seconds();
-    let uncovered = image.iter().filter(|v| v.is_none()).count();
-    let image = image
-        .into_iter()
-        .map(|v| v.unwrap_or(DVec3::ZERO))
-        .collect();
+    let (image, uncovered, render_seconds) = render(&cache, store.gbuffer);
     // The records' measured costs.
     let (mut trace_seconds, mut raddiff_seconds) = (0.0, 0.0);
     for &i in &record_pixels {
@@ -352,19 +369,188 @@ pub fn run(store: &GatherStore, metric: Metric, parameter: f64) -> Result<Run, r
     Ok(Run {
         metric,
         parameter,
-        records,
+        records: cache.records(),
         image,
         trace_seconds,
         raddiff_seconds,
-        cache_seconds,
+        cache_seconds: placement_seconds + render_seconds,
         uncovered,
     })
 }
 
+/// The record of gather `g` with `extent`, with its gradients or (Ward 1988) without.
+fn record_of(g: &Gathered, extent: Extent, gradients: bool) -> Record<[f32; 3]> {
+    let mut record = Record::new(g.position, g.normal, g.value, extent);
+    if gradients {
+        record.gradient = Some(g.gradient);
+        record.rotation_gradient = Some(g.rotation_gradient);
+    }
+    record
+}
+
+/// Whether a record covers pixel `i` (pixels that show no indirect light count as covered).
+fn covered(cache: &Cache<[f32; 3]>, gb: &GBuffer, i: usize) -> bool {
+    match gb.pixels[i].shaded() {
+        Some(sp) => cache.lookup(sp.position, sp.normal).is_ok(),
+        None => true,
+    }
+}
+
+/// Production placement: coarse to fine (pixel grids of step 16, 8, …, 1). At every level the
+/// pixels no record covers get a gather, and their records are inserted in pixel order, each
+/// clamped to its stored neighbours and skipped when a record inserted earlier at the same level
+/// already covers it; then the two-sided neighbour clamp runs over the whole cache. Clamping
+/// can uncover pixels, so the finest level repeats until every pixel is covered (at most four
+/// times). Returns the cache, the pixels of its records and the placement's CPU seconds.
+fn fill_production(
+    store: &GatherStore,
+    metric: Metric,
+    parameter: f64,
+    config: CacheConfig,
+) -> Result<(Cache<[f32; 3]>, Vec<usize>, f64), raddiff::Error> {
+    let gb = store.gbuffer;
+    let (w, h) = (gb.width, gb.height);
+    let size = store.scene.size;
+    let mut cache: Cache<[f32; 3]> =
+        Cache::new(config.with_gradient_limit(GRADIENT_LIMIT))?;
+    let mut record_pixels = Vec::new();
+    let mut seconds = 0.0;
+    let mut step = 16;
+    let mut final_rounds = 0;
+    loop {
+        let level = level_pixels(w, h, step);
+        // Lookups run on this thread so that the thread clock measures them (they cost
+        // microseconds; the gathers below are what needs the threads).
+        let start = ThreadTimer::start();
+        let wanted: Vec<usize> = level
+            .iter()
+            .copied()
+            .filter(|&i| !covered(&cache, gb, i))
+            .collect();
+        seconds += start.seconds();
+        wanted.par_iter().for_each(|&i| {
+            store.get(i);
+        });
+        let start = ThreadTimer::start();
+        for &i in &wanted {
+            if covered(&cache, gb, i) {
+                continue;
+            }
+            let Some(g) = store.get(i) else { continue };
+            let extent = clamped_extent_to(
+                metric.extent(g, parameter).ok(),
+                RADIUS_MIN * size,
+                RADIUS_MAX * size,
+            );
+            let extent = cache.clamp_to_neighbours(g.position, &extent)?;
+            cache.insert(&record_of(g, extent, true))?;
+            record_pixels.push(i);
+        }
+        cache.clamp_neighbours();
+        seconds += start.seconds();
+        if step > 1 {
+            step /= 2;
+            continue;
+        }
+        final_rounds += 1;
+        if wanted.is_empty() || final_rounds == 4 {
+            break;
+        }
+    }
+    Ok((cache, record_pixels, seconds))
+}
+
+/// Thesis placement: one pass in scanline order, a record wherever no record covers the pixel
+/// (lazy placement while rendering). Gathers are computed ahead in small parallel batches of the
+/// next uncovered pixels (some of them then turn out covered and are not used: only the used
+/// ones count in the CPU time), so the wall time stays low without changing any result.
+fn fill_thesis(
+    store: &GatherStore,
+    metric: Metric,
+    parameter: f64,
+    config: CacheConfig,
+) -> Result<(Cache<[f32; 3]>, Vec<usize>, f64), raddiff::Error> {
+    let gb = store.gbuffer;
+    let camera = &store.scene.camera;
+    let size = store.scene.size;
+    let cache: Cache<[f32; 3]> = Cache::new(config)?;
+    let mut record_pixels = Vec::new();
+    let mut seconds = 0.0;
+    let batch = 2 * rayon::current_num_threads();
+    let mut next = 0;
+    while next < gb.pixels.len() {
+        let start = ThreadTimer::start();
+        let mut ahead = Vec::with_capacity(batch);
+        let mut i = next;
+        while i < gb.pixels.len() && ahead.len() < batch {
+            if !covered(&cache, gb, i) {
+                ahead.push(i);
+            }
+            i += 1;
+        }
+        seconds += start.seconds();
+        ahead.par_iter().for_each(|&i| {
+            store.get(i);
+        });
+        let start = ThreadTimer::start();
+        for p in next..i {
+            if covered(&cache, gb, p) {
+                continue;
+            }
+            let Some(g) = store.get(p) else { continue };
+            // one pixel's footprint at the record's depth
+            let depth = (g.position - camera.position).dot(camera.forward);
+            let pixel = 2.0 * depth * camera.tan_half_fov / gb.height as f64;
+            let max = match metric {
+                Metric::BoundedSplitSphere => pixel * 150.0 / 1800.0 * gb.height as f64,
+                Metric::SplitSphere | Metric::Gradient => RADIUS_MAX * size,
+                _ => raddiff::cache::RADIUS_MAX,
+            };
+            let extent = clamped_extent_to(metric.extent(g, parameter).ok(), pixel, max);
+            cache.insert(&record_of(g, extent, metric != Metric::SplitSphere))?;
+            record_pixels.push(p);
+        }
+        seconds += start.seconds();
+        next = i;
+    }
+    Ok((cache, record_pixels, seconds))
+}
+
+/// The indirect irradiance of every pixel from the cache, in scanline order through a cursor
+/// (the same results as plain lookups, faster for neighbouring pixels); uncovered pixels are
+/// zero. Returns the image, the uncovered count and the CPU seconds.
+fn render(cache: &Cache<[f32; 3]>, gb: &GBuffer) -> (Vec<DVec3>, usize, f64) {
+    let start = ThreadTimer::start();
+    let mut cursor = raddiff::cache::Cursor::new();
+    let image: Vec<Option<DVec3>> = gb
+        .pixels
+        .iter()
+        .map(|p| match p.shaded() {
+            Some(sp) => cache
+                .lookup_with(&mut cursor, sp.position, sp.normal)
+                .ok()
+                .map(|l| DVec3::new(l.value[0] as f64, l.value[1] as f64, l.value[2] as f64)),
+            None => Some(DVec3::ZERO),
+        })
+        .collect();
+    let seconds = start.seconds();
+    let uncovered = image.iter().filter(|v| v.is_none()).count();
+    let image = image
+        .into_iter()
+        .map(|v| v.unwrap_or(DVec3::ZERO))
+        .collect();
+    (image, uncovered, seconds)
+}
+
 /// Tunes the metric's parameter (bisection in log space) until the record count is within 3% of
 /// `target` (or 24 steps), then returns that run.
-pub fn tune(store: &GatherStore, metric: Metric, target: usize) -> Result<Run, raddiff::Error> {
-    let count = |p: f64| run(store, metric, p);
+pub fn tune(
+    store: &GatherStore,
+    metric: Metric,
+    target: usize,
+    baseline: Baseline,
+) -> Result<Run, raddiff::Error> {
+    let count = |p: f64| run(store, metric, p, baseline);
     let mut p = metric.initial_parameter();
     let mut current = count(p)?;
     // Bracket: records decrease as the parameter grows.

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use crate::caching::Metric;
+use crate::caching::{Baseline, Metric};
 use crate::media_cache::MediaMetric;
 use crate::scene::SceneKind;
 
@@ -16,6 +16,12 @@ OPTIONS:
   --metric NAME       split-sphere | bounded-split-sphere | gradient | hessian-unaware |
                       hessian-geometric | hessian-isotropic | hessian-anisotropic | all
                                                                      [default: all]
+  --baseline NAME     production | thesis | all                      [default: all]
+                      production: overture pass, gradients for every metric, the cache's
+                      gradient limit and neighbour clamping, radii in [0.004, 0.25] x size;
+                      thesis (sec. 6.4): lazy scanline placement, Ward 1988 split sphere
+                      without gradients, one-pixel minimum radius, bounded split sphere
+                      capped at 150 px of 1800, no maximum for Hessian records
   --records N         record count every metric is tuned to          [default: 1000]
   --resolution W[xH]  image size in pixels                           [default: 192]
   --threads N         worker threads (0: one per core)               [default: 0]
@@ -39,6 +45,7 @@ MEDIA (VOLUME) CACHES, scenes with a medium (room) only:
 pub struct Options {
     pub scenes: Vec<SceneKind>,
     pub metrics: Vec<Metric>,
+    pub baselines: Vec<Baseline>,
     pub records: usize,
     pub width: usize,
     pub height: usize,
@@ -64,6 +71,7 @@ impl Default for Options {
         Options {
             scenes: vec![SceneKind::Cornell],
             metrics: Vec::new(),
+            baselines: Baseline::ALL.to_vec(),
             records: 1000,
             width: 192,
             height: 192,
@@ -125,6 +133,14 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Options>, 
                 }
             }
             "--metric" => metric = value,
+            "--baseline" => {
+                o.baselines = if value == "all" {
+                    Baseline::ALL.to_vec()
+                } else {
+                    vec![Baseline::parse(&value)
+                        .ok_or_else(|| format!("unknown baseline {value:?} (see --help)"))?]
+                }
+            }
             "--records" => o.records = number(&flag, &value)?.max(1),
             "--resolution" => (o.width, o.height) = pair(&flag, &value)?,
             "--threads" => o.threads = number(&flag, &value)?,

@@ -12,8 +12,10 @@ use crate::geometry::{cosine_polar_local, tangent_of, Ray};
 use crate::scene::Scene;
 
 pub struct LightMap {
-    /// Per primitive: texels along u and v, and RGB outgoing radiance row-major (v outer).
-    maps: Vec<(usize, usize, Vec<DVec3>)>,
+    /// Per primitive: texels along u and v, RGB outgoing radiance row-major (v outer), and
+    /// whether each texel's centre lies in open space (false: buried inside a solid, such as
+    /// the floor under a block; see [`buried`]).
+    maps: Vec<(usize, usize, Vec<DVec3>, Vec<bool>)>,
     /// In a medium: the in-scattered radiance on a voxel grid.
     volume: Option<VolumeMap>,
 }
@@ -108,6 +110,36 @@ impl VolumeMap {
     }
 }
 
+/// Directions (cosine-polar strata centres) probed to decide whether a texel centre is buried.
+const BURIED_PROBES: (usize, usize) = (4, 8);
+
+/// Whether the point `p` on a surface with normal `normal` lies inside a closed solid: most
+/// probe rays leave it through the back of a face (solids' faces point outward). A buried texel
+/// sees no light, and a bilinear lookup that blended it into its open neighbours would paint a
+/// dark band one texel wide along every contact line (the floor beside a block), a feature of
+/// the light map rather than of the scene's light transport.
+fn buried(scene: &Scene, p: DVec3, normal: DVec3) -> bool {
+    let t = tangent_of(normal);
+    let b = normal.cross(t);
+    let (m, n) = BURIED_PROBES;
+    let mut inside = 0;
+    for j in 0..m {
+        for k in 0..n {
+            let l = cosine_polar_local(j, k, m, n, 0.5, 0.5);
+            let ray = Ray {
+                origin: p,
+                direction: l.x * t + l.y * b + l.z * normal,
+            };
+            if let Some(hit) = scene.bvh.intersect(&ray, scene.epsilon(), f64::INFINITY) {
+                if scene.bvh.primitive(hit.primitive).normal.dot(ray.direction) > 0.0 {
+                    inside += 1;
+                }
+            }
+        }
+    }
+    2 * inside > m * n
+}
+
 /// Texels per unit length (the scenes' L); the Cornell box walls get 48 × 48.
 fn texel_density(scene: &Scene) -> f64 {
     48.0 / scene.size
@@ -135,13 +167,17 @@ impl LightMap {
             let prim = scene.bvh.primitive(i);
             prim.point((a as f64 + 0.5) / nu as f64, (b as f64 + 0.5) / nv as f64)
         };
-        // Pass 1: direct irradiance.
-        let direct: Vec<DVec3> = texels
+        // Pass 1: direct irradiance, and which texels are buried.
+        let direct: Vec<(DVec3, bool)> = texels
             .par_iter()
             .map(|texel| {
                 progress.inc(1);
                 let prim = scene.bvh.primitive(texel.0);
-                scene.direct_irradiance(texel_point(texel), prim.normal, 16)
+                let p = texel_point(texel);
+                (
+                    scene.direct_irradiance(p, prim.normal, 16),
+                    !buried(scene, p, prim.normal),
+                )
             })
             .collect();
         let mut direct_map = LightMap {
@@ -151,13 +187,12 @@ impl LightMap {
         let mut offset = 0;
         for (i, &(nu, nv)) in dims.iter().enumerate() {
             let albedo = scene.materials[i].albedo / std::f64::consts::PI;
+            let texels = &direct[offset..offset + nu * nv];
             direct_map.maps.push((
                 nu,
                 nv,
-                direct[offset..offset + nu * nv]
-                    .iter()
-                    .map(|e| *e * albedo)
-                    .collect(),
+                texels.iter().map(|(e, _)| *e * albedo).collect(),
+                texels.iter().map(|(_, open)| *open).collect(),
             ));
             offset += nu * nv;
         }
@@ -218,17 +253,34 @@ impl LightMap {
     }
 
     /// Outgoing (reflected, non-emitted) radiance at (s, t) of a primitive, bilinear over texel
-    /// centres and clamped at the edges.
+    /// centres and clamped at the edges; buried texels are left out of the blend (the weights of
+    /// the open ones renormalized) unless all four are buried.
     pub fn radiance(&self, primitive: usize, s: f64, t: f64) -> DVec3 {
-        let (nu, nv, ref data) = self.maps[primitive];
+        let (nu, nv, ref data, ref open) = self.maps[primitive];
         let x = (s * nu as f64 - 0.5).clamp(0.0, (nu - 1) as f64);
         let y = (t * nv as f64 - 0.5).clamp(0.0, (nv - 1) as f64);
         let (x0, y0) = (x.floor() as usize, y.floor() as usize);
         let (x1, y1) = ((x0 + 1).min(nu - 1), (y0 + 1).min(nv - 1));
         let (fx, fy) = (x - x0 as f64, y - y0 as f64);
-        let at = |a: usize, b: usize| data[b * nu + a];
-        (at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx) * (1.0 - fy)
-            + (at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx) * fy
+        let corners = [
+            (x0, y0, (1.0 - fx) * (1.0 - fy)),
+            (x1, y0, fx * (1.0 - fy)),
+            (x0, y1, (1.0 - fx) * fy),
+            (x1, y1, fx * fy),
+        ];
+        let (mut sum, mut weight) = (DVec3::ZERO, 0.0);
+        for &(a, b, w) in &corners {
+            if open[b * nu + a] {
+                sum += data[b * nu + a] * w;
+                weight += w;
+            }
+        }
+        if weight > 0.0 {
+            return sum / weight;
+        }
+        corners
+            .iter()
+            .fold(DVec3::ZERO, |acc, &(a, b, w)| acc + data[b * nu + a] * w)
     }
 
     /// Reflected radiance found along a ray (zero on a miss), and the hit distance (∞ on a miss).

@@ -21,6 +21,7 @@ mod plot;
 mod render;
 mod report;
 mod scene;
+mod shim;
 mod timing;
 
 use std::path::Path;
@@ -29,7 +30,7 @@ use std::time::Instant;
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::caching::GatherStore;
+use crate::caching::{Baseline, GatherStore};
 use crate::lightmap::LightMap;
 use crate::render::GBuffer;
 use crate::scene::Scene;
@@ -57,7 +58,7 @@ fn load_or_compute_reference(
     out: &Path,
 ) -> std::io::Result<(Vec<DVec3>, f64)> {
     let path = out.join(format!(
-        "{}-reference-v4-{}x{}-{}.f64",
+        "{}-reference-v6-{}x{}-{}.f64",
         scene.kind.name(),
         gbuffer.width,
         gbuffer.height,
@@ -87,6 +88,94 @@ fn load_or_compute_reference(
     }
     std::fs::write(&path, bytes)?;
     Ok((values, seconds))
+}
+
+/// What every baseline's caches of one scene share.
+struct SceneRun<'a> {
+    scene: &'a Scene,
+    gbuffer: &'a GBuffer,
+    reference: &'a [DVec3],
+    exposure: f64,
+    options: &'a cli::Options,
+}
+
+impl SceneRun<'_> {
+    /// Every metric's cache under `baseline`, tuned to the record target, its images, and the
+    /// threshold sweep of the error-against-time plot, added to `scene_report`.
+    fn caches(
+        &self,
+        store: &GatherStore,
+        baseline: Baseline,
+        report_name: &str,
+        scene_report: &mut report::SceneReport,
+    ) -> Result<(), String> {
+        let (options, gbuffer, reference) = (self.options, self.gbuffer, self.reference);
+        let (width, height) = (options.width, options.height);
+        let save = |img: image::Rgb8, file: &str| {
+            let path = options.out.join(format!("{report_name}-{file}.png"));
+            img.save(&path)
+                .map_err(|e| format!("{}: {e}", path.display()))
+        };
+        let bar = progress(&format!("caches ({})", baseline.name()));
+        bar.set_length((options.metrics.len() * options.thresholds) as u64);
+        for &metric in &options.metrics {
+            if metric.surfaces_only() && self.scene.medium.is_some() {
+                bar.println(format!(
+                    "   {}: not defined in a participating medium, skipped",
+                    metric.name()
+                ));
+                continue;
+            }
+            let tuned = caching::tune(store, metric, options.records, baseline)
+                .map_err(|e| e.to_string())?;
+            let render: Vec<DVec3> = gbuffer
+                .pixels
+                .iter()
+                .zip(&tuned.image)
+                .map(|(p, e)| p.base + p.indirect_weight * *e)
+                .collect();
+            let file = format!("cache-{}", metric.name());
+            save(image::tonemap(width, height, &render, self.exposure), &file)?;
+            save(
+                outputs::records_overlay(
+                    &self.scene.camera,
+                    gbuffer,
+                    &render,
+                    self.exposure,
+                    &tuned.records,
+                ),
+                &format!("{file}-records"),
+            )?;
+            save(
+                outputs::error_map(gbuffer, &tuned.image, reference, report::ERROR_MAP_SCALE),
+                &format!("{file}-error"),
+            )?;
+            // Error against time: the same metric at thresholds around the tuned one, spaced so
+            // that every metric's radii change by the same factors (2^0.75 per step).
+            let mut sweep = Vec::new();
+            for k in 0..options.thresholds {
+                let factor = 2f64.powf(0.75 * (k as f64 - 1.0) / metric.radius_exponent());
+                let run = if factor == 1.0 {
+                    None
+                } else {
+                    Some(
+                        caching::run(store, metric, tuned.parameter * factor, baseline)
+                            .map_err(|e| e.to_string())?,
+                    )
+                };
+                let r = run.as_ref().unwrap_or(&tuned);
+                sweep.push(report::Row::new(r, reference, gbuffer));
+                bar.inc(1);
+            }
+            scene_report.add(report::Row::new(&tuned, reference, gbuffer), sweep);
+        }
+        bar.finish_and_clear();
+        println!(
+            "   wrote {}/{report_name}-cache-<metric>[-records|-error].png",
+            options.out.display()
+        );
+        Ok(())
+    }
 }
 
 fn run() -> Result<(), String> {
@@ -164,91 +253,61 @@ fn run() -> Result<(), String> {
             caching::Metric::hessians(&options.metrics),
         )
         .map_err(|e| e.to_string())?;
-        let mut scene_report = report::SceneReport::new(name, &options, ref_seconds);
-        let bar = progress("caches");
-        bar.set_length((options.metrics.len() * options.thresholds) as u64);
-        for &metric in &options.metrics {
-            if metric.surfaces_only() && scene.medium.is_some() {
-                println!(
-                    "   {}: not defined in a participating medium, skipped",
-                    metric.name()
-                );
-                continue;
+        let ctx = SceneRun {
+            scene: &scene,
+            gbuffer: &gbuffer,
+            reference: &reference,
+            exposure,
+            options: &options,
+        };
+        for &baseline in &options.baselines {
+            let report_name = match baseline {
+                Baseline::Production => name.to_string(),
+                Baseline::Thesis => format!("{name}-thesis"),
+            };
+            let mut scene_report =
+                report::SceneReport::new(&report_name, &options, ref_seconds, baseline);
+            ctx.caches(&store, baseline, &report_name, &mut scene_report)?;
+            scene_report.overhead(&store, &reference);
+            if scene.medium.is_some() && baseline == Baseline::Production {
+                media_report::run(&scene, &lightmap, &options, &mut scene_report, progress)?;
             }
-            let tuned =
-                caching::tune(&store, metric, options.records).map_err(|e| e.to_string())?;
-            let render: Vec<DVec3> = gbuffer
-                .pixels
-                .iter()
-                .zip(&tuned.image)
-                .map(|(p, e)| p.base + p.indirect_weight * *e)
-                .collect();
-            let file = format!("cache-{}", metric.name());
-            save(
-                image::tonemap(options.width, options.height, &render, exposure),
-                &file,
-            )?;
-            save(
-                outputs::records_overlay(
-                    &scene.camera,
-                    &gbuffer,
-                    &render,
-                    exposure,
-                    &tuned.records,
+            scene_report
+                .write(&options.out)
+                .map_err(|e| e.to_string())?;
+            let files = [
+                format!("{report_name}-report.md"),
+                format!("{report_name}-report.csv"),
+            ];
+            for file in files {
+                println!("   wrote {}", options.out.join(file).display());
+            }
+            let plot_path = options.out.join(format!("{report_name}-error-time.png"));
+            plot::error_against_time(
+                &plot_path,
+                &format!(
+                    "{name}, {} baselines: error against time, {} rays per record",
+                    baseline.name(),
+                    store.rays_per_gather()
                 ),
-                &format!("{file}-records"),
-            )?;
-            save(
-                outputs::error_map(&gbuffer, &tuned.image, &reference, report::ERROR_MAP_SCALE),
-                &format!("{file}-error"),
-            )?;
-            // Error against time: the same metric at thresholds around the tuned one, spaced so
-            // that every metric's radii change by the same factors (2^0.75 per step).
-            let mut sweep = Vec::new();
-            for k in 0..options.thresholds {
-                let factor = 2f64.powf(0.75 * (k as f64 - 1.0) / metric.radius_exponent());
-                let run = if factor == 1.0 {
-                    None
-                } else {
-                    Some(
-                        caching::run(&store, metric, tuned.parameter * factor)
-                            .map_err(|e| e.to_string())?,
-                    )
-                };
-                let r = run.as_ref().unwrap_or(&tuned);
-                sweep.push(report::Row::new(r, &reference, &gbuffer));
-                bar.inc(1);
-            }
-            scene_report.add(report::Row::new(&tuned, &reference, &gbuffer), sweep);
-        }
-        bar.finish_and_clear();
-        scene_report.overhead(&store, &reference);
-        if scene.medium.is_some() {
-            media_report::run(&scene, &lightmap, &options, &mut scene_report, progress)?;
-        }
-        scene_report
-            .write(&options.out)
-            .map_err(|e| e.to_string())?;
-        plot::error_against_time(
-            &options.out.join(format!("{name}-error-time.png")),
-            &format!(
-                "{name}: error against time, {} rays per record",
-                store.rays_per_gather()
-            ),
-            &scene_report.series(),
-        )
-        .unwrap_or_else(|e| eprintln!("   plot skipped: {e}"));
-        let media_series = scene_report.media_series();
-        if !media_series.is_empty() {
-            plot::error_against_time_of(
-                &options.out.join(format!("{name}-media-error-time.png")),
-                &format!("{name}: media caches, error against time"),
-                "indirect in-scattering",
-                &media_series,
+                &scene_report.series(),
             )
+            .map(|()| println!("   wrote {}", plot_path.display()))
             .unwrap_or_else(|e| eprintln!("   plot skipped: {e}"));
+            let media_series = scene_report.media_series();
+            if !media_series.is_empty() {
+                let path = options.out.join(format!("{name}-media-error-time.png"));
+                plot::error_against_time_of(
+                    &path,
+                    &format!("{name}: media caches, error against time"),
+                    "indirect in-scattering",
+                    &media_series,
+                )
+                .map(|()| println!("   wrote {}", path.display()))
+                .unwrap_or_else(|e| eprintln!("   plot skipped: {e}"));
+            }
+            print!("{}", scene_report.markdown());
         }
-        print!("{}", scene_report.markdown());
     }
     Ok(())
 }

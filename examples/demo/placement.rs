@@ -21,12 +21,18 @@ pub fn level_pixels(w: usize, h: usize, step: usize) -> Vec<usize> {
 /// `extent` (or, when the metric gave none, the largest isotropic one) with every radius clamped
 /// to [`RADIUS_MIN`, `RADIUS_MAX`] × `size` (a non-finite radius becomes the largest).
 pub fn clamped_extent(extent: Option<Extent>, size: f64) -> Extent {
-    let extent = extent.unwrap_or_else(|| Extent::isotropic(RADIUS_MAX * size));
+    clamped_extent_to(extent, RADIUS_MIN * size, RADIUS_MAX * size)
+}
+
+/// `extent` (or, when the metric gave none, the largest isotropic one) with every radius clamped
+/// to [`min`, `max`] (a non-finite radius becomes `max`).
+pub fn clamped_extent_to(extent: Option<Extent>, min: f64, max: f64) -> Extent {
+    let extent = extent.unwrap_or_else(|| Extent::isotropic(max));
     let clamp = |r: f64| {
         if r.is_finite() {
-            r.clamp(RADIUS_MIN * size, RADIUS_MAX * size)
+            r.clamp(min, max)
         } else {
-            RADIUS_MAX * size
+            max
         }
     };
     Extent {

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use crate::caching::{rms_error, GatherStore, Run};
+use crate::caching::{rms_error, Baseline, GatherStore, Run};
 use crate::cli::Options;
 use crate::plot::Series;
 use crate::render::GBuffer;
@@ -63,12 +63,14 @@ pub struct SceneReport {
 }
 
 impl SceneReport {
-    pub fn new(scene: &str, o: &Options, reference_seconds: f64) -> Self {
+    pub fn new(scene: &str, o: &Options, reference_seconds: f64, baseline: Baseline) -> Self {
         SceneReport {
             scene: scene.to_string(),
             settings: format!(
-                "{}x{} pixels, gathers of {}x{} = {} rays, target {} records, reference {} rays per \
-                 pixel ({reference_seconds:.1} s wall), {} threads",
+                "{} baselines ({}). {}x{} pixels, gathers of {}x{} = {} rays, target {} records, \
+                 reference {} rays per pixel ({reference_seconds:.1} s wall), {} threads",
+                baseline.name(),
+                baseline.summary(),
                 o.width,
                 o.height,
                 o.gather_m,

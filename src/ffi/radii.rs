@@ -69,6 +69,57 @@ pub unsafe extern "C" fn raddiff_surface_radii(
     })
 }
 
+/// Default weight of the curvature floor of `raddiff_surface_radii_floored` (1% of the tangent
+/// curvature 4E/D² of irradiance from a small source at distance D straight above).
+pub const RADDIFF_CURVATURE_FLOOR_WEIGHT: f64 = 0.04;
+
+/// `raddiff_surface_radii` with the robustness term (the Rust `gather::radii::surface_radii_floored`):
+/// `floor_weight * |value| / floor_distance^2` is added to the magnitude of each tangent eigenvalue,
+/// so a record whose estimated Hessian vanishes, or whose gather was black (`value` 0 with
+/// `RADDIFF_ERROR_RELATIVE`), gets the finite radius `(4 error D^2 / (pi kappa))^(1/4)` instead of
+/// `RADDIFF_MAX_RADIUS`. `floor_distance` (> 0, finite) is the gather's harmonic-mean hit distance
+/// (`raddiff_gather_values.harmonic_mean_distance`); `floor_weight` (>= 0, finite) is kappa,
+/// `RADDIFF_CURVATURE_FLOOR_WEIGHT` by default, 0 for no floor.
+///
+/// # Safety
+/// As `raddiff_surface_radii`.
+#[no_mangle]
+pub unsafe extern "C" fn raddiff_surface_radii_floored(
+    hessian: *const f64,
+    normal: raddiff_vec3,
+    value: f64,
+    error: f64,
+    mode: u32,
+    max_anisotropy: f64,
+    floor_distance: f64,
+    floor_weight: f64,
+    radii: *mut f64,
+    axes: *mut raddiff_vec3,
+) -> raddiff_status {
+    guard(|| {
+        let hessian = unsafe { hessian_from_c(hessian)? };
+        let radii_out = unsafe { out_array(radii, "radii")? };
+        let axes_out = unsafe { out_array(axes, "axes")? };
+        let mode = mode_from_c(mode)?;
+        let floor = radii::CurvatureFloor {
+            distance: floor_distance,
+            weight: floor_weight,
+        };
+        let r = radii::surface_radii_floored(
+            hessian,
+            normal.into(),
+            value,
+            error,
+            mode,
+            max_anisotropy,
+            floor,
+        )?;
+        *radii_out = r.radii;
+        *axes_out = r.axes.map(Into::into);
+        Ok(())
+    })
+}
+
 /// Ellipsoidal media record from a 3x3 Hessian (row-major; see the Rust `gather::radii::volume_radii`):
 /// semi-axes `radii[0] <= radii[1] <= radii[2]` along the orthonormal `axes[0..3]`, chosen so that the
 /// integrated second-order error over the ellipsoid equals the tolerance. `max_anisotropy >= 1` caps

@@ -47,6 +47,62 @@ use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 /// zero (or so small that the formula would exceed it) along that axis.
 pub static MAX_RADIUS: f64 = 1e30;
 
+/// Default weight κ of [`CurvatureFloor`]: 1% of the tangent curvature `4E/D²` of the
+/// irradiance from a small source straight above the record at distance `D`.
+pub const CURVATURE_FLOOR_WEIGHT: f64 = 0.04;
+
+/// The robustness term of surface record radii: a curvature `κ·|value|/D²` added to the
+/// magnitude of each tangent eigenvalue of the Hessian before the radii are solved for.
+///
+/// # Why a floor, and why this one
+/// The thesis (sec. 6.3) makes radii robust by adding 1% of the irradiance to every triangle's
+/// radiance. Its Hessian is that of a closed environment of uniform radiance, whose irradiance is
+/// the constant πL wherever the receiver stands: its tangent projection is zero (to rounding), so
+/// the term changes nothing, and a black gather (zero Hessian) gets the largest radius, the
+/// opposite of what the term is for. A floor on the *magnitudes* does what it meant to do.
+/// Irradiance `E` from a small source at distance `D` straight above a receiver has tangent
+/// curvature `4E/D²` along every axis (`E ∝ D²/(D² + s²)²`); the floor is `κ` times `E/D²` with
+/// `D` the gather's harmonic-mean hit distance (Ward's `R`), so where the estimated Hessian
+/// vanishes the record's radius is `(4 ε D²/(πκ))^{1/4}` for a relative tolerance `ε` (the surface
+/// bound of the module docs, isotropic), and where `|λ| ≫ κE/D²` the radii change by
+/// `≈ κE/(4D²|λ|)` relative. In [`ErrorMode::Relative`] radii depend only on `|λ|/|value|`, so a
+/// black gather (value and Hessian zero) takes the limit `κ/D²` and gets that split-sphere radius,
+/// not the largest one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurvatureFloor {
+    /// `D` (L, > 0): the gather's harmonic-mean hit distance (`GatherValues::harmonic_mean_distance`).
+    pub distance: f64,
+    /// `κ` (≥ 0, dimensionless); [`CURVATURE_FLOOR_WEIGHT`] by default; 0 turns the floor off.
+    pub weight: f64,
+}
+
+impl CurvatureFloor {
+    /// The floor for a gather whose harmonic-mean hit distance is `distance`, with the default
+    /// weight [`CURVATURE_FLOOR_WEIGHT`].
+    pub fn new(distance: f64) -> Self {
+        CurvatureFloor {
+            distance,
+            weight: CURVATURE_FLOOR_WEIGHT,
+        }
+    }
+
+    fn check(&self) -> Result<()> {
+        if !(self.distance > 0.0 && self.distance.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "curvature floor distance must be positive and finite (got {})",
+                self.distance
+            )));
+        }
+        if !(self.weight >= 0.0 && self.weight.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "curvature floor weight must be >= 0 and finite (got {})",
+                self.weight
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// How the error tolerance is measured.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u32)]
@@ -295,6 +351,18 @@ pub fn surface_radii(
     mode: ErrorMode,
     max_anisotropy: f64,
 ) -> Result<SurfaceRadii> {
+    let n = checked_surface_input(hessian, normal, value, error, max_anisotropy)?;
+    surface_radii_with(hessian, n, value, error, mode, max_anisotropy, None)
+}
+
+/// Validates the arguments of the surface radii functions; returns the unit normal.
+fn checked_surface_input(
+    hessian: DMat3,
+    normal: DVec3,
+    value: f64,
+    error: f64,
+    max_anisotropy: f64,
+) -> Result<DVec3> {
     if !hessian.is_finite() {
         return Err(Error::InvalidArgument("hessian is not finite".into()));
     }
@@ -306,18 +374,67 @@ pub fn surface_radii(
             "normal must be a unit vector (length {len})"
         )));
     }
-    let n = normal / len;
+    Ok(normal / len)
+}
+
+/// [`surface_radii`] with the robustness term [`CurvatureFloor`]: `κ·|value|/D²` is added to the
+/// magnitude of each tangent eigenvalue (same axes). In [`ErrorMode::Relative`] with `value == 0`
+/// and a zero tangent Hessian (a black gather) the radii are the limit of `value → 0`, those of
+/// the relative curvature `κ/D²` alone; in [`ErrorMode::Absolute`] a zero value adds nothing.
+/// Finite for any finite input; `InvalidArgument` for a non-positive or non-finite distance or a
+/// negative or non-finite weight, and as [`surface_radii`].
+pub fn surface_radii_floored(
+    hessian: DMat3,
+    normal: DVec3,
+    value: f64,
+    error: f64,
+    mode: ErrorMode,
+    max_anisotropy: f64,
+    floor: CurvatureFloor,
+) -> Result<SurfaceRadii> {
+    floor.check()?;
+    let n = checked_surface_input(hessian, normal, value, error, max_anisotropy)?;
+    surface_radii_with(hessian, n, value, error, mode, max_anisotropy, Some(floor))
+}
+
+/// The body of [`surface_radii`] for a validated unit normal `n`, with an optional floor.
+fn surface_radii_with(
+    hessian: DMat3,
+    n: DVec3,
+    value: f64,
+    error: f64,
+    mode: ErrorMode,
+    max_anisotropy: f64,
+    floor: Option<CurvatureFloor>,
+) -> Result<SurfaceRadii> {
     let (u1, u2) = tangent_basis(n);
     let (scale, vals, vecs) = eigen2(tangent_hessian(hessian, u1, u2));
     // The projection rounds at ~ε‖H‖: tangent curvature below that is noise, not information.
-    let floor = 16.0 * f64::EPSILON * max_abs(&hessian.to_cols_array());
-    let mu = vals.map(|v| {
-        if v.abs() * scale <= floor {
+    let noise = 16.0 * f64::EPSILON * max_abs(&hessian.to_cols_array());
+    let mut mu = vals.map(|v| {
+        if v.abs() * scale <= noise {
             0.0
         } else {
             v.abs()
         }
     });
+    let mut scale = scale;
+    let mut value = value;
+    if let Some(f) = floor {
+        let flat = mu.iter().all(|&m| m == 0.0);
+        if mode == ErrorMode::Relative && value == 0.0 && flat {
+            // radii depend on |λ|/|value| only: the black gather's limit is κ/D² at value 1
+            value = 1.0;
+        }
+        let add = f.weight * value.abs() / (f.distance * f.distance);
+        // back to unscaled magnitudes, floored, rescaled so the largest is 1
+        let actual = mu.map(|m| m * scale + add);
+        let top = actual[0].max(actual[1]);
+        if top > 0.0 && top.is_finite() {
+            mu = actual.map(|m| m / top);
+            scale = top;
+        }
+    }
     let radii = solve_radii(mu, scale, tolerance(value, error, mode), max_anisotropy);
     let axes = vecs.map(|v| (u1 * v.x + u2 * v.y).normalize());
     Ok(SurfaceRadii { radii, axes })
@@ -391,6 +508,103 @@ mod tests {
         let marco = (15.0 * tau / (4.0 * std::f64::consts::PI * 2.0)).powf(0.2);
         let b = ellipsoid_error_bound([-2.0; 3], [marco; 3]);
         assert!((b / tau - 1.5).abs() < 1e-12);
+    }
+
+    /// Isotropic surface radius for tangent curvature `mu` and tolerance `tau` (module docs).
+    fn isotropic_radius(mu: f64, tau: f64) -> f64 {
+        (4.0 * tau / (std::f64::consts::PI * mu)).powf(0.25)
+    }
+
+    #[test]
+    fn curvature_floor_binds_where_the_hessian_vanishes() {
+        let floor = CurvatureFloor::new(0.5);
+        let (e, eps) = (2.0, 1e-3);
+        // A flat estimate: without the floor the largest radius, with it the split-sphere-like one.
+        let plain = surface_radii(DMat3::ZERO, DVec3::Z, e, eps, ErrorMode::Relative, 2.0).unwrap();
+        assert_eq!(plain.radii, [MAX_RADIUS; 2]);
+        let floored =
+            surface_radii_floored(DMat3::ZERO, DVec3::Z, e, eps, ErrorMode::Relative, 2.0, floor)
+                .unwrap();
+        let expect = isotropic_radius(CURVATURE_FLOOR_WEIGHT * e / 0.25, eps * e);
+        for r in floored.radii {
+            assert!((r - expect).abs() < 1e-12 * expect, "{r} vs {expect}");
+        }
+        // = (4 eps D² / (pi kappa))^(1/4), whatever the value
+        let closed =
+            (4.0 * eps * 0.25 / (std::f64::consts::PI * CURVATURE_FLOOR_WEIGHT)).powf(0.25);
+        assert!((expect - closed).abs() < 1e-12 * closed);
+        // The normal component of the Hessian is not curvature along the surface.
+        let normal_only = DMat3::from_diagonal(DVec3::new(0.0, 0.0, 50.0));
+        let r = surface_radii_floored(normal_only, DVec3::Z, e, eps, ErrorMode::Relative, 2.0, floor)
+            .unwrap();
+        assert!((r.radii[0] - expect).abs() < 1e-12 * expect);
+    }
+
+    #[test]
+    fn curvature_floor_gives_black_gathers_a_finite_radius() {
+        let floor = CurvatureFloor::new(0.8);
+        let eps = 1e-4;
+        let plain = surface_radii(DMat3::ZERO, DVec3::Y, 0.0, eps, ErrorMode::Relative, 2.0).unwrap();
+        assert_eq!(plain.radii, [MAX_RADIUS; 2]);
+        let r = surface_radii_floored(DMat3::ZERO, DVec3::Y, 0.0, eps, ErrorMode::Relative, 2.0, floor)
+            .unwrap();
+        let closed =
+            (4.0 * eps * 0.64 / (std::f64::consts::PI * CURVATURE_FLOOR_WEIGHT)).powf(0.25);
+        for a in r.radii {
+            assert!((a - closed).abs() < 1e-12 * closed, "{a} vs {closed}");
+        }
+        // the limit of a vanishing value: continuous
+        let tiny = surface_radii_floored(DMat3::ZERO, DVec3::Y, 1e-200, eps, ErrorMode::Relative, 2.0, floor)
+            .unwrap();
+        assert!((tiny.radii[0] - closed).abs() < 1e-12 * closed);
+        // absolute mode: a zero value adds no curvature (an absolute error of 0 stays 0)
+        let abs = surface_radii_floored(DMat3::ZERO, DVec3::Y, 0.0, eps, ErrorMode::Absolute, 2.0, floor)
+            .unwrap();
+        assert_eq!(abs.radii, [MAX_RADIUS; 2]);
+    }
+
+    #[test]
+    fn curvature_floor_is_negligible_where_the_hessian_is_strong() {
+        // a penumbra-like Hessian: |λ| = 400 E / D², 10⁴ times the floor
+        let (e, d, eps) = (1.5, 0.3, 1e-3);
+        let lambda = 400.0 * e / (d * d);
+        let h = DMat3::from_diagonal(DVec3::new(-lambda, 0.5 * lambda, 7.0));
+        let floor = CurvatureFloor::new(d);
+        let plain = surface_radii(h, DVec3::Z, e, eps, ErrorMode::Relative, 2.0).unwrap();
+        let floored = surface_radii_floored(h, DVec3::Z, e, eps, ErrorMode::Relative, 2.0, floor).unwrap();
+        for (a, b) in plain.radii.iter().zip(floored.radii) {
+            let change = (a - b) / a;
+            assert!(change > 0.0 && change < 2e-4, "relative change {change}");
+        }
+        assert!((plain.axes[0] - floored.axes[0]).length() < 1e-12);
+        // indefinite Hessians are floored on magnitudes: the floor never cancels curvature
+        let saddle = DMat3::from_diagonal(DVec3::new(-2.0, 2.0, 0.0));
+        let a = surface_radii(saddle, DVec3::Z, 1.0, eps, ErrorMode::Relative, 1.0).unwrap();
+        let b = surface_radii_floored(saddle, DVec3::Z, 1.0, eps, ErrorMode::Relative, 1.0, CurvatureFloor { distance: 1.0, weight: 2.0 })
+            .unwrap();
+        let expect = isotropic_radius(4.0, eps);
+        assert!(a.radii[0] > b.radii[0] && (b.radii[0] - expect).abs() < 1e-12 * expect);
+    }
+
+    #[test]
+    fn curvature_floor_rejects_bad_input_and_stays_finite() {
+        for f in [
+            CurvatureFloor { distance: 0.0, weight: 0.04 },
+            CurvatureFloor { distance: f64::INFINITY, weight: 0.04 },
+            CurvatureFloor { distance: 1.0, weight: -1.0 },
+            CurvatureFloor { distance: 1.0, weight: f64::NAN },
+        ] {
+            assert!(surface_radii_floored(DMat3::ZERO, DVec3::Z, 1.0, 1e-3, ErrorMode::Relative, 2.0, f).is_err());
+        }
+        for (h, v, d) in [
+            (DMat3::from_diagonal(DVec3::splat(1e300)), 1e-300, 1e-300),
+            (DMat3::ZERO, 1e300, 1e-300),
+            (DMat3::from_diagonal(DVec3::splat(-1e-300)), 1e300, 1e300),
+        ] {
+            let f = CurvatureFloor::new(d);
+            let r = surface_radii_floored(h, DVec3::Z, v, 1e-3, ErrorMode::Relative, 2.0, f).unwrap();
+            assert!(r.radii.iter().all(|a| a.is_finite() && *a >= 0.0), "{r:?}");
+        }
     }
 
     #[test]
