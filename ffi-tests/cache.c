@@ -184,11 +184,75 @@ int main(int argc, char **argv) {
     v = 1.0f;
     CHECK_STATUS(raddiff_cache_lookup(reloaded, q, n, &v, NULL), RADDIFF_OK);
     CHECK(v == 0.0f);
-    flagged.interpolation = RADDIFF_INTERP_WARD | 0x200;
+    flagged.interpolation = RADDIFF_INTERP_WARD | 0x400;
     CHECK(raddiff_cache_new(&flagged) == NULL);
     raddiff_cache_free(reloaded);
     raddiff_cache_free(clamped);
     raddiff_cache_free(signed_cache);
+  }
+
+  /* RADDIFF_INTERP_GRADIENT_LIMIT: a record with |gradient| R / E = 132 extrapolates by at most
+     c |E| (c = RADDIFF_GRADIENT_LIMIT_DEFAULT = 1); raddiff_cache_set_gradient_limit changes c for
+     later inserts; the limit survives save / load */
+  {
+    const float one[1] = {1.0f}, steep[3] = {-132.0f, 0.0f, 0.0f};
+    raddiff_vec3 q = {0.99, 0.0, 0.0}, q2 = {10.99, 0.0, 0.0};
+    raddiff_cache_config plain_cfg = {1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD, 0.2};
+    raddiff_cache_config limit_cfg = {1, RADDIFF_DOMAIN_SURFACE,
+                                      RADDIFF_INTERP_WARD | RADDIFF_INTERP_GRADIENT_LIMIT, 0.2};
+    raddiff_cache *plain = raddiff_cache_new(&plain_cfg), *limited = raddiff_cache_new(&limit_cfg);
+    raddiff_cache *reloaded;
+    float v = 0.0f, v2 = 0.0f;
+    double c = 0.0;
+    CHECK(plain != NULL && limited != NULL);
+    CHECK(RADDIFF_GRADIENT_LIMIT_DEFAULT == 1.0);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(limited, &c), RADDIFF_OK);
+    CHECK(c == RADDIFF_GRADIENT_LIMIT_DEFAULT);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(plain, &c), RADDIFF_OK);
+    CHECK(isinf(c) && c > 0.0);
+    rec = make_record(0.0, one, steep);
+    CHECK_STATUS(raddiff_cache_insert(plain, &rec), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_insert(limited, &rec), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_lookup(plain, q, n, &v, NULL), RADDIFF_OK);
+    CHECK_CLOSE(v, 1.0 - 0.99 * 132.0, 1e-4);
+    CHECK_STATUS(raddiff_cache_lookup(limited, q, n, &v, NULL), RADDIFF_OK);
+    CHECK_CLOSE(v, 1.0 - 0.99, 1e-3);
+    CHECK(v > 0.0f);
+    /* c = 0.5 for the next records; the stored one keeps its gradient */
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(plain, 0.5), RADDIFF_OK);
+    rec = make_record(10.0, one, steep);
+    CHECK_STATUS(raddiff_cache_insert(plain, &rec), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_lookup(plain, q2, n, &v, NULL), RADDIFF_OK);
+    CHECK_CLOSE(v, 1.0 - 0.99 * 0.5, 1e-3);
+    CHECK_STATUS(raddiff_cache_lookup(plain, q, n, &v, NULL), RADDIFF_OK);
+    CHECK_CLOSE(v, 1.0 - 0.99 * 132.0, 1e-4);
+    /* errors leave the limit as it was */
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(NULL, 1.0), RADDIFF_ERROR_NULL_POINTER);
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(plain, 0.0), RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(raddiff_last_error(), "gradient limit") != NULL);
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(plain, -1.0), RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(plain, NAN), RADDIFF_ERROR_INVALID_ARGUMENT);
+    c = -1.0;
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(NULL, &c), RADDIFF_ERROR_NULL_POINTER);
+    CHECK(c == -1.0);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(plain, NULL), RADDIFF_ERROR_NULL_POINTER);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(plain, &c), RADDIFF_OK);
+    CHECK(c == 0.5);
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(plain, INFINITY), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(plain, &c), RADDIFF_OK);
+    CHECK(isinf(c));
+    /* save / load keeps the limit and the limited records */
+    CHECK_STATUS(raddiff_cache_save(limited, path), RADDIFF_OK);
+    reloaded = raddiff_cache_load(path);
+    CHECK(reloaded != NULL);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(reloaded, &c), RADDIFF_OK);
+    CHECK(c == 1.0);
+    CHECK_STATUS(raddiff_cache_lookup(limited, q, n, &v, NULL), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_lookup(reloaded, q, n, &v2, NULL), RADDIFF_OK);
+    CHECK(v == v2);
+    raddiff_cache_free(reloaded);
+    raddiff_cache_free(limited);
+    raddiff_cache_free(plain);
   }
 
   /* unreadable and corrupt files: NULL with an IO / CORRUPT message */

@@ -39,6 +39,13 @@ pub const RADDIFF_INTERP_WARD_TABELLION: u32 = 5;
 /// radiance cannot be negative; leave it off for signed quantities). `_LOG` is positive anyway.
 /// Saved with the cache and restored by `raddiff_cache_load`.
 pub const RADDIFF_INTERP_NON_NEGATIVE: u32 = 0x100;
+/// Flag OR-ed into `raddiff_cache_config.interpolation`: create the cache with the gradient
+/// (slope) limit c = `RADDIFF_GRADIENT_LIMIT_DEFAULT` (see `raddiff_cache_set_gradient_limit` for
+/// the rule and for other values of c). Saved with the cache and restored by `raddiff_cache_load`.
+pub const RADDIFF_INTERP_GRADIENT_LIMIT: u32 = 0x200;
+/// The gradient limit c that `RADDIFF_INTERP_GRADIENT_LIMIT` selects: 1, the largest c with which
+/// extrapolation never flips the sign of a record's value.
+pub const RADDIFF_GRADIENT_LIMIT_DEFAULT: f64 = 1.0;
 
 /// A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
 /// `raddiff_cache_insert` on the same handle at once (lookups never block).
@@ -55,7 +62,7 @@ pub struct raddiff_cache_config {
     /// `RADDIFF_DOMAIN_SURFACE` or `RADDIFF_DOMAIN_VOLUME`.
     pub domain: u32,
     /// `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`),
-    /// optionally OR-ed with `RADDIFF_INTERP_NON_NEGATIVE`.
+    /// optionally OR-ed with `RADDIFF_INTERP_NON_NEGATIVE` and `RADDIFF_INTERP_GRADIENT_LIMIT`.
     pub interpolation: u32,
     /// Radians in (0, pi]: largest normal deviation for a record to be used (surface domain;
     /// ignored in volumes). 0.2 is a good default.
@@ -86,12 +93,18 @@ pub struct raddiff_cache_record {
 }
 
 fn config_from_c(c: &raddiff_cache_config) -> Result<CacheConfig, FfiError> {
+    let flags = RADDIFF_INTERP_NON_NEGATIVE | RADDIFF_INTERP_GRADIENT_LIMIT;
     Ok(CacheConfig {
         channels: c.channels as usize,
         domain: Domain::try_from(c.domain)?,
-        interpolation: Interpolation::try_from(c.interpolation & !RADDIFF_INTERP_NON_NEGATIVE)?,
+        interpolation: Interpolation::try_from(c.interpolation & !flags)?,
         max_normal_deviation: c.max_normal_deviation,
         non_negative: c.interpolation & RADDIFF_INTERP_NON_NEGATIVE != 0,
+        gradient_limit: if c.interpolation & RADDIFF_INTERP_GRADIENT_LIMIT != 0 {
+            RADDIFF_GRADIENT_LIMIT_DEFAULT
+        } else {
+            f64::INFINITY
+        },
     })
 }
 
@@ -285,6 +298,43 @@ pub extern "C" fn raddiff_cache_compact(cache: *mut raddiff_cache) -> raddiff_st
     })
 }
 
+/// Sets the gradient (slope) limit c for the records inserted from now on; stored records keep
+/// their gradients. Rule, applied by `raddiff_cache_insert` to each channel k with value E_k: with
+/// R the record's largest radius, s_t = |gradient_k| * R and s_r = |rotation_gradient_k| *
+/// sin(min(max_normal_deviation, pi/2)) (0 in the volume domain), if s_t + s_r > c * |E_k| both
+/// gradients of channel k are scaled by c * |E_k| / (s_t + s_r) (a channel with E_k = 0 loses its
+/// gradients). Then every lookup within the record's extent extrapolates channel k by at most
+/// c * |E_k| (up to binary16 rounding): with c <= 1 extrapolation never flips a value's sign.
+/// c = INFINITY turns the limit off; `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for c <= 0 or
+/// NaN. Saved with the cache and restored by `raddiff_cache_load`; `raddiff_cache_merge` copies
+/// records as stored. **Not thread-safe**: no other thread may use the cache during the call.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_set_gradient_limit(
+    cache: *mut raddiff_cache,
+    c: f64,
+) -> raddiff_status {
+    guard(|| {
+        // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
+        let cache = unsafe { out_ref(cache, "cache")? };
+        cache.inner.set_gradient_limit(c)?;
+        Ok(())
+    })
+}
+
+/// Writes the cache's gradient limit c to `*limit` (INFINITY when off).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_get_gradient_limit(
+    cache: *const raddiff_cache,
+    limit: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        let limit = unsafe { out_ref(limit, "limit")? };
+        *limit = cache.inner.config().gradient_limit;
+        Ok(())
+    })
+}
+
 /// Number of records (0 for NULL).
 #[no_mangle]
 pub extern "C" fn raddiff_cache_len(cache: *const raddiff_cache) -> usize {
@@ -307,9 +357,10 @@ pub extern "C" fn raddiff_cache_save(
     })
 }
 
-/// Loads a cache saved by `raddiff_cache_save` (channels, domain and interpolation come from the
-/// file). Returns NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in
-/// `raddiff_last_error` for unreadable, truncated, damaged or wrong-version files.
+/// Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags and the
+/// gradient limit come from the file; files of format version 2 have no gradient limit). Returns
+/// NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in `raddiff_last_error` for
+/// unreadable, truncated, damaged or wrong-version files.
 #[no_mangle]
 pub extern "C" fn raddiff_cache_load(path: *const c_char) -> *mut raddiff_cache {
     guard_ptr(|| {
