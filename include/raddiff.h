@@ -365,6 +365,27 @@ enum raddiff_status raddiff_cache_set_gradient_limit(struct raddiff_cache *cache
 enum raddiff_status raddiff_cache_get_gradient_limit(const struct raddiff_cache *cache,
                                                      double *limit);
 
+// Neighbour clamping (Krivanek et al. 2006) of a record about to be inserted: shrinks
+// `record->radii` in place so that the record's largest radius R (surface: of `radii[0..1]`) is at
+// most R_j + d_j for every stored record j at distance d_j = |position - x_j| < R (R_j its largest
+// radius). All radii are scaled by one factor (anisotropy and axes kept) and the largest becomes
+// the largest float at most the tightest bound, so that the inserted record meets every bound
+// exactly. Only `position` and `radii` are read (and `radii` written); untouched when no bound
+// binds or on error. One-sided: stored records are not shrunk (see
+// `raddiff_cache_clamp_neighbours`). `RADDIFF_ERROR_INVALID_ARGUMENT` for a non-finite position or
+// radius. Thread-safe, like `raddiff_cache_lookup`.
+enum raddiff_status raddiff_cache_clamp_record(const struct raddiff_cache *cache,
+                                               struct raddiff_cache_record *record);
+
+// Two-sided neighbour clamping of every stored record: each record's largest radius R_i becomes
+// min(R_i, min_j (R_j + d_ij)) from the current radii, which is the fixed point of the
+// constraints R_i <= R_j + d_ij (independent of record and thread order; a second call shrinks
+// nothing); a shrinking record's radii are all scaled by one factor. Records that become
+// identical are stored once. If `shrunk` is not NULL, the number of records that shrank is
+// written to it. **Not thread-safe**: no other thread may use the cache during the call (it
+// rebuilds the index and compacts the cache like `raddiff_cache_compact`).
+enum raddiff_status raddiff_cache_clamp_neighbours(struct raddiff_cache *cache, size_t *shrunk);
+
 // Number of records (0 for NULL).
 size_t raddiff_cache_len(const struct raddiff_cache *cache);
 

@@ -58,6 +58,15 @@
 //! flips a value's sign. Records within the bound are stored bit for bit as without the limit;
 //! [`Cache::merge`] and [`Cache::load`] take records as stored.
 //!
+//! # Neighbour clamping
+//! Křivánek et al. 2006 bound a record's radius by each neighbour's radius plus their distance,
+//! Rᵢ ≤ Rⱼ + dᵢⱼ, so that a large record does not reach far past a small one that the error
+//! metric found necessary. [`Cache::clamp_to_neighbours`] applies it to a record before it is
+//! inserted (one-sided: stored records are immutable while threads insert), and
+//! [`Cache::clamp_neighbours`] applies it two-sided to every stored record under `&mut`: a single
+//! pass over the current radii that is the constraints' fixed point, independent of record order
+//! (proof in its documentation).
+//!
 //! # File format (version 3, little-endian)
 //! | offset | size | field |
 //! |---|---|---|
@@ -94,6 +103,7 @@
 //! [`Error::Corrupt`] (or [`Error::Io`]) with the reason; it never panics on any input.
 
 mod blend;
+mod clamp;
 mod cursor;
 mod index;
 pub mod interp;
@@ -452,20 +462,35 @@ impl<V: CacheValue> Cache<V> {
             )));
         }
         let _guard = self.writer.lock().unwrap_or_else(|e| e.into_inner());
-        let mut duplicate = false;
-        self.index.query(position, |id| {
-            let (h, c) = self.stored(id);
-            duplicate |= h == head && c == chans;
-        });
-        if duplicate {
+        if self.holds(head, chans) {
             return Ok(false);
         }
-        let id = self.len.load(Ordering::Relaxed);
-        if id >= u32::MAX as usize {
+        if self.len.load(Ordering::Relaxed) >= u32::MAX as usize {
             return Err(Error::InvalidArgument(
                 "cache is full (2^32 - 1 records)".into(),
             ));
         }
+        self.append(head, chans);
+        Ok(true)
+    }
+
+    /// Whether a record with exactly these stored bytes is stored.
+    fn holds(&self, head: &Head, chans: &[Channel]) -> bool {
+        let mut duplicate = false;
+        self.index.query(head.position(), |id| {
+            let (h, c) = self.stored(id);
+            duplicate |= h == head && c == chans;
+        });
+        duplicate
+    }
+
+    /// Writes a record into the next slot, indexes it and publishes it.
+    ///
+    /// # Contract
+    /// The caller holds the writer lock (or `&mut self`), and the cache holds fewer than
+    /// 2³² − 1 records.
+    fn append(&self, head: &Head, chans: &[Channel]) {
+        let id = self.len.load(Ordering::Relaxed);
         self.records.ensure(id);
         let ptr = self.records.slot_ptr(id) as *mut u8;
         // SAFETY: slot `id` is unpublished, sized for the head and the channels, and 8-aligned.
@@ -477,9 +502,9 @@ impl<V: CacheValue> Cache<V> {
                 chans.len(),
             );
         }
-        self.index.insert(id as u32, position, radius);
+        self.index
+            .insert(id as u32, head.position(), head.max_radius());
         self.len.store(id + 1, Ordering::Release);
-        Ok(true)
     }
 
     /// [`Cache::check_query`] plus the output length.
@@ -736,30 +761,6 @@ impl<V: CacheValue> Cache<V> {
             value: V::from_channels(out),
             weight_sum,
             records,
-        })
-    }
-
-    /// Neighbour clamping (thesis 3.5.4, Křivánek et al. 2006) for a record about to be inserted
-    /// at `position`: every stored record j whose bounding sphere contains `position` bounds the
-    /// new record's largest radius by Rⱼ + ‖position − xⱼ‖ (Rⱼ its largest radius); the extent is
-    /// scaled uniformly (anisotropy kept) to satisfy all bounds. Stored records are immutable, so
-    /// the reverse clamp of the neighbours is not applied (it would make results depend on
-    /// insertion order).
-    pub fn clamp_to_neighbours(&self, position: DVec3, extent: &Extent) -> Result<Extent> {
-        ensure_finite3(position, "position")?;
-        let mut limit = f64::INFINITY;
-        self.index.query(position, |id| {
-            let (head, _) = self.stored(id);
-            let distance = (position - head.position()).length();
-            if distance <= head.max_radius() {
-                limit = limit.min(head.max_radius() + distance);
-            }
-        });
-        let r = extent.max_radius();
-        Ok(if r > limit {
-            extent.scaled(limit / r)
-        } else {
-            *extent
         })
     }
 

@@ -277,3 +277,250 @@ fn merge_copies_records_as_stored() {
     assert_eq!(limited.merge(&plain).unwrap(), 1);
     assert_eq!(limited.keys(), plain.keys());
 }
+
+/// A lone-value record with no gradients.
+fn plain_record(p: DVec3, radii: [f64; 3], axis: DVec3) -> Record<f32> {
+    Record::new(
+        p,
+        DVec3::Z,
+        1.0,
+        Extent {
+            radii,
+            axes: [axis, DVec3::Z.cross(axis), DVec3::Z],
+        },
+    )
+}
+
+/// Each stored record's position bits and largest stored radius.
+fn radii_by_position(c: &Cache<f32>) -> std::collections::HashMap<[u64; 3], f64> {
+    c.records()
+        .iter()
+        .map(|r| {
+            let max = match c.config().domain {
+                Domain::Surface => r.extent.radii[0].max(r.extent.radii[1]),
+                Domain::Volume => r.extent.max_radius(),
+            };
+            (r.position.to_array().map(f64::to_bits), max)
+        })
+        .collect()
+}
+
+#[test]
+fn clamp_to_neighbours_binds_on_small_records_inside_the_new_sphere() {
+    let c: Cache<f32> = Cache::new(CacheConfig::surface(1)).unwrap();
+    c.insert(&plain_record(DVec3::ZERO, [0.1; 3], DVec3::X))
+        .unwrap();
+    // the stored record does not cover x = 0.5, yet lies well inside the new record's sphere
+    let p = DVec3::new(0.5, 0.0, 0.0);
+    let wide = Extent {
+        radii: [1.0, 2.0, 0.0],
+        axes: [DVec3::X, DVec3::ZERO, DVec3::ZERO],
+    };
+    let e = c.clamp_to_neighbours(p, &wide).unwrap();
+    let bound = 0.1f32 as f64 + 0.5;
+    assert!(
+        e.radii[1] <= bound && e.radii[1] > bound * (1.0 - 1e-6),
+        "{e:?}"
+    );
+    assert_eq!(e.radii[1], e.radii[1] as f32 as f64);
+    // uniform scaling: anisotropy and axes kept
+    assert!((e.radii[0] / e.radii[1] - 0.5).abs() < 1e-6);
+    assert_eq!(e.axes, wide.axes);
+    // inserted, the stored largest radius meets the bound exactly
+    let mut r = plain_record(p, e.radii, DVec3::X);
+    r.extent = e;
+    c.insert(&r).unwrap();
+    let stored = radii_by_position(&c)[&p.to_array().map(f64::to_bits)];
+    assert!(stored <= bound, "{stored} > {bound}");
+    // smaller than the bound, or too far away to bind: unchanged
+    let small = Extent::isotropic(0.55);
+    assert_eq!(c.clamp_to_neighbours(p, &small).unwrap(), small);
+    let far = DVec3::new(5.0, 0.0, 0.0);
+    assert_eq!(c.clamp_to_neighbours(far, &wide).unwrap(), wide);
+    assert!(c
+        .clamp_to_neighbours(DVec3::new(f64::NAN, 0.0, 0.0), &wide)
+        .is_err());
+}
+
+#[test]
+fn clamp_to_neighbours_finds_small_records_far_below_the_ball_size() {
+    // many tiny records (a fine index level) and one query ball a thousand times their size: the
+    // ball query falls back to a scan and still finds the binding record
+    let c: Cache<f32> = Cache::new(CacheConfig::volume(1)).unwrap();
+    for i in 0..50 {
+        let p = DVec3::new(i as f64 * 0.01, 3.0, 0.0);
+        c.insert(&plain_record(p, [0.001; 3], DVec3::X)).unwrap();
+    }
+    let e = c
+        .clamp_to_neighbours(DVec3::new(0.0, 2.0, 0.0), &Extent::isotropic(5.0))
+        .unwrap();
+    // the nearest tiny record is at distance 1
+    assert!((e.radii[0] - (1.0 + 0.001)).abs() < 1e-6, "{e:?}");
+}
+
+#[test]
+fn clamp_neighbours_binds_both_ways_from_the_original_radii() {
+    let fill = |order: &[usize]| {
+        let records = [
+            // A: large, at the origin; B: medium, 1 away; C: small, 1.5 away
+            plain_record(DVec3::ZERO, [4.0, 2.0, 0.0], DVec3::new(1.0, 1.0, 0.0)),
+            plain_record(DVec3::X, [1.0; 3], DVec3::X),
+            plain_record(DVec3::new(1.5, 0.0, 0.0), [0.1; 3], DVec3::X),
+        ];
+        let mut c: Cache<f32> = Cache::new(CacheConfig::surface(1)).unwrap();
+        for &i in order {
+            c.insert(&records[i]).unwrap();
+        }
+        let before = c.keys();
+        assert_eq!(c.clamp_neighbours(), 2);
+        assert_ne!(c.keys(), before);
+        c
+    };
+    let c = fill(&[0, 1, 2]);
+    let radii = radii_by_position(&c);
+    let at = |x: f64| radii[&[x.to_bits(), 0, 0]];
+    // B ≤ C + 0.5 = 0.6; A ≤ min(B + 1, C + 1.5) = 1.6 from the original radii, which is also
+    // the fixed point (A ≤ B' + 1 = 1.6); C is untouched
+    let c_r = 0.1f32 as f64;
+    assert!(at(1.0) <= c_r + 0.5 && at(1.0) > (c_r + 0.5) * (1.0 - 1e-6));
+    assert!(at(0.0) <= c_r + 1.5 && at(0.0) > (c_r + 1.5) * (1.0 - 1e-6));
+    assert_eq!(at(1.5), c_r);
+    // A keeps its anisotropy
+    let a = c
+        .records()
+        .into_iter()
+        .find(|r| r.position == DVec3::ZERO)
+        .unwrap();
+    assert!((a.extent.radii[0] / a.extent.radii[1] - 2.0).abs() < 1e-6);
+    // any insertion order gives the same records; a second pass changes nothing
+    for order in [[2, 1, 0], [1, 2, 0], [2, 0, 1]] {
+        assert_eq!(fill(&order).keys(), c.keys());
+    }
+    let mut c = c;
+    let keys = c.keys();
+    assert_eq!(c.clamp_neighbours(), 0);
+    assert_eq!(c.keys(), keys);
+    // lookups use the clamped radii: 1.7 from A along its long axis was covered, not any more
+    let unclamped: Cache<f32> = Cache::new(CacheConfig::surface(1)).unwrap();
+    unclamped
+        .insert(&plain_record(
+            DVec3::ZERO,
+            [4.0, 2.0, 0.0],
+            DVec3::new(1.0, 1.0, 0.0),
+        ))
+        .unwrap();
+    assert!(unclamped
+        .lookup(DVec3::new(-1.2, -1.2, 0.0), DVec3::Z)
+        .is_ok());
+    assert!(c.lookup(DVec3::new(-1.2, -1.2, 0.0), DVec3::Z).is_err());
+    assert!(c.lookup(DVec3::new(-1.1, -1.1, 0.0), DVec3::Z).is_ok());
+}
+
+#[test]
+fn clamp_neighbours_stores_records_that_become_identical_once() {
+    let mut c: Cache<f32> = Cache::new(CacheConfig::surface(1)).unwrap();
+    c.insert(&plain_record(DVec3::ZERO, [1.0; 3], DVec3::X))
+        .unwrap();
+    c.insert(&plain_record(DVec3::ZERO, [0.5; 3], DVec3::X))
+        .unwrap();
+    assert_eq!(c.len(), 2);
+    assert_eq!(c.clamp_neighbours(), 1);
+    assert_eq!(c.len(), 1);
+    // still a valid file
+    assert_eq!(
+        Cache::<f32>::from_bytes(&c.to_bytes()).unwrap().keys(),
+        c.keys()
+    );
+}
+
+#[test]
+fn clamp_neighbours_random_configuration_satisfies_every_pair() {
+    for domain in [Domain::Surface, Domain::Volume] {
+        let mut rng = lcg(11);
+        let records: Vec<Record<f32>> = (0..300)
+            .map(|_| {
+                let p = DVec3::new(rng() * 10.0, rng() * 10.0, rng() * 0.5);
+                let r = 0.02 * (100.0f64).powf(rng());
+                let radii = [r, r * (0.5 + rng()), r * (0.5 + rng())];
+                let axis = DVec3::new(rng() - 0.5, rng() - 0.5, 0.0);
+                let mut rec = plain_record(p, radii, axis);
+                rec.value = rng() as f32;
+                rec.normal = DVec3::new(0.1 * (rng() - 0.5), 0.0, 1.0);
+                rec
+            })
+            .collect();
+        let config = match domain {
+            Domain::Surface => CacheConfig::surface(1),
+            Domain::Volume => CacheConfig::volume(1),
+        };
+        let mut caches: Vec<Cache<f32>> = (0..3)
+            .map(|k| {
+                let c = Cache::new(config).unwrap();
+                let mut order: Vec<usize> = (0..records.len()).collect();
+                if k == 1 {
+                    order.reverse();
+                } else if k == 2 {
+                    let mut r = lcg(5);
+                    for i in (1..order.len()).rev() {
+                        order.swap(i, (r() * (i + 1) as f64) as usize);
+                    }
+                }
+                for i in order {
+                    c.insert(&records[i]).unwrap();
+                }
+                c
+            })
+            .collect();
+        let before = radii_by_position(&caches[0]);
+        let shrunk: Vec<usize> = caches.iter_mut().map(|c| c.clamp_neighbours()).collect();
+        assert!(shrunk[0] > 30, "{domain:?}: only {} shrank", shrunk[0]);
+        assert!(shrunk.iter().all(|&s| s == shrunk[0]), "{shrunk:?}");
+        let keys = caches[0].keys();
+        for c in &caches[1..] {
+            assert_eq!(c.keys(), keys);
+        }
+        // every pair satisfies the constraint (as the pass evaluates it) and nothing grew
+        let after = radii_by_position(&caches[0]);
+        let entries: Vec<(DVec3, f64)> = after
+            .iter()
+            .map(|(p, &r)| (DVec3::from_array(p.map(f64::from_bits)), r))
+            .collect();
+        let mut shrank = 0;
+        for (p, r) in &entries {
+            let original = before[&p.to_array().map(f64::to_bits)];
+            assert!(*r <= original, "{p}: {r} > {original}");
+            if *r < original {
+                shrank += 1;
+                // it shrank to a bound that some neighbour sets
+                assert!(entries
+                    .iter()
+                    .any(|(q, s)| q != p && *r >= (s + (*p - *q).length()) * (1.0 - 1e-6)));
+            }
+            for (q, s) in &entries {
+                assert!(*r <= s + (*p - *q).length(), "{p} {r} vs {q} {s}");
+            }
+        }
+        assert_eq!(shrank, shrunk[0]);
+        // idempotent, and lookups agree bit for bit across insertion orders
+        for c in &mut caches {
+            assert_eq!(c.clamp_neighbours(), 0);
+        }
+        let mut q = lcg(3);
+        for _ in 0..500 {
+            let p = DVec3::new(q() * 10.0, q() * 10.0, q() * 0.5);
+            let a = caches[0]
+                .lookup(p, DVec3::Z)
+                .ok()
+                .map(|l| l.value.to_bits());
+            for c in &caches[1..] {
+                assert_eq!(c.lookup(p, DVec3::Z).ok().map(|l| l.value.to_bits()), a);
+                assert_eq!(
+                    c.lookup_indexed(p, DVec3::Z)
+                        .ok()
+                        .map(|l| l.value.to_bits()),
+                    a
+                );
+            }
+        }
+    }
+}

@@ -335,6 +335,59 @@ pub extern "C" fn raddiff_cache_get_gradient_limit(
     })
 }
 
+/// Neighbour clamping (Krivanek et al. 2006) of a record about to be inserted: shrinks
+/// `record->radii` in place so that the record's largest radius R (surface: of `radii[0..1]`) is at
+/// most R_j + d_j for every stored record j at distance d_j = |position - x_j| < R (R_j its largest
+/// radius). All radii are scaled by one factor (anisotropy and axes kept) and the largest becomes
+/// the largest float at most the tightest bound, so that the inserted record meets every bound
+/// exactly. Only `position` and `radii` are read (and `radii` written); untouched when no bound
+/// binds or on error. One-sided: stored records are not shrunk (see
+/// `raddiff_cache_clamp_neighbours`). `RADDIFF_ERROR_INVALID_ARGUMENT` for a non-finite position or
+/// radius. Thread-safe, like `raddiff_cache_lookup`.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_clamp_record(
+    cache: *const raddiff_cache,
+    record: *mut raddiff_cache_record,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        // SAFETY: NULL or a record the caller lets us modify.
+        let record = unsafe { out_ref(record, "record")? };
+        let extent = Extent {
+            radii: record.radii,
+            axes: record.axes.map(DVec3::from),
+        };
+        let clamped = cache
+            .inner
+            .clamp_to_neighbours(record.position.into(), &extent)?;
+        record.radii = clamped.radii;
+        Ok(())
+    })
+}
+
+/// Two-sided neighbour clamping of every stored record: each record's largest radius R_i becomes
+/// min(R_i, min_j (R_j + d_ij)) from the current radii, which is the fixed point of the
+/// constraints R_i <= R_j + d_ij (independent of record and thread order; a second call shrinks
+/// nothing); a shrinking record's radii are all scaled by one factor. Records that become
+/// identical are stored once. If `shrunk` is not NULL, the number of records that shrank is
+/// written to it. **Not thread-safe**: no other thread may use the cache during the call (it
+/// rebuilds the index and compacts the cache like `raddiff_cache_compact`).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_clamp_neighbours(
+    cache: *mut raddiff_cache,
+    shrunk: *mut usize,
+) -> raddiff_status {
+    guard(|| {
+        // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
+        let cache = unsafe { out_ref(cache, "cache")? };
+        let count = cache.inner.clamp_neighbours();
+        if let Some(s) = unsafe { shrunk.as_mut() } {
+            *s = count;
+        }
+        Ok(())
+    })
+}
+
 /// Number of records (0 for NULL).
 #[no_mangle]
 pub extern "C" fn raddiff_cache_len(cache: *const raddiff_cache) -> usize {
