@@ -184,11 +184,129 @@ int main(int argc, char **argv) {
     v = 1.0f;
     CHECK_STATUS(raddiff_cache_lookup(reloaded, q, n, &v, NULL), RADDIFF_OK);
     CHECK(v == 0.0f);
-    flagged.interpolation = RADDIFF_INTERP_WARD | 0x200;
+    flagged.interpolation = RADDIFF_INTERP_WARD | 0x400;
     CHECK(raddiff_cache_new(&flagged) == NULL);
     raddiff_cache_free(reloaded);
     raddiff_cache_free(clamped);
     raddiff_cache_free(signed_cache);
+  }
+
+  /* RADDIFF_INTERP_GRADIENT_LIMIT: a record with |gradient| R / E = 132 extrapolates by at most
+     c |E| (c = RADDIFF_GRADIENT_LIMIT_DEFAULT = 1); raddiff_cache_set_gradient_limit changes c for
+     later inserts; the limit survives save / load */
+  {
+    const float one[1] = {1.0f}, steep[3] = {-132.0f, 0.0f, 0.0f};
+    raddiff_vec3 q = {0.99, 0.0, 0.0}, q2 = {10.99, 0.0, 0.0};
+    raddiff_cache_config plain_cfg = {1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD, 0.2};
+    raddiff_cache_config limit_cfg = {1, RADDIFF_DOMAIN_SURFACE,
+                                      RADDIFF_INTERP_WARD | RADDIFF_INTERP_GRADIENT_LIMIT, 0.2};
+    raddiff_cache *plain = raddiff_cache_new(&plain_cfg), *limited = raddiff_cache_new(&limit_cfg);
+    raddiff_cache *reloaded;
+    float v = 0.0f, v2 = 0.0f;
+    double c = 0.0;
+    CHECK(plain != NULL && limited != NULL);
+    CHECK(RADDIFF_GRADIENT_LIMIT_DEFAULT == 1.0);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(limited, &c), RADDIFF_OK);
+    CHECK(c == RADDIFF_GRADIENT_LIMIT_DEFAULT);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(plain, &c), RADDIFF_OK);
+    CHECK(isinf(c) && c > 0.0);
+    rec = make_record(0.0, one, steep);
+    CHECK_STATUS(raddiff_cache_insert(plain, &rec), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_insert(limited, &rec), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_lookup(plain, q, n, &v, NULL), RADDIFF_OK);
+    CHECK_CLOSE(v, 1.0 - 0.99 * 132.0, 1e-4);
+    CHECK_STATUS(raddiff_cache_lookup(limited, q, n, &v, NULL), RADDIFF_OK);
+    CHECK_CLOSE(v, 1.0 - 0.99, 1e-3);
+    CHECK(v > 0.0f);
+    /* c = 0.5 for the next records; the stored one keeps its gradient */
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(plain, 0.5), RADDIFF_OK);
+    rec = make_record(10.0, one, steep);
+    CHECK_STATUS(raddiff_cache_insert(plain, &rec), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_lookup(plain, q2, n, &v, NULL), RADDIFF_OK);
+    CHECK_CLOSE(v, 1.0 - 0.99 * 0.5, 1e-3);
+    CHECK_STATUS(raddiff_cache_lookup(plain, q, n, &v, NULL), RADDIFF_OK);
+    CHECK_CLOSE(v, 1.0 - 0.99 * 132.0, 1e-4);
+    /* errors leave the limit as it was */
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(NULL, 1.0), RADDIFF_ERROR_NULL_POINTER);
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(plain, 0.0), RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK(strstr(raddiff_last_error(), "gradient limit") != NULL);
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(plain, -1.0), RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(plain, NAN), RADDIFF_ERROR_INVALID_ARGUMENT);
+    c = -1.0;
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(NULL, &c), RADDIFF_ERROR_NULL_POINTER);
+    CHECK(c == -1.0);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(plain, NULL), RADDIFF_ERROR_NULL_POINTER);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(plain, &c), RADDIFF_OK);
+    CHECK(c == 0.5);
+    CHECK_STATUS(raddiff_cache_set_gradient_limit(plain, INFINITY), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(plain, &c), RADDIFF_OK);
+    CHECK(isinf(c));
+    /* save / load keeps the limit and the limited records */
+    CHECK_STATUS(raddiff_cache_save(limited, path), RADDIFF_OK);
+    reloaded = raddiff_cache_load(path);
+    CHECK(reloaded != NULL);
+    CHECK_STATUS(raddiff_cache_get_gradient_limit(reloaded, &c), RADDIFF_OK);
+    CHECK(c == 1.0);
+    CHECK_STATUS(raddiff_cache_lookup(limited, q, n, &v, NULL), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_lookup(reloaded, q, n, &v2, NULL), RADDIFF_OK);
+    CHECK(v == v2);
+    raddiff_cache_free(reloaded);
+    raddiff_cache_free(limited);
+    raddiff_cache_free(plain);
+  }
+
+  /* neighbour clamping: raddiff_cache_clamp_record shrinks a record's radii in place before it
+     is inserted (one-sided); raddiff_cache_clamp_neighbours shrinks stored records both ways and
+     reaches the same radius */
+  {
+    const float one[1] = {1.0f};
+    raddiff_cache_config ccfg = {1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD, 0.2};
+    raddiff_cache *pre = raddiff_cache_new(&ccfg), *post = raddiff_cache_new(&ccfg);
+    raddiff_cache_record small = make_record(0.5, one, NULL), big = make_record(0.0, one, NULL);
+    raddiff_vec3 inside = {0.3, 0.0, 0.0}, outside = {-1.0, 0.0, 0.0};
+    double bound = (double)0.1f + 0.5;
+    size_t shrunk = 99;
+    float a = 0.0f, b = 0.0f;
+    CHECK(pre != NULL && post != NULL);
+    small.radii[0] = small.radii[1] = small.radii[2] = 0.1;
+    big.radii[0] = 4.0;
+    big.radii[1] = big.radii[2] = 2.0;
+    big.axes[0].x = 1.0;
+    CHECK_STATUS(raddiff_cache_insert(pre, &small), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_insert(post, &small), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_insert(post, &big), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_lookup(post, outside, n, &a, NULL), RADDIFF_OK);
+    /* errors leave the record untouched */
+    CHECK_STATUS(raddiff_cache_clamp_record(NULL, &big), RADDIFF_ERROR_NULL_POINTER);
+    CHECK_STATUS(raddiff_cache_clamp_record(pre, NULL), RADDIFF_ERROR_NULL_POINTER);
+    big.position.y = NAN;
+    CHECK_STATUS(raddiff_cache_clamp_record(pre, &big), RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK(big.radii[0] == 4.0 && big.radii[1] == 2.0);
+    big.position.y = 0.0;
+    /* the small record 0.5 away bounds the big one by 0.1 + 0.5; anisotropy is kept */
+    CHECK_STATUS(raddiff_cache_clamp_record(pre, &big), RADDIFF_OK);
+    CHECK(big.radii[0] <= bound && big.radii[0] > bound * (1.0 - 1e-6));
+    CHECK_CLOSE(big.radii[1], big.radii[0] / 2.0, 1e-6);
+    CHECK_STATUS(raddiff_cache_insert(pre, &big), RADDIFF_OK);
+    /* two-sided pass over the stored records: the big one shrinks, the small one does not */
+    CHECK_STATUS(raddiff_cache_clamp_neighbours(NULL, &shrunk), RADDIFF_ERROR_NULL_POINTER);
+    CHECK(shrunk == 99);
+    CHECK_STATUS(raddiff_cache_clamp_neighbours(post, &shrunk), RADDIFF_OK);
+    CHECK(shrunk == 1);
+    CHECK(raddiff_cache_len(post) == 2);
+    CHECK_STATUS(raddiff_cache_clamp_neighbours(post, &shrunk), RADDIFF_OK);
+    CHECK(shrunk == 0);
+    CHECK_STATUS(raddiff_cache_clamp_neighbours(post, NULL), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_clamp_neighbours(pre, &shrunk), RADDIFF_OK);
+    CHECK(shrunk == 0);
+    /* both ways give the same records: the same lookups, and x = -1 is no longer covered */
+    CHECK_STATUS(raddiff_cache_lookup(pre, inside, n, &a, NULL), RADDIFF_OK);
+    CHECK_STATUS(raddiff_cache_lookup(post, inside, n, &b, NULL), RADDIFF_OK);
+    CHECK(a == b);
+    CHECK_STATUS(raddiff_cache_lookup(post, outside, n, &a, NULL), RADDIFF_ERROR_NOT_FOUND);
+    CHECK_STATUS(raddiff_cache_lookup(pre, outside, n, &a, NULL), RADDIFF_ERROR_NOT_FOUND);
+    raddiff_cache_free(pre);
+    raddiff_cache_free(post);
   }
 
   /* unreadable and corrupt files: NULL with an IO / CORRUPT message */

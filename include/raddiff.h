@@ -44,6 +44,15 @@
 // Saved with the cache and restored by `raddiff_cache_load`.
 #define RADDIFF_INTERP_NON_NEGATIVE 256
 
+// Flag OR-ed into `raddiff_cache_config.interpolation`: create the cache with the gradient
+// (slope) limit c = `RADDIFF_GRADIENT_LIMIT_DEFAULT` (see `raddiff_cache_set_gradient_limit` for
+// the rule and for other values of c). Saved with the cache and restored by `raddiff_cache_load`.
+#define RADDIFF_INTERP_GRADIENT_LIMIT 512
+
+// The gradient limit c that `RADDIFF_INTERP_GRADIENT_LIMIT` selects: 1, the largest c with which
+// extrapolation never flips the sign of a record's value.
+#define RADDIFF_GRADIENT_LIMIT_DEFAULT 1.0
+
 // Major version of the library this header belongs to.
 #define RADDIFF_VERSION_MAJOR 0
 
@@ -137,7 +146,7 @@ typedef struct raddiff_cache_config {
   // `RADDIFF_DOMAIN_SURFACE` or `RADDIFF_DOMAIN_VOLUME`.
   uint32_t domain;
   // `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`),
-  // optionally OR-ed with `RADDIFF_INTERP_NON_NEGATIVE`.
+  // optionally OR-ed with `RADDIFF_INTERP_NON_NEGATIVE` and `RADDIFF_INTERP_GRADIENT_LIMIT`.
   uint32_t interpolation;
   // Radians in (0, pi]: largest normal deviation for a record to be used (surface domain;
   // ignored in volumes). 0.2 is a good default.
@@ -348,6 +357,43 @@ enum raddiff_status raddiff_cache_lookup_with(const struct raddiff_cache *cache,
 // **Not thread-safe**: no other thread may use the cache during the call.
 enum raddiff_status raddiff_cache_compact(struct raddiff_cache *cache);
 
+// Sets the gradient (slope) limit c for the records inserted from now on; stored records keep
+// their gradients. Rule, applied by `raddiff_cache_insert` to each channel k with value E_k: with
+// R the record's largest radius, s_t = |gradient_k| * R and s_r = |rotation_gradient_k| *
+// sin(min(max_normal_deviation, pi/2)) (0 in the volume domain), if s_t + s_r > c * |E_k| both
+// gradients of channel k are scaled by c * |E_k| / (s_t + s_r) (a channel with E_k = 0 loses its
+// gradients). Then every lookup within the record's extent extrapolates channel k by at most
+// c * |E_k| (up to binary16 rounding): with c <= 1 extrapolation never flips a value's sign.
+// c = INFINITY turns the limit off; `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for c <= 0 or
+// NaN. Saved with the cache and restored by `raddiff_cache_load`; `raddiff_cache_merge` copies
+// records as stored. **Not thread-safe**: no other thread may use the cache during the call.
+enum raddiff_status raddiff_cache_set_gradient_limit(struct raddiff_cache *cache, double c);
+
+// Writes the cache's gradient limit c to `*limit` (INFINITY when off).
+enum raddiff_status raddiff_cache_get_gradient_limit(const struct raddiff_cache *cache,
+                                                     double *limit);
+
+// Neighbour clamping (Krivanek et al. 2006) of a record about to be inserted: shrinks
+// `record->radii` in place so that the record's largest radius R (surface: of `radii[0..1]`) is at
+// most R_j + d_j for every stored record j at distance d_j = |position - x_j| < R (R_j its largest
+// radius). All radii are scaled by one factor (anisotropy and axes kept) and the largest becomes
+// the largest float at most the tightest bound, so that the inserted record meets every bound
+// exactly. Only `position` and `radii` are read (and `radii` written); untouched when no bound
+// binds or on error. One-sided: stored records are not shrunk (see
+// `raddiff_cache_clamp_neighbours`). `RADDIFF_ERROR_INVALID_ARGUMENT` for a non-finite position or
+// radius. Thread-safe, like `raddiff_cache_lookup`.
+enum raddiff_status raddiff_cache_clamp_record(const struct raddiff_cache *cache,
+                                               struct raddiff_cache_record *record);
+
+// Two-sided neighbour clamping of every stored record: each record's largest radius R_i becomes
+// min(R_i, min_j (R_j + d_ij)) from the current radii, which is the fixed point of the
+// constraints R_i <= R_j + d_ij (independent of record and thread order; a second call shrinks
+// nothing); a shrinking record's radii are all scaled by one factor. Records that become
+// identical are stored once. If `shrunk` is not NULL, the number of records that shrank is
+// written to it. **Not thread-safe**: no other thread may use the cache during the call (it
+// rebuilds the index and compacts the cache like `raddiff_cache_compact`).
+enum raddiff_status raddiff_cache_clamp_neighbours(struct raddiff_cache *cache, size_t *shrunk);
+
 // Number of records (0 for NULL).
 size_t raddiff_cache_len(const struct raddiff_cache *cache);
 
@@ -355,9 +401,10 @@ size_t raddiff_cache_len(const struct raddiff_cache *cache);
 // a crash never leaves a damaged file. `RADDIFF_ERROR_IO` on failure.
 enum raddiff_status raddiff_cache_save(const struct raddiff_cache *cache, const char *path);
 
-// Loads a cache saved by `raddiff_cache_save` (channels, domain and interpolation come from the
-// file). Returns NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in
-// `raddiff_last_error` for unreadable, truncated, damaged or wrong-version files.
+// Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags and the
+// gradient limit come from the file; files of format version 2 have no gradient limit). Returns
+// NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in `raddiff_last_error` for
+// unreadable, truncated, damaged or wrong-version files.
 struct raddiff_cache *raddiff_cache_load(const char *path);
 
 // Adds to `into` every record of `from` it does not hold yet (identical records, e.g. the same

@@ -47,6 +47,9 @@ fn reseal(bytes: &mut [u8]) {
     bytes[body..].copy_from_slice(&sum.to_le_bytes());
 }
 
+/// Size of the version 3 header (records start here).
+const HEADER: usize = 56;
+
 fn corrupt_reason(bytes: &[u8]) -> String {
     match Cache::<[f32; 3]>::from_bytes(bytes) {
         Err(Error::Corrupt(m)) => m,
@@ -117,36 +120,40 @@ fn header_and_record_damage_is_named() {
     b[0] = b'X';
     assert!(corrupt_reason(&b).contains("magic"));
     let mut b = good.clone();
-    b[8] = 3;
+    b[8] = 4;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("version"));
     let mut b = good.clone();
     b[100] ^= 1;
     assert!(corrupt_reason(&b).contains("checksum"));
-    // a header flag this version does not know (bit 0 is the non-negative flag)
+    // a header flag this version does not know (bit 0 is the non-negative flag, bit 1 the
+    // gradient limit)
     let mut b = good.clone();
-    b[44] = 2;
+    b[44] = 4;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("flags"));
-    // a resealed file with a NaN radius (record 0 radii start at 48 + 40)
+    // a resealed file with a NaN radius (record 0 radii start at HEADER + 40)
     let mut b = good.clone();
-    b[48 + 40..48 + 44].copy_from_slice(&f32::NAN.to_le_bytes());
+    b[HEADER + 40..HEADER + 44].copy_from_slice(&f32::NAN.to_le_bytes());
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("radius"));
-    // a frame quaternion that is not a rotation (record 0 quaternion at 48 + 24)
+    // a frame quaternion that is not a rotation (record 0 quaternion at HEADER + 24)
     let mut b = good.clone();
-    b[48 + 24..48 + 28].copy_from_slice(&2.0f32.to_le_bytes());
+    b[HEADER + 24..HEADER + 28].copy_from_slice(&2.0f32.to_le_bytes());
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("quaternion"));
-    // the reserved field of a record (48 + 60)
+    // the reserved field of a record (HEADER + 60)
     let mut b = good.clone();
-    b[48 + 60] = 1;
+    b[HEADER + 60] = 1;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("reserved"));
     // records swapped: no longer in content order
     let stride = 64 + 16 * 3;
     let mut b = good.clone();
-    let (r0, r1) = (48..48 + stride, 48 + stride..48 + 2 * stride);
+    let (r0, r1) = (
+        HEADER..HEADER + stride,
+        HEADER + stride..HEADER + 2 * stride,
+    );
     let first: Vec<u8> = b[r0.clone()].to_vec();
     b.copy_within(r1.clone(), r0.start);
     b[r1].copy_from_slice(&first);
@@ -154,7 +161,7 @@ fn header_and_record_damage_is_named() {
     assert!(corrupt_reason(&b).contains("increasing"));
     // a duplicated record is not increasing either
     let mut b = good.clone();
-    b.copy_within(48..48 + stride, 48 + stride);
+    b.copy_within(HEADER..HEADER + stride, HEADER + stride);
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("increasing"));
     // version 1 files are named as such
@@ -167,6 +174,106 @@ fn header_and_record_damage_is_named() {
     b[16] = 9;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("domain"));
+}
+
+/// The version 2 file of a cache without a gradient limit: the version 3 file without the
+/// gradient-limit field (offset 48..56), version 2, resealed.
+fn as_version_2(v3: &[u8]) -> Vec<u8> {
+    let mut b = v3[..48].to_vec();
+    b.extend_from_slice(&v3[HEADER..]);
+    b[8..12].copy_from_slice(&2u32.to_le_bytes());
+    reseal(&mut b);
+    b
+}
+
+#[test]
+fn gradient_limit_round_trips_in_version_3() {
+    let config = CacheConfig::surface(3)
+        .with_non_negative(true)
+        .with_gradient_limit(0.75);
+    let c: Cache<[f32; 3]> = Cache::new(config).unwrap();
+    for r in sample(20).records() {
+        c.insert(&r).unwrap();
+    }
+    let bytes = c.to_bytes();
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 3);
+    assert_eq!(u32::from_le_bytes(bytes[44..48].try_into().unwrap()), 0b11);
+    assert_eq!(f64::from_le_bytes(bytes[48..56].try_into().unwrap()), 0.75);
+    let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
+    assert_eq!(back.config(), c.config());
+    assert_eq!(back.keys(), c.keys());
+    assert_eq!(back.to_bytes(), bytes);
+    // the restored limit applies to the next insert as it did before saving
+    let steep = Record {
+        position: DVec3::new(100.0, 0.0, 0.0),
+        normal: DVec3::Z,
+        value: [1.0, 1.0, 1.0],
+        gradient: Some([[500.0, 0.0, 0.0], [0.0; 3], [0.0; 3]]),
+        rotation_gradient: None,
+        extent: Extent::isotropic(1.0),
+    };
+    c.insert(&steep).unwrap();
+    back.insert(&steep).unwrap();
+    assert_eq!(back.keys(), c.keys());
+    // no limit: flag clear and a zero field
+    let plain = sample(3).to_bytes();
+    assert_eq!(u32::from_le_bytes(plain[44..48].try_into().unwrap()), 0);
+    assert_eq!(u64::from_le_bytes(plain[48..56].try_into().unwrap()), 0);
+    assert_eq!(
+        Cache::<[f32; 3]>::from_bytes(&plain)
+            .unwrap()
+            .config()
+            .gradient_limit,
+        f64::INFINITY
+    );
+    // invalid limit fields
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let mut b = bytes.clone();
+        b[48..56].copy_from_slice(&f64::to_le_bytes(bad));
+        reseal(&mut b);
+        assert!(corrupt_reason(&b).contains("gradient limit"), "{bad}");
+    }
+    let mut b = plain.clone();
+    b[48..56].copy_from_slice(&1.0f64.to_le_bytes());
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("flag is not set"));
+}
+
+#[test]
+fn version_2_files_still_load() {
+    let c = sample(30);
+    let v3 = c.to_bytes();
+    let v2 = as_version_2(&v3);
+    assert_eq!(v2.len(), v3.len() - 8);
+    let back = Cache::<[f32; 3]>::from_bytes(&v2).unwrap();
+    assert_eq!(back.config(), c.config());
+    assert_eq!(back.config().gradient_limit, f64::INFINITY);
+    assert_eq!(back.keys(), c.keys());
+    // saved again, it is the version 3 file of the same cache
+    assert_eq!(back.to_bytes(), v3);
+    // the non-negative flag still reads from version 2
+    let nn: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3).with_non_negative(true)).unwrap();
+    let v2 = as_version_2(&nn.to_bytes());
+    assert!(
+        Cache::<[f32; 3]>::from_bytes(&v2)
+            .unwrap()
+            .config()
+            .non_negative
+    );
+    // version 2 had no gradient-limit flag: bit 1 is unknown there
+    let mut b = as_version_2(&v3);
+    b[44] = 2;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("flags"));
+    // every truncation of a version 2 file is rejected
+    let small = as_version_2(&sample(2).to_bytes());
+    for len in 0..small.len() {
+        let m = corrupt_reason(&small[..len]);
+        assert!(
+            m.contains("truncated") || m.contains("length"),
+            "{len}: {m}"
+        );
+    }
 }
 
 proptest! {

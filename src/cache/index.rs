@@ -424,10 +424,63 @@ impl Grid {
 
     /// Calls `f(id, center, radius)` for every record whose (conservative) bounding sphere meets
     /// the ball (a, delta), with its listed centre and radius (within 10⁻⁵ relative of the
-    /// record's). `delta` must be at most half of [`Grid::finest_side`], so that at most three
-    /// cells per axis and level are visited. Lock-free.
+    /// record's). With `delta` at most half of [`Grid::finest_side`] at most three cells per axis
+    /// and level are visited; a larger `delta` is correct but visits [`Grid::ball_cells`] cells.
+    /// Lock-free.
     pub(crate) fn query_ball(&self, a: DVec3, delta: f64, mut f: impl FnMut(u32, DVec3, f64)) {
         self.each_level(|table, level| self.ball_level(table, level, a, delta, &mut f));
+    }
+
+    /// How many cells [`Grid::query_ball`] probes for the ball (a, delta), over every occupied
+    /// level (no limit on `delta`): callers compare it with a linear scan's cost.
+    pub(crate) fn ball_cells(&self, a: DVec3, delta: f64) -> f64 {
+        let mut cells = 0.0;
+        self.each_level(|_, level| {
+            if let Some(r) = self.ball_ranges(level, a, delta) {
+                cells += r
+                    .iter()
+                    .map(|r| {
+                        if r.is_empty() {
+                            0.0
+                        } else {
+                            (r.end() - r.start()) as f64 + 1.0
+                        }
+                    })
+                    .product::<f64>();
+            }
+        });
+        cells
+    }
+
+    /// The cell coordinates, per axis, whose records may meet the ball (a, delta) at `level`
+    /// (clipped to the occupied cells); `None` for a NaN ball.
+    fn ball_ranges(
+        &self,
+        level: usize,
+        a: DVec3,
+        delta: f64,
+    ) -> Option<[std::ops::RangeInclusive<i64>; 3]> {
+        let side = cell_side(level);
+        let inv = 1.0 / side;
+        let reach = 0.5 * side + delta;
+        let lo = ((a - DVec3::splat(reach)) * inv).floor();
+        let hi = ((a + DVec3::splat(reach)) * inv).floor();
+        if lo.is_nan() || hi.is_nan() {
+            return None;
+        }
+        // clipped to the occupied cells (real cell coordinates), so a ball reaching beyond the
+        // coordinate range still finds every record of the level (`as` saturates)
+        let b = &self.bounds[level];
+        let range = |k: usize, l: f64, h: f64| {
+            let min = b[k][0].load(Ordering::Relaxed);
+            let max = b[k][1].load(Ordering::Relaxed);
+            (l as i64).max(min)..=(h as i64).min(max)
+        };
+        Some([
+            range(0, lo.x, hi.x),
+            range(1, lo.y, hi.y),
+            range(2, lo.z, hi.z),
+        ])
     }
 
     fn ball_level(
@@ -439,22 +492,12 @@ impl Grid {
         f: &mut impl FnMut(u32, DVec3, f64),
     ) {
         let side = cell_side(level);
-        let inv = 1.0 / side;
-        let reach = 0.5 * side + delta;
-        let lo = ((a - DVec3::splat(reach)) * inv).floor();
-        let hi = ((a + DVec3::splat(reach)) * inv).floor();
-        if lo.abs().max(hi.abs()).max_element() >= MAX_CELL_COORDINATE {
+        let Some([rx, ry, rz]) = self.ball_ranges(level, a, delta) else {
             return;
-        }
-        let b = &self.bounds[level];
-        let range = |k: usize, l: f64, h: f64| {
-            let min = b[k][0].load(Ordering::Relaxed);
-            let max = b[k][1].load(Ordering::Relaxed);
-            (l as i64).max(min)..=(h as i64).min(max)
         };
-        for cz in range(2, lo.z, hi.z) {
-            for cy in range(1, lo.y, hi.y) {
-                for cx in range(0, lo.x, hi.x) {
+        for cz in rz {
+            for cy in ry.clone() {
+                for cx in rx.clone() {
                     let block = table.find(cell_key(level, [cx, cy, cz]));
                     if block.is_null() {
                         continue;

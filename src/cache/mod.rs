@@ -47,20 +47,45 @@
 //! one 20-byte index entry and its share of the index's hash table (about 25 bytes per record in
 //! all after [`Cache::compact`] at typical overlaps; see [`Cache::memory`]).
 //!
-//! # File format (version 2, little-endian)
+//! # Gradient limiting
+//! First-order extrapolation E + Δx·∇E goes wrong where |∇E|·R ≫ E (a Ward-Heckbert gradient
+//! estimated right at a wall junction can reach |∇E|·R/E ≈ 100). [`CacheConfig::gradient_limit`]
+//! c (off by default) is a slope limiter applied when a record is inserted: for each channel k
+//! with value Eₖ, with R the record's largest radius, sₜ = |∇ₜEₖ|·R and
+//! sᵣ = |∇ᵣEₖ|·sin(min(Δn_max, π/2)) (surface domain; 0 in volumes), if sₜ + sᵣ > c·|Eₖ| both
+//! gradients of channel k are scaled by c·|Eₖ|/(sₜ + sᵣ). Every lookup within the record's extent
+//! then extrapolates channel k by at most c·|Eₖ| (up to binary16 rounding), so with c ≤ 1 it never
+//! flips a value's sign. Records within the bound are stored bit for bit as without the limit;
+//! [`Cache::merge`] and [`Cache::load`] take records as stored.
+//!
+//! # Neighbour clamping
+//! Křivánek et al. 2006 bound a record's radius by each neighbour's radius plus their distance,
+//! Rᵢ ≤ Rⱼ + dᵢⱼ, so that a large record does not reach far past a small one that the error
+//! metric found necessary. [`Cache::clamp_to_neighbours`] applies it to a record before it is
+//! inserted (one-sided: stored records are immutable while threads insert), and
+//! [`Cache::clamp_neighbours`] applies it two-sided to every stored record under `&mut`: a single
+//! pass over the current radii that is the constraints' fixed point, independent of record order
+//! (proof in its documentation).
+//!
+//! # File format (version 3, little-endian)
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic `RDFCACHE` |
-//! | 8 | 4 | format version, u32 = 2 |
+//! | 8 | 4 | format version, u32 = 3 |
 //! | 12 | 4 | channels, u32 ≥ 1 |
 //! | 16 | 4 | domain, u32 (0 surface, 1 volume) |
 //! | 20 | 4 | interpolation, u32 (`RADDIFF_INTERP_*`) |
 //! | 24 | 8 | max normal deviation, f64 radians |
 //! | 32 | 8 | record count N, u64 |
 //! | 40 | 4 | record size S = 64 + 16·channels, u32 |
-//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], the other bits 0 |
-//! | 48 | N·S | records, in strictly increasing content order |
-//! | 48 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
+//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, the other bits 0 |
+//! | 48 | 8 | gradient limit c, f64: finite and > 0 if flag bit 1 is set, else 0.0 (all bits 0) |
+//! | 56 | N·S | records, in strictly increasing content order |
+//! | 56 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
+//!
+//! Version 2 (written before the gradient limit existed) is still read: its header is the same
+//! up to offset 48 without the gradient-limit field (records start at 48), flag bit 1 must be 0,
+//! and the cache has no gradient limit. [`Cache::save`] always writes version 3.
 //!
 //! Record (S bytes): position 3×f64; frame as a unit quaternion 4×f32 (x, y, z, w with w ≥ 0,
 //! rotating the world axes onto the frame: surface axis 0, axis 1 = n × axis 0, normal n; volume
@@ -78,6 +103,7 @@
 //! [`Error::Corrupt`] (or [`Error::Io`]) with the reason; it never panics on any input.
 
 mod blend;
+mod clamp;
 mod cursor;
 mod index;
 pub mod interp;
@@ -129,6 +155,24 @@ pub struct CacheConfig {
     /// which irradiance and radiance require. Leave it off for signed quantities. `Log`
     /// interpolation is positive by construction and ignores it.
     pub non_negative: bool,
+    /// Slope limit c applied to every record when it is inserted (default `f64::INFINITY`: off;
+    /// must be > 0, [`Cache::new`] rejects 0, negative values and NaN). The rule: for each
+    /// channel k with value Eₖ, let R be the record's largest radius (as stored, `f32`),
+    /// sₜ = |∇ₜEₖ|·R and sᵣ = |∇ᵣEₖ|·sin(min(Δn_max, π/2)) (surface domain, Δn_max =
+    /// [`CacheConfig::max_normal_deviation`]; sᵣ = 0 in volumes, which have no rotational
+    /// gradient). If sₜ + sᵣ > c·|Eₖ|, both gradients of channel k are multiplied by
+    /// c·|Eₖ|/(sₜ + sᵣ); a channel with Eₖ = 0 loses its gradients.
+    ///
+    /// Consequence: a lookup within the record's extent (|Δx| ≤ R, |nᵢ × n| ≤ sin(min(Δn_max,
+    /// π/2))) extrapolates channel k by |Δx·∇ₜEₖ + (nᵢ×n)·∇ᵣEₖ| ≤ c·|Eₖ|, up to the binary16
+    /// rounding of the stored gradients (2⁻¹¹ of the record's largest gradient component); with
+    /// c ≤ 1 extrapolation never flips a value's sign. In [`Interpolation::Log`] the same bound
+    /// holds for the exponent: a record's factor lies in [e^−c, e^c]. Use it against outlier
+    /// gradients, e.g. Ward-Heckbert gradients estimated a hair's breadth from a wall junction
+    /// (|∇E|·R/E up to ~100). Records that satisfy the bound are stored bit for bit as without
+    /// the limit. [`Cache::merge`] and [`Cache::load`] take records as stored (no limit is
+    /// re-applied). Saved with the cache (file format version 3).
+    pub gradient_limit: f64,
 }
 
 impl CacheConfig {
@@ -141,6 +185,7 @@ impl CacheConfig {
             interpolation: Interpolation::Ward,
             max_normal_deviation: 0.2,
             non_negative: false,
+            gradient_limit: f64::INFINITY,
         }
     }
 
@@ -152,6 +197,7 @@ impl CacheConfig {
             interpolation: Interpolation::Cubic,
             max_normal_deviation: 0.2,
             non_negative: false,
+            gradient_limit: f64::INFINITY,
         }
     }
 
@@ -165,6 +211,24 @@ impl CacheConfig {
     pub fn with_non_negative(mut self, non_negative: bool) -> Self {
         self.non_negative = non_negative;
         self
+    }
+
+    /// The same configuration with [`CacheConfig::gradient_limit`] set to `c` (`f64::INFINITY`
+    /// turns the limit off; [`Cache::new`] rejects `c <= 0` and NaN).
+    pub fn with_gradient_limit(mut self, c: f64) -> Self {
+        self.gradient_limit = c;
+        self
+    }
+
+    /// The slope limiter the encoder applies, `None` when off.
+    pub(crate) fn slope_limit(&self) -> Option<record::SlopeLimit> {
+        (self.gradient_limit < f64::INFINITY).then(|| record::SlopeLimit {
+            c: self.gradient_limit,
+            sin_deviation: self
+                .max_normal_deviation
+                .min(std::f64::consts::FRAC_PI_2)
+                .sin(),
+        })
     }
 
     /// The lowest value a record's extrapolation may take: 0 with
@@ -235,8 +299,10 @@ const PRECISION_RATIO: f64 = (1u64 << 40) as f64;
 
 impl<V: CacheValue> Cache<V> {
     /// An empty cache. `InvalidArgument` for 0 or more than [`MAX_CHANNELS`] channels, a channel
-    /// count that disagrees with `V`, or a maximum normal deviation outside (0, π] (surfaces).
+    /// count that disagrees with `V`, a maximum normal deviation outside (0, π] (surfaces), or a
+    /// gradient limit that is not > 0 (NaN, 0, negative).
     pub fn new(config: CacheConfig) -> Result<Self> {
+        check_gradient_limit(config.gradient_limit)?;
         if config.channels == 0 || config.channels > MAX_CHANNELS {
             return Err(Error::InvalidArgument(format!(
                 "channels must be in 1..={MAX_CHANNELS} (got {})",
@@ -273,6 +339,15 @@ impl<V: CacheValue> Cache<V> {
     /// The configuration.
     pub fn config(&self) -> &CacheConfig {
         &self.config
+    }
+
+    /// Sets [`CacheConfig::gradient_limit`] to `c` for the records inserted from now on (stored
+    /// records keep their gradients); `f64::INFINITY` turns the limit off. `InvalidArgument` (and
+    /// no change) for `c <= 0` or NaN.
+    pub fn set_gradient_limit(&mut self, c: f64) -> Result<()> {
+        check_gradient_limit(c)?;
+        self.config.gradient_limit = c;
+        Ok(())
     }
 
     /// Number of records.
@@ -350,8 +425,8 @@ impl<V: CacheValue> Cache<V> {
         }
     }
 
-    /// Inserts a record. Returns `false` (and changes nothing) if an identical record is already
-    /// stored. `InvalidArgument` for non-finite or out-of-range input, a zero surface normal,
+    /// Inserts a record, its gradients limited by [`CacheConfig::gradient_limit`] (if set).
+    /// Returns `false` (and changes nothing) if an identical record is already stored. `InvalidArgument` for non-finite or out-of-range input, a zero surface normal,
     /// degenerate axes with anisotropic radii, or a largest radius below |position|·2⁻⁴⁰ (beyond
     /// the index's resolution).
     pub fn insert(&self, record: &Record<V>) -> Result<bool> {
@@ -368,7 +443,12 @@ impl<V: CacheValue> Cache<V> {
     }
 
     pub(crate) fn insert_flat(&self, input: &RecordInput<'_>) -> Result<bool> {
-        let (head, chans) = record::encode(self.config.domain, self.config.channels, input)?;
+        let (head, chans) = record::encode(
+            self.config.domain,
+            self.config.channels,
+            input,
+            self.config.slope_limit(),
+        )?;
         self.insert_stored(&head, &chans)
     }
 
@@ -382,20 +462,35 @@ impl<V: CacheValue> Cache<V> {
             )));
         }
         let _guard = self.writer.lock().unwrap_or_else(|e| e.into_inner());
-        let mut duplicate = false;
-        self.index.query(position, |id| {
-            let (h, c) = self.stored(id);
-            duplicate |= h == head && c == chans;
-        });
-        if duplicate {
+        if self.holds(head, chans) {
             return Ok(false);
         }
-        let id = self.len.load(Ordering::Relaxed);
-        if id >= u32::MAX as usize {
+        if self.len.load(Ordering::Relaxed) >= u32::MAX as usize {
             return Err(Error::InvalidArgument(
                 "cache is full (2^32 - 1 records)".into(),
             ));
         }
+        self.append(head, chans);
+        Ok(true)
+    }
+
+    /// Whether a record with exactly these stored bytes is stored.
+    fn holds(&self, head: &Head, chans: &[Channel]) -> bool {
+        let mut duplicate = false;
+        self.index.query(head.position(), |id| {
+            let (h, c) = self.stored(id);
+            duplicate |= h == head && c == chans;
+        });
+        duplicate
+    }
+
+    /// Writes a record into the next slot, indexes it and publishes it.
+    ///
+    /// # Contract
+    /// The caller holds the writer lock (or `&mut self`), and the cache holds fewer than
+    /// 2³² − 1 records.
+    fn append(&self, head: &Head, chans: &[Channel]) {
+        let id = self.len.load(Ordering::Relaxed);
         self.records.ensure(id);
         let ptr = self.records.slot_ptr(id) as *mut u8;
         // SAFETY: slot `id` is unpublished, sized for the head and the channels, and 8-aligned.
@@ -407,9 +502,9 @@ impl<V: CacheValue> Cache<V> {
                 chans.len(),
             );
         }
-        self.index.insert(id as u32, position, radius);
+        self.index
+            .insert(id as u32, head.position(), head.max_radius());
         self.len.store(id + 1, Ordering::Release);
-        Ok(true)
     }
 
     /// [`Cache::check_query`] plus the output length.
@@ -669,30 +764,6 @@ impl<V: CacheValue> Cache<V> {
         })
     }
 
-    /// Neighbour clamping (thesis 3.5.4, Křivánek et al. 2006) for a record about to be inserted
-    /// at `position`: every stored record j whose bounding sphere contains `position` bounds the
-    /// new record's largest radius by Rⱼ + ‖position − xⱼ‖ (Rⱼ its largest radius); the extent is
-    /// scaled uniformly (anisotropy kept) to satisfy all bounds. Stored records are immutable, so
-    /// the reverse clamp of the neighbours is not applied (it would make results depend on
-    /// insertion order).
-    pub fn clamp_to_neighbours(&self, position: DVec3, extent: &Extent) -> Result<Extent> {
-        ensure_finite3(position, "position")?;
-        let mut limit = f64::INFINITY;
-        self.index.query(position, |id| {
-            let (head, _) = self.stored(id);
-            let distance = (position - head.position()).length();
-            if distance <= head.max_radius() {
-                limit = limit.min(head.max_radius() + distance);
-            }
-        });
-        let r = extent.max_radius();
-        Ok(if r > limit {
-            extent.scaled(limit / r)
-        } else {
-            *extent
-        })
-    }
-
     /// Identity keys of all records, sorted (equal for two caches holding the same records).
     pub fn keys(&self) -> Vec<u64> {
         let mut keys: Vec<u64> = (0..self.len() as u32)
@@ -746,7 +817,8 @@ impl<V: CacheValue> Cache<V> {
     /// Adds every record of `other` that `self` does not already hold (duplicates, i.e. records
     /// with identical stored bytes, are skipped). Returns how many were added. Both caches must
     /// have the same channel count and domain; `self` keeps its interpolation settings.
-    /// `other` may be `self` (a no-op).
+    /// Records are copied as stored in `other`: `self`'s [`CacheConfig::gradient_limit`] is not
+    /// applied to them. `other` may be `self` (a no-op).
     pub fn merge(&self, other: &Cache<V>) -> Result<usize> {
         if other.config.channels != self.config.channels
             || other.config.domain != self.config.domain
@@ -770,6 +842,17 @@ impl<V: CacheValue> Cache<V> {
     }
 }
 
+/// `InvalidArgument` unless `c` is a valid [`CacheConfig::gradient_limit`] (> 0 or +∞).
+fn check_gradient_limit(c: f64) -> Result<()> {
+    if c > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidArgument(format!(
+            "gradient limit must be > 0 (or infinite: off), got {c}"
+        )))
+    }
+}
+
 /// `NotFound` unless the covering records' weights sum to a positive finite number.
 fn check_weight_sum(weight_sum: f64, position: DVec3) -> Result<()> {
     if weight_sum > 0.0 && weight_sum.is_finite() {
@@ -781,5 +864,7 @@ fn check_weight_sum(weight_sum: f64, position: DVec3) -> Result<()> {
     }
 }
 
+#[cfg(test)]
+mod safeguard_tests;
 #[cfg(test)]
 mod tests;

@@ -11,12 +11,19 @@ use crate::error::{Error, Result};
 
 /// File magic.
 pub const MAGIC: [u8; 8] = *b"RDFCACHE";
-/// Current (and only accepted) format version.
-pub const FORMAT_VERSION: u32 = 2;
-const HEADER_BYTES: usize = 48;
+/// Format version written by [`Cache::to_bytes`] (versions 2 and 3 are read).
+pub const FORMAT_VERSION: u32 = 3;
+/// The oldest version read: no gradient-limit field, records at [`HEADER_BYTES_V2`].
+const FORMAT_VERSION_2: u32 = 2;
+/// Header size of version 3: the version 2 header plus the gradient limit (f64 at offset 48).
+const HEADER_BYTES: usize = 56;
+const HEADER_BYTES_V2: usize = 48;
 const CHECKSUM_BYTES: usize = 8;
 /// Header flag (offset 44): [`CacheConfig::non_negative`].
 const FLAG_NON_NEGATIVE: u32 = 1;
+/// Header flag (offset 44, version 3): [`CacheConfig::gradient_limit`] is set (its value at
+/// offset 48).
+const FLAG_GRADIENT_LIMIT: u32 = 2;
 
 impl<V: CacheValue> Cache<V> {
     /// The cache in the documented binary format (records in content order, so equal record
@@ -35,12 +42,21 @@ impl<V: CacheValue> Cache<V> {
         out.extend_from_slice(&self.config.max_normal_deviation.to_le_bytes());
         out.extend_from_slice(&(count as u64).to_le_bytes());
         out.extend_from_slice(&(stride as u32).to_le_bytes());
-        let flags = if self.config.non_negative {
-            FLAG_NON_NEGATIVE
-        } else {
-            0
-        };
+        let limited = self.config.gradient_limit < f64::INFINITY;
+        let mut flags = 0;
+        if self.config.non_negative {
+            flags |= FLAG_NON_NEGATIVE;
+        }
+        if limited {
+            flags |= FLAG_GRADIENT_LIMIT;
+        }
         out.extend_from_slice(&flags.to_le_bytes());
+        let limit = if limited {
+            self.config.gradient_limit
+        } else {
+            0.0
+        };
+        out.extend_from_slice(&limit.to_le_bytes());
         for id in ids {
             let (head, chans) = self.stored(id);
             record::serialize(head, chans, &mut out);
@@ -53,13 +69,14 @@ impl<V: CacheValue> Cache<V> {
     /// Parses and validates a cache in the documented binary format. `Corrupt` with the reason
     /// for anything that [`Cache::to_bytes`] could not have written, including a channel count
     /// that disagrees with `V`. Never panics.
+    /// Version 2 files (no gradient limit) are read as well.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
         let corrupt = |m: String| Err(Error::Corrupt(m));
-        if bytes.len() < HEADER_BYTES + CHECKSUM_BYTES {
+        if bytes.len() < HEADER_BYTES_V2 + CHECKSUM_BYTES {
             return corrupt(format!(
                 "truncated: {} bytes, a cache file has at least {}",
                 bytes.len(),
-                HEADER_BYTES + CHECKSUM_BYTES
+                HEADER_BYTES_V2 + CHECKSUM_BYTES
             ));
         }
         if bytes[..8] != MAGIC {
@@ -68,9 +85,21 @@ impl<V: CacheValue> Cache<V> {
         let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
         let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
         let version = u32_at(8);
-        if version != FORMAT_VERSION {
+        let header_bytes = match version {
+            FORMAT_VERSION => HEADER_BYTES,
+            FORMAT_VERSION_2 => HEADER_BYTES_V2,
+            _ => {
+                return corrupt(format!(
+                    "unsupported format version {version} (this library reads versions \
+                     {FORMAT_VERSION_2} and {FORMAT_VERSION})"
+                ))
+            }
+        };
+        if bytes.len() < header_bytes + CHECKSUM_BYTES {
             return corrupt(format!(
-                "unsupported format version {version} (this library reads version {FORMAT_VERSION})"
+                "truncated: {} bytes, a version {version} cache file has at least {}",
+                bytes.len(),
+                header_bytes + CHECKSUM_BYTES
             ));
         }
         let channels = u32_at(12) as usize;
@@ -96,13 +125,36 @@ impl<V: CacheValue> Cache<V> {
             ));
         }
         let flags = u32_at(44);
-        if flags & !FLAG_NON_NEGATIVE != 0 {
+        let known = if version == FORMAT_VERSION_2 {
+            FLAG_NON_NEGATIVE
+        } else {
+            FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT
+        };
+        if flags & !known != 0 {
             return corrupt(format!("unknown header flags {flags:#x}"));
         }
+        let gradient_limit = if version == FORMAT_VERSION_2 {
+            f64::INFINITY
+        } else {
+            let c = f64::from_le_bytes(bytes[48..56].try_into().unwrap_or([0; 8]));
+            if flags & FLAG_GRADIENT_LIMIT != 0 {
+                if !(c.is_finite() && c > 0.0) {
+                    return corrupt(format!("gradient limit {c} is not finite and positive"));
+                }
+                c
+            } else {
+                if c.to_bits() != 0 {
+                    return corrupt(format!(
+                        "gradient limit field is {c} but the limit flag is not set"
+                    ));
+                }
+                f64::INFINITY
+            }
+        };
         let expected = usize::try_from(count)
             .ok()
             .and_then(|c| c.checked_mul(stride))
-            .and_then(|b| b.checked_add(HEADER_BYTES + CHECKSUM_BYTES));
+            .and_then(|b| b.checked_add(header_bytes + CHECKSUM_BYTES));
         match expected {
             Some(e) if e == bytes.len() => {}
             Some(e) if e > bytes.len() => {
@@ -128,11 +180,12 @@ impl<V: CacheValue> Cache<V> {
             interpolation,
             max_normal_deviation,
             non_negative: flags & FLAG_NON_NEGATIVE != 0,
+            gradient_limit,
         };
         let mut cache = Cache::new(config).map_err(|e| Error::Corrupt(format!("header: {e}")))?;
         let mut previous: Option<(record::Head, record::Channels)> = None;
         for i in 0..count as usize {
-            let at = HEADER_BYTES + i * stride;
+            let at = header_bytes + i * stride;
             let (head, chans) = record::deserialize(domain, &bytes[at..at + stride])
                 .map_err(|e| Error::Corrupt(format!("record {i}: {e}")))?;
             if let Some((h, c)) = &previous {

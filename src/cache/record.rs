@@ -380,11 +380,73 @@ fn check_radius(r: f64, i: usize) -> Result<f32> {
     Ok(r as f32)
 }
 
-/// Validates a record and converts it to the stored form.
+/// The slope limiter [`encode`] applies (see [`CacheConfig::gradient_limit`](super::CacheConfig::gradient_limit)
+/// for the rule): the bound `c` and the largest |nᵢ × n| of a used record,
+/// sin(min(max_normal_deviation, π/2)) (surface domain; ignored in volumes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SlopeLimit {
+    pub c: f64,
+    pub sin_deviation: f64,
+}
+
+/// The channel-major gradients of `input` with the slope limit applied: for each channel k, if
+/// s = |∇ₜEₖ|·R + |∇ᵣEₖ|·sin_deviation exceeds c·|Eₖ|, both of its gradients are multiplied by
+/// c·|Eₖ|/s. `None` (use the input as is) when no channel exceeds its bound, so that records within
+/// the bound are encoded bit for bit as without a limit. `rotation` is `None` in volumes.
+#[allow(clippy::type_complexity)]
+fn limit_slopes(
+    limit: SlopeLimit,
+    radius: f64,
+    value: &[f32],
+    gradient: Option<&[f32]>,
+    rotation: Option<&[f32]>,
+) -> Option<(Option<SmallVec<[f32; 24]>>, Option<SmallVec<[f32; 24]>>)> {
+    let norm = |g: Option<&[f32]>, k: usize| {
+        g.map_or(0.0, |g| {
+            DVec3::new(g[3 * k] as f64, g[3 * k + 1] as f64, g[3 * k + 2] as f64).length()
+        })
+    };
+    let factors: SmallVec<[f64; 8]> = value
+        .iter()
+        .enumerate()
+        .map(|(k, &e)| {
+            let slope = norm(gradient, k) * radius + norm(rotation, k) * limit.sin_deviation;
+            let bound = limit.c * (e as f64).abs();
+            if slope > bound {
+                bound / slope
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    if factors.iter().all(|&f| f == 1.0) {
+        return None;
+    }
+    let scale = |g: Option<&[f32]>| {
+        g.map(|g| {
+            g.iter()
+                .enumerate()
+                .map(|(i, &x)| {
+                    let f = factors[i / 3];
+                    if f == 1.0 {
+                        x
+                    } else {
+                        (x as f64 * f) as f32
+                    }
+                })
+                .collect::<SmallVec<[f32; 24]>>()
+        })
+    };
+    Some((scale(gradient), scale(rotation)))
+}
+
+/// Validates a record and converts it to the stored form, applying the slope limit `limit` (if
+/// any) to its gradients.
 pub(crate) fn encode(
     domain: Domain,
     channels: usize,
     input: &RecordInput<'_>,
+    limit: Option<SlopeLimit>,
 ) -> Result<(Head, Channels)> {
     ensure_finite3(input.position, "record position")?;
     if input.position.abs().max_element() > POSITION_MAX {
@@ -456,11 +518,19 @@ pub(crate) fn encode(
             (frame, rr)
         }
     };
-    let (gradient_scale, grads) = pack_gradients(input.gradient, channels);
-    let (rotation_scale, rots) = match domain {
-        Domain::Surface => pack_gradients(input.rotation, channels),
-        Domain::Volume => pack_gradients(None, channels),
+    let rotation = match domain {
+        Domain::Surface => input.rotation,
+        Domain::Volume => None,
     };
+    let radius = radii[0].max(radii[1]).max(radii[2]) as f64;
+    let limited =
+        limit.and_then(|l| limit_slopes(l, radius, input.value, input.gradient, rotation));
+    let (gradient, rotation) = match &limited {
+        Some((g, r)) => (g.as_deref(), r.as_deref()),
+        None => (input.gradient, rotation),
+    };
+    let (gradient_scale, grads) = pack_gradients(gradient, channels);
+    let (rotation_scale, rots) = pack_gradients(rotation, channels);
     let head = Head {
         position: input.position.to_array(),
         rotation: quaternion_of(frame),

@@ -39,6 +39,13 @@ pub const RADDIFF_INTERP_WARD_TABELLION: u32 = 5;
 /// radiance cannot be negative; leave it off for signed quantities). `_LOG` is positive anyway.
 /// Saved with the cache and restored by `raddiff_cache_load`.
 pub const RADDIFF_INTERP_NON_NEGATIVE: u32 = 0x100;
+/// Flag OR-ed into `raddiff_cache_config.interpolation`: create the cache with the gradient
+/// (slope) limit c = `RADDIFF_GRADIENT_LIMIT_DEFAULT` (see `raddiff_cache_set_gradient_limit` for
+/// the rule and for other values of c). Saved with the cache and restored by `raddiff_cache_load`.
+pub const RADDIFF_INTERP_GRADIENT_LIMIT: u32 = 0x200;
+/// The gradient limit c that `RADDIFF_INTERP_GRADIENT_LIMIT` selects: 1, the largest c with which
+/// extrapolation never flips the sign of a record's value.
+pub const RADDIFF_GRADIENT_LIMIT_DEFAULT: f64 = 1.0;
 
 /// A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
 /// `raddiff_cache_insert` on the same handle at once (lookups never block).
@@ -55,7 +62,7 @@ pub struct raddiff_cache_config {
     /// `RADDIFF_DOMAIN_SURFACE` or `RADDIFF_DOMAIN_VOLUME`.
     pub domain: u32,
     /// `RADDIFF_INTERP_WARD`, `_TENT`, `_CUBIC`, `_LOG` (or `_WARD_CLASSIC`, `_WARD_TABELLION`),
-    /// optionally OR-ed with `RADDIFF_INTERP_NON_NEGATIVE`.
+    /// optionally OR-ed with `RADDIFF_INTERP_NON_NEGATIVE` and `RADDIFF_INTERP_GRADIENT_LIMIT`.
     pub interpolation: u32,
     /// Radians in (0, pi]: largest normal deviation for a record to be used (surface domain;
     /// ignored in volumes). 0.2 is a good default.
@@ -86,12 +93,18 @@ pub struct raddiff_cache_record {
 }
 
 fn config_from_c(c: &raddiff_cache_config) -> Result<CacheConfig, FfiError> {
+    let flags = RADDIFF_INTERP_NON_NEGATIVE | RADDIFF_INTERP_GRADIENT_LIMIT;
     Ok(CacheConfig {
         channels: c.channels as usize,
         domain: Domain::try_from(c.domain)?,
-        interpolation: Interpolation::try_from(c.interpolation & !RADDIFF_INTERP_NON_NEGATIVE)?,
+        interpolation: Interpolation::try_from(c.interpolation & !flags)?,
         max_normal_deviation: c.max_normal_deviation,
         non_negative: c.interpolation & RADDIFF_INTERP_NON_NEGATIVE != 0,
+        gradient_limit: if c.interpolation & RADDIFF_INTERP_GRADIENT_LIMIT != 0 {
+            RADDIFF_GRADIENT_LIMIT_DEFAULT
+        } else {
+            f64::INFINITY
+        },
     })
 }
 
@@ -285,6 +298,96 @@ pub extern "C" fn raddiff_cache_compact(cache: *mut raddiff_cache) -> raddiff_st
     })
 }
 
+/// Sets the gradient (slope) limit c for the records inserted from now on; stored records keep
+/// their gradients. Rule, applied by `raddiff_cache_insert` to each channel k with value E_k: with
+/// R the record's largest radius, s_t = |gradient_k| * R and s_r = |rotation_gradient_k| *
+/// sin(min(max_normal_deviation, pi/2)) (0 in the volume domain), if s_t + s_r > c * |E_k| both
+/// gradients of channel k are scaled by c * |E_k| / (s_t + s_r) (a channel with E_k = 0 loses its
+/// gradients). Then every lookup within the record's extent extrapolates channel k by at most
+/// c * |E_k| (up to binary16 rounding): with c <= 1 extrapolation never flips a value's sign.
+/// c = INFINITY turns the limit off; `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for c <= 0 or
+/// NaN. Saved with the cache and restored by `raddiff_cache_load`; `raddiff_cache_merge` copies
+/// records as stored. **Not thread-safe**: no other thread may use the cache during the call.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_set_gradient_limit(
+    cache: *mut raddiff_cache,
+    c: f64,
+) -> raddiff_status {
+    guard(|| {
+        // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
+        let cache = unsafe { out_ref(cache, "cache")? };
+        cache.inner.set_gradient_limit(c)?;
+        Ok(())
+    })
+}
+
+/// Writes the cache's gradient limit c to `*limit` (INFINITY when off).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_get_gradient_limit(
+    cache: *const raddiff_cache,
+    limit: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        let limit = unsafe { out_ref(limit, "limit")? };
+        *limit = cache.inner.config().gradient_limit;
+        Ok(())
+    })
+}
+
+/// Neighbour clamping (Krivanek et al. 2006) of a record about to be inserted: shrinks
+/// `record->radii` in place so that the record's largest radius R (surface: of `radii[0..1]`) is at
+/// most R_j + d_j for every stored record j at distance d_j = |position - x_j| < R (R_j its largest
+/// radius). All radii are scaled by one factor (anisotropy and axes kept) and the largest becomes
+/// the largest float at most the tightest bound, so that the inserted record meets every bound
+/// exactly. Only `position` and `radii` are read (and `radii` written); untouched when no bound
+/// binds or on error. One-sided: stored records are not shrunk (see
+/// `raddiff_cache_clamp_neighbours`). `RADDIFF_ERROR_INVALID_ARGUMENT` for a non-finite position or
+/// radius. Thread-safe, like `raddiff_cache_lookup`.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_clamp_record(
+    cache: *const raddiff_cache,
+    record: *mut raddiff_cache_record,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        // SAFETY: NULL or a record the caller lets us modify.
+        let record = unsafe { out_ref(record, "record")? };
+        let extent = Extent {
+            radii: record.radii,
+            axes: record.axes.map(DVec3::from),
+        };
+        let clamped = cache
+            .inner
+            .clamp_to_neighbours(record.position.into(), &extent)?;
+        record.radii = clamped.radii;
+        Ok(())
+    })
+}
+
+/// Two-sided neighbour clamping of every stored record: each record's largest radius R_i becomes
+/// min(R_i, min_j (R_j + d_ij)) from the current radii, which is the fixed point of the
+/// constraints R_i <= R_j + d_ij (independent of record and thread order; a second call shrinks
+/// nothing); a shrinking record's radii are all scaled by one factor. Records that become
+/// identical are stored once. If `shrunk` is not NULL, the number of records that shrank is
+/// written to it. **Not thread-safe**: no other thread may use the cache during the call (it
+/// rebuilds the index and compacts the cache like `raddiff_cache_compact`).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_clamp_neighbours(
+    cache: *mut raddiff_cache,
+    shrunk: *mut usize,
+) -> raddiff_status {
+    guard(|| {
+        // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
+        let cache = unsafe { out_ref(cache, "cache")? };
+        let count = cache.inner.clamp_neighbours();
+        if let Some(s) = unsafe { shrunk.as_mut() } {
+            *s = count;
+        }
+        Ok(())
+    })
+}
+
 /// Number of records (0 for NULL).
 #[no_mangle]
 pub extern "C" fn raddiff_cache_len(cache: *const raddiff_cache) -> usize {
@@ -307,9 +410,10 @@ pub extern "C" fn raddiff_cache_save(
     })
 }
 
-/// Loads a cache saved by `raddiff_cache_save` (channels, domain and interpolation come from the
-/// file). Returns NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in
-/// `raddiff_last_error` for unreadable, truncated, damaged or wrong-version files.
+/// Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags and the
+/// gradient limit come from the file; files of format version 2 have no gradient limit). Returns
+/// NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in `raddiff_last_error` for
+/// unreadable, truncated, damaged or wrong-version files.
 #[no_mangle]
 pub extern "C" fn raddiff_cache_load(path: *const c_char) -> *mut raddiff_cache {
     guard_ptr(|| {
