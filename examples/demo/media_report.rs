@@ -185,7 +185,11 @@ pub fn run(
             .map(|(v, r)| (image::luminance(*v) - image::luminance(*r)).abs() / mean.max(1e-300))
             .collect();
         save(
-            image::heat_map(view.width, view.height, &errors, report::ERROR_MAP_SCALE),
+            image::with_colour_bar(
+                &image::heat_map(view.width, view.height, &errors, report::ERROR_MAP_SCALE),
+                report::ERROR_MAP_SCALE,
+                crate::outputs::ERROR_CAPTION,
+            ),
             &format!("{}-error", metric.name()),
         )?;
         let mut sweep = Vec::new();
