@@ -276,3 +276,98 @@ fn room_media_gradient_radii_shrink_at_the_shaft_boundary() {
         assert!(near < 0.8 * outside, "{samples:?}");
     }
 }
+
+/// Irradiance (luminance) at a point with normal +y from the light map's radiance: stratum
+/// centres of a 32 x 64 cosine-weighted polar grid.
+fn courtyard_floor_irradiance(scene: &Scene, lightmap: &lightmap::LightMap, p: DVec3) -> f64 {
+    let (m, n) = (32, 64);
+    let mut sum = 0.0;
+    for j in 0..m {
+        for k in 0..n {
+            let l = geometry::cosine_polar_local(j, k, m, n, 0.5, 0.5);
+            let ray = Ray {
+                origin: p,
+                direction: DVec3::new(l.x, l.z, l.y),
+            };
+            sum += image::luminance(lightmap.trace(scene, &ray).1);
+        }
+    }
+    sum * std::f64::consts::PI / (m * n) as f64
+}
+
+/// The courtyard's walkway gets no sunlight: the camera's points under the roof have no direct
+/// irradiance, and gather rays from them leave the walkway only through the colonnade (no light
+/// leaks at the joints of walls, columns and roof).
+#[test]
+fn courtyard_walkway_is_lit_only_through_the_colonnade() {
+    let scene = Scene::build(SceneKind::Courtyard);
+    let (w, d, h) = scene::COURTYARD_WALKWAY;
+    let (iw, ih) = (64, 64);
+    let mut rng = Rng::new(11);
+    let (mut under_roof, mut escaped) = (0, 0);
+    for y in 0..ih {
+        for x in 0..iw {
+            let Some(sp) = scene.intersect(&scene.camera.ray(x, y, iw, ih)) else {
+                continue;
+            };
+            let p = sp.position;
+            if p.z > d - 1e-6 || p.y > h - 1e-6 || !(0.0..=w).contains(&p.x) {
+                continue;
+            }
+            under_roof += 1;
+            assert_eq!(
+                scene.direct_irradiance(p, sp.normal, 1),
+                DVec3::ZERO,
+                "sunlight under the roof at {p}"
+            );
+            for _ in 0..24 {
+                let mut dir = random_direction(&mut rng);
+                if dir.dot(sp.normal) < 0.0 {
+                    dir = -dir;
+                }
+                let ray = Ray {
+                    origin: p,
+                    direction: dir,
+                };
+                if scene
+                    .bvh
+                    .intersect(&ray, scene.epsilon(), f64::INFINITY)
+                    .is_some()
+                {
+                    continue;
+                }
+                escaped += 1;
+                assert!(dir.z > 0.0, "ray from {p} escaped backwards along {dir}");
+                let q = p + (d - p.z) / dir.z * dir;
+                assert!(
+                    (-1e-9..=w + 1e-9).contains(&q.x) && (-1e-9..=h + 1e-9).contains(&q.y),
+                    "light leak at pixel ({x}, {y}): ray from {p} left the walkway at {q}"
+                );
+            }
+        }
+    }
+    assert!(
+        under_roof > iw * ih / 4,
+        "{under_roof} pixels under the roof"
+    );
+    assert!(escaped > 0, "some rays must leave through the colonnade");
+}
+
+/// The columns cast indirect shadows: on the walkway floor 0.1 behind a column the irradiance is
+/// well below that behind the gap beside it, at the same distance from the colonnade.
+#[test]
+fn courtyard_columns_cast_indirect_shadows() {
+    let scene = Scene::build(SceneKind::Courtyard);
+    let lightmap = lightmap::LightMap::build(&scene, &indicatif::ProgressBar::hidden());
+    let (_, d, _) = scene::COURTYARD_WALKWAY;
+    let columns = scene::COURTYARD_COLUMNS;
+    let depth = columns[1].1 - columns[1].0;
+    let z = d - depth - 0.1;
+    let behind = 0.5 * (columns[1].0 + columns[1].1);
+    let gap = 0.5 * (columns[1].1 + columns[2].0);
+    let at = |x: f64| courtyard_floor_irradiance(&scene, &lightmap, DVec3::new(x, 1e-6, z));
+    let (shadow, lit) = (at(behind), at(gap));
+    println!("floor irradiance behind a column {shadow:.4}, behind a gap {lit:.4}");
+    assert!(lit > 0.0);
+    assert!(shadow < 0.8 * lit, "behind {shadow}, gap {lit}");
+}

@@ -12,7 +12,8 @@ raddiff demo: irradiance caching with every error metric against a path-traced r
 USAGE: cargo run --release --example demo -- [OPTIONS]
 
 OPTIONS:
-  --scene NAME        cornell | cornell-black | room | all           [default: cornell]
+  --scene NAME        cornell | cornell-black | room | courtyard | all
+                                                                     [default: cornell]
   --metric NAME       split-sphere | bounded-split-sphere | gradient | hessian-unaware |
                       hessian-geometric | hessian-isotropic | hessian-anisotropic | all
                                                                      [default: all]

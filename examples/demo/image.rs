@@ -108,3 +108,96 @@ pub fn heat_map(width: usize, height: usize, values: &[f64], scale: f64) -> Rgb8
     }
     img
 }
+
+/// Draws `text` in the font8x8 bitmap font, `s` pixels per font pixel, top-left corner at (x, y).
+pub fn draw_text(img: &mut Rgb8, x: usize, y: usize, s: usize, text: &str, colour: [u8; 3]) {
+    use font8x8::{UnicodeFonts, BASIC_FONTS};
+    for (k, c) in text.chars().enumerate() {
+        let Some(glyph) = BASIC_FONTS.get(c) else {
+            continue;
+        };
+        for (row, bits) in glyph.iter().enumerate() {
+            for col in (0..8).filter(|col| bits & (1 << col) != 0) {
+                for sy in 0..s {
+                    for sx in 0..s {
+                        img.set(x + (8 * k + col) * s + sx, y + row * s + sy, colour);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// `map` (a [`heat_map`] with this `scale`) above a colour bar: the ramp from 0 to `scale`, ticks at
+/// 0, `scale` / 2 and `scale`, the end values and `caption` (what is mapped) in a light strip.
+pub fn with_colour_bar(map: &Rgb8, scale: f64, caption: &str) -> Rgb8 {
+    const BACKGROUND: [u8; 3] = [232, 232, 232];
+    const INK: [u8; 3] = [16, 16, 16];
+    let w = map.width;
+    // Glyphs 8 px high up to 383 px wide images, 16 px from 384.
+    let s = (w / 192).max(1);
+    let glyph = 8 * s;
+    let margin = 4 * s;
+    let (low, high) = ("0".to_string(), format!("{scale}"));
+    let text_width = |t: &str| glyph * t.chars().count();
+    // The caption shares the row of the end values if it fits between them, else gets its own.
+    let caption_fits = text_width(caption) + text_width(&low) + text_width(&high) + 4 * margin <= w;
+    let ramp_top = 3 * s;
+    let ramp_height = 8 * s;
+    let ticks_top = ramp_top + ramp_height;
+    let labels_top = ticks_top + 4 * s;
+    let caption_top = if caption_fits {
+        labels_top
+    } else {
+        labels_top + glyph + 2 * s
+    };
+    let strip = caption_top + glyph + 3 * s;
+    let mut img = Rgb8::new(w, map.height + strip);
+    img.data[..map.data.len()].copy_from_slice(&map.data);
+    for y in map.height..img.height {
+        for x in 0..w {
+            img.set(x, y, BACKGROUND);
+        }
+    }
+    let top = map.height;
+    let (x0, x1) = (margin, w.saturating_sub(margin + 1).max(margin + 1));
+    for x in x0..=x1 {
+        let colour = heat((x - x0) as f64 / (x1 - x0) as f64);
+        for y in 0..ramp_height {
+            img.set(x, top + ramp_top + y, colour);
+        }
+    }
+    // A frame around the ramp (its low end is black like the map's zero error).
+    for x in x0 - 1..=x1 + 1 {
+        img.set(x, top + ramp_top - 1, INK);
+        img.set(x, top + ramp_top + ramp_height, INK);
+    }
+    for y in ramp_top - 1..=ramp_top + ramp_height {
+        img.set(x0 - 1, top + y, INK);
+        img.set(x1 + 1, top + y, INK);
+    }
+    for tick in [x0, (x0 + x1) / 2, x1] {
+        for y in ticks_top..ticks_top + 3 * s {
+            for dx in 0..s {
+                img.set(tick + dx - s / 2, top + y, INK);
+            }
+        }
+    }
+    // End values centred on their ticks, kept inside the image.
+    let place = |centre: usize, t: &str| {
+        centre
+            .saturating_sub(text_width(t) / 2)
+            .min(w.saturating_sub(text_width(t)))
+    };
+    draw_text(&mut img, place(x0, &low), top + labels_top, s, &low, INK);
+    draw_text(&mut img, place(x1, &high), top + labels_top, s, &high, INK);
+    draw_text(
+        &mut img,
+        place(w / 2, caption),
+        top + caption_top,
+        s,
+        caption,
+        INK,
+    );
+    img
+}

@@ -11,12 +11,20 @@ use crate::image;
 use crate::lightmap::LightMap;
 use crate::media_cache::{self, MediaRun, MediaStore, MediaView};
 use crate::media_gather::MediaGatherer;
-use crate::report::{self, Row, SceneReport};
+use crate::report::{self, RadiusStats, Row, SceneReport};
 use crate::scene::Scene;
 
 impl Row {
     pub fn media(run: &MediaRun, reference: &[DVec3], view: &MediaView) -> Row {
-        let (rms, relative_rms) = media_cache::rms_error(&run.image(view), reference, view);
+        let image = run.image(view);
+        let (rms, relative_rms) = media_cache::rms_error(&image, reference, view);
+        let squared_errors = image
+            .iter()
+            .zip(reference)
+            .enumerate()
+            .filter(|(p, _)| view.in_medium(*p))
+            .map(|(_, (v, r))| (image::luminance(*v) - image::luminance(*r)).powi(2))
+            .collect();
         Row {
             metric: run.metric.report_name(),
             parameter: run.parameter,
@@ -27,6 +35,14 @@ impl Row {
             rms,
             relative_rms,
             uncovered: run.uncovered,
+            // Volume records: the smallest of the ellipsoid's three radii.
+            radii: RadiusStats::of(
+                run.records
+                    .iter()
+                    .map(|r| r.extent.radii.into_iter().fold(f64::INFINITY, f64::min))
+                    .collect(),
+            ),
+            worst_share: report::worst_percent_share(squared_errors),
         }
     }
 }
@@ -169,7 +185,11 @@ pub fn run(
             .map(|(v, r)| (image::luminance(*v) - image::luminance(*r)).abs() / mean.max(1e-300))
             .collect();
         save(
-            image::heat_map(view.width, view.height, &errors, report::ERROR_MAP_SCALE),
+            image::with_colour_bar(
+                &image::heat_map(view.width, view.height, &errors, report::ERROR_MAP_SCALE),
+                report::ERROR_MAP_SCALE,
+                crate::outputs::ERROR_CAPTION,
+            ),
             &format!("{}-error", metric.name()),
         )?;
         let mut sweep = Vec::new();

@@ -66,7 +66,8 @@ pub fn records_overlay(
     img
 }
 
-/// |luminance error| per pixel divided by the mean reference luminance, 0 … `scale` on the ramp.
+/// |luminance error| per pixel divided by the mean reference luminance, 0 … `scale` on the ramp,
+/// with a colour bar below.
 pub fn error_map(
     gbuffer: &GBuffer,
     image_values: &[DVec3],
@@ -80,5 +81,12 @@ pub fn error_map(
         .zip(reference)
         .map(|(v, r)| (image::luminance(*v) - image::luminance(*r)).abs() / mean.max(1e-300))
         .collect();
-    image::heat_map(gbuffer.width, gbuffer.height, &errors, scale)
+    image::with_colour_bar(
+        &image::heat_map(gbuffer.width, gbuffer.height, &errors, scale),
+        scale,
+        ERROR_CAPTION,
+    )
 }
+
+/// What an error map's colour bar maps: the caption under its ramp.
+pub const ERROR_CAPTION: &str = "|error| / mean";

@@ -9,6 +9,7 @@ use glam::DVec3;
 
 use crate::caching::{rms_error, Baseline, GatherStore, Run};
 use crate::cli::Options;
+use crate::image::luminance;
 use crate::plot::Series;
 use crate::render::GBuffer;
 
@@ -27,6 +28,60 @@ pub struct Row {
     pub rms: f64,
     pub relative_rms: f64,
     pub uncovered: usize,
+    /// Minimum, 5th percentile and median of the records' smallest radii (scene units); `None`
+    /// without records.
+    pub radii: Option<RadiusStats>,
+    /// Share of the squared luminance error held by the worst 1% of the measured pixels; `None`
+    /// without error.
+    pub worst_share: Option<f64>,
+}
+
+/// The distribution of the records' smallest radii.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadiusStats {
+    pub min: f64,
+    pub p5: f64,
+    pub median: f64,
+}
+
+impl RadiusStats {
+    /// Nearest-rank minimum, 5th percentile and median of `radii`; `None` if empty.
+    pub fn of(mut radii: Vec<f64>) -> Option<RadiusStats> {
+        if radii.is_empty() {
+            return None;
+        }
+        radii.sort_by(f64::total_cmp);
+        let rank =
+            |q: f64| radii[((q * radii.len() as f64).ceil() as usize).clamp(1, radii.len()) - 1];
+        Some(RadiusStats {
+            min: radii[0],
+            p5: rank(0.05),
+            median: rank(0.5),
+        })
+    }
+}
+
+/// The share of the total of `squared_errors` held by its largest ceil(1%) entries: 0.01 for an
+/// error spread evenly, 1 for an error in a single pixel (of 100 or fewer). `None` if the total is 0.
+pub fn worst_percent_share(mut squared_errors: Vec<f64>) -> Option<f64> {
+    let total: f64 = squared_errors.iter().sum();
+    if squared_errors.is_empty() || total <= 0.0 {
+        return None;
+    }
+    let k = squared_errors.len().div_ceil(100);
+    squared_errors.sort_by(|a, b| b.total_cmp(a));
+    Some(squared_errors[..k].iter().sum::<f64>() / total)
+}
+
+/// Squared luminance errors at the pixels the cache serves (`gbuffer.pixels[i].shaded()`).
+fn shaded_squared_errors(image: &[DVec3], reference: &[DVec3], gbuffer: &GBuffer) -> Vec<f64> {
+    image
+        .iter()
+        .zip(reference)
+        .zip(&gbuffer.pixels)
+        .filter(|(_, p)| p.shaded().is_some())
+        .map(|((v, r), _)| (luminance(*v) - luminance(*r)).powi(2))
+        .collect()
 }
 
 impl Row {
@@ -42,6 +97,13 @@ impl Row {
             rms,
             relative_rms,
             uncovered: run.uncovered,
+            radii: RadiusStats::of(
+                run.records
+                    .iter()
+                    .map(|r| r.extent.radii[0].min(r.extent.radii[1]))
+                    .collect(),
+            ),
+            worst_share: worst_percent_share(shaded_squared_errors(&run.image, reference, gbuffer)),
         }
     }
 
@@ -152,6 +214,18 @@ impl SceneReport {
              and the cache's placement and rendering lookups; RMS error is over the luminance of the \
              indirect irradiance at every pixel, relative RMS error divides it by the reference's RMS.\n"
         );
+        let _ = writeln!(
+            s,
+            "Where the error lives: min, 5% and median radius are the minimum, 5th percentile and \
+             median over the records of each record's smallest radius, in scene units (radii are \
+             clamped to {} … {} × the scene size: a value at the lower clamp means the metric asked \
+             for records at least that small); small radii mark where a metric saw fast change. \
+             Worst 1% share is the fraction of the summed squared luminance error held by the worst \
+             1% of the shaded pixels (0.01 if the error is spread evenly, near 1 if a few pixels \
+             hold all of it).\n",
+            crate::placement::RADIUS_MIN,
+            crate::placement::RADIUS_MAX
+        );
         if !self.overhead.is_empty() {
             let _ = writeln!(s, "{}", self.overhead);
         }
@@ -161,7 +235,9 @@ impl SceneReport {
             let _ = writeln!(
                 s,
                 "\nErrors are over the luminance of the cached term integrated along every camera ray \
-                 (all pixels cross the medium), against the same integral of the reference.\n"
+                 (all pixels cross the medium), against the same integral of the reference. The radii are \
+                 the smallest of each record's three ellipsoid radii, the worst 1% share is over \
+                 the pixels whose ray crosses the medium.\n"
             );
         }
         s
@@ -191,7 +267,7 @@ impl SceneReport {
         let mut csv = std::fs::File::create(out.join(format!("{}-report.csv", self.scene)))?;
         writeln!(
             csv,
-            "scene,metric,tuned,parameter,records,cpu_seconds,trace_seconds,raddiff_seconds,cache_seconds,rms,relative_rms,uncovered_pixels"
+            "scene,metric,tuned,parameter,records,cpu_seconds,trace_seconds,raddiff_seconds,cache_seconds,rms,relative_rms,uncovered_pixels,radius_min,radius_p5,radius_median,worst1pct_error_share"
         )?;
         let tuned = self.tuned.iter().chain(&self.media).map(|r| (true, r));
         let swept = self
@@ -203,7 +279,7 @@ impl SceneReport {
         for (is_tuned, r) in tuned.chain(swept) {
             writeln!(
                 csv,
-                "{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 self.scene,
                 r.metric,
                 is_tuned,
@@ -215,10 +291,28 @@ impl SceneReport {
                 r.cache_seconds,
                 r.rms,
                 r.relative_rms,
-                r.uncovered
+                r.uncovered,
+                opt(r.radii.map(|d| d.min)),
+                opt(r.radii.map(|d| d.p5)),
+                opt(r.radii.map(|d| d.median)),
+                opt(r.worst_share)
             )?;
         }
         Ok(())
+    }
+}
+
+/// A CSV field: the value, or empty.
+fn opt(v: Option<f64>) -> String {
+    v.map_or(String::new(), |v| v.to_string())
+}
+
+/// A table cell: the value with three significant digits, or "-".
+fn cell(v: Option<f64>) -> String {
+    match v {
+        Some(v) if v != 0.0 && v.abs() < 0.01 => format!("{v:.2e}"),
+        Some(v) => format!("{v:.3}"),
+        None => "-".to_string(),
     }
 }
 
@@ -248,12 +342,12 @@ fn parameter(p: f64) -> String {
 fn table(s: &mut String, rows: &[Row]) {
     let _ = writeln!(
         s,
-        "| metric | parameter | records | CPU time (s) | ray casting (s) | raddiff (s) | cache (s) | RMS error | relative RMS error |\n|---|---|---|---|---|---|---|---|---|"
+        "| metric | parameter | records | CPU time (s) | ray casting (s) | raddiff (s) | cache (s) | RMS error | relative RMS error | min radius | 5% radius | median radius | worst 1% share |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.5} | {:.4} |",
+            "| {} | {} | {} | {:.2} | {:.2} | {:.3} | {:.3} | {:.5} | {:.4} | {} | {} | {} | {} |",
             r.metric,
             parameter(r.parameter),
             r.records,
@@ -262,7 +356,11 @@ fn table(s: &mut String, rows: &[Row]) {
             r.raddiff_seconds,
             r.cache_seconds,
             r.rms,
-            r.relative_rms
+            r.relative_rms,
+            cell(r.radii.map(|d| d.min)),
+            cell(r.radii.map(|d| d.p5)),
+            cell(r.radii.map(|d| d.median)),
+            cell(r.worst_share)
         );
     }
 }

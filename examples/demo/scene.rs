@@ -1,6 +1,6 @@
 //! The demo scenes, built in code from parallelograms: a Cornell box with an occluding block, the
-//! same with a black back wall, and a room lit by the sun through a window and filled with a
-//! homogeneous scattering medium.
+//! same with a black back wall, a room lit by the sun through a window and filled with a
+//! homogeneous scattering medium, and a sunlit courtyard whose arcade columns cast indirect shadows.
 
 use std::f64::consts::PI;
 
@@ -19,6 +19,10 @@ pub enum SceneKind {
     CornellBlack,
     /// A 4 × 3 × 4 room with a window, sunlight and a homogeneous scattering medium.
     Room,
+    /// A sunlit courtyard before a covered walkway: the sun never reaches under the roof, and the
+    /// light the courtyard floor reflects through the colonnade casts the columns' indirect shadows
+    /// on the walkway's floor and back wall (thesis Fig. 6.17).
+    Courtyard,
 }
 
 impl SceneKind {
@@ -27,6 +31,7 @@ impl SceneKind {
             SceneKind::Cornell => "cornell",
             SceneKind::CornellBlack => "cornell-black",
             SceneKind::Room => "room",
+            SceneKind::Courtyard => "courtyard",
         }
     }
 
@@ -35,11 +40,17 @@ impl SceneKind {
             "cornell" => Some(SceneKind::Cornell),
             "cornell-black" => Some(SceneKind::CornellBlack),
             "room" => Some(SceneKind::Room),
+            "courtyard" => Some(SceneKind::Courtyard),
             _ => None,
         }
     }
 
-    pub const ALL: [SceneKind; 3] = [SceneKind::Cornell, SceneKind::CornellBlack, SceneKind::Room];
+    pub const ALL: [SceneKind; 4] = [
+        SceneKind::Cornell,
+        SceneKind::CornellBlack,
+        SceneKind::Room,
+        SceneKind::Courtyard,
+    ];
 }
 
 /// Diffuse reflectance and emitted radiance of a primitive (RGB).
@@ -149,6 +160,7 @@ impl Scene {
             SceneKind::Cornell => cornell(false),
             SceneKind::CornellBlack => cornell(true),
             SceneKind::Room => room(),
+            SceneKind::Courtyard => courtyard(),
         }
     }
 
@@ -492,5 +504,98 @@ fn room() -> Scene {
             62.0,
         ),
         size: 4.0,
+    }
+}
+
+/// The courtyard's walkway: `WALKWAY.0` long (x from 0), `WALKWAY.1` deep (z from 0, the back wall,
+/// to the colonnade's front) and `WALKWAY.2` high (y, the underside of the roof).
+pub const COURTYARD_WALKWAY: (f64, f64, f64) = (10.0, 3.0, 3.0);
+
+/// The x ranges of the courtyard's columns (square, their fronts flush with the roof's).
+pub const COURTYARD_COLUMNS: [(f64, f64); 4] = [(1.6, 2.4), (3.6, 4.4), (5.6, 6.4), (7.6, 8.4)];
+
+/// A covered walkway (arcade) along one side of a sunlit courtyard: a back wall, two end walls and
+/// a roof slab on four square columns, every piece a closed block (the light map is one-sided, so
+/// no surface may be seen from its back). The sun comes from above, behind the roof and from the
+/// -x side: it lights the courtyard floor in front of the colonnade but nothing under the roof,
+/// where all light is indirect, mostly from the courtyard floor through the gaps between the
+/// columns, and the columns cast indirect shadows on the walkway floor and back wall.
+fn courtyard() -> Scene {
+    let (w, d, h) = COURTYARD_WALKWAY;
+    let (thick, slab) = (0.3, 0.3);
+    let stone = DVec3::new(0.72, 0.68, 0.6);
+    let ground = DVec3::new(0.55, 0.48, 0.38);
+    let none = DVec3::ZERO;
+    let mut prims = Vec::new();
+    let mut materials = Vec::new();
+    let mut add = |faces: Vec<Parallelogram>, albedo: DVec3| {
+        for f in faces {
+            prims.push(f);
+            materials.push(Material {
+                albedo,
+                emission: none,
+            });
+        }
+    };
+    let (x_axis, z_axis) = (DVec3::X, DVec3::Z);
+    // The ground: the walkway floor and the courtyard, one plane facing up.
+    add(
+        vec![parallelogram(
+            [-2.0, 0.0, -thick],
+            [0.0, 0.0, 11.0 + thick],
+            [w + 4.0, 0.0, 0.0],
+        )],
+        ground,
+    );
+    // Back wall (its front face at z = 0) and end walls (x = 0, x = w), up to the roof's underside.
+    add(
+        block(
+            DVec3::new(-thick, 0.0, -thick),
+            x_axis * (w + 2.0 * thick),
+            z_axis * thick,
+            h,
+        ),
+        stone,
+    );
+    for x in [-thick, w] {
+        add(
+            block(DVec3::new(x, 0.0, 0.0), x_axis * thick, z_axis * d, h),
+            stone,
+        );
+    }
+    for &(x0, x1) in &COURTYARD_COLUMNS {
+        add(
+            block(
+                DVec3::new(x0, 0.0, d - (x1 - x0)),
+                x_axis * (x1 - x0),
+                z_axis * (x1 - x0),
+                h,
+            ),
+            stone,
+        );
+    }
+    // The roof slab over walls and columns: a block lifted to y = h, and its underside facing down.
+    let roof_corner = DVec3::new(-thick, h, -thick);
+    let (roof_x, roof_z) = (x_axis * (w + 2.0 * thick), z_axis * (d + thick));
+    add(block(roof_corner, roof_x, roof_z, slab), stone);
+    add(vec![Parallelogram::new(roof_corner, roof_x, roof_z)], stone);
+    // Travelling +x and slightly +z: no sunlight enters the walkway through its open front.
+    let direction = DVec3::new(0.55, -1.0, 0.12).normalize();
+    Scene {
+        kind: SceneKind::Courtyard,
+        bvh: Bvh::new(prims),
+        materials,
+        light: Light::Sun {
+            direction,
+            irradiance: DVec3::new(6.0, 5.6, 5.0),
+        },
+        medium: None,
+        camera: Camera::look_at(
+            DVec3::new(9.6, 1.9, 0.4),
+            DVec3::new(4.0, 0.0, 4.2),
+            DVec3::Y,
+            65.0,
+        ),
+        size: 14.0,
     }
 }
