@@ -20,8 +20,6 @@ use crate::placement::{clamped_extent_to, level_pixels, RADIUS_MAX, RADIUS_MIN};
 use crate::render::GBuffer;
 use crate::scene::Scene;
 use crate::timing::ThreadTimer;
-#[allow(unused_imports)]
-use crate::shim::{CacheShim, ConfigShim};
 
 /// How records are placed and what the metrics get: the two settings the demo reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,6 +65,10 @@ impl Baseline {
         }
     }
 }
+
+/// Rounds of the finest level that end with the two-sided neighbour clamp (each can uncover
+/// pixels next to the small records the round inserted); one more round then only fills.
+const CLAMP_ROUNDS: usize = 3;
 
 /// Gradient limit c of the production caches (`CacheConfig::gradient_limit`): over its extent a
 /// record's first-order extrapolation moves a channel by at most c times its value.
@@ -412,13 +414,19 @@ fn fill_production(
     let (w, h) = (gb.width, gb.height);
     let size = store.scene.size;
     let mut cache: Cache<[f32; 3]> =
-        Cache::new(config.with_gradient_limit(GRADIENT_LIMIT))?;
+        Cache::new(config.with_gradient_limit(std::env::var("XLIMIT").ok().map_or(GRADIENT_LIMIT, |v| v.parse().unwrap())))?;
+    let xclamp = std::env::var_os("XNOCLAMP").is_none();
     let mut record_pixels = Vec::new();
     let mut seconds = 0.0;
     let mut step = 16;
     let mut final_rounds = 0;
     loop {
-        let level = level_pixels(w, h, step);
+        // the repeated finest rounds revisit every pixel: the clamp can uncover any of them
+        let level = if final_rounds == 0 {
+            level_pixels(w, h, step)
+        } else {
+            (0..w * h).collect()
+        };
         // Lookups run on this thread so that the thread clock measures them (they cost
         // microseconds; the gathers below are what needs the threads).
         let start = ThreadTimer::start();
@@ -442,20 +450,24 @@ fn fill_production(
                 RADIUS_MIN * size,
                 RADIUS_MAX * size,
             );
-            let extent = cache.clamp_to_neighbours(g.position, &extent)?;
+            let extent = if xclamp { cache.clamp_to_neighbours(g.position, &extent)? } else { extent };
             cache.insert(&record_of(g, extent, true))?;
             record_pixels.push(i);
         }
-        cache.clamp_neighbours();
+        // the last round only fills: every pixel it inserts a record for stays covered
+        let last_round = step == 1 && final_rounds == CLAMP_ROUNDS;
+        if xclamp && !last_round {
+            cache.clamp_neighbours();
+        }
         seconds += start.seconds();
         if step > 1 {
             step /= 2;
             continue;
         }
-        final_rounds += 1;
-        if wanted.is_empty() || final_rounds == 4 {
+        if wanted.is_empty() || last_round {
             break;
         }
+        final_rounds += 1;
     }
     Ok((cache, record_pixels, seconds))
 }

@@ -21,7 +21,6 @@ mod plot;
 mod render;
 mod report;
 mod scene;
-mod shim;
 mod timing;
 
 use std::path::Path;
