@@ -50,18 +50,29 @@ impl Baseline {
     }
 
     /// One line for the report.
-    pub fn summary(self) -> &'static str {
+    pub fn summary(self, safeguards: Safeguards) -> String {
         match self {
             Baseline::Production => {
-                "overture placement, gradients for every metric, gradient limit, two-sided \
-                 neighbour clamping, curvature floor for the Hessian metrics, radii in \
-                 [0.004, 0.25] x scene size"
+                let limit = if safeguards.gradient_limit.is_finite() {
+                    format!("gradient limit c = {}", safeguards.gradient_limit)
+                } else {
+                    "no gradient limit".to_string()
+                };
+                let clamp = if safeguards.neighbour_clamp {
+                    "two-sided neighbour clamping"
+                } else {
+                    "no neighbour clamping"
+                };
+                format!(
+                    "overture placement, gradients for every metric, {limit}, {clamp}, curvature \
+                     floor for the Hessian metrics, radii in [0.004, 0.25] x scene size"
+                )
             }
-            Baseline::Thesis => {
-                "lazy scanline placement, Ward 1988 split sphere without gradients, one-pixel \
-                 minimum radius, bounded split sphere capped at 150 px of 1800, no maximum \
-                 radius for Hessian records"
-            }
+            Baseline::Thesis => "lazy scanline placement, Ward 1988 split sphere without \
+                                 gradients, one-pixel minimum radius, bounded split sphere capped \
+                                 at 150 px of 1800, no maximum radius for Hessian records, \
+                                 curvature floor for the Hessian metrics"
+                .to_string(),
         }
     }
 }
@@ -70,9 +81,28 @@ impl Baseline {
 /// pixels next to the small records the round inserted); one more round then only fills.
 const CLAMP_ROUNDS: usize = 3;
 
-/// Gradient limit c of the production caches (`CacheConfig::gradient_limit`): over its extent a
-/// record's first-order extrapolation moves a channel by at most c times its value.
-pub const GRADIENT_LIMIT: f64 = 0.5;
+/// The production baseline's safeguards (command-line options).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Safeguards {
+    /// `CacheConfig::gradient_limit`: over its extent a record's first-order extrapolation moves
+    /// a channel by at most this times its value (∞: off).
+    pub gradient_limit: f64,
+    /// Two-sided neighbour clamping (Křivánek et al. 2006): each record clamped to its stored
+    /// neighbours before it is inserted, and `Cache::clamp_neighbours` after every level.
+    pub neighbour_clamp: bool,
+}
+
+impl Default for Safeguards {
+    /// The gradient limit at c = 1 (no record's extrapolation changes a value's sign within its
+    /// extent); neighbour clamping off: at equal record counts it raised every metric's error
+    /// here (see `docs/demo.md`).
+    fn default() -> Self {
+        Safeguards {
+            gradient_limit: 1.0,
+            neighbour_clamp: false,
+        }
+    }
+}
 
 /// The metrics compared, by command-line name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -346,10 +376,11 @@ pub fn run(
     metric: Metric,
     parameter: f64,
     baseline: Baseline,
+    safeguards: Safeguards,
 ) -> Result<Run, raddiff::Error> {
     let config = CacheConfig::surface(3).with_interpolation(metric.interpolation());
     let (cache, record_pixels, placement_seconds) = match baseline {
-        Baseline::Production => fill_production(store, metric, parameter, config)?,
+        Baseline::Production => fill_production(store, metric, parameter, config, safeguards)?,
         Baseline::Thesis => fill_thesis(store, metric, parameter, config)?,
     };
     let (image, uncovered, render_seconds) = render(&cache, store.gbuffer);
@@ -409,13 +440,14 @@ fn fill_production(
     metric: Metric,
     parameter: f64,
     config: CacheConfig,
+    safeguards: Safeguards,
 ) -> Result<(Cache<[f32; 3]>, Vec<usize>, f64), raddiff::Error> {
     let gb = store.gbuffer;
     let (w, h) = (gb.width, gb.height);
     let size = store.scene.size;
     let mut cache: Cache<[f32; 3]> =
-        Cache::new(config.with_gradient_limit(std::env::var("XLIMIT").ok().map_or(GRADIENT_LIMIT, |v| v.parse().unwrap())))?;
-    let xclamp = std::env::var_os("XNOCLAMP").is_none();
+        Cache::new(config.with_gradient_limit(safeguards.gradient_limit))?;
+    let clamp = safeguards.neighbour_clamp;
     let mut record_pixels = Vec::new();
     let mut seconds = 0.0;
     let mut step = 16;
@@ -450,13 +482,17 @@ fn fill_production(
                 RADIUS_MIN * size,
                 RADIUS_MAX * size,
             );
-            let extent = if xclamp { cache.clamp_to_neighbours(g.position, &extent)? } else { extent };
+            let extent = if clamp {
+                cache.clamp_to_neighbours(g.position, &extent)?
+            } else {
+                extent
+            };
             cache.insert(&record_of(g, extent, true))?;
             record_pixels.push(i);
         }
         // the last round only fills: every pixel it inserts a record for stays covered
         let last_round = step == 1 && final_rounds == CLAMP_ROUNDS;
-        if xclamp && !last_round {
+        if clamp && !last_round {
             cache.clamp_neighbours();
         }
         seconds += start.seconds();
@@ -488,7 +524,7 @@ fn fill_thesis(
     let cache: Cache<[f32; 3]> = Cache::new(config)?;
     let mut record_pixels = Vec::new();
     let mut seconds = 0.0;
-    let batch = 2 * rayon::current_num_threads();
+    let batch = rayon::current_num_threads();
     let mut next = 0;
     while next < gb.pixels.len() {
         let start = ThreadTimer::start();
@@ -561,8 +597,9 @@ pub fn tune(
     metric: Metric,
     target: usize,
     baseline: Baseline,
+    safeguards: Safeguards,
 ) -> Result<Run, raddiff::Error> {
-    let count = |p: f64| run(store, metric, p, baseline);
+    let count = |p: f64| run(store, metric, p, baseline, safeguards);
     let mut p = metric.initial_parameter();
     let mut current = count(p)?;
     // Bracket: records decrease as the parameter grows.

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use crate::caching::{Baseline, Metric};
+use crate::caching::{Baseline, Metric, Safeguards};
 use crate::media_cache::MediaMetric;
 use crate::scene::SceneKind;
 
@@ -23,8 +23,10 @@ OPTIONS:
                       thesis (sec. 6.4): lazy scanline placement, Ward 1988 split sphere
                       without gradients, one-pixel minimum radius, bounded split sphere
                       capped at 150 px of 1800, no maximum for Hessian records
+  --gradient-limit C  production caches' gradient limit c, or off     [default: 1]
+  --neighbour-clamp on|off  production caches' two-sided neighbour clamping [default: off]
   --records N         record count every metric is tuned to          [default: 1000]
-  --resolution W[xH]  image size in pixels                           [default: 192]
+  --resolution W[xH]  image size in pixels                           [default: 256]
   --threads N         worker threads (0: one per core)               [default: 0]
   --gather MxN        gather strata per record (rays = M*N)          [default: 32x128]
   --reference N       reference rays per pixel (a square number)     [default: 4096]
@@ -47,6 +49,7 @@ pub struct Options {
     pub scenes: Vec<SceneKind>,
     pub metrics: Vec<Metric>,
     pub baselines: Vec<Baseline>,
+    pub safeguards: Safeguards,
     pub records: usize,
     pub width: usize,
     pub height: usize,
@@ -73,9 +76,10 @@ impl Default for Options {
             scenes: vec![SceneKind::Cornell],
             metrics: Vec::new(),
             baselines: Baseline::ALL.to_vec(),
+            safeguards: Safeguards::default(),
             records: 1000,
-            width: 192,
-            height: 192,
+            width: 256,
+            height: 256,
             threads: 0,
             gather_m: 32,
             gather_n: 128,
@@ -140,6 +144,27 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Options>, 
                 } else {
                     vec![Baseline::parse(&value)
                         .ok_or_else(|| format!("unknown baseline {value:?} (see --help)"))?]
+                }
+            }
+            "--gradient-limit" => {
+                o.safeguards.gradient_limit = if value == "off" {
+                    f64::INFINITY
+                } else {
+                    match value.parse::<f64>() {
+                        Ok(c) if c > 0.0 => c,
+                        _ => {
+                            return Err(format!(
+                                "--gradient-limit expects a positive number or off, got {value:?}"
+                            ))
+                        }
+                    }
+                }
+            }
+            "--neighbour-clamp" => {
+                o.safeguards.neighbour_clamp = match value.as_str() {
+                    "on" => true,
+                    "off" => false,
+                    _ => return Err(format!("--neighbour-clamp expects on or off, got {value:?}")),
                 }
             }
             "--records" => o.records = number(&flag, &value)?.max(1),

@@ -125,7 +125,7 @@ impl SceneRun<'_> {
                 ));
                 continue;
             }
-            let tuned = caching::tune(store, metric, options.records, baseline)
+            let tuned = caching::tune(store, metric, options.records, baseline, options.safeguards)
                 .map_err(|e| e.to_string())?;
             let render: Vec<DVec3> = gbuffer
                 .pixels
@@ -158,7 +158,13 @@ impl SceneRun<'_> {
                     None
                 } else {
                     Some(
-                        caching::run(store, metric, tuned.parameter * factor, baseline)
+                        caching::run(
+                            store,
+                            metric,
+                            tuned.parameter * factor,
+                            baseline,
+                            options.safeguards,
+                        )
                             .map_err(|e| e.to_string())?,
                     )
                 };

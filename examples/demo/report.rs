@@ -132,7 +132,7 @@ impl SceneReport {
                 "{} baselines ({}). {}x{} pixels, gathers of {}x{} = {} rays, target {} records, \
                  reference {} rays per pixel ({reference_seconds:.1} s wall), {} threads",
                 baseline.name(),
-                baseline.summary(),
+                baseline.summary(o.safeguards),
                 o.width,
                 o.height,
                 o.gather_m,
