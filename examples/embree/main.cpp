@@ -4,6 +4,8 @@
 // directions raddiff gives it with Embree, turns what the rays found into records with raddiff
 // (irradiance, gradients, radius), fills one raddiff_cache from many threads, renders the indirect
 // irradiance from the cache, saves the cache, reloads it and renders a second pass from the file.
+// Safeguards: the cache's gradient limit (always), neighbour clamping (--neighbour-clamp); --records N
+// tunes the metric's parameter to about N records, for comparisons at equal record counts.
 //
 // Only two headers matter: <embree3/rtcore.h> and "raddiff.h". See the README section
 // "C++ integration (Embree)" for the walk-through.
@@ -807,11 +809,13 @@ int main(int argc, char **argv) {
         cfg.target_records = static_cast<size_t>(n);
       } else if (a == "--neighbour-clamp") cfg.neighbour_clamp = true;
       else if (a == "--gradient-limit") cfg.gradient_limit = std::stod(next());
+      else if (a == "--check") cfg.check_pixels = std::stoi(next());
       else {
         std::printf(
             "usage: raddiff_embree [--obj scene.obj] [--out prefix] [--size N] [--gather MxN]\n"
             "                      [--accuracy a | --hessian relative_error] [--records N] [--threads N]\n"
             "                      [--neighbour-clamp] [--gradient-limit c (default 0.5, inf: off)]\n"
+            "                      [--check pixels (default 96)]\n"
             "                      [--eye x,y,z] [--target x,y,z] [--fov degrees] [--radius min,max]\n");
         return a == "--help" || a == "-h" ? 0 : 2;
       }
