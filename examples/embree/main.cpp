@@ -4,6 +4,8 @@
 // directions raddiff gives it with Embree, turns what the rays found into records with raddiff
 // (irradiance, gradients, radius), fills one raddiff_cache from many threads, renders the indirect
 // irradiance from the cache, saves the cache, reloads it and renders a second pass from the file.
+// Safeguards: the cache's gradient limit (always), neighbour clamping (--neighbour-clamp); --records N
+// tunes the metric's parameter to about N records, for comparisons at equal record counts.
 //
 // Only two headers matter: <embree3/rtcore.h> and "raddiff.h". See the README section
 // "C++ integration (Embree)" for the walk-through.
@@ -294,6 +296,9 @@ struct Settings {
   double fov = 38.0;
   double min_radius = 0.005, max_radius = 0.25;
   int check_pixels = 96;
+  double gradient_limit = 0.5;   // slope limit c of raddiff_cache_set_gradient_limit (INFINITY: off)
+  bool neighbour_clamp = false;  // clamp records to their neighbours (one-sided at insert, two-sided passes)
+  size_t target_records = 0;     // > 0: tune the metric's parameter to about this many records
 };
 
 struct Stats {
@@ -360,11 +365,21 @@ bool make_record(const Scene &scene, const Settings &cfg, V3 p, V3 n, uint64_t s
     // Luminance Hessian -> anisotropic ellipse bounding the relative interpolation error.
     double h[9];
     for (int k = 0; k < 9; ++k) h[k] = 0.2126 * hessian[k] + 0.7152 * hessian[9 + k] + 0.0722 * hessian[18 + k];
+    // The curvature floor kappa |E| / D^2 (D: harmonic-mean hit distance) keeps a record whose
+    // estimated Hessian (nearly) vanishes from growing to the largest radius.
     double radii[2];
     raddiff_vec3 axes[2];
-    check(raddiff_surface_radii(h, to_c(n), luminance(value.data()), cfg.hessian_error, RADDIFF_ERROR_RELATIVE,
-                                2.0, radii, axes),
-          "raddiff_surface_radii");
+    const double d = output.harmonic_mean_distance;
+    if (std::isfinite(d) && d > 0) {
+      check(raddiff_surface_radii_floored(h, to_c(n), luminance(value.data()), cfg.hessian_error,
+                                          RADDIFF_ERROR_RELATIVE, 2.0, d, RADDIFF_CURVATURE_FLOOR_WEIGHT, radii,
+                                          axes),
+            "raddiff_surface_radii_floored");
+    } else {  // every ray missed: no distance for the floor
+      check(raddiff_surface_radii(h, to_c(n), luminance(value.data()), cfg.hessian_error, RADDIFF_ERROR_RELATIVE,
+                                  2.0, radii, axes),
+            "raddiff_surface_radii");
+    }
     for (int k = 0; k < 2; ++k) {
       record.radii[k] = std::clamp(radii[k], cfg.min_radius, cfg.max_radius);
       record.axes[k] = axes[k];
@@ -477,6 +492,158 @@ struct Primary {
   V3 p, n;
 };
 
+// Pixel indices of one coarse-to-fine level: the grid of step `step` without the coarser grid's
+// pixels (the coarsest level, 16, takes its whole grid).
+std::vector<size_t> level_pixels(int w, int h, int step) {
+  std::vector<size_t> level;
+  for (int y = 0; y < h; y += step)
+    for (int x = 0; x < w; x += step)
+      if (step == 16 || x % (2 * step) != 0 || y % (2 * step) != 0) level.push_back(static_cast<size_t>(y) * w + x);
+  return level;
+}
+
+// A filled cache (owned by the caller) and what the fill cost.
+struct Fill {
+  raddiff_cache *cache = nullptr;
+  size_t records = 0;
+  uint64_t rays = 0;
+  double seconds = 0;
+  size_t shrunk = 0;      // records shrunk by the two-sided neighbour passes
+  int finest_rounds = 0;  // visits of the finest level (1 without neighbour clamping)
+};
+
+// Repeated visits of every pixel after the finest level when neighbour clamping: this many end with
+// the two-sided pass (the first is the finest level itself), then one only fills.
+constexpr int kClampRounds = 3;
+
+// Fills a fresh cache coarse to fine (pixel steps 16, 8, ..., 1); all threads look up and insert
+// concurrently. With `neighbour_clamp`, each record is clamped to the stored records before its
+// insert (raddiff_cache_clamp_record, thread-safe) and the two-sided pass
+// (raddiff_cache_clamp_neighbours, single-threaded) runs after each level; the pass can uncover
+// pixels, so the finest level is repeated over all pixels until a round inserts nothing, the last
+// allowed round filling only (so no pixel is left uncovered).
+Fill fill_cache(const Scene &scene, const Settings &cfg, const std::vector<Primary> &primary, unsigned threads) {
+  using clock = std::chrono::steady_clock;
+  // Irradiance is never negative: RADDIFF_INTERP_NON_NEGATIVE clamps each record's first-order
+  // extrapolation at 0 (steep gradients in dark corners would otherwise dip below it).
+  const uint32_t weights = cfg.hessian_error > 0 ? RADDIFF_INTERP_TENT : RADDIFF_INTERP_WARD;
+  const raddiff_cache_config config{3, RADDIFF_DOMAIN_SURFACE, weights | RADDIFF_INTERP_NON_NEGATIVE, 0.2};
+  Fill out;
+  out.cache = raddiff_cache_new(&config);
+  if (!out.cache) throw std::runtime_error(std::string("raddiff_cache_new: ") + raddiff_last_error());
+  raddiff_cache *cache = out.cache;
+  try {
+    // Slope limiter at insert: over its extent a record extrapolates each channel by at most
+    // c times its value (c = 0.5 here, as the Rust demo).
+    check(raddiff_cache_set_gradient_limit(cache, cfg.gradient_limit), "raddiff_cache_set_gradient_limit");
+    Stats stats;
+    std::atomic<size_t> inserted{0};
+    auto ensure_covered = [&](size_t i) {
+      const Primary &px = primary[i];
+      if (!px.hit) return;
+      float v[3];
+      const raddiff_status st = raddiff_cache_lookup(cache, to_c(px.p), to_c(px.n), v, nullptr);
+      if (st == RADDIFF_OK) return;
+      if (st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
+      std::array<float, 3> value;
+      std::array<float, 9> gradient, rotation;
+      raddiff_cache_record record;
+      if (!make_record(scene, cfg, px.p, px.n, 1 + i, stats, value, gradient, rotation, record, cfg.gather_m,
+                       cfg.gather_n))
+        return;
+      if (cfg.neighbour_clamp) check(raddiff_cache_clamp_record(cache, &record), "raddiff_cache_clamp_record");
+      check(raddiff_cache_insert(cache, &record), "raddiff_cache_insert");
+      ++inserted;
+    };
+    const int w = cfg.width, h = cfg.height;
+    std::vector<size_t> all(primary.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+    const auto t0 = clock::now();
+    int step = 16;
+    for (;;) {
+      const std::vector<size_t> level = out.finest_rounds == 0 ? level_pixels(w, h, step) : all;
+      inserted = 0;
+      parallel_for(level.size(), threads, [&](size_t k) { ensure_covered(level[k]); });
+      const bool last_round = step == 1 && out.finest_rounds == kClampRounds;
+      if (cfg.neighbour_clamp && !last_round) {
+        size_t shrunk = 0;
+        check(raddiff_cache_clamp_neighbours(cache, &shrunk), "raddiff_cache_clamp_neighbours");
+        out.shrunk += shrunk;
+      }
+      if (step > 1) {
+        step /= 2;
+        continue;
+      }
+      ++out.finest_rounds;
+      // Without clamping every pixel of the finest level is covered now; with it, a round that
+      // inserted nothing found every pixel covered (and its pass had nothing new to shrink).
+      if (!cfg.neighbour_clamp || inserted == 0 || last_round) break;
+    }
+    out.seconds = std::chrono::duration<double>(clock::now() - t0).count();
+    out.records = raddiff_cache_len(cache);
+    out.rays = stats.rays.load();
+  } catch (...) {
+    raddiff_cache_free(cache);
+    throw;
+  }
+  return out;
+}
+
+// The parameter --records tunes: the Hessian's relative error, or the split sphere's accuracy a.
+double &tuned_parameter(Settings &cfg) { return cfg.hessian_error > 0 ? cfg.hessian_error : cfg.accuracy; }
+
+// Fills fresh caches, tuning the metric's parameter p until the record count is within 5% of
+// `cfg.target_records` (at most 10 fills). Until the target is bracketed, p jumps along the power
+// law records ~ p^-k (k from the last two fills, at first 2 for the split sphere's radius a*D and
+// 1/2 for the Hessian's error-to-the-1/4 radii); then it bisects the bracket in log space. Keeps the
+// fill closest to the target (the others are freed) and writes its parameter into `cfg`.
+Fill tune(const Scene &scene, Settings &cfg, const std::vector<Primary> &primary, unsigned threads) {
+  const double target = static_cast<double>(cfg.target_records);
+  const char *name = cfg.hessian_error > 0 ? "hessian e" : "accuracy a";
+  double p = tuned_parameter(cfg);
+  double k = cfg.hessian_error > 0 ? 0.5 : 2.0;
+  double too_many = 0, too_few = 0;  // parameters known to give more / fewer records than wanted
+  double last_p = 0, last_n = 0;
+  Fill best;
+  double best_p = p, best_miss = INFINITY, seconds = 0;
+  int fills = 0;
+  for (; fills < 10; ++fills) {
+    Settings trial = cfg;
+    tuned_parameter(trial) = p;
+    Fill f = fill_cache(scene, trial, primary, threads);
+    seconds += f.seconds;
+    const double n = static_cast<double>(f.records);
+    const double miss = std::abs(std::log(std::max(n, 1.0) / target));
+    std::printf("tune %d: %s = %.5g -> %zu records (fill %.2f s)\n", fills + 1, name, p, f.records, f.seconds);
+    if (miss < best_miss) {
+      raddiff_cache_free(best.cache);
+      best = f, best_p = p, best_miss = miss;
+    } else {
+      raddiff_cache_free(f.cache);
+    }
+    if (std::abs(n / target - 1) <= 0.05) {
+      ++fills;
+      break;
+    }
+    if (n > target) too_many = std::max(too_many, p);
+    else too_few = too_few > 0 ? std::min(too_few, p) : p;
+    if (last_p > 0 && last_p != p && last_n > 0 && n > 0 && last_n != n) {
+      k = std::clamp(std::log(last_n / n) / std::log(p / last_p), 0.1, 10.0);  // measured slope
+    }
+    last_p = p, last_n = n;
+    if (too_many > 0 && too_few > 0) {
+      p = std::sqrt(too_many * too_few);  // bisection in log space
+    } else {
+      p *= std::pow(std::max(n, 1.0) / target, 1.0 / k);  // power-law jump towards the target
+    }
+  }
+  tuned_parameter(cfg) = best_p;
+  const bool hit = std::abs(static_cast<double>(best.records) / target - 1) <= 0.05;
+  std::printf("tuned: %s = %.5g, %zu records for %zu wanted (%s), %d fills, %.2f s\n", name, best_p, best.records,
+              cfg.target_records, hit ? "within 5%" : "NOT within 5%", fills, seconds);
+  return best;
+}
+
 int run(const Settings &cfg) {
   using clock = std::chrono::steady_clock;
   const unsigned threads = cfg.threads ? cfg.threads : std::max(1u, std::thread::hardware_concurrency());
@@ -502,37 +669,18 @@ int run(const Settings &cfg) {
     if (std::isfinite(hit.distance)) primary[i] = {true, cfg.eye + d * (hit.distance * (1 - 1e-4)), hit.normal};
   });
 
-  // Pass 1: fill the cache coarse to fine; all threads look up and insert concurrently.
-  // Irradiance is never negative: RADDIFF_INTERP_NON_NEGATIVE clamps each record's first-order
-  // extrapolation at 0 (steep gradients in dark corners would otherwise dip below it).
-  const uint32_t weights = cfg.hessian_error > 0 ? RADDIFF_INTERP_TENT : RADDIFF_INTERP_WARD;
-  const raddiff_cache_config config{3, RADDIFF_DOMAIN_SURFACE, weights | RADDIFF_INTERP_NON_NEGATIVE, 0.2};
-  raddiff_cache *cache = raddiff_cache_new(&config);
-  if (!cache) throw std::runtime_error(std::string("raddiff_cache_new: ") + raddiff_last_error());
-  Stats stats;
-  auto ensure_covered = [&](size_t i) {
-    const Primary &px = primary[i];
-    if (!px.hit) return;
-    float v[3];
-    const raddiff_status st = raddiff_cache_lookup(cache, to_c(px.p), to_c(px.n), v, nullptr);
-    if (st == RADDIFF_OK) return;
-    if (st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
-    std::array<float, 3> value;
-    std::array<float, 9> gradient, rotation;
-    raddiff_cache_record record;
-    if (make_record(scene, cfg, px.p, px.n, 1 + i, stats, value, gradient, rotation, record, cfg.gather_m,
-                    cfg.gather_n))
-      check(raddiff_cache_insert(cache, &record), "raddiff_cache_insert");
-  };
-  const auto t0 = clock::now();
-  for (int step = 16; step >= 1; step /= 2) {
-    std::vector<size_t> level;
-    for (int y = 0; y < h; y += step)
-      for (int x = 0; x < w; x += step)
-        if (step == 16 || x % (2 * step) != 0 || y % (2 * step) != 0) level.push_back(static_cast<size_t>(y) * w + x);
-    parallel_for(level.size(), threads, [&](size_t k) { ensure_covered(level[k]); });
-  }
-  const double fill_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+  // Pass 1: fill the cache (tuned to a record count if asked).
+  Settings used = cfg;
+  const Fill filled = cfg.target_records > 0 ? tune(scene, used, primary, threads)
+                                             : fill_cache(scene, used, primary, threads);
+  raddiff_cache *cache = filled.cache;
+  const double fill_seconds = filled.seconds;
+  std::printf("placement: %s = %.5g, gradient limit %g, neighbour clamp %s\n",
+              used.hessian_error > 0 ? "hessian e" : "split sphere a", tuned_parameter(used), used.gradient_limit,
+              used.neighbour_clamp ? "on" : "off");
+  if (cfg.neighbour_clamp)
+    std::printf("neighbour clamp: %zu records shrunk by the two-sided passes, %d finest-level rounds\n",
+                filled.shrunk, filled.finest_rounds);
 
   // Render from the cache: through a per-thread cursor (successive pixels of a thread are close,
   // so the cursor's remembered records serve most lookups), or with plain lookups (for which the
@@ -568,7 +716,7 @@ int run(const Settings &cfg) {
   const double render_seconds = std::chrono::duration<double>(clock::now() - t1).count();
   const size_t records = raddiff_cache_len(cache);
   std::printf("pass 1: %zu records, %.2f Mrays, fill %.2f s, render %.3f s, %zu uncovered pixels\n", records,
-              stats.rays.load() * 1e-6, fill_seconds, render_seconds, misses1);
+              filled.rays * 1e-6, fill_seconds, render_seconds, misses1);
   write_images(cfg.out + "-irradiance", w, h, first);
 
   // Save, reload, render again from the file (the overture/reuse workflow).
@@ -655,10 +803,19 @@ int main(int argc, char **argv) {
       else if (a == "--radius") {
         const std::string r = next();
         if (std::sscanf(r.c_str(), "%lf,%lf", &cfg.min_radius, &cfg.max_radius) != 2) throw std::runtime_error("--radius min,max");
-      } else {
+      } else if (a == "--records") {
+        const long n = std::stol(next());
+        if (n < 1) throw std::runtime_error("--records N needs N >= 1");
+        cfg.target_records = static_cast<size_t>(n);
+      } else if (a == "--neighbour-clamp") cfg.neighbour_clamp = true;
+      else if (a == "--gradient-limit") cfg.gradient_limit = std::stod(next());
+      else if (a == "--check") cfg.check_pixels = std::stoi(next());
+      else {
         std::printf(
             "usage: raddiff_embree [--obj scene.obj] [--out prefix] [--size N] [--gather MxN]\n"
-            "                      [--accuracy a | --hessian relative_error] [--threads N]\n"
+            "                      [--accuracy a | --hessian relative_error] [--records N] [--threads N]\n"
+            "                      [--neighbour-clamp] [--gradient-limit c (default 0.5, inf: off)]\n"
+            "                      [--check pixels (default 96)]\n"
             "                      [--eye x,y,z] [--target x,y,z] [--fov degrees] [--radius min,max]\n");
         return a == "--help" || a == "-h" ? 0 : 2;
       }

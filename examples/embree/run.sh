@@ -27,11 +27,15 @@ cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release -DRADDIFF_ROOT="$root" >
 cmake --build "$build" -j 2 >/dev/null
 mkdir -p "$out"
 
-# A small, quick configuration: split-sphere records, then occlusion-aware Hessian records.
+# A small, quick configuration: split-sphere records, then occlusion-aware Hessian records with
+# the Hessian's relative error tuned (--records) to the split sphere's record count, so that the two
+# check errors compare at (nearly) equal records.
 "$build/raddiff_embree" --obj "$here/cornell.obj" --out "$out/cornell" --size 128 --gather 16x48 "$@" \
   | tee "$out/cornell.log"
+records="$(sed -n 's/^pass 1: \([0-9][0-9]*\) records.*/\1/p' "$out/cornell.log")"
+[ -n "$records" ] || { echo "no record count in $out/cornell.log" >&2; exit 1; }
 "$build/raddiff_embree" --obj "$here/cornell.obj" --out "$out/cornell-hessian" --size 128 \
-  --gather 16x48 --hessian 0.05 "$@" | tee "$out/cornell-hessian.log"
+  --gather 16x48 --hessian 0.05 --records "$records" "$@" | tee "$out/cornell-hessian.log"
 runs=(cornell cornell-hessian)
 
 # The program exits non-zero when its own checks fail; check the files too.
@@ -41,4 +45,10 @@ for f in "${runs[@]}"; do
   test -s "$out/$f-irradiance.pfm"
   test -s "$out/$f.rdc"
 done
+records_of() { sed -n 's/^pass 1: \([0-9][0-9]*\) records.*/\1/p' "$out/$1.log"; }
+error_of() { sed -n 's/^check: relative RMS error.*: \([0-9.eE+-]*\)$/\1/p' "$out/$1.log"; }
+awk -v n="$(records_of cornell)" -v x="$(error_of cornell)" -v m="$(records_of cornell-hessian)" \
+  -v y="$(error_of cornell-hessian)" 'BEGIN {
+    printf "equal records: split sphere %d records error %.4f, hessian %d records error %.4f (hessian/split sphere = %.2f)\n",
+      n, x, m, y, (x > 0 ? y / x : 0) }'
 echo "embree example: OK (images and caches in $out)"
