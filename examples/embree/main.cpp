@@ -296,7 +296,7 @@ struct Settings {
   double fov = 38.0;
   double min_radius = 0.005, max_radius = 0.25;
   int check_pixels = 96;
-  double gradient_limit = 0.5;   // slope limit c of raddiff_cache_set_gradient_limit (INFINITY: off)
+  double gradient_limit = RADDIFF_GRADIENT_LIMIT_DEFAULT;  // slope limit c (INFINITY: off)
   bool neighbour_clamp = false;  // clamp records to their neighbours (one-sided at insert, two-sided passes)
   size_t target_records = 0;     // > 0: tune the metric's parameter to about this many records
 };
@@ -534,7 +534,7 @@ Fill fill_cache(const Scene &scene, const Settings &cfg, const std::vector<Prima
   raddiff_cache *cache = out.cache;
   try {
     // Slope limiter at insert: over its extent a record extrapolates each channel by at most
-    // c times its value (c = 0.5 here, as the Rust demo).
+    // c times its value (c = 1 here, as in the Rust demo: no value changes sign).
     check(raddiff_cache_set_gradient_limit(cache, cfg.gradient_limit), "raddiff_cache_set_gradient_limit");
     Stats stats;
     std::atomic<size_t> inserted{0};
