@@ -57,7 +57,7 @@ fn load_or_compute_reference(
     out: &Path,
 ) -> std::io::Result<(Vec<DVec3>, f64)> {
     let path = out.join(format!(
-        "{}-reference-v6-{}x{}-{}.f64",
+        "{}-reference-v7-{}x{}-{}.f64",
         scene.kind.name(),
         gbuffer.width,
         gbuffer.height,
