@@ -164,7 +164,11 @@ pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Options>, 
                 o.safeguards.neighbour_clamp = match value.as_str() {
                     "on" => true,
                     "off" => false,
-                    _ => return Err(format!("--neighbour-clamp expects on or off, got {value:?}")),
+                    _ => {
+                        return Err(format!(
+                            "--neighbour-clamp expects on or off, got {value:?}"
+                        ))
+                    }
                 }
             }
             "--records" => o.records = number(&flag, &value)?.max(1),

@@ -165,7 +165,7 @@ impl SceneRun<'_> {
                             baseline,
                             options.safeguards,
                         )
-                            .map_err(|e| e.to_string())?,
+                        .map_err(|e| e.to_string())?,
                     )
                 };
                 let r = run.as_ref().unwrap_or(&tuned);
@@ -290,11 +290,7 @@ fn run() -> Result<(), String> {
             let plot_path = options.out.join(format!("{report_name}-error-time.png"));
             plot::error_against_time(
                 &plot_path,
-                &format!(
-                    "{name}, {} baselines: error against time, {} rays per record",
-                    baseline.name(),
-                    store.rays_per_gather()
-                ),
+                &format!("{name} ({}): error against time", baseline.name()),
                 &scene_report.series(),
             )
             .map(|()| println!("   wrote {}", plot_path.display()))

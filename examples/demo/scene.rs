@@ -315,7 +315,7 @@ fn ceiling_around(lo: f64, hi: f64) -> Vec<Parallelogram> {
     vec![
         parallelogram([0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, lo]), // z < lo
         parallelogram([0.0, 1.0, hi], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0 - hi]), // z > hi
-        parallelogram([0.0, 1.0, lo], [lo, 0.0, 0.0], [0.0, 0.0, w]),   // x < lo
+        parallelogram([0.0, 1.0, lo], [lo, 0.0, 0.0], [0.0, 0.0, w]),    // x < lo
         parallelogram([hi, 1.0, lo], [1.0 - hi, 0.0, 0.0], [0.0, 0.0, w]), // x > hi
     ]
 }
@@ -344,7 +344,7 @@ fn cornell(black_back_wall: bool) -> Scene {
         white,
         none,
     ); // floor
-    // The ceiling, in four pieces around the light's opening (x, z in [0.38, 0.62]).
+       // The ceiling, in four pieces around the light's opening (x, z in [0.38, 0.62]).
     for piece in ceiling_around(0.38, 0.62) {
         add(piece, white, none);
     }
@@ -363,10 +363,10 @@ fn cornell(black_back_wall: bool) -> Scene {
         green,
         none,
     ); // right
-    // The light fills the ceiling's opening, flush with it and facing down. A panel hung below
-    // the ceiling left a slit the camera looked into (its pixels held most of every metric's
-    // squared error); a housing closing that slit made a 2 mm wall whose contact shadow on the
-    // ceiling, one pixel row wide, did the same at 256 px. Flush, there is neither.
+       // The light fills the ceiling's opening, flush with it and facing down. A panel hung below
+       // the ceiling left a slit the camera looked into (its pixels held most of every metric's
+       // squared error); a housing closing that slit made a 2 mm wall whose contact shadow on the
+       // ceiling, one pixel row wide, did the same at 256 px. Flush, there is neither.
     let light_index = add(
         parallelogram([0.38, 1.0, 0.38], [0.24, 0.0, 0.0], [0.0, 0.0, 0.24]),
         none,

@@ -98,7 +98,8 @@ pub struct raddiff_gather_output {
     pub occlusion_gradient: *mut f64,
     /// 9*channels: occlusion-aware 3x3 translation Hessian, row-major; for hemisphere layouts with
     /// the thesis' robustness terms (1% of the irradiance on every triangle, geometric Hessian for an
-    /// all-black channel), ready for raddiff_surface_radii.
+    /// all-black channel; their tangent projection is zero, so they change no radius). For robust
+    /// radii pass it to raddiff_surface_radii_floored with `harmonic_mean_distance`.
     pub hessian: *mut f64,
     /// Harmonic mean of the hit distances, m*n / sum(1/r); INFINITY if every ray missed.
     pub harmonic_mean_distance: f64,

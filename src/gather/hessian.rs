@@ -49,9 +49,13 @@
 //!
 //! # Robustness (thesis sec. 6.3)
 //!
-//! For record radii, [`OcclusionDerivatives::robust_hessian`] adds 1% of the irradiance to every
-//! triangle radiance (= `H + 0.01 E H_geometric`), and uses the geometric Hessian (unit radiance)
-//! for a channel in which every ray returned black.
+//! The thesis makes radii robust by adding 1% of the irradiance to every triangle radiance
+//! ([`OcclusionDerivatives::robust_hessian`], `H + 0.01 E H_geometric`, and the geometric Hessian
+//! alone for a channel in which every ray returned black). The mesh is closed, and the irradiance
+//! from a closed environment of uniform radiance is the same everywhere inside it, so
+//! `H_geometric`'s tangent projection is zero (to rounding): the term changes no radius, and a
+//! black gather keeps the largest one. The robustness term that works is the curvature floor of
+//! [`super::radii::surface_radii_floored`].
 
 use glam::{DMat3, DVec3};
 
@@ -119,7 +123,9 @@ pub struct OcclusionDerivatives {
 impl OcclusionDerivatives {
     /// The Hessian of channel `c` with the thesis' robustness (sec. 6.3): `H + 0.01 E H_geometric`
     /// (1% of the irradiance added to every triangle radiance), or `H_geometric` (unit radiance)
-    /// when every ray of the channel returned black.
+    /// when every ray of the channel returned black. Kept for comparison with the thesis: the
+    /// added term's projection on the tangent plane is zero (module docs), so radii from this are
+    /// those of the plain Hessian; use [`super::radii::surface_radii_floored`] for robust radii.
     pub fn robust_hessian(&self, c: usize) -> DMat3 {
         if self.all_black[c] {
             self.geometric.hessian

@@ -522,9 +522,16 @@ mod tests {
         // A flat estimate: without the floor the largest radius, with it the split-sphere-like one.
         let plain = surface_radii(DMat3::ZERO, DVec3::Z, e, eps, ErrorMode::Relative, 2.0).unwrap();
         assert_eq!(plain.radii, [MAX_RADIUS; 2]);
-        let floored =
-            surface_radii_floored(DMat3::ZERO, DVec3::Z, e, eps, ErrorMode::Relative, 2.0, floor)
-                .unwrap();
+        let floored = surface_radii_floored(
+            DMat3::ZERO,
+            DVec3::Z,
+            e,
+            eps,
+            ErrorMode::Relative,
+            2.0,
+            floor,
+        )
+        .unwrap();
         let expect = isotropic_radius(CURVATURE_FLOOR_WEIGHT * e / 0.25, eps * e);
         for r in floored.radii {
             assert!((r - expect).abs() < 1e-12 * expect, "{r} vs {expect}");
@@ -535,8 +542,16 @@ mod tests {
         assert!((expect - closed).abs() < 1e-12 * closed);
         // The normal component of the Hessian is not curvature along the surface.
         let normal_only = DMat3::from_diagonal(DVec3::new(0.0, 0.0, 50.0));
-        let r = surface_radii_floored(normal_only, DVec3::Z, e, eps, ErrorMode::Relative, 2.0, floor)
-            .unwrap();
+        let r = surface_radii_floored(
+            normal_only,
+            DVec3::Z,
+            e,
+            eps,
+            ErrorMode::Relative,
+            2.0,
+            floor,
+        )
+        .unwrap();
         assert!((r.radii[0] - expect).abs() < 1e-12 * expect);
     }
 
@@ -544,22 +559,47 @@ mod tests {
     fn curvature_floor_gives_black_gathers_a_finite_radius() {
         let floor = CurvatureFloor::new(0.8);
         let eps = 1e-4;
-        let plain = surface_radii(DMat3::ZERO, DVec3::Y, 0.0, eps, ErrorMode::Relative, 2.0).unwrap();
+        let plain =
+            surface_radii(DMat3::ZERO, DVec3::Y, 0.0, eps, ErrorMode::Relative, 2.0).unwrap();
         assert_eq!(plain.radii, [MAX_RADIUS; 2]);
-        let r = surface_radii_floored(DMat3::ZERO, DVec3::Y, 0.0, eps, ErrorMode::Relative, 2.0, floor)
-            .unwrap();
+        let r = surface_radii_floored(
+            DMat3::ZERO,
+            DVec3::Y,
+            0.0,
+            eps,
+            ErrorMode::Relative,
+            2.0,
+            floor,
+        )
+        .unwrap();
         let closed =
             (4.0 * eps * 0.64 / (std::f64::consts::PI * CURVATURE_FLOOR_WEIGHT)).powf(0.25);
         for a in r.radii {
             assert!((a - closed).abs() < 1e-12 * closed, "{a} vs {closed}");
         }
         // the limit of a vanishing value: continuous
-        let tiny = surface_radii_floored(DMat3::ZERO, DVec3::Y, 1e-200, eps, ErrorMode::Relative, 2.0, floor)
-            .unwrap();
+        let tiny = surface_radii_floored(
+            DMat3::ZERO,
+            DVec3::Y,
+            1e-200,
+            eps,
+            ErrorMode::Relative,
+            2.0,
+            floor,
+        )
+        .unwrap();
         assert!((tiny.radii[0] - closed).abs() < 1e-12 * closed);
         // absolute mode: a zero value adds no curvature (an absolute error of 0 stays 0)
-        let abs = surface_radii_floored(DMat3::ZERO, DVec3::Y, 0.0, eps, ErrorMode::Absolute, 2.0, floor)
-            .unwrap();
+        let abs = surface_radii_floored(
+            DMat3::ZERO,
+            DVec3::Y,
+            0.0,
+            eps,
+            ErrorMode::Absolute,
+            2.0,
+            floor,
+        )
+        .unwrap();
         assert_eq!(abs.radii, [MAX_RADIUS; 2]);
     }
 
@@ -571,7 +611,8 @@ mod tests {
         let h = DMat3::from_diagonal(DVec3::new(-lambda, 0.5 * lambda, 7.0));
         let floor = CurvatureFloor::new(d);
         let plain = surface_radii(h, DVec3::Z, e, eps, ErrorMode::Relative, 2.0).unwrap();
-        let floored = surface_radii_floored(h, DVec3::Z, e, eps, ErrorMode::Relative, 2.0, floor).unwrap();
+        let floored =
+            surface_radii_floored(h, DVec3::Z, e, eps, ErrorMode::Relative, 2.0, floor).unwrap();
         for (a, b) in plain.radii.iter().zip(floored.radii) {
             let change = (a - b) / a;
             assert!(change > 0.0 && change < 2e-4, "relative change {change}");
@@ -580,8 +621,19 @@ mod tests {
         // indefinite Hessians are floored on magnitudes: the floor never cancels curvature
         let saddle = DMat3::from_diagonal(DVec3::new(-2.0, 2.0, 0.0));
         let a = surface_radii(saddle, DVec3::Z, 1.0, eps, ErrorMode::Relative, 1.0).unwrap();
-        let b = surface_radii_floored(saddle, DVec3::Z, 1.0, eps, ErrorMode::Relative, 1.0, CurvatureFloor { distance: 1.0, weight: 2.0 })
-            .unwrap();
+        let b = surface_radii_floored(
+            saddle,
+            DVec3::Z,
+            1.0,
+            eps,
+            ErrorMode::Relative,
+            1.0,
+            CurvatureFloor {
+                distance: 1.0,
+                weight: 2.0,
+            },
+        )
+        .unwrap();
         let expect = isotropic_radius(4.0, eps);
         assert!(a.radii[0] > b.radii[0] && (b.radii[0] - expect).abs() < 1e-12 * expect);
     }
@@ -589,12 +641,33 @@ mod tests {
     #[test]
     fn curvature_floor_rejects_bad_input_and_stays_finite() {
         for f in [
-            CurvatureFloor { distance: 0.0, weight: 0.04 },
-            CurvatureFloor { distance: f64::INFINITY, weight: 0.04 },
-            CurvatureFloor { distance: 1.0, weight: -1.0 },
-            CurvatureFloor { distance: 1.0, weight: f64::NAN },
+            CurvatureFloor {
+                distance: 0.0,
+                weight: 0.04,
+            },
+            CurvatureFloor {
+                distance: f64::INFINITY,
+                weight: 0.04,
+            },
+            CurvatureFloor {
+                distance: 1.0,
+                weight: -1.0,
+            },
+            CurvatureFloor {
+                distance: 1.0,
+                weight: f64::NAN,
+            },
         ] {
-            assert!(surface_radii_floored(DMat3::ZERO, DVec3::Z, 1.0, 1e-3, ErrorMode::Relative, 2.0, f).is_err());
+            assert!(surface_radii_floored(
+                DMat3::ZERO,
+                DVec3::Z,
+                1.0,
+                1e-3,
+                ErrorMode::Relative,
+                2.0,
+                f
+            )
+            .is_err());
         }
         for (h, v, d) in [
             (DMat3::from_diagonal(DVec3::splat(1e300)), 1e-300, 1e-300),
@@ -602,7 +675,8 @@ mod tests {
             (DMat3::from_diagonal(DVec3::splat(-1e-300)), 1e300, 1e300),
         ] {
             let f = CurvatureFloor::new(d);
-            let r = surface_radii_floored(h, DVec3::Z, v, 1e-3, ErrorMode::Relative, 2.0, f).unwrap();
+            let r =
+                surface_radii_floored(h, DVec3::Z, v, 1e-3, ErrorMode::Relative, 2.0, f).unwrap();
             assert!(r.radii.iter().all(|a| a.is_finite() && *a >= 0.0), "{r:?}");
         }
     }
