@@ -100,10 +100,6 @@
 // curvature 4E/D² of irradiance from a small source at distance D straight above).
 #define RADDIFF_CURVATURE_FLOOR_WEIGHT 0.04
 
-// Default weight κ of [`CurvatureFloor`]: 1% of the tangent curvature `4E/D²` of the
-// irradiance from a small source straight above the record at distance `D`.
-#define CURVATURE_FLOOR_WEIGHT 0.04
-
 // Outcome of a fallible call. `RADDIFF_OK` is 0; on any other code, `raddiff_last_error()` says why
 // and no output was written.
 typedef enum raddiff_status {
@@ -263,7 +259,8 @@ typedef struct raddiff_gather_output {
   double *occlusion_gradient;
   // 9*channels: occlusion-aware 3x3 translation Hessian, row-major; for hemisphere layouts with
   // the thesis' robustness terms (1% of the irradiance on every triangle, geometric Hessian for an
-  // all-black channel), ready for raddiff_surface_radii.
+  // all-black channel; their tangent projection is zero, so they change no radius). For robust
+  // radii pass it to raddiff_surface_radii_floored with `harmonic_mean_distance`.
   double *hessian;
   // Harmonic mean of the hit distances, m*n / sum(1/r); INFINITY if every ray missed.
   double harmonic_mean_distance;

@@ -19,11 +19,11 @@ OPTIONS:
                                                                      [default: all]
   --baseline NAME     production | thesis | all                      [default: all]
                       production: overture pass, gradients for every metric, the cache's
-                      gradient limit and neighbour clamping, radii in [0.004, 0.25] x size;
+                      gradient limit, curvature floor, radii in [0.004, 0.25] x size;
                       thesis (sec. 6.4): lazy scanline placement, Ward 1988 split sphere
                       without gradients, one-pixel minimum radius, bounded split sphere
                       capped at 150 px of 1800, no maximum for Hessian records
-  --gradient-limit C  production caches' gradient limit c, or off     [default: 1]
+  --gradient-limit C  production caches' gradient limit c, or off     [default: 2]
   --neighbour-clamp on|off  production caches' two-sided neighbour clamping [default: off]
   --records N         record count every metric is tuned to          [default: 1000]
   --resolution W[xH]  image size in pixels                           [default: 256]
