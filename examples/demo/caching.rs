@@ -381,7 +381,11 @@ pub fn run(
     safeguards: Safeguards,
 ) -> Result<Run, raddiff::Error> {
     let config = CacheConfig::surface(3).with_interpolation(metric.interpolation());
-    let (cache, record_pixels, placement_seconds) = match baseline {
+    let Filled {
+        cache,
+        record_pixels,
+        seconds: placement_seconds,
+    } = match baseline {
         Baseline::Production => fill_production(store, metric, parameter, config, safeguards)?,
         Baseline::Thesis => fill_thesis(store, metric, parameter, config)?,
     };
@@ -413,6 +417,13 @@ pub fn run(
     })
 }
 
+/// A filled cache, the pixels whose gathers made its records, and the placement's CPU seconds.
+struct Filled {
+    cache: Cache<[f32; 3]>,
+    record_pixels: Vec<usize>,
+    seconds: f64,
+}
+
 /// The record of gather `g` with `extent`, with its gradients or (Ward 1988) without.
 fn record_of(g: &Gathered, extent: Extent, gradients: bool) -> Record<[f32; 3]> {
     let mut record = Record::new(g.position, g.normal, g.value, extent);
@@ -435,15 +446,15 @@ fn covered(cache: &Cache<[f32; 3]>, gb: &GBuffer, i: usize) -> bool {
 /// pixels no record covers get a gather, and their records are inserted in pixel order, each
 /// clamped to its stored neighbours and skipped when a record inserted earlier at the same level
 /// already covers it; then the two-sided neighbour clamp runs over the whole cache. Clamping
-/// can uncover pixels, so the finest level repeats until every pixel is covered (at most four
-/// times). Returns the cache, the pixels of its records and the placement's CPU seconds.
+/// can uncover pixels, so the finest level repeats over every pixel, the last round only
+/// filling, until every pixel is covered.
 fn fill_production(
     store: &GatherStore,
     metric: Metric,
     parameter: f64,
     config: CacheConfig,
     safeguards: Safeguards,
-) -> Result<(Cache<[f32; 3]>, Vec<usize>, f64), raddiff::Error> {
+) -> Result<Filled, raddiff::Error> {
     let gb = store.gbuffer;
     let (w, h) = (gb.width, gb.height);
     let size = store.scene.size;
@@ -507,7 +518,11 @@ fn fill_production(
         }
         final_rounds += 1;
     }
-    Ok((cache, record_pixels, seconds))
+    Ok(Filled {
+        cache,
+        record_pixels,
+        seconds,
+    })
 }
 
 /// Thesis placement: one pass in scanline order, a record wherever no record covers the pixel
@@ -519,7 +534,7 @@ fn fill_thesis(
     metric: Metric,
     parameter: f64,
     config: CacheConfig,
-) -> Result<(Cache<[f32; 3]>, Vec<usize>, f64), raddiff::Error> {
+) -> Result<Filled, raddiff::Error> {
     let gb = store.gbuffer;
     let camera = &store.scene.camera;
     let size = store.scene.size;
@@ -563,7 +578,11 @@ fn fill_thesis(
         seconds += start.seconds();
         next = i;
     }
-    Ok((cache, record_pixels, seconds))
+    Ok(Filled {
+        cache,
+        record_pixels,
+        seconds,
+    })
 }
 
 /// The indirect irradiance of every pixel from the cache, in scanline order through a cursor
