@@ -27,6 +27,9 @@ pub mod scatter;
 mod simd;
 
 pub use deriv::{Deriv2, Deriv3, Order};
+/// The `glam` version raddiff's API is written in (`DVec3`, `DMat3`, ...): use `raddiff::glam`
+/// instead of adding `glam` at exactly this version to your own manifest.
+pub use glam;
 pub use error::{Error, Result};
 
 /// The crate version, "MAJOR.MINOR.PATCH".
