@@ -39,3 +39,22 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
+
+/// The Rust examples of the guides in `docs/`, compiled and run as doc-tests.
+#[cfg(doctest)]
+pub mod guide_doctests {
+    #[doc = include_str!("../docs/kernels.md")]
+    pub struct Kernels;
+    #[doc = include_str!("../docs/gathers.md")]
+    pub struct Gathers;
+    #[doc = include_str!("../docs/cache.md")]
+    pub struct Cache;
+    #[doc = include_str!("../docs/single-scattering.md")]
+    pub struct SingleScattering;
+    #[doc = include_str!("../docs/demo.md")]
+    pub struct Demo;
+    #[doc = include_str!("../docs/embree.md")]
+    pub struct Embree;
+    #[doc = include_str!("../docs/ARCHITECTURE.md")]
+    pub struct Architecture;
+}
