@@ -27,10 +27,10 @@ pub mod scatter;
 mod simd;
 
 pub use deriv::{Deriv2, Deriv3, Order};
+pub use error::{Error, Result};
 /// The `glam` version raddiff's API is written in (`DVec3`, `DMat3`, ...): use `raddiff::glam`
 /// instead of adding `glam` at exactly this version to your own manifest.
 pub use glam;
-pub use error::{Error, Result};
 
 /// The crate version, "MAJOR.MINOR.PATCH".
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
