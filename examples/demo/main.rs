@@ -47,15 +47,45 @@ fn progress(message: &str) -> ProgressBar {
     bar
 }
 
+/// A reference and where it came from.
+pub struct Reference {
+    pub values: Vec<DVec3>,
+    /// Wall seconds it took to compute (then or now).
+    pub seconds: f64,
+    /// The file it was read from or saved to.
+    pub path: std::path::PathBuf,
+    /// Whether it was read from `path` rather than computed by this run.
+    pub reused: bool,
+}
+
+impl Reference {
+    /// One console line: what was computed or reused, and where it is.
+    pub fn describe(&self, what: &str) -> String {
+        if self.reused {
+            format!(
+                "   {what}: reused {} (computed in {:.1} s by an earlier run)",
+                self.path.display(),
+                self.seconds
+            )
+        } else {
+            format!(
+                "   {what}: computed in {:.1} s, wrote {}",
+                self.seconds,
+                self.path.display()
+            )
+        }
+    }
+}
+
 /// The reference is the slow part and depends only on the scene, resolution and sample count: keep
-/// it under out/ and reuse it.
+/// it under out/ and reuse it (the file name's version changes whenever the scenes do).
 fn load_or_compute_reference(
     scene: &Scene,
     lightmap: &LightMap,
     gbuffer: &GBuffer,
     samples: usize,
     out: &Path,
-) -> std::io::Result<(Vec<DVec3>, f64)> {
+) -> std::io::Result<Reference> {
     let path = out.join(format!(
         "{}-reference-v7-{}x{}-{}.f64",
         scene.kind.name(),
@@ -71,7 +101,12 @@ fn load_or_compute_reference(
             let values = (0..count)
                 .map(|p| DVec3::new(f(1 + 3 * p), f(2 + 3 * p), f(3 + 3 * p)))
                 .collect();
-            return Ok((values, seconds));
+            return Ok(Reference {
+                values,
+                seconds,
+                path,
+                reused: true,
+            });
         }
     }
     let side = (samples as f64).sqrt().round() as usize;
@@ -86,7 +121,12 @@ fn load_or_compute_reference(
         }
     }
     std::fs::write(&path, bytes)?;
-    Ok((values, seconds))
+    Ok(Reference {
+        values,
+        seconds,
+        path,
+        reused: false,
+    })
 }
 
 /// What every baseline's caches of one scene share.
@@ -211,7 +251,7 @@ fn run() -> Result<(), String> {
             "   light map and primary hits: {:.2} s",
             start.elapsed().as_secs_f64()
         );
-        let (reference, ref_seconds) = load_or_compute_reference(
+        let computed = load_or_compute_reference(
             &scene,
             &lightmap,
             &gbuffer,
@@ -220,9 +260,13 @@ fn run() -> Result<(), String> {
         )
         .map_err(|e| e.to_string())?;
         println!(
-            "   reference ({} rays per pixel): {ref_seconds:.2} s",
-            options.reference_samples
+            "{}",
+            computed.describe(&format!(
+                "reference ({} rays per pixel)",
+                options.reference_samples
+            ))
         );
+        let (reference, ref_seconds) = (computed.values, computed.seconds);
         let final_image: Vec<DVec3> = gbuffer
             .pixels
             .iter()

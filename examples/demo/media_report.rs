@@ -54,10 +54,10 @@ fn load_or_compute_reference(
     o: &Options,
     out: &Path,
     progress: &indicatif::ProgressBar,
-) -> std::io::Result<(Vec<DVec3>, f64)> {
+) -> std::io::Result<crate::Reference> {
     let view = store.view;
     let path = out.join(format!(
-        "{}-media-reference-v1-{}x{}x{}-{}x{}.f64",
+        "{}-media-reference-v2-{}x{}x{}-{}x{}.f64",
         store.scene.kind.name(),
         view.width,
         view.height,
@@ -72,7 +72,12 @@ fn load_or_compute_reference(
             let values = (0..count)
                 .map(|p| DVec3::new(f(1 + 3 * p), f(2 + 3 * p), f(3 + 3 * p)))
                 .collect();
-            return Ok((values, f(0)));
+            return Ok(crate::Reference {
+                values,
+                seconds: f(0),
+                path,
+                reused: true,
+            });
         }
     }
     let start = Instant::now();
@@ -86,7 +91,12 @@ fn load_or_compute_reference(
         }
     }
     std::fs::write(&path, bytes)?;
-    Ok((values, seconds))
+    Ok(crate::Reference {
+        values,
+        seconds,
+        path,
+        reused: false,
+    })
 }
 
 /// The records' centres (red) over the dimmed image.
@@ -126,15 +136,18 @@ pub fn run(
     let name = scene.kind.name();
     let view = MediaView::build(scene, o.media_width, o.media_height, o.media_steps);
     let store = MediaStore::new(scene, lightmap, &view, gatherer);
-    let (reference_points, ref_seconds) =
-        load_or_compute_reference(&store, o, &o.out, &progress("media reference"))
-            .map_err(|e| e.to_string())?;
+    let computed = load_or_compute_reference(&store, o, &o.out, &progress("media reference"))
+        .map_err(|e| e.to_string())?;
     println!(
-        "   media reference ({}x{} rays at {} points): {ref_seconds:.2} s",
-        o.media_reference_m,
-        o.media_reference_n,
-        view.points()
+        "{}",
+        computed.describe(&format!(
+            "media reference ({}x{} rays at {} points)",
+            o.media_reference_m,
+            o.media_reference_n,
+            view.points()
+        ))
     );
+    let (reference_points, ref_seconds) = (computed.values, computed.seconds);
     let reference = view.integrate(&reference_points);
     let exposure = image::auto_exposure(&reference);
     let save = |img: image::Rgb8, file: &str| {
