@@ -160,6 +160,9 @@ fn main() {
         ("sliver", sliver, DVec3::new(0.4, 0.1, 0.3), 1e-4),
     ];
 
+    // the 320-bit references take tens of seconds: say what is happening (on stderr, so that
+    // stdout stays the markdown tables)
+    eprintln!("triangle solid angle: 320-bit references and timings of 6 configurations ...");
     for (case, t, x, fd_step) in cases {
         let step = 1e-30 * (t[0] - x).length().max(1e-300);
         let r = reference_a::central3(&mut hp, x, step, &mut |hp, p| {
@@ -175,6 +178,7 @@ fn main() {
             &|p, o| kernels::triangle_solid_angle(p, t[0], t[1], t[2], o),
         ));
     }
+    eprintln!("triangle form factor: 320-bit references and timings of 6 configurations ...");
     for (case, t, x, fd_step) in cases {
         // The receiver faces the triangle so nothing is clipped, except where the case says so.
         let n = if (t[0] - x).dot(normal) > 0.0 {
@@ -192,6 +196,7 @@ fn main() {
             &|p, o| kernels::triangle_form_factor(p, n, t[0], t[1], t[2], o),
         ));
     }
+    eprintln!("transmittance, flatland segment form factor ...");
     {
         let (x, y, sigma) = (DVec3::new(0.3, -0.2, 0.1), DVec3::new(1.5, 2.0, -0.7), 0.8);
         let step = 1e-30;
