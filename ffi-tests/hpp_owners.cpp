@@ -183,11 +183,14 @@ void cache() {
     raddiff::Cache replaced(one);
     replaced = std::move(loaded);  // frees the one-channel cache
     CHECK(replaced.size() == 2 && !loaded);
-    replaced = std::move(replaced);  // self-move keeps the handle
+    raddiff::Cache &alias = replaced;
+    replaced = std::move(alias);  // self-move keeps the handle
     CHECK(replaced.size() == 2);
     raddiff::Cache adopted = raddiff::Cache::adopt(raddiff_cache_new(&one));
     CHECK(adopted.size() == 0);
-    CHECK_THROWS(raddiff::Cache::adopt(nullptr), RADDIFF_ERROR_INVALID_ARGUMENT, "");
+    raddiff_cache_config bad = one;
+    bad.domain = 7;
+    CHECK_THROWS(raddiff::Cache::adopt(raddiff_cache_new(&bad)), RADDIFF_ERROR_INVALID_ARGUMENT, "domain");
   }
 }
 

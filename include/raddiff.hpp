@@ -90,9 +90,11 @@ inline void check_size(const char *what, std::size_t actual, std::size_t expecte
   }
 }
 
-/// The release function of each handle type.
+/// Wraps `raddiff_cache_free` (NULL is ignored).
 inline void free_handle(raddiff_cache *p) noexcept { raddiff_cache_free(p); }
+/// Wraps `raddiff_cache_cursor_free` (NULL is ignored).
 inline void free_handle(raddiff_cache_cursor *p) noexcept { raddiff_cache_cursor_free(p); }
+/// Wraps `raddiff_refractive_mesh_free` (NULL is ignored).
 inline void free_handle(raddiff_refractive_mesh *p) noexcept { raddiff_refractive_mesh_free(p); }
 
 /// Move-only owner of one raddiff handle: frees it on destruction; a moved-from owner holds NULL
@@ -100,9 +102,13 @@ inline void free_handle(raddiff_refractive_mesh *p) noexcept { raddiff_refractiv
 template <class T>
 class Owner {
  public:
+  /// Not copyable: one owner per handle.
   Owner(const Owner &) = delete;
+  /// Not copyable: one owner per handle.
   Owner &operator=(const Owner &) = delete;
+  /// Takes the handle of `other`, which is left holding NULL.
   Owner(Owner &&other) noexcept : ptr_(other.ptr_) { other.ptr_ = nullptr; }
+  /// Frees the current handle (with its C `_free`) and takes the handle of `other`.
   Owner &operator=(Owner &&other) noexcept {
     if (this != &other) {
       free_handle(ptr_);
@@ -111,6 +117,7 @@ class Owner {
     }
     return *this;
   }
+  /// Frees the handle with its C `_free` (NULL is ignored).
   ~Owner() { free_handle(ptr_); }
 
   /// The raw C handle (still owned by this object; NULL after a move).
@@ -125,6 +132,7 @@ class Owner {
   }
 
  protected:
+  /// Owns `ptr` (NULL-checked by the derived class's constructor).
   explicit Owner(T *ptr) noexcept : ptr_(ptr) {}
 
  private:
@@ -195,7 +203,8 @@ class Cache : public detail::Owner<raddiff_cache> {
     return Cache(detail::check_handle(raddiff_cache_load(path.c_str())));
   }
 
-  /// Takes ownership of a handle from `raddiff_cache_new` / `raddiff_cache_load` (NULL throws).
+  /// Takes ownership of a handle from `raddiff_cache_new` / `raddiff_cache_load`; NULL throws
+  /// raddiff::Error with raddiff_last_error(), so `adopt(raddiff_cache_new(&config))` reports why.
   static Cache adopt(raddiff_cache *cache) { return Cache(detail::check_handle(cache)); }
 
   /// Wraps `raddiff_cache_insert` (thread-safe). The record's arrays hold `channels` floats (value)
@@ -270,6 +279,7 @@ class Cache : public detail::Owner<raddiff_cache> {
   }
 
  private:
+  /// Owns `cache` (already NULL-checked).
   explicit Cache(raddiff_cache *cache) noexcept : Owner(cache) {}
 };
 
@@ -285,6 +295,7 @@ class RefractiveMesh : public detail::Owner<raddiff_refractive_mesh> {
       : Owner(create(positions, normals, indices)) {}
 
  private:
+  /// The size checks and the C constructor (NULL throws).
   static raddiff_refractive_mesh *create(Span<const float> positions, Span<const float> normals,
                                          Span<const std::uint32_t> indices) {
     detail::check_size("positions", positions.size(), positions.size() / 3 * 3);
