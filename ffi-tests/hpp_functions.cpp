@@ -57,11 +57,8 @@ void marched() {
   CHECK_THROWS(raddiff::transmittance_marched(x, x, sigma, grad), RADDIFF_ERROR_DEGENERATE, "degenerate");
   const std::vector<double> bad = {0.5, -0.1, 0.5, 0.5};
   CHECK_THROWS(raddiff::transmittance_marched(x, y, bad), RADDIFF_ERROR_INVALID_ARGUMENT, "sigma_t[1]");
-  CHECK_THROWS(raddiff::transmittance_marched(x, y, raddiff::Span<const double>()), RADDIFF_ERROR_NULL_POINTER,
-               "sigma_t");
-  const double empty_sigma[1] = {0.5};
-  CHECK_THROWS(raddiff::transmittance_marched(x, y, raddiff::Span<const double>(empty_sigma, 0)),
-               RADDIFF_ERROR_INVALID_ARGUMENT, "count");
+  CHECK_THROWS(raddiff::transmittance_marched(x, y, raddiff::Span<const double>()), RADDIFF_ERROR_INVALID_ARGUMENT,
+               "count");
   // size check: one gradient per sample
   CHECK_THROWS(raddiff::transmittance_marched(x, y, sigma, raddiff::Span<const raddiff_vec3>(grad.data(), 3)),
                RADDIFF_ERROR_INVALID_ARGUMENT, "sigma_t_gradient holds 3 elements, expected 4");

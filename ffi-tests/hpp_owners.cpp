@@ -191,6 +191,9 @@ void cache() {
     raddiff_cache_config bad = one;
     bad.domain = 7;
     CHECK_THROWS(raddiff::Cache::adopt(raddiff_cache_new(&bad)), RADDIFF_ERROR_INVALID_ARGUMENT, "domain");
+    // a NULL argument: the status comes from the C message's "null pointer" wording
+    CHECK_THROWS(raddiff::Cache::adopt(raddiff_cache_new(nullptr)), RADDIFF_ERROR_NULL_POINTER, "null pointer");
+    CHECK_THROWS(raddiff::Cache::adopt(raddiff_cache_load(nullptr)), RADDIFF_ERROR_NULL_POINTER, "null pointer");
   }
 }
 
@@ -281,8 +284,10 @@ void mesh() {
   CHECK_THROWS(raddiff::RefractiveMesh(p, p, reversed), RADDIFF_ERROR_INVALID_ARGUMENT, "counter-clockwise");
   const std::vector<std::uint32_t> out_of_range = {0, 1, 7};
   CHECK_THROWS(raddiff::RefractiveMesh(p, p, out_of_range), RADDIFF_ERROR_INVALID_ARGUMENT, "invalid argument");
-  CHECK_THROWS(raddiff::RefractiveMesh(p, p, raddiff::Span<const std::uint32_t>()), RADDIFF_ERROR_NULL_POINTER,
-               "indices");
+  CHECK_THROWS(raddiff::RefractiveMesh(p, p, raddiff::Span<const std::uint32_t>()), RADDIFF_ERROR_INVALID_ARGUMENT,
+               "no triangles");
+  CHECK_THROWS(raddiff::RefractiveMesh(raddiff::Span<const float>(), raddiff::Span<const float>(), tris),
+               RADDIFF_ERROR_INVALID_ARGUMENT, "0 vertices");
   CHECK_THROWS(raddiff::RefractiveMesh(raddiff::Span<const float>(p.data(), 11), p, tris),
                RADDIFF_ERROR_INVALID_ARGUMENT, "positions holds 11");
   CHECK_THROWS(raddiff::RefractiveMesh(p, raddiff::Span<const float>(p.data(), 9), tris),
