@@ -248,6 +248,10 @@ void gathers() {
   bad_in.directions = raddiff::Span<const raddiff_vec3>();
   CHECK_THROWS(raddiff::gather_evaluate(layout, frame, bad_in), RADDIFF_ERROR_INVALID_ARGUMENT, "directions holds 0");
 
+  // size products saturate instead of wrapping around
+  CHECK(raddiff::detail::mul(SIZE_MAX / 2, 3) == SIZE_MAX && raddiff::detail::mul(0, SIZE_MAX) == 0);
+  CHECK(raddiff::detail::mul(std::size_t(1) << 32, std::size_t(1) << 31) == std::size_t(1) << 63);
+
   // a medium: marched emissive radiance, no surfaces hit: E = pi q (1 - exp(-sigma T)) / sigma
   {
     std::vector<float> q(kCells * 10 * 2, 0.25f);

@@ -90,6 +90,12 @@ inline void check_size(const char *what, std::size_t actual, std::size_t expecte
   }
 }
 
+/// a * b, or SIZE_MAX when that overflows (no array holds SIZE_MAX elements, so a size check
+/// against it fails instead of passing a wrapped-around product).
+inline std::size_t mul(std::size_t a, std::size_t b) noexcept {
+  return (a != 0 && b > SIZE_MAX / a) ? SIZE_MAX : a * b;
+}
+
 /// Wraps `raddiff_cache_free` (NULL is ignored).
 inline void free_handle(raddiff_cache *p) noexcept { raddiff_cache_free(p); }
 /// Wraps `raddiff_cache_cursor_free` (NULL is ignored).
@@ -143,7 +149,8 @@ class Owner {
 
 /// A non-owning view of `size()` contiguous `T` (C++17 has no std::span): built from a pointer and
 /// a size, a C array, a std::array or a std::vector (or anything with data() and size()). An empty
-/// span stands for a NULL pointer where the C function accepts one.
+/// span stands for a NULL pointer where the C function accepts one. It does not keep its source
+/// alive: a span of a temporary is valid only until the end of the full expression.
 template <class T>
 class Span {
  public:
@@ -462,13 +469,13 @@ inline GatherResult gather_evaluate(const raddiff_gather_layout &layout, const r
   const std::size_t ch = input.channels;
   detail::check_size("directions", input.directions.size(), cells);
   detail::check_size("distance", input.distance.size(), cells);
-  detail::check_size("radiance", input.radiance.size(), cells * ch);
+  detail::check_size("radiance", input.radiance.size(), detail::mul(cells, ch));
+  const std::size_t samples = detail::mul(detail::mul(cells, input.steps), ch);
   if (!input.media_radiance.empty()) {
-    detail::check_size("media_radiance", input.media_radiance.size(), cells * input.steps * ch);
+    detail::check_size("media_radiance", input.media_radiance.size(), samples);
   }
   if (!input.media_radiance_gradient.empty()) {
-    detail::check_size("media_radiance_gradient", input.media_radiance_gradient.size(),
-                       cells * input.steps * 3 * ch);
+    detail::check_size("media_radiance_gradient", input.media_radiance_gradient.size(), detail::mul(samples, 3));
   }
   raddiff_gather_input in{};
   in.directions = input.directions.data();
