@@ -110,6 +110,24 @@ fn readme_c_example_is_tested() {
     );
 }
 
+/// The README's C++ example (section "Using it from C++") is `ffi-tests/hpp_readme_example.cpp`,
+/// so it is compiled and run below.
+#[test]
+fn readme_cpp_example_is_tested() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let section = readme
+        .find("## Using it from C++")
+        .expect("README has a C++ section");
+    let start = section + readme[section..].find("```cpp\n").expect("C++ example") + 7;
+    let end = start + readme[start..].find("```").unwrap();
+    let example = std::fs::read_to_string(root().join("ffi-tests/hpp_readme_example.cpp")).unwrap();
+    assert_eq!(
+        &readme[start..end],
+        example,
+        "README C++ example and ffi-tests/hpp_readme_example.cpp differ"
+    );
+}
+
 #[test]
 fn ffi_programs_pass() {
     let lib = static_library();

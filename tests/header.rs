@@ -69,3 +69,71 @@ fn every_declared_name_is_prefixed() {
         "unprefixed names in include/raddiff.h: {bad:?}"
     );
 }
+
+/// The C functions `include/raddiff.h` declares (names before `(` on non-comment lines).
+fn declared_functions(header: &str) -> Vec<String> {
+    let mut names = Vec::new();
+    for line in header.lines() {
+        let line = line.trim();
+        if line.starts_with("//") || line.starts_with('#') || line.starts_with('*') {
+            continue;
+        }
+        let Some(open) = line.find('(') else {
+            continue;
+        };
+        let before = &line[..open];
+        if let Some(name) = before.split([' ', '*']).next_back() {
+            if name.starts_with("raddiff_")
+                && before.contains(' ')
+                && !names.iter().any(|n| n == name)
+            {
+                names.push(name.to_string());
+            }
+        }
+    }
+    names
+}
+
+/// Every function of the C header is called in the C++ wrapper `include/raddiff.hpp` (outside
+/// comments), so the wrapper cannot fall behind the header.
+#[test]
+fn cpp_wrapper_calls_every_c_function() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let header = std::fs::read_to_string(root.join("include/raddiff.h")).unwrap();
+    let wrapper = std::fs::read_to_string(root.join("include/raddiff.hpp")).unwrap();
+    // the wrapper's code without its comments (`//` to the end of the line, `/* ... */`)
+    let mut code = String::new();
+    let mut rest = wrapper.as_str();
+    while let Some(start) = rest.find("/*") {
+        code.push_str(&rest[..start]);
+        rest = rest[start..]
+            .find("*/")
+            .map_or("", |end| &rest[start + end + 2..]);
+    }
+    code.push_str(rest);
+    let code: String = code
+        .lines()
+        .map(|l| l.find("//").map_or(l, |i| &l[..i]))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let functions = declared_functions(&header);
+    assert!(
+        functions.len() >= 30,
+        "found only {} functions in include/raddiff.h: {functions:?}",
+        functions.len()
+    );
+    let missing: Vec<&String> = functions
+        .iter()
+        .filter(|name| {
+            !code.match_indices(name.as_str()).any(|(i, _)| {
+                let before = code[..i].chars().next_back();
+                let after = code[i + name.len()..].trim_start().chars().next();
+                !before.is_some_and(|c| c.is_alphanumeric() || c == '_') && after == Some('(')
+            })
+        })
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "include/raddiff.hpp does not call these functions of include/raddiff.h: {missing:?}"
+    );
+}

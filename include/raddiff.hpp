@@ -1,0 +1,583 @@
+/*
+ * raddiff.hpp: header-only C++17 wrapper over the C API in raddiff.h.
+ *
+ * - Failures become exceptions: every call whose C function returns a status other than RADDIFF_OK
+ *   throws raddiff::Error, carrying that status and the message of raddiff_last_error().
+ * - Handles (cache, cache cursor, refractive mesh) are move-only owners that free them on
+ *   destruction.
+ * - Arrays are passed as raddiff::Span (pointer and size); where raddiff.h documents the length a
+ *   function needs, the wrapper checks it before the call and throws raddiff::Error with
+ *   RADDIFF_ERROR_INVALID_ARGUMENT otherwise. Outputs are returned by value.
+ * - Nothing else: units, conventions and results are those of the C functions (see raddiff.h and
+ *   the README); the wrapper adds no computation of its own.
+ */
+#ifndef RADDIFF_HPP
+#define RADDIFF_HPP
+
+#include "raddiff.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace raddiff {
+
+/// The exception thrown for every failed raddiff call: `status()` is the `raddiff_status` the C
+/// function returned (never `RADDIFF_OK`), `what()` the message of `raddiff_last_error()` at the
+/// time of the failure (or the wrapper's own message for a size check).
+class Error : public std::runtime_error {
+ public:
+  /// An error with status `status` and message `message`.
+  Error(raddiff_status status, const std::string &message)
+      : std::runtime_error(message), status_(status) {}
+
+  /// The C status code of the failure (`RADDIFF_ERROR_*`).
+  raddiff_status status() const noexcept { return status_; }
+
+ private:
+  raddiff_status status_;
+};
+
+/// Wraps `raddiff_last_error()`: the message of the last failed raddiff call on this thread ("" if
+/// none failed yet), copied.
+inline std::string last_error() { return std::string(raddiff_last_error()); }
+
+/// Wraps `raddiff_version()`: the library version, "MAJOR.MINOR.PATCH".
+inline std::string version() { return std::string(raddiff_version()); }
+
+namespace detail {
+
+/// Throws raddiff::Error(status, raddiff_last_error()) unless `status` is RADDIFF_OK.
+inline void check(raddiff_status status) {
+  if (status != RADDIFF_OK) throw Error(status, raddiff_last_error());
+}
+
+/// The status behind the message of a constructor that returned NULL (the C constructors report
+/// no code): the message's prefix, as raddiff words it, else RADDIFF_ERROR_INVALID_ARGUMENT.
+inline raddiff_status constructor_status(const std::string &message) {
+  const auto starts = [&message](const char *prefix) { return message.rfind(prefix, 0) == 0; };
+  if (starts("null pointer")) return RADDIFF_ERROR_NULL_POINTER;
+  if (starts("degenerate")) return RADDIFF_ERROR_DEGENERATE;
+  if (starts("not found")) return RADDIFF_ERROR_NOT_FOUND;
+  if (starts("i/o error")) return RADDIFF_ERROR_IO;
+  if (starts("corrupt")) return RADDIFF_ERROR_CORRUPT;
+  if (starts("internal panic")) return RADDIFF_ERROR_PANIC;
+  return RADDIFF_ERROR_INVALID_ARGUMENT;
+}
+
+/// Returns `handle`, or throws raddiff::Error with raddiff_last_error() when it is NULL.
+template <class T>
+T *check_handle(T *handle) {
+  if (handle == nullptr) {
+    std::string message = raddiff_last_error();
+    throw Error(constructor_status(message), message);
+  }
+  return handle;
+}
+
+/// Throws raddiff::Error(RADDIFF_ERROR_INVALID_ARGUMENT) when an array holds `actual` elements
+/// where the C function needs `expected`.
+inline void check_size(const char *what, std::size_t actual, std::size_t expected) {
+  if (actual != expected) {
+    throw Error(RADDIFF_ERROR_INVALID_ARGUMENT, std::string("raddiff.hpp: ") + what + " holds " +
+                                                    std::to_string(actual) + " elements, expected " +
+                                                    std::to_string(expected));
+  }
+}
+
+/// a * b, or SIZE_MAX when that overflows (no array holds SIZE_MAX elements, so a size check
+/// against it fails instead of passing a wrapped-around product).
+inline std::size_t mul(std::size_t a, std::size_t b) noexcept {
+  return (a != 0 && b > SIZE_MAX / a) ? SIZE_MAX : a * b;
+}
+
+/// Wraps `raddiff_cache_free` (NULL is ignored).
+inline void free_handle(raddiff_cache *p) noexcept { raddiff_cache_free(p); }
+/// Wraps `raddiff_cache_cursor_free` (NULL is ignored).
+inline void free_handle(raddiff_cache_cursor *p) noexcept { raddiff_cache_cursor_free(p); }
+/// Wraps `raddiff_refractive_mesh_free` (NULL is ignored).
+inline void free_handle(raddiff_refractive_mesh *p) noexcept { raddiff_refractive_mesh_free(p); }
+
+/// Move-only owner of one raddiff handle: frees it on destruction; a moved-from owner holds NULL
+/// (and every C call on it then fails with RADDIFF_ERROR_NULL_POINTER).
+template <class T>
+class Owner {
+ public:
+  /// Not copyable: one owner per handle.
+  Owner(const Owner &) = delete;
+  /// Not copyable: one owner per handle.
+  Owner &operator=(const Owner &) = delete;
+  /// Takes the handle of `other`, which is left holding NULL.
+  Owner(Owner &&other) noexcept : ptr_(other.ptr_) { other.ptr_ = nullptr; }
+  /// Frees the current handle (with its C `_free`) and takes the handle of `other`.
+  Owner &operator=(Owner &&other) noexcept {
+    if (this != &other) {
+      free_handle(ptr_);
+      ptr_ = other.ptr_;
+      other.ptr_ = nullptr;
+    }
+    return *this;
+  }
+  /// Frees the handle with its C `_free` (NULL is ignored).
+  ~Owner() { free_handle(ptr_); }
+
+  /// The raw C handle (still owned by this object; NULL after a move).
+  T *get() const noexcept { return ptr_; }
+  /// True unless moved from or released.
+  explicit operator bool() const noexcept { return ptr_ != nullptr; }
+  /// Gives up ownership: returns the raw handle, which the caller must free with the C `_free`.
+  T *release() noexcept {
+    T *p = ptr_;
+    ptr_ = nullptr;
+    return p;
+  }
+
+ protected:
+  /// Owns `ptr` (NULL-checked by the derived class's constructor).
+  explicit Owner(T *ptr) noexcept : ptr_(ptr) {}
+
+ private:
+  T *ptr_;
+};
+
+}  // namespace detail
+
+/// A non-owning view of `size()` contiguous `T` (C++17 has no std::span): built from a pointer and
+/// a size, a C array, a std::array or a std::vector (or anything with data() and size()). An empty
+/// span stands for a NULL pointer where the C function accepts one. It does not keep its source
+/// alive: a span of a temporary is valid only until the end of the full expression.
+template <class T>
+class Span {
+ public:
+  /// An empty span (NULL, 0).
+  constexpr Span() noexcept = default;
+  /// `size` elements from `data`.
+  constexpr Span(T *data, std::size_t size) noexcept : data_(data), size_(size) {}
+  /// A whole C array.
+  template <std::size_t N>
+  constexpr Span(T (&array)[N]) noexcept : data_(array), size_(N) {}  // NOLINT: implicit by design
+  /// A whole container with contiguous data() and size() (std::vector, std::array, Span<U>).
+  template <class C, class = std::enable_if_t<
+                         std::is_convertible<decltype(std::declval<C &>().data()), T *>::value &&
+                         !std::is_array<std::remove_reference_t<C>>::value>>
+  constexpr Span(C &&container) noexcept  // NOLINT: implicit by design
+      : data_(container.data()), size_(container.size()) {}
+
+  /// First element (NULL for the default span).
+  constexpr T *data() const noexcept { return data_; }
+  /// Number of elements.
+  constexpr std::size_t size() const noexcept { return size_; }
+  /// True for zero elements.
+  constexpr bool empty() const noexcept { return size_ == 0; }
+  /// Element `i` (unchecked).
+  constexpr T &operator[](std::size_t i) const noexcept { return data_[i]; }
+  /// Iteration.
+  constexpr T *begin() const noexcept { return data_; }
+  /// Iteration.
+  constexpr T *end() const noexcept { return data_ + size_; }
+
+ private:
+  T *data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
+/// Owner of a `raddiff_cache_cursor` (per-thread state for coherent lookups, see
+/// `raddiff_cache_lookup_with`). Not thread-safe: one per thread; usable with any cache.
+class CacheCursor : public detail::Owner<raddiff_cache_cursor> {
+ public:
+  /// Wraps `raddiff_cache_cursor_new`; throws raddiff::Error if it returns NULL.
+  CacheCursor() : Owner(detail::check_handle(raddiff_cache_cursor_new())) {}
+};
+
+/// Owner of a `raddiff_cache` (thread-safe radiance cache; see the C docs of each function for
+/// which calls may run concurrently: insert, lookup, lookup_with, clamp_record may; compact,
+/// clamp_neighbours, set_gradient_limit may not).
+class Cache : public detail::Owner<raddiff_cache> {
+ public:
+  /// Wraps `raddiff_cache_new`: an empty cache; throws raddiff::Error (with the C message) for an
+  /// invalid configuration.
+  explicit Cache(const raddiff_cache_config &config)
+      : Owner(detail::check_handle(raddiff_cache_new(&config))) {}
+
+  /// Wraps `raddiff_cache_load`: a cache saved by save(); throws raddiff::Error with
+  /// RADDIFF_ERROR_IO or RADDIFF_ERROR_CORRUPT (from the message's wording) for bad files.
+  static Cache load(const std::string &path) {
+    return Cache(detail::check_handle(raddiff_cache_load(path.c_str())));
+  }
+
+  /// Takes ownership of a handle from `raddiff_cache_new` / `raddiff_cache_load`; NULL throws
+  /// raddiff::Error with raddiff_last_error(), so `adopt(raddiff_cache_new(&config))` reports why.
+  static Cache adopt(raddiff_cache *cache) { return Cache(detail::check_handle(cache)); }
+
+  /// Wraps `raddiff_cache_insert` (thread-safe). The record's arrays hold `channels` floats (value)
+  /// and 3*channels floats (gradients, nullable), as documented in raddiff.h.
+  void insert(const raddiff_cache_record &record) { detail::check(raddiff_cache_insert(get(), &record)); }
+
+  /// Wraps `raddiff_cache_lookup`: interpolates at `position` (normal `normal`, ignored in volumes)
+  /// into `value` (must hold the cache's channel count; the C API does not expose it, so this is
+  /// not checked) and returns the weight sum. A point no record covers throws raddiff::Error with
+  /// RADDIFF_ERROR_NOT_FOUND (use try_lookup in loops where misses are common).
+  double lookup(raddiff_vec3 position, raddiff_vec3 normal, Span<float> value) const {
+    double weight_sum = 0.0;
+    detail::check(raddiff_cache_lookup(get(), position, normal, value.data(), &weight_sum));
+    return weight_sum;
+  }
+
+  /// `raddiff_cache_lookup` without an exception for a miss: false on RADDIFF_ERROR_NOT_FOUND
+  /// (`value` untouched), true on success (weight sum in `*weight_sum` if not NULL); other
+  /// failures throw raddiff::Error.
+  bool try_lookup(raddiff_vec3 position, raddiff_vec3 normal, Span<float> value,
+                  double *weight_sum = nullptr) const {
+    const raddiff_status s = raddiff_cache_lookup(get(), position, normal, value.data(), weight_sum);
+    if (s == RADDIFF_ERROR_NOT_FOUND) return false;
+    detail::check(s);
+    return true;
+  }
+
+  /// Wraps `raddiff_cache_lookup_with`: lookup() through `cursor` (same results bit for bit).
+  double lookup_with(CacheCursor &cursor, raddiff_vec3 position, raddiff_vec3 normal,
+                     Span<float> value) const {
+    double weight_sum = 0.0;
+    detail::check(
+        raddiff_cache_lookup_with(get(), cursor.get(), position, normal, value.data(), &weight_sum));
+    return weight_sum;
+  }
+
+  /// Wraps `raddiff_cache_compact` (not thread-safe): prepares a lookup-only phase.
+  void compact() { detail::check(raddiff_cache_compact(get())); }
+
+  /// Wraps `raddiff_cache_len`: the number of records (0 after a move).
+  std::size_t size() const noexcept { return raddiff_cache_len(get()); }
+
+  /// Wraps `raddiff_cache_save`: writes the cache to `path` atomically (RADDIFF_ERROR_IO on failure).
+  void save(const std::string &path) const { detail::check(raddiff_cache_save(get(), path.c_str())); }
+
+  /// Wraps `raddiff_cache_merge`: adds every record of `from` not held yet (`from` may be *this).
+  void merge(const Cache &from) { detail::check(raddiff_cache_merge(get(), from.get())); }
+
+  /// Wraps `raddiff_cache_clamp_neighbours` (not thread-safe): two-sided neighbour clamping of the
+  /// stored records; returns how many shrank.
+  std::size_t clamp_neighbours() {
+    std::size_t shrunk = 0;
+    detail::check(raddiff_cache_clamp_neighbours(get(), &shrunk));
+    return shrunk;
+  }
+
+  /// Wraps `raddiff_cache_clamp_record` (thread-safe): shrinks `record.radii` in place against the
+  /// stored records before it is inserted (untouched on error).
+  void clamp_record(raddiff_cache_record &record) const {
+    detail::check(raddiff_cache_clamp_record(get(), &record));
+  }
+
+  /// Wraps `raddiff_cache_set_gradient_limit` (not thread-safe): the gradient limit c for records
+  /// inserted from now on (INFINITY: off; c <= 0 or NaN throws).
+  void set_gradient_limit(double c) { detail::check(raddiff_cache_set_gradient_limit(get(), c)); }
+
+  /// Wraps `raddiff_cache_get_gradient_limit`: the current c (INFINITY when off).
+  double gradient_limit() const {
+    double c = 0.0;
+    detail::check(raddiff_cache_get_gradient_limit(get(), &c));
+    return c;
+  }
+
+ private:
+  /// Owns `cache` (already NULL-checked).
+  explicit Cache(raddiff_cache *cache) noexcept : Owner(cache) {}
+};
+
+/// Owner of a `raddiff_refractive_mesh` (immutable, shareable between threads).
+class RefractiveMesh : public detail::Owner<raddiff_refractive_mesh> {
+ public:
+  /// Wraps `raddiff_refractive_mesh_new`: `positions` and `normals` hold 3 floats per vertex (the
+  /// same count), `indices` 3 per triangle (counter-clockwise seen from outside; normals point
+  /// outwards). Sizes that are not multiples of 3, or normals not matching positions, throw
+  /// raddiff::Error (RADDIFF_ERROR_INVALID_ARGUMENT) before the call; the C errors throw with
+  /// their message. The arrays are copied.
+  RefractiveMesh(Span<const float> positions, Span<const float> normals, Span<const std::uint32_t> indices)
+      : Owner(create(positions, normals, indices)) {}
+
+ private:
+  /// The size checks and the C constructor (NULL throws).
+  static raddiff_refractive_mesh *create(Span<const float> positions, Span<const float> normals,
+                                         Span<const std::uint32_t> indices) {
+    detail::check_size("positions", positions.size(), positions.size() / 3 * 3);
+    detail::check_size("normals", normals.size(), positions.size());
+    detail::check_size("indices", indices.size(), indices.size() / 3 * 3);
+    return detail::check_handle(raddiff_refractive_mesh_new(positions.data(), normals.data(),
+                                                             positions.size() / 3, indices.data(),
+                                                             indices.size() / 3));
+  }
+};
+
+/// Wraps `raddiff_transmittance`: exp(-sigma_t |x - y|) with gradient and Hessian with respect to
+/// `x` up to `order` (`RADDIFF_ORDER_*`; higher parts 0).
+inline raddiff_deriv3 transmittance(raddiff_vec3 x, raddiff_vec3 y, double sigma_t,
+                                    std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  raddiff_deriv3 out{};
+  detail::check(raddiff_transmittance(x, y, sigma_t, order, &out));
+  return out;
+}
+
+/// Wraps `raddiff_transmittance_marched`: heterogeneous transmittance from the extinction samples
+/// `sigma_t` at the segment's midpoints; `sigma_t_gradient` is empty (unknown) or holds one vector
+/// per sample (checked). `order` is RADDIFF_ORDER_VALUE or RADDIFF_ORDER_GRADIENT.
+inline raddiff_deriv3 transmittance_marched(raddiff_vec3 x, raddiff_vec3 y, Span<const double> sigma_t,
+                                            Span<const raddiff_vec3> sigma_t_gradient = {},
+                                            std::uint32_t order = RADDIFF_ORDER_GRADIENT) {
+  if (!sigma_t_gradient.empty()) {
+    detail::check_size("sigma_t_gradient", sigma_t_gradient.size(), sigma_t.size());
+  }
+  raddiff_deriv3 out{};
+  detail::check(raddiff_transmittance_marched(x, y, sigma_t.data(),
+                                              sigma_t_gradient.empty() ? nullptr : sigma_t_gradient.data(),
+                                              sigma_t.size(), order, &out));
+  return out;
+}
+
+/// Wraps `raddiff_triangle_solid_angle`: unsigned solid angle (steradians) of triangle (a, b, c)
+/// seen from `x`, with derivatives with respect to `x`.
+inline raddiff_deriv3 triangle_solid_angle(raddiff_vec3 x, raddiff_vec3 a, raddiff_vec3 b, raddiff_vec3 c,
+                                           std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  raddiff_deriv3 out{};
+  detail::check(raddiff_triangle_solid_angle(x, a, b, c, order, &out));
+  return out;
+}
+
+/// Wraps `raddiff_triangle_form_factor`: form factor from a differential area at `x` with unit
+/// normal `n` to triangle (a, b, c) (clipped at the tangent plane), derivatives with respect to `x`.
+inline raddiff_deriv3 triangle_form_factor(raddiff_vec3 x, raddiff_vec3 n, raddiff_vec3 a, raddiff_vec3 b,
+                                           raddiff_vec3 c, std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  raddiff_deriv3 out{};
+  detail::check(raddiff_triangle_form_factor(x, n, a, b, c, order, &out));
+  return out;
+}
+
+/// Wraps `raddiff_polygon_form_factor`: triangle_form_factor for a planar simple polygon (the C
+/// function needs at least 3 vertices and reports fewer itself).
+inline raddiff_deriv3 polygon_form_factor(raddiff_vec3 x, raddiff_vec3 n, Span<const raddiff_vec3> vertices,
+                                          std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  raddiff_deriv3 out{};
+  detail::check(raddiff_polygon_form_factor(x, n, vertices.data(), vertices.size(), order, &out));
+  return out;
+}
+
+/// Wraps `raddiff_segment_form_factor_2d`: flatland angle subtended at `x` by segment (a, b) over
+/// 2 pi, with gradient and 2x2 Hessian with respect to `x`.
+inline raddiff_deriv2 segment_form_factor_2d(raddiff_vec2 x, raddiff_vec2 a, raddiff_vec2 b,
+                                             std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  raddiff_deriv2 out{};
+  detail::check(raddiff_segment_form_factor_2d(x, a, b, order, &out));
+  return out;
+}
+
+/// m*n of a layout (the number of directions of a gather), in 64 bits.
+inline std::size_t gather_size(const raddiff_gather_layout &layout) noexcept {
+  return static_cast<std::size_t>(static_cast<std::uint64_t>(layout.m) * layout.n);
+}
+
+/// Wraps `raddiff_gather_directions`: writes the m*n world directions (index j*n + k) into
+/// `directions`, which must hold exactly m*n (checked).
+inline void gather_directions(const raddiff_gather_layout &layout, const raddiff_frame &frame,
+                              Span<raddiff_vec3> directions) {
+  detail::check_size("directions", directions.size(), gather_size(layout));
+  detail::check(raddiff_gather_directions(&layout, &frame, directions.data()));
+}
+
+/// Wraps `raddiff_gather_directions`, returning the m*n directions (index j*n + k). A layout with
+/// m*n above RADDIFF_GATHER_MAX_STRATA throws RADDIFF_ERROR_INVALID_ARGUMENT before allocating.
+inline std::vector<raddiff_vec3> gather_directions(const raddiff_gather_layout &layout,
+                                                   const raddiff_frame &frame) {
+  if (static_cast<std::uint64_t>(layout.m) * layout.n > RADDIFF_GATHER_MAX_STRATA) {
+    throw Error(RADDIFF_ERROR_INVALID_ARGUMENT, "raddiff.hpp: layout m*n exceeds RADDIFF_GATHER_MAX_STRATA");
+  }
+  std::vector<raddiff_vec3> directions(gather_size(layout));
+  gather_directions(layout, frame, Span<raddiff_vec3>(directions));
+  return directions;
+}
+
+/// What the rays of a gather found (`raddiff_gather_input` with sized arrays). With i = j*n + k:
+/// `directions` and `distance` hold m*n, `radiance` m*n*channels, `media_radiance` empty or
+/// m*n*steps*channels, `media_radiance_gradient` empty or m*n*steps*3*channels (all checked).
+struct GatherInput {
+  /// The layout's directions, as returned by gather_directions.
+  Span<const raddiff_vec3> directions;
+  /// Hit distances (> 0); INFINITY for a miss.
+  Span<const double> distance;
+  /// Radiance leaving each hit towards x, before attenuation; index i*channels + c.
+  Span<const float> radiance;
+  /// Values per direction (>= 1).
+  std::uint32_t channels = 1;
+  /// Homogeneous extinction between x and the hits (0: no medium).
+  double sigma_t = 0.0;
+  /// Optional in-scattered radiance along each direction (see raddiff_gather_input).
+  Span<const float> media_radiance;
+  /// Optional gradient of media_radiance (see raddiff_gather_input).
+  Span<const float> media_radiance_gradient;
+  /// Media march steps per direction.
+  std::uint32_t steps = 0;
+  /// Media march step length.
+  double step = 0.0;
+};
+
+/// Bits selecting the outputs of gather_evaluate (the others stay empty and cost nothing).
+enum GatherOutputs : unsigned {
+  /// `irradiance` (channels).
+  GATHER_IRRADIANCE = 1u,
+  /// `gradient` (3*channels).
+  GATHER_GRADIENT = 2u,
+  /// `rotation_gradient` (3*channels).
+  GATHER_ROTATION_GRADIENT = 4u,
+  /// `occlusion_gradient` (3*channels).
+  GATHER_OCCLUSION_GRADIENT = 8u,
+  /// `hessian` (9*channels).
+  GATHER_HESSIAN = 16u,
+  /// All of the above.
+  GATHER_ALL = 31u,
+};
+
+/// The outputs of gather_evaluate (`raddiff_gather_output` by value): each vector is empty unless
+/// selected; layouts as in raddiff.h (`gradient[3*c + axis]`, `hessian[9*c + 3*row + col]`).
+struct GatherResult {
+  /// Irradiance (hemisphere layouts) or scalar fluence (sphere), per channel.
+  std::vector<double> irradiance;
+  /// Ward-Heckbert translational gradient (with the media terms when a medium is given).
+  std::vector<double> gradient;
+  /// Rotational gradient.
+  std::vector<double> rotation_gradient;
+  /// Occlusion-aware gradient of the triangulated environment.
+  std::vector<double> occlusion_gradient;
+  /// Occlusion-aware 3x3 translation Hessian per channel, row-major.
+  std::vector<double> hessian;
+  /// Harmonic mean of the hit distances (INFINITY if every ray missed).
+  double harmonic_mean_distance = 0.0;
+  /// Smallest hit distance (INFINITY if every ray missed).
+  double min_distance = 0.0;
+};
+
+/// Wraps `raddiff_gather_evaluate`: irradiance (or fluence) and the derivatives selected by
+/// `outputs` (GatherOutputs bits) from a traced gather. Array sizes are checked first.
+inline GatherResult gather_evaluate(const raddiff_gather_layout &layout, const raddiff_frame &frame,
+                                    const GatherInput &input,
+                                    unsigned outputs = GATHER_IRRADIANCE | GATHER_GRADIENT |
+                                                       GATHER_ROTATION_GRADIENT) {
+  const std::size_t cells = gather_size(layout);
+  const std::size_t ch = input.channels;
+  detail::check_size("directions", input.directions.size(), cells);
+  detail::check_size("distance", input.distance.size(), cells);
+  detail::check_size("radiance", input.radiance.size(), detail::mul(cells, ch));
+  const std::size_t samples = detail::mul(detail::mul(cells, input.steps), ch);
+  if (!input.media_radiance.empty()) {
+    detail::check_size("media_radiance", input.media_radiance.size(), samples);
+  }
+  if (!input.media_radiance_gradient.empty()) {
+    detail::check_size("media_radiance_gradient", input.media_radiance_gradient.size(), detail::mul(samples, 3));
+  }
+  raddiff_gather_input in{};
+  in.directions = input.directions.data();
+  in.distance = input.distance.data();
+  in.radiance = input.radiance.data();
+  in.channels = input.channels;
+  in.sigma_t = input.sigma_t;
+  in.media_radiance = input.media_radiance.empty() ? nullptr : input.media_radiance.data();
+  in.media_radiance_gradient =
+      input.media_radiance_gradient.empty() ? nullptr : input.media_radiance_gradient.data();
+  in.steps = input.steps;
+  in.step = input.step;
+
+  GatherResult result;
+  raddiff_gather_output out{};
+  if (outputs & GATHER_IRRADIANCE) {
+    result.irradiance.resize(ch);
+    out.irradiance = result.irradiance.data();
+  }
+  if (outputs & GATHER_GRADIENT) {
+    result.gradient.resize(3 * ch);
+    out.gradient = result.gradient.data();
+  }
+  if (outputs & GATHER_ROTATION_GRADIENT) {
+    result.rotation_gradient.resize(3 * ch);
+    out.rotation_gradient = result.rotation_gradient.data();
+  }
+  if (outputs & GATHER_OCCLUSION_GRADIENT) {
+    result.occlusion_gradient.resize(3 * ch);
+    out.occlusion_gradient = result.occlusion_gradient.data();
+  }
+  if (outputs & GATHER_HESSIAN) {
+    result.hessian.resize(9 * ch);
+    out.hessian = result.hessian.data();
+  }
+  detail::check(raddiff_gather_evaluate(&layout, &frame, &in, &out));
+  result.harmonic_mean_distance = out.harmonic_mean_distance;
+  result.min_distance = out.min_distance;
+  return result;
+}
+
+/// An elliptical surface record: `radii[0] <= radii[1]` along the world-space unit tangents `axes`.
+struct SurfaceRadii {
+  /// Semi-axes (caller's length unit; RADDIFF_MAX_RADIUS at most).
+  std::array<double, 2> radii;
+  /// Their directions.
+  std::array<raddiff_vec3, 2> axes;
+};
+
+/// An ellipsoidal media record: `radii[0] <= radii[1] <= radii[2]` along the orthonormal `axes`.
+struct VolumeRadii {
+  /// Semi-axes (caller's length unit; RADDIFF_MAX_RADIUS at most).
+  std::array<double, 3> radii;
+  /// Their directions.
+  std::array<raddiff_vec3, 3> axes;
+};
+
+/// Wraps `raddiff_surface_radii`: `hessian` is the 3x3 row-major Hessian (9 doubles, checked),
+/// `mode` RADDIFF_ERROR_ABSOLUTE or RADDIFF_ERROR_RELATIVE.
+inline SurfaceRadii surface_radii(Span<const double> hessian, raddiff_vec3 normal, double value, double error,
+                                  std::uint32_t mode, double max_anisotropy) {
+  detail::check_size("hessian", hessian.size(), 9);
+  SurfaceRadii r{};
+  detail::check(raddiff_surface_radii(hessian.data(), normal, value, error, mode, max_anisotropy, r.radii.data(),
+                                      r.axes.data()));
+  return r;
+}
+
+/// Wraps `raddiff_surface_radii_floored`: surface_radii with the curvature floor
+/// `floor_weight * |value| / floor_distance^2` (floor_distance: the gather's harmonic-mean hit
+/// distance; floor_weight: RADDIFF_CURVATURE_FLOOR_WEIGHT by default, 0 for none).
+inline SurfaceRadii surface_radii_floored(Span<const double> hessian, raddiff_vec3 normal, double value,
+                                          double error, std::uint32_t mode, double max_anisotropy,
+                                          double floor_distance,
+                                          double floor_weight = RADDIFF_CURVATURE_FLOOR_WEIGHT) {
+  detail::check_size("hessian", hessian.size(), 9);
+  SurfaceRadii r{};
+  detail::check(raddiff_surface_radii_floored(hessian.data(), normal, value, error, mode, max_anisotropy,
+                                              floor_distance, floor_weight, r.radii.data(), r.axes.data()));
+  return r;
+}
+
+/// Wraps `raddiff_volume_radii`: ellipsoid from the 3x3 row-major Hessian (9 doubles, checked).
+inline VolumeRadii volume_radii(Span<const double> hessian, double value, double error, std::uint32_t mode,
+                                double max_anisotropy) {
+  detail::check_size("hessian", hessian.size(), 9);
+  VolumeRadii r{};
+  detail::check(
+      raddiff_volume_radii(hessian.data(), value, error, mode, max_anisotropy, r.radii.data(), r.axes.data()));
+  return r;
+}
+
+/// Wraps `raddiff_single_scatter`: single-scattered radiance arriving at `entry` along the refracted
+/// eye segment entry -> exit inside `mesh`, from a point light of intensity `intensity` (power per
+/// steradian) at `light`; radiance inside the medium, before refraction out (see raddiff.h).
+inline double single_scatter(const RefractiveMesh &mesh, const raddiff_medium &medium, raddiff_vec3 entry,
+                             raddiff_vec3 exit, raddiff_vec3 light, double intensity) {
+  double radiance = 0.0;
+  detail::check(raddiff_single_scatter(mesh.get(), &medium, entry, exit, light, intensity, &radiance));
+  return radiance;
+}
+
+}  // namespace raddiff
+
+#endif  // RADDIFF_HPP
