@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
-# Builds raddiff (release static library) and the Embree example, renders the Cornell box with it
-# and checks the output. Needs: cargo, g++, cmake, libembree-dev (Debian: apt-get install cmake
-# libembree-dev). Usage: examples/embree/run.sh [extra raddiff_embree options]
+# Installs raddiff into target/embree-prefix (scripts/install.sh: cargo cinstall and the CMake package
+# config), builds the Embree example against that installed package (find_package(raddiff CONFIG
+# REQUIRED), -DCMAKE_PREFIX_PATH), renders the Cornell box with it and checks the output.
+# Needs: cargo and cargo-c (installed when missing), g++, cmake, libembree-dev (Debian: apt-get
+# install cmake libembree-dev). Usage: examples/embree/run.sh [extra raddiff_embree options]
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 build="$root/target/embree"
+prefix="$root/target/embree-prefix"
 out="$root/out/embree"
 
 # Debian/Ubuntu: install what is missing when allowed to (CI runs as root).
@@ -22,8 +25,9 @@ if [ ${#missing[@]} -gt 0 ]; then
   fi
 fi
 
-cargo build --release --lib --manifest-path "$root/Cargo.toml"
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release -DRADDIFF_ROOT="$root" >/dev/null
+bash "$root/scripts/ensure-cargo-c.sh"
+bash "$root/scripts/install.sh" "$prefix" >/dev/null
+cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
 cmake --build "$build" -j 2 >/dev/null
 mkdir -p "$out"
 
