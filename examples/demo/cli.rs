@@ -9,7 +9,7 @@ use crate::scene::SceneKind;
 pub const USAGE: &str = "\
 raddiff demo: irradiance caching with every error metric against a path-traced reference
 
-USAGE: cargo run --release --example demo -- [OPTIONS]
+USAGE: cargo run --release -p raddiff-demo -- [OPTIONS]
 
 OPTIONS:
   --scene NAME        cornell | cornell-black | room | courtyard | all

@@ -1,7 +1,7 @@
 //! The raddiff demo: scenes built in code, a path-traced reference of indirect irradiance, and
 //! irradiance caching with every error metric at equal record counts.
 //!
-//! Run `cargo run --release --example demo -- --help` for the options; images, the report and the
+//! Run `cargo run --release -p raddiff-demo -- --help` for the options; images, the report and the
 //! plot are written under `out/`.
 
 mod bvh;
