@@ -2,7 +2,7 @@
 //!
 //! * Value: stratified Monte Carlo with weight `A_{j,k}·cosθ = π/(MN)` per stratum for the
 //!   cosine-weighted hemisphere layouts and `4π/(MN)` for the sphere (fluence) — Jarosz et al. 2008
-//!   Table 2 with ERRATA 4: the cell area is `(MN)⁻¹ pdf⁻¹`.
+//!   Table 2: the cell area is `(MN)⁻¹ pdf⁻¹` (the thesis' Table 3.1 misprints it as `(MN)⁻¹ pdf`).
 //! * Translational gradient: Ward-Heckbert wall motion (see [`super::walls`]) on the radiance
 //!   reaching x through each stratum, plus the cell-radiance term `∇T·L` through a homogeneous
 //!   medium (Jarosz 2008 eq. 14-18), plus, with media radiance, the gradient of each stratum's

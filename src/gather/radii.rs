@@ -1,7 +1,7 @@
 //! Record radii from a Hessian: the ellipse (surface, flatland medium) or ellipsoid (medium) over
 //! which a first-order extrapolation stays within an error tolerance.
 //!
-//! # What is bounded (ERRATA item 5)
+//! # What is bounded (the papers' radius formulas differ in how they bound the error integral)
 //!
 //! A record at x extrapolates to first order, `f(x + d) ≈ f(x) + ∇f·d`. Taking the second-order
 //! Taylor expansion as the oracle, the error at offset `d` is `½ |dᵀ H d|` (thesis eq. 4.16, Marco

@@ -14,7 +14,8 @@
 //!   `W = (−sinφ_k, cosφ_k, 0) ∫_{θ_j}^{θ_{j+1}} w(θ) dθ`.
 //!
 //! These are the exact integrals of Jarosz et al. 2008 eq. (12)-(13) (which approximate them with
-//! centre values; ERRATA 3 fixes the azimuthal wall's distance and sign) extended to all three
+//! centre values; the thesis' eq. 3.41-3.42 misprint the azimuthal wall's neighbour and sign: the wall between
+//! (j, k) and (j, k−1) moves with the closer of those two, as in Jarosz et al. eq. 13) extended to all three
 //! axes: the normal component follows from the same wall motion.
 
 use std::f64::consts::TAU;

@@ -18,7 +18,8 @@
 //! ∇I = 2 ∫ r/‖r‖⁴ dt,   HI = −2 (∫ dt/‖r‖⁴) 𝟙 + 8 ∫ r rᵀ/‖r‖⁶ dt.
 //! ```
 //!
-//! (This re-derives the thesis' eq. 6.5-6.6, whose printed form is garbled: see ERRATA item 2.)
+//! (This re-derives the thesis' eq. 6.5-6.6, whose printed form is garbled: the leading
+//! "−(−1/2π)" and "norm γ_i" are extraction errors for 1/2π and the edge angle β_i.)
 //! The integrals are evaluated in the edge's own frame (foot point `p`, direction `ê`, abscissae
 //! `s_a`, `s_b`, distance `h` to the edge's line) with closed forms arranged to avoid cancellation,
 //! and with convergent series when `x` lies near the extension of the edge's line.

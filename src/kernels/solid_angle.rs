@@ -3,7 +3,8 @@
 //!
 //! With `r_k = y_k − x` (the vertices seen from `x`), `s_k = ‖r_k‖` and
 //!
-//! * `A = (a − x)·N`, `N = (b − a)×(c − a)` (equal to `r_0·(r_1×r_2)`, ERRATA 1),
+//! * `A = (a − x)·N`, `N = (b − a)×(c − a)` (equal to `r_0·(r_1×r_2)`; Marco et al. eq. 47 prints
+//!   its gradient without the transposes: `∇A = −N`, constant, so `HA = 0`),
 //! * `D = s_0 s_1 s_2 + (r_0·r_1) s_2 + (r_1·r_2) s_0 + (r_2·r_0) s_1`,
 //!
 //! the signed solid angle is `Ω = 2 atan2(A, D)`. Derivatives (derived here, cross-checked against
