@@ -74,7 +74,7 @@ impl<V: CacheValue> Cache<V> {
     /// the previous rule's records whose sphere contains `position`. The extent is scaled
     /// uniformly (anisotropy and axes kept) so that its largest radius is the largest `f32` at
     /// most the tightest bound: inserted, the record's stored largest radius satisfies every
-    /// bound exactly (smaller radii are raised to [`RADIUS_MIN`](super::RADIUS_MIN) and to
+    /// bound exactly (smaller radii are raised to [`RADIUS_MIN`] and to
     /// |position|·2⁻⁴⁰, what [`Cache::insert`] accepts). Returns `extent` unchanged when no
     /// bound binds.
     ///
@@ -136,7 +136,7 @@ impl<V: CacheValue> Cache<V> {
     /// order and thread timing — and idempotent (R' already satisfies every constraint).
     ///
     /// Storage: radii are `f32`. A shrinking record's largest radius becomes the largest `f32` at
-    /// most its bound (raised only to what [`Cache::insert`] accepts: [`RADIUS_MIN`](super::RADIUS_MIN)
+    /// most its bound (raised only to what [`Cache::insert`] accepts: [`RADIUS_MIN`]
     /// and |position|·2⁻⁴⁰); because rounding a neighbour down can leave a constraint violated by
     /// an ulp, the pass is repeated (each round computed from the previous round's radii, so still
     /// order-independent) until no stored radius changes; in exact arithmetic the repeats change
