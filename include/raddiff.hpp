@@ -491,26 +491,17 @@ inline GatherResult gather_evaluate(const raddiff_gather_layout &layout, const r
 
   GatherResult result;
   raddiff_gather_output out{};
-  if (outputs & GATHER_IRRADIANCE) {
-    result.irradiance.resize(ch);
-    out.irradiance = result.irradiance.data();
-  }
-  if (outputs & GATHER_GRADIENT) {
-    result.gradient.resize(3 * ch);
-    out.gradient = result.gradient.data();
-  }
-  if (outputs & GATHER_ROTATION_GRADIENT) {
-    result.rotation_gradient.resize(3 * ch);
-    out.rotation_gradient = result.rotation_gradient.data();
-  }
-  if (outputs & GATHER_OCCLUSION_GRADIENT) {
-    result.occlusion_gradient.resize(3 * ch);
-    out.occlusion_gradient = result.occlusion_gradient.data();
-  }
-  if (outputs & GATHER_HESSIAN) {
-    result.hessian.resize(9 * ch);
-    out.hessian = result.hessian.data();
-  }
+  // each requested output gets a buffer of its documented size; the others stay NULL (not computed)
+  auto wanted = [outputs](unsigned flag, std::vector<double> &buffer, std::size_t size) -> double * {
+    if (!(outputs & flag)) return nullptr;
+    buffer.resize(size);
+    return buffer.data();
+  };
+  out.irradiance = wanted(GATHER_IRRADIANCE, result.irradiance, ch);
+  out.gradient = wanted(GATHER_GRADIENT, result.gradient, 3 * ch);
+  out.rotation_gradient = wanted(GATHER_ROTATION_GRADIENT, result.rotation_gradient, 3 * ch);
+  out.occlusion_gradient = wanted(GATHER_OCCLUSION_GRADIENT, result.occlusion_gradient, 3 * ch);
+  out.hessian = wanted(GATHER_HESSIAN, result.hessian, 9 * ch);
   detail::check(raddiff_gather_evaluate(&layout, &frame, &in, &out));
   result.harmonic_mean_distance = out.harmonic_mean_distance;
   result.min_distance = out.min_distance;

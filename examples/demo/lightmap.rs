@@ -119,25 +119,34 @@ const BURIED_PROBES: (usize, usize) = (4, 8);
 /// dark band one texel wide along every contact line (the floor beside a block), a feature of
 /// the light map rather than of the scene's light transport.
 fn buried(scene: &Scene, p: DVec3, normal: DVec3) -> bool {
+    let (m, n) = BURIED_PROBES;
+    let inside = stratum_centre_rays(p, normal, m, n)
+        .filter(|ray| {
+            scene
+                .bvh
+                .intersect(ray, scene.epsilon(), f64::INFINITY)
+                .is_some_and(|hit| {
+                    scene.bvh.primitive(hit.primitive).normal.dot(ray.direction) > 0.0
+                })
+        })
+        .count();
+    2 * inside > m * n
+}
+
+/// Rays from `p` through the centres of the m x n cosine-polar strata about `normal` (the same
+/// pattern at every point, so what they gather is a smooth function of the point).
+fn stratum_centre_rays(p: DVec3, normal: DVec3, m: usize, n: usize) -> impl Iterator<Item = Ray> {
     let t = tangent_of(normal);
     let b = normal.cross(t);
-    let (m, n) = BURIED_PROBES;
-    let mut inside = 0;
-    for j in 0..m {
-        for k in 0..n {
+    (0..m).flat_map(move |j| {
+        (0..n).map(move |k| {
             let l = cosine_polar_local(j, k, m, n, 0.5, 0.5);
-            let ray = Ray {
+            Ray {
                 origin: p,
                 direction: l.x * t + l.y * b + l.z * normal,
-            };
-            if let Some(hit) = scene.bvh.intersect(&ray, scene.epsilon(), f64::INFINITY) {
-                if scene.bvh.primitive(hit.primitive).normal.dot(ray.direction) > 0.0 {
-                    inside += 1;
-                }
             }
-        }
-    }
-    2 * inside > m * n
+        })
+    })
 }
 
 /// Texels per unit length (the scenes' L); the Cornell box walls get 48 × 48.
@@ -204,21 +213,9 @@ impl LightMap {
             .map(|texel| {
                 progress.inc(1);
                 let prim = scene.bvh.primitive(texel.0);
-                let p = texel_point(texel);
-                let normal = prim.normal;
-                let t = tangent_of(normal);
-                let b = normal.cross(t);
-                let mut sum = DVec3::ZERO;
-                for j in 0..m {
-                    for k in 0..n {
-                        let l = cosine_polar_local(j, k, m, n, 0.5, 0.5);
-                        let ray = Ray {
-                            origin: p,
-                            direction: l.x * t + l.y * b + l.z * normal,
-                        };
-                        sum += direct_map.radiance_along(scene, &ray);
-                    }
-                }
+                let sum: DVec3 = stratum_centre_rays(texel_point(texel), prim.normal, m, n)
+                    .map(|ray| direct_map.radiance_along(scene, &ray))
+                    .sum();
                 sum * (std::f64::consts::PI / (m * n) as f64)
             })
             .collect();

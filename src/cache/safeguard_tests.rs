@@ -2,18 +2,8 @@
 
 use glam::DVec3;
 
+use super::tests::lcg;
 use super::*;
-
-/// A deterministic uniform generator on [0, 1).
-fn lcg(seed: u64) -> impl FnMut() -> f64 {
-    let mut s = seed;
-    move || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// A unit vector at angle `angle` from +z, turned by `turn` about z.
 fn tilted(angle: f64, turn: f64) -> DVec3 {

@@ -23,8 +23,8 @@ fn rec(p: DVec3, value: f32, gradient: [f32; 3], r: f64) -> Record<f32> {
     }
 }
 
-/// A deterministic uniform generator on [0, 1).
-fn lcg(seed: u64) -> impl FnMut() -> f64 {
+/// A deterministic uniform generator on [0, 1) (shared with the safeguard tests).
+pub(super) fn lcg(seed: u64) -> impl FnMut() -> f64 {
     let mut s = seed;
     move || {
         s = s
