@@ -6,7 +6,7 @@
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use criterion::{criterion_group, Criterion, Throughput};
 use glam::DVec3;
 use raddiff::cache::{Cache, CacheConfig, Cursor, Extent, Record};
 
@@ -76,6 +76,20 @@ fn queries(n: usize, count: usize) -> Vec<DVec3> {
         .collect()
 }
 
+/// Scanline-like coherence: successive queries 0.05 apart along rows.
+fn scanline_queries(n: usize) -> Vec<DVec3> {
+    let s = side(n);
+    (0..1 << 16)
+        .map(|k| {
+            DVec3::new(
+                (k % 4096) as f64 * 0.05 % s,
+                100.0 + (k / 4096) as f64 * 0.05,
+                0.0,
+            )
+        })
+        .collect()
+}
+
 fn mean_covering(cache: &Cache<[f32; 3]>, qs: &[DVec3]) -> f64 {
     let total: usize = qs
         .iter()
@@ -120,17 +134,7 @@ fn lookups(c: &mut Criterion) {
             });
         }
         if n == 1_000_000 {
-            // scanline-like coherence: successive queries 0.05 apart along rows
-            let s = side(n);
-            let row: Vec<DVec3> = (0..1 << 16)
-                .map(|k| {
-                    DVec3::new(
-                        (k % 4096) as f64 * 0.05 % s,
-                        100.0 + (k / 4096) as f64 * 0.05,
-                        0.0,
-                    )
-                })
-                .collect();
+            let row = scanline_queries(n);
             let mut j = 0;
             group.bench_function(format!("coherent/{n}"), |b| {
                 b.iter(|| {
@@ -271,4 +275,46 @@ criterion_group! {
     config = Criterion::default().warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(3));
     targets = lookups, inserts
 }
-criterion_main!(benches);
+/// `RADDIFF_CACHE_PROFILE=<queries>:<records>:<lookups>` builds a cache of `records` records and
+/// makes `lookups` lookups and nothing else, for `valgrind --tool=callgrind`: the difference of two
+/// runs' instruction counts over the difference of their lookup counts is the cost of one lookup,
+/// whatever the machine's load. `queries` is `coherent` or `random` through `lookup`, or
+/// `coherent_indexed` / `random_indexed` through the index alone (`lookup_indexed`).
+fn profile(spec: &str) {
+    let parts: Vec<&str> = spec.split(':').collect();
+    let [kind, records, count] = parts[..] else {
+        panic!("RADDIFF_CACHE_PROFILE=<queries>:<records>:<lookups>, got {spec}");
+    };
+    let n: usize = records.parse().expect("record count");
+    let count: usize = count.parse().expect("lookup count");
+    let cache = build(n);
+    let (coherent, indexed) = match kind {
+        "coherent" => (true, false),
+        "coherent_indexed" => (true, true),
+        "random" => (false, false),
+        "random_indexed" => (false, true),
+        other => panic!("unknown query kind {other}"),
+    };
+    let qs = if coherent {
+        scanline_queries(n)
+    } else {
+        queries(n, 1 << 16)
+    };
+    for k in 0..count {
+        let q = qs[k & (qs.len() - 1)];
+        if indexed {
+            black_box(cache.lookup_indexed(q, DVec3::Z).ok());
+        } else {
+            black_box(cache.lookup(q, DVec3::Z).ok());
+        }
+    }
+}
+
+fn main() {
+    if let Ok(spec) = std::env::var("RADDIFF_CACHE_PROFILE") {
+        profile(&spec);
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}
