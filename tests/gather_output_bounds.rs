@@ -42,7 +42,7 @@ fn valid_gathers_stay_within_the_documented_magnitudes() {
         LayoutKind::Concentric,
         LayoutKind::Sphere,
     ] {
-        for (m, n) in [(2, 3), (4, 8), (8, 16), (16, 32)] {
+        for (m, n) in [(3, 6), (4, 8), (8, 16), (16, 32)] {
             for trial in 0..40 {
                 let normal = DVec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5)
                     .normalize();
@@ -68,7 +68,11 @@ fn valid_gathers_stay_within_the_documented_magnitudes() {
                             scale * 10f64.powf(rng.unit() * 3.0)
                         };
                         rad[i] = if trial % 2 == 1 {
-                            if (i / n + i % n) % 2 == 0 { 5.0 } else { -5.0 }
+                            if (i / n as usize + i % n as usize) % 2 == 0 {
+                                5.0
+                            } else {
+                                -5.0
+                            }
                         } else {
                             (rng.unit() * 10.0 - 5.0) as f32
                         };

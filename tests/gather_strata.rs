@@ -133,6 +133,7 @@ fn the_issues_concentric_gather_is_refused() {
     let g = Gather::new(&layout);
     let err = ValidGather::new(&layout, &f, &g.input(&d, false)).unwrap_err();
     let msg = err.to_string();
+    println!("{msg}");
     assert!(
         msg.contains("directions[0] (row j = 0, column k = 0 of the 8x8 Concentric layout) lies outside its stratum"),
         "{msg}"

@@ -217,11 +217,16 @@ impl CGather {
             && out.harmonic_mean_distance == SENTINEL
             && out.min_distance == SENTINEL
         {
-            Answer::Refused(status_name(s), last_error().contains(expect))
+            Answer::Refused(status_name(s), named(expect))
         } else {
             Answer::RefusedButWritten(status_name(s))
         }
     }
+}
+
+/// Whether the last error names what `expect` says (an empty `expect`: nothing is claimed).
+fn named(expect: &str) -> bool {
+    !expect.is_empty() && last_error().contains(expect)
 }
 
 /// The gathers every direction class is tried on: three kinds, three shapes, five seeds.
@@ -478,7 +483,7 @@ fn radii_call(
             && r[..count].windows(2).all(|w| w[0] <= w[1]);
         if ok { Answer::Finite } else { Answer::NonFinite }
     } else if r.iter().all(|&v| v == SENTINEL) && axes.iter().all(|a| a.x == SENTINEL) {
-        Answer::Refused(status_name(s), last_error().contains(expect))
+        Answer::Refused(status_name(s), named(expect))
     } else {
         Answer::RefusedButWritten(status_name(s))
     }
@@ -502,7 +507,7 @@ fn radii_rows() -> Vec<Row> {
             }
         } else if s % 3 == 1 {
             let m = DMat3::from_cols_array(&h);
-            h = (0.5 * (m + m.transpose())).to_cols_array();
+            h = (0.5 * m + 0.5 * m.transpose()).to_cols_array();
         }
         let (value, error) = [(1.0, 0.05), (1e-300, 1e300), (1e300, 1e-300), (1e300, 1e300)][s % 4];
         let aniso = [1.0, 2.0, 1e200][s % 3];
@@ -559,7 +564,10 @@ const END: &str = "<!-- end of the generated table -->";
 
 #[test]
 fn hostile_input_table_matches_what_the_library_answers() {
-    let rows: Vec<Row> = [direction_rows(), value_rows(), radii_rows()].concat();
+    let rows: Vec<Row> = [direction_rows(), value_rows(), radii_rows()]
+        .into_iter()
+        .flatten()
+        .collect();
     for r in &rows {
         r.check();
     }

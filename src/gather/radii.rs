@@ -291,6 +291,21 @@ fn max_abs(values: &[f64]) -> f64 {
     values.iter().fold(0.0, |m, v| m.max(v.abs()))
 }
 
+/// Entries of a matrix scaled to largest entry 1 below this magnitude are set to zero before the
+/// eigen-solver runs: they move no eigenvalue by more than 3e-150 (far below rounding), and
+/// subnormal operands made the iterative solver return NaN eigenvectors
+/// (`tests/radii_hostile.rs`).
+const FLUSH: f64 = 1e-150;
+
+#[inline]
+fn flush(v: f64) -> f64 {
+    if v.abs() < FLUSH {
+        0.0
+    } else {
+        v
+    }
+}
+
 /// Eigen-decomposition of a symmetric 2x2 matrix, eigenvalues by descending magnitude, after scaling
 /// by `scale` (returned) so that the largest entry is 1.
 fn eigen2(m: DMat2) -> (f64, [f64; 2], [DVec2; 2]) {
@@ -300,8 +315,13 @@ fn eigen2(m: DMat2) -> (f64, [f64; 2], [DVec2; 2]) {
     }
     // Division, not multiplication by the reciprocal: that of a subnormal scale overflows.
     let s = m / scale;
-    let off = 0.5 * (s.x_axis.y + s.y_axis.x);
-    let eig = Matrix2::new(s.x_axis.x, off, off, s.y_axis.y).symmetric_eigen();
+    let off = flush(0.5 * (s.x_axis.y + s.y_axis.x));
+    let eig = Matrix2::new(flush(s.x_axis.x), off, off, flush(s.y_axis.y)).symmetric_eigen();
+    if !(eig.eigenvalues.iter().all(|v| v.is_finite())
+        && eig.eigenvectors.iter().all(|v| v.is_finite()))
+    {
+        return (scale, [s.x_axis.x, s.y_axis.y], [DVec2::X, DVec2::Y]);
+    }
     let mut idx = [0usize, 1];
     idx.sort_by(|&a, &b| {
         eig.eigenvalues[b]
@@ -310,7 +330,9 @@ fn eigen2(m: DMat2) -> (f64, [f64; 2], [DVec2; 2]) {
     });
     let vals = idx.map(|i| eig.eigenvalues[i]);
     let first = eig.eigenvectors.column(idx[0]);
-    let v0 = DVec2::new(first[0], first[1]).normalize();
+    let v0 = DVec2::new(first[0], first[1])
+        .try_normalize()
+        .unwrap_or(DVec2::X);
     // The second axis is the perpendicular of the first: exactly orthonormal, whatever the solver did.
     let v1 = v0.perp();
     (scale, vals, [v0, v1])
@@ -324,9 +346,19 @@ fn eigen3(m: DMat3) -> (f64, [f64; 3], [DVec3; 3]) {
         return (0.0, [0.0; 3], [DVec3::X, DVec3::Y, DVec3::Z]);
     }
     let s = m / scale;
-    let sym = |i: usize, j: usize| 0.5 * (s.col(j)[i] + s.col(i)[j]);
+    let sym = |i: usize, j: usize| flush(0.5 * (s.col(j)[i] + s.col(i)[j]));
     let mat = Matrix3::from_fn(sym);
     let eig = mat.symmetric_eigen();
+    if !(eig.eigenvalues.iter().all(|v| v.is_finite())
+        && eig.eigenvectors.iter().all(|v| v.is_finite()))
+    {
+        // Never seen after the flush; a finite answer (the diagonal) rather than NaN radii.
+        let d = [mat[(0, 0)], mat[(1, 1)], mat[(2, 2)]];
+        let mut idx = [0usize, 1, 2];
+        idx.sort_by(|&a, &b| d[b].abs().total_cmp(&d[a].abs()));
+        let axis = [DVec3::X, DVec3::Y, DVec3::Z];
+        return (scale, idx.map(|i| d[i]), idx.map(|i| axis[i]));
+    }
     let mut idx = [0usize, 1, 2];
     idx.sort_by(|&a, &b| {
         eig.eigenvalues[b]
@@ -339,8 +371,13 @@ fn eigen3(m: DMat3) -> (f64, [f64; 3], [DVec3; 3]) {
         DVec3::new(c[0], c[1], c[2])
     };
     // Re-orthonormalize (Gram-Schmidt, third = cross) so the axes are exactly orthonormal.
-    let v0 = col(0).normalize();
-    let v1 = (col(1) - v0 * v0.dot(col(1))).normalize();
+    // A solver's vectors can be (nearly) parallel for a (nearly) repeated eigenvalue: any
+    // orthonormal completion is then an eigenbasis too.
+    let v0 = col(0).try_normalize().unwrap_or(DVec3::X);
+    let v1 = (col(1) - v0 * v0.dot(col(1)))
+        .try_normalize()
+        .filter(|v| v.dot(v0).abs() < 1e-6)
+        .unwrap_or_else(|| v0.any_orthonormal_vector());
     let v2 = v0.cross(v1);
     (scale, vals, [v0, v1, v2])
 }
