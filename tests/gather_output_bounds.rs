@@ -44,8 +44,8 @@ fn valid_gathers_stay_within_the_documented_magnitudes() {
     ] {
         for (m, n) in [(3, 6), (4, 8), (8, 16), (16, 32)] {
             for trial in 0..40 {
-                let normal = DVec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5)
-                    .normalize();
+                let normal =
+                    DVec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize();
                 let frame = Frame::new(
                     DVec3::new(3.0, -1.0, 2.0),
                     normal,
@@ -94,7 +94,11 @@ fn valid_gathers_stay_within_the_documented_magnitudes() {
                 let Some(r) = v.min_distance else { continue };
                 let l = rad.iter().fold(0.0f64, |a, &b| a.max(b.abs() as f64));
                 let (mf, nf) = (m as f64, n as f64);
-                let sr = if kind == LayoutKind::Sphere { 4.0 * PI } else { PI };
+                let sr = if kind == LayoutKind::Sphere {
+                    4.0 * PI
+                } else {
+                    PI
+                };
                 let ratios = [
                     v.irradiance[0].abs() / (sr * l),
                     v.gradient[0].length() * r / (2.0 * PI * (2.0 * mf + nf) * l),

@@ -32,7 +32,9 @@ impl Gather {
         Gather {
             dist: (0..cells).map(|i| 0.5 + (i % 7) as f64 * 0.3).collect(),
             rad: (0..cells).map(|i| 0.1 + (i % 5) as f32 * 0.2).collect(),
-            media: (0..cells * 4).map(|i| 0.05 + (i % 3) as f32 * 0.01).collect(),
+            media: (0..cells * 4)
+                .map(|i| 0.05 + (i % 3) as f32 * 0.01)
+                .collect(),
         }
     }
 
@@ -70,7 +72,10 @@ fn expect_refused(layout: &Layout, frame: &Frame, dirs: &[DVec3], first: usize, 
             other => panic!("{layout:?} {what} (media {media}): {other:?}"),
         }
     }
-    let check = layout.check_directions(frame, dirs).unwrap_err().to_string();
+    let check = layout
+        .check_directions(frame, dirs)
+        .unwrap_err()
+        .to_string();
     assert!(check.contains(&want), "{check}");
 }
 
@@ -164,10 +169,7 @@ fn valid_gathers_of_many_seeds_pass() {
                 let layout = Layout::new(kind, m, n, seed).unwrap();
                 let d = layout.directions(&f).unwrap();
                 layout.check_directions(&f, &d).unwrap();
-                let single: Vec<DVec3> = d
-                    .iter()
-                    .map(|w| w.as_vec3().as_dvec3())
-                    .collect();
+                let single: Vec<DVec3> = d.iter().map(|w| w.as_vec3().as_dvec3()).collect();
                 layout.check_directions(&f, &single).unwrap();
                 tried += 1;
             }
@@ -201,9 +203,19 @@ fn the_tolerance_is_a_thin_band_around_each_stratum() {
                     1.5
                 };
                 let b = if db < 0.0 {
-                    2.0 - eps * if kind == LayoutKind::Concentric { 3.0 } else { 6.0 / std::f64::consts::TAU }
+                    2.0 - eps
+                        * if kind == LayoutKind::Concentric {
+                            3.0
+                        } else {
+                            6.0 / std::f64::consts::TAU
+                        }
                 } else if db > 0.0 {
-                    3.0 + eps * if kind == LayoutKind::Concentric { 3.0 } else { 6.0 / std::f64::consts::TAU }
+                    3.0 + eps
+                        * if kind == LayoutKind::Concentric {
+                            3.0
+                        } else {
+                            6.0 / std::f64::consts::TAU
+                        }
                 } else {
                     2.5
                 };

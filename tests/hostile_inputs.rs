@@ -160,9 +160,7 @@ impl CGather {
                     }
                 })
                 .collect(),
-            rad: (0..cells * 2)
-                .map(|i| 0.1 + (i % 5) as f32 * 0.3)
-                .collect(),
+            rad: (0..cells * 2).map(|i| 0.1 + (i % 5) as f32 * 0.3).collect(),
             channels: 2,
             sigma_t: 0.0,
             media: None,
@@ -252,18 +250,47 @@ fn name(i: usize, n: usize) -> String {
 
 fn direction_rows() -> Vec<Row> {
     const S: &str = "Gather directions (`raddiff_gather_evaluate`, 3 layout kinds x 3 shapes x 5 seeds, with and without marched media)";
-    let mut valid = Row::new(S, "valid gathers, directions as generated or rounded to `f32`", false);
+    let mut valid = Row::new(
+        S,
+        "valid gathers, directions as generated or rounded to `f32`",
+        false,
+    );
     let mut rows_shift = Row::new(S, "rows shifted by one (row j holds row j-1)", true);
-    let mut rows_cyclic = Row::new(S, "rows cyclically shifted (row j holds row j+1, the last row the first)", true);
+    let mut rows_cyclic = Row::new(
+        S,
+        "rows cyclically shifted (row j holds row j+1, the last row the first)",
+        true,
+    );
     let mut cols_shift = Row::new(S, "columns shifted by one in every row", true);
     let mut off_by_one = Row::new(S, "the whole array off by one index", true);
-    let mut swap_row = Row::new(S, "two neighbours swapped in a row (every pair of one row)", true);
-    let mut swap_col = Row::new(S, "two neighbours swapped across rows (every pair of two rows)", true);
+    let mut swap_row = Row::new(
+        S,
+        "two neighbours swapped in a row (every pair of one row)",
+        true,
+    );
+    let mut swap_col = Row::new(
+        S,
+        "two neighbours swapped across rows (every pair of two rows)",
+        true,
+    );
     let mut far = Row::new(S, "one direction from the far side (opposite azimuth; the antipode for the sphere), every index", true);
-    let mut below = Row::new(S, "one direction mirrored below the horizon (hemisphere layouts), every index", true);
+    let mut below = Row::new(
+        S,
+        "one direction mirrored below the horizon (hemisphere layouts), every index",
+        true,
+    );
     let mut turned = Row::new(S, "a frame whose tangent is turned by 90 degrees", true);
-    let mut nonunit = Row::new(S, "one direction scaled by 1+1e-5, 0.5 or 0, or with a NaN or infinite component", true);
-    let mut other_kind = Row::new(S, "the directions of another layout kind (same m, n, seed)", true).report_only();
+    let mut nonunit = Row::new(
+        S,
+        "one direction scaled by 1+1e-5, 0.5 or 0, or with a NaN or infinite component",
+        true,
+    );
+    let mut other_kind = Row::new(
+        S,
+        "the directions of another layout kind (same m, n, seed)",
+        true,
+    )
+    .report_only();
     for base in bases() {
         let n = base.layout.n as usize;
         let m = base.layout.m as usize;
@@ -286,7 +313,9 @@ fn direction_rows() -> Vec<Row> {
             rows_cyclic.add(r.evaluate(&name(0, n)));
 
             let mut r = g.clone();
-            r.dirs = (0..cells).map(|i| g.dirs[(i / n) * n + (i % n + 1) % n]).collect();
+            r.dirs = (0..cells)
+                .map(|i| g.dirs[(i / n) * n + (i % n + 1) % n])
+                .collect();
             cols_shift.add(r.evaluate(&name(0, n)));
 
             let mut r = g.clone();
@@ -352,13 +381,28 @@ fn direction_rows() -> Vec<Row> {
             )
             .unwrap();
             let mut r = g.clone();
-            r.dirs = other.directions(&frame).unwrap().into_iter().map(v3).collect();
+            r.dirs = other
+                .directions(&frame)
+                .unwrap()
+                .into_iter()
+                .map(v3)
+                .collect();
             other_kind.add(r.evaluate("directions["));
         }
     }
     vec![
-        valid, rows_shift, rows_cyclic, cols_shift, off_by_one, swap_row, swap_col, far, below,
-        turned, nonunit, other_kind,
+        valid,
+        rows_shift,
+        rows_cyclic,
+        cols_shift,
+        off_by_one,
+        swap_row,
+        swap_col,
+        far,
+        below,
+        turned,
+        nonunit,
+        other_kind,
     ]
 }
 
@@ -366,11 +410,20 @@ fn value_rows() -> Vec<Row> {
     const S: &str = "Gather values, sizes, frames and layouts (`raddiff_gather_evaluate`, on a 6x10 gather of each kind)";
     let mut dist = Row::new(S, "a distance of 0, -1, -inf, NaN or -0", true);
     let mut rad = Row::new(S, "a radiance of NaN, +inf or -inf", true);
-    let mut extreme = Row::new(S, "extreme but valid values: radiance +-3.4e38, distances 1e-300 or 1e300, sigma_t 1e300", false).report_only();
+    let mut extreme = Row::new(
+        S,
+        "extreme but valid values: radiance +-3.4e38, distances 1e-300 or 1e300, sigma_t 1e300",
+        false,
+    )
+    .report_only();
     let mut media = Row::new(S, "marched media: steps 0, step 0, -1, NaN or inf, steps x step overflowing, a NaN media radiance", true);
     let mut sigma = Row::new(S, "sigma_t of -1, NaN or inf", true);
     let mut frames = Row::new(S, "a frame with a normal of length 1.01, a tangent 0.01 off perpendicular, a NaN normal or position", true);
-    let mut layouts = Row::new(S, "a layout of kind 3, m = 0, n = 0, m = 65537 or m x n above 2^24", true);
+    let mut layouts = Row::new(
+        S,
+        "a layout of kind 3, m = 0, n = 0, m = 65537 or m x n above 2^24",
+        true,
+    );
     let mut channels = Row::new(S, "channels = 0", true);
     for kind in [
         LayoutKind::CosinePolar,
@@ -378,12 +431,22 @@ fn value_rows() -> Vec<Row> {
         LayoutKind::Sphere,
     ] {
         let g = CGather::new(kind, 6, 10, 3);
-        for (i, d) in [(7, 0.0), (0, -1.0), (59, f64::NEG_INFINITY), (30, f64::NAN), (11, -0.0)] {
+        for (i, d) in [
+            (7, 0.0),
+            (0, -1.0),
+            (59, f64::NEG_INFINITY),
+            (30, f64::NAN),
+            (11, -0.0),
+        ] {
             let mut r = g.clone();
             r.dist[i] = d;
             dist.add(r.evaluate(&format!("distance[{i}]")));
         }
-        for (i, v) in [(3, f32::NAN), (100, f32::INFINITY), (119, f32::NEG_INFINITY)] {
+        for (i, v) in [
+            (3, f32::NAN),
+            (100, f32::INFINITY),
+            (119, f32::NEG_INFINITY),
+        ] {
             let mut r = g.clone();
             r.rad[i] = v;
             rad.add(r.evaluate(&format!("radiance[{i}]")));
@@ -425,7 +488,8 @@ fn value_rows() -> Vec<Row> {
         r.frame.normal = v3(DVec3::from(g.frame.normal) * 1.01);
         frames.add(r.evaluate("normal"));
         let mut r = g.clone();
-        r.frame.tangent = v3((DVec3::from(g.frame.tangent) + 0.01 * DVec3::from(g.frame.normal)).normalize());
+        r.frame.tangent =
+            v3((DVec3::from(g.frame.tangent) + 0.01 * DVec3::from(g.frame.normal)).normalize());
         frames.add(r.evaluate("tangent"));
         let mut r = g.clone();
         r.frame.normal.x = f64::NAN;
@@ -433,9 +497,20 @@ fn value_rows() -> Vec<Row> {
         let mut r = g.clone();
         r.frame.position.y = f64::INFINITY;
         frames.add(r.evaluate("position"));
-        for (k, m, n) in [(3, 6, 10), (kind as u32, 0, 10), (kind as u32, 6, 0), (kind as u32, 65537, 1), (kind as u32, 8192, 4096)] {
+        for (k, m, n) in [
+            (3, 6, 10),
+            (kind as u32, 0, 10),
+            (kind as u32, 6, 0),
+            (kind as u32, 65537, 1),
+            (kind as u32, 8192, 4096),
+        ] {
             let mut r = g.clone();
-            r.layout = raddiff_gather_layout { kind: k, m, n, seed: 3 };
+            r.layout = raddiff_gather_layout {
+                kind: k,
+                m,
+                n,
+                seed: 3,
+            };
             layouts.add(r.evaluate("layout"));
         }
         let mut r = g.clone();
@@ -447,11 +522,24 @@ fn value_rows() -> Vec<Row> {
 
 /// Hessian entries the hostile matrices are built from.
 const ENTRIES: [f64; 12] = [
-    0.0, 1.0, -1.0, 2.5, 1e300, -1e300, f64::MAX, -f64::MAX, 5e-324, -5e-324, 1e-300, -7e150,
+    0.0,
+    1.0,
+    -1.0,
+    2.5,
+    1e300,
+    -1e300,
+    f64::MAX,
+    -f64::MAX,
+    5e-324,
+    -5e-324,
+    1e-300,
+    -7e150,
 ];
 
 fn lcg(state: &mut u64) -> usize {
-    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *state = state
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     (*state >> 33) as usize
 }
 
@@ -469,19 +557,57 @@ fn radii_call(
     expect: &str,
 ) -> Answer {
     let mut r = [SENTINEL; 3];
-    let mut axes = [raddiff_vec3 { x: SENTINEL, y: SENTINEL, z: SENTINEL }; 3];
+    let mut axes = [raddiff_vec3 {
+        x: SENTINEL,
+        y: SENTINEL,
+        z: SENTINEL,
+    }; 3];
     let s = unsafe {
         match which {
-            0 => raddiff_surface_radii(h.as_ptr(), v3(normal), value, error, mode, aniso, r.as_mut_ptr(), axes.as_mut_ptr()),
-            1 => raddiff_surface_radii_floored(h.as_ptr(), v3(normal), value, error, mode, aniso, floor.0, floor.1, r.as_mut_ptr(), axes.as_mut_ptr()),
-            _ => raddiff_volume_radii(h.as_ptr(), value, error, mode, aniso, r.as_mut_ptr(), axes.as_mut_ptr()),
+            0 => raddiff_surface_radii(
+                h.as_ptr(),
+                v3(normal),
+                value,
+                error,
+                mode,
+                aniso,
+                r.as_mut_ptr(),
+                axes.as_mut_ptr(),
+            ),
+            1 => raddiff_surface_radii_floored(
+                h.as_ptr(),
+                v3(normal),
+                value,
+                error,
+                mode,
+                aniso,
+                floor.0,
+                floor.1,
+                r.as_mut_ptr(),
+                axes.as_mut_ptr(),
+            ),
+            _ => raddiff_volume_radii(
+                h.as_ptr(),
+                value,
+                error,
+                mode,
+                aniso,
+                r.as_mut_ptr(),
+                axes.as_mut_ptr(),
+            ),
         }
     };
     let count = if which == 2 { 3 } else { 2 };
     if s == raddiff_status::RADDIFF_OK {
-        let ok = r[..count].iter().all(|v| v.is_finite() && (0.0..=RADDIFF_MAX_RADIUS).contains(v))
+        let ok = r[..count]
+            .iter()
+            .all(|v| v.is_finite() && (0.0..=RADDIFF_MAX_RADIUS).contains(v))
             && r[..count].windows(2).all(|w| w[0] <= w[1]);
-        if ok { Answer::Finite } else { Answer::NonFinite }
+        if ok {
+            Answer::Finite
+        } else {
+            Answer::NonFinite
+        }
     } else if r.iter().all(|&v| v == SENTINEL) && axes.iter().all(|a| a.x == SENTINEL) {
         Answer::Refused(status_name(s), named(expect))
     } else {
@@ -492,7 +618,11 @@ fn radii_call(
 fn radii_rows() -> Vec<Row> {
     const S: &str = "Record radii (`raddiff_surface_radii`, `raddiff_surface_radii_floored`, `raddiff_volume_radii`)";
     let mut finite = Row::new(S, "finite Hessians with entries from {0, +-1, 2.5, +-1e300, +-DBL_MAX, +-5e-324, 1e-300, -7e150}: diagonal (indefinite), symmetric, non-symmetric; value/error from 1e-300 to 1e300, anisotropy up to 1e200, floor distance 1e-200 to 1e200", false);
-    let mut nonfinite = Row::new(S, "a NaN, +inf or -inf Hessian entry (each of the 9 positions)", true);
+    let mut nonfinite = Row::new(
+        S,
+        "a NaN, +inf or -inf Hessian entry (each of the 9 positions)",
+        true,
+    );
     let mut args = Row::new(S, "a normal of length 0, 2 or NaN; mode 2; anisotropy 0.5 or NaN; error -1 or NaN; value inf; floor distance 0, -1, inf; floor weight -1", true);
     let n = DVec3::new(0.6, 0.0, 0.8);
     let mut state = 7u64;
@@ -509,12 +639,19 @@ fn radii_rows() -> Vec<Row> {
             let m = DMat3::from_cols_array(&h);
             h = (0.5 * m + 0.5 * m.transpose()).to_cols_array();
         }
-        let (value, error) = [(1.0, 0.05), (1e-300, 1e300), (1e300, 1e-300), (1e300, 1e300)][s % 4];
+        let (value, error) = [
+            (1.0, 0.05),
+            (1e-300, 1e300),
+            (1e300, 1e-300),
+            (1e300, 1e300),
+        ][s % 4];
         let aniso = [1.0, 2.0, 1e200][s % 3];
         let floor = ([1.0, 1e-200, 1e200][s % 3], RADDIFF_CURVATURE_FLOOR_WEIGHT);
         for which in 0..3 {
             for mode in [RADDIFF_ERROR_ABSOLUTE, RADDIFF_ERROR_RELATIVE] {
-                finite.add(radii_call(which, &h, n, value, error, mode, aniso, floor, ""));
+                finite.add(radii_call(
+                    which, &h, n, value, error, mode, aniso, floor, "",
+                ));
             }
         }
     }
@@ -524,26 +661,99 @@ fn radii_rows() -> Vec<Row> {
             let mut h = good;
             h[pos] = bad;
             for which in 0..3 {
-                nonfinite.add(radii_call(which, &h, n, 1.0, 0.05, 1, 2.0, (1.0, 0.04), "hessian"));
+                nonfinite.add(radii_call(
+                    which,
+                    &h,
+                    n,
+                    1.0,
+                    0.05,
+                    1,
+                    2.0,
+                    (1.0, 0.04),
+                    "hessian",
+                ));
             }
         }
     }
     let base = (n, 1.0, 0.05, 1u32, 2.0, (1.0, 0.04));
     type Case = (DVec3, f64, f64, u32, f64, (f64, f64), &'static str, usize);
     let cases: Vec<Case> = vec![
-        (DVec3::ZERO, base.1, base.2, base.3, base.4, base.5, "normal", 2),
+        (
+            DVec3::ZERO,
+            base.1,
+            base.2,
+            base.3,
+            base.4,
+            base.5,
+            "normal",
+            2,
+        ),
         (n * 2.0, base.1, base.2, base.3, base.4, base.5, "normal", 2),
-        (DVec3::new(f64::NAN, 0.0, 1.0), base.1, base.2, base.3, base.4, base.5, "normal", 2),
+        (
+            DVec3::new(f64::NAN, 0.0, 1.0),
+            base.1,
+            base.2,
+            base.3,
+            base.4,
+            base.5,
+            "normal",
+            2,
+        ),
         (n, base.1, base.2, 2, base.4, base.5, "mode", 3),
         (n, base.1, base.2, base.3, 0.5, base.5, "max_anisotropy", 3),
-        (n, base.1, base.2, base.3, f64::NAN, base.5, "max_anisotropy", 3),
+        (
+            n,
+            base.1,
+            base.2,
+            base.3,
+            f64::NAN,
+            base.5,
+            "max_anisotropy",
+            3,
+        ),
         (n, base.1, -1.0, base.3, base.4, base.5, "error", 3),
         (n, base.1, f64::NAN, base.3, base.4, base.5, "error", 3),
         (n, f64::INFINITY, base.2, base.3, base.4, base.5, "value", 3),
-        (n, base.1, base.2, base.3, base.4, (0.0, 0.04), "floor distance", 1),
-        (n, base.1, base.2, base.3, base.4, (-1.0, 0.04), "floor distance", 1),
-        (n, base.1, base.2, base.3, base.4, (f64::INFINITY, 0.04), "floor distance", 1),
-        (n, base.1, base.2, base.3, base.4, (1.0, -1.0), "floor weight", 1),
+        (
+            n,
+            base.1,
+            base.2,
+            base.3,
+            base.4,
+            (0.0, 0.04),
+            "floor distance",
+            1,
+        ),
+        (
+            n,
+            base.1,
+            base.2,
+            base.3,
+            base.4,
+            (-1.0, 0.04),
+            "floor distance",
+            1,
+        ),
+        (
+            n,
+            base.1,
+            base.2,
+            base.3,
+            base.4,
+            (f64::INFINITY, 0.04),
+            "floor distance",
+            1,
+        ),
+        (
+            n,
+            base.1,
+            base.2,
+            base.3,
+            base.4,
+            (1.0, -1.0),
+            "floor weight",
+            1,
+        ),
     ];
     for (normal, value, error, mode, aniso, floor, expect, functions) in cases {
         // `functions`: 1 floored only, 2 the surface ones, 3 all three
@@ -553,13 +763,16 @@ fn radii_rows() -> Vec<Row> {
             _ => vec![0, 1, 2],
         };
         for w in which {
-            args.add(radii_call(w, &good, normal, value, error, mode, aniso, floor, expect));
+            args.add(radii_call(
+                w, &good, normal, value, error, mode, aniso, floor, expect,
+            ));
         }
     }
     vec![finite, nonfinite, args]
 }
 
-const BEGIN: &str = "<!-- hostile-input table: generated by tests/hostile_inputs.rs, do not edit -->";
+const BEGIN: &str =
+    "<!-- hostile-input table: generated by tests/hostile_inputs.rs, do not edit -->";
 const END: &str = "<!-- end of the generated table -->";
 
 #[test]

@@ -54,7 +54,11 @@ fn hostile_matrices() -> Vec<DMat3> {
             *v = ENTRIES[(mix(s * 16 + i as u64) % ENTRIES.len() as u64) as usize];
         }
         let m = DMat3::from_cols_array(&e);
-        out.push(if s % 2 == 0 { m } else { 0.5 * m + 0.5 * m.transpose() });
+        out.push(if s % 2 == 0 {
+            m
+        } else {
+            0.5 * m + 0.5 * m.transpose()
+        });
     }
     out
 }
@@ -76,7 +80,8 @@ fn check_radii(r: &[f64]) {
         assert!(w[0] <= w[1], "{r:?}");
     }
     assert!(
-        r.iter().all(|&v| v.is_finite() && (0.0..=MAX_RADIUS).contains(&v)),
+        r.iter()
+            .all(|&v| v.is_finite() && (0.0..=MAX_RADIUS).contains(&v)),
         "{r:?}"
     );
 }
@@ -89,7 +94,13 @@ fn radii_are_finite_and_clamped_for_any_finite_hessian() {
         DVec3::new(-0.48, 0.6, -0.64),
     ];
     // (value, error): ordinary, and products that overflow or underflow
-    let tolerances = [(1.0, 0.05), (1e-300, 1e300), (1e300, 1e-300), (0.0, 0.1), (1e300, 1e300)];
+    let tolerances = [
+        (1.0, 0.05),
+        (1e-300, 1e300),
+        (1e300, 1e-300),
+        (0.0, 0.1),
+        (1e300, 1e300),
+    ];
     let anisotropies = [1.0, 2.0, 1e200];
     let floors = [1.0, 1e-200, 1e200];
     let mut calls = 0;
@@ -117,7 +128,11 @@ fn radii_are_finite_and_clamped_for_any_finite_hessian() {
 /// Isotropic radius of the module docs: surface `(4τ/(π|λ|))^{1/4}`, volume `(5τ/(2π|λ|))^{1/5}`,
 /// evaluated in logarithms so that it is exact across the exponent range, then clamped.
 fn isotropic(tau: f64, lambda: f64, volume: bool) -> f64 {
-    let (c, p) = if volume { (2.5 / PI, 5.0) } else { (4.0 / PI, 4.0) };
+    let (c, p) = if volume {
+        (2.5 / PI, 5.0)
+    } else {
+        (4.0 / PI, 4.0)
+    };
     let log = (c.ln() + tau.ln() - lambda.abs().ln()) / p;
     log.exp().min(MAX_RADIUS)
 }
@@ -173,7 +188,11 @@ fn indefinite_and_rank_one_hessians_of_any_magnitude() {
         let h = DMat3::from_diagonal(DVec3::new(lambda, 0.0, 0.0));
         let s = surface_radii(h, DVec3::Z, 1.0, 0.01, ErrorMode::Absolute, 4.0).unwrap();
         if want * 4.0 < MAX_RADIUS {
-            assert!((s.radii[1] / s.radii[0] - 4.0).abs() < 1e-12, "{lambda}: {:?}", s.radii);
+            assert!(
+                (s.radii[1] / s.radii[0] - 4.0).abs() < 1e-12,
+                "{lambda}: {:?}",
+                s.radii
+            );
         } else {
             assert_eq!(s.radii, [MAX_RADIUS; 2], "{lambda}");
         }

@@ -282,7 +282,11 @@ fn solve_radii<const D: usize>(
     let mut out = [0.0; D];
     for i in 0..D {
         let a = r * shape[i];
-        out[i] = if a.is_nan() { MAX_RADIUS } else { a.clamp(0.0, MAX_RADIUS) };
+        out[i] = if a.is_nan() {
+            MAX_RADIUS
+        } else {
+            a.clamp(0.0, MAX_RADIUS)
+        };
     }
     out
 }
@@ -486,7 +490,11 @@ fn surface_radii_with(
         let add = if add.is_finite() { add } else { f64::MAX };
         // |λ|·scale + add for each axis, in units of the larger of the two so nothing overflows
         // (the order of the magnitudes is kept: the same term is added to each).
-        let unit = if scale.is_finite() { scale.max(add) } else { f64::MAX };
+        let unit = if scale.is_finite() {
+            scale.max(add)
+        } else {
+            f64::MAX
+        };
         if unit > 0.0 {
             let ratio = if scale.is_finite() { scale / unit } else { 1.0 };
             mu = mu.map(|m| m * ratio + add / unit);

@@ -67,9 +67,7 @@ pub(crate) fn column_bounds(layout: &Layout) -> Vec<f64> {
         return Vec::new();
     }
     let n = layout.n as f64;
-    (0..=layout.n)
-        .map(|k| 2.0 * k as f64 / n - 1.0)
-        .collect()
+    (0..=layout.n).map(|k| 2.0 * k as f64 / n - 1.0).collect()
 }
 
 /// Row `j`'s range, widened by the tolerance: in sin²θ (polar), cosθ (sphere) or the square's
@@ -152,8 +150,7 @@ fn polar_ok<const SPHERE: bool, const AZIMUTH: bool>(
     let ring = if SPHERE { lz } else { lx * lx + ly * ly };
     let unit = (w.length_squared() - 1.0).abs() <= 2.0 * TOL;
     let above = SPHERE || lz >= -TOL;
-    let azimuth =
-        !AZIMUTH || ((a0.0 * ly - a0.1 * lx >= -TOL) & (lx * a1.1 - ly * a1.0 >= -TOL));
+    let azimuth = !AZIMUTH || ((a0.0 * ly - a0.1 * lx >= -TOL) & (lx * a1.1 - ly * a1.0 >= -TOL));
     // NaN fails every comparison, so this covers non-finite input too.
     unit & above & (ring >= lo) & (ring <= hi) & azimuth
 }
@@ -256,7 +253,9 @@ fn direction_ok(
             tables.column_bounds[k],
             tables.column_bounds[k + 1],
         ),
-        (LayoutKind::CosinePolar, true) => polar_ok::<false, false>(w, axes, range, wall(k), wall(k)),
+        (LayoutKind::CosinePolar, true) => {
+            polar_ok::<false, false>(w, axes, range, wall(k), wall(k))
+        }
         (LayoutKind::CosinePolar, false) => {
             polar_ok::<false, true>(w, axes, range, wall(k), wall(k + 1))
         }
@@ -297,16 +296,29 @@ fn describe(layout: &Layout, frame: &Frame, w: DVec3, i: usize) -> Error {
         )
     } else {
         let where_ = match layout.stratum_bounds(j as u32, k as u32) {
-            StratumBounds::Polar { theta, phi } => format!(
-                "it is at theta = {:.4} deg, phi = {:.4} deg; the stratum spans theta in \
-                 [{:.4}, {:.4}] deg, phi in [{:.4}, {:.4}] deg",
+            StratumBounds::Polar { theta, phi } => {
+                let (lo, hi) = row_range(layout, j);
+                let ring = if layout.kind == LayoutKind::Sphere {
+                    l.z
+                } else {
+                    l.x * l.x + l.y * l.y
+                };
+                let which = if ring >= lo && ring <= hi {
+                    "azimuth range"
+                } else {
+                    "ring"
+                };
+                format!(
+                "outside the {which}: it is at theta = {:.4} deg, phi = {:.4} deg; the stratum \
+                 spans theta in [{:.4}, {:.4}] deg, phi in [{:.4}, {:.4}] deg",
                 l.z.clamp(-1.0, 1.0).acos().to_degrees(),
                 l.y.atan2(l.x).rem_euclid(TAU).to_degrees(),
                 theta.0.to_degrees(),
                 theta.1.to_degrees(),
                 phi.0.to_degrees(),
                 phi.1.to_degrees()
-            ),
+            )
+            }
             StratumBounds::Square { min, max } => {
                 let (a, b) = local_to_square(l.x, l.y);
                 format!(
@@ -391,7 +403,10 @@ mod tests {
             d.swap(20, 21);
             assert!(!directions_ok(&layout, &frame, &d), "{kind:?}");
             assert!(!directions_ok_any(&layout, &frame, &d), "{kind:?}");
-            assert!(locate_bad_direction(&layout, &frame, &d).is_err(), "{kind:?}");
+            assert!(
+                locate_bad_direction(&layout, &frame, &d).is_err(),
+                "{kind:?}"
+            );
         }
     }
 }
