@@ -8,7 +8,11 @@
 //! groups, a summary table in ns per sample with the speed-up over the previous implementation,
 //! timed in the same run as on-CPU time of the thread (robust on a shared machine; criterion's
 //! figures are wall time).
-//! `RADDIFF_BENCH_SUMMARY_ONLY=1` skips the criterion groups;
+//! A second summary times the stratum check alone (`Layout::check_directions`, the validation of
+//! every direction against its stratum that `evaluate` runs first) against the evaluation with
+//! Ward-Heckbert gradients, for each layout kind at every size (criterion group `gather_check`).
+//! `RADDIFF_BENCH_SUMMARY_ONLY=1` skips the criterion groups, `RADDIFF_BENCH_CHECK_ONLY=1` the
+//! first summary;
 //! `RADDIFF_BENCH_PROFILE=32x128:gradients:1000` runs one case only (for `perf`/callgrind).
 //!
 //! `cargo bench --bench gather -- --warm-up-time 1 --measurement-time 3`
@@ -167,7 +171,69 @@ fn cases(s: &Scene) -> Vec<Case<'_>> {
     v
 }
 
+/// Per layout kind: the stratum check alone, and the evaluation with gradients (which includes it).
+fn check_cases(m: u32, n: u32) -> Vec<(String, Box<dyn Fn()>)> {
+    let mut v: Vec<(String, Box<dyn Fn()>)> = Vec::new();
+    for kind in [
+        LayoutKind::CosinePolar,
+        LayoutKind::Concentric,
+        LayoutKind::Sphere,
+    ] {
+        let s = std::rc::Rc::new(Scene::new_kind(kind, m, n));
+        let s2 = std::rc::Rc::clone(&s);
+        v.push((
+            format!("{kind:?} check"),
+            Box::new(move || {
+                s.layout
+                    .check_directions(&s.frame, black_box(&s.dirs))
+                    .unwrap()
+            }),
+        ));
+        v.push((
+            format!("{kind:?} gradients"),
+            Box::new(move || {
+                let input = s2.input_with(false, false);
+                black_box(evaluate(&s2.layout, &s2.frame, &input, GRADIENTS).unwrap());
+            }),
+        ));
+    }
+    v
+}
+
+fn check_summary() {
+    println!(
+        "\nStratum check alone vs evaluate with Ward-Heckbert gradients ({CHANNELS} channels), CPU ns per sample:"
+    );
+    println!("| layout | cosine-polar check / gradients | concentric check / gradients | sphere check / gradients |");
+    println!("|---|---|---|---|");
+    for (m, n) in SIZES {
+        let samples = (m * n) as f64;
+        let t: Vec<f64> = check_cases(m, n)
+            .iter()
+            .map(|(_, f)| time(f.as_ref()) / samples)
+            .collect();
+        let cell = |i: usize| {
+            format!(
+                "{:.2} / {:.1} ({:.1}%)",
+                t[2 * i],
+                t[2 * i + 1],
+                100.0 * t[2 * i] / t[2 * i + 1]
+            )
+        };
+        println!("| {m}x{n} | {} | {} | {} |", cell(0), cell(1), cell(2));
+    }
+}
+
 fn bench(c: &mut Criterion) {
+    {
+        let (m, n) = (32, 128);
+        let mut group = c.benchmark_group(format!("gather_check_{m}x{n}"));
+        group.throughput(Throughput::Elements((m * n) as u64));
+        for (name, f) in check_cases(m, n) {
+            group.bench_function(&name, |b| b.iter(&f));
+        }
+        group.finish();
+    }
     for (m, n) in SIZES {
         let scene = Scene::new(m, n);
         let mut group = c.benchmark_group(format!("gather_{m}x{n}"));
@@ -283,5 +349,8 @@ fn main() {
         benches();
     }
     Criterion::default().configure_from_args().final_summary();
-    summary();
+    if std::env::var_os("RADDIFF_BENCH_CHECK_ONLY").is_none() {
+        summary();
+    }
+    check_summary();
 }

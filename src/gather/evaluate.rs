@@ -59,14 +59,15 @@ impl Wanted {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct GatherValues {
     /// Irradiance `∫ L (n·ω) dω` (hemisphere layouts) or fluence `∫ L dω` (sphere), per channel:
-    /// radiance units × sr.
+    /// radiance units × sr. With `L` the largest |radiance| and no medium: at most `πL` (`4πL`).
     pub irradiance: Vec<f64>,
     /// Translational gradient (world axes, per L), per channel. All three components: the tangent
-    /// ones are Ward-Heckbert's; the normal one follows from the same wall motion.
+    /// ones are Ward-Heckbert's; the normal one follows from the same wall motion. Without a medium
+    /// its length is at most `2π(2M + N) L / min_distance` (`docs/robustness.md`).
     pub gradient: Vec<DVec3>,
     /// Rotational gradient (world axes, per radian), per channel: rotating the normal by the small
     /// rotation vector ρ changes the irradiance by `ρ·∇_r E`. Zero for the sphere layout (fluence does
-    /// not depend on the normal).
+    /// not depend on the normal). Its length is at most `(π²/2) L`.
     pub rotation_gradient: Vec<DVec3>,
     /// Harmonic mean of the hit distances, `MN / Σ 1/r` (thesis eq. 3.9; misses count as 1/r = 0):
     /// `INFINITY` if every ray missed.

@@ -563,66 +563,8 @@ fn validate(input: &GatherInput<'_>, layout: &Layout, frame: &Frame) -> Result<(
     check_directions(layout, frame, input.directions)
 }
 
-/// Every direction unit, in the right half-space, and (polar and sphere layouts) inside its stratum.
+/// The direction check shared with the current implementation: the reference is the baseline of
+/// the evaluation, not of the validation (the messages of both must match).
 fn check_directions(layout: &Layout, frame: &Frame, directions: &[DVec3]) -> Result<()> {
-    let tol = GatherInput::DIRECTION_TOLERANCE;
-    let (m, n) = (layout.m as usize, layout.n as usize);
-    // Azimuth walls as unit 2D vectors (φ_k = 2πk/N), N+1 of them (the last one is the first).
-    let walls: Vec<(f64, f64)> = if layout.kind == LayoutKind::Concentric || n < 2 {
-        Vec::new()
-    } else {
-        (0..=n)
-            .map(|k| {
-                let (s, c) = (std::f64::consts::TAU * (k % n) as f64 / n as f64).sin_cos();
-                (c, s)
-            })
-            .collect()
-    };
-    let b = frame.bitangent();
-    for (j, row) in directions.chunks_exact(n).enumerate() {
-        // The ring's range in sin²θ (polar) or cosθ (sphere), widened by the tolerance.
-        let (lo, hi) = match layout.kind {
-            LayoutKind::CosinePolar => (j as f64 / m as f64 - tol, (j + 1) as f64 / m as f64 + tol),
-            LayoutKind::Sphere => (
-                1.0 - 2.0 * (j + 1) as f64 / m as f64 - tol,
-                1.0 - 2.0 * j as f64 / m as f64 + tol,
-            ),
-            LayoutKind::Concentric => (f64::NEG_INFINITY, f64::INFINITY),
-        };
-        for (k, &w) in row.iter().enumerate() {
-            let lx = w.dot(frame.tangent);
-            let ly = w.dot(b);
-            let lz = w.dot(frame.normal);
-            let ring = match layout.kind {
-                LayoutKind::Sphere => lz,
-                _ => lx * lx + ly * ly,
-            };
-            let unit = (w.length_squared() - 1.0).abs() <= 2.0 * tol;
-            let above = lz >= -tol || layout.kind == LayoutKind::Sphere;
-            let azimuth = walls.is_empty() || {
-                let (a0, a1) = (walls[k], walls[k + 1]);
-                a0.0 * ly - a0.1 * lx >= -tol && lx * a1.1 - ly * a1.0 >= -tol
-            };
-            // NaN fails every comparison, so one test covers non-finite input too.
-            if unit && above && ring >= lo && ring <= hi && azimuth {
-                continue;
-            }
-            let why = if !w.is_finite() {
-                "is not finite"
-            } else if !unit {
-                "is not unit"
-            } else if !above {
-                "is below the horizon"
-            } else if !(ring >= lo && ring <= hi) {
-                "is outside its stratum's ring (wrong frame or index order?)"
-            } else {
-                "is outside its stratum's azimuth range (wrong frame or index order?)"
-            };
-            return Err(Error::InvalidArgument(format!(
-                "directions[{}] = {w} {why} (j = {j}, k = {k})",
-                j * n + k
-            )));
-        }
-    }
-    Ok(())
+    super::strata::check_directions(layout, frame, directions)
 }

@@ -36,6 +36,7 @@ mod evaluate;
 pub mod evaluate_reference;
 mod input;
 pub mod layout;
+mod strata;
 mod walls;
 
 pub use evaluate::{evaluate, GatherValues, ValidGather, Wanted};

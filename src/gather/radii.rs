@@ -35,8 +35,18 @@
 //!
 //! Limits: where the Hessian vanishes (all eigenvalues zero, or the radius would exceed it) a
 //! radius is [`MAX_RADIUS`]; tangent eigenvalues below the rounding level of the projection
-//! (16 ε times the largest entry of the 3x3 Hessian) count as zero; a zero eigenvalue alone is handled by the anisotropy clamp. A zero
-//! tolerance (relative mode at `value == 0`, or `error == 0`) with a non-zero Hessian gives radii 0.
+//! (16 ε times the largest entry of the 3x3 Hessian) count as zero; a zero eigenvalue alone is
+//! handled by the anisotropy clamp. A zero tolerance (relative mode at `value == 0`, or
+//! `error == 0`) with a non-zero Hessian gives radii 0.
+//!
+//! Hostile input: for **any finite** Hessian (entries up to `±f64::MAX`, subnormal, zero,
+//! indefinite, not symmetric) and any finite arguments that pass validation, every radius is
+//! finite and in `[0, MAX_RADIUS]`, ascending, with orthonormal axes. The matrix is scaled by its
+//! largest entry before it is projected and decomposed, and the radius is solved one factor at a
+//! time (`τ^{1/p}`, `|λ|^{1/p}`, ...), so neither the matrix nor the tolerance nor the anisotropy
+//! overflows or underflows on the way; a radius is 0 only when it is below the smallest positive
+//! double or the curvature itself overflows (3x3 entries within a factor 3 of `f64::MAX`).
+//! `tests/radii_hostile.rs` and `ffi-tests/radii_hostile.c` try such matrices.
 
 use glam::{DMat2, DMat3, DVec2, DVec3};
 use nalgebra::{Matrix2, Matrix3};
@@ -246,12 +256,15 @@ fn solve_radii<const D: usize>(
     }
     // Shape: a_i ∝ |λ_i|^{-1/2} relative to the shortest axis, clamped to the anisotropy.
     let mut shape = [1.0; D];
+    // `ratio·A² ≤ 1` without forming A² (it overflows for A above 1e154).
+    let limit = max_anisotropy.recip().powi(2);
     for i in 1..D {
         let ratio = mu[i] / top;
-        shape[i] = if ratio * max_anisotropy * max_anisotropy <= 1.0 {
+        shape[i] = if ratio <= limit {
             max_anisotropy
         } else {
-            ratio.recip().sqrt()
+            // (not `ratio.recip().sqrt()`: the reciprocal of a subnormal ratio overflows)
+            ratio.sqrt().recip()
         };
     }
     let (constant, power): (f64, f64) = if D == 2 {
@@ -259,17 +272,20 @@ fn solve_radii<const D: usize>(
     } else {
         (2.0 * std::f64::consts::PI / 15.0, 5.0)
     };
-    let product: f64 = shape.iter().product();
     let weighted: f64 = mu.iter().zip(shape).map(|(m, s)| m / top * s * s).sum();
-    // B(R·shape) = constant · R^power · product · (top·scale) · weighted = tau.
-    let r = ((tau / (top * scale)) / (constant * product * weighted)).powf(power.recip());
+    // B(R·shape) = constant · R^power · Π shape · (top·scale) · weighted = tau, solved one factor
+    // at a time: their product may overflow or underflow (a Hessian entry of 1e300, a tolerance
+    // of 1e-300, an anisotropy of 1e200) where R itself is representable.
+    let root = |x: f64| x.powf(power.recip());
+    let product_root: f64 = shape.iter().map(|&s| root(s)).product();
+    let r = root(tau) / (root(top) * root(scale) * root(constant * weighted) * product_root);
     let mut out = [0.0; D];
     for i in 0..D {
         let a = r * shape[i];
-        out[i] = if a.is_finite() {
-            a.min(MAX_RADIUS)
-        } else {
+        out[i] = if a.is_nan() {
             MAX_RADIUS
+        } else {
+            a.clamp(0.0, MAX_RADIUS)
         };
     }
     out
@@ -279,6 +295,21 @@ fn max_abs(values: &[f64]) -> f64 {
     values.iter().fold(0.0, |m, v| m.max(v.abs()))
 }
 
+/// Entries of a matrix scaled to largest entry 1 below this magnitude are set to zero before the
+/// eigen-solver runs: they move no eigenvalue by more than 3e-150 (far below rounding), and
+/// subnormal operands made the iterative solver return NaN eigenvectors
+/// (`tests/radii_hostile.rs`).
+const FLUSH: f64 = 1e-150;
+
+#[inline]
+fn flush(v: f64) -> f64 {
+    if v.abs() < FLUSH {
+        0.0
+    } else {
+        v
+    }
+}
+
 /// Eigen-decomposition of a symmetric 2x2 matrix, eigenvalues by descending magnitude, after scaling
 /// by `scale` (returned) so that the largest entry is 1.
 fn eigen2(m: DMat2) -> (f64, [f64; 2], [DVec2; 2]) {
@@ -286,9 +317,15 @@ fn eigen2(m: DMat2) -> (f64, [f64; 2], [DVec2; 2]) {
     if scale == 0.0 {
         return (0.0, [0.0; 2], [DVec2::X, DVec2::Y]);
     }
-    let s = m * scale.recip();
-    let off = 0.5 * (s.x_axis.y + s.y_axis.x);
-    let eig = Matrix2::new(s.x_axis.x, off, off, s.y_axis.y).symmetric_eigen();
+    // Division, not multiplication by the reciprocal: that of a subnormal scale overflows.
+    let s = m / scale;
+    let off = flush(0.5 * (s.x_axis.y + s.y_axis.x));
+    let eig = Matrix2::new(flush(s.x_axis.x), off, off, flush(s.y_axis.y)).symmetric_eigen();
+    if !(eig.eigenvalues.iter().all(|v| v.is_finite())
+        && eig.eigenvectors.iter().all(|v| v.is_finite()))
+    {
+        return (scale, [s.x_axis.x, s.y_axis.y], [DVec2::X, DVec2::Y]);
+    }
     let mut idx = [0usize, 1];
     idx.sort_by(|&a, &b| {
         eig.eigenvalues[b]
@@ -297,7 +334,9 @@ fn eigen2(m: DMat2) -> (f64, [f64; 2], [DVec2; 2]) {
     });
     let vals = idx.map(|i| eig.eigenvalues[i]);
     let first = eig.eigenvectors.column(idx[0]);
-    let v0 = DVec2::new(first[0], first[1]).normalize();
+    let v0 = DVec2::new(first[0], first[1])
+        .try_normalize()
+        .unwrap_or(DVec2::X);
     // The second axis is the perpendicular of the first: exactly orthonormal, whatever the solver did.
     let v1 = v0.perp();
     (scale, vals, [v0, v1])
@@ -310,10 +349,20 @@ fn eigen3(m: DMat3) -> (f64, [f64; 3], [DVec3; 3]) {
     if scale == 0.0 {
         return (0.0, [0.0; 3], [DVec3::X, DVec3::Y, DVec3::Z]);
     }
-    let s = m * scale.recip();
-    let sym = |i: usize, j: usize| 0.5 * (s.col(j)[i] + s.col(i)[j]);
+    let s = m / scale;
+    let sym = |i: usize, j: usize| flush(0.5 * (s.col(j)[i] + s.col(i)[j]));
     let mat = Matrix3::from_fn(sym);
     let eig = mat.symmetric_eigen();
+    if !(eig.eigenvalues.iter().all(|v| v.is_finite())
+        && eig.eigenvectors.iter().all(|v| v.is_finite()))
+    {
+        // Never seen after the flush; a finite answer (the diagonal) rather than NaN radii.
+        let d = [mat[(0, 0)], mat[(1, 1)], mat[(2, 2)]];
+        let mut idx = [0usize, 1, 2];
+        idx.sort_by(|&a, &b| d[b].abs().total_cmp(&d[a].abs()));
+        let axis = [DVec3::X, DVec3::Y, DVec3::Z];
+        return (scale, idx.map(|i| d[i]), idx.map(|i| axis[i]));
+    }
     let mut idx = [0usize, 1, 2];
     idx.sort_by(|&a, &b| {
         eig.eigenvalues[b]
@@ -326,8 +375,13 @@ fn eigen3(m: DMat3) -> (f64, [f64; 3], [DVec3; 3]) {
         DVec3::new(c[0], c[1], c[2])
     };
     // Re-orthonormalize (Gram-Schmidt, third = cross) so the axes are exactly orthonormal.
-    let v0 = col(0).normalize();
-    let v1 = (col(1) - v0 * v0.dot(col(1))).normalize();
+    // A solver's vectors can be (nearly) parallel for a (nearly) repeated eigenvalue: any
+    // orthonormal completion is then an eigenbasis too.
+    let v0 = col(0).try_normalize().unwrap_or(DVec3::X);
+    let v1 = (col(1) - v0 * v0.dot(col(1)))
+        .try_normalize()
+        .filter(|v| v.dot(v0).abs() < 1e-6)
+        .unwrap_or_else(|| v0.any_orthonormal_vector());
     let v2 = v0.cross(v1);
     (scale, vals, [v0, v1, v2])
 }
@@ -408,17 +462,23 @@ fn surface_radii_with(
     floor: Option<CurvatureFloor>,
 ) -> Result<SurfaceRadii> {
     let (u1, u2) = tangent_basis(n);
-    let (scale, vals, vecs) = eigen2(tangent_hessian(hessian, u1, u2));
+    // Scaled first so that the projection cannot overflow (entries up to f64::MAX): `pre` is the
+    // largest entry's magnitude, the projected matrix's entries are then at most 3.
+    let pre = max_abs(&hessian.to_cols_array());
+    let unit = if pre > 0.0 { hessian / pre } else { hessian };
+    let (tangent_scale, vals, vecs) = eigen2(tangent_hessian(unit, u1, u2));
     // The projection rounds at ~ε‖H‖: tangent curvature below that is noise, not information.
-    let noise = 16.0 * f64::EPSILON * max_abs(&hessian.to_cols_array());
+    let noise = 16.0 * f64::EPSILON;
     let mut mu = vals.map(|v| {
-        if v.abs() * scale <= noise {
+        if v.abs() * tangent_scale <= noise {
             0.0
         } else {
             v.abs()
         }
     });
-    let mut scale = scale;
+    // May overflow to infinity for entries near f64::MAX; `solve_radii` then returns radii 0,
+    // the limit of an unbounded curvature.
+    let mut scale = tangent_scale * if pre > 0.0 { pre } else { 1.0 };
     let mut value = value;
     if let Some(f) = floor {
         let flat = mu.iter().all(|&m| m == 0.0);
@@ -427,12 +487,18 @@ fn surface_radii_with(
             value = 1.0;
         }
         let add = f.weight * value.abs() / (f.distance * f.distance);
-        // back to unscaled magnitudes, floored, rescaled so the largest is 1
-        let actual = mu.map(|m| m * scale + add);
-        let top = actual[0].max(actual[1]);
-        if top > 0.0 && top.is_finite() {
-            mu = actual.map(|m| m / top);
-            scale = top;
+        let add = if add.is_finite() { add } else { f64::MAX };
+        // |λ|·scale + add for each axis, in units of the larger of the two so nothing overflows
+        // (the order of the magnitudes is kept: the same term is added to each).
+        let unit = if scale.is_finite() {
+            scale.max(add)
+        } else {
+            f64::MAX
+        };
+        if unit > 0.0 {
+            let ratio = if scale.is_finite() { scale / unit } else { 1.0 };
+            mu = mu.map(|m| m * ratio + add / unit);
+            scale = unit;
         }
     }
     let radii = solve_radii(mu, scale, tolerance(value, error, mode), max_anisotropy);

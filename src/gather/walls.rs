@@ -134,8 +134,11 @@ pub(crate) struct LayoutTables {
     /// Wall data for the evaluation ([`Walls`]); `None` for the concentric layout.
     pub(crate) walls: Option<Walls>,
     /// `(cos φ_k, sin φ_k)`, k = 0..=N, for the direction check (see
-    /// [`super::input::azimuth_bounds`]).
+    /// [`super::strata::azimuth_bounds`]).
     pub(crate) azimuth_bounds: Vec<(f64, f64)>,
+    /// The concentric layout's column walls on the square, k = 0..=N (see
+    /// [`super::strata::column_bounds`]).
+    pub(crate) column_bounds: Vec<f64>,
 }
 
 /// `(kind, M, N)` and the tables of that layout.
@@ -159,7 +162,8 @@ impl LayoutTables {
             }
             let tables = Rc::new(LayoutTables {
                 walls: (layout.kind != LayoutKind::Concentric).then(|| Walls::new(layout)),
-                azimuth_bounds: super::input::azimuth_bounds(layout),
+                azimuth_bounds: super::strata::azimuth_bounds(layout),
+                column_bounds: super::strata::column_bounds(layout),
             });
             if cache.len() >= LAYOUT_TABLES_CACHE_SIZE {
                 cache.remove(0);
