@@ -112,9 +112,11 @@ impl raddiff_triangle_mesh {
                 let p = self.vertices.cast::<f64>();
                 (VertexData::F64(aligned_slice(p, len, "mesh vertices")?), s)
             }
-            f => return Err(invalid(format!(
+            f => {
+                return Err(invalid(format!(
                 "vertex_format {f} is not RADDIFF_VERTEX_FLOAT3 (0) or RADDIFF_VERTEX_DOUBLE3 (1)"
-            ))),
+            )))
+            }
         };
         let (indices, istride) = if self.indices.is_null() {
             (None, 3)

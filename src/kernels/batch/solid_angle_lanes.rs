@@ -13,8 +13,9 @@
 //! * `A² · 4096 ≥ s_v² ‖e_i‖² ‖e_j‖²`: the rounding error of `A` (below ~4 ε s_v ‖e_i‖ ‖e_j‖)
 //!   stays under ~3e-14 relative (the kernel's own threshold is 1024, below which it recomputes `A`
 //!   in double-double: x near the triangle's plane);
-//! * `A² + D² ≥ 1e-4 (s_0 s_1 s_2)²`: `D` and `∇D` do not cancel by more than 100x (the kernel
-//!   refines them in double-double below 1e-6: x near an edge);
+//! * `A² + D² ≥ 1e-2 (s_0 s_1 s_2)²`: `D` and `∇D` do not cancel by more than 10x (their rounding
+//!   errors, below ~32 ε s_0 s_1 s_2, then move the angle by less than ~7e-14; the kernel refines
+//!   them in double-double below 1e-6: x near an edge);
 //! * the largest coordinate of `y_k − x` within 2^±960 (no overflow or underflow of the products up
 //!   to `1/g²` once scaled), every output finite.
 //!
@@ -41,8 +42,10 @@ struct Lanes {
     /// `e[k][axis][lane]`: the edge opposite vertex k along the cycle (a, b, c), from the
     /// coordinates themselves (differences of the `r_k` would lose distance/size digits).
     e: [[[f64; BATCH]; 3]; 3],
-    out: [[f64; OUTPUTS]; BATCH],
-    ok: [bool; BATCH],
+    /// `out[k][lane]` (structure of arrays: strided stores would keep the loop scalar).
+    out: [[f64; BATCH]; OUTPUTS],
+    /// 1 where the lane's certificate holds (an integer, not a `bool`, so that it vectorizes).
+    ok: [u64; BATCH],
 }
 
 impl Lanes {
@@ -50,8 +53,8 @@ impl Lanes {
         Box::new(Lanes {
             r: [[[0.0; BATCH]; 3]; 3],
             e: [[[0.0; BATCH]; 3]; 3],
-            out: [[0.0; OUTPUTS]; BATCH],
-            ok: [false; BATCH],
+            out: [[0.0; BATCH]; OUTPUTS],
+            ok: [0; BATCH],
         })
     }
 
@@ -126,9 +129,12 @@ fn evaluate<const FMA: bool, const GRADIENT: bool, const HESSIAN: bool>(l: &mut 
         let exponent = (extent.to_bits() >> 52) & 0x7ff;
         let in_range = (EXPONENT_MIN..=EXPONENT_MAX).contains(&exponent);
         let scale = f64::from_bits(2045u64.wrapping_sub(exponent).wrapping_shl(52) & (0x7ff << 52));
-        for v in r.iter_mut().chain(e.iter_mut()) {
-            for c in v.iter_mut() {
-                *c *= scale;
+        // Index loops (fully unrolled): an iterator chain here stays a loop, and the lane loop
+        // around it would not vectorize.
+        for k in 0..3 {
+            for c in 0..3 {
+                r[k][c] *= scale;
+                e[k][c] *= scale;
             }
         }
         let s = [
@@ -173,8 +179,8 @@ fn evaluate<const FMA: bool, const GRADIENT: bool, const HESSIAN: bool>(l: &mut 
             fmadd::<FMA>(d12, s[0], fmadd::<FMA>(d20, s[1], s012)),
         );
         let g = fmadd::<FMA>(a, a, d * d);
-        let d_ok = g >= 1e-4 * s012 * s012;
-        let out = &mut l.out[i];
+        let d_ok = g >= 1e-2 * s012 * s012;
+        let mut out = [0.0; OUTPUTS];
         out[0] = 2.0 * atan2_upper::<FMA>(a, d);
         if GRADIENT {
             let inv_s = [1.0 / s[0], 1.0 / s[1], 1.0 / s[2]];
@@ -237,10 +243,11 @@ fn evaluate<const FMA: bool, const GRADIENT: bool, const HESSIAN: bool>(l: &mut 
             }
         }
         let mut finite = true;
-        for o in out.iter() {
+        for (k, o) in out.iter().enumerate() {
             finite &= o.is_finite();
+            l.out[k][i] = *o;
         }
-        l.ok[i] = in_range && a_ok && d_ok && finite;
+        l.ok[i] = (in_range && a_ok && d_ok && finite) as u64;
     }
 }
 
@@ -300,8 +307,9 @@ fn evaluate_on(isa: Isa, l: &mut Lanes, order: Order) {
     }
 }
 
-/// A lane's outputs as a [`Deriv3`] (parts above `order` zero).
-fn lane_result(o: &[f64; OUTPUTS], order: Order) -> Deriv3 {
+/// Lane `i`'s outputs as a [`Deriv3`] (parts above `order` zero).
+fn lane_result(l: &Lanes, i: usize, order: Order) -> Deriv3 {
+    let o: [f64; OUTPUTS] = std::array::from_fn(|k| l.out[k][i]);
     let mut d = Deriv3::constant(o[0]);
     if order.gradient() {
         d.gradient = DVec3::new(o[1], o[2], o[3]);
@@ -359,8 +367,8 @@ pub(super) fn run_on(
         }
         evaluate_on(isa, &mut lanes, order);
         for i in 0..n {
-            let d = if lanes.ok[i] {
-                lane_result(&lanes.out[i], order)
+            let d = if lanes.ok[i] != 0 {
+                lane_result(&lanes, i, order)
             } else {
                 let (x, y) = get(start + i);
                 super::super::triangle_solid_angle(x, y[0], y[1], y[2], order)
@@ -435,13 +443,13 @@ mod tests {
                     lanes.set(i, *p, tri);
                 }
                 evaluate_on(isa, &mut lanes, order);
-                assert!(lanes.ok.iter().all(|&ok| ok), "{isa:?} {order:?}");
+                assert!(lanes.ok.iter().all(|&ok| ok == 1), "{isa:?} {order:?}");
                 for (i, p) in hard.iter().enumerate() {
                     lanes.set(i, *p, tri);
                 }
                 evaluate_on(isa, &mut lanes, order);
                 assert!(
-                    !lanes.ok[..hard.len()].iter().any(|&ok| ok),
+                    lanes.ok[..hard.len()].iter().all(|&ok| ok == 0),
                     "{isa:?} {order:?}"
                 );
 
