@@ -482,4 +482,46 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn portable_and_vector_paths_agree() {
+        // What RADDIFF_SIMD=portable selects, against every vector copy, lane by lane (the FMA
+        // contractions are the only difference).
+        let mut state = 17u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let elems: Vec<(DVec3, [DVec3; 3])> = (0..200)
+            .map(|_| {
+                let x = DVec3::new(next(), next(), next()) * 4.0;
+                let y = [0, 1, 2].map(|_| DVec3::new(next(), next(), next() + 2.0));
+                (x, y)
+            })
+            .collect();
+        let collect = |isa: Isa| {
+            let mut v = Vec::new();
+            run_on(
+                isa,
+                elems.len(),
+                |i| elems[i],
+                Order::Hessian,
+                "e",
+                |_, d| v.push(d),
+            )
+            .unwrap();
+            v
+        };
+        let portable = collect(Isa::Portable);
+        for isa in isas().into_iter().skip(1) {
+            for (p, q) in portable.iter().zip(collect(isa)) {
+                assert!((p.value - q.value).abs() <= 1e-14 * p.value.abs());
+                let gs = p.gradient.abs().max_element();
+                assert!((p.gradient - q.gradient).abs().max_element() <= 1e-13 * gs);
+                assert!(max_abs(p.hessian - q.hessian) <= 1e-13 * max_abs(p.hessian));
+            }
+        }
+    }
 }
