@@ -11,6 +11,12 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// `raddiff_triangle_mesh.vertex_format`: three `float` per vertex (Embree's `RTC_FORMAT_FLOAT3`).
+#define RADDIFF_VERTEX_FLOAT3 0
+
+// `raddiff_triangle_mesh.vertex_format`: three `double` per vertex.
+#define RADDIFF_VERTEX_DOUBLE3 1
+
 // Records on surfaces: ellipses in the tangent plane, normals compared at lookup.
 #define RADDIFF_DOMAIN_SURFACE 0
 
@@ -135,6 +141,53 @@ typedef struct raddiff_cache_cursor raddiff_cache_cursor;
 // Immutable after creation: one mesh may be shared by any number of threads.
 typedef struct raddiff_refractive_mesh raddiff_refractive_mesh;
 
+// A 3D vector or point.
+typedef struct raddiff_vec3 {
+  // x component.
+  double x;
+  // y component.
+  double y;
+  // z component.
+  double z;
+} raddiff_vec3;
+
+// A triangle set the caller already holds, read in place (nothing is copied or kept): the vertex
+// and index buffers a renderer shares with its ray tracer (Embree-style, with byte strides).
+//
+// Vertex `i` is the three coordinates (`float` or `double`, per `vertex_format`) at byte offset
+// `i * vertex_stride` from `vertices`; triangle `t` has the three `uint32_t` vertex indices at
+// byte offset `t * index_stride` from `indices`, or, when `indices` is NULL, the vertices `3t`,
+// `3t + 1`, `3t + 2` (a triangle soup). A stride of 0 means packed (12 or 24 bytes per vertex,
+// 12 bytes per index triple); strides must be multiples of the element size, and both buffers
+// aligned to their element type. Every call validates the mesh (each index below `vertex_count`,
+// every vertex finite) and names the first bad element in `raddiff_last_error()`.
+typedef struct raddiff_triangle_mesh {
+  // The first vertex (`vertex_count` vertices; may be NULL when `vertex_count` is 0).
+  const void *vertices;
+  // `RADDIFF_VERTEX_FLOAT3` or `RADDIFF_VERTEX_DOUBLE3`.
+  uint32_t vertex_format;
+  // Bytes from one vertex to the next (0: packed).
+  size_t vertex_stride;
+  // The number of vertices.
+  size_t vertex_count;
+  // `triangle_count` index triples, or NULL for a triangle soup.
+  const uint32_t *indices;
+  // Bytes from one index triple to the next (0: packed, 12).
+  size_t index_stride;
+  // The number of triangles.
+  size_t triangle_count;
+} raddiff_triangle_mesh;
+
+// Value, gradient and Hessian (row-major, symmetric) with respect to a 3D point.
+typedef struct raddiff_deriv3 {
+  // The value.
+  double value;
+  // The gradient (0 when not requested).
+  double gradient[3];
+  // The Hessian, row-major (0 when not requested).
+  double hessian[9];
+} raddiff_deriv3;
+
 // How a cache is created.
 typedef struct raddiff_cache_config {
   // Floats per record value (1..=4096).
@@ -148,16 +201,6 @@ typedef struct raddiff_cache_config {
   // ignored in volumes). 0.2 is a good default.
   double max_normal_deviation;
 } raddiff_cache_config;
-
-// A 3D vector or point.
-typedef struct raddiff_vec3 {
-  // x component.
-  double x;
-  // y component.
-  double y;
-  // z component.
-  double z;
-} raddiff_vec3;
 
 // A record to insert.
 typedef struct raddiff_cache_record {
@@ -179,16 +222,6 @@ typedef struct raddiff_cache_record {
   // Principal axes (need not be unit; may be zero for isotropic radii).
   struct raddiff_vec3 axes[3];
 } raddiff_cache_record;
-
-// Value, gradient and Hessian (row-major, symmetric) with respect to a 3D point.
-typedef struct raddiff_deriv3 {
-  // The value.
-  double value;
-  // The gradient (0 when not requested).
-  double gradient[3];
-  // The Hessian, row-major (0 when not requested).
-  double hessian[9];
-} raddiff_deriv3;
 
 // An m x n stratified layout: `kind` is a `RADDIFF_LAYOUT_*` constant; 1 <= m, n <=
 // `RADDIFF_GATHER_MAX_STRATA_PER_AXIS`, m*n <= `RADDIFF_GATHER_MAX_STRATA`. Seed 0: stratum centres;
@@ -310,6 +343,97 @@ typedef struct raddiff_medium {
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+// Sum over the triangles of `mesh` of the unsigned solid angle (steradians) each subtends at `x`,
+// with gradient and Hessian with respect to `x` (see `raddiff_triangle_solid_angle` for the
+// limits per triangle, and the Rust `kernels::mesh_solid_angle`). Overlapping triangles count
+// once each. `RADDIFF_ERROR_DEGENERATE` (message naming the triangle) when `x` is on an edge or
+// at a vertex of a triangle.
+//
+// # Safety
+// `mesh` must be NULL or point to a `raddiff_triangle_mesh` whose buffers are valid for the sizes
+// it states; `out` NULL or valid for one write.
+enum raddiff_status raddiff_mesh_solid_angle(struct raddiff_vec3 x,
+                                             const struct raddiff_triangle_mesh *mesh,
+                                             uint32_t order,
+                                             struct raddiff_deriv3 *out);
+
+// The unsigned solid angle of each triangle of `mesh` seen from `x` (as
+// `raddiff_mesh_solid_angle`, not summed): `values[t]`, `gradients[3t..3t+3]` and
+// `hessians[9t..9t+9]` (row-major). `values` must hold `triangle_count` doubles; `gradients`
+// (3 per triangle) is required from `RADDIFF_ORDER_GRADIENT` on and `hessians` (9 per triangle)
+// for `RADDIFF_ORDER_HESSIAN`, otherwise ignored (may be NULL). Nothing is written on error.
+//
+// # Safety
+// As `raddiff_mesh_solid_angle`; the output arrays NULL or valid for the writes stated.
+enum raddiff_status raddiff_mesh_solid_angle_each(struct raddiff_vec3 x,
+                                                  const struct raddiff_triangle_mesh *mesh,
+                                                  uint32_t order,
+                                                  double *values,
+                                                  double *gradients,
+                                                  double *hessians);
+
+// Sum over the triangles of `mesh` of the form factor from a differential area at `x` with unit
+// normal `n` to each triangle (see `raddiff_triangle_form_factor`: two-sided, clipped to the
+// half-space above the tangent plane; the Rust `kernels::mesh_form_factor`). No occlusion between
+// the triangles is accounted for. Triangles of (numerically) zero area contribute 0.
+// `RADDIFF_ERROR_DEGENERATE` (naming the triangle) for derivatives with `x` in a triangle's plane.
+//
+// # Safety
+// As `raddiff_mesh_solid_angle`.
+enum raddiff_status raddiff_mesh_form_factor(struct raddiff_vec3 x,
+                                             struct raddiff_vec3 n,
+                                             const struct raddiff_triangle_mesh *mesh,
+                                             uint32_t order,
+                                             struct raddiff_deriv3 *out);
+
+// The form factor to each triangle of `mesh` (as `raddiff_mesh_form_factor`, not summed), into
+// the output arrays as `raddiff_mesh_solid_angle_each` describes. Nothing is written on error.
+//
+// # Safety
+// As `raddiff_mesh_solid_angle_each`.
+enum raddiff_status raddiff_mesh_form_factor_each(struct raddiff_vec3 x,
+                                                  struct raddiff_vec3 n,
+                                                  const struct raddiff_triangle_mesh *mesh,
+                                                  uint32_t order,
+                                                  double *values,
+                                                  double *gradients,
+                                                  double *hessians);
+
+// The unsigned solid angle of the triangle `(a, b, c)` seen from each of the `count` `points`
+// (as `raddiff_triangle_solid_angle` per point), into `values[i]`, `gradients[3i..3i+3]` and
+// `hessians[9i..9i+9]` (required as for `raddiff_mesh_solid_angle_each`). Nothing is written on
+// error; the message names the first bad point.
+//
+// # Safety
+// `points` NULL or valid for `count` reads; the output arrays NULL or valid for the writes stated.
+enum raddiff_status raddiff_points_solid_angle(const struct raddiff_vec3 *points,
+                                               size_t count,
+                                               struct raddiff_vec3 a,
+                                               struct raddiff_vec3 b,
+                                               struct raddiff_vec3 c,
+                                               uint32_t order,
+                                               double *values,
+                                               double *gradients,
+                                               double *hessians);
+
+// The form factor from a differential area at each of the `count` `points` with unit normal
+// `normals[i]` to the triangle `(a, b, c)` (as `raddiff_triangle_form_factor` per point), into
+// the output arrays as `raddiff_points_solid_angle` describes. A zero-area triangle gives 0.
+// Nothing is written on error; the message names the first bad point or normal.
+//
+// # Safety
+// `points` and `normals` NULL or valid for `count` reads; the output arrays as above.
+enum raddiff_status raddiff_points_form_factor(const struct raddiff_vec3 *points,
+                                               const struct raddiff_vec3 *normals,
+                                               size_t count,
+                                               struct raddiff_vec3 a,
+                                               struct raddiff_vec3 b,
+                                               struct raddiff_vec3 c,
+                                               uint32_t order,
+                                               double *values,
+                                               double *gradients,
+                                               double *hessians);
 
 // Creates an empty cache, or returns NULL (with `raddiff_last_error`) for a NULL or invalid
 // configuration. Free it with `raddiff_cache_free`.

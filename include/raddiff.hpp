@@ -375,6 +375,162 @@ inline raddiff_deriv2 segment_form_factor_2d(raddiff_vec2 x, raddiff_vec2 a, rad
   return out;
 }
 
+/// A `raddiff_triangle_mesh` over packed float vertices (3 per vertex) and uint32 index triples
+/// (3 per triangle); sizes that are not multiples of 3 throw before any call. The mesh reads the
+/// arrays in place: they must outlive its use.
+inline raddiff_triangle_mesh triangle_mesh(Span<const float> vertices, Span<const std::uint32_t> indices) {
+  detail::check_size("vertices", vertices.size(), vertices.size() / 3 * 3);
+  detail::check_size("indices", indices.size(), indices.size() / 3 * 3);
+  return raddiff_triangle_mesh{vertices.data(), RADDIFF_VERTEX_FLOAT3, 0, vertices.size() / 3,
+                               indices.data(), 0, indices.size() / 3};
+}
+
+/// triangle_mesh over packed double vertices (3 per vertex).
+inline raddiff_triangle_mesh triangle_mesh(Span<const double> vertices, Span<const std::uint32_t> indices) {
+  detail::check_size("vertices", vertices.size(), vertices.size() / 3 * 3);
+  detail::check_size("indices", indices.size(), indices.size() / 3 * 3);
+  return raddiff_triangle_mesh{vertices.data(), RADDIFF_VERTEX_DOUBLE3, 0, vertices.size() / 3,
+                               indices.data(), 0, indices.size() / 3};
+}
+
+/// triangle_mesh over raddiff_vec3 vertices.
+inline raddiff_triangle_mesh triangle_mesh(Span<const raddiff_vec3> vertices, Span<const std::uint32_t> indices) {
+  detail::check_size("indices", indices.size(), indices.size() / 3 * 3);
+  return raddiff_triangle_mesh{vertices.data(), RADDIFF_VERTEX_DOUBLE3, 0, vertices.size(),
+                               indices.data(), 0, indices.size() / 3};
+}
+
+/// A triangle soup: triangle t is vertices[3t], vertices[3t+1], vertices[3t+2] (the size must be a
+/// multiple of 3, checked).
+inline raddiff_triangle_mesh triangle_soup(Span<const raddiff_vec3> vertices) {
+  detail::check_size("vertices", vertices.size(), vertices.size() / 3 * 3);
+  return raddiff_triangle_mesh{vertices.data(), RADDIFF_VERTEX_DOUBLE3, 0, vertices.size(), nullptr, 0,
+                               vertices.size() / 3};
+}
+
+/// Per-element results of the batch calls: `values[i]`, `gradients[3i + axis]`,
+/// `hessians[9i + 3 row + col]`; the arrays above the requested order are empty.
+struct BatchResult {
+  /// One value per element.
+  std::vector<double> values;
+  /// 3 per element (from RADDIFF_ORDER_GRADIENT on).
+  std::vector<double> gradients;
+  /// 9 per element, row-major (RADDIFF_ORDER_HESSIAN).
+  std::vector<double> hessians;
+};
+
+namespace detail {
+
+/// Checks caller arrays for `count` elements at `order` (the arrays above the order may be empty).
+inline void check_batch_outputs(std::size_t count, std::uint32_t order, Span<double> values,
+                                Span<double> gradients, Span<double> hessians) {
+  check_size("values", values.size(), count);
+  if (order >= RADDIFF_ORDER_GRADIENT) check_size("gradients", gradients.size(), mul(count, 3));
+  if (order >= RADDIFF_ORDER_HESSIAN) check_size("hessians", hessians.size(), mul(count, 9));
+}
+
+/// A BatchResult sized for `count` elements at `order`.
+inline BatchResult batch_result(std::size_t count, std::uint32_t order) {
+  BatchResult r;
+  r.values.resize(count);
+  if (order >= RADDIFF_ORDER_GRADIENT) r.gradients.resize(mul(count, 3));
+  if (order >= RADDIFF_ORDER_HESSIAN) r.hessians.resize(mul(count, 9));
+  return r;
+}
+
+}  // namespace detail
+
+/// Wraps `raddiff_mesh_solid_angle`: the sum over the triangles of `mesh` of their unsigned solid
+/// angles seen from `x`, with derivatives up to `order`.
+inline raddiff_deriv3 mesh_solid_angle(raddiff_vec3 x, const raddiff_triangle_mesh &mesh,
+                                       std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  raddiff_deriv3 out{};
+  detail::check(raddiff_mesh_solid_angle(x, &mesh, order, &out));
+  return out;
+}
+
+/// Wraps `raddiff_mesh_solid_angle_each` into caller arrays: `values` holds mesh.triangle_count,
+/// `gradients` 3 and `hessians` 9 per triangle when `order` needs them (checked; the others may be
+/// empty). Untouched on error.
+inline void mesh_solid_angle_each(raddiff_vec3 x, const raddiff_triangle_mesh &mesh, std::uint32_t order,
+                                  Span<double> values, Span<double> gradients = {},
+                                  Span<double> hessians = {}) {
+  detail::check_batch_outputs(mesh.triangle_count, order, values, gradients, hessians);
+  detail::check(raddiff_mesh_solid_angle_each(x, &mesh, order, values.data(), gradients.data(),
+                                              hessians.data()));
+}
+
+/// Wraps `raddiff_mesh_solid_angle_each`, returning the per-triangle results.
+inline BatchResult mesh_solid_angle_each(raddiff_vec3 x, const raddiff_triangle_mesh &mesh,
+                                         std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  BatchResult r = detail::batch_result(mesh.triangle_count, order);
+  mesh_solid_angle_each(x, mesh, order, r.values, r.gradients, r.hessians);
+  return r;
+}
+
+/// Wraps `raddiff_mesh_form_factor`: the sum over the triangles of `mesh` of the form factors from
+/// a differential area at `x` with unit normal `n` (no occlusion between triangles).
+inline raddiff_deriv3 mesh_form_factor(raddiff_vec3 x, raddiff_vec3 n, const raddiff_triangle_mesh &mesh,
+                                       std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  raddiff_deriv3 out{};
+  detail::check(raddiff_mesh_form_factor(x, n, &mesh, order, &out));
+  return out;
+}
+
+/// Wraps `raddiff_mesh_form_factor_each` into caller arrays (sizes as mesh_solid_angle_each).
+inline void mesh_form_factor_each(raddiff_vec3 x, raddiff_vec3 n, const raddiff_triangle_mesh &mesh,
+                                  std::uint32_t order, Span<double> values, Span<double> gradients = {},
+                                  Span<double> hessians = {}) {
+  detail::check_batch_outputs(mesh.triangle_count, order, values, gradients, hessians);
+  detail::check(raddiff_mesh_form_factor_each(x, n, &mesh, order, values.data(), gradients.data(),
+                                              hessians.data()));
+}
+
+/// Wraps `raddiff_mesh_form_factor_each`, returning the per-triangle results.
+inline BatchResult mesh_form_factor_each(raddiff_vec3 x, raddiff_vec3 n, const raddiff_triangle_mesh &mesh,
+                                         std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  BatchResult r = detail::batch_result(mesh.triangle_count, order);
+  mesh_form_factor_each(x, n, mesh, order, r.values, r.gradients, r.hessians);
+  return r;
+}
+
+/// Wraps `raddiff_points_solid_angle` into caller arrays sized for points.size() (checked).
+inline void points_solid_angle(Span<const raddiff_vec3> points, raddiff_vec3 a, raddiff_vec3 b, raddiff_vec3 c,
+                               std::uint32_t order, Span<double> values, Span<double> gradients = {},
+                               Span<double> hessians = {}) {
+  detail::check_batch_outputs(points.size(), order, values, gradients, hessians);
+  detail::check(raddiff_points_solid_angle(points.data(), points.size(), a, b, c, order, values.data(),
+                                           gradients.data(), hessians.data()));
+}
+
+/// Wraps `raddiff_points_solid_angle`, returning the per-point results.
+inline BatchResult points_solid_angle(Span<const raddiff_vec3> points, raddiff_vec3 a, raddiff_vec3 b,
+                                      raddiff_vec3 c, std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  BatchResult r = detail::batch_result(points.size(), order);
+  points_solid_angle(points, a, b, c, order, r.values, r.gradients, r.hessians);
+  return r;
+}
+
+/// Wraps `raddiff_points_form_factor` into caller arrays; `normals` holds one unit normal per
+/// point (checked).
+inline void points_form_factor(Span<const raddiff_vec3> points, Span<const raddiff_vec3> normals,
+                               raddiff_vec3 a, raddiff_vec3 b, raddiff_vec3 c, std::uint32_t order,
+                               Span<double> values, Span<double> gradients = {}, Span<double> hessians = {}) {
+  detail::check_size("normals", normals.size(), points.size());
+  detail::check_batch_outputs(points.size(), order, values, gradients, hessians);
+  detail::check(raddiff_points_form_factor(points.data(), normals.data(), points.size(), a, b, c, order,
+                                           values.data(), gradients.data(), hessians.data()));
+}
+
+/// Wraps `raddiff_points_form_factor`, returning the per-point results.
+inline BatchResult points_form_factor(Span<const raddiff_vec3> points, Span<const raddiff_vec3> normals,
+                                      raddiff_vec3 a, raddiff_vec3 b, raddiff_vec3 c,
+                                      std::uint32_t order = RADDIFF_ORDER_HESSIAN) {
+  BatchResult r = detail::batch_result(points.size(), order);
+  points_form_factor(points, normals, a, b, c, order, r.values, r.gradients, r.hessians);
+  return r;
+}
+
 /// m*n of a layout (the number of directions of a gather), in 64 bits.
 inline std::size_t gather_size(const raddiff_gather_layout &layout) noexcept {
   return static_cast<std::size_t>(static_cast<std::uint64_t>(layout.m) * layout.n);

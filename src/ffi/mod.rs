@@ -7,6 +7,7 @@
 //! conversion: the computation lives in the Rust modules.
 #![allow(non_camel_case_types)]
 
+mod batch;
 mod cache;
 mod common;
 mod form_factor;
@@ -15,6 +16,7 @@ mod kernels;
 mod radii;
 mod scatter;
 
+pub use batch::*;
 pub use cache::*;
 pub use common::*;
 pub use form_factor::*;

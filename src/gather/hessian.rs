@@ -59,7 +59,7 @@
 
 use glam::{DMat3, DVec3};
 
-mod edges;
+pub(crate) mod edges;
 mod workspace;
 
 pub use workspace::OcclusionWorkspace;

@@ -1,6 +1,7 @@
 //! Closed-form derivative kernels: pure functions returning value, gradient and Hessian with respect
 //! to an evaluation point `x`. Each takes an [`Order`](crate::Order) and does no work above it.
 
+pub mod batch;
 mod dd;
 pub mod form_factor;
 pub mod marched;
@@ -9,6 +10,7 @@ pub mod segment;
 pub mod solid_angle;
 pub mod transmittance;
 
+pub use batch::*;
 pub use form_factor::*;
 pub use marched::*;
 pub use polygon::*;
