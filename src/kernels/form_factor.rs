@@ -84,6 +84,9 @@ const AXIAL_RATIO: f64 = 0.25;
 /// # Ok::<(), raddiff::Error>(())
 /// ```
 pub fn edge_form_factor(x: DVec3, n: DVec3, a: DVec3, b: DVec3, order: Order) -> Result<Deriv3> {
+    if let Some(d) = edge_form_factor_fast(x, n, a, b, order) {
+        return Ok(d);
+    }
     ensure_finite3(x, "x")?;
     ensure_finite3(a, "a")?;
     ensure_finite3(b, "b")?;
@@ -114,6 +117,9 @@ pub fn triangle_form_factor(
     c: DVec3,
     order: Order,
 ) -> Result<Deriv3> {
+    if let Some(d) = triangle_form_factor_fast(x, n, [a, b, c], order) {
+        return Ok(d);
+    }
     polygon_form_factor(x, n, &[a, b, c], order)
 }
 
@@ -437,4 +443,109 @@ impl ExactEnds {
         let b = dd::Dd3::new(self.b[0], self.b[1]);
         a.cross(&b).to_dvec3()
     }
+}
+
+// ------------------------------------------------------------------------------------------------
+// Fast paths.
+
+/// Coordinate differences the fast paths accept (outside, the robust path's exact power-of-two
+/// rescaling is needed to keep intermediate products in range).
+const FAST_RANGE: (f64, f64) = (1e-30, 1e30);
+
+/// `‖v‖_∞` of the differences, `None` outside [`FAST_RANGE`] (NaN and infinities included).
+#[inline]
+fn in_fast_range(vs: &[DVec3]) -> Option<()> {
+    let m = vs.iter().fold(0.0f64, |m, v| m.max(v.abs().max_element()));
+    (m > FAST_RANGE.0 && m < FAST_RANGE.1).then_some(())
+}
+
+/// Whether the robust path would recompute the edge's cross product from the exact endpoints
+/// ([`EdgeFrame::with_exact_ends`]): x near the edge's line.
+#[inline]
+fn near_line(r_a: DVec3, e: DVec3) -> bool {
+    let bound = NEAR_LINE_SINE * e.length();
+    !(r_a.cross(e).length_squared() >= bound * bound * r_a.length_squared())
+}
+
+/// The fast evaluation of [`edge_form_factor`]: `None` when the inputs are invalid or out of
+/// [`FAST_RANGE`], or `x` is near the edge's line (where the robust path switches to double-double
+/// cross products). Elsewhere the robust path evaluates exactly these f64 operations on inputs
+/// rescaled by a power of two, which changes no rounding: the result is bit-for-bit the robust one,
+/// so it carries the robust path's accuracy, without its rescaling and exact-difference setup.
+pub(crate) fn edge_form_factor_fast(
+    x: DVec3,
+    n: DVec3,
+    a: DVec3,
+    b: DVec3,
+    order: Order,
+) -> Option<Deriv3> {
+    let (r_a, e) = (a - x, b - a);
+    in_fast_range(&[r_a, b - x, e])?;
+    let len = n.length();
+    if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) || near_line(r_a, e) {
+        return None;
+    }
+    let d = edge_term(r_a, e, n / len, order).ok()?;
+    d.is_finite().then_some(d)
+}
+
+/// The fast evaluation of [`triangle_form_factor`] when the robust path's decisions are certain:
+/// every vertex strictly above the tangent plane by more than the rounding bound of its height
+/// (so nothing is clipped), not near the plane, no edge line near `x`, the triangle not in the far
+/// field and the edge sum not cancelling (where the robust path integrates by quadrature instead).
+/// `None` otherwise, or for invalid or out-of-range inputs. Accepted results are bit-for-bit those
+/// of the robust path (same f64 operations; its power-of-two rescaling changes no rounding).
+pub(crate) fn triangle_form_factor_fast(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    order: Order,
+) -> Option<Deriv3> {
+    let r = [v[0] - x, v[1] - x, v[2] - x];
+    // Positions relative to the first vertex, as the robust path forms them (its edge vectors are
+    // differences of these).
+    let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
+    in_fast_range(&[r[0], r[1], r[2], u[1], u[2]])?;
+    let len = n.length();
+    if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) {
+        return None;
+    }
+    let n = n / len;
+    // Heights over the tangent plane: the f64 dot product errs by less than 4u·(|n|·|r|) (one
+    // rounding in r, three in the dot product), so above 8u·(|n|·|r|) the exact height is positive
+    // and the robust clip keeps every vertex without cutting.
+    for rk in &r {
+        if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
+            return None;
+        }
+    }
+    let plane = polygon::triangle_plane(&u)?;
+    let (far, h_p) = polygon::fast_decisions(&r, &plane)?;
+    if far {
+        return None;
+    }
+    let mut sum = Deriv3::constant(0.0);
+    let mut magnitude = 0.0;
+    for i in 0..3 {
+        let j = (i + 1) % 3;
+        let e = u[j] - u[i];
+        if near_line(r[i], e) {
+            return None;
+        }
+        let t = edge_term(r[i], e, n, order).ok()?;
+        magnitude += t.value.abs();
+        sum.value += t.value;
+        sum.gradient += t.gradient;
+        sum.hessian += t.hessian;
+    }
+    if !(magnitude <= polygon::CANCELLATION_LIMIT * sum.value.abs()) {
+        return None;
+    }
+    if h_p < 0.0 {
+        sum.value = -sum.value;
+        sum.gradient = -sum.gradient;
+        sum.hessian = -sum.hessian;
+    }
+    sum.value = sum.value.clamp(0.0, 1.0);
+    sum.is_finite().then_some(sum)
 }
