@@ -549,3 +549,157 @@ pub(crate) fn triangle_form_factor_fast(
     sum.value = sum.value.clamp(0.0, 1.0);
     sum.is_finite().then_some(sum)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TRI: [DVec3; 3] = [
+        DVec3::new(-0.4, -0.3, 1.0),
+        DVec3::new(0.7, -0.1, 1.2),
+        DVec3::new(0.0, 0.8, 0.9),
+    ];
+
+    fn n() -> DVec3 {
+        DVec3::new(0.2, -0.1, 1.0).normalize()
+    }
+
+    /// The robust evaluation (the polygon path, which has no fast path).
+    fn robust(x: DVec3, n: DVec3, t: [DVec3; 3]) -> Deriv3 {
+        polygon::form_factor(x, n, &t, Order::Hessian).unwrap()
+    }
+
+    /// Walks `x(t)` for `t` from `t0` down to `t1` (log steps) and checks that the fast path is
+    /// taken at `t0`, declines at `t1`, and agrees bit for bit with the robust path wherever it is
+    /// taken; returns the last certified and first declined parameters.
+    fn walk(x_of: &dyn Fn(f64) -> DVec3, t: [DVec3; 3], t0: f64, t1: f64) -> (f64, f64) {
+        walk_n(x_of, n(), t, t0, t1)
+    }
+
+    fn walk_n(
+        x_of: &dyn Fn(f64) -> DVec3,
+        n: DVec3,
+        t: [DVec3; 3],
+        t0: f64,
+        t1: f64,
+    ) -> (f64, f64) {
+        let (mut last_ok, mut first_fail) = (f64::NAN, f64::NAN);
+        let steps = 400;
+        for k in 0..=steps {
+            let p = t0 * (t1 / t0).powf(k as f64 / steps as f64);
+            let x = x_of(p);
+            match triangle_form_factor_fast(x, n, t, Order::Hessian) {
+                Some(f) => {
+                    assert_eq!(f, robust(x, n, t), "fast != robust at {x:?}");
+                    if first_fail.is_nan() {
+                        last_ok = p;
+                    }
+                }
+                None => {
+                    if first_fail.is_nan() {
+                        first_fail = p;
+                    }
+                }
+            }
+        }
+        assert!(
+            !last_ok.is_nan() && !first_fail.is_nan(),
+            "no switch in [{t1}, {t0}]"
+        );
+        // Narrow the switch down to configurations a relative 1e-12 apart.
+        for _ in 0..60 {
+            let mid = (last_ok * first_fail).sqrt();
+            match triangle_form_factor_fast(x_of(mid), n, t, Order::Hessian) {
+                Some(f) => {
+                    assert_eq!(f, robust(x_of(mid), n, t));
+                    last_ok = mid;
+                }
+                None => first_fail = mid,
+            }
+        }
+        assert!((last_ok / first_fail - 1.0).abs() < 1e-12);
+        (last_ok, first_fail)
+    }
+
+    fn close(p: &Deriv3, q: &Deriv3, tol: f64) -> bool {
+        let hm = q
+            .hessian
+            .abs()
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, e| m.max(*e));
+        let hd = (p.hessian - q.hessian)
+            .abs()
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, e| m.max(*e));
+        (p.value - q.value).abs() <= tol * q.value.abs()
+            && (p.gradient - q.gradient).abs().max_element() <= tol * q.gradient.abs().max_element()
+            && hd <= tol * hm
+    }
+
+    #[test]
+    fn fast_triangle_equals_robust_and_switches_off_at_the_tangent_plane() {
+        // Lower x's tangent plane onto vertex c: the fast path declines just before the clip starts.
+        let c = TRI[2];
+        let base = DVec3::new(0.1, -0.2, 0.05);
+        // Move x along n so that n·(c − x) = t·|c − base|.
+        let x_of = |t: f64| base + n() * (n().dot(c - base) - t * (c - base).length());
+        let (ok, fail) = walk(&x_of, TRI, 0.3, 1e-18);
+        // Both sides of the switch give the same function to well within the contract.
+        let (a, b) = (robust(x_of(ok), n(), TRI), robust(x_of(fail), n(), TRI));
+        assert!(close(
+            &triangle_form_factor_fast(x_of(ok), n(), TRI, Order::Hessian).unwrap(),
+            &a,
+            0.0
+        ));
+        assert!(close(&a, &b, 1e-9), "{a:?} {b:?}");
+    }
+
+    #[test]
+    fn fast_triangle_switches_off_near_an_edge_line_and_in_the_far_field() {
+        // Approach the extension of edge ab beyond a, out of the triangle's plane, with a receiver
+        // normal in that plane (every vertex stays above the tangent plane).
+        let (a, b, c) = (TRI[0], TRI[1], TRI[2]);
+        let ne = ((b - a).normalize() + (c - a).normalize()).normalize();
+        let plane_n = (b - a).cross(c - a).normalize();
+        let x_of = |t: f64| a - (b - a) * 0.5 + plane_n * t;
+        let (ok, fail) = walk_n(&x_of, ne, TRI, 0.5, 1e-9);
+        let (p, q) = (robust(x_of(ok), ne, TRI), robust(x_of(fail), ne, TRI));
+        assert!(close(&p, &q, 1e-9), "{p:?} {q:?}");
+        // Far away along −n: the robust path switches to quadrature at 16 radii.
+        let centroid = (TRI[0] + TRI[1] + TRI[2]) / 3.0;
+        let x_far = |t: f64| centroid - n() * (1.0 / t);
+        let (ok, fail) = walk(&x_far, TRI, 1.0, 1e-3);
+        assert!(1.0 / ok < 1.0 / fail);
+        let (p, q) = (robust(x_far(ok), n(), TRI), robust(x_far(fail), n(), TRI));
+        assert!(close(&p, &q, 1e-9), "{p:?} {q:?}");
+    }
+
+    #[test]
+    fn fast_edge_term_equals_robust_and_declines_near_its_line() {
+        let (a, b) = (TRI[0], TRI[1]);
+        let x = DVec3::new(0.1, -0.2, 0.05);
+        let fast = edge_form_factor_fast(x, n(), a, b, Order::Hessian).unwrap();
+        let scaled = polygon::Scaled::new(x, &[a, b]).unwrap();
+        let ends = scaled.exact_ends(0, 1);
+        let unit = polygon::unit_normal(n()).unwrap();
+        let slow = edge_term_exact(
+            scaled.r[0],
+            scaled.u[1] - scaled.u[0],
+            unit,
+            Order::Hessian,
+            Some(&ends),
+        )
+        .and_then(|d| scaled.finish(d, Order::Hessian))
+        .unwrap();
+        assert_eq!(fast, slow);
+        // 1e-4 of the length off the line (sine below 1e-2): the double-double path.
+        let near = a + (b - a) * 1.7 + DVec3::Z * 1e-4;
+        assert!(edge_form_factor_fast(near, n(), a, b, Order::Hessian).is_none());
+        assert!(edge_form_factor(near, n(), a, b, Order::Hessian).is_ok());
+        // Invalid inputs are left to the robust path's validation.
+        assert!(edge_form_factor_fast(x, n() * 1.1, a, b, Order::Value).is_none());
+        assert!(edge_form_factor_fast(DVec3::NAN, n(), a, b, Order::Value).is_none());
+    }
+}
