@@ -194,7 +194,8 @@ impl Plane {
 pub(crate) fn triangle_plane(u: &[DVec3; 3]) -> Option<Plane> {
     // Newell's sum reduces to u_1 × u_2 (the other two terms are exactly zero).
     let nn = u[1].cross(u[2]);
-    let extent = u[1].length().max(u[2].length());
+    // sqrt is monotone and correctly rounded: the max of the roots is the root of the max.
+    let extent = u[1].length_squared().max(u[2].length_squared()).sqrt();
     let twice_area = nn.length();
     if !(twice_area > AREA_TOLERANCE * extent * extent) {
         return None;
@@ -215,7 +216,13 @@ pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(bool, f64)> 
         .min_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
         .copied()?;
     let h_p = plane.normal.dot(nearest);
-    let r_max = r.iter().map(|v| v.length()).fold(0.0, f64::max);
+    // One root each for r_max and the radius: the max of the roots is the root of the max, so the
+    // decisions are those of `evaluate`.
+    let r_max = r
+        .iter()
+        .map(|v| v.length_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
     if !(h_p.abs() >= NEAR_PLANE_HEIGHT * r_max) {
         return None;
     }
@@ -223,8 +230,9 @@ pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(bool, f64)> 
     let centroid = r.iter().sum::<DVec3>() / count;
     let radius = r
         .iter()
-        .map(|v| (*v - centroid).length())
-        .fold(0.0, f64::max);
+        .map(|v| (*v - centroid).length_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
     Some((centroid.length() >= FAR_FIELD_RATIO * radius, h_p))
 }
 
