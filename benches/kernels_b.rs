@@ -95,6 +95,8 @@ form factors: time (ns, ratio to the textbook value) and error vs 320-bit refere
         let raddiff = |p: DVec3, o: Order| {
             if is_edge {
                 kernels::edge_form_factor(p, n, v[0], v[1], o)
+            } else if v.len() == 3 {
+                kernels::triangle_form_factor(p, n, v[0], v[1], v[2], o)
             } else {
                 kernels::polygon_form_factor(p, n, &v, o)
             }
@@ -352,8 +354,25 @@ fn bench(c: &mut Criterion) {
         ] {
             g.bench_function(label, |b| {
                 b.iter(|| {
-                    kernels::polygon_form_factor(black_box(x), black_box(n), black_box(&v), order)
-                        .unwrap()
+                    // Triangles through their own entry point (which has the fast path).
+                    if v.len() == 3 {
+                        kernels::triangle_form_factor(
+                            black_box(x),
+                            black_box(n),
+                            v[0],
+                            v[1],
+                            v[2],
+                            order,
+                        )
+                    } else {
+                        kernels::polygon_form_factor(
+                            black_box(x),
+                            black_box(n),
+                            black_box(&v),
+                            order,
+                        )
+                    }
+                    .unwrap()
                 })
             });
         }
