@@ -19,7 +19,6 @@ use raddiff::{kernels, Deriv3, Order};
 use std::hint::black_box;
 
 #[path = "../tests/kernels_a_ref/mod.rs"]
-#[allow(dead_code)]
 mod reference;
 
 type D3 = Dual2SVec64<3>;

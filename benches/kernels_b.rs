@@ -17,7 +17,6 @@ use num_dual::{DualNum, HyperDual64};
 use raddiff::{kernels, Deriv3, Order};
 
 #[path = "../tests/kernels_b_common/mod.rs"]
-#[allow(dead_code)]
 mod reference;
 
 /// Lambert's per-edge term as a user writes it: `β n·(r_a×r_b)/‖r_a×r_b‖ / 2π`,

@@ -462,6 +462,7 @@ fn in_fast_range(vs: &[DVec3]) -> Option<()> {
 /// Whether the robust path would recompute the edge's cross product from the exact endpoints
 /// ([`EdgeFrame::with_exact_ends`]): x near the edge's line.
 #[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn near_line(r_a: DVec3, e: DVec3) -> bool {
     let bound = NEAR_LINE_SINE * e.length();
     !(r_a.cross(e).length_squared() >= bound * bound * r_a.length_squared())
@@ -472,6 +473,7 @@ fn near_line(r_a: DVec3, e: DVec3) -> bool {
 /// cross products). Elsewhere the robust path evaluates exactly these f64 operations on inputs
 /// rescaled by a power of two, which changes no rounding: the result is bit-for-bit the robust one,
 /// so it carries the robust path's accuracy, without its rescaling and exact-difference setup.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn edge_form_factor_fast(
     x: DVec3,
     n: DVec3,
@@ -495,6 +497,7 @@ pub(crate) fn edge_form_factor_fast(
 /// field and the edge sum not cancelling (where the robust path integrates by quadrature instead).
 /// `None` otherwise, or for invalid or out-of-range inputs. Accepted results are bit-for-bit those
 /// of the robust path (same f64 operations; its power-of-two rescaling changes no rounding).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn triangle_form_factor_fast(
     x: DVec3,
     n: DVec3,

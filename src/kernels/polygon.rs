@@ -191,6 +191,7 @@ impl Plane {
 
 /// The plane of a triangle given relative to its first vertex (`u[0] = 0`), as [`Plane::new`]
 /// computes it (a triangle is planar and simple); `None` for (numerically) zero area.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn triangle_plane(u: &[DVec3; 3]) -> Option<Plane> {
     // Newell's sum reduces to u_1 × u_2 (the other two terms are exactly zero).
     let nn = u[1].cross(u[2]);
@@ -210,6 +211,7 @@ pub(crate) fn triangle_plane(u: &[DVec3; 3]) -> Option<Plane> {
 /// The decisions [`evaluate`] takes before its edge sum, for an unclipped polygon given relative to
 /// `x`: `None` when `x` is in or near the polygon's plane (where it recomputes the height exactly),
 /// otherwise whether the far-field quadrature applies and the signed height `h_P`.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(bool, f64)> {
     let nearest = r
         .iter()

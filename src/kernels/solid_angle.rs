@@ -412,6 +412,7 @@ fn l1(v: DVec3) -> f64 {
 ///   `atan2(A, D)` and the relative perturbation of `√g`), the value's error is at most
 ///   `2(|D||δA| + |A||δD|)/g` plus the last-bit error of `atan2`; the gradient `2(cos θ ∇A − sin θ ∇D)/√g`
 ///   and the Hessian are bounded term by term the same way (see the code).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn solid_angle_fast(
     x: DVec3,
     y: [DVec3; 3],
