@@ -408,6 +408,11 @@ pub(crate) fn edge_term_exact(
     let Some(f) = EdgeFrame::with_exact_ends(r_a, e, ends) else {
         return Ok(Deriv3::constant(0.0));
     };
+    frame_term(&f, n, order)
+}
+
+/// The edge term from its frame (see [`edge_term_exact`]).
+pub(crate) fn frame_term(f: &EdgeFrame, n: DVec3, order: Order) -> Result<Deriv3> {
     let m = f.moments(order)?;
     // ν = n·w / L = n·(p × ê): the edge's lever arm about n.
     let nu = n.dot(f.w) / f.len;
@@ -459,13 +464,18 @@ fn in_fast_range(vs: &[DVec3]) -> Option<()> {
     (m > FAST_RANGE.0 && m < FAST_RANGE.1).then_some(())
 }
 
-/// Whether the robust path would recompute the edge's cross product from the exact endpoints
-/// ([`EdgeFrame::with_exact_ends`]): x near the edge's line.
+/// The edge's frame as the robust path builds it, `None` when the robust path would recompute the
+/// cross product from the exact endpoints ([`EdgeFrame::with_exact_ends`]: x near the edge's line,
+/// the same comparison on the same values) or the edge has zero length.
 #[inline]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn near_line(r_a: DVec3, e: DVec3) -> bool {
-    let bound = NEAR_LINE_SINE * e.length();
-    !(r_a.cross(e).length_squared() >= bound * bound * r_a.length_squared())
+fn fast_frame(r_a: DVec3, e: DVec3) -> Option<EdgeFrame> {
+    let f = EdgeFrame::new(r_a, e)?;
+    let bound = NEAR_LINE_SINE * f.len;
+    if !(f.w.length_squared() >= bound * bound * r_a.length_squared()) {
+        return None;
+    }
+    Some(f)
 }
 
 /// The fast evaluation of [`edge_form_factor`]: `None` when the inputs are invalid or out of
@@ -484,10 +494,10 @@ pub(crate) fn edge_form_factor_fast(
     let (r_a, e) = (a - x, b - a);
     in_fast_range(&[r_a, b - x, e])?;
     let len = n.length();
-    if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) || near_line(r_a, e) {
+    if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) {
         return None;
     }
-    let d = edge_term(r_a, e, n / len, order).ok()?;
+    let d = frame_term(&fast_frame(r_a, e)?, n / len, order).ok()?;
     d.is_finite().then_some(d)
 }
 
@@ -531,11 +541,7 @@ pub(crate) fn triangle_form_factor_fast(
     let mut magnitude = 0.0;
     for i in 0..3 {
         let j = (i + 1) % 3;
-        let e = u[j] - u[i];
-        if near_line(r[i], e) {
-            return None;
-        }
-        let t = edge_term(r[i], e, n, order).ok()?;
+        let t = frame_term(&fast_frame(r[i], u[j] - u[i])?, n, order).ok()?;
         magnitude += t.value.abs();
         sum.value += t.value;
         sum.gradient += t.gradient;
