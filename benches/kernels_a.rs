@@ -1,10 +1,11 @@
 //! Criterion benches for the kernels-a kernels (triangle solid angle, flatland segment form factor,
 //! homogeneous and marched transmittance) at each order, against the baselines a user would
-//! otherwise write: (a) central finite differences of the value kernel (gradient: 6 evaluations,
-//! 4 in 2D; Hessian: 19, 9 in 2D) and (b) a num-dual second-order dual-number (Dual2Vec) Hessian of
-//! the same value formula. Before timing, the accuracy of both baselines against the closed form is
-//! printed side by side (max error normalized by the largest entry), on a generic configuration and
-//! on one 1e4 sizes away.
+//! otherwise write: (a) the textbook value formula (Van Oosterom-Strackee for the solid angle), (b)
+//! central finite differences of that textbook value (gradient: 6 evaluations, 4 in 2D; Hessian:
+//! 19, 9 in 2D) and (c) a num-dual second-order dual-number (Dual2Vec) Hessian of the same textbook
+//! formula. Before timing, the errors of raddiff and of every baseline against 320-bit references
+//! (astro-float, `tests/kernels_a_ref`) are printed side by side, and an interleaved timing table gives
+//! every time as a ratio to the textbook value measured in the same rounds.
 //!
 //! `cargo bench --bench kernels_a -- --warm-up-time 1 --measurement-time 3`
 
@@ -16,6 +17,9 @@ use nalgebra::{SMatrix, SVector};
 use num_dual::{Dual2SVec64, DualNum};
 use raddiff::{kernels, Deriv3, Order};
 use std::hint::black_box;
+
+#[path = "../tests/kernels_a_ref/mod.rs"]
+mod reference;
 
 type D3 = Dual2SVec64<3>;
 type D2 = Dual2SVec64<2>;
@@ -76,22 +80,43 @@ fn fd_hessian2(f: &dyn Fn(DVec2) -> f64, x: DVec2, h: f64) -> [f64; 3] {
 // ------------------------------------------------------------------------------------------------
 // Dual-number baselines: the same value formulas on num-dual's Dual2Vec.
 
-fn c3(v: f64) -> D3 {
-    D3::from(v)
-}
-
-fn solid_angle_dual(x: &SVector<D3, 3>, a: DVec3, b: DVec3, c: DVec3) -> D3 {
-    let n = (b - a).cross(c - a);
-    let r = [a, b, c].map(|y| [c3(y.x) - x[0], c3(y.y) - x[1], c3(y.z) - x[2]]);
-    let dot = |p: &[D3; 3], q: &[D3; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
+/// The textbook Van Oosterom-Strackee formula, `2 atan2(|r_0·(r_1×r_2)|, D)`, as a user writes it
+/// (generic over f64 and dual numbers).
+fn textbook_solid_angle<D: DualNum<Primitive = f64> + Copy>(
+    x: [D; 3],
+    a: DVec3,
+    b: DVec3,
+    c: DVec3,
+) -> D {
+    let r = [a, b, c].map(|y| {
+        [
+            D::from(y.x) - x[0],
+            D::from(y.y) - x[1],
+            D::from(y.z) - x[2],
+        ]
+    });
+    let dot = |p: &[D; 3], q: &[D; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
     let s = r.each_ref().map(|v| dot(v, v).sqrt());
-    let a_num = r[0][0] * n.x + r[0][1] * n.y + r[0][2] * n.z;
+    let cross = [
+        r[1][1] * r[2][2] - r[1][2] * r[2][1],
+        r[1][2] * r[2][0] - r[1][0] * r[2][2],
+        r[1][0] * r[2][1] - r[1][1] * r[2][0],
+    ];
+    let a_num = dot(&r[0], &cross);
     let d = s[0] * s[1] * s[2]
         + dot(&r[0], &r[1]) * s[2]
         + dot(&r[1], &r[2]) * s[0]
         + dot(&r[2], &r[0]) * s[1];
-    let a_abs = if a_num.re < 0.0 { -a_num } else { a_num };
+    let a_abs = if a_num.re() < 0.0 { -a_num } else { a_num };
     a_abs.atan2(d) * 2.0
+}
+
+fn textbook_sa(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    textbook_solid_angle(p.to_array(), a, b, c)
+}
+
+fn solid_angle_dual(x: &SVector<D3, 3>, a: DVec3, b: DVec3, c: DVec3) -> D3 {
+    textbook_solid_angle([x[0], x[1], x[2]], a, b, c)
 }
 
 fn segment_dual(x: &SVector<D2, 2>, a: DVec2, b: DVec2) -> D2 {
@@ -100,6 +125,12 @@ fn segment_dual(x: &SVector<D2, 2>, a: DVec2, b: DVec2) -> D2 {
     let cross = ax * (b.y - a.y) - ay * (b.x - a.x);
     let cross = if cross.re < 0.0 { -cross } else { cross };
     cross.atan2(ax * bx + ay * by) * (0.5 / std::f64::consts::PI)
+}
+
+/// The textbook flatland form factor `θ/2π`, `θ = atan2(|r_a×r_b|, r_a·r_b)`.
+fn textbook_segment(x: DVec2, a: DVec2, b: DVec2) -> f64 {
+    let (ra, rb) = (a - x, b - x);
+    ra.perp_dot(rb).abs().atan2(ra.dot(rb)) * (0.5 / std::f64::consts::PI)
 }
 
 fn transmittance_dual(x: &SVector<D3, 3>, y: DVec3, sigma: f64) -> D3 {
@@ -151,21 +182,13 @@ fn report_accuracy() {
         "{:<40} {:>10} {:>10} {:>10} {:>10}",
         "configuration", "FD grad", "FD hess", "dual grad", "dual hess"
     );
-    let (a, b, c) = (
-        DVec3::new(0.1, -0.2, 0.05),
-        DVec3::new(1.1, 0.1, 0.2),
-        DVec3::new(0.3, 0.9, -0.1),
-    );
+    let (a, b, c) = TRI;
     for (name, x) in [
         ("solid angle, generic", DVec3::new(0.4, 0.3, 0.8)),
         ("solid angle, 1e4 sizes away", DVec3::new(4e3, -6e3, 7e3)),
     ] {
         let exact = kernels::triangle_solid_angle(x, a, b, c, Order::Hessian).unwrap();
-        let f = |p: DVec3| {
-            kernels::triangle_solid_angle(p, a, b, c, Order::Value)
-                .unwrap()
-                .value
-        };
+        let f = |p: DVec3| textbook_sa(p, a, b, c);
         let h = 1e-5 * x.length().max(1.0);
         let fg = fd_gradient3(&f, x, h);
         let fh = fd_hessian3(&f, x, 1e-4 * x.length().max(1.0));
@@ -235,6 +258,144 @@ fn report_accuracy() {
     );
 }
 
+/// The solid-angle benchmark triangle (about one size from the generic point).
+const TRI: (DVec3, DVec3, DVec3) = (
+    DVec3::new(0.1, -0.2, 0.05),
+    DVec3::new(1.1, 0.1, 0.2),
+    DVec3::new(0.3, 0.9, -0.1),
+);
+
+/// Solid-angle configurations: (name, triangle, x, finite-difference step).
+fn solid_angle_cases() -> Vec<(&'static str, [DVec3; 3], DVec3, f64)> {
+    let t = [TRI.0, TRI.1, TRI.2];
+    let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+    let centroid = (t[0] + t[1] + t[2]) / 3.0;
+    let outside = centroid + (t[1] - t[0]) * 1.5;
+    let sliver = [
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(0.5, 1e-4, 1.0),
+    ];
+    vec![
+        ("generic", t, DVec3::new(0.4, 0.3, 0.8), 1e-4),
+        (
+            "sliver (apex 1e-4)",
+            sliver,
+            DVec3::new(0.4, 0.1, 0.3),
+            1e-4,
+        ),
+        ("1e-6 above the plane", t, outside + n * 1e-6, 1e-8),
+        (
+            "1e6 sizes away",
+            t,
+            centroid + DVec3::new(-0.3, -0.2, -1.0).normalize() * 1e6,
+            1e2,
+        ),
+    ]
+}
+
+/// Time and error side by side for the solid angle: raddiff and the baselines a user would write
+/// (the textbook value, central differences of it, num-dual on it), errors against 320-bit
+/// references, times as the minimum over interleaved rounds with ratios to the textbook value.
+fn report_solid_angle() {
+    let mut hp = reference::Hp::new();
+    println!("\ntriangle solid angle: time (ns, ratio to the textbook value) and error vs 320-bit reference");
+    println!(
+        "{:<22} {:>16} {:>16} {:>16} {:>16} {:>16} {:>16} {:>16}",
+        "configuration",
+        "textbook value",
+        "raddiff value",
+        "raddiff grad",
+        "raddiff hess",
+        "FD grad (tb)",
+        "FD hess (tb)",
+        "dual hess (tb)"
+    );
+    for (name, t, x, step) in solid_angle_cases() {
+        let [a, b, c] = t;
+        let r = reference::central3(&mut hp, x, 1e-30 * (a - x).length(), &mut |hp, p| {
+            let v = t.map(|v| reference::V3::from(hp, v));
+            reference::solid_angle_hp(hp, p, &v, false)
+        });
+        let f = |p: DVec3| textbook_sa(p, a, b, c);
+        let d = kernels::triangle_solid_angle(x, a, b, c, Order::Hessian).unwrap();
+        let dual = dual_hessian3(|v| solid_angle_dual(v, a, b, c), x);
+        let err = [
+            reference::rel(f(x), r.value),
+            reference::rel(d.value, r.value),
+            reference::rel3(d.gradient, r.gradient),
+            reference::rel33(d.hessian, r.hessian),
+            reference::rel3(fd_gradient3(&f, x, step * 0.1), r.gradient),
+            reference::rel33(fd_hessian3(&f, x, step), r.hessian),
+            reference::rel33(dual.hessian, r.hessian),
+        ];
+        let t = min_ns(
+            60,
+            2000,
+            &mut [
+                &mut || {
+                    black_box(f(black_box(x)));
+                },
+                &mut || {
+                    black_box(kernels::triangle_solid_angle(
+                        black_box(x),
+                        a,
+                        b,
+                        c,
+                        Order::Value,
+                    ))
+                    .ok();
+                },
+                &mut || {
+                    black_box(kernels::triangle_solid_angle(
+                        black_box(x),
+                        a,
+                        b,
+                        c,
+                        Order::Gradient,
+                    ))
+                    .ok();
+                },
+                &mut || {
+                    black_box(kernels::triangle_solid_angle(
+                        black_box(x),
+                        a,
+                        b,
+                        c,
+                        Order::Hessian,
+                    ))
+                    .ok();
+                },
+                &mut || {
+                    black_box(fd_gradient3(&f, black_box(x), step * 0.1));
+                },
+                &mut || {
+                    black_box(fd_hessian3(&f, black_box(x), step));
+                },
+                &mut || {
+                    black_box(dual_hessian3(
+                        |v| solid_angle_dual(v, a, b, c),
+                        black_box(x),
+                    ));
+                },
+            ],
+        );
+        let cells: Vec<String> = (0..7)
+            .map(|k| format!("{:.0} ({:.2}x)", t[k], t[k] / t[0]))
+            .collect();
+        println!(
+            "{name:<22} {:>16} {:>16} {:>16} {:>16} {:>16} {:>16} {:>16}",
+            cells[0], cells[1], cells[2], cells[3], cells[4], cells[5], cells[6]
+        );
+        let errs: Vec<String> = err.iter().map(|e| format!("err {e:.1e}")).collect();
+        println!(
+            "{:<22} {:>16} {:>16} {:>16} {:>16} {:>16} {:>16} {:>16}",
+            "", errs[0], errs[1], errs[2], errs[3], errs[4], errs[5], errs[6]
+        );
+    }
+    println!();
+}
+
 // ------------------------------------------------------------------------------------------------
 // Interleaved timing: on a shared, loaded machine criterion's sequential groups see different load
 // levels. Here every variant of a kernel is timed in each round, rounds alternate, and the minimum
@@ -256,7 +417,7 @@ fn min_ns(rounds: usize, calls: usize, variants: &mut [&mut dyn FnMut()]) -> Vec
 
 fn report_interleaved_timing() {
     let rounds = 60;
-    println!("interleaved timing, minimum over {rounds} rounds (ns per call; ratio to the value kernel):");
+    println!("interleaved timing, minimum over {rounds} rounds (ns per call; ratio to the value kernel; FD of the textbook value):");
     println!(
         "{:<24} {:>8} {:>8} {:>8} {:>10} {:>10} {:>10}",
         "kernel", "value", "gradient", "hessian", "FD grad", "FD hess", "dual hess"
@@ -275,77 +436,12 @@ fn report_interleaved_timing() {
         );
     };
 
-    let (a, b, c) = (
-        DVec3::new(0.1, -0.2, 0.05),
-        DVec3::new(1.1, 0.1, 0.2),
-        DVec3::new(0.3, 0.9, -0.1),
-    );
-    let x = DVec3::new(0.4, 0.3, 0.8);
-    let f = |p: DVec3| {
-        kernels::triangle_solid_angle(p, a, b, c, Order::Value)
-            .unwrap()
-            .value
-    };
-    let t = min_ns(
-        rounds,
-        2000,
-        &mut [
-            &mut || {
-                black_box(kernels::triangle_solid_angle(
-                    black_box(x),
-                    a,
-                    b,
-                    c,
-                    Order::Value,
-                ))
-                .ok();
-            },
-            &mut || {
-                black_box(kernels::triangle_solid_angle(
-                    black_box(x),
-                    a,
-                    b,
-                    c,
-                    Order::Gradient,
-                ))
-                .ok();
-            },
-            &mut || {
-                black_box(kernels::triangle_solid_angle(
-                    black_box(x),
-                    a,
-                    b,
-                    c,
-                    Order::Hessian,
-                ))
-                .ok();
-            },
-            &mut || {
-                black_box(fd_gradient3(&f, black_box(x), 1e-5));
-            },
-            &mut || {
-                black_box(fd_hessian3(&f, black_box(x), 1e-4));
-            },
-            &mut || {
-                black_box(dual_hessian3(
-                    |v| solid_angle_dual(v, a, b, c),
-                    black_box(x),
-                ));
-            },
-        ],
-    );
-    print("triangle solid angle", &t);
-
     let (sa, sb, sx) = (
         DVec2::new(-0.3, 1.0),
         DVec2::new(0.8, 1.2),
         DVec2::new(0.1, -0.2),
     );
-    let f2 = |p: DVec2| {
-        kernels::segment_form_factor_2d(p, sa, sb, Order::Value)
-            .unwrap()
-            .value
-    };
+    let f2 = |p: DVec2| textbook_segment(p, sa, sb);
     let t = min_ns(
         rounds,
         2000,
@@ -391,11 +487,7 @@ fn report_interleaved_timing() {
     print("segment form factor 2D", &t);
 
     let (tx, ty, sigma) = (DVec3::new(0.3, 0.2, 0.1), DVec3::new(1.5, -0.7, 2.0), 0.8);
-    let ft = |p: DVec3| {
-        kernels::transmittance(p, ty, sigma, Order::Value)
-            .unwrap()
-            .value
-    };
+    let ft = |p: DVec3| (-sigma * (p - ty).length()).exp();
     let t = min_ns(
         rounds,
         2000,
@@ -494,6 +586,7 @@ fn report_interleaved_timing() {
 // ------------------------------------------------------------------------------------------------
 
 fn bench(c: &mut Criterion) {
+    report_solid_angle();
     report_accuracy();
     report_interleaved_timing();
 
@@ -521,11 +614,8 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
-    let f = |p: DVec3| {
-        kernels::triangle_solid_angle(p, a, b, tc, Order::Value)
-            .unwrap()
-            .value
-    };
+    let f = |p: DVec3| textbook_sa(p, a, b, tc);
+    g.bench_function("textbook_value", |bch| bch.iter(|| f(black_box(x))));
     g.bench_function("fd_gradient", |bch| {
         bch.iter(|| fd_gradient3(&f, black_box(x), 1e-5))
     });

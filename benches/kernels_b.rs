@@ -1,7 +1,11 @@
-//! Criterion benches of the point-to-triangle / point-to-polygon form factors at each order, against
-//! (a) central finite differences of the value kernel (19 value calls for value + gradient + Hessian)
-//! and (b) a num-dual hyper-dual Hessian of the value formula (6 hyper-dual evaluations, one per
-//! Hessian entry), with the Hessian errors of both baselines printed next to the timings.
+//! Criterion benches of the point-to-triangle / point-to-polygon form factors and of the per-edge
+//! term at each order, against the baselines a user would otherwise write: (a) the textbook value
+//! formula (Lambert's per-edge sum, with the clipping of the value formula below where the case is
+//! clipped), (b) central finite differences of that textbook value (19 value calls for value +
+//! gradient + Hessian) and (c) a num-dual hyper-dual Hessian of the same formula (6 hyper-dual
+//! evaluations, one per Hessian entry). Before timing, a table gives time (ratio to the textbook
+//! value, same interleaved rounds) and error against 320-bit references (`tests/kernels_b_common`)
+//! side by side.
 //!
 //! `cargo bench --bench kernels_b -- --warm-up-time 1 --measurement-time 3`
 
@@ -11,6 +15,154 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use glam::{DMat3, DVec3};
 use num_dual::{DualNum, HyperDual64};
 use raddiff::{kernels, Deriv3, Order};
+
+#[path = "../tests/kernels_b_common/mod.rs"]
+mod reference;
+
+/// Lambert's per-edge term as a user writes it: `β n·(r_a×r_b)/‖r_a×r_b‖ / 2π`,
+/// `β = acos(r̂_a·r̂_b)`.
+fn textbook_edge(x: DVec3, n: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let (ra, rb) = (a - x, b - x);
+    let w = ra.cross(rb);
+    let beta = (ra.normalize().dot(rb.normalize())).clamp(-1.0, 1.0).acos();
+    beta * n.dot(w) / w.length() * (0.5 * std::f64::consts::FRAC_1_PI)
+}
+
+/// Lambert's per-edge sum for a triangle above the tangent plane (no clipping), as a user writes it.
+fn textbook_triangle(x: DVec3, n: DVec3, t: &[DVec3]) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..3 {
+        sum += textbook_edge(x, n, t[i], t[(i + 1) % 3]);
+    }
+    sum.abs()
+}
+
+/// The textbook value of a case: the plain edge sum when nothing is clipped, otherwise the clipped
+/// value formula below (in f64).
+fn textbook_value(x: DVec3, n: DVec3, verts: &[DVec3]) -> f64 {
+    if verts.len() == 3 && verts.iter().all(|v| n.dot(*v - x) > 0.0) {
+        textbook_triangle(x, n, verts)
+    } else {
+        value_formula([x.x, x.y, x.z], n, verts)
+    }
+}
+
+/// Minimum per-call time of each variant over interleaved rounds (all see the same load).
+fn min_ns(variants: &mut [&mut dyn FnMut()]) -> Vec<f64> {
+    let (rounds, calls) = (40, 1000);
+    let mut best = vec![f64::INFINITY; variants.len()];
+    for _ in 0..rounds {
+        for (k, f) in variants.iter_mut().enumerate() {
+            let t = std::time::Instant::now();
+            for _ in 0..calls {
+                f();
+            }
+            best[k] = best[k].min(t.elapsed().as_nanos() as f64 / calls as f64);
+        }
+    }
+    best
+}
+
+fn report_time_and_error() {
+    let mut big = reference::Big::new();
+    println!(
+        "
+form factors: time (ns, ratio to the textbook value) and error vs 320-bit reference"
+    );
+    println!(
+        "{:<18} {:>15} {:>15} {:>15} {:>15} {:>15} {:>15}",
+        "case",
+        "textbook value",
+        "raddiff value",
+        "raddiff grad",
+        "raddiff hess",
+        "FD hess (tb)",
+        "dual hess (tb)"
+    );
+    let mut all = cases();
+    // The per-edge term alone, one edge of the generic triangle.
+    let edge = all[0].verts[..2].to_vec();
+    all.push(Case {
+        name: "edge term",
+        x: all[0].x,
+        n: all[0].n,
+        verts: edge,
+    });
+    for case in all {
+        let (x, n, v) = (case.x, case.n, case.verts.clone());
+        let is_edge = v.len() == 2;
+        let raddiff = |p: DVec3, o: Order| {
+            if is_edge {
+                kernels::edge_form_factor(p, n, v[0], v[1], o)
+            } else if v.len() == 3 {
+                kernels::triangle_form_factor(p, n, v[0], v[1], v[2], o)
+            } else {
+                kernels::polygon_form_factor(p, n, &v, o)
+            }
+        };
+        let textbook = |p: DVec3| {
+            if is_edge {
+                textbook_edge(p, n, v[0], v[1])
+            } else {
+                textbook_value(p, n, &v)
+            }
+        };
+        let r = if is_edge {
+            big.edge_reference(x, n, v[0], v[1])
+        } else {
+            big.polygon_reference(x, n, &v, true)
+        };
+        let d = raddiff(x, Order::Hessian).unwrap();
+        let fd = finite_difference_hessian(&textbook, x, 1e-4);
+        let err = [
+            reference::rel_scalar(textbook(x), r.value, 1e-300),
+            reference::rel_scalar(d.value, r.value, 1e-300),
+            reference::rel_vec(d.gradient, r.gradient, 1e-300),
+            reference::rel_mat(d.hessian, r.hessian, 1e-300),
+            reference::rel_mat(fd.hessian, r.hessian, 1e-300),
+            if is_edge {
+                f64::NAN
+            } else {
+                reference::rel_mat(hyperdual_hessian(x, n, &v).hessian, r.hessian, 1e-300)
+            },
+        ];
+        let t = min_ns(&mut [
+            &mut || {
+                black_box(textbook(black_box(x)));
+            },
+            &mut || {
+                black_box(raddiff(black_box(x), Order::Value).ok());
+            },
+            &mut || {
+                black_box(raddiff(black_box(x), Order::Gradient).ok());
+            },
+            &mut || {
+                black_box(raddiff(black_box(x), Order::Hessian).ok());
+            },
+            &mut || {
+                black_box(finite_difference_hessian(&textbook, black_box(x), 1e-4));
+            },
+            &mut || {
+                if !is_edge {
+                    black_box(hyperdual_hessian(black_box(x), n, &v));
+                }
+            },
+        ]);
+        let cells: Vec<String> = (0..6)
+            .map(|k| format!("{:.0} ({:.2}x)", t[k], t[k] / t[0]))
+            .collect();
+        println!(
+            "{:<18} {:>15} {:>15} {:>15} {:>15} {:>15} {:>15}",
+            case.name, cells[0], cells[1], cells[2], cells[3], cells[4], cells[5]
+        );
+        let errs: Vec<String> = err.iter().map(|e| format!("err {e:.1e}")).collect();
+        println!(
+            "{:<18} {:>15} {:>15} {:>15} {:>15} {:>15} {:>15}",
+            "", errs[0], errs[1], errs[2], errs[3], errs[4], errs[5]
+        );
+    }
+    println!();
+}
 
 /// The clipped form factor's value formula, generic over dual numbers (for the AD baseline).
 fn value_formula<D: DualNum<Primitive = f64> + Copy>(x: [D; 3], n: DVec3, verts: &[DVec3]) -> D {
@@ -172,15 +324,12 @@ fn cases() -> Vec<Case> {
 }
 
 fn bench(c: &mut Criterion) {
+    report_time_and_error();
     println!("\nHessian error against the analytic kernel (max entry error / max entry):");
     for case in cases() {
         let analytic =
             kernels::polygon_form_factor(case.x, case.n, &case.verts, Order::Hessian).unwrap();
-        let value = |x: DVec3| {
-            kernels::polygon_form_factor(x, case.n, &case.verts, Order::Value)
-                .unwrap()
-                .value
-        };
+        let value = |x: DVec3| textbook_value(x, case.n, &case.verts);
         let fd = finite_difference_hessian(&value, case.x, 1e-4);
         let ad = hyperdual_hessian(case.x, case.n, &case.verts);
         println!(
@@ -204,17 +353,33 @@ fn bench(c: &mut Criterion) {
         ] {
             g.bench_function(label, |b| {
                 b.iter(|| {
-                    kernels::polygon_form_factor(black_box(x), black_box(n), black_box(&v), order)
-                        .unwrap()
+                    // Triangles through their own entry point (which has the fast path).
+                    if v.len() == 3 {
+                        kernels::triangle_form_factor(
+                            black_box(x),
+                            black_box(n),
+                            v[0],
+                            v[1],
+                            v[2],
+                            order,
+                        )
+                    } else {
+                        kernels::polygon_form_factor(
+                            black_box(x),
+                            black_box(n),
+                            black_box(&v),
+                            order,
+                        )
+                    }
+                    .unwrap()
                 })
             });
         }
+        g.bench_function("textbook_value", |b| {
+            b.iter(|| textbook_value(black_box(x), n, &v))
+        });
         g.bench_function("finite_differences", |b| {
-            let value = |x: DVec3| {
-                kernels::polygon_form_factor(x, n, &v, Order::Value)
-                    .unwrap()
-                    .value
-            };
+            let value = |x: DVec3| textbook_value(x, n, &v);
             b.iter(|| finite_difference_hessian(&value, black_box(x), 1e-4))
         });
         g.bench_function("hyperdual", |b| {

@@ -1,13 +1,15 @@
-//! The kernels at a glance: accuracy against 320-bit references and speed against finite differences.
+//! The kernels at a glance: time and accuracy against the formulas a user would otherwise write.
 //!
 //! `cargo run --release --example kernels`
 //!
 //! For each kernel and configuration (generic, near the plane, near an edge, far away, sliver) it
-//! prints the relative error (max-norm, normalized by the largest reference entry) of the value,
-//! gradient and Hessian against an independent 320-bit evaluation (astro-float, central differences
-//! with a step far below every length scale), then the time per call at each order and the speed-up of
-//! the closed-form Hessian over a central finite-difference Hessian of the value kernel (19 value
-//! evaluations). The timings here are a quick look; `cargo bench` has the criterion measurements.
+//! times, in the same interleaved rounds, the textbook value formula (Van Oosterom-Strackee for the
+//! solid angle, Lambert's per-edge sum for the form factor), raddiff at each order, a central
+//! finite-difference Hessian of the textbook value (19 calls) and num-dual's second-order dual
+//! numbers on the textbook formula, and prints each time with its ratio to the textbook value next
+//! to the relative errors (max-norm, normalized by the largest reference entry) against an
+//! independent 320-bit evaluation (astro-float, central differences with a step far below every
+//! length scale). `cargo bench --bench kernels_a` / `kernels_b` has the criterion measurements.
 
 #[path = "../tests/kernels_a_ref/mod.rs"]
 mod reference_a;
@@ -18,6 +20,8 @@ use std::hint::black_box;
 use std::time::Instant;
 
 use glam::{DMat3, DVec2, DVec3};
+use nalgebra::{SMatrix, SVector};
+use num_dual::{Dual2SVec64, DualNum};
 use raddiff::{kernels, Deriv3, Order};
 
 /// Relative max-norm error of a matrix normalized by its largest reference entry.
@@ -33,22 +37,25 @@ fn rel(got: f64, want: f64) -> f64 {
     reference_b::rel_scalar(got, want, 1e-300)
 }
 
-/// Nanoseconds per call of `f`, from the best of a few timed batches.
-fn time_ns(mut f: impl FnMut()) -> f64 {
-    let batch = 20_000;
-    let mut best = f64::INFINITY;
-    for _ in 0..5 {
-        let start = Instant::now();
-        for _ in 0..batch {
-            f();
+/// Nanoseconds per call of each variant: every round times each variant in turn (so that on a
+/// loaded machine all of them see the same load), and the minimum over the rounds is kept.
+fn min_ns(variants: &mut [&mut dyn FnMut()]) -> Vec<f64> {
+    let (rounds, calls) = (40, 2_000);
+    let mut best = vec![f64::INFINITY; variants.len()];
+    for _ in 0..rounds {
+        for (k, f) in variants.iter_mut().enumerate() {
+            let start = Instant::now();
+            for _ in 0..calls {
+                f();
+            }
+            best[k] = best[k].min(start.elapsed().as_secs_f64() * 1e9 / calls as f64);
         }
-        best = best.min(start.elapsed().as_secs_f64() * 1e9 / batch as f64);
     }
     best
 }
 
 /// Central finite-difference Hessian of a scalar function (19 evaluations), the baseline a user
-/// would otherwise write; the step balances truncation and rounding for a unit-scale problem.
+/// would otherwise write; the step balances truncation and rounding for the case's scale.
 fn fd_hessian(x: DVec3, h: f64, f: &dyn Fn(DVec3) -> f64) -> DMat3 {
     let e = [DVec3::X * h, DVec3::Y * h, DVec3::Z * h];
     let f0 = f(x);
@@ -66,36 +73,160 @@ fn fd_hessian(x: DVec3, h: f64, f: &dyn Fn(DVec3) -> f64) -> DMat3 {
     DMat3::from_cols_array_2d(&m)
 }
 
+type D3 = Dual2SVec64<3>;
+
+/// Value, gradient and Hessian of a formula written on num-dual's second-order dual numbers.
+fn dual_hessian(f: &dyn Fn(&[D3; 3]) -> D3, x: DVec3) -> Deriv3 {
+    let (v, g, h): (f64, SVector<f64, 3>, SMatrix<f64, 3, 3>) = num_dual::hessian(
+        |p: SVector<D3, 3>| f(&[p[0], p[1], p[2]]),
+        &SVector::from([x.x, x.y, x.z]),
+    );
+    Deriv3 {
+        value: v,
+        gradient: DVec3::new(g[0], g[1], g[2]),
+        hessian: DMat3::from_cols_array(&[
+            h[(0, 0)],
+            h[(1, 0)],
+            h[(2, 0)],
+            h[(0, 1)],
+            h[(1, 1)],
+            h[(2, 1)],
+            h[(0, 2)],
+            h[(1, 2)],
+            h[(2, 2)],
+        ]),
+    }
+}
+
+// ------------------------------------------------------------------------------------------------
+// The textbook value formulas, written as a user would (generic over f64 and dual numbers).
+
+fn sub3<D: DualNum<Primitive = f64> + Copy>(v: DVec3, x: &[D; 3]) -> [D; 3] {
+    [
+        D::from(v.x) - x[0],
+        D::from(v.y) - x[1],
+        D::from(v.z) - x[2],
+    ]
+}
+
+fn dot3<D: DualNum<Primitive = f64> + Copy>(a: &[D; 3], b: &[D; 3]) -> D {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross3<D: DualNum<Primitive = f64> + Copy>(a: &[D; 3], b: &[D; 3]) -> [D; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Van Oosterom-Strackee: `Ω = 2 atan2(|r_0·(r_1×r_2)|, s_0 s_1 s_2 + (r_0·r_1) s_2 + …)`.
+fn textbook_solid_angle<D: DualNum<Primitive = f64> + Copy>(x: &[D; 3], t: &[DVec3; 3]) -> D {
+    let r = t.map(|v| sub3(v, x));
+    let s = r.map(|v| dot3(&v, &v).sqrt());
+    let num = dot3(&r[0], &cross3(&r[1], &r[2]));
+    let num = if num.re() < 0.0 { -num } else { num };
+    let den = s[0] * s[1] * s[2]
+        + dot3(&r[0], &r[1]) * s[2]
+        + dot3(&r[1], &r[2]) * s[0]
+        + dot3(&r[2], &r[0]) * s[1];
+    num.atan2(den) * 2.0
+}
+
+/// Lambert's per-edge sum (unclipped: the cases keep the triangle above the tangent plane, except
+/// where said): `F = |Σ β_i n·(r_i×r_{i+1})/‖r_i×r_{i+1}‖| / 2π`, `β_i = acos(r̂_i·r̂_{i+1})`.
+fn textbook_form_factor<D: DualNum<Primitive = f64> + Copy>(
+    x: &[D; 3],
+    n: DVec3,
+    t: &[DVec3; 3],
+) -> D {
+    let r = t.map(|v| sub3(v, x));
+    let unit = r.map(|v| {
+        let l = dot3(&v, &v).sqrt();
+        [v[0] / l, v[1] / l, v[2] / l]
+    });
+    let mut sum = D::from(0.0);
+    for i in 0..3 {
+        let (a, b) = (&r[i], &r[(i + 1) % 3]);
+        let w = cross3(a, b);
+        let wl = dot3(&w, &w).sqrt();
+        let beta = dot3(&unit[i], &unit[(i + 1) % 3]).acos();
+        sum += beta * (w[0] * n.x + w[1] * n.y + w[2] * n.z) / wl;
+    }
+    let sum = if sum.re() < 0.0 { -sum } else { sum };
+    sum * (0.5 * std::f64::consts::FRAC_1_PI)
+}
+
+/// Lambert's per-edge term `β n·(r_a×r_b)/‖r_a×r_b‖ / 2π`, `β = acos(r̂_a·r̂_b)`.
+fn textbook_edge<D: DualNum<Primitive = f64> + Copy>(
+    x: &[D; 3],
+    n: DVec3,
+    a: DVec3,
+    b: DVec3,
+) -> D {
+    let (ra, rb) = (sub3(a, x), sub3(b, x));
+    let (la, lb) = (dot3(&ra, &ra).sqrt(), dot3(&rb, &rb).sqrt());
+    let w = cross3(&ra, &rb);
+    let beta = (dot3(&ra, &rb) / (la * lb)).acos();
+    beta * (w[0] * n.x + w[1] * n.y + w[2] * n.z) / dot3(&w, &w).sqrt()
+        * (0.5 * std::f64::consts::FRAC_1_PI)
+}
+
+fn textbook_transmittance<D: DualNum<Primitive = f64> + Copy>(
+    x: &[D; 3],
+    y: DVec3,
+    sigma: f64,
+) -> D {
+    let d = sub3(y, x);
+    (-(dot3(&d, &d).sqrt() * sigma)).exp()
+}
+
+fn point(p: DVec3) -> [f64; 3] {
+    p.to_array()
+}
+
 struct Row {
     kernel: &'static str,
     case: &'static str,
-    err: [f64; 3],
-    fd_err: f64,
-    ns: [f64; 3],
-    fd_ns: f64,
+    /// textbook value, raddiff value, gradient, Hessian, FD of the textbook value, num-dual.
+    ns: [f64; 6],
+    /// textbook value; raddiff value, gradient, Hessian; FD Hessian; num-dual Hessian.
+    err: [f64; 6],
 }
 
 fn print_rows(rows: &[Row]) {
     println!(
-        "| kernel | configuration | value err | gradient err | Hessian err | FD Hessian err | value ns | gradient ns | Hessian ns | Hessian/value | FD/closed-form |"
+        "| kernel | configuration | textbook value ns | raddiff value ns | raddiff gradient ns | raddiff Hessian ns | FD (textbook) Hessian ns | num-dual (textbook) Hessian ns | textbook value err | raddiff value / gradient / Hessian err | FD Hessian err | num-dual Hessian err |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for r in rows {
+        let t = r.ns[0];
+        let cell = |v: f64| format!("{v:.0} ({:.2}x)", v / t);
         println!(
-            "| {} | {} | {:.1e} | {:.1e} | {:.1e} | {:.1e} | {:.0} | {:.0} | {:.0} | {:.1}x | {:.1}x |",
+            "| {} | {} | {:.0} | {} | {} | {} | {} | {} | {:.1e} | {:.1e} / {:.1e} / {:.1e} | {:.1e} | {:.1e} |",
             r.kernel,
             r.case,
+            t,
+            cell(r.ns[1]),
+            cell(r.ns[2]),
+            cell(r.ns[3]),
+            cell(r.ns[4]),
+            cell(r.ns[5]),
             r.err[0],
             r.err[1],
             r.err[2],
-            r.fd_err,
-            r.ns[0],
-            r.ns[1],
-            r.ns[2],
-            r.ns[2] / r.ns[0],
-            r.fd_ns / r.ns[2]
+            r.err[3],
+            r.err[4],
+            r.err[5],
         );
     }
+}
+
+struct Kernel<'a> {
+    raddiff: &'a dyn Fn(DVec3, Order) -> raddiff::Result<Deriv3>,
+    textbook: &'a dyn Fn(&[f64; 3]) -> f64,
+    dual: &'a dyn Fn(&[D3; 3]) -> D3,
 }
 
 fn measure3(
@@ -104,30 +235,44 @@ fn measure3(
     x: DVec3,
     fd_step: f64,
     reference: (f64, DVec3, DMat3),
-    f: &dyn Fn(DVec3, Order) -> raddiff::Result<Deriv3>,
+    k: Kernel,
 ) -> Row {
-    let d = f(x, Order::Hessian).expect("kernel failed on a demo configuration");
-    let value_only = |p: DVec3| f(p, Order::Value).map(|d| d.value).unwrap_or(0.0);
-    let fd = fd_hessian(x, fd_step, &value_only);
-    let ns = [Order::Value, Order::Gradient, Order::Hessian].map(|o| {
-        time_ns(|| {
-            black_box(f(black_box(x), o).ok());
-        })
-    });
-    let fd_ns = time_ns(|| {
-        black_box(fd_hessian(black_box(x), fd_step, &value_only));
-    });
+    let d = (k.raddiff)(x, Order::Hessian).expect("kernel failed on a demo configuration");
+    let textbook = |p: DVec3| (k.textbook)(&point(p));
+    let fd = fd_hessian(x, fd_step, &textbook);
+    let dual = dual_hessian(k.dual, x);
+    let ns = min_ns(&mut [
+        &mut || {
+            black_box(textbook(black_box(x)));
+        },
+        &mut || {
+            black_box((k.raddiff)(black_box(x), Order::Value).ok());
+        },
+        &mut || {
+            black_box((k.raddiff)(black_box(x), Order::Gradient).ok());
+        },
+        &mut || {
+            black_box((k.raddiff)(black_box(x), Order::Hessian).ok());
+        },
+        &mut || {
+            black_box(fd_hessian(black_box(x), fd_step, &textbook));
+        },
+        &mut || {
+            black_box(dual_hessian(k.dual, black_box(x)));
+        },
+    ]);
     Row {
         kernel,
         case,
+        ns: [ns[0], ns[1], ns[2], ns[3], ns[4], ns[5]],
         err: [
+            rel(textbook(x), reference.0),
             rel(d.value, reference.0),
             rel_vec(d.gradient, reference.1),
             rel_mat(d.hessian, reference.2),
+            rel_mat(fd, reference.2),
+            rel_mat(dual.hessian, reference.2),
         ],
-        fd_err: rel_mat(fd, reference.2),
-        ns,
-        fd_ns,
     }
 }
 
@@ -175,7 +320,11 @@ fn main() {
             x,
             fd_step,
             (r.value, r.gradient, r.hessian),
-            &|p, o| kernels::triangle_solid_angle(p, t[0], t[1], t[2], o),
+            Kernel {
+                raddiff: &|p, o| kernels::triangle_solid_angle(p, t[0], t[1], t[2], o),
+                textbook: &|p| textbook_solid_angle(p, &t),
+                dual: &|p| textbook_solid_angle(p, &t),
+            },
         ));
     }
     eprintln!("triangle form factor: 320-bit references and timings of 6 configurations ...");
@@ -193,7 +342,28 @@ fn main() {
             x,
             fd_step,
             (r.value, r.gradient, r.hessian),
-            &|p, o| kernels::triangle_form_factor(p, n, t[0], t[1], t[2], o),
+            Kernel {
+                raddiff: &|p, o| kernels::triangle_form_factor(p, n, t[0], t[1], t[2], o),
+                textbook: &|p| textbook_form_factor(p, n, &t),
+                dual: &|p| textbook_form_factor(p, n, &t),
+            },
+        ));
+    }
+    {
+        // The per-edge term alone (one edge of the generic triangle), for callers summing edges.
+        let (x, a, b) = (cases[0].2, tri[0], tri[1]);
+        let r = big.edge_reference(x, normal, a, b);
+        rows.push(measure3(
+            "edge form factor term",
+            "generic",
+            x,
+            1e-4,
+            (r.value, r.gradient, r.hessian),
+            Kernel {
+                raddiff: &|p, o| kernels::edge_form_factor(p, normal, a, b, o),
+                textbook: &|p| textbook_edge(p, normal, a, b),
+                dual: &|p| textbook_edge(p, normal, a, b),
+            },
         ));
     }
     eprintln!("transmittance, flatland segment form factor ...");
@@ -211,10 +381,16 @@ fn main() {
             x,
             1e-4,
             (r.value, r.gradient, r.hessian),
-            &|p, o| kernels::transmittance(p, y, sigma, o),
+            Kernel {
+                raddiff: &|p, o| kernels::transmittance(p, y, sigma, o),
+                textbook: &|p| textbook_transmittance(p, y, sigma),
+                dual: &|p| textbook_transmittance(p, y, sigma),
+            },
         ));
     }
-    println!("## raddiff kernels: accuracy against 320-bit references, speed against finite differences\n");
+    println!(
+        "## raddiff kernels against the textbook value formulas: time (ratio to the textbook value) and error against 320-bit references\n"
+    );
     print_rows(&rows);
 
     println!("\n## flatland segment form factor\n");
@@ -231,12 +407,15 @@ fn main() {
             reference_a::segment_hp(hp, px, py, a, b)
         });
         let d = kernels::segment_form_factor_2d(x, a, b, Order::Hessian).unwrap();
-        let v_ns = time_ns(|| {
-            black_box(kernels::segment_form_factor_2d(black_box(x), a, b, Order::Value).ok());
-        });
-        let h_ns = time_ns(|| {
-            black_box(kernels::segment_form_factor_2d(black_box(x), a, b, Order::Hessian).ok());
-        });
+        let t = min_ns(&mut [
+            &mut || {
+                black_box(kernels::segment_form_factor_2d(black_box(x), a, b, Order::Value).ok());
+            },
+            &mut || {
+                black_box(kernels::segment_form_factor_2d(black_box(x), a, b, Order::Hessian).ok());
+            },
+        ]);
+        let (v_ns, h_ns) = (t[0], t[1]);
         println!(
             "| {case} | {:.1e} | {:.1e} | {:.1e} | {v_ns:.0} | {h_ns:.0} |",
             reference_a::rel(d.value, r.value),
@@ -245,7 +424,9 @@ fn main() {
         );
     }
     println!(
-        "\nErrors are max-norm relative to the largest reference entry. 'FD Hessian err' is what a \
-         central finite-difference Hessian of the value kernel achieves with a step tuned per case."
+        "\nErrors are max-norm relative to the largest reference entry. Times are the minimum over 40 \
+         interleaved rounds; ratios are to the textbook value formula in the same run. 'FD (textbook)' \
+         is a central finite-difference Hessian (19 calls) of the textbook value formula with a step \
+         tuned per case, 'num-dual (textbook)' the same formula on second-order dual numbers."
     );
 }

@@ -84,6 +84,9 @@ const AXIAL_RATIO: f64 = 0.25;
 /// # Ok::<(), raddiff::Error>(())
 /// ```
 pub fn edge_form_factor(x: DVec3, n: DVec3, a: DVec3, b: DVec3, order: Order) -> Result<Deriv3> {
+    if let Some(d) = edge_form_factor_fast(x, n, a, b, order) {
+        return Ok(d);
+    }
     ensure_finite3(x, "x")?;
     ensure_finite3(a, "a")?;
     ensure_finite3(b, "b")?;
@@ -114,6 +117,9 @@ pub fn triangle_form_factor(
     c: DVec3,
     order: Order,
 ) -> Result<Deriv3> {
+    if let Some(d) = triangle_form_factor_fast(x, n, [a, b, c], order) {
+        return Ok(d);
+    }
     polygon_form_factor(x, n, &[a, b, c], order)
 }
 
@@ -402,6 +408,11 @@ pub(crate) fn edge_term_exact(
     let Some(f) = EdgeFrame::with_exact_ends(r_a, e, ends) else {
         return Ok(Deriv3::constant(0.0));
     };
+    frame_term(&f, n, order)
+}
+
+/// The edge term from its frame (see [`edge_term_exact`]).
+pub(crate) fn frame_term(f: &EdgeFrame, n: DVec3, order: Order) -> Result<Deriv3> {
     let m = f.moments(order)?;
     // ν = n·w / L = n·(p × ê): the edge's lever arm about n.
     let nu = n.dot(f.w) / f.len;
@@ -436,5 +447,268 @@ impl ExactEnds {
         let a = dd::Dd3::new(self.a[0], self.a[1]);
         let b = dd::Dd3::new(self.b[0], self.b[1]);
         a.cross(&b).to_dvec3()
+    }
+}
+
+// ------------------------------------------------------------------------------------------------
+// Fast paths.
+
+/// Coordinate differences the fast paths accept (outside, the robust path's exact power-of-two
+/// rescaling is needed to keep intermediate products in range).
+const FAST_RANGE: (f64, f64) = (1e-30, 1e30);
+
+/// `‖v‖_∞` of the differences, `None` outside [`FAST_RANGE`] (NaN and infinities included).
+#[inline]
+fn in_fast_range(vs: &[DVec3]) -> Option<()> {
+    let m = vs.iter().fold(0.0f64, |m, v| m.max(v.abs().max_element()));
+    (m > FAST_RANGE.0 && m < FAST_RANGE.1).then_some(())
+}
+
+/// The edge's frame as the robust path builds it, `None` when the robust path would recompute the
+/// cross product from the exact endpoints ([`EdgeFrame::with_exact_ends`]: x near the edge's line,
+/// the same comparison on the same values) or the edge has zero length.
+#[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+fn fast_frame(r_a: DVec3, e: DVec3) -> Option<EdgeFrame> {
+    let f = EdgeFrame::new(r_a, e)?;
+    let bound = NEAR_LINE_SINE * f.len;
+    if !(f.w.length_squared() >= bound * bound * r_a.length_squared()) {
+        return None;
+    }
+    Some(f)
+}
+
+/// The fast evaluation of [`edge_form_factor`]: `None` when the inputs are invalid or out of
+/// [`FAST_RANGE`], or `x` is near the edge's line (where the robust path switches to double-double
+/// cross products). Elsewhere the robust path evaluates exactly these f64 operations on inputs
+/// rescaled by a power of two, which changes no rounding: the result is bit-for-bit the robust one,
+/// so it carries the robust path's accuracy, without its rescaling and exact-difference setup.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(crate) fn edge_form_factor_fast(
+    x: DVec3,
+    n: DVec3,
+    a: DVec3,
+    b: DVec3,
+    order: Order,
+) -> Option<Deriv3> {
+    let (r_a, e) = (a - x, b - a);
+    in_fast_range(&[r_a, b - x, e])?;
+    let len = n.length();
+    if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) {
+        return None;
+    }
+    let d = frame_term(&fast_frame(r_a, e)?, n / len, order).ok()?;
+    d.is_finite().then_some(d)
+}
+
+/// The fast evaluation of [`triangle_form_factor`] when the robust path's decisions are certain:
+/// every vertex strictly above the tangent plane by more than the rounding bound of its height
+/// (so nothing is clipped), not near the plane, no edge line near `x`, the triangle not in the far
+/// field and the edge sum not cancelling (where the robust path integrates by quadrature instead).
+/// `None` otherwise, or for invalid or out-of-range inputs. Accepted results are bit-for-bit those
+/// of the robust path (same f64 operations; its power-of-two rescaling changes no rounding).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(crate) fn triangle_form_factor_fast(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    order: Order,
+) -> Option<Deriv3> {
+    let r = [v[0] - x, v[1] - x, v[2] - x];
+    // Positions relative to the first vertex, as the robust path forms them (its edge vectors are
+    // differences of these).
+    let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
+    in_fast_range(&[r[0], r[1], r[2], u[1], u[2]])?;
+    let len = n.length();
+    if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) {
+        return None;
+    }
+    let n = n / len;
+    // Heights over the tangent plane: the f64 dot product errs by less than 4u·(|n|·|r|) (one
+    // rounding in r, three in the dot product), so above 8u·(|n|·|r|) the exact height is positive
+    // and the robust clip keeps every vertex without cutting.
+    for rk in &r {
+        if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
+            return None;
+        }
+    }
+    let plane = polygon::triangle_plane(&u)?;
+    let (far, h_p) = polygon::fast_decisions(&r, &plane)?;
+    if far {
+        return None;
+    }
+    let mut sum = Deriv3::constant(0.0);
+    let mut magnitude = 0.0;
+    for i in 0..3 {
+        let j = (i + 1) % 3;
+        let t = frame_term(&fast_frame(r[i], u[j] - u[i])?, n, order).ok()?;
+        magnitude += t.value.abs();
+        sum.value += t.value;
+        sum.gradient += t.gradient;
+        sum.hessian += t.hessian;
+    }
+    if !(magnitude <= polygon::CANCELLATION_LIMIT * sum.value.abs()) {
+        return None;
+    }
+    if h_p < 0.0 {
+        sum.value = -sum.value;
+        sum.gradient = -sum.gradient;
+        sum.hessian = -sum.hessian;
+    }
+    sum.value = sum.value.clamp(0.0, 1.0);
+    sum.is_finite().then_some(sum)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TRI: [DVec3; 3] = [
+        DVec3::new(-0.4, -0.3, 1.0),
+        DVec3::new(0.7, -0.1, 1.2),
+        DVec3::new(0.0, 0.8, 0.9),
+    ];
+
+    fn n() -> DVec3 {
+        DVec3::new(0.2, -0.1, 1.0).normalize()
+    }
+
+    /// The robust evaluation (the polygon path, which has no fast path).
+    fn robust(x: DVec3, n: DVec3, t: [DVec3; 3]) -> Deriv3 {
+        polygon::form_factor(x, n, &t, Order::Hessian).unwrap()
+    }
+
+    /// Walks `x(t)` for `t` from `t0` down to `t1` (log steps) and checks that the fast path is
+    /// taken at `t0`, declines at `t1`, and agrees bit for bit with the robust path wherever it is
+    /// taken; returns the last certified and first declined parameters.
+    fn walk(x_of: &dyn Fn(f64) -> DVec3, t: [DVec3; 3], t0: f64, t1: f64) -> (f64, f64) {
+        walk_n(x_of, n(), t, t0, t1)
+    }
+
+    fn walk_n(
+        x_of: &dyn Fn(f64) -> DVec3,
+        n: DVec3,
+        t: [DVec3; 3],
+        t0: f64,
+        t1: f64,
+    ) -> (f64, f64) {
+        let (mut last_ok, mut first_fail) = (f64::NAN, f64::NAN);
+        let steps = 400;
+        for k in 0..=steps {
+            let p = t0 * (t1 / t0).powf(k as f64 / steps as f64);
+            let x = x_of(p);
+            match triangle_form_factor_fast(x, n, t, Order::Hessian) {
+                Some(f) => {
+                    assert_eq!(f, robust(x, n, t), "fast != robust at {x:?}");
+                    if first_fail.is_nan() {
+                        last_ok = p;
+                    }
+                }
+                None => {
+                    if first_fail.is_nan() {
+                        first_fail = p;
+                    }
+                }
+            }
+        }
+        assert!(
+            !last_ok.is_nan() && !first_fail.is_nan(),
+            "no switch in [{t1}, {t0}]"
+        );
+        // Narrow the switch down to configurations a relative 1e-12 apart.
+        for _ in 0..60 {
+            let mid = (last_ok * first_fail).sqrt();
+            match triangle_form_factor_fast(x_of(mid), n, t, Order::Hessian) {
+                Some(f) => {
+                    assert_eq!(f, robust(x_of(mid), n, t));
+                    last_ok = mid;
+                }
+                None => first_fail = mid,
+            }
+        }
+        assert!((last_ok / first_fail - 1.0).abs() < 1e-12);
+        (last_ok, first_fail)
+    }
+
+    fn close(p: &Deriv3, q: &Deriv3, tol: f64) -> bool {
+        let hm = q
+            .hessian
+            .abs()
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, e| m.max(*e));
+        let hd = (p.hessian - q.hessian)
+            .abs()
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, e| m.max(*e));
+        (p.value - q.value).abs() <= tol * q.value.abs()
+            && (p.gradient - q.gradient).abs().max_element() <= tol * q.gradient.abs().max_element()
+            && hd <= tol * hm
+    }
+
+    #[test]
+    fn fast_triangle_equals_robust_and_switches_off_at_the_tangent_plane() {
+        // Lower x's tangent plane onto vertex c: the fast path declines just before the clip starts.
+        let c = TRI[2];
+        let base = DVec3::new(0.1, -0.2, 0.05);
+        // Move x along n so that n·(c − x) = t·|c − base|.
+        let x_of = |t: f64| base + n() * (n().dot(c - base) - t * (c - base).length());
+        let (ok, fail) = walk(&x_of, TRI, 0.3, 1e-18);
+        // Both sides of the switch give the same function to well within the contract.
+        let (a, b) = (robust(x_of(ok), n(), TRI), robust(x_of(fail), n(), TRI));
+        assert!(close(
+            &triangle_form_factor_fast(x_of(ok), n(), TRI, Order::Hessian).unwrap(),
+            &a,
+            0.0
+        ));
+        assert!(close(&a, &b, 1e-9), "{a:?} {b:?}");
+    }
+
+    #[test]
+    fn fast_triangle_switches_off_near_an_edge_line_and_in_the_far_field() {
+        // Approach the extension of edge ab beyond a, out of the triangle's plane, with a receiver
+        // normal in that plane (every vertex stays above the tangent plane).
+        let (a, b, c) = (TRI[0], TRI[1], TRI[2]);
+        let ne = ((b - a).normalize() + (c - a).normalize()).normalize();
+        let plane_n = (b - a).cross(c - a).normalize();
+        let x_of = |t: f64| a - (b - a) * 0.5 + plane_n * t;
+        let (ok, fail) = walk_n(&x_of, ne, TRI, 0.5, 1e-9);
+        let (p, q) = (robust(x_of(ok), ne, TRI), robust(x_of(fail), ne, TRI));
+        assert!(close(&p, &q, 1e-9), "{p:?} {q:?}");
+        // Far away along −n: the robust path switches to quadrature at 16 radii.
+        let centroid = (TRI[0] + TRI[1] + TRI[2]) / 3.0;
+        let x_far = |t: f64| centroid - n() * (1.0 / t);
+        let (ok, fail) = walk(&x_far, TRI, 1.0, 1e-3);
+        assert!(1.0 / ok < 1.0 / fail);
+        let (p, q) = (robust(x_far(ok), n(), TRI), robust(x_far(fail), n(), TRI));
+        assert!(close(&p, &q, 1e-9), "{p:?} {q:?}");
+    }
+
+    #[test]
+    fn fast_edge_term_equals_robust_and_declines_near_its_line() {
+        let (a, b) = (TRI[0], TRI[1]);
+        let x = DVec3::new(0.1, -0.2, 0.05);
+        let fast = edge_form_factor_fast(x, n(), a, b, Order::Hessian).unwrap();
+        let scaled = polygon::Scaled::new(x, &[a, b]).unwrap();
+        let ends = scaled.exact_ends(0, 1);
+        let unit = polygon::unit_normal(n()).unwrap();
+        let slow = edge_term_exact(
+            scaled.r[0],
+            scaled.u[1] - scaled.u[0],
+            unit,
+            Order::Hessian,
+            Some(&ends),
+        )
+        .and_then(|d| scaled.finish(d, Order::Hessian))
+        .unwrap();
+        assert_eq!(fast, slow);
+        // 1e-4 of the length off the line (sine below 1e-2): the double-double path.
+        let near = a + (b - a) * 1.7 + DVec3::Z * 1e-4;
+        assert!(edge_form_factor_fast(near, n(), a, b, Order::Hessian).is_none());
+        assert!(edge_form_factor(near, n(), a, b, Order::Hessian).is_ok());
+        // Invalid inputs are left to the robust path's validation.
+        assert!(edge_form_factor_fast(x, n() * 1.1, a, b, Order::Value).is_none());
+        assert!(edge_form_factor_fast(DVec3::NAN, n(), a, b, Order::Value).is_none());
     }
 }

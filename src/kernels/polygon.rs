@@ -147,7 +147,7 @@ impl Scaled {
 }
 
 /// The polygon's plane, checked for area, planarity and simplicity.
-struct Plane {
+pub(crate) struct Plane {
     normal: DVec3,
     /// `‖Σ u_i × u_{i+1}‖` (twice the area).
     twice_area: f64,
@@ -187,6 +187,55 @@ impl Plane {
             extent,
         })
     }
+}
+
+/// The plane of a triangle given relative to its first vertex (`u[0] = 0`), as [`Plane::new`]
+/// computes it (a triangle is planar and simple); `None` for (numerically) zero area.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(crate) fn triangle_plane(u: &[DVec3; 3]) -> Option<Plane> {
+    // Newell's sum reduces to u_1 × u_2 (the other two terms are exactly zero).
+    let nn = u[1].cross(u[2]);
+    // sqrt is monotone and correctly rounded: the max of the roots is the root of the max.
+    let extent = u[1].length_squared().max(u[2].length_squared()).sqrt();
+    let twice_area = nn.length();
+    if !(twice_area > AREA_TOLERANCE * extent * extent) {
+        return None;
+    }
+    Some(Plane {
+        normal: nn / twice_area,
+        twice_area,
+        extent,
+    })
+}
+
+/// The decisions [`evaluate`] takes before its edge sum, for an unclipped polygon given relative to
+/// `x`: `None` when `x` is in or near the polygon's plane (where it recomputes the height exactly),
+/// otherwise whether the far-field quadrature applies and the signed height `h_P`.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(bool, f64)> {
+    let nearest = r
+        .iter()
+        .min_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
+        .copied()?;
+    let h_p = plane.normal.dot(nearest);
+    // One root each for r_max and the radius: the max of the roots is the root of the max, so the
+    // decisions are those of `evaluate`.
+    let r_max = r
+        .iter()
+        .map(|v| v.length_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
+    if !(h_p.abs() >= NEAR_PLANE_HEIGHT * r_max) {
+        return None;
+    }
+    let count = r.len() as f64;
+    let centroid = r.iter().sum::<DVec3>() / count;
+    let radius = r
+        .iter()
+        .map(|v| (*v - centroid).length_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
+    Some((centroid.length() >= FAR_FIELD_RATIO * radius, h_p))
 }
 
 fn orient2(a: DVec2, b: DVec2, c: DVec2) -> f64 {
@@ -576,7 +625,7 @@ fn subdivided_quadrature(
 
 /// Above this ratio of `Σ|edge term|` to `|Σ edge term|` (the edge sum has lost more than ~1e4 ulps
 /// to cancellation), [`subdivided_quadrature`] is tried instead.
-const CANCELLATION_LIMIT: f64 = 1e2;
+pub(crate) const CANCELLATION_LIMIT: f64 = 1e2;
 
 /// The Hessian term from the motion of the clip line ℓ:
 /// `n nᵀ (|h_P| / (π ‖n_t‖)) ∫_{P∩ℓ} ds/‖r‖⁴`, with `P∩ℓ` the oriented clip edges (bridges of

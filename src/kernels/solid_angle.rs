@@ -86,6 +86,9 @@ pub fn triangle_solid_angle_signed(
 }
 
 fn solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<Deriv3> {
+    if let Some(out) = solid_angle_fast(x, y, order, signed) {
+        return Ok(out);
+    }
     let out = solid_angle_unchecked(x, y, order, signed)?;
     if !out.is_finite() {
         return Err(Error::Degenerate(
@@ -354,6 +357,199 @@ fn outer(u: DVec3, v: DVec3) -> DMat3 {
     DMat3::from_cols(u * v.x, u * v.y, u * v.z)
 }
 
+// ------------------------------------------------------------------------------------------------
+// Certified fast path.
+
+/// Unit roundoff of f64.
+const U: f64 = 0.5 * f64::EPSILON;
+/// Error budgets of the fast path (value, gradient, Hessian; relative to the value, to the largest
+/// gradient entry, to the largest Hessian entry). The accuracy contract is 1e-12 / 1e-12 / 1e-10 in
+/// generic configurations (1e-10 / 1e-9 / 1e-8 in the hard regimes): the fast result is accepted
+/// only when its error bound (itself pessimistic) is 2-20x below the strictest of these.
+const FAST_TOL: [f64; 3] = [5e-13, 5e-13, 5e-12];
+/// Above this relative error bound of the f64 triple product `A`, the fast path recomputes `A` and
+/// `N` in double-double (x near the plane relative to its distance, or a sliver whose angle at `a`
+/// is small) before certifying.
+const FAST_A_TOL: f64 = 5e-14;
+/// Absolute error allowance for products that may be subnormal (inputs are restricted to
+/// magnitudes in [1e-30, 1e30], where every other quantity bounded below is normal).
+const TINY: f64 = 1e-290;
+
+/// `(|a_y b_z| + |a_z b_y|, …)`: the componentwise magnitude bound of `a × b` (arguments already
+/// absolute).
+#[inline]
+fn abs_cross(a: DVec3, b: DVec3) -> DVec3 {
+    DVec3::new(
+        a.y * b.z + a.z * b.y,
+        a.z * b.x + a.x * b.z,
+        a.x * b.y + a.y * b.x,
+    )
+}
+
+#[inline]
+fn l1(v: DVec3) -> f64 {
+    v.x.abs() + v.y.abs() + v.z.abs()
+}
+
+/// The fast evaluation of the (signed or unsigned) solid angle with a running error bound, in the
+/// manner of adaptive geometric predicates: `None` when the inputs are outside the range it handles
+/// (non-finite, coordinate differences outside [1e-30, 1e30], `x` on the plane or at a vertex) or
+/// when the bound cannot certify the result to [`FAST_TOL`]; the caller then takes the robust path.
+///
+/// It is the robust path's formulation without its exact rescaling (not needed in that range) and
+/// without its validation by error values (a few comparisons instead). `A` and `N` come from the
+/// edges at `a` in f64, or in double-double when their f64 bound exceeds [`FAST_A_TOL`]; `D`, `∇D`
+/// and `HD` are f64 (the robust path refines them only near an edge, where the bound fails).
+///
+/// The bound, with `u` the unit roundoff (derived by counting roundings per term, each term bounded
+/// by its magnitude; the constants are rounded up):
+/// * `|δA| ≤ 9u·|r_0|·(|e_1|⊠|e_2|)` (⊠ the cross product of magnitudes, the permanent of the
+///   determinant), `‖δN‖₁ ≤ 4u·‖|e_1|⊠|e_2|‖₁`; after the double-double recomputation
+///   `|δA| ≤ 2u|A| + 64u²·(permanent)`;
+/// * `|δD| ≤ 64u·s_0 s_1 s_2` (each of the four terms of `D` is at most `s_0 s_1 s_2`),
+///   `‖δ∇D‖₁ ≤ 200u·Σ s_i s_j`, entries of `δHD` ≤ `40u·(4 Σ s_i s_j/s_k + 14 Σ s_k)`;
+/// * with `g = A² + D²` and `Δ = (|δA| + |δD|)/√g` (which bounds the perturbation of the angle
+///   `atan2(A, D)` and the relative perturbation of `√g`), the value's error is at most
+///   `2(|D||δA| + |A||δD|)/g` plus the last-bit error of `atan2`; the gradient `2(cos θ ∇A − sin θ ∇D)/√g`
+///   and the Hessian are bounded term by term the same way (see the code).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(crate) fn solid_angle_fast(
+    x: DVec3,
+    y: [DVec3; 3],
+    order: Order,
+    signed: bool,
+) -> Option<Deriv3> {
+    let r = [y[0] - x, y[1] - x, y[2] - x];
+    let extent = r[0].abs().max(r[1].abs()).max(r[2].abs()).max_element();
+    // NaN and infinities fail this too.
+    if !(extent > 1e-30 && extent < 1e30) {
+        return None;
+    }
+    let s = r.map(|v| v.length());
+    if !(s[0].min(s[1]).min(s[2]) > 1e-30) {
+        return None;
+    }
+    let e1 = y[1] - y[0];
+    let e2 = y[2] - y[0];
+    let mut normal = e1.cross(e2);
+    let perm_n = abs_cross(e1.abs(), e2.abs());
+    let perm_a = r[0].abs().dot(perm_n);
+    let mut a_num = r[0].dot(normal);
+    let mut err_a = 9.0 * U * perm_a + TINY;
+    let mut err_n = 4.0 * U * (perm_n.x + perm_n.y + perm_n.z) + TINY;
+    if !(err_a <= FAST_A_TOL * a_num.abs()) {
+        // Near the plane or a sliver: the exact differences, in double-double (no rescaling needed
+        // in this range).
+        let ra = Dd3::diff(y[0], x);
+        let n = Dd3::diff(y[1], y[0]).cross(&Dd3::diff(y[2], y[0]));
+        a_num = ra.dot(&n).to_f64();
+        normal = n.to_dvec3();
+        err_a = 2.0 * U * a_num.abs() + 64.0 * U * U * perm_a + TINY;
+        err_n = 2.0 * U * l1(normal) + 64.0 * U * U * (perm_n.x + perm_n.y + perm_n.z) + TINY;
+    }
+    // On the plane (or a sign that rounding could flip): the robust path's limits apply.
+    if !(err_a < 0.5 * a_num.abs()) {
+        return None;
+    }
+    if !signed && a_num < 0.0 {
+        a_num = -a_num;
+        normal = -normal;
+    }
+
+    let d01 = r[0].dot(r[1]);
+    let d12 = r[1].dot(r[2]);
+    let d20 = r[2].dot(r[0]);
+    let s012 = s[0] * s[1] * s[2];
+    let d_den = s012 + d01 * s[2] + d12 * s[0] + d20 * s[1];
+    let err_d = 64.0 * U * s012;
+    let theta = a_num.atan2(d_den);
+    let g = a_num * a_num + d_den * d_den;
+    // |δθ| ≤ (|D||δA| + |A||δD|)/g (+ 2u|θ| for atan2 and the rounding of g).
+    if !(d_den.abs() * err_a + a_num.abs() * err_d
+        <= (0.5 * FAST_TOL[0] - 4.0 * U) * theta.abs() * g)
+    {
+        return None;
+    }
+    let mut out = Deriv3::constant(2.0 * theta);
+    if !order.gradient() {
+        return Some(out);
+    }
+
+    let inv_s = s.map(|v| 1.0 / v);
+    let p = [s[1] * s[2] + d12, s[2] * s[0] + d20, s[0] * s[1] + d01];
+    let c = [
+        p[0] * inv_s[0] + s[1] + s[2],
+        p[1] * inv_s[1] + s[2] + s[0],
+        p[2] * inv_s[2] + s[0] + s[1],
+    ];
+    let grad_d = -(r[0] * c[0] + r[1] * c[1] + r[2] * c[2]);
+    let grad_a = -normal;
+    let inv_g = 1.0 / g;
+    out.gradient = (grad_a * d_den - grad_d * a_num) * (2.0 * inv_g);
+
+    // Perturbation bounds: |δθ| ≤ Δθ, |δ√g|/√g ≤ Δg (first order; the checks keep them ≪ 1).
+    let (aa, dd) = (a_num.abs(), d_den.abs());
+    let delta_theta = (dd * err_a + aa * err_d) * inv_g;
+    let delta_g = (aa * err_a + dd * err_d) * inv_g;
+    let q = s[0] * s[1] + s[1] * s[2] + s[2] * s[0];
+    let err_g = 200.0 * U * q;
+    let (n1, g1) = (l1(normal), l1(grad_d));
+    // ∇Ω = 2(cos θ ∇A − sin θ ∇D)/√g with cos θ = D/√g, sin θ = A/√g.
+    let grad_bound = 2.0
+        * inv_g
+        * (delta_theta * (aa * n1 + dd * g1)
+            + dd * err_n
+            + aa * err_g
+            + (delta_g + 8.0 * U) * (dd * n1 + aa * g1));
+    if !(grad_bound <= FAST_TOL[1] * out.gradient.abs().max_element()) {
+        return None;
+    }
+
+    if order.hessian() {
+        let s_sum = s[0] + s[1] + s[2];
+        let u = [r[0] * inv_s[0], r[1] * inv_s[1], r[2] * inv_s[2]];
+        let u_sum = u[0] + u[1] + u[2];
+        let mut hess_d =
+            DMat3::from_diagonal(DVec3::splat(c[0] + c[1] + c[2])) + outer(u_sum, u_sum) * s_sum;
+        for k in 0..3 {
+            hess_d -= outer(u[k], u[k]) * (s_sum + p[k] * inv_s[k]);
+        }
+        let inv_g2 = inv_g * inv_g;
+        let qq = 2.0 * d_den * a_num * inv_g2;
+        let m = (d_den * d_den - a_num * a_num) * inv_g2;
+        let ad = outer(grad_a, grad_d);
+        out.hessian = (hess_d * (-a_num * inv_g)
+            - (outer(grad_a, grad_a) - outer(grad_d, grad_d)) * qq
+            - (ad + ad.transpose()) * m)
+            * 2.0;
+        let w = s[1] * s[2] * inv_s[0] + s[2] * s[0] * inv_s[1] + s[0] * s[1] * inv_s[2];
+        let hd_mag = 4.0 * w + 14.0 * s_sum;
+        let err_hd = 40.0 * U * hd_mag;
+        // HΩ = 2[−sin θ HD/√g − (sin 2θ (aaᵀ − ddᵀ) + cos 2θ (adᵀ + daᵀ))/g], a = ∇A, d = ∇D;
+        // δ(sin 2θ) = 2 cos 2θ δθ, δ(cos 2θ) = −2 sin 2θ δθ, 1/g moves by 2Δg relatively.
+        let (sin2, cos2) = (2.0 * aa * dd * inv_g, (dd * dd - aa * aa).abs() * inv_g);
+        let (sq, cross2) = (n1 * n1 + g1 * g1, 2.0 * n1 * g1);
+        let term1 = (delta_theta * dd * hd_mag + aa * err_hd + delta_g * aa * hd_mag) * inv_g;
+        let term2 = (2.0 * delta_theta * (cos2 * sq + sin2 * cross2)
+            + 2.0 * sin2 * (n1 * err_n + g1 * err_g)
+            + 2.0 * cos2 * (n1 * err_g + g1 * err_n)
+            + 2.0 * delta_g * (sin2 * sq + cos2 * cross2))
+            * inv_g;
+        let rounding = 32.0 * U * (aa * hd_mag + sin2 * sq + cos2 * cross2) * inv_g;
+        let hess_bound = 2.0 * (term1 + term2 + rounding);
+        let h_max = out
+            .hessian
+            .abs()
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, e| m.max(*e));
+        if !(hess_bound <= FAST_TOL[2] * h_max) {
+            return None;
+        }
+    }
+    out.is_finite().then_some(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -384,6 +580,168 @@ mod tests {
         assert!(matches!(signed, Err(Error::Degenerate(_))));
         let flat = triangle_solid_angle(DVec3::Z, a, b, b * 2.0, Order::Hessian).unwrap();
         assert_eq!(flat, Deriv3::constant(0.0));
+    }
+
+    /// Worst relative differences (value; gradient and Hessian normalized by their largest entry).
+    fn differences(p: &Deriv3, q: &Deriv3) -> [f64; 3] {
+        let gm = q.gradient.abs().max_element();
+        let hm = q
+            .hessian
+            .abs()
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, e| m.max(*e));
+        let hd = (p.hessian - q.hessian)
+            .abs()
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, e| m.max(*e));
+        [
+            (p.value - q.value).abs() / q.value.abs(),
+            (p.gradient - q.gradient).abs().max_element() / gm,
+            hd / hm,
+        ]
+    }
+
+    /// The fast and robust results, both at order Hessian; asserts they agree within the generic
+    /// accuracy contract (1e-12 / 1e-12 / 1e-10) when the fast path certifies.
+    fn both(x: DVec3, y: [DVec3; 3], signed: bool) -> Option<Deriv3> {
+        let robust = solid_angle_unchecked(x, y, Order::Hessian, signed).unwrap();
+        let fast = solid_angle_fast(x, y, Order::Hessian, signed)?;
+        let d = differences(&fast, &robust);
+        assert!(
+            d[0] <= 1e-12 && d[1] <= 1e-12 && d[2] <= 1e-10,
+            "fast and robust differ by {d:?} at x={x:?} y={y:?}"
+        );
+        Some(fast)
+    }
+
+    const TRI: [DVec3; 3] = [
+        DVec3::new(0.1, -0.2, 0.05),
+        DVec3::new(1.1, 0.1, 0.2),
+        DVec3::new(0.3, 0.9, -0.1),
+    ];
+
+    #[test]
+    fn fast_path_certifies_the_target_regimes() {
+        let n = (TRI[1] - TRI[0]).cross(TRI[2] - TRI[0]).normalize();
+        let centroid = (TRI[0] + TRI[1] + TRI[2]) / 3.0;
+        // Generic (one size above), 1e6 sizes away, 1e-6 sizes above the plane outside and inside
+        // the triangle (double-double A), both signs of the normal.
+        let outside = centroid + (TRI[1] - TRI[0]) * 1.5;
+        for x in [
+            centroid + n,
+            centroid - n * 0.7 + DVec3::new(0.3, 0.1, 0.0),
+            centroid + DVec3::new(4e5, -6e5, 7e5),
+            outside + n * 1e-6,
+            outside - n * 1e-9,
+            centroid + n * 1e-6,
+        ] {
+            for signed in [false, true] {
+                assert!(both(x, TRI, signed).is_some(), "not certified at {x:?}");
+            }
+        }
+        // A sliver: apex 1e-6 of its length above the base (small angles at two vertices).
+        let sliver = [DVec3::ZERO, DVec3::X, DVec3::new(0.4, 1e-6, 0.0)];
+        for x in [DVec3::new(0.3, 0.5, 0.8), DVec3::new(-1.0, 0.2, 0.3)] {
+            for k in 0..3 {
+                let y = [sliver[k], sliver[(k + 1) % 3], sliver[(k + 2) % 3]];
+                assert!(both(x, y, false).is_some(), "sliver not certified at {x:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn fast_path_certifies_almost_all_generic_configurations() {
+        // Random well-shaped triangles seen from 0.5..2 sizes away, anywhere off the plane by more
+        // than 5% of the distance: the certificate should hardly ever send these to the robust path.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut unit = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let (mut tried, mut certified) = (0, 0);
+        while tried < 2000 {
+            let mut p = || DVec3::new(unit(), unit(), unit());
+            let y = [p(), p(), p()];
+            let x = p() * 2.0;
+            let nn = (y[1] - y[0]).cross(y[2] - y[0]);
+            let size = (y[1] - y[0]).length().max((y[2] - y[0]).length());
+            let dist = y
+                .iter()
+                .map(|v| (*v - x).length())
+                .fold(f64::INFINITY, f64::min);
+            let height = (y[0] - x).dot(nn.normalize()).abs();
+            if nn.length() < 0.2 * size * size || dist < 0.5 * size || height < 0.05 * dist {
+                continue;
+            }
+            tried += 1;
+            certified += both(x, y, tried % 2 == 0).is_some() as usize;
+        }
+        assert!(certified >= 1960, "certified {certified} of {tried}");
+    }
+
+    /// Finds, by bisection on `t ∈ [t_ok, t_fail]` (log scale), two configurations `x(t)` just on
+    /// each side of the point where the fast path stops certifying; checks both paths agree on the
+    /// certified side and that the robust path answers on the other.
+    fn check_switch(x_of: &dyn Fn(f64) -> DVec3, mut t_ok: f64, mut t_fail: f64, signed: bool) {
+        assert!(both(x_of(t_ok), TRI, signed).is_some());
+        assert!(solid_angle_fast(x_of(t_fail), TRI, Order::Hessian, signed).is_none());
+        for _ in 0..60 {
+            let t = (t_ok * t_fail).sqrt();
+            if both(x_of(t), TRI, signed).is_some() {
+                t_ok = t;
+            } else {
+                t_fail = t;
+            }
+        }
+        assert!((t_ok / t_fail - 1.0).abs() < 1e-9);
+        let robust = solid_angle_unchecked(x_of(t_fail), TRI, Order::Hessian, signed).unwrap();
+        let fast = both(x_of(t_ok), TRI, signed).unwrap();
+        // The function is smooth across the switch: the two sides agree to the contract too.
+        let d = differences(&fast, &robust);
+        assert!(d[0] < 1e-9 && d[1] < 1e-7 && d[2] < 1e-6, "{d:?}");
+    }
+
+    #[test]
+    fn both_paths_agree_at_the_near_edge_switch() {
+        // Approaching the middle of edge ab from above the triangle's plane.
+        let n = (TRI[1] - TRI[0]).cross(TRI[2] - TRI[0]).normalize();
+        let mid = (TRI[0] + TRI[1]) * 0.5;
+        let out = (TRI[1] - TRI[0]).cross(n).normalize();
+        for dir in [n, (n + out).normalize(), (out - n * 0.01).normalize()] {
+            for signed in [false, true] {
+                check_switch(&|t| mid + dir * t, 0.3, 1e-12, signed);
+            }
+        }
+    }
+
+    #[test]
+    fn near_a_vertex_nothing_cancels_and_the_fast_path_stays() {
+        // r_k = y_k − x is exact there (Sterbenz) and D, A, g all scale with the distance: the bound
+        // keeps certifying down to 1e-14 sizes from the vertex.
+        let n = (TRI[1] - TRI[0]).cross(TRI[2] - TRI[0]).normalize();
+        let dir = (n + DVec3::new(0.3, -0.2, 0.1)).normalize();
+        for t in [1e-3, 1e-6, 1e-9, 1e-12, 1e-14] {
+            assert!(both(TRI[2] + dir * t, TRI, false).is_some(), "{t}");
+        }
+    }
+
+    #[test]
+    fn fast_path_leaves_singular_and_out_of_range_inputs_to_the_robust_path() {
+        let flat_tri = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        let on_plane = DVec3::new(0.2, 0.3, 0.0);
+        assert!(solid_angle_fast(on_plane, flat_tri, Order::Value, false).is_none());
+        assert!(solid_angle_fast(on_plane * 5.0, flat_tri, Order::Value, true).is_none());
+        assert!(solid_angle_fast(TRI[1], TRI, Order::Value, false).is_none());
+        let far = DVec3::new(1e31, 0.0, 0.0);
+        assert!(solid_angle_fast(far, TRI, Order::Value, false).is_none());
+        let nan = DVec3::new(f64::NAN, 0.0, 0.0);
+        assert!(solid_angle_fast(nan, TRI, Order::Value, false).is_none());
+        let flat = [DVec3::ZERO, DVec3::X, DVec3::X * 2.0];
+        assert!(solid_angle_fast(DVec3::Z, flat, Order::Value, false).is_none());
     }
 
     #[test]
