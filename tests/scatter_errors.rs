@@ -100,12 +100,26 @@ fn bad_media_points_and_options_are_rejected() {
             light,
             1.0,
             &ScatterOptions {
-                samples_per_interval: 0,
+                max_subintervals: 0,
                 ..o
             },
         ),
-        "samples",
+        "max_subintervals",
     );
+    for tolerance in [0.0, -1e-9, 1.0, f64::NAN] {
+        expect(
+            single_scatter(
+                &mesh,
+                &medium(),
+                entry,
+                exit,
+                light,
+                1.0,
+                &ScatterOptions { tolerance, ..o },
+            ),
+            "tolerance",
+        );
+    }
     expect(
         single_scatter_brute_force(
             &mesh,

@@ -5,6 +5,7 @@ use glam::DVec3;
 
 use super::bvh::{BoundingSphere, RayHit, SphereHierarchy};
 use super::constraint::TriangleGeometry;
+use super::interval::Ownership;
 use super::prune::NormalCone;
 use crate::error::{Error, Result};
 
@@ -20,6 +21,7 @@ pub struct RefractiveMesh {
     cones: Vec<NormalCone>,
     hierarchy: SphereHierarchy,
     closed: bool,
+    ownership: Vec<Ownership>,
 }
 
 impl RefractiveMesh {
@@ -125,7 +127,37 @@ impl RefractiveMesh {
             }
         }
         let closed = edges.values().all(|&c| c == 2);
-        Ok(Self::from_geometry(geometry, closed))
+        // Each shared edge and vertex belongs to the lowest-index triangle using it.
+        let mut edge_owner: std::collections::HashMap<(u32, u32), usize> = Default::default();
+        let mut vertex_owner = vec![usize::MAX; positions.len()];
+        for (ti, t) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                edge_owner.entry((a.min(b), a.max(b))).or_insert(ti);
+                let v = &mut vertex_owner[t[k] as usize];
+                *v = (*v).min(ti);
+            }
+        }
+        let ownership = triangles
+            .iter()
+            .enumerate()
+            .map(|(ti, t)| {
+                let mut bits = 0u8;
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    if edge_owner[&(a.min(b), a.max(b))] == ti {
+                        bits |= 1 << k;
+                    }
+                    if vertex_owner[t[k] as usize] == ti {
+                        bits |= 1 << (3 + k);
+                    }
+                }
+                Ownership(bits)
+            })
+            .collect();
+        let mut mesh = Self::from_geometry(geometry, closed);
+        mesh.ownership = ownership;
+        Ok(mesh)
     }
 
     fn from_geometry(triangles: Vec<TriangleGeometry>, closed: bool) -> Self {
@@ -138,12 +170,14 @@ impl RefractiveMesh {
             .map(|t| NormalCone::of_normals(&t.normals))
             .collect();
         let hierarchy = SphereHierarchy::build(&triangles);
+        let n = triangles.len();
         RefractiveMesh {
             triangles,
             spheres,
             cones,
             hierarchy,
             closed,
+            ownership: vec![Ownership::ALL; n],
         }
     }
 
@@ -189,6 +223,12 @@ impl RefractiveMesh {
     /// All triangles.
     pub fn triangles(&self) -> &[TriangleGeometry] {
         &self.triangles
+    }
+
+    /// Which of triangle `i`'s edges and vertices count the paths through them (each shared edge
+    /// and vertex is owned by one triangle, so that such a path is counted once).
+    pub fn triangle_ownership(&self, i: usize) -> Ownership {
+        self.ownership[i]
     }
 
     /// The bounding sphere of triangle `i`.
