@@ -199,15 +199,24 @@ pub fn polish(c: &Constraint, x: f64, ab: DVec2) -> DVec2 {
     ab
 }
 
-/// The smallest |f| double precision can resolve at (x, α, β): rounding P and V (or L) by
-/// ε (|P| + |V|) turns ω_V by that over |V − P|, and the residual floor is a small multiple of it.
+/// The smallest |f| double precision can resolve at (x, α, β): rounding P and V (or L) by ε times
+/// the magnitudes they are computed from turns ω_V by that over |V − P|, and the residual floor is a
+/// small multiple of it.
 /// It exceeds the tolerance only when V (or L) is within ~1e-5 of the triangle's size of P, as at
 /// an eye segment's end on the mesh.
 pub fn precision_floor(c: &Constraint, x: f64, ab: DVec2) -> f64 {
     let p = c.tri.point(ab);
     let v = c.eye.at(x);
     let near = (v - p).length().min((c.light - p).length());
-    let magnitude = p.abs().max_element() + v.abs().max_element() + c.light.abs().max_element();
+    // P = P0 + α e1 + β e2 and V = origin + x u are rounded at the magnitudes of their terms (a
+    // large triangle's vertices and edges, not the small P they may add up to).
+    let t = c.tri;
+    let magnitude = t.p0.abs().max_element()
+        + ab.x.abs() * t.e1.abs().max_element()
+        + ab.y.abs() * t.e2.abs().max_element()
+        + c.eye.origin.abs().max_element()
+        + x.abs()
+        + c.light.abs().max_element();
     64.0 * f64::EPSILON * magnitude / near
 }
 

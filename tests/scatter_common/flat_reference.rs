@@ -55,8 +55,9 @@ pub fn contribution(m: &Medium, light: DVec3, origin: DVec3, dir: DVec3, x: f64)
     m.sigma_s * phase * t * (-m.sigma_t * (x + d_v)).exp() / d
 }
 
-/// ∫ f over [a, b] by recursive bisection of a 20-point Gauss-Legendre rule until the two halves
-/// agree with the whole to `tol` (absolute).
+/// ∫ f over [a, b]: a 20-point Gauss-Legendre rule on each interval, the interval whose halves
+/// disagree most with it bisected until the summed disagreement is at most `tol` (absolute) or
+/// 20 000 intervals (rounding noise of the integrand bounds the reachable accuracy).
 pub fn adaptive(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
     let (nodes, weights) = raddiff::scatter::integrate::gauss_legendre(20);
     let rule = |a: f64, b: f64| -> f64 {
@@ -67,22 +68,24 @@ pub fn adaptive(f: &dyn Fn(f64) -> f64, a: f64, b: f64, tol: f64) -> f64 {
             .map(|(z, w)| h * w * f(c + h * z))
             .sum()
     };
-    fn rec(
-        rule: &dyn Fn(f64, f64) -> f64,
-        a: f64,
-        b: f64,
-        whole: f64,
-        tol: f64,
-        depth: u32,
-    ) -> f64 {
+    // (a, b, value of the halves, disagreement with the whole)
+    let part = |a: f64, b: f64, whole: f64| {
         let m = 0.5 * (a + b);
-        let (l, r) = (rule(a, m), rule(m, b));
-        if (l + r - whole).abs() <= tol || depth > 60 {
-            return l + r;
-        }
-        rec(rule, a, m, l, 0.5 * tol, depth + 1) + rec(rule, m, b, r, 0.5 * tol, depth + 1)
+        let halves = rule(a, m) + rule(m, b);
+        (a, b, halves, (halves - whole).abs())
+    };
+    let mut parts = vec![part(a, b, rule(a, b))];
+    while parts.iter().map(|p| p.3).sum::<f64>() > tol && parts.len() < 20_000 {
+        let worst = (0..parts.len())
+            .max_by(|&i, &j| parts[i].3.total_cmp(&parts[j].3))
+            .unwrap();
+        let (lo, hi, _, _) = parts[worst];
+        let m = 0.5 * (lo + hi);
+        let (l, r) = (rule(lo, m), rule(m, hi));
+        parts[worst] = part(lo, m, l);
+        parts.push(part(m, hi, r));
     }
-    rec(&rule, a, b, rule(a, b), tol, 0)
+    parts.iter().map(|p| p.2).sum()
 }
 
 /// The single-scattered radiance of the segment entry → exit below the plane z = 0.
@@ -91,5 +94,6 @@ pub fn radiance(m: &Medium, light: DVec3, entry: DVec3, exit: DVec3, rel_tol: f6
     let dir = (exit - entry) / len;
     let f = |x: f64| contribution(m, light, entry, dir, x);
     let rough = adaptive(&f, 0.0, len, 1e-6 * f(0.5 * len).abs().max(1e-300) * len);
+    // 20-point rules on halves agree to far better than their disagreement with the whole.
     adaptive(&f, 0.0, len, rel_tol * rough.abs())
 }
