@@ -110,6 +110,14 @@ impl RefractiveMesh {
             })?;
             for (k, normal) in g.normals.iter().enumerate() {
                 if !(normal.dot(g.geometric_normal) > 0.0) {
+                    // A nearly collinear triangle (angles below ~1e-6, e.g. collinear points
+                    // rounded to f32) has a meaningless geometric normal: say so, not "faces away".
+                    if !(cross > 1e-6 * scale) {
+                        return Err(Error::Degenerate(format!(
+                            "triangle {ti} (vertices {tri:?}) has (nearly) zero area: its \
+                             vertices are collinear"
+                        )));
+                    }
                     return Err(Error::InvalidArgument(format!(
                         "the normal of vertex {} faces away from triangle {ti}'s geometric normal: \
                          triangles must wind counter-clockwise seen from outside, normals point outwards",
@@ -187,8 +195,11 @@ impl RefractiveMesh {
         self.closed
     }
 
-    /// For a closed mesh: whether `p` is inside, by the parity of the surface crossings of a ray
-    /// (in a fixed direction chosen to avoid axis-aligned edges). `false` for open meshes.
+    /// For a closed mesh: whether `p` is strictly inside, by the parity of the surface crossings of
+    /// a ray (in a fixed direction chosen to avoid axis-aligned edges) and of the opposite ray: both
+    /// must be odd. A point on the surface (a vertex, an edge) makes the two disagree, since the
+    /// crossing at the point itself is seen by at most one of them: it is not inside. `false` for
+    /// open meshes.
     pub fn contains(&self, p: DVec3) -> bool {
         if !self.closed {
             return false;
@@ -198,16 +209,34 @@ impl RefractiveMesh {
             return false;
         }
         let dir = DVec3::new(0.572_393_7, 0.614_981_3, 0.542_351_9).normalize();
+        // Hits within 1e-9 of the mesh's size of p: p is on the surface (a vertex, an edge), so
+        // not inside, whether or not the ray test sees that crossing.
+        let near = 1e-9 * s.radius;
+        let (Some(forward), Some(backward)) = (
+            self.crossings_beyond(p, dir, near),
+            self.crossings_beyond(p, -dir, near),
+        ) else {
+            return false;
+        };
+        forward % 2 == 1 && backward % 2 == 1
+    }
+
+    /// Surface crossings of the ray p + t dir beyond t = `near`; `None` if one is closer.
+    fn crossings_beyond(&self, p: DVec3, dir: DVec3, near: f64) -> Option<usize> {
+        let s = self.bounding_sphere();
         let mut t = 0.0;
         let mut crossings = 0;
         while let Some(hit) = self.closest_hit(p, dir, t, f64::INFINITY) {
+            if hit.t <= near {
+                return None;
+            }
             crossings += 1;
             t = hit.t * (1.0 + 1e-12) + 1e-12 * s.radius;
             if crossings > self.triangles.len() {
                 break;
             }
         }
-        crossings % 2 == 1
+        Some(crossings)
     }
 
     /// Number of triangles.
