@@ -126,7 +126,7 @@ mod tests {
     fn rules_are_exact_to_their_degree() {
         // K15 is exact for degree 22 (and G7 for 13): a wrong constant breaks one of these.
         for degree in 0..=22 {
-            let f = |x: f64| x.powi(degree as i32);
+            let f = |x: f64| x.powi(degree);
             let xs = nodes(-0.3, 1.7);
             let mut v = [0.0; 15];
             for (y, &x) in v.iter_mut().zip(&xs) {
