@@ -340,6 +340,8 @@ typedef struct raddiff_medium {
 
 
 
+
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus

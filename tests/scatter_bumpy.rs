@@ -163,7 +163,7 @@ fn pruning_changes_time_not_result() {
 }
 
 #[test]
-fn quadrature_converges_with_samples_per_interval() {
+fn quadrature_converges_with_the_tolerance() {
     let mesh = scene::bumpy_sphere(8, 0.05, 6.0).build().unwrap();
     let m = medium();
     for (entry, exit) in segments(&mesh, 4) {
@@ -176,15 +176,18 @@ fn quadrature_converges_with_samples_per_interval() {
                 LIGHT,
                 1.0,
                 &ScatterOptions {
-                    samples_per_interval: n,
+                    tolerance: n,
                     ..Default::default()
                 },
             )
             .unwrap()
             .radiance
         };
-        let (r4, r8, r32) = (r(4), r(8), r(32));
-        assert!((r8 - r32).abs() <= 2e-3 * r32, "{r8} vs {r32}");
-        assert!((r8 - r32).abs() <= (r4 - r32).abs() + 1e-12 * r32);
+        let (loose, default, tight) = (r(1e-4), r(1e-10), r(1e-13));
+        assert!(
+            (default - tight).abs() <= 1e-9 * tight,
+            "{default} vs {tight}"
+        );
+        assert!((loose - tight).abs() <= 1e-3 * tight, "{loose} vs {tight}");
     }
 }

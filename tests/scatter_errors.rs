@@ -100,12 +100,26 @@ fn bad_media_points_and_options_are_rejected() {
             light,
             1.0,
             &ScatterOptions {
-                samples_per_interval: 0,
+                max_subintervals: 0,
                 ..o
             },
         ),
-        "samples",
+        "max_subintervals",
     );
+    for tolerance in [0.0, -1e-9, 1.0, f64::NAN] {
+        expect(
+            single_scatter(
+                &mesh,
+                &medium(),
+                entry,
+                exit,
+                light,
+                1.0,
+                &ScatterOptions { tolerance, ..o },
+            ),
+            "tolerance",
+        );
+    }
     expect(
         single_scatter_brute_force(
             &mesh,
@@ -146,4 +160,39 @@ fn bad_media_points_and_options_are_rejected() {
         0.0
     );
     assert!(run(medium(), entry, exit, light, 1.0).unwrap().radiance > 0.0);
+}
+
+#[test]
+fn collinear_triangles_and_lights_on_vertices() {
+    // Collinear points rounded to f32: a tiny non-zero cross product and a meaningless normal.
+    let p = [0.1f32, 0.2, 0.3, 0.2, 0.4, 0.6, 0.3, 0.6, 0.9];
+    let n = [0.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0];
+    for idx in [[0u32, 1, 2], [0, 2, 1]] {
+        match raddiff::scatter::RefractiveMesh::from_flat(&p, &n, &idx) {
+            Err(Error::Degenerate(msg)) => assert!(msg.contains("zero area"), "{msg}"),
+            other => panic!("expected a zero-area error, got {other:?}"),
+        }
+    }
+    // A light exactly on a vertex of a closed mesh is on the surface, not inside it.
+    let data = scene::bumpy_sphere(4, 0.05, 6.0);
+    let mesh = data.build().unwrap();
+    let (entry, exit) = (DVec3::new(-0.5, 0.0, 0.0), DVec3::new(0.5, 0.1, 0.0));
+    for v in [0, 7, 100] {
+        let light = data.positions[v];
+        assert!(!mesh.contains(light));
+        let r = single_scatter(
+            &mesh,
+            &medium(),
+            entry,
+            exit,
+            light,
+            1.0,
+            &ScatterOptions::default(),
+        )
+        .unwrap();
+        assert!(r.radiance.is_finite() && r.radiance >= 0.0);
+        // Just inside it is rejected.
+        let inside = light * (1.0 - 1e-6);
+        assert!(mesh.contains(inside));
+    }
 }

@@ -146,7 +146,7 @@ fn integrated_radiance_matches_the_closed_form_integral() {
     let exit = eye.at(eye.length);
     for df in [DistanceFactor::Interpolated, DistanceFactor::Flat] {
         let opts = ScatterOptions {
-            samples_per_interval: 24,
+            tolerance: 1e-12,
             distance_factor: df,
             ..Default::default()
         };
@@ -234,7 +234,7 @@ fn support_ends_where_the_refraction_point_leaves_a_small_triangle() {
         })
         .sum();
     let opts = ScatterOptions {
-        samples_per_interval: 24,
+        tolerance: 1e-12,
         ..Default::default()
     };
     let r = scatter::single_scatter(

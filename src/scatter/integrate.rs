@@ -6,19 +6,24 @@ use smallvec::SmallVec;
 
 use super::constraint::{Constraint, EyeSegment};
 use super::contribution::{path_contribution, DistanceFactor, Medium};
-use super::interval::{seeds_at, solutions_at, triangle_support, SupportInterval};
+use super::interval::{owned_solutions_at, seeds_at, triangle_support, Ownership, SupportInterval};
 use super::mesh::RefractiveMesh;
 use super::newton::NewtonSettings;
 use super::prune::{normal_cone_test, sidedness_test, spindle_test};
+use super::quadrature::{self, Adaptive};
 use super::stats::ScatterStats;
 use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 
 /// Settings of [`single_scatter`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ScatterOptions {
-    /// Gauss-Legendre nodes per support piece (≥ 1). The contribution of one triangle is smooth on
-    /// its support, so a few nodes suffice: 8 gives ~1e-6 relative error on the bumpy sphere.
-    pub samples_per_interval: usize,
+    /// Relative tolerance of the adaptive Gauss-Kronrod (7-15) integral of each support piece, on
+    /// the piece's own estimated error |K15 − G7| (pessimistic: the K15 result is usually far more
+    /// accurate). In (0, 1); default 1e-10.
+    pub tolerance: f64,
+    /// Most sub-intervals (15 evaluations each) per support piece; ≥ 1, default 100. Bisection
+    /// concentrates them where the integrand is steep (a light near the surface, grazing rays).
+    pub max_subintervals: usize,
     /// Apply the sidedness test to triangles (also clips the x range to where V is below the plane).
     pub sidedness_test: bool,
     /// Apply the spindle test to hierarchy nodes and triangles.
@@ -34,7 +39,8 @@ pub struct ScatterOptions {
 impl Default for ScatterOptions {
     fn default() -> Self {
         ScatterOptions {
-            samples_per_interval: 8,
+            tolerance: 1e-10,
+            max_subintervals: 100,
             sidedness_test: true,
             spindle_test: true,
             normal_cone_test: true,
@@ -149,9 +155,15 @@ pub fn single_scatter(
     options: &ScatterOptions,
 ) -> Result<ScatterResult> {
     validate(mesh, medium, entry, exit, light, intensity)?;
-    if options.samples_per_interval == 0 {
+    if !(options.tolerance > 0.0 && options.tolerance < 1.0) {
+        return Err(Error::InvalidArgument(format!(
+            "tolerance must be in (0, 1) (got {})",
+            options.tolerance
+        )));
+    }
+    if options.max_subintervals == 0 {
         return Err(Error::InvalidArgument(
-            "samples_per_interval must be >= 1".into(),
+            "max_subintervals must be >= 1".into(),
         ));
     }
     let mut stats = ScatterStats {
@@ -170,7 +182,6 @@ pub fn single_scatter(
             stats,
         });
     }
-    let quadrature = gauss_legendre(options.samples_per_interval);
     let full = (0.0, eye.length);
     let h = mesh.hierarchy();
     let mut total = 0.0;
@@ -196,7 +207,6 @@ pub fn single_scatter(
                 intensity,
                 medium,
                 options,
-                &quadrature,
                 &mut stats,
             );
         }
@@ -217,10 +227,10 @@ pub fn triangle_contribution(
     intensity: f64,
     medium: &Medium,
     options: &ScatterOptions,
-    (nodes, weights): &(Vec<f64>, Vec<f64>),
     stats: &mut ScatterStats,
 ) -> f64 {
     stats.triangles_visited += 1;
+    let own = mesh.triangle_ownership(ti);
     let sphere = mesh.triangle_sphere(ti);
     let mut range = (0.0, eye.length);
     if options.sidedness_test {
@@ -271,7 +281,7 @@ pub fn triangle_contribution(
     let mut paths = 0;
     for piece in &support.intervals {
         sum += integrate_piece(
-            &c, piece, intensity, medium, options, nodes, weights, stats, &mut paths,
+            &c, piece, own, intensity, medium, options, stats, &mut paths,
         );
     }
     if paths > 0 {
@@ -284,87 +294,96 @@ pub fn triangle_contribution(
 fn integrate_piece(
     c: &Constraint,
     piece: &SupportInterval,
+    own: Ownership,
     intensity: f64,
     medium: &Medium,
     options: &ScatterOptions,
-    nodes: &[f64],
-    weights: &[f64],
     stats: &mut ScatterStats,
     paths: &mut u64,
 ) -> f64 {
     let width = piece.x1 - piece.x0;
-    // Nodes in order of increasing distance from the regular end, so that continuation seeding
-    // walks along one branch. A fold end gets the substitution x = x_fold ± width s², which turns
-    // its 1/√ singularity into a smooth integrand.
+    // The piece is integrated over s in [0, 1]. A fold end gets the substitution
+    // x = x_fold ± width s², which turns its 1/√ singularity into a smooth integrand.
     let fold_at_start = piece.folds[0] && !piece.folds[1];
     let fold_at_end = piece.folds[1] && !piece.folds[0];
-    let mut order: SmallVec<[usize; 32]> = (0..nodes.len()).collect();
-    if fold_at_start {
-        order.reverse();
-    }
-    let mut sum = 0.0;
-    let mut previous: Option<DVec2> = if fold_at_start {
-        piece.ends[1]
-    } else {
-        piece.ends[0]
-    };
-    for &k in &order {
-        let (z, w) = (nodes[k], weights[k]);
-        let s = 0.5 * (z + 1.0);
-        let (x, jac) = if fold_at_end {
-            // x = x1 - width (1 - s)^2 ... expressed from the regular end x0.
+    let map = |s: f64| -> (f64, f64) {
+        if fold_at_end {
             let t = 1.0 - s;
             (piece.x1 - width * t * t, 2.0 * width * t)
         } else if fold_at_start {
             (piece.x0 + width * s * s, 2.0 * width * s)
         } else {
             (piece.x0 + width * s, width)
-        };
-        stats.samples += 1;
-        let guess = if piece.folds == [false, false] {
-            match piece.ends {
-                [Some(a), Some(b)] if piece.multiplicity == 1 => Some(a + s * (b - a)),
-                _ => previous,
-            }
-        } else {
-            previous
-        };
-        let mut seeds: SmallVec<[DVec2; 8]> = SmallVec::new();
-        seeds.extend(guess);
-        seeds.extend(seeds_at(c, x));
-        let all = piece.multiplicity > 1;
-        let found = solutions_at(c, x, &seeds, all, &options.newton, &mut stats.interior);
-        let found = if found.is_empty() && !all {
-            // The first seed converged outside the triangle: try the others before giving up.
-            solutions_at(
-                c,
-                x,
-                &seeds_at(c, x),
-                true,
-                &options.newton,
-                &mut stats.interior,
-            )
-        } else {
-            found
-        };
-        for ab in &found {
-            if let Some(p) = path_contribution(
-                c.tri,
-                *ab,
-                c.eye,
-                x,
-                c.light,
-                intensity,
-                medium,
-                options.distance_factor,
-            ) {
-                sum += 0.5 * w * jac * p.value;
-                stats.paths += 1;
-                *paths += 1;
-            }
         }
-        previous = found.first().copied().or(previous);
-    }
+    };
+    // Continuation: each interval's nodes are solved from the regular end towards the fold, each
+    // seeded by the previous solution.
+    let mut previous: Option<DVec2> = if fold_at_start {
+        piece.ends[1]
+    } else {
+        piece.ends[0]
+    };
+    let settings = Adaptive {
+        relative: options.tolerance,
+        absolute: 0.0,
+        max_intervals: options.max_subintervals,
+    };
+    let all = piece.multiplicity > 1;
+    let (sum, _, intervals) = quadrature::integrate(0.0, 1.0, &settings, |ss, values| {
+        for i in 0..15 {
+            let k = if fold_at_start { 14 - i } else { i };
+            let s = ss[k];
+            let (x, jac) = map(s);
+            stats.samples += 1;
+            let guess = if piece.folds == [false, false] {
+                match piece.ends {
+                    [Some(a), Some(b)] if piece.multiplicity == 1 => Some(a + s * (b - a)),
+                    _ => previous,
+                }
+            } else {
+                previous
+            };
+            let mut seeds: SmallVec<[DVec2; 8]> = SmallVec::new();
+            seeds.extend(guess);
+            seeds.extend(seeds_at(c, x));
+            let found =
+                owned_solutions_at(c, x, &seeds, all, own, &options.newton, &mut stats.interior);
+            let found = if found.is_empty() && !all {
+                // The first seed converged outside the triangle: try the others before giving up.
+                owned_solutions_at(
+                    c,
+                    x,
+                    &seeds_at(c, x),
+                    true,
+                    own,
+                    &options.newton,
+                    &mut stats.interior,
+                )
+            } else {
+                found
+            };
+            let mut value = 0.0;
+            for ab in &found {
+                if let Some(p) = path_contribution(
+                    c.tri,
+                    *ab,
+                    c.eye,
+                    x,
+                    c.light,
+                    intensity,
+                    medium,
+                    options.distance_factor,
+                ) {
+                    value += jac * p.value;
+                    stats.paths += 1;
+                    *paths += 1;
+                }
+            }
+            values[k] = value;
+            previous = found.first().copied().or(previous);
+        }
+    });
+    stats.subintervals += intervals as u64;
     sum
 }
 
@@ -442,7 +461,7 @@ pub fn single_scatter_brute_force(
     let dx = eye.length / options.samples as f64;
     let mut total = 0.0;
     for (ti, tri) in mesh.triangles().iter().enumerate() {
-        let _ = ti;
+        let own = mesh.triangle_ownership(ti);
         stats.triangles_visited += 1;
         let c = Constraint {
             tri,
@@ -459,11 +478,12 @@ pub fn single_scatter_brute_force(
             let mut all_seeds: Vec<DVec2> = previous.to_vec();
             all_seeds.extend(seeds_at(&c, x));
             all_seeds.extend_from_slice(&seeds);
-            previous = solutions_at(
+            previous = owned_solutions_at(
                 &c,
                 x,
                 &all_seeds,
                 true,
+                own,
                 &options.newton,
                 &mut stats.interior,
             );

@@ -21,8 +21,8 @@ use smallvec::SmallVec;
 
 use super::constraint::Constraint;
 use super::newton::{
-    edge_crossings, foot_seed, inside_triangle, pinv_solve, solve_interior, straight_line_seed,
-    EdgeCrossing, NewtonCounters, NewtonSettings,
+    edge_crossings, foot_seed, inside_triangle, pinv_solve, polish, solve_interior,
+    straight_line_seed, EdgeCrossing, NewtonCounters, NewtonSettings,
 };
 
 /// Seeds for interior solves without a better guess: the centroid, then the centroids of the corner
@@ -114,6 +114,96 @@ pub fn is_physical(c: &Constraint, x: f64, ab: DVec2) -> bool {
     let ng = c.tri.geometric_normal;
     let (l, v) = (c.light - p, c.eye.at(x) - p);
     l.dot(ns) > 0.0 && l.dot(ng) > 0.0 && v.dot(ns) < 0.0 && v.dot(ng) < 0.0
+}
+
+/// Solutions this close to a boundary feature (in barycentric coordinates, i.e. relative to the
+/// triangle's size) lie on it: an edge or a vertex shared by several triangles, whose paths only its
+/// owner counts ([`Ownership`]). A polished solution ([`super::newton::polish`]) is within ~1e-14
+/// of its true coordinates, and a generic solution falls within the band only on a set of x of
+/// relative measure ~1e-12.
+pub const BOUNDARY: f64 = 1e-12;
+
+/// The edge opposite each vertex (the edge where its barycentric coordinate vanishes).
+const OPPOSITE_EDGE: [usize; 3] = [1, 2, 0];
+
+/// Which boundary features of a triangle (edges in the order of [`super::newton::EDGES`], vertices
+/// P0, P1, P2) count the paths through them: each edge and vertex of a mesh is owned by exactly one
+/// of the triangles sharing it (the one of lowest index), so a path through a shared edge or vertex
+/// is counted once. Bits 0-2: edges, bits 3-5: vertices.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Ownership(pub u8);
+
+impl Ownership {
+    /// A lone triangle: it owns its whole boundary.
+    pub const ALL: Ownership = Ownership(0b11_1111);
+
+    /// Whether edge `e` ([`super::newton::EDGES`] order) is owned.
+    #[inline]
+    pub fn owns_edge(self, e: usize) -> bool {
+        (self.0 >> e) & 1 == 1
+    }
+
+    /// Whether vertex `k` (P0, P1, P2) is owned.
+    #[inline]
+    pub fn owns_vertex(self, k: usize) -> bool {
+        (self.0 >> (3 + k)) & 1 == 1
+    }
+
+    /// Whether the solution (α, β) counts for this triangle: inside the triangle widened by
+    /// [`BOUNDARY`], and, within [`BOUNDARY`] of an edge or a vertex, only if that edge or vertex is
+    /// owned. The widening makes a path exactly on a shared edge count even when rounding puts it
+    /// just outside its owner.
+    pub fn accepts(self, ab: DVec2) -> bool {
+        let w = [1.0 - ab.x - ab.y, ab.x, ab.y];
+        if w.iter().any(|&v| !(v >= -BOUNDARY)) {
+            return false;
+        }
+        let near = w.map(|v| v <= BOUNDARY);
+        match near.iter().filter(|&&b| b).count() {
+            0 => true,
+            1 => {
+                let i = near.iter().position(|&b| b).unwrap_or(0);
+                self.owns_edge(OPPOSITE_EDGE[i])
+            }
+            _ => {
+                let k = near.iter().position(|&b| !b).unwrap_or(0);
+                self.owns_vertex(k)
+            }
+        }
+    }
+}
+
+/// Like [`solutions_at`], with the solutions that [`Ownership::accepts`] (polished first when near
+/// the boundary, so that the ownership decision is not left to Newton's slack).
+pub fn owned_solutions_at(
+    c: &Constraint,
+    x: f64,
+    seeds: &[DVec2],
+    all: bool,
+    own: Ownership,
+    settings: &NewtonSettings,
+    counters: &mut NewtonCounters,
+) -> SmallVec<[DVec2; 2]> {
+    let mut out: SmallVec<[DVec2; 2]> = SmallVec::new();
+    for &seed in seeds {
+        if let Some(ab) = solve_interior(c, x, seed, settings, counters) {
+            let ab = if ab.x.min(ab.y).min(1.0 - ab.x - ab.y) < 1e-6 {
+                polish(c, x, ab)
+            } else {
+                ab
+            };
+            if own.accepts(ab)
+                && is_physical(c, x, ab)
+                && out.iter().all(|q| (*q - ab).length() > DISTINCT)
+            {
+                out.push(ab);
+            }
+            if !all {
+                break;
+            }
+        }
+    }
+    out
 }
 
 /// Physical interior solutions inside the triangle at `x`: the first seed that converges decides (a small
@@ -306,9 +396,49 @@ pub fn triangle_support(
         });
     }
     Support {
-        intervals,
+        intervals: merge_branches(c, intervals, settings, interior),
         consistent: false,
     }
+}
+
+/// Merges traced pieces that follow the same branch of the solution curve. Tracing starts from every
+/// anchor, and anchors that lie on one branch (several events along a branch that runs on an edge,
+/// or a range-end solution and an event) give overlapping pieces of it: a piece that starts inside
+/// another is the same branch when continuation along the other reaches its start solution.
+fn merge_branches(
+    c: &Constraint,
+    mut pieces: SmallVec<[SupportInterval; 4]>,
+    settings: &NewtonSettings,
+    counters: &mut NewtonCounters,
+) -> SmallVec<[SupportInterval; 4]> {
+    pieces.sort_by(|a, b| a.x0.total_cmp(&b.x0));
+    let mut out: SmallVec<[SupportInterval; 4]> = SmallVec::new();
+    'next: for p in pieces {
+        for q in out.iter_mut() {
+            if !(p.x0 >= q.x0 && p.x0 <= q.x1) {
+                continue;
+            }
+            let (Some(q_start), Some(p_start)) = (q.ends[0], p.ends[0]) else {
+                continue;
+            };
+            let same = if p.x0 == q.x0 {
+                (q_start - p_start).length() < 1e-6
+            } else {
+                trace_branch(c, q.x0, q_start, p.x0, settings, counters)
+                    .is_some_and(|b| b.x == p.x0 && (b.ab - p_start).length() < 1e-6)
+            };
+            if same {
+                if p.x1 > q.x1 {
+                    q.x1 = p.x1;
+                    q.ends[1] = p.ends[1];
+                    q.folds[1] = p.folds[1];
+                }
+                continue 'next;
+            }
+        }
+        out.push(p);
+    }
+    out
 }
 
 /// Where a traced branch ends.

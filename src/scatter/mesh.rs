@@ -5,6 +5,7 @@ use glam::DVec3;
 
 use super::bvh::{BoundingSphere, RayHit, SphereHierarchy};
 use super::constraint::TriangleGeometry;
+use super::interval::Ownership;
 use super::prune::NormalCone;
 use crate::error::{Error, Result};
 
@@ -20,6 +21,7 @@ pub struct RefractiveMesh {
     cones: Vec<NormalCone>,
     hierarchy: SphereHierarchy,
     closed: bool,
+    ownership: Vec<Ownership>,
 }
 
 impl RefractiveMesh {
@@ -108,6 +110,14 @@ impl RefractiveMesh {
             })?;
             for (k, normal) in g.normals.iter().enumerate() {
                 if !(normal.dot(g.geometric_normal) > 0.0) {
+                    // A nearly collinear triangle (angles below ~1e-6, e.g. collinear points
+                    // rounded to f32) has a meaningless geometric normal: say so, not "faces away".
+                    if !(cross > 1e-6 * scale) {
+                        return Err(Error::Degenerate(format!(
+                            "triangle {ti} (vertices {tri:?}) has (nearly) zero area: its \
+                             vertices are collinear"
+                        )));
+                    }
                     return Err(Error::InvalidArgument(format!(
                         "the normal of vertex {} faces away from triangle {ti}'s geometric normal: \
                          triangles must wind counter-clockwise seen from outside, normals point outwards",
@@ -125,7 +135,37 @@ impl RefractiveMesh {
             }
         }
         let closed = edges.values().all(|&c| c == 2);
-        Ok(Self::from_geometry(geometry, closed))
+        // Each shared edge and vertex belongs to the lowest-index triangle using it.
+        let mut edge_owner: std::collections::HashMap<(u32, u32), usize> = Default::default();
+        let mut vertex_owner = vec![usize::MAX; positions.len()];
+        for (ti, t) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                edge_owner.entry((a.min(b), a.max(b))).or_insert(ti);
+                let v = &mut vertex_owner[t[k] as usize];
+                *v = (*v).min(ti);
+            }
+        }
+        let ownership = triangles
+            .iter()
+            .enumerate()
+            .map(|(ti, t)| {
+                let mut bits = 0u8;
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    if edge_owner[&(a.min(b), a.max(b))] == ti {
+                        bits |= 1 << k;
+                    }
+                    if vertex_owner[t[k] as usize] == ti {
+                        bits |= 1 << (3 + k);
+                    }
+                }
+                Ownership(bits)
+            })
+            .collect();
+        let mut mesh = Self::from_geometry(geometry, closed);
+        mesh.ownership = ownership;
+        Ok(mesh)
     }
 
     fn from_geometry(triangles: Vec<TriangleGeometry>, closed: bool) -> Self {
@@ -138,12 +178,14 @@ impl RefractiveMesh {
             .map(|t| NormalCone::of_normals(&t.normals))
             .collect();
         let hierarchy = SphereHierarchy::build(&triangles);
+        let n = triangles.len();
         RefractiveMesh {
             triangles,
             spheres,
             cones,
             hierarchy,
             closed,
+            ownership: vec![Ownership::ALL; n],
         }
     }
 
@@ -153,8 +195,11 @@ impl RefractiveMesh {
         self.closed
     }
 
-    /// For a closed mesh: whether `p` is inside, by the parity of the surface crossings of a ray
-    /// (in a fixed direction chosen to avoid axis-aligned edges). `false` for open meshes.
+    /// For a closed mesh: whether `p` is strictly inside, by the parity of the surface crossings of
+    /// a ray (in a fixed direction chosen to avoid axis-aligned edges) and of the opposite ray: both
+    /// must be odd. A point on the surface (a vertex, an edge) makes the two disagree, since the
+    /// crossing at the point itself is seen by at most one of them: it is not inside. `false` for
+    /// open meshes.
     pub fn contains(&self, p: DVec3) -> bool {
         if !self.closed {
             return false;
@@ -164,16 +209,34 @@ impl RefractiveMesh {
             return false;
         }
         let dir = DVec3::new(0.572_393_7, 0.614_981_3, 0.542_351_9).normalize();
+        // Hits within 1e-9 of the mesh's size of p: p is on the surface (a vertex, an edge), so
+        // not inside, whether or not the ray test sees that crossing.
+        let near = 1e-9 * s.radius;
+        let (Some(forward), Some(backward)) = (
+            self.crossings_beyond(p, dir, near),
+            self.crossings_beyond(p, -dir, near),
+        ) else {
+            return false;
+        };
+        forward % 2 == 1 && backward % 2 == 1
+    }
+
+    /// Surface crossings of the ray p + t dir beyond t = `near`; `None` if one is closer.
+    fn crossings_beyond(&self, p: DVec3, dir: DVec3, near: f64) -> Option<usize> {
+        let s = self.bounding_sphere();
         let mut t = 0.0;
         let mut crossings = 0;
         while let Some(hit) = self.closest_hit(p, dir, t, f64::INFINITY) {
+            if hit.t <= near {
+                return None;
+            }
             crossings += 1;
             t = hit.t * (1.0 + 1e-12) + 1e-12 * s.radius;
             if crossings > self.triangles.len() {
                 break;
             }
         }
-        crossings % 2 == 1
+        Some(crossings)
     }
 
     /// Number of triangles.
@@ -189,6 +252,12 @@ impl RefractiveMesh {
     /// All triangles.
     pub fn triangles(&self) -> &[TriangleGeometry] {
         &self.triangles
+    }
+
+    /// Which of triangle `i`'s edges and vertices count the paths through them (each shared edge
+    /// and vertex is owned by one triangle, so that such a path is counted once).
+    pub fn triangle_ownership(&self, i: usize) -> Ownership {
+        self.ownership[i]
     }
 
     /// The bounding sphere of triangle `i`.

@@ -39,6 +39,7 @@ pub mod interval;
 pub mod mesh;
 pub mod newton;
 pub mod prune;
+pub mod quadrature;
 pub mod scene;
 pub mod stats;
 

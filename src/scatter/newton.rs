@@ -104,10 +104,13 @@ pub fn foot_seed(c: &Constraint, x: f64) -> Option<DVec2> {
         .then(|| ab.clamp(DVec2::splat(-1.0), DVec2::splat(2.0)))
 }
 
-/// Whether (α, β) lies in the closed triangle.
+/// Whether (α, β) lies in the closed triangle widened by [`super::interval::BOUNDARY`] (so that a
+/// solution on a shared edge or vertex, which rounding may put just outside either triangle, is
+/// found by every triangle sharing it; [`super::interval::Ownership`] then counts it once).
 #[inline]
 pub fn inside_triangle(ab: DVec2) -> bool {
-    ab.x >= 0.0 && ab.y >= 0.0 && ab.x + ab.y <= 1.0
+    let d = super::interval::BOUNDARY;
+    ab.x >= -d && ab.y >= -d && ab.x + ab.y <= 1.0 + d
 }
 
 /// Interior solve: (α, β) with f(x, α, β) = 0, starting from `seed`. Returns the converged
@@ -171,15 +174,49 @@ pub fn solve_interior(
     None
 }
 
-/// The smallest |f| double precision can resolve at (x, α, β): rounding P and V (or L) by
-/// ε (|P| + |V|) turns ω_V by that over |V − P|, and the residual floor is a small multiple of it.
+/// Up to three more full Newton steps from a converged solution, each kept only if it lowers |f|:
+/// quadratic convergence takes a 1e-10 residual to the rounding floor, so that the solution's
+/// distance to an edge is known to ~1e-13 of the triangle's size (ownership of shared edges).
+pub fn polish(c: &Constraint, x: f64, ab: DVec2) -> DVec2 {
+    let mut ab = ab;
+    let Some(mut v) = c.eval(x, ab, true) else {
+        return ab;
+    };
+    for _ in 0..3 {
+        let r = v.f.length();
+        let Some(step) = pinv_solve(v.jacobian.y_axis, v.jacobian.z_axis, v.f) else {
+            break;
+        };
+        let cand = ab - step;
+        match c.eval(x, cand, true) {
+            Some(vn) if vn.f.length() < r => {
+                ab = cand;
+                v = vn;
+            }
+            _ => break,
+        }
+    }
+    ab
+}
+
+/// The smallest |f| double precision can resolve at (x, α, β): rounding P and V (or L) by ε times
+/// the magnitudes they are computed from turns ω_V by that over |V − P|, and the residual floor is a
+/// small multiple of it.
 /// It exceeds the tolerance only when V (or L) is within ~1e-5 of the triangle's size of P, as at
 /// an eye segment's end on the mesh.
 pub fn precision_floor(c: &Constraint, x: f64, ab: DVec2) -> f64 {
     let p = c.tri.point(ab);
     let v = c.eye.at(x);
     let near = (v - p).length().min((c.light - p).length());
-    let magnitude = p.abs().max_element() + v.abs().max_element() + c.light.abs().max_element();
+    // P = P0 + α e1 + β e2 and V = origin + x u are rounded at the magnitudes of their terms (a
+    // large triangle's vertices and edges, not the small P they may add up to).
+    let t = c.tri;
+    let magnitude = t.p0.abs().max_element()
+        + ab.x.abs() * t.e1.abs().max_element()
+        + ab.y.abs() * t.e2.abs().max_element()
+        + c.eye.origin.abs().max_element()
+        + x.abs()
+        + c.light.abs().max_element();
     64.0 * f64::EPSILON * magnitude / near
 }
 

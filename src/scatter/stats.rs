@@ -31,6 +31,8 @@ pub struct ScatterStats {
     pub triangles_fallback: u64,
     /// Sample points along the eye segment at which a triangle was solved.
     pub samples: u64,
+    /// Sub-intervals of the adaptive quadrature over all support pieces (15 samples each).
+    pub subintervals: u64,
     /// Refracted paths found (contributions added).
     pub paths: u64,
     /// Interior (α, β) solves.
@@ -72,6 +74,7 @@ impl AddAssign for ScatterStats {
         self.triangles_contributing += o.triangles_contributing;
         self.triangles_fallback += o.triangles_fallback;
         self.samples += o.samples;
+        self.subintervals += o.subintervals;
         self.paths += o.paths;
         self.interior += o.interior;
         self.edge += o.edge;

@@ -1,6 +1,8 @@
 //! Shared scene set-up for the scatter integration tests.
 #![allow(dead_code)]
 
+pub mod flat_reference;
+
 use glam::DVec3;
 use raddiff::scatter::{Medium, RefractiveMesh};
 
