@@ -286,7 +286,8 @@ fn eigen2(m: DMat2) -> (f64, [f64; 2], [DVec2; 2]) {
     if scale == 0.0 {
         return (0.0, [0.0; 2], [DVec2::X, DVec2::Y]);
     }
-    let s = m * scale.recip();
+    // Divided, not multiplied by the reciprocal: 1/scale overflows for a subnormal scale.
+    let s = DMat2::from_cols_array(&m.to_cols_array().map(|x| x / scale));
     let off = 0.5 * (s.x_axis.y + s.y_axis.x);
     let eig = Matrix2::new(s.x_axis.x, off, off, s.y_axis.y).symmetric_eigen();
     let mut idx = [0usize, 1];
@@ -310,7 +311,8 @@ fn eigen3(m: DMat3) -> (f64, [f64; 3], [DVec3; 3]) {
     if scale == 0.0 {
         return (0.0, [0.0; 3], [DVec3::X, DVec3::Y, DVec3::Z]);
     }
-    let s = m * scale.recip();
+    // Divided, not multiplied by the reciprocal: 1/scale overflows for a subnormal scale.
+    let s = DMat3::from_cols_array(&m.to_cols_array().map(|x| x / scale));
     let sym = |i: usize, j: usize| 0.5 * (s.col(j)[i] + s.col(i)[j]);
     let mat = Matrix3::from_fn(sym);
     let eig = mat.symmetric_eigen();
@@ -408,9 +410,22 @@ fn surface_radii_with(
     floor: Option<CurvatureFloor>,
 ) -> Result<SurfaceRadii> {
     let (u1, u2) = tangent_basis(n);
-    let (scale, vals, vecs) = eigen2(tangent_hessian(hessian, u1, u2));
+    // Projected at unit scale: entries near f64::MAX would overflow the projection's sums to
+    // infinities, and the eigenvectors to NaN (found by fuzzing, fuzz/regressions/radii/).
+    let h_scale = max_abs(&hessian.to_cols_array());
+    let unit = if h_scale > 0.0 {
+        DMat3::from_cols_array(&hessian.to_cols_array().map(|x| x / h_scale))
+    } else {
+        hessian
+    };
+    let (scale, vals, vecs) = eigen2(tangent_hessian(unit, u1, u2));
+    let scale = if h_scale > 0.0 {
+        scale * h_scale
+    } else {
+        scale
+    };
     // The projection rounds at ~ε‖H‖: tangent curvature below that is noise, not information.
-    let noise = 16.0 * f64::EPSILON * max_abs(&hessian.to_cols_array());
+    let noise = 16.0 * f64::EPSILON * h_scale;
     let mut mu = vals.map(|v| {
         if v.abs() * scale <= noise {
             0.0
