@@ -47,6 +47,10 @@ use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 /// zero (or so small that the formula would exceed it) along that axis.
 pub static MAX_RADIUS: f64 = 1e30;
 
+/// Largest anisotropy the radii functions apply: a larger `max_anisotropy` acts as this one (the
+/// axis-ratio product of the solve stays far from overflow).
+const ANISOTROPY_CAP: f64 = 1e30;
+
 /// Default weight κ of [`CurvatureFloor`]: 1% of the tangent curvature `4E/D²` of the
 /// irradiance from a small source straight above the record at distance `D`.
 pub const CURVATURE_FLOOR_WEIGHT: f64 = 0.04;
@@ -241,6 +245,9 @@ fn solve_radii<const D: usize>(
     if top <= 0.0 || scale <= 0.0 {
         return [MAX_RADIUS; D];
     }
+    // A cap near f64::MAX overflows the shape product below (found by fuzzing: caps near 1e280
+    // gave radii [0, 1e30, 0]); axis ratios beyond 1e30 mean nothing anyway.
+    let max_anisotropy = max_anisotropy.min(ANISOTROPY_CAP);
     if tau <= 0.0 {
         return [0.0; D];
     }
@@ -298,7 +305,11 @@ fn eigen2(m: DMat2) -> (f64, [f64; 2], [DVec2; 2]) {
     });
     let vals = idx.map(|i| eig.eigenvalues[i]);
     let first = eig.eigenvectors.column(idx[0]);
-    let v0 = DVec2::new(first[0], first[1]).normalize();
+    // The solver can return a non-unit or NaN vector when entries span ~300 decades (found by
+    // fuzzing); any unit vector is then as good an axis.
+    let v0 = DVec2::new(first[0], first[1])
+        .try_normalize()
+        .unwrap_or(DVec2::X);
     // The second axis is the perpendicular of the first: exactly orthonormal, whatever the solver did.
     let v1 = v0.perp();
     (scale, vals, [v0, v1])
@@ -328,8 +339,12 @@ fn eigen3(m: DMat3) -> (f64, [f64; 3], [DVec3; 3]) {
         DVec3::new(c[0], c[1], c[2])
     };
     // Re-orthonormalize (Gram-Schmidt, third = cross) so the axes are exactly orthonormal.
-    let v0 = col(0).normalize();
-    let v1 = (col(1) - v0 * v0.dot(col(1))).normalize();
+    // Fallbacks where the solver's vectors are degenerate or NaN, which happens for entries that
+    // span ~300 decades (found by fuzzing, fuzz/regressions/radii/).
+    let v0 = col(0).try_normalize().unwrap_or(DVec3::X);
+    let v1 = (col(1) - v0 * v0.dot(col(1)))
+        .try_normalize()
+        .unwrap_or_else(|| v0.any_orthonormal_vector());
     let v2 = v0.cross(v1);
     (scale, vals, [v0, v1, v2])
 }
