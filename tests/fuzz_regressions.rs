@@ -90,9 +90,9 @@ fn fuzzing_findings_stay_fixed() {
 #[test]
 fn the_property_checks_catch_violations() {
     use targets::check;
-    let wrote = catch_unwind(|| check::untouched("call", "out", &[check::SENTINEL, 0.0]));
+    let wrote = catch_unwind(|| check::untouched("call", "out", &[check::sentinel(), 0.0]));
     assert!(wrote.is_err());
-    check::untouched("call", "out", &[check::SENTINEL; 3]);
+    check::untouched("call", "out", &[check::sentinel(); 3]);
     let nan = catch_unwind(|| check::finite("call", "out", &[1.0, f64::NAN]));
     assert!(nan.is_err());
     let inf = catch_unwind(|| check::finite_f32("call", "out", &[f32::INFINITY]));

@@ -14,7 +14,7 @@ use std::ffi::CString;
 
 use raddiff::ffi::*;
 
-use super::check::{self, SENTINEL, SENTINEL_F32};
+use super::check::{self, sentinel, sentinel_f32};
 use super::decode::{add_scaled, normalized, perpendicular, Input};
 use super::Outcome;
 
@@ -252,7 +252,7 @@ impl State {
             1 => input.f64(),
             _ => input.magnitude(),
         };
-        let mut previous = SENTINEL;
+        let mut previous = sentinel();
         let get = "raddiff_cache_get_gradient_limit";
         assert!(check::status(
             get,
@@ -262,7 +262,7 @@ impl State {
             "raddiff_cache_set_gradient_limit",
             raddiff_cache_set_gradient_limit(self.cache, c),
         );
-        let mut now = SENTINEL;
+        let mut now = sentinel();
         assert!(check::status(
             get,
             raddiff_cache_get_gradient_limit(self.cache, &mut now)
@@ -352,8 +352,8 @@ pub fn lookup(
     normal: raddiff_vec3,
     channels: usize,
 ) -> (bool, Vec<u32>, u64) {
-    let mut value = vec![SENTINEL_F32; channels];
-    let mut weight = SENTINEL;
+    let mut value = vec![sentinel_f32(); channels];
+    let mut weight = sentinel();
     let (name, status) = match cursor {
         None => (
             "raddiff_cache_lookup",

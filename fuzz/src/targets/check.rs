@@ -5,17 +5,25 @@ use std::ffi::CStr;
 use raddiff::ffi::{raddiff_last_error, raddiff_status, raddiff_vec3};
 
 /// The bit pattern written into every output before a call: a NaN with a payload that no
-/// computation produces, so "untouched" is a bitwise comparison.
-pub const SENTINEL: f64 = f64::from_bits(0x7ff4_dead_beef_0001);
+/// computation produces, so "untouched" is a bitwise comparison. (Functions, not constants:
+/// `from_bits` is `const` only from Rust 1.83, above the crate's MSRV.)
+pub fn sentinel() -> f64 {
+    f64::from_bits(0x7ff4_dead_beef_0001)
+}
+
 /// The f32 sentinel (a NaN payload, likewise).
-pub const SENTINEL_F32: f32 = f32::from_bits(0x7fa1_2345);
+pub fn sentinel_f32() -> f32 {
+    f32::from_bits(0x7fa1_2345)
+}
 
 /// A vector of sentinels.
-pub const SENTINEL3: raddiff_vec3 = raddiff_vec3 {
-    x: SENTINEL,
-    y: SENTINEL,
-    z: SENTINEL,
-};
+pub fn sentinel3() -> raddiff_vec3 {
+    raddiff_vec3 {
+        x: sentinel(),
+        y: sentinel(),
+        z: sentinel(),
+    }
+}
 
 /// Checks a returned status: never `RADDIFF_ERROR_PANIC` (a caught panic is a bug), and every
 /// failure leaves a message. Returns whether the call succeeded.
@@ -75,7 +83,7 @@ pub fn untouched(call: &str, what: &str, values: &[f64]) {
     if let Some((i, v)) = values
         .iter()
         .enumerate()
-        .find(|(_, v)| v.to_bits() != SENTINEL.to_bits())
+        .find(|(_, v)| v.to_bits() != sentinel().to_bits())
     {
         panic!("{call}: failed but wrote {what}[{i}] = {v}");
     }
@@ -86,7 +94,7 @@ pub fn untouched_f32(call: &str, what: &str, values: &[f32]) {
     if let Some((i, v)) = values
         .iter()
         .enumerate()
-        .find(|(_, v)| v.to_bits() != SENTINEL_F32.to_bits())
+        .find(|(_, v)| v.to_bits() != sentinel_f32().to_bits())
     {
         panic!("{call}: failed but wrote {what}[{i}] = {v}");
     }

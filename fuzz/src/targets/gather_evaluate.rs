@@ -12,7 +12,7 @@
 //! the two distances keep their sentinels) and a message is set.
 use raddiff::ffi::*;
 
-use super::check::{self, SENTINEL, SENTINEL3};
+use super::check::{self, sentinel, sentinel3};
 use super::decode::{add_scaled, finite3, normalized, perpendicular, Input};
 use super::Outcome;
 
@@ -39,7 +39,7 @@ pub fn run(data: &[u8]) -> Outcome {
     let wanted: [bool; 5] = std::array::from_fn(|_| input.byte() < 200);
 
     let mut outputs: [Vec<f64>; 5] =
-        [1, 3, 3, 3, 9].map(|per_channel| vec![SENTINEL; per_channel * channels]);
+        [1, 3, 3, 3, 9].map(|per_channel| vec![sentinel(); per_channel * channels]);
     let pointer = |v: &mut Vec<f64>, want: bool| {
         if want {
             v.as_mut_ptr()
@@ -54,8 +54,8 @@ pub fn run(data: &[u8]) -> Outcome {
         rotation_gradient: pointer(rotation, wanted[2]),
         occlusion_gradient: pointer(occlusion, wanted[3]),
         hessian: pointer(hessian, wanted[4]),
-        harmonic_mean_distance: SENTINEL,
-        min_distance: SENTINEL,
+        harmonic_mean_distance: sentinel(),
+        min_distance: sentinel(),
     };
     let gather = raddiff_gather_input {
         directions: directions.as_ptr(),
@@ -163,7 +163,7 @@ fn directions(
     } else {
         0
     };
-    let mut dirs = vec![SENTINEL3; cells];
+    let mut dirs = vec![sentinel3(); cells];
     let name = "raddiff_gather_directions";
     let status = if cells == 0 {
         raddiff_gather_directions(layout, frame, std::ptr::null_mut())

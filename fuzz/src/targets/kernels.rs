@@ -8,7 +8,7 @@
 //! order exactly 0; on failure the output untouched and a message set.
 use raddiff::ffi::*;
 
-use super::check::{self, SENTINEL};
+use super::check::{self, sentinel};
 use super::decode::{add_scaled, cross, normalized, perpendicular, Input};
 use super::Outcome;
 
@@ -25,9 +25,9 @@ pub fn run(data: &[u8]) -> Outcome {
         segment_2d(&mut input, order)
     } else {
         let mut out = raddiff_deriv3 {
-            value: SENTINEL,
-            gradient: [SENTINEL; 3],
-            hessian: [SENTINEL; 9],
+            value: sentinel(),
+            gradient: [sentinel(); 3],
+            hessian: [sentinel(); 9],
         };
         let (name, status) = call3(kernel, &mut input, order, &mut out);
         let ok = check::status(name, status);
@@ -146,9 +146,9 @@ fn segment_2d(input: &mut Input, order: u32) -> bool {
     };
     let (x, a, b) = (point(), point(), point());
     let mut out = raddiff_deriv2 {
-        value: SENTINEL,
-        gradient: [SENTINEL; 2],
-        hessian: [SENTINEL; 4],
+        value: sentinel(),
+        gradient: [sentinel(); 2],
+        hessian: [sentinel(); 4],
     };
     let name = "raddiff_segment_form_factor_2d";
     let ok = check::status(

@@ -9,7 +9,7 @@
 //! untouched and a message set.
 use raddiff::ffi::*;
 
-use super::check::{self, SENTINEL, SENTINEL3};
+use super::check::{self, sentinel, sentinel3};
 use super::decode::Input;
 use super::Outcome;
 
@@ -35,8 +35,8 @@ pub fn run(data: &[u8]) -> Outcome {
         _ => 1.0 + input.magnitude(),
     };
     let (floor_distance, floor_weight) = (input.f64(), input.f64());
-    let mut radii = [SENTINEL; 3];
-    let mut axes = [SENTINEL3; 3];
+    let mut radii = [sentinel(); 3];
+    let mut axes = [sentinel3(); 3];
     let (name, status, dims) = match which {
         // SAFETY (all three): `hessian` holds 9 doubles, `radii` and `axes` 3 elements each.
         0 => (

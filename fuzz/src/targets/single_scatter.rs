@@ -8,7 +8,7 @@
 //! finite and non-negative; on failure it is untouched and a message is set.
 use raddiff::ffi::*;
 
-use super::check::{self, SENTINEL};
+use super::check::{self, sentinel};
 use super::decode::{add_scaled, Input};
 use super::Outcome;
 
@@ -231,7 +231,7 @@ fn query(input: &mut Input, handle: *const raddiff_refractive_mesh, mesh: &Mesh)
     } else {
         input.f64()
     };
-    let mut radiance = SENTINEL;
+    let mut radiance = sentinel();
     let name = "raddiff_single_scatter";
     // SAFETY: a live mesh, a valid medium and one writable double.
     let status = unsafe {
