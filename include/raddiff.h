@@ -509,7 +509,7 @@ enum raddiff_status raddiff_cache_get_gradient_limit(const struct raddiff_cache 
 // exactly. Only `position` and `radii` are read (and `radii` written); untouched when no bound
 // binds or on error. One-sided: stored records are not shrunk (see
 // `raddiff_cache_clamp_neighbours`). `RADDIFF_ERROR_INVALID_ARGUMENT` for a non-finite position or
-// radius. Thread-safe, like `raddiff_cache_lookup`.
+// radius, or a negative one among those the domain uses. Thread-safe, like `raddiff_cache_lookup`.
 enum raddiff_status raddiff_cache_clamp_record(const struct raddiff_cache *cache,
                                                struct raddiff_cache_record *record);
 

@@ -9,7 +9,7 @@ use glam::DVec3;
 
 use super::record::{Channels, Domain, Extent, Head, RADIUS_MIN};
 use super::{index, store, Cache, CacheValue, PRECISION_RATIO};
-use crate::error::{ensure_finite, ensure_finite3, Result};
+use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 
 /// The largest `f32` radius that is at most `bound`, raised if needed to the smallest radius
 /// the cache accepts for a record at `position` ([`RADIUS_MIN`] and |position|·2⁻⁴⁰).
@@ -80,12 +80,28 @@ impl<V: CacheValue> Cache<V> {
     ///
     /// One-sided: stored records are not shrunk towards the new one (their R ≤ R_new + d); run
     /// [`Cache::clamp_neighbours`] once the cache is filled for the two-sided fixed point.
-    /// `InvalidArgument` for a non-finite position or radius. Thread-safe (it reads the records
+    /// `InvalidArgument` for a non-finite position or radius, or a negative radius among those the
+    /// domain uses. Thread-safe (it reads the records
     /// inserted before the call).
     pub fn clamp_to_neighbours(&self, position: DVec3, extent: &Extent) -> Result<Extent> {
         ensure_finite3(position, "position")?;
         for r in extent.radii {
             ensure_finite(r, "radius")?;
+        }
+        // A negative radius would be raised to RADIUS_MIN below and come back looking valid
+        // (found by fuzzing, fuzz/regressions/cache_ops/); the surface domain ignores radii[2].
+        let used = match self.config.domain {
+            Domain::Surface => 2,
+            Domain::Volume => 3,
+        };
+        if let Some((i, r)) = extent.radii[..used]
+            .iter()
+            .enumerate()
+            .find(|(_, r)| **r < 0.0)
+        {
+            return Err(Error::InvalidArgument(format!(
+                "radii[{i}] = {r} is negative"
+            )));
         }
         let r = extent_max_radius(self.config.domain, extent);
         if r <= 0.0 {

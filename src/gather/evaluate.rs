@@ -149,7 +149,11 @@ impl<'a> ValidGather<'a> {
         let finite = out.irradiance.iter().all(|v| v.is_finite())
             && out.gradient.iter().all(|v| v.is_finite())
             && out.rotation_gradient.iter().all(|v| v.is_finite())
-            && out.harmonic_mean_distance.map_or(true, |v| !v.is_nan());
+            // INFINITY only when every ray missed; a few hits at distances near f64::MAX overflow
+            // MN / sum(1/r) (found by fuzzing, fuzz/regressions/gather_evaluate/).
+            && out.harmonic_mean_distance.map_or(true, |v| {
+                v.is_finite() || (v == f64::INFINITY && out.min_distance == Some(f64::INFINITY))
+            });
         if !finite {
             return Err(Error::Degenerate(
                 "gather result overflows (hit distances or radiance too extreme)".into(),

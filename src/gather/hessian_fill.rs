@@ -60,7 +60,25 @@ pub fn cached_topology(layout: &Layout) -> Result<Rc<Topology>> {
 ///   gradient, if given, is not used: Marco et al. hold radiance constant per triangle).
 ///
 /// `hessian` selects [`Order::Hessian`]; otherwise only gradients are computed (Hessians zero).
+///
+/// `Degenerate` when a result overflows `f64` (radiance near `f32::MAX` at hit distances near the
+/// smallest doubles), as [`ValidGather::evaluate`] does, rather than an infinity or a NaN.
 pub fn occlusion_outputs(gather: &ValidGather, hessian: bool) -> Result<(Vec<DVec3>, Vec<DMat3>)> {
+    let (gradients, hessians) = occlusion_outputs_unchecked(gather, hessian)?;
+    // Found by fuzzing (fuzz/regressions/gather_evaluate/): finite input, infinite output.
+    if !(gradients.iter().all(|g| g.is_finite()) && hessians.iter().all(|h| h.is_finite())) {
+        return Err(Error::Degenerate(
+            "occlusion-aware gradient or Hessian overflows (hit distances or radiance too extreme)"
+                .into(),
+        ));
+    }
+    Ok((gradients, hessians))
+}
+
+fn occlusion_outputs_unchecked(
+    gather: &ValidGather,
+    hessian: bool,
+) -> Result<(Vec<DVec3>, Vec<DMat3>)> {
     let layout = gather.layout();
     let frame = gather.frame();
     let input: &GatherInput = gather.input();

@@ -57,6 +57,10 @@ use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 /// zero (or so small that the formula would exceed it) along that axis.
 pub static MAX_RADIUS: f64 = 1e30;
 
+/// Largest anisotropy the radii functions apply: a larger `max_anisotropy` acts as this one (the
+/// axis-ratio product of the solve stays far from overflow).
+const ANISOTROPY_CAP: f64 = 1e30;
+
 /// Default weight κ of [`CurvatureFloor`]: 1% of the tangent curvature `4E/D²` of the
 /// irradiance from a small source straight above the record at distance `D`.
 pub const CURVATURE_FLOOR_WEIGHT: f64 = 0.04;
@@ -251,6 +255,9 @@ fn solve_radii<const D: usize>(
     if top <= 0.0 || scale <= 0.0 {
         return [MAX_RADIUS; D];
     }
+    // A cap near f64::MAX overflows the shape product below (found by fuzzing: caps near 1e280
+    // gave radii [0, 1e30, 0]); axis ratios beyond 1e30 mean nothing anyway.
+    let max_anisotropy = max_anisotropy.min(ANISOTROPY_CAP);
     if tau <= 0.0 {
         return [0.0; D];
     }

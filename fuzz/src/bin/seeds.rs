@@ -1,0 +1,179 @@
+//! Writes the seed corpora into `fuzz/corpus/<target>/` (run from `fuzz/`:
+//! `cargo run --release --bin seeds`). For every target but `cache_load`: pseudo-random byte
+//! strings (fixed seed), the first few that the target accepts and the first few it refuses. For
+//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 3) and their version 2
+//! forms, each behind the option byte 0, and two refused files (truncated, damaged).
+use std::ffi::CString;
+use std::path::Path;
+
+use raddiff::ffi::*;
+use raddiff_fuzz::targets::{self, cache_load::fnv1a, Outcome};
+
+fn main() {
+    let root = Path::new("corpus");
+    for name in targets::NAMES.iter().filter(|n| **n != "cache_load") {
+        let run = targets::by_name(name).expect("a target");
+        let dir = root.join(name);
+        std::fs::create_dir_all(&dir).expect("corpus directory");
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let (mut ok, mut refused) = (0, 0);
+        for attempt in 0..20_000 {
+            let len = 16 << (attempt % 6);
+            let data: Vec<u8> = (0..len).map(|_| lcg(&mut state)).collect();
+            let wanted = match run(&data) {
+                Outcome::Ok if ok < 6 => {
+                    ok += 1;
+                    true
+                }
+                Outcome::Refused if refused < 2 => {
+                    refused += 1;
+                    true
+                }
+                _ => false,
+            };
+            if wanted {
+                std::fs::write(dir.join(format!("seed-{:02}", ok + refused)), &data)
+                    .expect("writing a seed");
+            }
+            if ok == 6 && refused == 2 {
+                break;
+            }
+        }
+        println!("{name}: {ok} accepted and {refused} refused seeds");
+    }
+    let dir = root.join("cache_load");
+    std::fs::create_dir_all(&dir).expect("corpus directory");
+    let caches = saved_caches();
+    // Two refused files: truncated, and a record byte changed under the old checksum.
+    let first = &caches[0];
+    let mut truncated = vec![0u8];
+    truncated.extend(&first[..first.len() - 9]);
+    std::fs::write(dir.join("truncated"), truncated).expect("writing");
+    let mut damaged = vec![0u8];
+    damaged.extend(first);
+    damaged[1 + 60] ^= 0x40;
+    std::fs::write(dir.join("damaged"), damaged).expect("writing");
+    for (i, v3) in caches.iter().enumerate() {
+        for (version, file) in [(3, v3.clone()), (2, as_version_2(v3))] {
+            let mut data = vec![0u8];
+            data.extend(file);
+            std::fs::write(dir.join(format!("cache-{i}-v{version}")), data).expect("writing");
+        }
+    }
+}
+
+fn lcg(state: &mut u64) -> u8 {
+    *state = state
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    (*state >> 56) as u8
+}
+
+/// Small caches of each kind, saved through the C API.
+fn saved_caches() -> Vec<Vec<u8>> {
+    let kinds = [
+        (1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD),
+        (
+            3,
+            RADDIFF_DOMAIN_SURFACE,
+            RADDIFF_INTERP_CUBIC | RADDIFF_INTERP_NON_NEGATIVE | RADDIFF_INTERP_GRADIENT_LIMIT,
+        ),
+        (3, RADDIFF_DOMAIN_VOLUME, RADDIFF_INTERP_TENT),
+        (
+            2,
+            RADDIFF_DOMAIN_VOLUME,
+            RADDIFF_INTERP_LOG | RADDIFF_INTERP_NON_NEGATIVE,
+        ),
+    ];
+    kinds
+        .iter()
+        .map(|&(channels, domain, interpolation)| {
+            let config = raddiff_cache_config {
+                channels,
+                domain,
+                interpolation,
+                max_normal_deviation: 0.3,
+            };
+            let cache = raddiff_cache_new(&config);
+            assert!(!cache.is_null());
+            for i in 0..5 {
+                let t = i as f64;
+                let value: Vec<f32> = (0..channels).map(|c| 1.0 + t as f32 + c as f32).collect();
+                let gradient: Vec<f32> = (0..3 * channels)
+                    .map(|k| 0.1 * k as f32 - t as f32)
+                    .collect();
+                let record = raddiff_cache_record {
+                    position: raddiff_vec3 {
+                        x: 0.3 * t,
+                        y: 0.1 * t * t,
+                        z: 0.0,
+                    },
+                    normal: raddiff_vec3 {
+                        x: 0.0,
+                        y: 0.0,
+                        z: 1.0,
+                    },
+                    value: value.as_ptr(),
+                    gradient: if i % 2 == 0 {
+                        gradient.as_ptr()
+                    } else {
+                        std::ptr::null()
+                    },
+                    rotation_gradient: if i == 3 {
+                        gradient.as_ptr()
+                    } else {
+                        std::ptr::null()
+                    },
+                    radii: [0.5, 0.5 + 0.2 * t, 0.6],
+                    axes: [
+                        raddiff_vec3 {
+                            x: 1.0,
+                            y: 0.0,
+                            z: 0.0,
+                        },
+                        raddiff_vec3 {
+                            x: 0.0,
+                            y: 1.0,
+                            z: 0.0,
+                        },
+                        raddiff_vec3 {
+                            x: 0.0,
+                            y: 0.0,
+                            z: 1.0,
+                        },
+                    ],
+                };
+                assert_eq!(
+                    raddiff_cache_insert(cache, &record),
+                    raddiff_status::RADDIFF_OK
+                );
+            }
+            let path =
+                std::env::temp_dir().join(format!("raddiff-seed-{}.cache", std::process::id()));
+            let c_path = CString::new(path.to_string_lossy().as_bytes()).expect("path");
+            assert_eq!(
+                raddiff_cache_save(cache, c_path.as_ptr()),
+                raddiff_status::RADDIFF_OK
+            );
+            raddiff_cache_free(cache);
+            let bytes = std::fs::read(&path).expect("reading the saved cache");
+            let _ = std::fs::remove_file(&path);
+            bytes
+        })
+        .collect()
+}
+
+/// The version 2 form of a version 3 file: no gradient-limit field (bytes 48..56), resealed. Only
+/// for caches without a gradient limit (version 2 cannot hold one): others are returned as is.
+fn as_version_2(v3: &[u8]) -> Vec<u8> {
+    let flags = u32::from_le_bytes(v3[44..48].try_into().expect("4 bytes"));
+    if flags & 2 != 0 {
+        return v3.to_vec();
+    }
+    let mut v2 = v3[..48].to_vec();
+    v2[8..12].copy_from_slice(&2u32.to_le_bytes());
+    v2.extend_from_slice(&v3[56..v3.len() - 8]);
+    let sum = fnv1a(&v2);
+    v2.extend_from_slice(&sum.to_le_bytes());
+    v2
+}
