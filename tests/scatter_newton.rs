@@ -80,5 +80,6 @@ fn tolerance_1e10_costs_under_one_iteration_more_than_1e6() {
     );
     assert!(solved > 100);
     assert!(mt - ml < 1.0, "{mt} vs {ml}");
-    assert!(mt <= 6.0);
+    // 5.97 with the report's ĥ + n_s, 6.03 with the tangential constraint (stable as η → 1).
+    assert!(mt <= 6.1);
 }
