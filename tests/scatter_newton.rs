@@ -1,7 +1,8 @@
 //! The measurement behind the Newton settings (see `raddiff::scatter::newton`): on the bumpy sphere,
 //! tightening the tolerance from the Mitsuba plugin's 1e-6 to 1e-10 costs under one iteration per
 //! converged solve (quadratic convergence), and the refraction points it gives move the D factor by
-//! a few 1e-6 relative at 1e-6 (hence the tighter default: it costs nothing). Prints the figures
+//! a few 1e-6 relative at 1e-6 (hence the tighter default: it costs nothing; since a converged
+//! solve takes one more full step the printed D change is ~2e-11 at either tolerance). Prints the figures
 //! with --nocapture.
 
 mod scatter_common;
@@ -80,5 +81,6 @@ fn tolerance_1e10_costs_under_one_iteration_more_than_1e6() {
     );
     assert!(solved > 100);
     assert!(mt - ml < 1.0, "{mt} vs {ml}");
-    assert!(mt <= 6.0);
+    // 5.97 with the report's ĥ + n_s, 6.03 with the tangential constraint (stable as η → 1).
+    assert!(mt <= 6.1);
 }

@@ -1,5 +1,5 @@
-//! The refraction constraint f(x, α, β) = normalize(η ω_V + ω_L) + n_s(α, β) and its analytic 3x3
-//! Jacobian (Holzschuch 2013, sec. 3.2.3, eq. 8).
+//! The refraction constraint f(x, α, β) = the tangential part (with respect to n_s) of
+//! η ω_V + ω_L, and its analytic 3x3 Jacobian (after Holzschuch 2013, sec. 3.2.3, eq. 8).
 //!
 //! * `x` is the distance (length unit L) from the eye segment's entry point to the scattering point
 //!   V(x) = entry + x u.
@@ -7,9 +7,14 @@
 //! * ω_V = (V − P)/|V − P| points into the medium, ω_L = (L − P)/|L − P| towards the light (outside).
 //! * n_s(α, β) = normalize((1 − α − β) n0 + α n1 + β n2) is the outward interpolated shading normal.
 //!
-//! f = 0 exactly when the light path L → P → V obeys Snell's law at P for the normal n_s: the
-//! tangential parts of ω_L and η ω_V cancel and their sum points inwards. (The report writes
-//! f = h + n_s in sec. 3.2.3; the normalized ĥ of sec. 3.1.1 is meant, and is what is implemented.)
+//! f = 0 exactly when the tangential parts of ω_L and η ω_V cancel, which is Snell's law at P for
+//! the normal n_s when the light is on the outer and V on the inner side of n_s (callers check the
+//! sides: f also vanishes on the mirrored configurations). The report writes f = ĥ + n_s with
+//! ĥ = normalize(η ω_V + ω_L); at a solution |η ω_V + ω_L| = η cos θ_t − cos θ_i → 0 as η → 1, so the
+//! direction ĥ, its Jacobian (divided by that length) and a residual tolerance on it degrade like
+//! 1/(η − 1) (η = 1 + 1e-9 lost every path). The tangential form divides by nothing that vanishes:
+//! its Jacobian is O(1/|V − P| + 1/|L − P|) for every η, and at a solution it equals |h| times the
+//! report's (so the λ, μ of the interval analysis are unchanged).
 
 use glam::{DMat3, DVec2, DVec3};
 
@@ -122,7 +127,7 @@ pub struct Constraint<'a> {
 /// f and its Jacobian at one parameter point.
 #[derive(Debug, Clone, Copy)]
 pub struct ConstraintValue {
-    /// f(x, α, β) (dimensionless; |f| ≤ 2).
+    /// f(x, α, β) (dimensionless; |f| ≤ η + 1).
     pub f: DVec3,
     /// Columns ∂f/∂x (per L), ∂f/∂α, ∂f/∂β.
     pub jacobian: DMat3,
@@ -136,7 +141,7 @@ pub(crate) fn d_normalize(vhat: DVec3, len: f64, dv: DVec3) -> DVec3 {
 
 impl Constraint<'_> {
     /// f and (if `with_jacobian`) its Jacobian at (x, α, β). `None` where f is undefined: P at V or at
-    /// L, η ω_V + ω_L = 0 (impossible for η > 1) or a vanishing interpolated normal.
+    /// L or a vanishing interpolated normal.
     pub fn eval(&self, x: f64, ab: DVec2, with_jacobian: bool) -> Option<ConstraintValue> {
         let p = self.tri.point(ab);
         let v = self.eye.at(x) - p;
@@ -151,12 +156,9 @@ impl Constraint<'_> {
         let wl = l / dl;
         let ns = m / dm;
         let h = self.eta * wv + wl;
-        let dh = h.length();
-        if !(dh > 0.0) {
-            return None;
-        }
-        let hh = h / dh;
-        let f = hh + ns;
+        let hn = h.dot(ns);
+        // The tangential part of h: no division by |h|, which is ~(η − 1) at a solution.
+        let f = h - hn * ns;
         if !with_jacobian {
             return Some(ConstraintValue {
                 f,
@@ -170,14 +172,16 @@ impl Constraint<'_> {
         let dwv_b = d_normalize(wv, dv, -t.e2);
         let dwl_a = d_normalize(wl, dl, -t.e1);
         let dwl_b = d_normalize(wl, dl, -t.e2);
-        let dhh_x = d_normalize(hh, dh, self.eta * dwv_x);
-        let dhh_a = d_normalize(hh, dh, self.eta * dwv_a + dwl_a);
-        let dhh_b = d_normalize(hh, dh, self.eta * dwv_b + dwl_b);
         let dns_a = d_normalize(ns, dm, t.normals[1] - t.normals[0]);
         let dns_b = d_normalize(ns, dm, t.normals[2] - t.normals[0]);
+        // d(h − (h·n) n) = dh − (dh·n + h·dn) n − (h·n) dn.
+        let df = |dh: DVec3, dn: DVec3| dh - (dh.dot(ns) + h.dot(dn)) * ns - hn * dn;
+        let df_x = df(self.eta * dwv_x, DVec3::ZERO);
+        let df_a = df(self.eta * dwv_a + dwl_a, dns_a);
+        let df_b = df(self.eta * dwv_b + dwl_b, dns_b);
         Some(ConstraintValue {
             f,
-            jacobian: DMat3::from_cols(dhh_x, dhh_a + dns_a, dhh_b + dns_b),
+            jacobian: DMat3::from_cols(df_x, df_a, df_b),
         })
     }
 }

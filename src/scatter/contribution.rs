@@ -66,7 +66,8 @@ impl Medium {
         ensure_finite(self.g, "medium.g")?;
         if self.eta <= 1.0 {
             return Err(Error::InvalidArgument(format!(
-                "medium.eta must be > 1 (got {}): the method assumes light refracts into a denser medium",
+                "medium.eta must be > 1 (got {}): the method assumes light refracts into a denser medium; \
+                 for an index-matched medium (eta = 1) call straight_line_single_scatter",
                 self.eta
             )));
         }

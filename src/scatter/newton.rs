@@ -30,7 +30,7 @@ pub struct NewtonSettings {
     pub max_iterations: u32,
     /// Maximum iterations (Newton or bisection) per edge solve.
     pub max_edge_iterations: u32,
-    /// Convergence threshold on |f| (dimensionless: f is the sum of two unit vectors).
+    /// Convergence threshold on |f| (dimensionless: f is the tangential part of η ω_V + ω_L).
     pub tolerance: f64,
 }
 
@@ -134,6 +134,15 @@ pub fn solve_interior(
     let mut r = value.f.length();
     for _ in 0..settings.max_iterations {
         if r <= settings.tolerance.max(precision_floor(c, x, ab)) {
+            // One more full step, kept if it lowers |f|: the quadratic convergence takes the
+            // residual to the rounding floor for one evaluation (the tangential constraint's
+            // iterates do not land as deep below the tolerance as the report's ĥ + n_s did).
+            let step = pinv_solve(value.jacobian.y_axis, value.jacobian.z_axis, value.f);
+            if let Some(cand) = step.map(|s| ab - s) {
+                if c.eval(x, cand, false).is_some_and(|v| v.f.length() < r) {
+                    return Some(cand);
+                }
+            }
             return Some(ab);
         }
         counters.iterations += 1;
@@ -418,8 +427,10 @@ fn accept(c: &Constraint, edge: &Edge, x: f64, t: f64) -> Option<EdgeRoot> {
     let p = c.tri.point(edge.at(t));
     let n = c.tri.raw_normal(edge.at(t)).try_normalize()?;
     let dir = refract_in(p, c.light, n, c.eta)?;
-    // V must lie in front of P along the refracted ray.
-    (dir.dot(c.eye.at(x) - p) > 0.0).then_some(EdgeRoot { x, t })
+    // V must lie in front of P along the refracted ray, and inside the shading normal: the
+    // tangential constraint also vanishes where V sits at the mirror image across the tangent plane.
+    let v = c.eye.at(x) - p;
+    (dir.dot(v) > 0.0 && v.dot(n) < 0.0).then_some(EdgeRoot { x, t })
 }
 
 #[cfg(test)]
