@@ -461,6 +461,9 @@ mod tests {
         (rel(a.value, b.value), g, h)
     }
 
+    /// Receiver normal, path x(t), first and last t.
+    type Walk = (DVec3, Box<dyn Fn(f64) -> DVec3>, f64, f64);
+
     #[test]
     fn triangle_derivatives_agree_with_the_robust_path_until_they_switch_off() {
         let c = (TRI[0] + TRI[1] + TRI[2]) / 3.0;
@@ -468,7 +471,7 @@ mod tests {
         let mid = (a + b) * 0.5;
         let out = (b - a).cross(normal()).normalize();
         let side = c + (TRI[0] - c) * 1.5;
-        let paths: [(DVec3, Box<dyn Fn(f64) -> DVec3>, f64, f64); 4] = [
+        let paths: [Walk; 4] = [
             (n(), Box::new(move |t| c - n() * t), 0.05, 1e8),
             (
                 normal(),
