@@ -44,12 +44,13 @@ fn in_range(r: DVec3) -> bool {
     m > 1e-30 && m < 1e30
 }
 
-/// The renormalized unit normal, `None` outside the kernels' unit tolerance (or NaN).
+/// `1/(2π‖n‖)`, the factor that renormalizes `n` and scales the edge sum, `None` outside the
+/// kernels' unit tolerance (or NaN).
 #[inline]
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
-fn unit(n: DVec3) -> Option<DVec3> {
+fn unit(n: DVec3) -> Option<f64> {
     let len = n.length();
-    ((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE).then(|| n / len)
+    ((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE).then(|| INV_2PI / len)
 }
 
 /// One Lambert edge term times 2π, `β (n·w)/s`, and its error bound times 2π / u, from
@@ -73,13 +74,13 @@ pub(crate) fn edge_value(x: DVec3, n: DVec3, a: DVec3, b: DVec3) -> Option<f64> 
     if !(in_range(ra) && in_range(rb)) {
         return None;
     }
-    let n = unit(n)?;
+    let scale = unit(n)?;
     let (f, err) = edge(n, ra, rb, b - a, ra.length_squared());
     // One more rounding for the product with n's renormalization, two for the final scaling.
     if !(U * (err + 3.0 * f.abs()) <= FAST_TOLERANCE * f.abs()) {
         return None;
     }
-    Some(f * INV_2PI)
+    Some(f * scale)
 }
 
 /// The value of [`triangle_form_factor`](super::triangle_form_factor) by Lambert's sum when every
@@ -91,7 +92,7 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     if !(in_range(r[0]) && in_range(r[1]) && in_range(r[2])) {
         return None;
     }
-    let n = unit(n)?;
+    let scale = unit(n)?;
     // Heights over the tangent plane: above 8u·(|n|·|r|) the exact height is positive (see the
     // robust fast path), so nothing is clipped.
     for rk in &r {
@@ -114,7 +115,7 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
         return None;
     }
     // The sum's sign is the triangle's orientation as seen from x; the form factor is two-sided.
-    Some((sum.abs() * INV_2PI).min(1.0))
+    Some((sum.abs() * scale).min(1.0))
 }
 
 /// Smallest `sin β = s/‖r_a‖‖r_b‖` of an edge at which the derivative fast path is used: its
@@ -164,18 +165,19 @@ fn edge_derivs(
         let nxe = n.cross(e);
         d.gradient = nxe * g + grad_i * nw;
         if order.hessian() {
-            let q = DMat3::from_diagonal(DVec3::splat(e.length_squared())) - outer_self(e);
-            let kk = outer_self(k);
+            // HI collected on 𝟙, e eᵀ, k kᵀ, m kᵀ + k mᵀ, m mᵀ (Q = ‖e‖²𝟙 − e eᵀ; the
+            // (m kᵀ + k mᵀ) coefficients of Hβ/s and of the ∇β kᵀ term sum to −2/P²).
             let inv_s3 = inv_s2 * inv_s;
-            let h_beta =
-                (q * (c * inv_s) - kk * (c * inv_s3) - DMat3::from_diagonal(DVec3::splat(2.0 * s)))
-                    * inv_p
-                    - (kk * (2.0 * c * inv_s) + sym_outer(m, k) * ((s2 - c * c) * inv_s)
-                        - outer_self(m) * (2.0 * s * c))
-                        * (inv_p * inv_p);
-            let h_i = h_beta * inv_s - sym_outer(grad_beta, k) * inv_s3 - q * (beta * inv_s3)
-                + kk * (3.0 * beta * inv_s3 * inv_s2);
-            d.hessian = sym_outer(nxe, grad_i) + h_i * nw;
+            let a_q = c * inv_s2 * inv_p - beta * inv_s3;
+            let a_kk = 3.0 * (beta * inv_s - c * inv_p) * inv_s2 * inv_s2
+                - 2.0 * c * inv_s2 * inv_p * inv_p;
+            let diag = nw * (a_q * e.length_squared() - 2.0 * inv_p);
+            d.hessian = DMat3::from_diagonal(DVec3::splat(diag))
+                + sym_outer(nxe, grad_i)
+                + sym_outer(m * (-2.0 * nw * inv_p * inv_p), k)
+                + outer_self(k) * (nw * a_kk)
+                + outer_self(m) * (2.0 * nw * c * inv_p * inv_p)
+                - outer_self(e) * (nw * a_q);
         }
     }
     (d, err, steep)
@@ -208,7 +210,7 @@ pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -
     if !(in_range(r[0]) && in_range(r[1]) && in_range(r[2])) {
         return None;
     }
-    let n = unit(n)?;
+    let scale = unit(n)?;
     for rk in &r {
         if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
             return None;
@@ -245,7 +247,7 @@ pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -
         return None;
     }
     // Orientation as seen from x: the form factor is two-sided.
-    let scale = INV_2PI.copysign(sum.value);
+    let scale = scale.copysign(sum.value);
     let out = Deriv3 {
         value: (sum.value * scale).min(1.0),
         gradient: sum.gradient * scale,
@@ -269,15 +271,15 @@ pub(crate) fn edge_derivs_checked(
     if !(in_range(ra) && in_range(rb)) {
         return None;
     }
-    let n = unit(n)?;
+    let scale = unit(n)?;
     let (d, err, steep) = edge_derivs(n, ra, rb, b - a, ra.length_squared(), order);
     if !(steep && U * (err + 3.0 * d.value.abs()) <= FAST_TOLERANCE * d.value.abs()) {
         return None;
     }
     let out = Deriv3 {
-        value: d.value * INV_2PI,
-        gradient: d.gradient * INV_2PI,
-        hessian: d.hessian * INV_2PI,
+        value: d.value * scale,
+        gradient: d.gradient * scale,
+        hessian: d.hessian * scale,
     };
     out.is_finite().then_some(out)
 }
