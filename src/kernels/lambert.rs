@@ -44,13 +44,13 @@ fn in_range(r: DVec3) -> bool {
     m > 1e-30 && m < 1e30
 }
 
-/// `1/(2π‖n‖)`, the factor that renormalizes `n` and scales the edge sum, `None` outside the
-/// kernels' unit tolerance (or NaN).
+/// The renormalized unit normal, `None` outside the kernels' unit tolerance (or NaN). Divided as
+/// the robust path divides, so that normals within the tolerance give the same bits.
 #[inline]
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
-fn unit(n: DVec3) -> Option<f64> {
+fn unit(n: DVec3) -> Option<DVec3> {
     let len = n.length();
-    ((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE).then(|| INV_2PI / len)
+    ((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE).then(|| n / len)
 }
 
 /// One Lambert edge term times 2π, `β (n·w)/s`, and its error bound times 2π / u, from
@@ -74,7 +74,8 @@ pub(crate) fn edge_value(x: DVec3, n: DVec3, a: DVec3, b: DVec3) -> Option<f64> 
     if !(in_range(ra) && in_range(rb)) {
         return None;
     }
-    let scale = unit(n)?;
+    let n = unit(n)?;
+    let scale = INV_2PI;
     let (f, err) = edge(n, ra, rb, b - a, ra.length_squared());
     // One more rounding for the product with n's renormalization, two for the final scaling.
     if !(U * (err + 3.0 * f.abs()) <= FAST_TOLERANCE * f.abs()) {
@@ -92,7 +93,8 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     if !(in_range(r[0]) && in_range(r[1]) && in_range(r[2])) {
         return None;
     }
-    let scale = unit(n)?;
+    let n = unit(n)?;
+    let scale = INV_2PI;
     // Heights over the tangent plane: above 8u·(|n|·|r|) the exact height is positive (see the
     // robust fast path), so nothing is clipped.
     for rk in &r {
@@ -210,7 +212,8 @@ pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -
     if !(in_range(r[0]) && in_range(r[1]) && in_range(r[2])) {
         return None;
     }
-    let scale = unit(n)?;
+    let n = unit(n)?;
+    let scale = INV_2PI;
     for rk in &r {
         if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
             return None;
@@ -271,7 +274,8 @@ pub(crate) fn edge_derivs_checked(
     if !(in_range(ra) && in_range(rb)) {
         return None;
     }
-    let scale = unit(n)?;
+    let n = unit(n)?;
+    let scale = INV_2PI;
     let (d, err, steep) = edge_derivs(n, ra, rb, b - a, ra.length_squared(), order);
     if !(steep && U * (err + 3.0 * d.value.abs()) <= FAST_TOLERANCE * d.value.abs()) {
         return None;
