@@ -50,7 +50,8 @@ fn in_range(r: DVec3) -> bool {
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn unit(n: DVec3) -> Option<DVec3> {
     let len = n.length();
-    ((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE).then(|| n / len)
+    // n / 1 is n: skip the three divisions for normals whose computed length is exactly 1.
+    ((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE).then(|| if len == 1.0 { n } else { n / len })
 }
 
 /// One Lambert edge term times 2π, `β (n·w)/s`, and its error bound times 2π / u, from
@@ -553,5 +554,22 @@ mod tests {
             edge_derivs_checked(mid + (b - a) * 2.0 + off * 1e-3, n(), a, b, Order::Hessian)
                 .is_none()
         );
+    }
+
+    #[test]
+    fn the_benchmarked_generic_edge_is_certified() {
+        // benches/kernels_b.rs "edge term": the first edge of its generic triangle.
+        let x = DVec3::new(0.1, -0.2, 0.05);
+        let f = edge_value(x, n(), TRI[0], TRI[1]).expect("declined");
+        let d = edge_derivs_checked(x, n(), TRI[0], TRI[1], Order::Hessian).expect("declined");
+        let r = crate::kernels::form_factor::edge_form_factor_fast(
+            x,
+            n(),
+            TRI[0],
+            TRI[1],
+            Order::Hessian,
+        )
+        .unwrap();
+        assert!(rel(f, r.value) < 1e-14 && rel(d.value, r.value) < 1e-14);
     }
 }
