@@ -30,6 +30,7 @@ use crate::error::{ensure_finite3, Error, Result};
 use crate::{Deriv3, Order};
 
 use super::dd;
+use super::lambert;
 use super::polygon;
 
 const INV_2PI: f64 = 0.5 * std::f64::consts::FRAC_1_PI;
@@ -84,6 +85,13 @@ const AXIAL_RATIO: f64 = 0.25;
 /// # Ok::<(), raddiff::Error>(())
 /// ```
 pub fn edge_form_factor(x: DVec3, n: DVec3, a: DVec3, b: DVec3, order: Order) -> Result<Deriv3> {
+    if order == Order::Value {
+        if let Some(f) = lambert::edge_value(x, n, a, b) {
+            return Ok(Deriv3::constant(f));
+        }
+    } else if let Some(d) = lambert::edge_derivs_checked(x, n, a, b, order) {
+        return Ok(d);
+    }
     if let Some(d) = edge_form_factor_fast(x, n, a, b, order) {
         return Ok(d);
     }
@@ -117,6 +125,13 @@ pub fn triangle_form_factor(
     c: DVec3,
     order: Order,
 ) -> Result<Deriv3> {
+    if order == Order::Value {
+        if let Some(f) = lambert::triangle_value(x, n, [a, b, c]) {
+            return Ok(Deriv3::constant(f));
+        }
+    } else if let Some(d) = lambert::triangle_derivs(x, n, [a, b, c], order) {
+        return Ok(d);
+    }
     if let Some(d) = triangle_form_factor_fast(x, n, [a, b, c], order) {
         return Ok(d);
     }

@@ -4,6 +4,7 @@
 pub mod batch;
 mod dd;
 pub mod form_factor;
+mod lambert;
 pub mod marched;
 pub mod polygon;
 pub mod segment;

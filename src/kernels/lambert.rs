@@ -1,0 +1,575 @@
+//! Certified value-only fast path of the point-to-triangle form factor and of its edge term:
+//! Lambert's per-edge sum as the textbook writes it, with a running error bound.
+//!
+//! Per edge (`r_a = a − x`, `r_b = b − x`, `e = b − a`, `w = r_a × e` (= `r_a × r_b`), `s = ‖w‖`,
+//! `c = r_a·r_b`):
+//!
+//! ```text
+//! f = (1/2π) β (n·w)/s,   β = atan2(s, c) ∈ [0, π].
+//! ```
+//!
+//! `w` is formed from the edge vector rather than as `r_a × r_b`: far away `r_a × r_b` loses
+//! `distance/size` digits to cancellation, `r_a × e` does not.
+//!
+//! **Error bound** (u = 2⁻⁵³, first order in u; `L = ‖r_a‖‖e‖`, `p = L/s`, `P = ‖r_a‖‖r_b‖`).
+//! Rounding `r_a`, `e` and the cross product gives `‖δw‖ ≤ 6uL`, so `|δ(n·w)| ≤ 6uL + 3us` and
+//! `|δs| ≤ 6uL + 2us`; `|δc| ≤ 5uP`. With `s² + c² = P²` and `sin β = s/P ≤ β`,
+//! `|δβ| ≤ (|c|·|δs| + s·|δc|)/P² + 2uβ ≤ (6p + 9)uβ` (atan2 within 2 ulp), so `g = β/s` is within
+//! `(12p + 12)u` relatively and `|δf|·2π ≤ uβ(18p + 16)` (using `|n·w| ≤ s`). With
+//! `p ≤ 1 + |r_a·e|/s` the bound needs only computed quantities: `|δf|·2π ≤ u(34β + 18|r_a·e|·g)`,
+//! used below as `u(36β + 20|r_a·e|g)`. Summing three terms, renormalizing `n` and scaling add
+//! `5u Σ|f_i|`. When the bound exceeds [`FAST_TOLERANCE`] times the result (x near an edge's line,
+//! where `p` grows; a cancelling sum: far away or near the triangle's plane), the caller falls back
+//! to the robust path.
+
+use glam::{DMat3, DVec3};
+
+use super::form_factor::{outer_self, sym_outer};
+use super::polygon;
+use crate::{Deriv3, Order};
+
+const INV_2PI: f64 = 0.5 * std::f64::consts::FRAC_1_PI;
+const U: f64 = 0.5 * f64::EPSILON;
+
+/// Largest certified relative error of an accepted result (the generic accuracy contract is 1e-12;
+/// the margin absorbs the second-order terms the bound omits).
+pub(crate) const FAST_TOLERANCE: f64 = 5e-13;
+
+/// `r` with every component's magnitude at most in (1e-30, 1e30) — products of up to four such
+/// factors stay far from overflow, and from underflow relative to the largest — and finite.
+#[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+fn in_range(r: DVec3) -> bool {
+    let m = r.abs().max_element();
+    m > 1e-30 && m < 1e30
+}
+
+/// The renormalized unit normal, `None` outside the kernels' unit tolerance (or NaN). Divided as
+/// the robust path divides, so that normals within the tolerance give the same bits.
+#[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+fn unit(n: DVec3) -> Option<DVec3> {
+    let len = n.length();
+    // n / 1 is n: skip the three divisions for normals whose computed length is exactly 1.
+    ((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE).then(|| if len == 1.0 { n } else { n / len })
+}
+
+/// One Lambert edge term times 2π, `β (n·w)/s`, and its error bound times 2π / u, from
+/// `r_a`, `r_b`, `e = b − a` and `‖r_a‖²`.
+#[inline]
+fn edge(n: DVec3, ra: DVec3, rb: DVec3, e: DVec3, ra2: f64) -> (f64, f64) {
+    let w = ra.cross(e);
+    let s = w.length();
+    let c = ra.dot(rb);
+    let beta = s.atan2(c);
+    let g = beta / s;
+    // r_a·e = r_a·r_b − ‖r_a‖².
+    (n.dot(w) * g, 36.0 * beta + 20.0 * (c - ra2).abs() * g)
+}
+
+/// The value of [`edge_form_factor`](super::edge_form_factor) by Lambert's formula when its error
+/// bound is within [`FAST_TOLERANCE`] of the result; `None` otherwise or for invalid input.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub(crate) fn edge_value(x: DVec3, n: DVec3, a: DVec3, b: DVec3) -> Option<f64> {
+    let (ra, rb) = (a - x, b - x);
+    if !(in_range(ra) && in_range(rb)) {
+        return None;
+    }
+    let n = unit(n)?;
+    let scale = INV_2PI;
+    let (f, err) = edge(n, ra, rb, b - a, ra.length_squared());
+    // One more rounding for the product with n's renormalization, two for the final scaling.
+    if !(U * (err + 3.0 * f.abs()) <= FAST_TOLERANCE * f.abs()) {
+        return None;
+    }
+    Some(f * scale)
+}
+
+/// The value of [`triangle_form_factor`](super::triangle_form_factor) by Lambert's sum when every
+/// vertex is certainly above the tangent plane (nothing clipped) and the running error bound is
+/// within [`FAST_TOLERANCE`] of the result; `None` otherwise or for invalid input.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
+    let r = [v[0] - x, v[1] - x, v[2] - x];
+    if !(in_range(r[0]) && in_range(r[1]) && in_range(r[2])) {
+        return None;
+    }
+    let n = unit(n)?;
+    let scale = INV_2PI;
+    // Heights over the tangent plane: above 8u·(|n|·|r|) the exact height is positive (see the
+    // robust fast path), so nothing is clipped.
+    for rk in &r {
+        if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
+            return None;
+        }
+    }
+    let r2 = [
+        r[0].length_squared(),
+        r[1].length_squared(),
+        r[2].length_squared(),
+    ];
+    let (f0, e0) = edge(n, r[0], r[1], v[1] - v[0], r2[0]);
+    let (f1, e1) = edge(n, r[1], r[2], v[2] - v[1], r2[1]);
+    let (f2, e2) = edge(n, r[2], r[0], v[0] - v[2], r2[2]);
+    let sum = f0 + f1 + f2;
+    let magnitude = f0.abs() + f1.abs() + f2.abs();
+    let err = U * (e0 + e1 + e2 + 5.0 * magnitude);
+    if !(err <= FAST_TOLERANCE * sum.abs()) {
+        return None;
+    }
+    // The sum's sign is the triangle's orientation as seen from x; the form factor is two-sided.
+    Some((sum.abs() * scale).min(1.0))
+}
+
+/// Smallest `sin β = s/‖r_a‖‖r_b‖` of an edge at which the derivative fast path is used: its
+/// Hessian has terms up to `β/s³` and `(w×e)(w×e)ᵀ/s⁵` that cancel like `1/sin³β` as `x`
+/// approaches the extension of the edge's line (`β → 0`) or `1/sin β` near the segment.
+const DERIV_MIN_SINE: f64 = 0.25;
+
+/// One Lambert edge term times 2π with its derivatives, its value error bound times 2π / u, and
+/// whether `sin β ≥ DERIV_MIN_SINE`. With `k = w × e`, `m = r_a + r_b`, `P = s² + c²`,
+/// `Q = ‖e‖²𝟙 − e eᵀ` and `I = β/s` (derivatives w.r.t. x: `∇w·δ = e × δ`, `∇s = k/s`,
+/// `∇c = −m`, `∇k = Q`):
+///
+/// ```text
+/// ∇β = (c k/s + s m)/P,   ∇I = ∇β/s − β k/s³,
+/// Hβ = [c Q/s − c k kᵀ/s³ − 2s 𝟙]/P − [2c k kᵀ/s + (s − c²/s)(m kᵀ + k mᵀ) − 2sc m mᵀ]/P²,
+/// HI = Hβ/s − (∇β kᵀ + k ∇βᵀ)/s³ − β Q/s³ + 3β k kᵀ/s⁵,
+/// 2π∇f = (n × e) I + (n·w) ∇I,   2π Hf = (n × e)∇Iᵀ + ∇I (n × e)ᵀ + (n·w) HI.
+/// ```
+#[inline]
+fn edge_derivs(
+    n: DVec3,
+    ra: DVec3,
+    rb: DVec3,
+    e: DVec3,
+    ra2: f64,
+    order: Order,
+) -> (Deriv3, f64, bool) {
+    let w = ra.cross(e);
+    let s2 = w.length_squared();
+    let s = s2.sqrt();
+    let c = ra.dot(rb);
+    let beta = s.atan2(c);
+    let inv_s = 1.0 / s;
+    let g = beta * inv_s;
+    let nw = n.dot(w);
+    let p = s2 + c * c;
+    let steep = s2 >= DERIV_MIN_SINE * DERIV_MIN_SINE * p;
+    let err = 36.0 * beta + 20.0 * (c - ra2).abs() * g;
+    let mut d = Deriv3::constant(nw * g);
+    if order.gradient() {
+        let k = w.cross(e);
+        let m = ra + rb;
+        let inv_p = 1.0 / p;
+        let inv_s2 = inv_s * inv_s;
+        let grad_beta = (k * (c * inv_s) + m * s) * inv_p;
+        let grad_i = (grad_beta - k * (beta * inv_s2)) * inv_s;
+        let nxe = n.cross(e);
+        d.gradient = nxe * g + grad_i * nw;
+        if order.hessian() {
+            // HI collected on 𝟙, e eᵀ, k kᵀ, m kᵀ + k mᵀ, m mᵀ (Q = ‖e‖²𝟙 − e eᵀ; the
+            // (m kᵀ + k mᵀ) coefficients of Hβ/s and of the ∇β kᵀ term sum to −2/P²).
+            let inv_s3 = inv_s2 * inv_s;
+            let a_q = c * inv_s2 * inv_p - beta * inv_s3;
+            let a_kk = 3.0 * (beta * inv_s - c * inv_p) * inv_s2 * inv_s2
+                - 2.0 * c * inv_s2 * inv_p * inv_p;
+            let diag = nw * (a_q * e.length_squared() - 2.0 * inv_p);
+            d.hessian = DMat3::from_diagonal(DVec3::splat(diag))
+                + sym_outer(nxe, grad_i)
+                + sym_outer(m * (-2.0 * nw * inv_p * inv_p), k)
+                + outer_self(k) * (nw * a_kk)
+                + outer_self(m) * (2.0 * nw * c * inv_p * inv_p)
+                - outer_self(e) * (nw * a_q);
+        }
+    }
+    (d, err, steep)
+}
+
+/// `‖·‖_∞` of the derivative part of `d` at `order` (gradient, and Hessian when asked).
+#[inline]
+fn deriv_size(d: &Deriv3, order: Order) -> (f64, f64) {
+    let h = if order.hessian() {
+        d.hessian
+            .x_axis
+            .abs()
+            .max(d.hessian.y_axis.abs())
+            .max(d.hessian.z_axis.abs())
+            .max_element()
+    } else {
+        0.0
+    };
+    (d.gradient.abs().max_element(), h)
+}
+
+/// Value, gradient (and Hessian at [`Order::Hessian`]) of
+/// [`triangle_form_factor`](super::triangle_form_factor) by the analytic derivatives of Lambert's
+/// sum, for `order` above [`Order::Value`]. Taken when the value is certified as in
+/// [`triangle_value`], every edge has `sin β ≥ DERIV_MIN_SINE` (no cancelling near-line terms) and
+/// neither the gradient nor the Hessian sum cancels by more than 100x; `None` otherwise.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Deriv3> {
+    let r = [v[0] - x, v[1] - x, v[2] - x];
+    if !(in_range(r[0]) && in_range(r[1]) && in_range(r[2])) {
+        return None;
+    }
+    let n = unit(n)?;
+    let scale = INV_2PI;
+    for rk in &r {
+        if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
+            return None;
+        }
+    }
+    let r2 = [
+        r[0].length_squared(),
+        r[1].length_squared(),
+        r[2].length_squared(),
+    ];
+    let (d0, e0, s0) = edge_derivs(n, r[0], r[1], v[1] - v[0], r2[0], order);
+    let (d1, e1, s1) = edge_derivs(n, r[1], r[2], v[2] - v[1], r2[1], order);
+    let (d2, e2, s2) = edge_derivs(n, r[2], r[0], v[0] - v[2], r2[2], order);
+    let sum = Deriv3 {
+        value: d0.value + d1.value + d2.value,
+        gradient: d0.gradient + d1.gradient + d2.gradient,
+        hessian: d0.hessian + d1.hessian + d2.hessian,
+    };
+    let magnitude = d0.value.abs() + d1.value.abs() + d2.value.abs();
+    let err = U * (e0 + e1 + e2 + 5.0 * magnitude);
+    if !(s0 && s1 && s2 && err <= FAST_TOLERANCE * sum.value.abs()) {
+        return None;
+    }
+    let parts = [
+        deriv_size(&d0, order),
+        deriv_size(&d1, order),
+        deriv_size(&d2, order),
+    ];
+    let total = deriv_size(&sum, order);
+    let (g_mag, h_mag) = parts
+        .iter()
+        .fold((0.0, 0.0), |(g, h), p| (g + p.0, h + p.1));
+    if !(g_mag <= CANCELLATION * total.0 && h_mag <= CANCELLATION * total.1) {
+        return None;
+    }
+    // Orientation as seen from x: the form factor is two-sided.
+    let scale = scale.copysign(sum.value);
+    let out = Deriv3 {
+        value: (sum.value * scale).min(1.0),
+        gradient: sum.gradient * scale,
+        hessian: sum.hessian * scale,
+    };
+    out.is_finite().then_some(out)
+}
+
+/// Value and derivatives of [`edge_form_factor`](super::edge_form_factor) by the analytic
+/// derivatives of Lambert's term, for `order` above [`Order::Value`], when the value is certified
+/// and `sin β ≥ DERIV_MIN_SINE`; `None` otherwise.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub(crate) fn edge_derivs_checked(
+    x: DVec3,
+    n: DVec3,
+    a: DVec3,
+    b: DVec3,
+    order: Order,
+) -> Option<Deriv3> {
+    let (ra, rb) = (a - x, b - x);
+    if !(in_range(ra) && in_range(rb)) {
+        return None;
+    }
+    let n = unit(n)?;
+    let scale = INV_2PI;
+    let (d, err, steep) = edge_derivs(n, ra, rb, b - a, ra.length_squared(), order);
+    if !(steep && U * (err + 3.0 * d.value.abs()) <= FAST_TOLERANCE * d.value.abs()) {
+        return None;
+    }
+    let out = Deriv3 {
+        value: d.value * scale,
+        gradient: d.gradient * scale,
+        hessian: d.hessian * scale,
+    };
+    out.is_finite().then_some(out)
+}
+
+/// Largest ratio of the summed magnitudes of the edge terms' derivatives to the magnitude of their
+/// sum accepted by the derivative fast path (as the robust path's value cancellation limit).
+const CANCELLATION: f64 = 1e2;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernels::{edge_form_factor, polygon_form_factor};
+    use glam::DMat3;
+
+    const TRI: [DVec3; 3] = [
+        DVec3::new(-0.4, -0.3, 1.0),
+        DVec3::new(0.7, -0.1, 1.2),
+        DVec3::new(0.0, 0.8, 0.9),
+    ];
+
+    fn n() -> DVec3 {
+        DVec3::new(0.2, -0.1, 1.0).normalize()
+    }
+
+    fn robust(x: DVec3, n: DVec3) -> f64 {
+        polygon_form_factor(x, n, &TRI, Order::Value).unwrap().value
+    }
+
+    fn rel(a: f64, b: f64) -> f64 {
+        (a - b).abs() / b.abs()
+    }
+
+    /// The triangle's unit normal (pointing to +z).
+    fn normal() -> DVec3 {
+        (TRI[1] - TRI[0]).cross(TRI[2] - TRI[0]).normalize()
+    }
+
+    #[test]
+    fn generic_triangle_agrees_with_the_robust_path() {
+        for (k, x) in [
+            DVec3::ZERO,
+            DVec3::new(0.3, -0.2, 0.1),
+            DVec3::new(-0.5, 0.4, -0.6),
+            DVec3::new(0.1, 0.1, 0.8),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let f = triangle_value(x, n(), TRI).unwrap_or_else(|| panic!("case {k} declined"));
+            let r = robust(x, n());
+            assert!(rel(f, r) < 1e-14, "case {k}: {f} vs {r}");
+            // Either orientation gives the same two-sided value.
+            let g = triangle_value(x, n(), [TRI[0], TRI[2], TRI[1]]).unwrap();
+            assert!(rel(g, f) < 1e-15);
+        }
+    }
+
+    /// Walks x(t) from t0 towards t1 geometrically (receiver normal `nr`): the fast path must agree
+    /// with the robust one within 1e-12 while it accepts (also at the last accepted step, where its
+    /// certificate is nearly exhausted) and decline from some step on. Returns the last accepted
+    /// and the first declined t.
+    fn walk(nr: DVec3, x_of: impl Fn(f64) -> DVec3, t0: f64, t1: f64) -> (f64, f64) {
+        let steps = 400;
+        let mut last_ok = None;
+        let mut declined = None;
+        for k in 0..=steps {
+            let t = t0 * (t1 / t0).powf(k as f64 / steps as f64);
+            let x = x_of(t);
+            match triangle_value(x, nr, TRI) {
+                Some(f) => {
+                    let r = robust(x, nr);
+                    let e = rel(f, r);
+                    assert!(e < 1e-12, "t = {t:e}: fast {f} robust {r} ({e:e})");
+                    assert!(declined.is_none(), "re-accepted at t = {t:e}");
+                    // The public kernel returns the certified value.
+                    let p = crate::kernels::triangle_form_factor(
+                        x,
+                        nr,
+                        TRI[0],
+                        TRI[1],
+                        TRI[2],
+                        Order::Value,
+                    );
+                    assert_eq!(p.unwrap().value, f);
+                    last_ok = Some(t);
+                }
+                None => {
+                    declined.get_or_insert(t);
+                }
+            }
+        }
+        (
+            last_ok.expect("never accepted"),
+            declined.expect("never declined"),
+        )
+    }
+
+    #[test]
+    fn switches_off_near_an_edge_line() {
+        // x approaches the line through TRI[0], TRI[1] diagonally from outside and below the
+        // triangle; the receiver faces the triangle's plane, so no vertex is ever clipped.
+        let (a, b) = (TRI[0], TRI[1]);
+        let mid = (a + b) * 0.5;
+        let out = (b - a).cross(normal()).normalize();
+        let (ok, off) = walk(normal(), |t| mid + (out - normal()) * t, 1.0, 1e-14);
+        assert!(ok > 1e-4 && ok < 1e-1 && off < ok, "{ok:e} {off:e}");
+    }
+
+    #[test]
+    fn switches_off_towards_the_plane_and_far_away() {
+        // x moves along the triangle's normal towards its plane from outside its projection ...
+        let c = (TRI[0] + TRI[1] + TRI[2]) / 3.0;
+        let side = c + (TRI[0] - c) * 1.5;
+        let (ok, _) = walk(normal(), |t| side - normal() * t, 1.0, 1e-14);
+        assert!(ok > 1e-3 && ok < 1.0, "{ok:e}");
+        // ... and away along -n: the edge sum cancels like (size/d)², its terms like size/d.
+        let (ok, _) = walk(n(), |t| c - n() * t, 2.0, 1e8);
+        assert!(ok > 10.0 && ok < 1e3, "{ok:e}");
+    }
+
+    #[test]
+    fn declines_when_clipped_or_invalid() {
+        // TRI[2] below the tangent plane.
+        let x = TRI[2] + DVec3::new(0.0, 0.0, 0.01);
+        assert!(triangle_value(x, DVec3::Z, TRI).is_none());
+        assert!(triangle_value(DVec3::ZERO, n() * 1.1, TRI).is_none());
+        assert!(triangle_value(DVec3::NAN, n(), TRI).is_none());
+        assert!(triangle_value(DVec3::splat(1e31), n(), TRI).is_none());
+        assert!(edge_value(DVec3::NAN, n(), TRI[0], TRI[1]).is_none());
+    }
+
+    #[test]
+    fn edge_term_agrees_and_declines_near_its_line() {
+        let (a, b) = (TRI[0], TRI[1]);
+        let slow = |x: DVec3| {
+            // The robust edge term without its fast paths: a polygon-free check through the
+            // public kernel would take this very path, so compare with the frame evaluation.
+            let scaled = crate::kernels::polygon::Scaled::new(x, &[a, b]).unwrap();
+            let ends = scaled.exact_ends(0, 1);
+            let d = super::super::form_factor::edge_term_exact(
+                scaled.r[0],
+                scaled.u[1] - scaled.u[0],
+                n(),
+                Order::Value,
+                Some(&ends),
+            )
+            .unwrap();
+            scaled.finish(d, Order::Value).unwrap().value
+        };
+        let mid = (a + b) * 0.5;
+        let off = (b - a).cross(n()).normalize();
+        let mut declined = false;
+        for k in 0..=300 {
+            let t = 10f64.powf(-(k as f64) / 30.0);
+            let x = mid + off * t;
+            match edge_value(x, n(), a, b) {
+                Some(f) => {
+                    assert!(!declined);
+                    assert!(rel(f, slow(x)) < 1e-12, "t = {t:e}");
+                    let pub_f = edge_form_factor(x, n(), a, b, Order::Value).unwrap().value;
+                    assert_eq!(pub_f, f);
+                }
+                None => declined = true,
+            }
+        }
+        assert!(declined);
+        assert!(edge_value(mid + off, n(), a, b).is_some());
+    }
+
+    /// Relative difference normalized by the largest entry, as the accuracy tests measure it.
+    fn rel_d(a: &Deriv3, b: &Deriv3) -> (f64, f64, f64) {
+        let g = (a.gradient - b.gradient).abs().max_element() / b.gradient.abs().max_element();
+        let hm = |m: DMat3| {
+            m.x_axis
+                .abs()
+                .max(m.y_axis.abs())
+                .max(m.z_axis.abs())
+                .max_element()
+        };
+        let h = hm(a.hessian - b.hessian) / hm(b.hessian);
+        (rel(a.value, b.value), g, h)
+    }
+
+    /// Receiver normal, path x(t), first and last t.
+    type Walk = (DVec3, Box<dyn Fn(f64) -> DVec3>, f64, f64);
+
+    #[test]
+    fn triangle_derivatives_agree_with_the_robust_path_until_they_switch_off() {
+        let c = (TRI[0] + TRI[1] + TRI[2]) / 3.0;
+        let (a, b) = (TRI[0], TRI[1]);
+        let mid = (a + b) * 0.5;
+        let out = (b - a).cross(normal()).normalize();
+        let side = c + (TRI[0] - c) * 1.5;
+        let paths: [Walk; 4] = [
+            (n(), Box::new(move |t| c - n() * t), 0.05, 1e8),
+            (
+                normal(),
+                Box::new(move |t| mid + (out - normal()) * t),
+                1.0,
+                1e-12,
+            ),
+            (normal(), Box::new(move |t| side - normal() * t), 1.0, 1e-12),
+            (n(), Box::new(|t| DVec3::new(0.3, -0.2, 0.1) * t), 1.0, 1e3),
+        ];
+        for (k, (nr, x_of, t0, t1)) in paths.iter().enumerate() {
+            let mut accepted = 0;
+            for step in 0..=200 {
+                let t = t0 * (t1 / t0).powf(step as f64 / 200.0);
+                let x = x_of(t);
+                for order in [Order::Gradient, Order::Hessian] {
+                    if let Some(d) = triangle_derivs(x, *nr, TRI, order) {
+                        accepted += 1;
+                        let r = polygon_form_factor(x, *nr, &TRI, order).unwrap();
+                        let (ev, eg, eh) = rel_d(&d, &r);
+                        let eh = if order.hessian() { eh } else { 0.0 };
+                        assert!(
+                            ev < 1e-12 && eg < 1e-12 && eh < 1e-11,
+                            "path {k} t = {t:e} {order:?}: {ev:e} {eg:e} {eh:e}"
+                        );
+                        let p = crate::kernels::triangle_form_factor(x, *nr, a, b, TRI[2], order);
+                        assert_eq!(p.unwrap(), d);
+                        if !order.hessian() {
+                            assert_eq!(d.hessian, DMat3::ZERO);
+                        }
+                    }
+                }
+            }
+            assert!(accepted > 0, "path {k} never accepted");
+        }
+    }
+
+    #[test]
+    fn edge_derivatives_agree_with_finite_differences_and_the_robust_path() {
+        let (a, b) = (TRI[0], TRI[1]);
+        let x = DVec3::new(0.2, 0.1, -0.3);
+        let d = edge_derivs_checked(x, n(), a, b, Order::Hessian).unwrap();
+        let r = crate::kernels::form_factor::edge_form_factor_fast(x, n(), a, b, Order::Hessian)
+            .unwrap();
+        let (ev, eg, eh) = rel_d(&d, &r);
+        assert!(
+            ev < 1e-14 && eg < 1e-13 && eh < 1e-13,
+            "{ev:e} {eg:e} {eh:e}"
+        );
+        // Central differences of the certified value (h = 1e-4: truncation ~1e-8).
+        let h = 1e-4;
+        let f = |p: DVec3| edge_value(p, n(), a, b).unwrap();
+        for i in 0..3 {
+            let dx = DVec3::AXES[i] * h;
+            let fd = (f(x + dx) - f(x - dx)) / (2.0 * h);
+            assert!((fd - d.gradient[i]).abs() < 1e-7, "grad {i}");
+            let gd = |p: DVec3| {
+                edge_derivs_checked(p, n(), a, b, Order::Gradient)
+                    .unwrap()
+                    .gradient
+            };
+            let col = (gd(x + dx) - gd(x - dx)) / (2.0 * h);
+            assert!(
+                (col - d.hessian.col(i)).abs().max_element() < 1e-7,
+                "hess col {i}"
+            );
+        }
+        // Near its line the derivative path declines while the value path may still accept.
+        let mid = (a + b) * 0.5;
+        let off = (b - a).cross(n()).normalize();
+        assert!(edge_derivs_checked(mid + off * 1e-3, n(), a, b, Order::Hessian).is_none());
+        assert!(
+            edge_derivs_checked(mid + (b - a) * 2.0 + off * 1e-3, n(), a, b, Order::Hessian)
+                .is_none()
+        );
+    }
+
+    #[test]
+    fn the_benchmarked_generic_edge_is_certified() {
+        // benches/kernels_b.rs "edge term": the first edge of its generic triangle.
+        let x = DVec3::new(0.1, -0.2, 0.05);
+        let f = edge_value(x, n(), TRI[0], TRI[1]).expect("declined");
+        let d = edge_derivs_checked(x, n(), TRI[0], TRI[1], Order::Hessian).expect("declined");
+        let r = crate::kernels::form_factor::edge_form_factor_fast(
+            x,
+            n(),
+            TRI[0],
+            TRI[1],
+            Order::Hessian,
+        )
+        .unwrap();
+        assert!(rel(f, r.value) < 1e-14 && rel(d.value, r.value) < 1e-14);
+    }
+}
