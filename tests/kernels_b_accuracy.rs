@@ -339,3 +339,65 @@ fn edge_term_generic_and_near_line() {
     ok &= report("edge term 1e-9..1e-5 off its line", &extreme, HARD, HARD);
     assert!(ok, "errors exceed the targets");
 }
+
+/// `triangle_form_factor` has fast paths of its own (a certified Lambert sum, then a replay of the
+/// robust path's decisions) that `polygon_form_factor` does not take: the same 320-bit reference,
+/// through that entry point, for generic points and along walks from generic towards an edge line
+/// and towards the triangle's plane, where the fast paths hand over to the robust one.
+#[test]
+fn triangle_entry_point_generic_and_across_its_switches() {
+    let mut big = Big::new();
+    let mut rng = Rng(11);
+    let (mut generic, mut walks) = (Worst::default(), Worst::default());
+    let check = |big: &mut Big, x: DVec3, n: DVec3, t: &[DVec3; 3], worst: &mut Worst| {
+        let reference = big.polygon_reference(x, n, t, true);
+        let h = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian)
+            .unwrap_or_else(|e| panic!("{e} for x={x:?} n={n:?} t={t:?}"));
+        let v = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Value).unwrap();
+        assert_eq!(v.value, h.value, "value depends on the order");
+        worst.add(
+            rel_scalar(h.value, reference.value, 1e-300),
+            rel_vec(h.gradient, reference.gradient, 1e-300),
+            rel_mat(h.hessian, reference.hessian, 1e-300),
+        );
+    };
+    for _ in 0..40 {
+        let s = scale(&mut rng);
+        let t = random_triangle(&mut rng, s);
+        let normal = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+        let c = (t[0] + t[1] + t[2]) / 3.0;
+        // generic: 0.5-3 sizes above the triangle, tangent plane facing it without clipping
+        let x = c + normal * s * rng.range(0.5, 3.0) + rng.vec(0.5 * s);
+        let side = if normal.dot(c - x) > 0.0 {
+            normal
+        } else {
+            -normal
+        };
+        if t.iter().all(|v| side.dot(*v - x) > 0.0) {
+            check(&mut big, x, side, &t, &mut generic);
+        }
+        // walks, down to the documented hard regimes: from 1 size away to 1e-5 sizes from a point
+        // on an edge, and from above the centroid to 1e-6 sizes from the plane
+        let i = (rng.next_u64() % 3) as usize;
+        let q = t[i] + rng.range(0.1, 0.9) * (t[(i + 1) % 3] - t[i]);
+        let away = rng.unit();
+        for k in 0..=12 {
+            let d = s * 10f64.powf(-0.5 * k as f64);
+            if k <= 10 {
+                let x = q + away * d;
+                let n = facing_normal(&mut rng, x, &t);
+                check(&mut big, x, n, &t, &mut walks);
+            }
+            let x = c + normal * d;
+            check(&mut big, x, -normal, &t, &mut walks);
+        }
+    }
+    let mut ok = report("triangle entry, generic", &generic, GENERIC, GENERIC);
+    ok &= report("triangle entry, walks", &walks, HARD, HARD);
+    assert!(
+        generic.count > 10,
+        "too few generic cases: {}",
+        generic.count
+    );
+    assert!(ok, "errors exceed the targets");
+}

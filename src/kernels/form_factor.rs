@@ -92,6 +92,27 @@ pub fn edge_form_factor(x: DVec3, n: DVec3, a: DVec3, b: DVec3, order: Order) ->
     } else if let Some(d) = lambert::edge_derivs_checked(x, n, a, b, order) {
         return Ok(d);
     }
+    let d = edge_form_factor_slow(x, n, a, b, order)?;
+    // The value must not depend on the order asked for: where Lambert's value is certified but
+    // its derivatives are not, the derivatives come from the paths below and the value from it.
+    Ok(with_lambert_value(d, order, || {
+        lambert::edge_value(x, n, a, b)
+    }))
+}
+
+/// The value a fast Lambert call would have given for `Order::Value`, put into `d`.
+#[inline]
+fn with_lambert_value(mut d: Deriv3, order: Order, value: impl FnOnce() -> Option<f64>) -> Deriv3 {
+    if order != Order::Value {
+        if let Some(f) = value() {
+            d.value = f;
+        }
+    }
+    d
+}
+
+/// [`edge_form_factor`] without the Lambert fast path.
+fn edge_form_factor_slow(x: DVec3, n: DVec3, a: DVec3, b: DVec3, order: Order) -> Result<Deriv3> {
     if let Some(d) = edge_form_factor_fast(x, n, a, b, order) {
         return Ok(d);
     }
@@ -132,10 +153,13 @@ pub fn triangle_form_factor(
     } else if let Some(d) = lambert::triangle_derivs(x, n, [a, b, c], order) {
         return Ok(d);
     }
-    if let Some(d) = triangle_form_factor_fast(x, n, [a, b, c], order) {
-        return Ok(d);
-    }
-    polygon_form_factor(x, n, &[a, b, c], order)
+    let d = match triangle_form_factor_fast(x, n, [a, b, c], order) {
+        Some(d) => d,
+        None => polygon_form_factor(x, n, &[a, b, c], order)?,
+    };
+    Ok(with_lambert_value(d, order, || {
+        lambert::triangle_value(x, n, [a, b, c])
+    }))
 }
 
 /// Form factor from a differential area at `x` with unit normal `n` to a planar simple polygon:

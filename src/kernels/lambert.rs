@@ -152,7 +152,9 @@ fn edge_derivs(
     let c = ra.dot(rb);
     let beta = s.atan2(c);
     let inv_s = 1.0 / s;
-    let g = beta * inv_s;
+    // Divided as `edge` divides (not `beta * inv_s`): the value must have the same bits whatever
+    // the order asked for.
+    let g = beta / s;
     let nw = n.dot(w);
     let p = s2 + c * c;
     let steep = s2 >= DERIV_MIN_SINE * DERIV_MIN_SINE * p;
