@@ -85,17 +85,17 @@ pub(crate) fn edge_value(x: DVec3, n: DVec3, a: DVec3, b: DVec3) -> Option<f64> 
     Some(f * scale)
 }
 
-/// The value of [`triangle_form_factor`](super::triangle_form_factor) by Lambert's sum when every
-/// vertex is certainly above the tangent plane (nothing clipped) and the running error bound is
-/// within [`FAST_TOLERANCE`] of the result; `None` otherwise or for invalid input.
+/// The unit normal, `r_k = v_k − x` and `‖r_k‖²` of a triangle both fast paths may take: every
+/// `r_k` in range and every vertex certainly above the tangent plane (nothing to clip); `None`
+/// otherwise or for a normal outside the unit tolerance.
+#[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
-pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
+fn unclipped_triangle(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<(DVec3, [DVec3; 3], [f64; 3])> {
     let r = [v[0] - x, v[1] - x, v[2] - x];
     if !(in_range(r[0]) && in_range(r[1]) && in_range(r[2])) {
         return None;
     }
     let n = unit(n)?;
-    let scale = INV_2PI;
     // Heights over the tangent plane: above 8u·(|n|·|r|) the exact height is positive (see the
     // robust fast path), so nothing is clipped.
     for rk in &r {
@@ -103,11 +103,16 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
             return None;
         }
     }
-    let r2 = [
-        r[0].length_squared(),
-        r[1].length_squared(),
-        r[2].length_squared(),
-    ];
+    Some((n, r, r.map(|rk| rk.length_squared())))
+}
+
+/// The value of [`triangle_form_factor`](super::triangle_form_factor) by Lambert's sum when every
+/// vertex is certainly above the tangent plane (nothing clipped) and the running error bound is
+/// within [`FAST_TOLERANCE`] of the result; `None` otherwise or for invalid input.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
+    let (n, r, r2) = unclipped_triangle(x, n, v)?;
+    let scale = INV_2PI;
     let (f0, e0) = edge(n, r[0], r[1], v[1] - v[0], r2[0]);
     let (f1, e1) = edge(n, r[1], r[2], v[2] - v[1], r2[1]);
     let (f2, e2) = edge(n, r[2], r[0], v[0] - v[2], r2[2]);
@@ -211,22 +216,8 @@ fn deriv_size(d: &Deriv3, order: Order) -> (f64, f64) {
 /// neither the gradient nor the Hessian sum cancels by more than 100x; `None` otherwise.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Deriv3> {
-    let r = [v[0] - x, v[1] - x, v[2] - x];
-    if !(in_range(r[0]) && in_range(r[1]) && in_range(r[2])) {
-        return None;
-    }
-    let n = unit(n)?;
+    let (n, r, r2) = unclipped_triangle(x, n, v)?;
     let scale = INV_2PI;
-    for rk in &r {
-        if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
-            return None;
-        }
-    }
-    let r2 = [
-        r[0].length_squared(),
-        r[1].length_squared(),
-        r[2].length_squared(),
-    ];
     let (d0, e0, s0) = edge_derivs(n, r[0], r[1], v[1] - v[0], r2[0], order);
     let (d1, e1, s1) = edge_derivs(n, r[1], r[2], v[2] - v[1], r2[1], order);
     let (d2, e2, s2) = edge_derivs(n, r[2], r[0], v[0] - v[2], r2[2], order);

@@ -210,23 +210,14 @@ fn solid_angle_unchecked(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) ->
     out.gradient = (grad_a * d_den - grad_d * a_num) * (2.0 * inv_g);
 
     if order.hessian() {
-        let s_sum = s[0] + s[1] + s[2];
-        let u = [r[0] * inv_s[0], r[1] * inv_s[1], r[2] * inv_s[2]];
-        let u_sum = u[0] + u[1] + u[2];
-        // Scalars multiply u uᵀ after the outer product so that every term is exactly symmetric.
-        let mut hess_d =
-            DMat3::from_diagonal(DVec3::splat(c[0] + c[1] + c[2])) + outer(u_sum, u_sum) * s_sum;
-        for k in 0..3 {
-            hess_d -= outer(u[k], u[k]) * (s_sum + p[k] * inv_s[k]);
-        }
-        let inv_g2 = inv_g * inv_g;
-        let q = 2.0 * d_den * a_num * inv_g2;
-        let m = (d_den * d_den - a_num * a_num) * inv_g2;
-        let ad = outer(grad_a, grad_d);
-        out.hessian = (hess_d * (-a_num * inv_g)
-            - (outer(grad_a, grad_a) - outer(grad_d, grad_d)) * q
-            - (ad + ad.transpose()) * m)
-            * 2.0;
+        out.hessian = hessian_of_parts(
+            &Parts { r, s, inv_s, p, c },
+            a_num,
+            d_den,
+            inv_g,
+            grad_a,
+            grad_d,
+        );
     }
 
     Ok(rescale(out, sc1, sc2))
@@ -350,6 +341,49 @@ pub(crate) fn rescale(mut d: Deriv3, f1: f64, f2: f64) -> Deriv3 {
     d.gradient = d.gradient * f1 * f2;
     d.hessian = d.hessian * f1 * f1 * f2 * f2;
     d
+}
+
+/// The per-vertex pieces of Van Oosterom-Strackee that both evaluations compute: `r_k = y_k − x`,
+/// `s_k = |r_k|`, their reciprocals, `p_k` (`p_0 = s_1 s_2 + r_1·r_2`, cyclic) and
+/// `c_k = p_k/s_k + s_{k+1} + s_{k+2}`.
+struct Parts {
+    r: [DVec3; 3],
+    s: [f64; 3],
+    inv_s: [f64; 3],
+    p: [f64; 3],
+    c: [f64; 3],
+}
+
+/// Hessian of `Ω = 2 atan2(A, D)` from the parts, `A`, `D`, `1/(A² + D²)` and the gradients of
+/// `A` and `D`: `HΩ = 2[−A HD/g − (2AD(aaᵀ − ddᵀ) + (D² − A²)(adᵀ + daᵀ))/g²]`, `a = ∇A`,
+/// `d = ∇D` (`HA = 0`: A is linear in x).
+#[inline(always)]
+fn hessian_of_parts(
+    parts: &Parts,
+    a_num: f64,
+    d_den: f64,
+    inv_g: f64,
+    grad_a: DVec3,
+    grad_d: DVec3,
+) -> DMat3 {
+    let Parts { r, s, inv_s, p, c } = parts;
+    let s_sum = s[0] + s[1] + s[2];
+    let u = [r[0] * inv_s[0], r[1] * inv_s[1], r[2] * inv_s[2]];
+    let u_sum = u[0] + u[1] + u[2];
+    // Scalars multiply u uᵀ after the outer product so that every term is exactly symmetric.
+    let mut hess_d =
+        DMat3::from_diagonal(DVec3::splat(c[0] + c[1] + c[2])) + outer(u_sum, u_sum) * s_sum;
+    for k in 0..3 {
+        hess_d -= outer(u[k], u[k]) * (s_sum + p[k] * inv_s[k]);
+    }
+    let inv_g2 = inv_g * inv_g;
+    let q = 2.0 * d_den * a_num * inv_g2;
+    let m = (d_den * d_den - a_num * a_num) * inv_g2;
+    let ad = outer(grad_a, grad_d);
+    (hess_d * (-a_num * inv_g)
+        - (outer(grad_a, grad_a) - outer(grad_d, grad_d)) * q
+        - (ad + ad.transpose()) * m)
+        * 2.0
 }
 
 #[inline]
@@ -507,21 +541,14 @@ pub(crate) fn solid_angle_fast(
 
     if order.hessian() {
         let s_sum = s[0] + s[1] + s[2];
-        let u = [r[0] * inv_s[0], r[1] * inv_s[1], r[2] * inv_s[2]];
-        let u_sum = u[0] + u[1] + u[2];
-        let mut hess_d =
-            DMat3::from_diagonal(DVec3::splat(c[0] + c[1] + c[2])) + outer(u_sum, u_sum) * s_sum;
-        for k in 0..3 {
-            hess_d -= outer(u[k], u[k]) * (s_sum + p[k] * inv_s[k]);
-        }
-        let inv_g2 = inv_g * inv_g;
-        let qq = 2.0 * d_den * a_num * inv_g2;
-        let m = (d_den * d_den - a_num * a_num) * inv_g2;
-        let ad = outer(grad_a, grad_d);
-        out.hessian = (hess_d * (-a_num * inv_g)
-            - (outer(grad_a, grad_a) - outer(grad_d, grad_d)) * qq
-            - (ad + ad.transpose()) * m)
-            * 2.0;
+        out.hessian = hessian_of_parts(
+            &Parts { r, s, inv_s, p, c },
+            a_num,
+            d_den,
+            inv_g,
+            grad_a,
+            grad_d,
+        );
         let w = s[1] * s[2] * inv_s[0] + s[2] * s[0] * inv_s[1] + s[0] * s[1] * inv_s[2];
         let hd_mag = 4.0 * w + 14.0 * s_sum;
         let err_hd = 40.0 * U * hd_mag;
