@@ -12,16 +12,18 @@
 #![allow(clippy::needless_range_loop)] // index loops mirror the finite-difference stencils
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use glam::{DMat3, DVec2, DVec3};
+use glam::{DVec2, DVec3};
 use nalgebra::{SMatrix, SVector};
 use num_dual::{Dual2SVec64, DualNum};
-use raddiff::{kernels, Deriv3, Order};
+use raddiff::{kernels, Order};
 use std::hint::black_box;
 
+mod baselines;
 #[path = "../tests/kernels_a_ref/mod.rs"]
 mod reference;
 
-type D3 = Dual2SVec64<3>;
+use baselines::{dual_hessian3, fd_hessian3, textbook_solid_angle, D3};
+
 type D2 = Dual2SVec64<2>;
 
 // ------------------------------------------------------------------------------------------------
@@ -35,28 +37,6 @@ fn fd_gradient3(f: &dyn Fn(DVec3) -> f64, x: DVec3, h: f64) -> DVec3 {
         g[i] = (f(x + e) - f(x - e)) / (2.0 * h);
     }
     g
-}
-
-fn fd_hessian3(f: &dyn Fn(DVec3) -> f64, x: DVec3, h: f64) -> DMat3 {
-    let f0 = f(x);
-    let mut m = [[0.0; 3]; 3];
-    let unit = |i: usize| {
-        let mut e = DVec3::ZERO;
-        e[i] = h;
-        e
-    };
-    for i in 0..3 {
-        let ei = unit(i);
-        m[i][i] = (f(x + ei) - 2.0 * f0 + f(x - ei)) / (h * h);
-        for j in (i + 1)..3 {
-            let ej = unit(j);
-            let v =
-                (f(x + ei + ej) - f(x + ei - ej) - f(x - ei + ej) + f(x - ei - ej)) / (4.0 * h * h);
-            m[i][j] = v;
-            m[j][i] = v;
-        }
-    }
-    DMat3::from_cols_array_2d(&m)
 }
 
 fn fd_gradient2(f: &dyn Fn(DVec2) -> f64, x: DVec2, h: f64) -> DVec2 {
@@ -79,37 +59,6 @@ fn fd_hessian2(f: &dyn Fn(DVec2) -> f64, x: DVec2, h: f64) -> [f64; 3] {
 
 // ------------------------------------------------------------------------------------------------
 // Dual-number baselines: the same value formulas on num-dual's Dual2Vec.
-
-/// The textbook Van Oosterom-Strackee formula, `2 atan2(|r_0·(r_1×r_2)|, D)`, as a user writes it
-/// (generic over f64 and dual numbers).
-fn textbook_solid_angle<D: DualNum<Primitive = f64> + Copy>(
-    x: [D; 3],
-    a: DVec3,
-    b: DVec3,
-    c: DVec3,
-) -> D {
-    let r = [a, b, c].map(|y| {
-        [
-            D::from(y.x) - x[0],
-            D::from(y.y) - x[1],
-            D::from(y.z) - x[2],
-        ]
-    });
-    let dot = |p: &[D; 3], q: &[D; 3]| p[0] * q[0] + p[1] * q[1] + p[2] * q[2];
-    let s = r.each_ref().map(|v| dot(v, v).sqrt());
-    let cross = [
-        r[1][1] * r[2][2] - r[1][2] * r[2][1],
-        r[1][2] * r[2][0] - r[1][0] * r[2][2],
-        r[1][0] * r[2][1] - r[1][1] * r[2][0],
-    ];
-    let a_num = dot(&r[0], &cross);
-    let d = s[0] * s[1] * s[2]
-        + dot(&r[0], &r[1]) * s[2]
-        + dot(&r[1], &r[2]) * s[0]
-        + dot(&r[2], &r[0]) * s[1];
-    let a_abs = if a_num.re() < 0.0 { -a_num } else { a_num };
-    a_abs.atan2(d) * 2.0
-}
 
 fn textbook_sa(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
     textbook_solid_angle(p.to_array(), a, b, c)
@@ -137,26 +86,6 @@ fn transmittance_dual(x: &SVector<D3, 3>, y: DVec3, sigma: f64) -> D3 {
     let d = [x[0] - y.x, x[1] - y.y, x[2] - y.z];
     let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
     (-(dist * sigma)).exp()
-}
-
-fn dual_hessian3(f: impl Fn(&SVector<D3, 3>) -> D3, x: DVec3) -> Deriv3 {
-    let (v, g, h): (f64, SVector<f64, 3>, SMatrix<f64, 3, 3>) =
-        num_dual::hessian(|v: SVector<D3, 3>| f(&v), &SVector::from([x.x, x.y, x.z]));
-    Deriv3 {
-        value: v,
-        gradient: DVec3::new(g[0], g[1], g[2]),
-        hessian: DMat3::from_cols_array(&[
-            h[(0, 0)],
-            h[(1, 0)],
-            h[(2, 0)],
-            h[(0, 1)],
-            h[(1, 1)],
-            h[(2, 1)],
-            h[(0, 2)],
-            h[(1, 2)],
-            h[(2, 2)],
-        ]),
-    }
 }
 
 fn dual_hessian2(f: impl Fn(&SVector<D2, 2>) -> D2, x: DVec2) -> (f64, DVec2, [f64; 3]) {

@@ -11,6 +11,8 @@
 //! independent 320-bit evaluation (astro-float, central differences with a step far below every
 //! length scale). `cargo bench --bench kernels_a` / `kernels_b` has the criterion measurements.
 
+#[path = "../benches/baselines/mod.rs"]
+mod baselines;
 #[path = "../tests/kernels_a_ref/mod.rs"]
 mod reference_a;
 #[path = "../tests/kernels_b_common/mod.rs"]
@@ -19,9 +21,9 @@ mod reference_b;
 use std::hint::black_box;
 use std::time::Instant;
 
+use baselines::{dual_hessian3, fd_hessian3, textbook_solid_angle, D3};
 use glam::{DMat3, DVec2, DVec3};
-use nalgebra::{SMatrix, SVector};
-use num_dual::{Dual2SVec64, DualNum};
+use num_dual::DualNum;
 use raddiff::{kernels, Deriv3, Order};
 
 /// Relative max-norm error of a matrix normalized by its largest reference entry.
@@ -54,50 +56,6 @@ fn min_ns(variants: &mut [&mut dyn FnMut()]) -> Vec<f64> {
     best
 }
 
-/// Central finite-difference Hessian of a scalar function (19 evaluations), the baseline a user
-/// would otherwise write; the step balances truncation and rounding for the case's scale.
-fn fd_hessian(x: DVec3, h: f64, f: &dyn Fn(DVec3) -> f64) -> DMat3 {
-    let e = [DVec3::X * h, DVec3::Y * h, DVec3::Z * h];
-    let f0 = f(x);
-    let mut m = [[0.0; 3]; 3];
-    for i in 0..3 {
-        m[i][i] = (f(x + e[i]) - 2.0 * f0 + f(x - e[i])) / (h * h);
-        for j in (i + 1)..3 {
-            let v = (f(x + e[i] + e[j]) - f(x + e[i] - e[j]) - f(x - e[i] + e[j])
-                + f(x - e[i] - e[j]))
-                / (4.0 * h * h);
-            m[i][j] = v;
-            m[j][i] = v;
-        }
-    }
-    DMat3::from_cols_array_2d(&m)
-}
-
-type D3 = Dual2SVec64<3>;
-
-/// Value, gradient and Hessian of a formula written on num-dual's second-order dual numbers.
-fn dual_hessian(f: &dyn Fn(&[D3; 3]) -> D3, x: DVec3) -> Deriv3 {
-    let (v, g, h): (f64, SVector<f64, 3>, SMatrix<f64, 3, 3>) = num_dual::hessian(
-        |p: SVector<D3, 3>| f(&[p[0], p[1], p[2]]),
-        &SVector::from([x.x, x.y, x.z]),
-    );
-    Deriv3 {
-        value: v,
-        gradient: DVec3::new(g[0], g[1], g[2]),
-        hessian: DMat3::from_cols_array(&[
-            h[(0, 0)],
-            h[(1, 0)],
-            h[(2, 0)],
-            h[(0, 1)],
-            h[(1, 1)],
-            h[(2, 1)],
-            h[(0, 2)],
-            h[(1, 2)],
-            h[(2, 2)],
-        ]),
-    }
-}
-
 // ------------------------------------------------------------------------------------------------
 // The textbook value formulas, written as a user would (generic over f64 and dual numbers).
 
@@ -119,19 +77,6 @@ fn cross3<D: DualNum<Primitive = f64> + Copy>(a: &[D; 3], b: &[D; 3]) -> [D; 3] 
         a[2] * b[0] - a[0] * b[2],
         a[0] * b[1] - a[1] * b[0],
     ]
-}
-
-/// Van Oosterom-Strackee: `Ω = 2 atan2(|r_0·(r_1×r_2)|, s_0 s_1 s_2 + (r_0·r_1) s_2 + …)`.
-fn textbook_solid_angle<D: DualNum<Primitive = f64> + Copy>(x: &[D; 3], t: &[DVec3; 3]) -> D {
-    let r = t.map(|v| sub3(v, x));
-    let s = r.map(|v| dot3(&v, &v).sqrt());
-    let num = dot3(&r[0], &cross3(&r[1], &r[2]));
-    let num = if num.re() < 0.0 { -num } else { num };
-    let den = s[0] * s[1] * s[2]
-        + dot3(&r[0], &r[1]) * s[2]
-        + dot3(&r[1], &r[2]) * s[0]
-        + dot3(&r[2], &r[0]) * s[1];
-    num.atan2(den) * 2.0
 }
 
 /// Lambert's per-edge sum (unclipped: the cases keep the triangle above the tangent plane, except
@@ -239,8 +184,8 @@ fn measure3(
 ) -> Row {
     let d = (k.raddiff)(x, Order::Hessian).expect("kernel failed on a demo configuration");
     let textbook = |p: DVec3| (k.textbook)(&point(p));
-    let fd = fd_hessian(x, fd_step, &textbook);
-    let dual = dual_hessian(k.dual, x);
+    let fd = fd_hessian3(&textbook, x, fd_step);
+    let dual = dual_hessian3(|p| (k.dual)(&[p[0], p[1], p[2]]), x);
     let ns = min_ns(&mut [
         &mut || {
             black_box(textbook(black_box(x)));
@@ -255,10 +200,13 @@ fn measure3(
             black_box((k.raddiff)(black_box(x), Order::Hessian).ok());
         },
         &mut || {
-            black_box(fd_hessian(black_box(x), fd_step, &textbook));
+            black_box(fd_hessian3(&textbook, black_box(x), fd_step));
         },
         &mut || {
-            black_box(dual_hessian(k.dual, black_box(x)));
+            black_box(dual_hessian3(
+                |p| (k.dual)(&[p[0], p[1], p[2]]),
+                black_box(x),
+            ));
         },
     ]);
     Row {
@@ -322,8 +270,8 @@ fn main() {
             (r.value, r.gradient, r.hessian),
             Kernel {
                 raddiff: &|p, o| kernels::triangle_solid_angle(p, t[0], t[1], t[2], o),
-                textbook: &|p| textbook_solid_angle(p, &t),
-                dual: &|p| textbook_solid_angle(p, &t),
+                textbook: &|p| textbook_solid_angle(*p, t[0], t[1], t[2]),
+                dual: &|p| textbook_solid_angle(*p, t[0], t[1], t[2]),
             },
         ));
     }
