@@ -1,0 +1,106 @@
+//! The form factor's rule switches in the far field (issue 18): on both sides of every switch of
+//! the far-field quadrature, the triangle and polygon entry points against the 320-bit astro-float
+//! reference of `kernels_b_common`, at the generic accuracy contract, and continuity across each
+//! switch. Run with `--nocapture` to see the worst errors per switch.
+
+mod kernels_b_common;
+
+use glam::DVec3;
+use kernels_b_common::*;
+use raddiff::{kernels, Deriv3, Order};
+
+/// The distance-over-radius ratios at which the far-field rule changes (`FAR_FIELD_RULES` in
+/// `src/kernels/polygon.rs`; 16 is the switch from the edge sum to quadrature).
+const SWITCHES: [f64; 5] = [16.0, 100.0, 280.0, 1.5e3, 3.6e4];
+
+const GENERIC: [f64; 3] = [1e-12, 1e-12, 1e-10];
+/// Largest relative change across a switch: the two sides are 2e-14 apart in distance (the
+/// function itself changes by ~1e-13 there), so this is the two rules' disagreement.
+const JUMP: [f64; 3] = [3e-13, 3e-13, 3e-12];
+
+fn errors(d: &Deriv3, r: &Reference) -> [f64; 3] {
+    [
+        rel_scalar(d.value, r.value, 1e-300),
+        rel_vec(d.gradient, r.gradient, 1e-300),
+        rel_mat(d.hessian, r.hessian, 1e-300),
+    ]
+}
+
+/// Relative differences between the two sides of a switch, normalized like the errors.
+fn jump(p: &Deriv3, q: &Deriv3) -> [f64; 3] {
+    let r = Reference {
+        value: q.value,
+        gradient: q.gradient,
+        hessian: q.hessian,
+    };
+    errors(p, &r)
+}
+
+fn max3(a: &mut [f64; 3], b: [f64; 3]) {
+    for k in 0..3 {
+        a[k] = a[k].max(b[k]);
+    }
+}
+
+#[test]
+fn far_field_rule_switches_against_the_reference() {
+    let mut big = Big::new();
+    let mut rng = Rng(18);
+    let mut ok = true;
+    for ratio in SWITCHES {
+        let (mut worst, mut worst_jump, mut count) = ([0.0f64; 3], [0.0f64; 3], 0);
+        for k in 0..8 {
+            let s = 10f64.powf(rng.range(-3.0, 3.0));
+            let t = loop {
+                let t = [rng.vec(s), rng.vec(s), rng.vec(s)];
+                if (t[1] - t[0]).cross(t[2] - t[0]).length() > 0.05 * s * s {
+                    break t;
+                }
+            };
+            let c = (t[0] + t[1] + t[2]) / 3.0;
+            let radius = t.iter().map(|v| (*v - c).length()).fold(0.0, f64::max);
+            let dir = rng.unit();
+            // Even k: the receiver faces the triangle (nothing clipped: the triangle entry point's
+            // far-field fast path); odd k: a random normal that clips part of it or none.
+            let n = if k % 2 == 0 {
+                let towards = -dir;
+                (towards + rng.unit() * 0.3).normalize()
+            } else {
+                loop {
+                    let n = rng.unit();
+                    let x = c + dir * ratio * radius;
+                    if t.iter().any(|v| n.dot(*v - x) > 0.0) {
+                        break n;
+                    }
+                }
+            };
+            let mut sides = Vec::new();
+            for side in [1.0 - 1e-14, 1.0 + 1e-14] {
+                let x = c + dir * (ratio * radius * side);
+                let r = big.polygon_reference(x, n, &t, true);
+                let tri =
+                    kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
+                let poly = kernels::polygon_form_factor(x, n, &t, Order::Hessian).unwrap();
+                let value = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Value)
+                    .unwrap()
+                    .value;
+                assert_eq!(value, tri.value, "value depends on the order");
+                max3(&mut worst, errors(&tri, &r));
+                max3(&mut worst, errors(&poly, &r));
+                count += 2;
+                sides.push(tri);
+            }
+            max3(&mut worst_jump, jump(&sides[0], &sides[1]));
+        }
+        println!(
+            "switch at {ratio:>7}: n={count:<3} worst error value {:.1e} gradient {:.1e} Hessian {:.1e}; jump across {:.1e} {:.1e} {:.1e}",
+            worst[0], worst[1], worst[2], worst_jump[0], worst_jump[1], worst_jump[2]
+        );
+        ok &= worst.iter().zip(GENERIC).all(|(e, t)| *e <= t);
+        ok &= worst_jump.iter().zip(JUMP).all(|(e, t)| *e <= t);
+    }
+    assert!(
+        ok,
+        "errors exceed the generic targets or the jumps {JUMP:?}"
+    );
+}
