@@ -104,3 +104,53 @@ fn far_field_rule_switches_against_the_reference() {
         "errors exceed the generic targets or the jumps {JUMP:?}"
     );
 }
+
+const HARD: [f64; 3] = [1e-10, 1e-9, 1e-8];
+
+/// Slivers: walks the apex height from 3e-3 down to 3e-6 of the length, across the switch from
+/// the edge sum (cancelling by up to `THIN_CANCELLATION_LIMIT` = 1e4, about the inverse aspect
+/// ratio) to the subdivided quadrature, through both entry points, against the reference at the
+/// hard-regime contract.
+#[test]
+fn slivers_across_the_edge_sum_limit_against_the_reference() {
+    let mut big = Big::new();
+    let mut rng = Rng(1804);
+    let mut worst = [0.0f64; 3];
+    let mut count = 0;
+    for _ in 0..6 {
+        let s = 10f64.powf(rng.range(-3.0, 3.0));
+        let a = rng.vec(s);
+        let b = a + rng.unit() * s;
+        let perp = (b - a).any_orthonormal_vector();
+        let foot = a + (b - a) * rng.range(0.2, 0.8);
+        let x = (a + b) * 0.5 + rng.vec(s);
+        for k in 0..13 {
+            let height = 10f64.powf(-2.5 - 0.25 * k as f64);
+            let t = [a, b, foot + perp * (s * height)];
+            let n = loop {
+                let n = rng.unit();
+                if t.iter().all(|v| n.dot(*v - x) > 0.0) {
+                    break n;
+                }
+            };
+            let r = big.polygon_reference(x, n, &t, true);
+            let tri =
+                kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
+            let value =
+                kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Value).unwrap();
+            assert_eq!(value.value, tri.value, "value depends on the order");
+            let poly = kernels::polygon_form_factor(x, n, &t, Order::Hessian).unwrap();
+            max3(&mut worst, errors(&tri, &r));
+            max3(&mut worst, errors(&poly, &r));
+            count += 2;
+        }
+    }
+    println!(
+        "slivers, apex 3e-3..3e-6: n={count} worst error value {:.1e} gradient {:.1e} Hessian {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(
+        worst.iter().zip(HARD).all(|(e, t)| *e <= t),
+        "errors exceed the hard-regime targets"
+    );
+}
