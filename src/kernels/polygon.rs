@@ -508,6 +508,11 @@ fn gauss_legendre_16() -> &'static [(f64, f64); 16] {
     RULE.get_or_init(legendre_rule::<16>)
 }
 
+/// Above this ratio of `Σ|edge term|` to `|Σ edge term|` (the sum has lost a bit or more), the
+/// value near the plane is recomputed by [`near_plane_value`]; below, the plain sum has lost less
+/// than one bit to cancellation.
+const NEAR_PLANE_CANCELLATION: f64 = 2.0;
+
 /// Below this `|h_P| / d_e` for every edge (x close to the polygon's plane compared with its
 /// distance to every edge line, in the plane), the value is recomputed by [`near_plane_value`].
 const NEAR_PLANE_RATIO: f64 = 0.1;
@@ -919,8 +924,14 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                 q
             }
             None => {
-                if let Some(v) = near_plane_value(&verts, n, plane.normal, h_p)? {
-                    sum.value = v;
+                // Without cancellation the plain sum is accurate (every term to a few ulps of its
+                // own size), also near the plane: x above the polygon's interior, where the terms
+                // share a sign. Only a cancelling sum needs the near-plane split (and its 16-point
+                // integrals per edge).
+                if magnitude > NEAR_PLANE_CANCELLATION * sum.value.abs() {
+                    if let Some(v) = near_plane_value(&verts, n, plane.normal, h_p)? {
+                        sum.value = v;
+                    }
                 }
                 sum
             }
