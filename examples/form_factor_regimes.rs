@@ -32,10 +32,13 @@ fn cases() -> Vec<Case> {
         DVec3::new(1.0, 0.0, 1.0),
         DVec3::new(0.5, 1e-4, 1.0),
     ];
+    let sliver_6 = [sliver[0], sliver[1], DVec3::new(0.5, 1e-6, 1.0)];
     let normal = DVec3::new(0.1, -0.2, 1.0).normalize();
     let plane_n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
     let centroid = (tri[0] + tri[1] + tri[2]) / 3.0;
     let far_dir = DVec3::new(-0.3, -0.2, -1.0).normalize();
+    // In the triangle's plane, beyond edge (0, 1): the tangent plane clips the triangle.
+    let outside = (tri[0] + tri[1]) * 0.5 + (tri[0] + tri[1] - tri[2] * 2.0) * 0.1;
     let list = [
         ("generic", tri, DVec3::new(0.3, 0.2, 0.1)),
         ("1e-6 above the plane", tri, centroid - plane_n * 1e-6),
@@ -43,6 +46,12 @@ fn cases() -> Vec<Case> {
         ("1e4 sizes away", tri, centroid + far_dir * 1e4),
         ("1e6 sizes away", tri, centroid + far_dir * 1e6),
         ("sliver", sliver, DVec3::new(0.4, 0.1, 0.3)),
+        ("sliver, apex 1e-6", sliver_6, DVec3::new(0.4, 0.1, 0.3)),
+        (
+            "1e-6 from the plane, outside",
+            tri,
+            outside - plane_n * 1e-6,
+        ),
     ];
     list.into_iter()
         .map(|(name, tri, x)| {
@@ -82,11 +91,24 @@ fn main() {
         return;
     }
     let cases = cases();
-    let (rounds, calls) = (40, 1000);
+    let (rounds, max_calls) = (40, 1000);
+    // Calls per round: up to 1000, fewer for the slow cases (about 2 ms a round).
+    let calls: Vec<[usize; 3]> = cases
+        .iter()
+        .map(|c| {
+            orders.map(|order| {
+                let start = Instant::now();
+                call(c, order);
+                let ns = start.elapsed().as_secs_f64() * 1e9;
+                ((2e6 / ns) as usize).clamp(1, max_calls)
+            })
+        })
+        .collect();
     let mut best = vec![[f64::INFINITY; 3]; cases.len()];
     for _ in 0..rounds {
         for (k, c) in cases.iter().enumerate() {
             for (o, order) in orders.iter().enumerate() {
+                let calls = calls[k][o];
                 let start = Instant::now();
                 for _ in 0..calls {
                     call(c, *order);
@@ -102,5 +124,5 @@ fn main() {
         let cell = |o: usize| format!("{:.0} ({:.2}x)", best[k][o], best[k][o] / best[0][o]);
         println!("| {} | {} | {} | {} |", c.name, cell(0), cell(1), cell(2));
     }
-    println!("\nns per call, minimum over {rounds} interleaved rounds of {calls} calls; ratios to the generic case at the same order.");
+    println!("\nns per call, minimum over {rounds} interleaved rounds of up to {max_calls} calls (about 2 ms a round for the slow cases); ratios to the generic case at the same order.");
 }
