@@ -87,35 +87,49 @@ pub(crate) struct Scaled {
 
 impl Scaled {
     pub(crate) fn new(x: DVec3, vertices: &[DVec3]) -> Result<Self> {
-        let attempt = |pre: f64| -> (Points, Points) {
+        // Filled in place with pushes: collecting into fresh small vectors and moving them into
+        // the result cost about as much as the rest of a near-plane evaluation's set-up.
+        let mut out = Scaled {
+            u: Points::new(),
+            r: Points::new(),
+            r_lo: Points::new(),
+            inv_scale: 1.0,
+        };
+        let mut pre = 1.0;
+        for attempt in 0..2 {
+            if attempt == 1 {
+                // Differences of coordinates near ±f64::MAX overflow: scale first (exactly).
+                pre = pow2(-4);
+                out.u.clear();
+                out.r.clear();
+                out.r_lo.clear();
+            }
             let v0 = vertices[0] * pre;
             let xs = x * pre;
-            let u = vertices.iter().map(|v| *v * pre - v0).collect();
-            let r = vertices.iter().map(|v| *v * pre - xs).collect();
-            (u, r)
-        };
-        let finite = |p: &Points| p.iter().all(|v| v.is_finite());
-        let mut pre = 1.0;
-        let (mut u, mut r) = attempt(pre);
-        if !finite(&u) || !finite(&r) {
-            // Differences of coordinates near ±f64::MAX overflow: scale first (exactly).
-            pre = pow2(-4);
-            (u, r) = attempt(pre);
-        }
-        // The rounding error of each difference (two-sum): cheap, and lets near-singular
-        // configurations be evaluated from exact coordinate differences.
-        let xs = x * pre;
-        let mut r_lo: Points = vertices
-            .iter()
-            .map(|v| {
+            let mut finite = true;
+            for v in vertices {
                 let vs = *v * pre;
+                let (u, r) = (vs - v0, vs - xs);
+                finite &= u.is_finite() && r.is_finite();
+                // The rounding error of each difference (two-sum): cheap, and lets
+                // near-singular configurations be evaluated from exact coordinate differences.
                 let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
-                DVec3::new(err(vs.x, xs.x), err(vs.y, xs.y), err(vs.z, xs.z))
-            })
-            .collect();
-        let max_abs = u
+                out.u.push(u);
+                out.r.push(r);
+                out.r_lo.push(DVec3::new(
+                    err(vs.x, xs.x),
+                    err(vs.y, xs.y),
+                    err(vs.z, xs.z),
+                ));
+            }
+            if finite {
+                break;
+            }
+        }
+        let max_abs = out
+            .u
             .iter()
-            .chain(r.iter())
+            .chain(out.r.iter())
             .map(|v| v.abs().max_element())
             .fold(0.0, f64::max);
         if max_abs == 0.0 {
@@ -123,15 +137,16 @@ impl Scaled {
         }
         let k = exponent(max_abs);
         let s = pow2(-k);
-        for v in u.iter_mut().chain(r.iter_mut()).chain(r_lo.iter_mut()) {
+        for v in out
+            .u
+            .iter_mut()
+            .chain(out.r.iter_mut())
+            .chain(out.r_lo.iter_mut())
+        {
             *v *= s;
         }
-        Ok(Scaled {
-            u,
-            r,
-            r_lo,
-            inv_scale: pre * s,
-        })
+        out.inv_scale = pre * s;
+        Ok(out)
     }
 
     /// The exact endpoints of the edge from vertex `i` to vertex `j`, relative to `x`.
@@ -1075,6 +1090,31 @@ mod tests {
         assert!(at_16[0] > 1e-14 && at_16[0] < 1e-12, "{at_16:?}");
         assert!(at_16[2] > 1e-12 && at_16[2] < 1e-8, "{at_16:?}");
         assert!(fits(8, 31.0));
+    }
+
+    /// Coordinates whose differences overflow take `Scaled::new`'s second attempt (pre-scaled by
+    /// 2⁻⁴): the value is bit for bit that of the same configuration scaled down exactly by
+    /// 2⁻¹⁰⁰⁰, and so is the gradient scaled back (it is ~1e-309, subnormal, at this scale; the
+    /// Hessian underflows to zero).
+    #[test]
+    fn overflowing_differences_are_rescaled_exactly() {
+        let big = 1.5e308;
+        let tri = [
+            DVec3::new(big, 0.2 * big, 0.9 * big),
+            DVec3::new(0.7 * big, -0.1 * big, big),
+            DVec3::new(0.9 * big, 0.8 * big, 0.6 * big),
+        ];
+        let x = DVec3::new(-big, -0.3 * big, -0.2 * big);
+        assert!(!(tri[0] - x).is_finite());
+        let n = DVec3::new(0.8, 0.3, 0.5).normalize();
+        let down = pow2(-1000);
+        let small: Vec<DVec3> = tri.iter().map(|v| *v * down).collect();
+        let got = form_factor(x, n, &tri, Order::Hessian).unwrap();
+        let want = form_factor(x * down, n, &small, Order::Hessian).unwrap();
+        assert!(got.value > 0.0);
+        assert_eq!(got.value, want.value);
+        assert_eq!(got.gradient, want.gradient * down);
+        assert!(got.gradient.abs().max_element() > 0.0);
     }
 
     /// The bound against the measured quadrature error of the value of a flat-on triangle (the
