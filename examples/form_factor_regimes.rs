@@ -42,7 +42,11 @@ fn cases() -> Vec<Case> {
     let list = [
         ("generic", tri, DVec3::new(0.3, 0.2, 0.1)),
         ("1e-6 above the plane", tri, centroid - plane_n * 1e-6),
-        ("1e-5 from an edge", tri, (tri[0] + tri[1]) * 0.5 - plane_n * 1e-5),
+        (
+            "1e-5 from an edge",
+            tri,
+            (tri[0] + tri[1]) * 0.5 - plane_n * 1e-5,
+        ),
         ("1e2 sizes away", tri, centroid + far_dir * 1e2),
         ("1e4 sizes away", tri, centroid + far_dir * 1e4),
         ("1e6 sizes away", tri, centroid + far_dir * 1e6),
