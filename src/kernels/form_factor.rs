@@ -146,12 +146,31 @@ pub fn triangle_form_factor(
     c: DVec3,
     order: Order,
 ) -> Result<Deriv3> {
+    let lambert_value = || lambert::triangle_value(x, n, [a, b, c]);
     if order == Order::Value {
-        if let Some(f) = lambert::triangle_value(x, n, [a, b, c]) {
+        if let Some(f) = lambert_value() {
             return Ok(Deriv3::constant(f));
         }
-    } else if let Some(d) = lambert::triangle_derivs(x, n, [a, b, c], order) {
-        return Ok(d);
+        if maybe_far([a, b, c], x) {
+            if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
+                return Ok(d);
+            }
+        }
+    } else {
+        // Far away Lambert's sum cancels and its derivatives would be computed only to be
+        // declined: the far-field quadrature first. Its value is replaced by Lambert's where that
+        // may be certified, as for `Order::Value`; beyond LAMBERT_NEVER_FAR it cannot be.
+        if maybe_far([a, b, c], x) {
+            if let Some((d, ratio)) = triangle_far_field_fast(x, n, [a, b, c], order) {
+                if ratio >= LAMBERT_NEVER_FAR {
+                    return Ok(d);
+                }
+                return Ok(with_lambert_value(d, order, lambert_value));
+            }
+        }
+        if let Some(d) = lambert::triangle_derivs(x, n, [a, b, c], order) {
+            return Ok(d);
+        }
     }
     let d = match triangle_form_factor_fast(x, n, [a, b, c], order) {
         Some(d) => d,
@@ -177,9 +196,13 @@ pub fn triangle_form_factor(
 /// * **Accuracy.** Near `x` the edge sum of [`edge_form_factor`] is evaluated in a cancellation-free
 ///   form. Far away (distance from the visible part's vertex centroid above 16 times its radius) the
 ///   edge sum cancels (terms ~size/d, sum ~(size/d)²), so the kernel integrates the smooth integrand
-///   instead with an 8x8 Gauss-Legendre rule per fan triangle (Duffy map), whose error falls like
-///   (size/d)^16; both sides of the switch meet 1e-12. When the edge sum cancels by more than 100x
-///   for another reason (slivers, `x` near the plane, a thin visible part), the fan triangles are
+///   instead with an n x n Gauss-Legendre rule per fan triangle (Duffy map), n = 8 from 16 radii,
+///   6 from 100, 5 from 280, 4 from 1500 and 3 from 36000 (an a-priori bound keeps the rule's
+///   relative error below 1e-14 for value and gradient, 1e-12 for the Hessian); both sides of
+///   every switch meet 1e-12. When the edge sum cancels by more than 100x for another reason
+///   (`x` near the plane, a thin visible part; for slivers, `2·area < 1e-2·extent²`, only beyond
+///   1e4x: their edge terms are accurate to a few ulps, so the sum keeps a few ulps times the
+///   cancellation, within the hard-regime contract), the fan triangles are
 ///   bisected until each is 16 radii away and integrated the same way (at most 256 pieces, or 4096
 ///   when `x` is near the plane and the polygon is clipped, which costs up to ~1 ms; otherwise the
 ///   edge sum is kept, with the parallel part of the value recomputed without cancellation when
@@ -540,10 +563,80 @@ pub(crate) fn edge_form_factor_fast(
     d.is_finite().then_some(d)
 }
 
+/// Distance over radius from which Lambert's value certificate ([`lambert::triangle_value`]) is
+/// known to fail. Its error bound is at least `36u Σβ_i` (u = 2⁻⁵³, `β_i` the angles the edges
+/// subtend), while `|Σ f_i|·2π = 2πF ≤ 2Ω ≤ (Σβ_i)²/2π` (the isoperimetric inequality on the
+/// sphere, for the small spherical triangle of solid angle `Ω`), and `Σβ_i ≤ 3√3 R/(d − R)` (the
+/// perimeter of a triangle within `R` of its centroid, seen from `d`). So the bound exceeds its
+/// acceptance threshold 5e-13 of the sum once `d/R − 1 ≥ 5e-13·3√3/(72πu) ≈ 104`; 280 (the switch to
+/// the 5x5 rule) leaves a margin for the bound's own rounding.
+const LAMBERT_NEVER_FAR: f64 = 280.0;
+
+/// A cheap necessary condition for the robust path's far-field decision (vertex centroid at least
+/// [`polygon::FAR_FIELD_RATIO`] radii `R` from x): then `‖a − x‖ ≥ 15 R` and every edge is at most
+/// `2R`, so `‖a − x‖_∞ ≥ ‖a − x‖/√3 ≥ 4.3 max(‖b − a‖_∞, ‖c − a‖_∞)`; 4 leaves room for rounding.
+/// Max-norms keep it to a few instructions on the generic path. It only decides whether
+/// [`triangle_far_field_fast`] is tried first, which replays the exact decision.
+#[inline(always)]
+fn maybe_far(v: [DVec3; 3], x: DVec3) -> bool {
+    let edges = (v[1] - v[0]).abs().max((v[2] - v[0]).abs()).max_element();
+    (v[0] - x).abs().max_element() >= 4.0 * edges
+}
+
+/// The far-field evaluation of [`triangle_form_factor`] when the robust path's decisions are
+/// certain: inputs valid and in [`FAST_RANGE`], every vertex above the tangent plane by more than
+/// the rounding bound of its height (nothing clipped), not near the plane, not a sliver (whose fan
+/// geometry the robust path takes from exact differences), and in the far field. Then the robust
+/// path integrates the one fan triangle with the rule [`polygon::fast_decisions`] picks, on the same
+/// f64 differences up to its exact power-of-two rescaling: the result is bit-for-bit the robust
+/// one. Returned with the smallest ratio (distance over radius) of the rule's range; `None`
+/// otherwise.
+// Not inlined: the generic path only pays the call's test, not this function's frame.
+#[inline(never)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(crate) fn triangle_far_field_fast(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    order: Order,
+) -> Option<(Deriv3, f64)> {
+    let r = [v[0] - x, v[1] - x, v[2] - x];
+    let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
+    in_fast_range(&[r[0], r[1], r[2], u[1], u[2]])?;
+    let len = n.length();
+    if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) {
+        return None;
+    }
+    let n = n / len;
+    for rk in &r {
+        if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
+            return None;
+        }
+    }
+    let plane = polygon::triangle_plane(&u)?;
+    if plane.is_thin() {
+        return None;
+    }
+    let (rule, h_p) = polygon::fast_decisions(&r, &plane)?;
+    let rule = rule?;
+    // The robust path's non-exact fan geometry of (v0, v1, v2) and its triangle rule.
+    let normal = u[1].cross(u[2]);
+    let geometry = (normal, normal.dot(r[0]));
+    let mut d = polygon::triangle_rule(r[0], u[1], u[2] - u[1], n, order, geometry, rule);
+    if h_p < 0.0 {
+        d.value = -d.value;
+        d.gradient = -d.gradient;
+        d.hessian = -d.hessian;
+    }
+    d.value = d.value.clamp(0.0, 1.0);
+    d.is_finite().then_some((d, rule.min_ratio()))
+}
+
 /// The fast evaluation of [`triangle_form_factor`] when the robust path's decisions are certain:
 /// every vertex strictly above the tangent plane by more than the rounding bound of its height
 /// (so nothing is clipped), not near the plane, no edge line near `x`, the triangle not in the far
-/// field and the edge sum not cancelling (where the robust path integrates by quadrature instead).
+/// field and the edge sum not cancelling beyond [`polygon::cancellation_limit`] (where the robust
+/// path integrates by quadrature instead).
 /// `None` otherwise, or for invalid or out-of-range inputs. Accepted results are bit-for-bit those
 /// of the robust path (same f64 operations; its power-of-two rescaling changes no rounding).
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
@@ -573,7 +666,7 @@ pub(crate) fn triangle_form_factor_fast(
     }
     let plane = polygon::triangle_plane(&u)?;
     let (far, h_p) = polygon::fast_decisions(&r, &plane)?;
-    if far {
+    if far.is_some() {
         return None;
     }
     let mut sum = Deriv3::constant(0.0);
@@ -586,7 +679,8 @@ pub(crate) fn triangle_form_factor_fast(
         sum.gradient += t.gradient;
         sum.hessian += t.hessian;
     }
-    if !(magnitude <= polygon::CANCELLATION_LIMIT * sum.value.abs()) {
+    // Neither near the plane nor clipped (both checked above).
+    if !(magnitude <= polygon::cancellation_limit(&plane, false) * sum.value.abs()) {
         return None;
     }
     if h_p < 0.0 {
@@ -722,6 +816,96 @@ mod tests {
         assert!(1.0 / ok < 1.0 / fail);
         let (p, q) = (robust(x_far(ok), n(), TRI), robust(x_far(fail), n(), TRI));
         assert!(close(&p, &q, 1e-9), "{p:?} {q:?}");
+    }
+
+    /// The far-field fast path, walking x from 1e7 radii in to 8 along a few directions (every
+    /// far-field rule switch is crossed): bit-for-bit the robust path wherever taken, taken at every
+    /// step beyond 16 radii (nothing is clipped), declined below. Clipped and sliver triangles go
+    /// to the robust path.
+    #[test]
+    fn far_field_fast_path_equals_robust_across_its_rule_switches() {
+        let centroid = (TRI[0] + TRI[1] + TRI[2]) / 3.0;
+        let radius = TRI
+            .iter()
+            .map(|v| (*v - centroid).length())
+            .fold(0.0, f64::max);
+        for dir in [
+            -n(),
+            DVec3::new(-0.3, 0.2, -1.0).normalize(),
+            DVec3::new(0.5, -0.6, -0.4).normalize(),
+        ] {
+            let steps = 600;
+            for k in 0..=steps {
+                let ratio = 1e7 * (8.0f64 / 1e7).powf(k as f64 / steps as f64);
+                let x = centroid + dir * (ratio * radius);
+                let got = triangle_far_field_fast(x, n(), TRI, Order::Hessian);
+                if ratio > 16.0 * (1.0 + 1e-9) {
+                    let (got, min_ratio) = got.unwrap_or_else(|| panic!("declined at {ratio}"));
+                    assert!(ratio >= min_ratio * (1.0 - 1e-12), "{ratio} < {min_ratio}");
+                    assert_eq!(got, robust(x, n(), TRI), "at {ratio}");
+                    // The entry point takes it, for every order, with the same value (Lambert's
+                    // where certified, which it is not beyond LAMBERT_NEVER_FAR).
+                    let entry =
+                        |o| triangle_form_factor(x, n(), TRI[0], TRI[1], TRI[2], o).unwrap();
+                    let (value, hessian) = (entry(Order::Value), entry(Order::Hessian));
+                    assert_eq!(value.value, hessian.value, "at {ratio}");
+                    assert_eq!(
+                        (hessian.gradient, hessian.hessian),
+                        (got.gradient, got.hessian)
+                    );
+                    let lambert = lambert::triangle_value(x, n(), TRI);
+                    assert_eq!(value.value, lambert.unwrap_or(got.value), "at {ratio}");
+                    if ratio >= LAMBERT_NEVER_FAR {
+                        assert!(lambert.is_none(), "Lambert certified at {ratio}");
+                    }
+                } else if ratio < 16.0 * (1.0 - 1e-9) {
+                    assert!(got.is_none(), "taken at {ratio}");
+                }
+            }
+        }
+        // Far away but clipped (the tangent plane through the triangle): declined.
+        let x = centroid - n() * (1e3 * radius);
+        let tilted = (TRI[0] - x).cross(TRI[1] - TRI[0]).normalize();
+        let nn = if tilted.dot(TRI[2] - x) > 0.0 {
+            tilted
+        } else {
+            -tilted
+        };
+        let nn = (nn + 1e-3 * (TRI[0] - TRI[1]).normalize()).normalize();
+        assert!(TRI.iter().any(|v| nn.dot(*v - x) < 0.0));
+        assert!(triangle_far_field_fast(x, nn, TRI, Order::Hessian).is_none());
+        // A far sliver: declined (its fan geometry is taken from exact differences).
+        let sliver = [TRI[0], TRI[1], (TRI[0] + TRI[1]) * 0.5 + DVec3::Z * 1e-4];
+        assert!(triangle_far_field_fast(x, n(), sliver, Order::Hessian).is_none());
+        assert!(
+            triangle_form_factor(x, n(), sliver[0], sliver[1], sliver[2], Order::Hessian).is_ok()
+        );
+    }
+
+    /// Slivers: the replay takes an edge sum cancelling by up to THIN_CANCELLATION_LIMIT, bit for
+    /// bit the robust path, and declines beyond (the robust path integrates by quadrature).
+    #[test]
+    fn fast_triangle_takes_slivers_up_to_the_thin_cancellation_limit() {
+        let (a, b) = (TRI[0], TRI[1]);
+        let perp = (b - a).cross(TRI[2] - a).cross(b - a).normalize();
+        let x = DVec3::new(0.1, -0.2, 0.05);
+        let (mut taken, mut declined) = (0, 0);
+        for k in 0..=40 {
+            let height = 10f64.powf(-2.0 - 0.1 * k as f64);
+            let t = [a, b, (a + b) * 0.5 + perp * height];
+            match triangle_form_factor_fast(x, n(), t, Order::Hessian) {
+                Some(d) => {
+                    assert_eq!(d, robust(x, n(), t), "at height {height}");
+                    assert_eq!(declined, 0, "taken again at {height}");
+                    taken += 1;
+                }
+                None => declined += 1,
+            }
+        }
+        assert!(
+            taken > 10 && declined > 10,
+            "{taken} taken, {declined} declined"
+        );
     }
 
     #[test]

@@ -29,8 +29,22 @@ const AREA_TOLERANCE: f64 = 1e-13;
 /// quadrature instead of the edge sum. Chosen by measurement (see `tests/kernels_b_accuracy.rs`): at
 /// 16 the edge sum has lost ~16 ulps to cancellation and the 8x8 Gauss rule is at its rounding floor.
 pub(crate) const FAR_FIELD_RATIO: f64 = 16.0;
-/// Gauss-Legendre points per direction on each fan triangle in the far field.
-const GAUSS_POINTS: usize = 8;
+
+/// The far-field rules: from this distance-over-radius ratio on, `n`x`n` Gauss-Legendre points per
+/// fan triangle (largest ratio first). Above 16 the ratios come from the a-priori bound of
+/// [`far_field_error_bound`]: at each listed ratio (and beyond) that bound on the relative error is
+/// at most 1e-14 for the value and the gradient and 1e-12 for the Hessian (a factor 100 below the
+/// generic accuracy contract; the bound itself ignores that Gauss rules converge faster than
+/// polynomial exactness alone implies, and overestimates the measured errors by orders of
+/// magnitude). Between 16 and 31 radii the 8x8 rule is kept on measurement: there its bound is above
+/// 1e-14 (see the unit test) but its measured error is at the rounding floor.
+pub(crate) const FAR_FIELD_RULES: [(f64, usize); 5] = [
+    (3.6e4, 3),
+    (1.5e3, 4),
+    (280.0, 5),
+    (100.0, 6),
+    (FAR_FIELD_RATIO, 8),
+];
 
 const FRAC_1_PI: f64 = std::f64::consts::FRAC_1_PI;
 
@@ -73,35 +87,49 @@ pub(crate) struct Scaled {
 
 impl Scaled {
     pub(crate) fn new(x: DVec3, vertices: &[DVec3]) -> Result<Self> {
-        let attempt = |pre: f64| -> (Points, Points) {
+        // Filled in place with pushes: collecting into fresh small vectors and moving them into
+        // the result cost about as much as the rest of a near-plane evaluation's set-up.
+        let mut out = Scaled {
+            u: Points::new(),
+            r: Points::new(),
+            r_lo: Points::new(),
+            inv_scale: 1.0,
+        };
+        let mut pre = 1.0;
+        for attempt in 0..2 {
+            if attempt == 1 {
+                // Differences of coordinates near ±f64::MAX overflow: scale first (exactly).
+                pre = pow2(-4);
+                out.u.clear();
+                out.r.clear();
+                out.r_lo.clear();
+            }
             let v0 = vertices[0] * pre;
             let xs = x * pre;
-            let u = vertices.iter().map(|v| *v * pre - v0).collect();
-            let r = vertices.iter().map(|v| *v * pre - xs).collect();
-            (u, r)
-        };
-        let finite = |p: &Points| p.iter().all(|v| v.is_finite());
-        let mut pre = 1.0;
-        let (mut u, mut r) = attempt(pre);
-        if !finite(&u) || !finite(&r) {
-            // Differences of coordinates near ±f64::MAX overflow: scale first (exactly).
-            pre = pow2(-4);
-            (u, r) = attempt(pre);
-        }
-        // The rounding error of each difference (two-sum): cheap, and lets near-singular
-        // configurations be evaluated from exact coordinate differences.
-        let xs = x * pre;
-        let mut r_lo: Points = vertices
-            .iter()
-            .map(|v| {
+            let mut finite = true;
+            for v in vertices {
                 let vs = *v * pre;
+                let (u, r) = (vs - v0, vs - xs);
+                finite &= u.is_finite() && r.is_finite();
+                // The rounding error of each difference (two-sum): cheap, and lets
+                // near-singular configurations be evaluated from exact coordinate differences.
                 let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
-                DVec3::new(err(vs.x, xs.x), err(vs.y, xs.y), err(vs.z, xs.z))
-            })
-            .collect();
-        let max_abs = u
+                out.u.push(u);
+                out.r.push(r);
+                out.r_lo.push(DVec3::new(
+                    err(vs.x, xs.x),
+                    err(vs.y, xs.y),
+                    err(vs.z, xs.z),
+                ));
+            }
+            if finite {
+                break;
+            }
+        }
+        let max_abs = out
+            .u
             .iter()
-            .chain(r.iter())
+            .chain(out.r.iter())
             .map(|v| v.abs().max_element())
             .fold(0.0, f64::max);
         if max_abs == 0.0 {
@@ -109,15 +137,16 @@ impl Scaled {
         }
         let k = exponent(max_abs);
         let s = pow2(-k);
-        for v in u.iter_mut().chain(r.iter_mut()).chain(r_lo.iter_mut()) {
+        for v in out
+            .u
+            .iter_mut()
+            .chain(out.r.iter_mut())
+            .chain(out.r_lo.iter_mut())
+        {
             *v *= s;
         }
-        Ok(Scaled {
-            u,
-            r,
-            r_lo,
-            inv_scale: pre * s,
-        })
+        out.inv_scale = pre * s;
+        Ok(out)
     }
 
     /// The exact endpoints of the edge from vertex `i` to vertex `j`, relative to `x`.
@@ -210,9 +239,9 @@ pub(crate) fn triangle_plane(u: &[DVec3; 3]) -> Option<Plane> {
 
 /// The decisions [`evaluate`] takes before its edge sum, for an unclipped polygon given relative to
 /// `x`: `None` when `x` is in or near the polygon's plane (where it recomputes the height exactly),
-/// otherwise whether the far-field quadrature applies and the signed height `h_P`.
+/// otherwise the far-field rule if the quadrature applies and the signed height `h_P`.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(bool, f64)> {
+pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(Option<Rule>, f64)> {
     let nearest = r
         .iter()
         .min_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
@@ -235,7 +264,15 @@ pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(bool, f64)> 
         .map(|v| (*v - centroid).length_squared())
         .fold(0.0, f64::max)
         .sqrt();
-    Some((centroid.length() >= FAR_FIELD_RATIO * radius, h_p))
+    Some((far_field_rule(centroid.length(), radius), h_p))
+}
+
+impl Plane {
+    /// Whether [`evaluate`] takes the fan triangles' geometry from exact differences for this
+    /// polygon even when x is not near its plane (a sliver: `2·area < 1e-2·extent²`).
+    pub(crate) fn is_thin(&self) -> bool {
+        self.twice_area < THIN_POLYGON * self.extent * self.extent
+    }
 }
 
 fn orient2(a: DVec2, b: DVec2, c: DVec2) -> f64 {
@@ -371,15 +408,125 @@ fn legendre_rule<const N: usize>() -> [(f64, f64); N] {
     rule
 }
 
-fn gauss_legendre() -> &'static [(f64, f64); GAUSS_POINTS] {
-    static RULE: OnceLock<[(f64, f64); GAUSS_POINTS]> = OnceLock::new();
-    RULE.get_or_init(legendre_rule::<GAUSS_POINTS>)
+/// The `N`-point Gauss-Legendre rule on [0, 1], computed once.
+macro_rules! cached_rule {
+    ($name:ident, $n:literal) => {
+        fn $name() -> &'static [(f64, f64)] {
+            static RULE: OnceLock<[(f64, f64); $n]> = OnceLock::new();
+            RULE.get_or_init(legendre_rule::<$n>)
+        }
+    };
+}
+cached_rule!(gauss_legendre_3, 3);
+cached_rule!(gauss_legendre_4, 4);
+cached_rule!(gauss_legendre_5, 5);
+cached_rule!(gauss_legendre_6, 6);
+cached_rule!(gauss_legendre_8, 8);
+
+/// A far-field quadrature rule: Gauss-Legendre nodes and weights on [0, 1], used in both directions
+/// of the Duffy-mapped fan triangle.
+#[derive(Clone, Copy)]
+pub(crate) struct Rule(&'static [(f64, f64)]);
+
+impl Rule {
+    /// The smallest distance-over-radius ratio at which [`far_field_rule`] returns this rule.
+    pub(crate) fn min_ratio(self) -> f64 {
+        FAR_FIELD_RULES
+            .iter()
+            .find(|(_, points)| *points == self.0.len())
+            .map_or(FAR_FIELD_RATIO, |r| r.0)
+    }
+}
+
+/// The rule for a (visible) polygon whose vertex centroid is `distance` from x and whose vertices
+/// are within `radius` of that centroid: the cheapest of [`FAR_FIELD_RULES`] whose ratio
+/// `distance / radius` reaches; `None` below [`FAR_FIELD_RATIO`] (the edge sum applies).
+#[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(crate) fn far_field_rule(distance: f64, radius: f64) -> Option<Rule> {
+    if !(distance >= FAR_FIELD_RATIO * radius) {
+        return None;
+    }
+    let points = FAR_FIELD_RULES
+        .iter()
+        .find(|(ratio, _)| distance >= ratio * radius)
+        .map_or(8, |r| r.1);
+    Some(Rule(match points {
+        3 => gauss_legendre_3(),
+        4 => gauss_legendre_4(),
+        5 => gauss_legendre_5(),
+        6 => gauss_legendre_6(),
+        _ => gauss_legendre_8(),
+    }))
+}
+
+/// A-priori bound on the relative quadrature error of [`triangle_rule`] with `points`x`points`
+/// Gauss-Legendre points, for a triangle within `rho` (radius over distance, `ρ < 1`) of x, as
+/// `[value, gradient, Hessian]` (the value relative to itself, the derivatives relative to their
+/// natural scale, which their largest entry reaches within a factor ~2).
+///
+/// Derivation. The Duffy-mapped tensor rule integrates polynomials of total degree
+/// `D = 2·points − 2` over the triangle exactly (a degree-`k` polynomial maps to degree `k + 1` in
+/// `s`, `k` in `t`). The integrands are `L·g` and `g'`, with `L = n·r ≥ 0` on the visible part
+/// (linear) and `g`, `g'` of the form `P_p(r)/(r·r)^j` (`p ≤ 2`). Along any real line
+/// `c + τ û` through the centroid `c`, `r·r = (τ − τ₁)(τ − τ₂)` with `|τ₁| = |τ₂| = d`, so `g` is
+/// analytic for `|τ| < d` and, on the circle `|τ| = σd`, `|g| ≤ (1 + σ)^p d^p / ((1 − σ) d)^{2j}`.
+/// Cauchy's estimate bounds the Taylor remainder beyond degree `m` for `|τ| ≤ R` by that maximum
+/// times `(ρ/σ)^{m+1} / (1 − ρ/σ)`. The rule is exact on `L·P_{D−1}g` (positive weights, summing to
+/// the area, and `Q(L) = ∫L`), so `|Q(Lg) − ∫Lg| ≤ 2 ∫L · max|g − P_{D−1}g|`; likewise
+/// `|Q(g') − ∫g'| ≤ 2·area·max|g' − P_D g'|`. With `∫L ≤ area·d(1 + ρ)` and the integrands at least
+/// their values at distance `d(1 + ρ)`:
+///
+/// ```text
+/// value:    2 (1+ρ)⁴ (1−σ)⁻⁴ (ρ/σ)^D / (1 − ρ/σ)
+/// gradient: √3 (1+ρ)⁴ [8 (1+ρ)(1+σ)(1−σ)⁻⁶ (ρ/σ)^D + 2 (1−σ)⁻⁴ (ρ/σ)^{D+1}] / (1 − ρ/σ)
+/// Hessian:  (1+ρ)⁵ [48 (1+ρ)(1+σ)²(1−σ)⁻⁸ (ρ/σ)^D + 16 (1+σ)(1−σ)⁻⁶ (ρ/σ)^{D+1}
+///                   + 8 (1+ρ)(1−σ)⁻⁶ (ρ/σ)^D] / (1 − ρ/σ)
+/// ```
+///
+/// minimized over `σ ∈ (ρ, 1)` (the gradient's scale is `|4(n·r̂) r̂ − n| ≥ 1`, its largest entry
+/// `≥ 1/√3` of it; the Hessian's `24 (n·r̂) r̂r̂ᵀ − 4(n r̂ᵀ + r̂ nᵀ) − 4 (n·r̂) 𝟙` has an entry of at
+/// least 1). Fan triangles of a non-convex polygon can overlap with opposite signs, which
+/// multiplies the bound by `Σ|area_k| / area`.
+/// Only the unit tests evaluate it (to check [`FAR_FIELD_RULES`]); the kernel uses the ratios.
+#[cfg(test)]
+pub(crate) fn far_field_error_bound(points: usize, rho: f64) -> [f64; 3] {
+    let d = (2 * points - 2) as i32;
+    let mut best = [f64::INFINITY; 3];
+    for k in 1..1000 {
+        let s = k as f64 / 1000.0;
+        if s <= rho {
+            continue;
+        }
+        let q = rho / s;
+        let (qd, qd1, tail) = (q.powi(d), q.powi(d + 1), 1.0 / (1.0 - q));
+        let (p, m) = (1.0 + rho, 1.0 - s);
+        let value = 2.0 * p.powi(4) * m.powi(-4) * qd * tail;
+        let gradient = 3f64.sqrt()
+            * p.powi(4)
+            * (8.0 * p * (1.0 + s) * m.powi(-6) * qd + 2.0 * m.powi(-4) * qd1)
+            * tail;
+        let hessian = p.powi(5)
+            * (48.0 * p * (1.0 + s).powi(2) * m.powi(-8) * qd
+                + 16.0 * (1.0 + s) * m.powi(-6) * qd1
+                + 8.0 * p * m.powi(-6) * qd)
+            * tail;
+        for (b, e) in best.iter_mut().zip([value, gradient, hessian]) {
+            *b = b.min(e);
+        }
+    }
+    best
 }
 
 fn gauss_legendre_16() -> &'static [(f64, f64); 16] {
     static RULE: OnceLock<[(f64, f64); 16]> = OnceLock::new();
     RULE.get_or_init(legendre_rule::<16>)
 }
+
+/// Above this ratio of `Σ|edge term|` to `|Σ edge term|` (the sum has lost a bit or more), the
+/// value near the plane is recomputed by [`near_plane_value`]; below, the plain sum has lost less
+/// than one bit to cancellation.
+const NEAR_PLANE_CANCELLATION: f64 = 2.0;
 
 /// Below this `|h_P| / d_e` for every edge (x close to the polygon's plane compared with its
 /// distance to every edge line, in the plane), the value is recomputed by [`near_plane_value`].
@@ -446,22 +593,22 @@ fn near_plane_value(
     Ok(Some(n_par * parallel + transverse))
 }
 
-/// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, 8x8
-/// Gauss-Legendre), with analytic derivatives of the integrand. Accurate when x is far from the
-/// triangle compared with its size. Signed by the triangle's orientation (`N` right-handed).
-/// `geometry` is the triangle's `(2·area·N̂, 2·area·N̂·r_a)` from [`fan_geometry`].
-fn triangle_rule(
-    a: &ClipVertex,
-    b: &ClipVertex,
-    c: &ClipVertex,
+/// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, `rule` in
+/// both directions), with analytic derivatives of the integrand. Accurate when x is far from the
+/// triangle compared with its size (see [`far_field_rule`]). Signed by the triangle's orientation
+/// (`N` right-handed). The triangle is `r_a + s·ab + s·t·bc` (`s, t ∈ [0, 1]`) relative to x;
+/// `geometry` is its `(2·area·N̂, 2·area·N̂·r_a)` from [`fan_geometry`].
+pub(crate) fn triangle_rule(
+    r_a: DVec3,
+    ab: DVec3,
+    bc: DVec3,
     n: DVec3,
     order: Order,
     geometry: (DVec3, f64),
+    rule: Rule,
 ) -> Deriv3 {
-    let rule = gauss_legendre();
+    let rule = rule.0;
     let mut out = Deriv3::constant(0.0);
-    let ab = b.u - a.u;
-    let bc = c.u - b.u;
     let (normal, c_t) = geometry;
     // Moments of the integrand's derivatives, assembled once after the loop:
     // ∇q = 4 (n·r) r/‖r‖⁶ − n/‖r‖⁴,
@@ -475,7 +622,7 @@ fn triangle_rule(
     for &(s, ws) in rule {
         for &(t, wt) in rule {
             let weight = ws * wt * s;
-            let r = a.r + s * ab + (s * t) * bc;
+            let r = r_a + s * ab + (s * t) * bc;
             let inv2 = 1.0 / r.length_squared();
             let inv4 = inv2 * inv2;
             let nr = n.dot(r);
@@ -522,13 +669,26 @@ fn accumulate(sum: &mut Deriv3, d: Deriv3) {
     sum.hessian += d.hessian;
 }
 
+/// [`triangle_rule`] on the triangle `(a, b, c)`.
+fn rule_on(
+    a: &ClipVertex,
+    b: &ClipVertex,
+    c: &ClipVertex,
+    n: DVec3,
+    order: Order,
+    geometry: (DVec3, f64),
+    rule: Rule,
+) -> Deriv3 {
+    triangle_rule(a.r, b.u - a.u, c.u - b.u, n, order, geometry, rule)
+}
+
 /// Signed form factor of the clipped loop by [`triangle_rule`] on its fan triangles.
-fn far_field(verts: &[ClipVertex], n: DVec3, order: Order, exact: bool) -> Deriv3 {
+fn far_field(verts: &[ClipVertex], n: DVec3, order: Order, exact: bool, rule: Rule) -> Deriv3 {
     let mut out = Deriv3::constant(0.0);
     for k in 1..verts.len() - 1 {
         let (a, b, c) = (&verts[0], &verts[k], &verts[k + 1]);
         let geometry = fan_geometry(a, b, c, exact);
-        accumulate(&mut out, triangle_rule(a, b, c, n, order, geometry));
+        accumulate(&mut out, rule_on(a, b, c, n, order, geometry, rule));
     }
     out
 }
@@ -590,14 +750,14 @@ fn subdivided_quadrature(
             .iter()
             .map(|v| (v.r - centroid).length())
             .fold(0.0, f64::max);
-        if centroid.length() >= FAR_FIELD_RATIO * radius {
+        if let Some(rule) = far_field_rule(centroid.length(), radius) {
             pieces += 1;
             if pieces > max_pieces {
                 return None;
             }
             accumulate(
                 &mut out,
-                triangle_rule(&t[0], &t[1], &t[2], n, order, geometry),
+                rule_on(&t[0], &t[1], &t[2], n, order, geometry, rule),
             );
             continue;
         }
@@ -626,6 +786,25 @@ fn subdivided_quadrature(
 /// Above this ratio of `Σ|edge term|` to `|Σ edge term|` (the edge sum has lost more than ~1e4 ulps
 /// to cancellation), [`subdivided_quadrature`] is tried instead.
 pub(crate) const CANCELLATION_LIMIT: f64 = 1e2;
+
+/// [`CANCELLATION_LIMIT`] for slivers (`2·area < 1e-2·extent²`) with x neither near their plane
+/// nor clipping them, whose edge sum cancels by about the inverse aspect ratio: each edge term is
+/// accurate to a few ulps, so the sum's relative error is a few ulps times the cancellation ratio
+/// (measured on the slivers of `tests/kernels_b_accuracy.rs` with the limit lifted: value errors
+/// 0.1-5.1 ε·ratio, gradient and Hessian (relative to their largest entry) within 10 ε·ratio over
+/// ratios 1e3-4e7). Slivers are a hard regime (contract 1e-10 / 1e-9 / 1e-8): at 1e4 the edge sum
+/// is within ~6e-12, and [`subdivided_quadrature`], 100x slower, is only needed beyond (aspect
+/// below ~1e-4).
+pub(crate) const THIN_CANCELLATION_LIMIT: f64 = 1e4;
+
+/// The cancellation the edge sum may have before the quadrature is tried instead.
+pub(crate) fn cancellation_limit(plane: &Plane, near_plane_or_cut: bool) -> f64 {
+    if plane.is_thin() && !near_plane_or_cut {
+        THIN_CANCELLATION_LIMIT
+    } else {
+        CANCELLATION_LIMIT
+    }
+}
 
 /// The Hessian term from the motion of the clip line ℓ:
 /// `n nᵀ (|h_P| / (π ‖n_t‖)) ∫_{P∩ℓ} ds/‖r‖⁴`, with `P∩ℓ` the oriented clip edges (bridges of
@@ -703,7 +882,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         h_p = exact_height(s, plane.twice_area);
     }
     // Quadrature geometry from exact differences near the plane and for slivers.
-    let exact = near_plane || plane.twice_area < THIN_POLYGON * plane.extent * plane.extent;
+    let exact = near_plane || plane.is_thin();
     let (verts, cut) = clip(&s.u, &s.r, &s.r_lo, n);
     if verts.len() < 3 {
         return Ok(Deriv3::constant(0.0));
@@ -716,10 +895,10 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         .iter()
         .map(|v| (v.r - centroid).length())
         .fold(0.0, f64::max);
-    let far = centroid.length() >= FAR_FIELD_RATIO * radius;
-    let mut used_quadrature = far;
-    let mut d = if far {
-        far_field(&verts, n, order, exact)
+    let far = far_field_rule(centroid.length(), radius);
+    let mut used_quadrature = far.is_some();
+    let mut d = if let Some(rule) = far {
+        far_field(&verts, n, order, exact, rule)
     } else {
         let mut sum = Deriv3::constant(0.0);
         let mut magnitude = 0.0;
@@ -746,7 +925,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
             accumulate(&mut sum, t);
         }
         let mut quadrature = None;
-        if magnitude > CANCELLATION_LIMIT * sum.value.abs() {
+        if magnitude > cancellation_limit(&plane, near_plane || cut) * sum.value.abs() {
             let max_pieces = if near_plane && cut {
                 MAX_PIECES_NEAR_PLANE
             } else {
@@ -760,8 +939,14 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                 q
             }
             None => {
-                if let Some(v) = near_plane_value(&verts, n, plane.normal, h_p)? {
-                    sum.value = v;
+                // Without cancellation the plain sum is accurate (every term to a few ulps of its
+                // own size), also near the plane: x above the polygon's interior, where the terms
+                // share a sign. Only a cancelling sum needs the near-plane split (and its 16-point
+                // integrals per edge).
+                if magnitude > NEAR_PLANE_CANCELLATION * sum.value.abs() {
+                    if let Some(v) = near_plane_value(&verts, n, plane.normal, h_p)? {
+                        sum.value = v;
+                    }
                 }
                 sum
             }
@@ -865,5 +1050,117 @@ pub fn vector_form_factor_jacobian(x: DVec3, vertices: &[DVec3]) -> Result<DMat3
         Ok(jac)
     } else {
         Err(Error::Degenerate("Arvo Jacobian overflows".into()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The switch ratios of [`FAR_FIELD_RULES`] above 16 satisfy the documented tolerances of
+    /// [`far_field_error_bound`] (1e-14 value and gradient, 1e-12 Hessian) at the switch, and so
+    /// beyond it (the bound grows with ρ); the next cheaper rule would not (each ratio is within
+    /// 10 % of the smallest the bound allows).
+    #[test]
+    fn far_field_switches_satisfy_the_a_priori_bound() {
+        let tolerance = [1e-14, 1e-14, 1e-12];
+        let fits = |points: usize, ratio: f64| {
+            far_field_error_bound(points, 1.0 / ratio)
+                .iter()
+                .zip(tolerance)
+                .all(|(e, t)| *e <= t)
+        };
+        for (ratio, points) in FAR_FIELD_RULES {
+            if ratio > FAR_FIELD_RATIO {
+                assert!(fits(points, ratio), "{points} points at {ratio}");
+                assert!(!fits(points, ratio / 1.1), "{points} points at {ratio}/1.1");
+            }
+            // The rule returned at and just below each switch.
+            let rule = far_field_rule(ratio, 1.0).unwrap();
+            assert_eq!(rule.0.len(), points);
+        }
+        for w in FAR_FIELD_RULES.windows(2) {
+            let below = far_field_rule(w[0].0 * (1.0 - 1e-15), 1.0).unwrap();
+            assert_eq!(below.0.len(), w[1].1);
+        }
+        assert!(far_field_rule(FAR_FIELD_RATIO * (1.0 - 1e-15), 1.0).is_none());
+        assert!(far_field_rule(f64::NAN, 1.0).is_none());
+        // The 8x8 rule between 16 and 31 radii is kept on measurement, not on this bound.
+        let at_16 = far_field_error_bound(8, 1.0 / 16.0);
+        assert!(at_16[0] > 1e-14 && at_16[0] < 1e-12, "{at_16:?}");
+        assert!(at_16[2] > 1e-12 && at_16[2] < 1e-8, "{at_16:?}");
+        assert!(fits(8, 31.0));
+    }
+
+    /// Coordinates whose differences overflow take `Scaled::new`'s second attempt (pre-scaled by
+    /// 2⁻⁴): the value is bit for bit that of the same configuration scaled down exactly by
+    /// 2⁻¹⁰⁰⁰, and so is the gradient scaled back (it is ~1e-309, subnormal, at this scale; the
+    /// Hessian underflows to zero).
+    #[test]
+    fn overflowing_differences_are_rescaled_exactly() {
+        let big = 1.5e308;
+        let tri = [
+            DVec3::new(big, 0.2 * big, 0.9 * big),
+            DVec3::new(0.7 * big, -0.1 * big, big),
+            DVec3::new(0.9 * big, 0.8 * big, 0.6 * big),
+        ];
+        let x = DVec3::new(-big, -0.3 * big, -0.2 * big);
+        assert!(!(tri[0] - x).is_finite());
+        let n = DVec3::new(0.8, 0.3, 0.5).normalize();
+        let down = pow2(-1000);
+        let small: Vec<DVec3> = tri.iter().map(|v| *v * down).collect();
+        let got = form_factor(x, n, &tri, Order::Hessian).unwrap();
+        let want = form_factor(x * down, n, &small, Order::Hessian).unwrap();
+        assert!(got.value > 0.0);
+        assert_eq!(got.value, want.value);
+        assert_eq!(got.gradient, want.gradient * down);
+        assert!(got.gradient.abs().max_element() > 0.0);
+    }
+
+    /// The bound against the measured quadrature error of the value of a flat-on triangle (the
+    /// exact form factor of a parallel receiver from the edge sum at a moderate distance where it
+    /// does not cancel): the bound holds, and overestimates.
+    #[test]
+    fn far_field_bound_holds_for_each_rule() {
+        let tri = [
+            DVec3::new(-0.4, -0.3, 0.0),
+            DVec3::new(0.7, -0.1, 0.0),
+            DVec3::new(0.0, 0.8, 0.0),
+        ];
+        let c = (tri[0] + tri[1] + tri[2]) / 3.0;
+        let radius = tri.iter().map(|v| (*v - c).length()).fold(0.0, f64::max);
+        let n = DVec3::new(0.3, 0.1, 1.0).normalize();
+        for (points, rule) in [
+            (3, gauss_legendre_3()),
+            (4, gauss_legendre_4()),
+            (5, gauss_legendre_5()),
+            (6, gauss_legendre_6()),
+        ] {
+            // Close enough that the error is well above rounding: 2-4 radii.
+            for ratio in [2.0, 3.0, 4.0] {
+                let x = c - DVec3::new(0.2, -0.1, 1.0).normalize() * (ratio * radius);
+                let verts: Vec<ClipVertex> = tri
+                    .iter()
+                    .map(|v| ClipVertex {
+                        u: *v - tri[0],
+                        r: *v - x,
+                        r_lo: DVec3::ZERO,
+                        on_line: false,
+                    })
+                    .collect();
+                let got = far_field(&verts, n, Order::Value, false, Rule(rule)).value;
+                let reference = form_factor(x, n, &tri, Order::Value).unwrap().value;
+                let err = (got.abs() - reference).abs() / reference;
+                let bound = far_field_error_bound(points, 1.0 / ratio)[0];
+                assert!(
+                    err <= bound,
+                    "{points} points, ratio {ratio}: {err:e} > {bound:e}"
+                );
+                assert!(
+                    err > 1e-15,
+                    "{points} points, ratio {ratio}: error {err:e} at rounding"
+                );
+            }
+        }
     }
 }
