@@ -14,13 +14,10 @@
 //! **Error bound** (u = 2⁻⁵³, first order in u; `L = ‖r_a‖‖e‖`, `p = L/s`, `P = ‖r_a‖‖r_b‖`).
 //! Rounding `r_a`, `e` and the cross product gives `‖δw‖ ≤ 6uL`, so `|δ(n·w)| ≤ 6uL + 3us` and
 //! `|δs| ≤ 6uL + 2us`; `|δc| ≤ 5uP`. With `s² + c² = P²` and `sin β = s/P ≤ β`,
-//! `|δβ| ≤ (|c|·|δs| + s·|δc|)/P² + 8uβ ≤ (6p + 15)uβ`, so `g = β/s` is within `(12p + 18)u`
-//! relatively and `|δf|·2π ≤ uβ(18p + 22)` (using `|n·w| ≤ s`). With `p ≤ 1 + |r_a·e|/s` the bound
-//! needs only computed quantities: `|δf|·2π ≤ u(40β + 18|r_a·e|·g)`, used below as
-//! `u(42β + 20|r_a·e|g)`. `atan2` is the branch-free polynomial of the gathers
-//! ([`atan2_upper`], about a fifth of the instructions of the libm call, which dominated the edge
-//! term's cost): the `8uβ` allows it 4 ulp of the exact angle, twice what is measured against
-//! `f64::atan2` (within 2 ulp; this module's tests check it over 1e6 random arguments). Summing three terms, renormalizing `n` and scaling add
+//! `|δβ| ≤ (|c|·|δs| + s·|δc|)/P² + 2uβ ≤ (6p + 9)uβ` (atan2 within 2 ulp), so `g = β/s` is within
+//! `(12p + 12)u` relatively and `|δf|·2π ≤ uβ(18p + 16)` (using `|n·w| ≤ s`). With
+//! `p ≤ 1 + |r_a·e|/s` the bound needs only computed quantities: `|δf|·2π ≤ u(34β + 18|r_a·e|·g)`,
+//! used below as `u(36β + 20|r_a·e|g)`. Summing three terms, renormalizing `n` and scaling add
 //! `5u Σ|f_i|` (`(m + 2)u Σ|f_i|` for `m` edges). When the bound exceeds [`FAST_TOLERANCE`] times
 //! the result (x near an edge's line, where `p` grows; a cancelling sum: near the polygon's plane),
 //! the caller falls back to the robust path. Far away (every edge within `1/√20` of its distance)
@@ -31,7 +28,6 @@ use glam::{DMat3, DVec3};
 use super::form_factor::{outer_self, sym_outer};
 use super::lambert_far::{self, Far};
 use super::polygon;
-use crate::gather::hessian::edges::atan2_upper;
 use crate::{Deriv3, Order};
 
 pub(super) const INV_2PI: f64 = 0.5 * std::f64::consts::FRAC_1_PI;
@@ -67,10 +63,10 @@ fn edge(n: DVec3, ra: DVec3, rb: DVec3, e: DVec3, ra2: f64) -> (f64, f64) {
     let w = ra.cross(e);
     let s = w.length();
     let c = ra.dot(rb);
-    let beta = atan2_upper::<false>(s, c);
+    let beta = s.atan2(c);
     let g = beta / s;
     // r_a·e = r_a·r_b − ‖r_a‖².
-    (n.dot(w) * g, 42.0 * beta + 20.0 * (c - ra2).abs() * g)
+    (n.dot(w) * g, 36.0 * beta + 20.0 * (c - ra2).abs() * g)
 }
 
 /// The value of [`edge_form_factor`](super::edge_form_factor) by Lambert's formula when its error
@@ -191,7 +187,7 @@ fn edge_derivs(
     let s2 = w.length_squared();
     let s = s2.sqrt();
     let c = ra.dot(rb);
-    let beta = atan2_upper::<false>(s, c);
+    let beta = s.atan2(c);
     let inv_s = 1.0 / s;
     // Divided as `edge` divides (not `beta * inv_s`): the value must have the same bits whatever
     // the order asked for.
@@ -199,7 +195,7 @@ fn edge_derivs(
     let nw = n.dot(w);
     let p = s2 + c * c;
     let steep = s2 >= DERIV_MIN_SINE * DERIV_MIN_SINE * p;
-    let err = 42.0 * beta + 20.0 * (c - ra2).abs() * g;
+    let err = 36.0 * beta + 20.0 * (c - ra2).abs() * g;
     let mut d = Deriv3::constant(nw * g);
     if order.gradient() {
         let k = w.cross(e);
@@ -501,25 +497,6 @@ mod tests {
             "{far_ok}/{far_steps}"
         );
         assert!(old_ok < far_ok / 2, "{old_ok} vs {far_ok}");
-    }
-
-    #[test]
-    fn atan2_upper_is_within_two_ulp_of_std() {
-        // The bound allows 4 ulp of the exact angle; std's atan2 is within 1 ulp of it.
-        let mut st = 5u64;
-        let mut worst = 0.0f64;
-        for k in 0..1_000_000 {
-            let (a, b) = (lcg(&mut st), lcg(&mut st));
-            // Magnitudes over 1e-12..1e12 and every quadrant with y >= 0 (y = s >= 0).
-            let y = a * 10f64.powf(24.0 * lcg(&mut st) - 12.0);
-            let x = (b - 0.5) * 10f64.powf(24.0 * lcg(&mut st) - 12.0);
-            let (y, x) = if k % 97 == 0 { (y, 0.0) } else { (y, x) };
-            let exact = y.atan2(x);
-            let ulp = f64::from_bits(exact.to_bits() + 1) - exact;
-            let e = (atan2_upper::<false>(y, x) - exact).abs() / ulp;
-            worst = worst.max(e);
-        }
-        assert!(worst <= 2.0, "{worst} ulp");
     }
 
     #[test]
