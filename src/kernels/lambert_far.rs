@@ -66,7 +66,7 @@ const PSI: [f64; 12] = [
 
 /// Smallest `ρ_{i+1}² / ‖e_i‖²` of the far regime (`σ² ≤ 1/20`). Disjoint from the derivative
 /// fast path (`sin β ≥ 1/4`), which must see the value path choose Lambert's sum.
-const FAR_RATIO2: f64 = 20.0;
+pub(crate) const FAR_RATIO2: f64 = 20.0;
 
 /// Outcome of [`far_sum`].
 pub(crate) enum Far {
@@ -97,7 +97,8 @@ fn norm1(v: DVec3) -> f64 {
 /// The far-field sum for the polygon `v` (unit normal `n`, `r_k = v_k − x` in range, `rho2` their
 /// squared lengths, every vertex above the tangent plane, checked by the caller). See the module
 /// documentation for the formula and its bound.
-#[inline(always)]
+// Not inlined: the callers' near path (Lambert's sum) stays as small as before the far form.
+#[inline(never)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn far_sum<const M: usize>(
     n: DVec3,
