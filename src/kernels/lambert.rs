@@ -481,7 +481,7 @@ mod tests {
         // direction: wherever the fast path accepts it agrees with the robust path, and past 5
         // sizes it accepts everywhere but for the thinnest views.
         let mut st = 7u64;
-        let mut rnd = |st: &mut u64| DVec3::new(lcg(st), lcg(st), lcg(st)) * 2.0 - DVec3::ONE;
+        let rnd = |st: &mut u64| DVec3::new(lcg(st), lcg(st), lcg(st)) * 2.0 - DVec3::ONE;
         let (mut far_steps, mut far_ok, mut old_ok, mut worst) = (0, 0, 0, 0.0f64);
         for _ in 0..40 {
             let c = rnd(&mut st);
