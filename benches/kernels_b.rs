@@ -28,11 +28,11 @@ fn textbook_edge(x: DVec3, n: DVec3, a: DVec3, b: DVec3) -> f64 {
     beta * n.dot(w) / w.length() * (0.5 * std::f64::consts::FRAC_1_PI)
 }
 
-/// Lambert's per-edge sum for a triangle above the tangent plane (no clipping), as a user writes it.
-fn textbook_triangle(x: DVec3, n: DVec3, t: &[DVec3]) -> f64 {
+/// Lambert's per-edge sum for a polygon above the tangent plane (no clipping), as a user writes it.
+fn textbook_polygon(x: DVec3, n: DVec3, t: &[DVec3]) -> f64 {
     let mut sum = 0.0;
-    for i in 0..3 {
-        sum += textbook_edge(x, n, t[i], t[(i + 1) % 3]);
+    for i in 0..t.len() {
+        sum += textbook_edge(x, n, t[i], t[(i + 1) % t.len()]);
     }
     sum.abs()
 }
@@ -40,8 +40,8 @@ fn textbook_triangle(x: DVec3, n: DVec3, t: &[DVec3]) -> f64 {
 /// The textbook value of a case: the plain edge sum when nothing is clipped, otherwise the clipped
 /// value formula below (in f64).
 fn textbook_value(x: DVec3, n: DVec3, verts: &[DVec3]) -> f64 {
-    if verts.len() == 3 && verts.iter().all(|v| n.dot(*v - x) > 0.0) {
-        textbook_triangle(x, n, verts)
+    if verts.iter().all(|v| n.dot(*v - x) > 0.0) {
+        textbook_polygon(x, n, verts)
     } else {
         value_formula([x.x, x.y, x.z], n, verts)
     }
@@ -313,6 +313,20 @@ fn cases() -> Vec<Case> {
                 DVec3::new(0.7, -0.1, 1.2),
                 DVec3::new(0.0, 0.8, 0.9),
             ],
+        },
+        Case {
+            name: "quad",
+            x: DVec3::new(0.1, -0.2, 0.05),
+            n,
+            verts: [(-0.5, -0.4), (0.6, -0.5), (0.7, 0.6), (-0.4, 0.5)]
+                .map(|(x, y)| DVec3::new(x, y, 1.0 + 0.1 * x + 0.1 * y))
+                .to_vec(),
+        },
+        Case {
+            name: "pentagon",
+            x: DVec3::new(0.1, -0.2, 0.05),
+            n,
+            verts: pentagon.iter().map(|v| *v + DVec3::Z).collect(),
         },
         Case {
             name: "pentagon_clipped",

@@ -5,6 +5,8 @@ pub mod batch;
 mod dd;
 pub mod form_factor;
 mod lambert;
+mod lambert_far;
+mod lambert_polygon;
 pub mod marched;
 pub mod polygon;
 pub mod segment;
