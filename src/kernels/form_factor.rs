@@ -158,14 +158,12 @@ pub fn triangle_form_factor(
             }
         }
     } else {
-        // Far away Lambert's sum cancels and its derivatives would be computed only to be
-        // declined: the far-field quadrature first. Its value is replaced by Lambert's where that
-        // may be certified, as for `Order::Value`; beyond LAMBERT_NEVER_FAR it cannot be.
+        // Far away Lambert's derivatives would be computed only to be declined (their sums
+        // cancel): the far-field quadrature first. Its value is replaced by Lambert's where that is
+        // certified (its cancellation-free far form reaches any distance), so that the value is
+        // the same for every order.
         if maybe_far([a, b, c], x) {
-            if let Some((d, ratio)) = triangle_far_field_fast(x, n, [a, b, c], order) {
-                if ratio >= LAMBERT_NEVER_FAR {
-                    return Ok(d);
-                }
+            if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
                 return Ok(with_lambert_value(d, order, lambert_value));
             }
         }
@@ -576,15 +574,6 @@ pub(crate) fn edge_form_factor_fast(
     d.is_finite().then_some(d)
 }
 
-/// Distance over radius from which Lambert's value certificate ([`lambert::triangle_value`]) is
-/// known to fail. Its error bound is at least `36u Σβ_i` (u = 2⁻⁵³, `β_i` the angles the edges
-/// subtend), while `|Σ f_i|·2π = 2πF ≤ 2Ω ≤ (Σβ_i)²/2π` (the isoperimetric inequality on the
-/// sphere, for the small spherical triangle of solid angle `Ω`), and `Σβ_i ≤ 3√3 R/(d − R)` (the
-/// perimeter of a triangle within `R` of its centroid, seen from `d`). So the bound exceeds its
-/// acceptance threshold 5e-13 of the sum once `d/R − 1 ≥ 5e-13·3√3/(72πu) ≈ 104`; 280 (the switch to
-/// the 5x5 rule) leaves a margin for the bound's own rounding.
-const LAMBERT_NEVER_FAR: f64 = 280.0;
-
 /// A cheap necessary condition for the robust path's far-field decision (vertex centroid at least
 /// [`polygon::FAR_FIELD_RATIO`] radii `R` from x): then `‖a − x‖ ≥ 15 R` and every edge is at most
 /// `2R`, so `‖a − x‖_∞ ≥ ‖a − x‖/√3 ≥ 4.3 max(‖b − a‖_∞, ‖c − a‖_∞)`; 4 leaves room for rounding.
@@ -857,7 +846,7 @@ mod tests {
                     assert!(ratio >= min_ratio * (1.0 - 1e-12), "{ratio} < {min_ratio}");
                     assert_eq!(got, robust(x, n(), TRI), "at {ratio}");
                     // The entry point takes it, for every order, with the same value (Lambert's
-                    // where certified, which it is not beyond LAMBERT_NEVER_FAR).
+                    // where certified: its far form is, out to 1e7 radii).
                     let entry =
                         |o| triangle_form_factor(x, n(), TRI[0], TRI[1], TRI[2], o).unwrap();
                     let (value, hessian) = (entry(Order::Value), entry(Order::Hessian));
@@ -868,9 +857,7 @@ mod tests {
                     );
                     let lambert = lambert::triangle_value(x, n(), TRI);
                     assert_eq!(value.value, lambert.unwrap_or(got.value), "at {ratio}");
-                    if ratio >= LAMBERT_NEVER_FAR {
-                        assert!(lambert.is_none(), "Lambert certified at {ratio}");
-                    }
+                    assert!(lambert.is_some(), "Lambert not certified at {ratio}");
                 } else if ratio < 16.0 * (1.0 - 1e-9) {
                     assert!(got.is_none(), "taken at {ratio}");
                 }
