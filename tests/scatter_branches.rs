@@ -48,107 +48,127 @@ fn count_exhaustive(
     .len()
 }
 
-#[test]
-#[ignore = "diagnostic"]
-fn diagnose_split_differences() {
+/// Prints, per triangle whose split sum differs from its whole, the supports and the exhaustive
+/// solution counts along the chord.
+fn diagnose(
+    frequency: usize,
+    amplitude: f64,
+    rays: &[(usize, (DVec3, DVec3))],
+    cuts: &[f64],
+    prune: bool,
+) {
     let m = medium();
-    let cuts: Vec<f64> = (0..=10).map(|k| k as f64 / 10.0).collect();
     let o = ScatterOptions {
-        sidedness_test: false,
-        spindle_test: false,
-        normal_cone_test: false,
+        sidedness_test: prune,
+        spindle_test: prune,
+        normal_cone_test: prune,
         ..Default::default()
     };
     let seeds = subdivision_seeds(12);
-    for amplitude in [0.0, 0.05] {
-        let mesh = scene::bumpy_sphere(8, amplitude, 6.0).build().unwrap();
-        for (ri, (org, d)) in eye_rays(12).into_iter().enumerate() {
-            let Some((a, b)) = chord(&mesh, org, d) else {
-                continue;
-            };
-            let len = (b - a).length();
-            let whole = per_triangle(&mesh, &m, a, b, &o);
-            let mut split = vec![0.0; whole.len()];
-            for w in cuts.windows(2) {
-                let (p, q) = (a + w[0] * (b - a), a + w[1] * (b - a));
-                let f = (-m.sigma_t * w[0] * len).exp();
-                for (s, v) in split.iter_mut().zip(per_triangle(&mesh, &m, p, q, &o)) {
-                    *s += f * v;
-                }
-            }
-            let total: f64 = whole.iter().sum();
-            let stotal: f64 = split.iter().sum();
-            println!(
-                "amp {amplitude} ray {ri}: whole {total:.9e} split {stotal:.9e} rel {:.2e}",
-                (stotal - total) / total
-            );
-            let eye = EyeSegment::new(a, b).unwrap();
-            for ti in 0..whole.len() {
-                let diff = split[ti] - whole[ti];
-                if diff.abs() <= 1e-10 * total {
-                    continue;
-                }
-                println!(
-                    "  tri {ti}: whole {:.6e} split {:.6e} diff/total {:.2e}",
-                    whole[ti],
-                    split[ti],
-                    diff / total
-                );
-                let c = Constraint {
-                    tri: mesh.triangle(ti),
-                    eye: &eye,
-                    light: LIGHT,
-                    eta: m.eta,
-                };
-                let (mut k1, mut k2) = (NewtonCounters::default(), NewtonCounters::default());
-                let sup =
-                    triangle_support(&c, (0.0, len), &NewtonSettings::default(), &mut k1, &mut k2);
-                println!(
-                    "    support consistent={} {:?}",
-                    sup.consistent,
-                    sup.intervals
-                        .iter()
-                        .map(|p| (p.x0 / len, p.x1 / len, p.multiplicity, p.folds))
-                        .collect::<Vec<_>>()
-                );
-                for w in cuts.windows(2) {
-                    let sup = triangle_support(
-                        &c,
-                        (w[0] * len, w[1] * len),
-                        &NewtonSettings::default(),
-                        &mut k1,
-                        &mut k2,
-                    );
-                    if !sup.intervals.is_empty() {
-                        println!(
-                            "    piece [{:.1},{:.1}] consistent={} {:?}",
-                            w[0],
-                            w[1],
-                            sup.consistent,
-                            sup.intervals
-                                .iter()
-                                .map(|p| (p.x0 / len, p.x1 / len, p.multiplicity, p.folds))
-                                .collect::<Vec<_>>()
-                        );
-                    }
-                }
-                // Exhaustive counts on a grid, printed as runs.
-                let n = 4000;
-                let mut runs: Vec<(f64, f64, usize)> = Vec::new();
-                for i in 0..n {
-                    let x = len * (i as f64 + 0.5) / n as f64;
-                    let cnt = count_exhaustive(&c, x, &mesh, ti, &seeds);
-                    match runs.last_mut() {
-                        Some(r) if r.2 == cnt => r.1 = x / len,
-                        _ => runs.push((x / len, x / len, cnt)),
-                    }
-                }
-                println!(
-                    "    exhaustive {:?}",
-                    runs.iter().filter(|r| r.2 > 0).collect::<Vec<_>>()
-                );
+    let mesh = scene::bumpy_sphere(frequency, amplitude, 6.0)
+        .build()
+        .unwrap();
+    for &(ri, (org, d)) in rays {
+        let Some((a, b)) = chord(&mesh, org, d) else {
+            continue;
+        };
+        let len = (b - a).length();
+        let whole = per_triangle(&mesh, &m, a, b, &o);
+        let mut split = vec![0.0; whole.len()];
+        for w in cuts.windows(2) {
+            let (p, q) = (a + w[0] * (b - a), a + w[1] * (b - a));
+            let f = (-m.sigma_t * w[0] * len).exp();
+            for (s, v) in split.iter_mut().zip(per_triangle(&mesh, &m, p, q, &o)) {
+                *s += f * v;
             }
         }
+        let total: f64 = whole.iter().sum();
+        let stotal: f64 = split.iter().sum();
+        println!("freq {frequency} amp {amplitude} ray {ri}: whole {total:.9e} split {stotal:.9e} rel {:.2e}", (stotal - total) / total);
+        let eye = EyeSegment::new(a, b).unwrap();
+        for ti in 0..whole.len() {
+            let diff = split[ti] - whole[ti];
+            if diff.abs() <= 1e-11 * total {
+                continue;
+            }
+            println!(
+                "  tri {ti}: whole {:.6e} split {:.6e} diff/total {:.2e}",
+                whole[ti],
+                split[ti],
+                diff / total
+            );
+            let c = Constraint {
+                tri: mesh.triangle(ti),
+                eye: &eye,
+                light: LIGHT,
+                eta: m.eta,
+            };
+            let (mut k1, mut k2) = (NewtonCounters::default(), NewtonCounters::default());
+            let sup =
+                triangle_support(&c, (0.0, len), &NewtonSettings::default(), &mut k1, &mut k2);
+            println!(
+                "    support consistent={} {:?}",
+                sup.consistent,
+                sup.intervals
+                    .iter()
+                    .map(|p| (p.x0 / len, p.x1 / len, p.multiplicity, p.folds))
+                    .collect::<Vec<_>>()
+            );
+            for w in cuts.windows(2) {
+                let sup = triangle_support(
+                    &c,
+                    (w[0] * len, w[1] * len),
+                    &NewtonSettings::default(),
+                    &mut k1,
+                    &mut k2,
+                );
+                if !sup.intervals.is_empty() {
+                    println!(
+                        "    piece [{:.4},{:.4}] consistent={} {:?}",
+                        w[0],
+                        w[1],
+                        sup.consistent,
+                        sup.intervals
+                            .iter()
+                            .map(|p| (p.x0 / len, p.x1 / len, p.multiplicity, p.folds))
+                            .collect::<Vec<_>>()
+                    );
+                }
+            }
+            let n = 4000;
+            let mut runs: Vec<(f64, f64, usize)> = Vec::new();
+            for i in 0..n {
+                let x = len * (i as f64 + 0.5) / n as f64;
+                let cnt = count_exhaustive(&c, x, &mesh, ti, &seeds);
+                match runs.last_mut() {
+                    Some(r) if r.2 == cnt => r.1 = x / len,
+                    _ => runs.push((x / len, x / len, cnt)),
+                }
+            }
+            println!(
+                "    exhaustive {:?}",
+                runs.iter().filter(|r| r.2 > 0).collect::<Vec<_>>()
+            );
+        }
+    }
+}
+
+#[test]
+#[ignore = "diagnostic"]
+fn diagnose_split_differences() {
+    let cuts: Vec<f64> = (0..=10).map(|k| k as f64 / 10.0).collect();
+    let rays: Vec<_> = eye_rays(12).into_iter().enumerate().collect();
+    for amplitude in [0.0, 0.05] {
+        diagnose(8, amplitude, &rays, &cuts, false);
+    }
+}
+
+#[test]
+#[ignore = "diagnostic"]
+fn diagnose_random_split_case() {
+    // Cases proptest found (tests/scatter_split.rs).
+    for (ray, cut) in [(34, 0.001), (35, 0.4434556680948983)] {
+        diagnose(6, 0.05, &[(ray, eye_rays(64)[ray])], &[0.0, cut, 1.0], true);
     }
 }
 
@@ -254,5 +274,40 @@ fn fold_triangles_match_an_exhaustive_reference() {
             let r = fold_reference(&mesh, &m, &eye, ti, (f0 * len, f1 * len), end * len, n);
             println!("amp {amp} ray {ray} tri {ti}: method {got:.9e} reference(n={n}) {r:.9e} rel {:.2e}", (got - r) / r);
         }
+    }
+}
+
+#[test]
+#[ignore = "diagnostic"]
+fn lone_fold_end() {
+    let mesh = scene::bumpy_sphere(6, 0.05, 6.0).build().unwrap();
+    let (org, d) = eye_rays(64)[34];
+    let (a, b) = chord(&mesh, org, d).unwrap();
+    let eye = EyeSegment::new(a, b).unwrap();
+    let len = eye.length;
+    let ti = 534;
+    let c = Constraint {
+        tri: mesh.triangle(ti),
+        eye: &eye,
+        light: LIGHT,
+        eta: 1.5,
+    };
+    let seeds = subdivision_seeds(12);
+    for f in [
+        0.0235, 0.02359, 0.023591, 0.0235919, 0.02359199, 0.023592, 0.023593, 0.0236, 0.024,
+    ] {
+        let x = f * len;
+        let mut k = NewtonCounters::default();
+        let mut sols: Vec<(glam::DVec2, bool, f64)> = Vec::new();
+        for &s in &seeds {
+            if let Some(ab) = solve_interior(&c, x, s, &NewtonSettings::default(), &mut k) {
+                let ab = polish(&c, x, ab);
+                if sols.iter().all(|q| (q.0 - ab).length() > 1e-7) {
+                    let r = c.eval(x, ab, false).unwrap().f.length();
+                    sols.push((ab, is_physical(&c, x, ab), r));
+                }
+            }
+        }
+        println!("x/len {f}: {:?}", sols);
     }
 }

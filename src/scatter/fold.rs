@@ -180,7 +180,68 @@ pub(crate) fn integrate_fold_pair(
 ) -> Option<f64> {
     let (xa, a) = regular_end(p)?;
     let (xb, b) = regular_end(q)?;
-    let d = b - a;
+    let arc = trace_arc(c, (xa, a), b - a, 1.0, range, options, stats)?;
+    let &(s_end, x_end, nu_end) = arc.last()?;
+    if s_end != 1.0 || (x_end - xb).abs() > 1e-6 * (range.1 - range.0) || nu_end.abs() > 1e-6 {
+        return None;
+    }
+    integrate_arc(
+        c,
+        a,
+        b - a,
+        &arc,
+        range,
+        own,
+        intensity,
+        medium,
+        options,
+        stats,
+        paths,
+    )
+}
+
+/// ∫ over the arc from the regular end of `p` through its fold and along the other branch until
+/// that leaves the triangle or the range: for a fold whose other branch the edge scan missed (both
+/// its crossings of one edge fell between two scan points). The chord runs to the mirror image of
+/// the regular end through the fold (where a parabolic fold puts the other branch at the same x)
+/// and beyond. `None` when the arc does not leave within three chord lengths or cannot be followed.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn integrate_lone_fold(
+    c: &Constraint,
+    p: &SupportInterval,
+    range: (f64, f64),
+    own: Ownership,
+    intensity: f64,
+    medium: &Medium,
+    options: &ScatterOptions,
+    stats: &mut ScatterStats,
+    paths: &mut u64,
+) -> Option<f64> {
+    let (xa, a) = regular_end(p)?;
+    let (_, f, _) = fold_end(p)?;
+    let d = 2.0 * (f - a);
+    let arc = trace_arc(c, (xa, a), d, 3.0, range, options, stats)?;
+    let &(s_end, _, _) = arc.last()?;
+    if !(s_end > 0.5 && s_end < 3.0) {
+        return None;
+    }
+    integrate_arc(
+        c, a, d, &arc, range, own, intensity, medium, options, stats, paths,
+    )
+}
+
+/// Follows the arc from (x_a, a) along the chord direction `d` for s in [0, s_max] by
+/// continuation; where it leaves the triangle or the x range (or stops being solvable), the exit
+/// is located by bisection on s and ends the arc. Returns the (s, x, ν) of the continuation steps.
+fn trace_arc(
+    c: &Constraint,
+    (xa, a): (f64, DVec2),
+    d: DVec2,
+    s_max: f64,
+    range: (f64, f64),
+    options: &ScatterOptions,
+    stats: &mut ScatterStats,
+) -> Option<Vec<(f64, f64, f64)>> {
     let len = d.length();
     if !(len > 1e-9) {
         return None;
@@ -191,29 +252,78 @@ pub(crate) fn integrate_fold_pair(
         n: DVec2::new(-d.y, d.x) / len,
     };
     let settings = &options.newton;
-    // Trace the arc: every step must stay inside the triangle and within the x range, and the end
-    // must be B itself.
-    let mut trace: Vec<(f64, f64, f64)> = Vec::with_capacity(TRACE_STEPS + 1);
-    trace.push((0.0, xa, 0.0));
     let span = range.1 - range.0;
-    for k in 1..=TRACE_STEPS {
-        let s = k as f64 / TRACE_STEPS as f64;
-        let &(_, x, nu) = trace.last()?;
-        let pt = solve_at(c, &chord, s, (x, nu), settings, stats)?;
-        let slack = 1e-9 * span;
-        if !inside_triangle_loose(pt.ab) || pt.x < range.0 - slack || pt.x > range.1 + slack {
-            return None;
+    let valid = |pt: &ArcPoint| {
+        let slack = 1e-12 * span;
+        inside_triangle_loose(pt.ab) && pt.x >= range.0 - slack && pt.x <= range.1 + slack
+    };
+    let steps = (TRACE_STEPS as f64 * s_max).ceil() as usize;
+    let mut trace: Vec<(f64, f64, f64)> = Vec::with_capacity(steps + 1);
+    trace.push((0.0, xa, 0.0));
+    for k in 1..=steps {
+        let s = s_max * k as f64 / steps as f64;
+        let &(s0, x, nu) = trace.last()?;
+        match solve_at(c, &chord, s, (x, nu), settings, stats) {
+            Some(pt) if valid(&pt) => trace.push((s, pt.x, pt.nu)),
+            _ => {
+                // Bisect for the exit between the last valid step and this one.
+                let (mut lo, mut hi) = (s0, s);
+                let mut last = (s0, x, nu);
+                for _ in 0..60 {
+                    let mid = 0.5 * (lo + hi);
+                    if !(mid > lo && mid < hi) {
+                        break;
+                    }
+                    match solve_at(c, &chord, mid, (last.1, last.2), settings, stats) {
+                        Some(pt) if valid(&pt) => {
+                            lo = mid;
+                            last = (mid, pt.x, pt.nu);
+                        }
+                        _ => hi = mid,
+                    }
+                }
+                if last.0 > s0 {
+                    trace.push(last);
+                }
+                return Some(trace);
+            }
         }
-        trace.push((s, pt.x, pt.nu));
     }
-    let &(_, x_end, nu_end) = trace.last()?;
-    if (x_end - xb).abs() > 1e-6 * span || nu_end.abs() > 1e-6 {
+    Some(trace)
+}
+
+/// The adaptive quadrature of F(x(s)) |dx/ds| over the traced arc's s range.
+#[allow(clippy::too_many_arguments)]
+fn integrate_arc(
+    c: &Constraint,
+    a: DVec2,
+    d: DVec2,
+    trace: &[(f64, f64, f64)],
+    range: (f64, f64),
+    own: Ownership,
+    intensity: f64,
+    medium: &Medium,
+    options: &ScatterOptions,
+    stats: &mut ScatterStats,
+    paths: &mut u64,
+) -> Option<f64> {
+    let len = d.length();
+    let chord = Chord {
+        a,
+        d,
+        n: DVec2::new(-d.y, d.x) / len,
+    };
+    let settings = &options.newton;
+    let s_end = trace.last()?.0;
+    if trace.len() < 2 || !(s_end > 0.0) {
         return None;
     }
     let guess = |s: f64| -> (f64, f64) {
-        let k = ((s * TRACE_STEPS as f64) as usize).min(TRACE_STEPS - 1);
-        let (s0, x0, n0) = trace[k];
-        let (s1, x1, n1) = trace[k + 1];
+        let k = trace
+            .partition_point(|t| t.0 <= s)
+            .clamp(1, trace.len() - 1);
+        let (s0, x0, n0) = trace[k - 1];
+        let (s1, x1, n1) = trace[k];
         let t = (s - s0) / (s1 - s0);
         (x0 + t * (x1 - x0), n0 + t * (n1 - n0))
     };
@@ -223,7 +333,7 @@ pub(crate) fn integrate_fold_pair(
         max_intervals: options.max_subintervals,
     };
     let mut failed = false;
-    let (sum, _, intervals) = quadrature::integrate(0.0, 1.0, &adaptive, |ss, values| {
+    let (sum, _, intervals) = quadrature::integrate(0.0, s_end, &adaptive, |ss, values| {
         for (k, &s) in ss.iter().enumerate() {
             stats.samples += 1;
             values[k] = 0.0;

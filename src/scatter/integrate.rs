@@ -6,7 +6,7 @@ use smallvec::SmallVec;
 
 use super::constraint::{Constraint, EyeSegment};
 use super::contribution::{path_contribution, DistanceFactor, Medium};
-use super::fold::{fold_pairs, integrate_fold_pair};
+use super::fold::{fold_pairs, integrate_fold_pair, integrate_lone_fold};
 use super::interval::{owned_solutions_at, seeds_at, triangle_support, Ownership, SupportInterval};
 use super::mesh::RefractiveMesh;
 use super::newton::NewtonSettings;
@@ -290,6 +290,17 @@ pub fn triangle_contribution(
             sum += v;
             done[i] = true;
             done[j] = true;
+        }
+    }
+    // A fold without a partner: the other branch crossed one edge twice between two scan points.
+    for (i, piece) in support.intervals.iter().enumerate() {
+        if !done[i] && piece.folds[0] != piece.folds[1] {
+            if let Some(v) = integrate_lone_fold(
+                &c, piece, range, own, intensity, medium, options, stats, &mut paths,
+            ) {
+                sum += v;
+                done[i] = true;
+            }
         }
     }
     for (piece, _) in support.intervals.iter().zip(&done).filter(|(_, &d)| !d) {

@@ -350,8 +350,21 @@ pub fn triangle_support(
             }
         }
     }
-    anchors.extend(start.iter().map(|&ab| (xs, 1.0, ab)));
-    anchors.extend(end.iter().map(|&ab| (xe, -1.0, ab)));
+    // A branch through a range end starts exactly there when the solve at the end converges
+    // (else at the inset, 1e-7 of the range short): the pieces of a split then tile the segment.
+    let at_end = |x_end: f64, x_in: f64, ab: DVec2, counters: &mut NewtonCounters| {
+        solve_interior(c, x_end, ab, settings, counters)
+            .filter(|&e| inside_triangle(e) && is_physical(c, x_end, e))
+            .map_or((x_in, ab), |e| (x_end, e))
+    };
+    for &ab in &start {
+        let (x, ab) = at_end(x_lo, xs, ab, interior);
+        anchors.push((x, 1.0, ab));
+    }
+    for &ab in &end {
+        let (x, ab) = at_end(x_hi, xe, ab, interior);
+        anchors.push((x, -1.0, ab));
+    }
     let mut intervals: SmallVec<[SupportInterval; 4]> = SmallVec::new();
     let mut consumed: SmallVec<[bool; 8]> = smallvec::smallvec![false; anchors.len()];
     for i in 0..anchors.len() {
