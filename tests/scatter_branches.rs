@@ -311,3 +311,52 @@ fn lone_fold_end() {
         println!("x/len {f}: {:?}", sols);
     }
 }
+
+/// The jittered cuts of `tests/scatter_split.rs::worst_split` for one ray.
+fn jittered_cuts(mesh: &RefractiveMesh, rays: usize, pieces: usize, target: usize) -> Vec<f64> {
+    let mut state = 0x2545f4914f6cdd1du64;
+    let mut rnd = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for (ray, (o, d)) in eye_rays(rays).into_iter().enumerate() {
+        if chord(mesh, o, d).is_none() {
+            continue;
+        }
+        let cuts: Vec<f64> = (1..pieces)
+            .map(|k| (k as f64 + rnd() - 0.5) / pieces as f64)
+            .collect();
+        if ray == target {
+            let mut all = vec![0.0];
+            all.extend(cuts);
+            all.push(1.0);
+            return all;
+        }
+    }
+    unreachable!()
+}
+
+#[test]
+#[ignore = "diagnostic"]
+fn diagnose_many_pieces_case() {
+    let spec: Vec<usize> = std::env::var("CASE")
+        .unwrap_or("6,19,3".into())
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let (frequency, ray, pieces) = (spec[0], spec[1], spec[2]);
+    let amplitude = if spec.len() > 3 { 0.0 } else { 0.05 };
+    let mesh = scene::bumpy_sphere(frequency, amplitude, 6.0)
+        .build()
+        .unwrap();
+    let cuts = jittered_cuts(&mesh, 24, pieces, ray);
+    diagnose(
+        frequency,
+        amplitude,
+        &[(ray, eye_rays(24)[ray])],
+        &cuts,
+        true,
+    );
+}

@@ -72,3 +72,61 @@ proptest! {
         }
     }
 }
+
+/// The worst relative |Σ pieces − whole| over `rays` chords of each sphere cut into `pieces` equal
+/// pieces, with a random (xorshift) jitter of each cut by up to half a piece.
+fn worst_split(
+    frequency: usize,
+    amplitude: f64,
+    rays: usize,
+    pieces: usize,
+    jitter: bool,
+) -> (f64, usize) {
+    let m = medium();
+    let mesh = scene::bumpy_sphere(frequency, amplitude, 6.0)
+        .build()
+        .unwrap();
+    let mut state = 0x2545f4914f6cdd1du64;
+    let mut rnd = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (mut worst, mut worst_ray) = (0.0f64, 0);
+    for (ray, (o, d)) in eye_rays(rays).into_iter().enumerate() {
+        let Some((a, b)) = chord(&mesh, o, d) else {
+            continue;
+        };
+        let cuts: Vec<f64> = (1..pieces)
+            .map(|k| {
+                let j = if jitter { rnd() - 0.5 } else { 0.0 };
+                (k as f64 + j) / pieces as f64
+            })
+            .collect();
+        let whole = radiance(&mesh, &m, a, b);
+        if whole == 0.0 {
+            continue;
+        }
+        let sum = split_sum(&mesh, &m, a, b, &cuts);
+        let rel = (sum - whole).abs() / whole;
+        if rel > worst {
+            (worst, worst_ray) = (rel, ray);
+        }
+    }
+    (worst, worst_ray)
+}
+
+#[test]
+#[ignore = "~1 min: cargo test --release --test scatter_split -- --ignored --nocapture"]
+fn many_small_pieces_sum_to_the_whole() {
+    let mut worst: f64 = 0.0;
+    for (frequency, amplitude) in [(8, 0.0), (8, 0.05), (6, 0.05), (16, 0.05)] {
+        for pieces in [3, 37, 200] {
+            let (w, ray) = worst_split(frequency, amplitude, 24, pieces, true);
+            println!("sphere {frequency}, amplitude {amplitude}: {pieces} pieces, worst {w:.2e} (ray {ray})");
+            worst = worst.max(w);
+        }
+    }
+    assert!(worst <= 1e-9, "{worst:.3e}");
+}

@@ -206,9 +206,10 @@ pub fn owned_solutions_at(
     out
 }
 
-/// Physical interior solutions inside the triangle at `x`: the first seed that converges decides (a small
-/// triangle holds at most one solution away from caustics); with `all`, every seed is tried and
-/// distinct solutions are collected.
+/// Physical interior solutions inside the triangle at `x`: the first seed that converges inside decides (a small
+/// triangle holds at most one solution away from caustics; a seed converging to the curve outside
+/// the triangle does not stop the search, or a tiny range crossed by a branch without edge events
+/// would lose it); with `all`, every seed is tried and distinct solutions are collected.
 pub fn solutions_at(
     c: &Constraint,
     x: f64,
@@ -225,9 +226,9 @@ pub fn solutions_at(
                 && out.iter().all(|q| (*q - ab).length() > DISTINCT)
             {
                 out.push(ab);
-            }
-            if !all {
-                break;
+                if !all {
+                    break;
+                }
             }
         }
     }
