@@ -360,3 +360,159 @@ fn diagnose_many_pieces_case() {
         true,
     );
 }
+
+#[test]
+#[ignore = "diagnostic"]
+fn fold_triangle_by_sub_ranges() {
+    let spec: Vec<f64> = std::env::var("SUB")
+        .unwrap_or("6,19,80".into())
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let (frequency, ray, ti) = (spec[0] as usize, spec[1] as usize, spec[2] as usize);
+    let m = medium();
+    let mesh = scene::bumpy_sphere(frequency, 0.05, 6.0).build().unwrap();
+    let (org, d) = eye_rays(24)[ray];
+    let (a, b) = chord(&mesh, org, d).unwrap();
+    let len = (b - a).length();
+    let o = ScatterOptions::default();
+    let on = |t0: f64, t1: f64| {
+        let eye = EyeSegment::new(a + t0 * (b - a), a + t1 * (b - a)).unwrap();
+        let mut st = ScatterStats::default();
+        (-m.sigma_t * t0 * len).exp()
+            * triangle_contribution(&mesh, ti, &eye, LIGHT, 1.0, &m, &o, &mut st)
+    };
+    let eye = EyeSegment::new(a, b).unwrap();
+    let c = Constraint {
+        tri: mesh.triangle(ti),
+        eye: &eye,
+        light: LIGHT,
+        eta: m.eta,
+    };
+    let seeds = subdivision_seeds(12);
+    let midpoint = |t0: f64, t1: f64, n: usize| {
+        let mut s = 0.0;
+        for i in 0..n {
+            let x = len * (t0 + (t1 - t0) * (i as f64 + 0.5) / n as f64);
+            let mut sd: Vec<_> = seeds_at(&c, x).to_vec();
+            sd.extend_from_slice(&seeds);
+            let mut k = NewtonCounters::default();
+            for ab in owned_solutions_at(
+                &c,
+                x,
+                &sd,
+                true,
+                mesh.triangle_ownership(ti),
+                &NewtonSettings::default(),
+                &mut k,
+            ) {
+                if let Some(p) = raddiff::scatter::contribution::path_contribution(
+                    c.tri,
+                    ab,
+                    &eye,
+                    x,
+                    LIGHT,
+                    1.0,
+                    &m,
+                    raddiff::scatter::DistanceFactor::Interpolated,
+                ) {
+                    s += p.value * len * (t1 - t0) / n as f64;
+                }
+            }
+        }
+        s
+    };
+    let ts: Vec<f64> = std::env::var("TS")
+        .unwrap_or("0.2877,0.29,0.30,0.31471,0.32,0.33,0.34".into())
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    println!("whole {:.9e}", on(0.0, 1.0));
+    for &t1 in &[0.3, 0.31471, 0.32] {
+        let (mut k1, mut k2) = (NewtonCounters::default(), NewtonCounters::default());
+        let sup = triangle_support(
+            &c,
+            (0.0, t1 * len),
+            &NewtonSettings::default(),
+            &mut k1,
+            &mut k2,
+        );
+        println!(
+            "support [0, {t1}]: {:?}",
+            sup.intervals
+                .iter()
+                .map(|p| (p.x0 / len, p.x1 / len, p.multiplicity, p.folds, p.ends))
+                .collect::<Vec<_>>()
+        );
+    }
+    let mut acc = on(0.0, ts[0]);
+    println!("[0, {}] {:.9e}", ts[0], acc);
+    for w in ts.windows(2) {
+        let v = on(w[0], w[1]);
+        acc += v;
+        println!(
+            "[{}, {}] method {:.9e} midpoint {:.9e}; cumulative {:.9e} vs [0, {}] {:.9e}",
+            w[0],
+            w[1],
+            v,
+            midpoint(w[0], w[1], 4000),
+            acc,
+            w[1],
+            on(0.0, w[1])
+        );
+    }
+}
+
+#[test]
+#[ignore = "diagnostic"]
+fn same_edge_probe() {
+    let mesh = scene::bumpy_sphere(8, 0.05, 6.0).build().unwrap();
+    let (org, d) = eye_rays(24)[8];
+    let (a, b) = chord(&mesh, org, d).unwrap();
+    let eye = EyeSegment::new(a, b).unwrap();
+    let len = eye.length;
+    let c = Constraint {
+        tri: mesh.triangle(195),
+        eye: &eye,
+        light: LIGHT,
+        eta: 1.5,
+    };
+    let seeds = subdivision_seeds(12);
+    for f in [
+        0.2090, 0.20913, 0.2095, 0.2100, 0.2150, 0.2200, 0.22037, 0.2205,
+    ] {
+        let x = f * len;
+        let mut k = NewtonCounters::default();
+        let mut s: Vec<_> = seeds_at(&c, x).to_vec();
+        s.extend_from_slice(&seeds);
+        let sols = owned_solutions_at(
+            &c,
+            x,
+            &s,
+            true,
+            raddiff::scatter::interval::Ownership::ALL,
+            &NewtonSettings::default(),
+            &mut k,
+        );
+        println!("x/len {f}: {:?}", sols);
+    }
+    let mut out = smallvec::SmallVec::new();
+    let mut k = NewtonCounters::default();
+    for e in 0..3 {
+        raddiff::scatter::newton::edge_crossings(
+            &c,
+            e,
+            0.0,
+            len,
+            &NewtonSettings::default(),
+            &mut k,
+            &mut out,
+        );
+    }
+    println!(
+        "edge crossings {:?}",
+        out.iter()
+            .map(|cr| (cr.x / len, cr.edge, cr.ab))
+            .collect::<Vec<_>>()
+    );
+}

@@ -253,8 +253,10 @@ fn trace_arc(
     };
     let settings = &options.newton;
     let span = range.1 - range.0;
+    // The slack covers the solves' error in x (a 1e-10 residual): an arc ending exactly at a range
+    // end must not stop a rounding short of it. Nodes beyond the range contribute nothing.
     let valid = |pt: &ArcPoint| {
-        let slack = 1e-12 * span;
+        let slack = 1e-8 * span;
         inside_triangle_loose(pt.ab) && pt.x >= range.0 - slack && pt.x <= range.1 + slack
     };
     let steps = (TRACE_STEPS as f64 * s_max).ceil() as usize;
