@@ -180,6 +180,70 @@ pub(crate) fn integrate_fold_pair(
 ) -> Option<f64> {
     let (xa, a) = regular_end(p)?;
     let (xb, b) = regular_end(q)?;
+    integrate_between(
+        c,
+        (xa, a),
+        (xb, b),
+        range,
+        own,
+        intensity,
+        medium,
+        options,
+        stats,
+        paths,
+    )
+}
+
+/// ∫ over a fold-free piece of a triangle whose analysis fell back to tracing, along the arc
+/// between its two end solutions: near a fold the two branches are close and a fixed-x solve per
+/// node can land on the other one (one branch counted twice, one missed: 5e-8 of a triangle),
+/// while the chord parameter pins the place along this branch. `None` when the arc cannot be
+/// followed (the caller integrates in x).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn integrate_piece_along_arc(
+    c: &Constraint,
+    p: &SupportInterval,
+    range: (f64, f64),
+    own: Ownership,
+    intensity: f64,
+    medium: &Medium,
+    options: &ScatterOptions,
+    stats: &mut ScatterStats,
+    paths: &mut u64,
+) -> Option<f64> {
+    if p.folds != [false, false] || p.multiplicity != 1 {
+        return None;
+    }
+    let (a, b) = (p.ends[0]?, p.ends[1]?);
+    integrate_between(
+        c,
+        (p.x0, a),
+        (p.x1, b),
+        range,
+        own,
+        intensity,
+        medium,
+        options,
+        stats,
+        paths,
+    )
+}
+
+/// The arc from the solution (x_a, a) to the solution (x_b, b), traced along their chord and
+/// integrated in the chord parameter; `None` if the trace does not arrive at B.
+#[allow(clippy::too_many_arguments)]
+fn integrate_between(
+    c: &Constraint,
+    (xa, a): (f64, DVec2),
+    (xb, b): (f64, DVec2),
+    range: (f64, f64),
+    own: Ownership,
+    intensity: f64,
+    medium: &Medium,
+    options: &ScatterOptions,
+    stats: &mut ScatterStats,
+    paths: &mut u64,
+) -> Option<f64> {
     let arc = trace_arc(c, (xa, a), b - a, 1.0, range, options, stats)?;
     let &(s_end, x_end, nu_end) = arc.last()?;
     if s_end != 1.0 || (x_end - xb).abs() > 1e-6 * (range.1 - range.0) || nu_end.abs() > 1e-6 {
@@ -253,20 +317,23 @@ fn trace_arc(
     };
     let settings = &options.newton;
     let span = range.1 - range.0;
-    // The slack covers the solves' error in x (a 1e-10 residual): an arc ending exactly at a range
-    // end must not stop a rounding short of it. Nodes beyond the range contribute nothing.
-    let valid = |pt: &ArcPoint| {
-        let slack = 1e-8 * span;
+    let valid = |pt: &ArcPoint, slack: f64| {
         inside_triangle_loose(pt.ab) && pt.x >= range.0 - slack && pt.x <= range.1 + slack
     };
+    // The last step may overshoot a range end by the solves' error in x (a 1e-10 residual moves x
+    // by up to ~1e-9 of the distances involved, more than a rounding of a short range): an arc
+    // that ends exactly at a range end must arrive. Exits inside are located exactly (nodes beyond
+    // the range contribute nothing).
+    let end_slack = 1e-6 * span;
     let steps = (TRACE_STEPS as f64 * s_max).ceil() as usize;
     let mut trace: Vec<(f64, f64, f64)> = Vec::with_capacity(steps + 1);
     trace.push((0.0, xa, 0.0));
     for k in 1..=steps {
         let s = s_max * k as f64 / steps as f64;
         let &(s0, x, nu) = trace.last()?;
+        let slack = if k == steps { end_slack } else { 0.0 };
         match solve_at(c, &chord, s, (x, nu), settings, stats) {
-            Some(pt) if valid(&pt) => trace.push((s, pt.x, pt.nu)),
+            Some(pt) if valid(&pt, slack) => trace.push((s, pt.x, pt.nu)),
             _ => {
                 // Bisect for the exit between the last valid step and this one.
                 let (mut lo, mut hi) = (s0, s);
@@ -277,7 +344,7 @@ fn trace_arc(
                         break;
                     }
                     match solve_at(c, &chord, mid, (last.1, last.2), settings, stats) {
-                        Some(pt) if valid(&pt) => {
+                        Some(pt) if valid(&pt, 0.0) => {
                             lo = mid;
                             last = (mid, pt.x, pt.nu);
                         }

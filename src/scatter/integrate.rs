@@ -6,7 +6,9 @@ use smallvec::SmallVec;
 
 use super::constraint::{Constraint, EyeSegment};
 use super::contribution::{path_contribution, DistanceFactor, Medium};
-use super::fold::{fold_pairs, integrate_fold_pair, integrate_lone_fold};
+use super::fold::{
+    fold_pairs, integrate_fold_pair, integrate_lone_fold, integrate_piece_along_arc,
+};
 use super::interval::{owned_solutions_at, seeds_at, triangle_support, Ownership, SupportInterval};
 use super::mesh::RefractiveMesh;
 use super::newton::NewtonSettings;
@@ -296,6 +298,16 @@ pub fn triangle_contribution(
     for (i, piece) in support.intervals.iter().enumerate() {
         if !done[i] && piece.folds[0] != piece.folds[1] {
             if let Some(v) = integrate_lone_fold(
+                &c, piece, range, own, intensity, medium, options, stats, &mut paths,
+            ) {
+                sum += v;
+                done[i] = true;
+            }
+        }
+    }
+    for (i, piece) in support.intervals.iter().enumerate() {
+        if !done[i] && !support.consistent {
+            if let Some(v) = integrate_piece_along_arc(
                 &c, piece, range, own, intensity, medium, options, stats, &mut paths,
             ) {
                 sum += v;
