@@ -410,10 +410,11 @@ fn integrate_arc(
                 failed = true;
                 continue;
             };
-            if !(pt.x >= range.0 && pt.x <= range.1)
-                || !own.accepts(pt.ab)
-                || !is_physical(c, pt.x, pt.ab)
-            {
+            let counts = pt.x >= range.0
+                && pt.x <= range.1
+                && own.accepts(pt.ab)
+                && is_physical(c, pt.x, pt.ab);
+            if !counts {
                 continue;
             }
             if let Some(path) = path_contribution(
