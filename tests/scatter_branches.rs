@@ -599,3 +599,34 @@ fn newton_count_against_exhaustive_search() {
     }
     println!("single-seed count {counted}, exhaustive {exhaustive}, sample points the support misses {uncovered}");
 }
+
+/// The interval column of docs/single-scattering.md's brute-force table: the three segments of
+/// `tests/scatter_bumpy.rs`'s full-size comparison, interval method only.
+#[test]
+#[ignore = "diagnostic"]
+fn interval_column_of_the_brute_force_table() {
+    let mesh = scene::bumpy_sphere(22, 0.05, 6.0).build().unwrap();
+    let m = medium();
+    let segs: Vec<_> = eye_rays(12)
+        .into_iter()
+        .filter_map(|(o, d)| chord(&mesh, o, d))
+        .take(3)
+        .collect();
+    for (a, b) in segs {
+        let r = raddiff::scatter::single_scatter(
+            &mesh,
+            &m,
+            a,
+            b,
+            LIGHT,
+            1.0,
+            &ScatterOptions::default(),
+        )
+        .unwrap();
+        println!(
+            "interval {:.6e} ({} Newton solves)",
+            r.radiance,
+            r.stats.newton_solves()
+        );
+    }
+}
