@@ -1,11 +1,12 @@
 //! Split invariance (issue 19): the radiance of a segment equals the sum over any split of it,
 //! each piece carried back to the entry point by exp(−σ_t offset).
 //!
-//! Not met yet (issue 19, item "find every branch near folds"): the worst relative difference over
-//! 12 chords split in 10 is 5.7e-4 on the smooth sphere, and random splits differ by up to ~3e-4.
-//! Both tests are ignored until fold branches are found independently of where a segment ends:
-//! `cargo test --test scatter_split -- --ignored` reproduces the figures.
-
+//! Every branch of the solution curve is found independently of where a segment ends: the two
+//! branches meeting at a fold are integrated together along the curve (`src/scatter/fold.rs`),
+//! and range-end solves try every seed. Measured (release): 12 chords split in 10, worst 3.2e-10
+//! (was 6.4e-4); 24 random splits pass 1e-9 (was ~3e-4); the bigger ignored variant (24 chords of
+//! 4 spheres in 3 / 37 / 200 jittered pieces) worst 3.6e-9 (was 0.35):
+//! `cargo test --release --test scatter_split -- --ignored --nocapture`.
 mod scatter_common;
 
 use glam::DVec3;
@@ -34,7 +35,6 @@ fn split_sum(mesh: &RefractiveMesh, m: &Medium, a: DVec3, b: DVec3, cuts: &[f64]
 }
 
 #[test]
-#[ignore = "issue 19: fold branches depend on the segment's ends (5.7e-4)"]
 fn ten_pieces_sum_to_the_whole_on_spheres() {
     let m = medium();
     let cuts: Vec<f64> = (1..10).map(|k| k as f64 / 10.0).collect();
@@ -59,7 +59,6 @@ fn ten_pieces_sum_to_the_whole_on_spheres() {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
     #[test]
-    #[ignore = "issue 19: fold branches depend on the segment's ends (~3e-4)"]
     fn random_splits_sum_to_the_whole(ray in 0usize..64, mut cuts in prop::collection::vec(0.001f64..0.999, 1..5)) {
         let mesh = scene::bumpy_sphere(6, 0.05, 6.0).build().unwrap();
         let m = medium();
@@ -71,4 +70,65 @@ proptest! {
             prop_assert!((sum - whole).abs() <= 1e-9 * whole, "{sum} vs {whole}");
         }
     }
+}
+
+/// The worst relative |Σ pieces − whole| over `rays` chords of each sphere cut into `pieces` equal
+/// pieces, with a random (xorshift) jitter of each cut by up to half a piece.
+fn worst_split(
+    frequency: usize,
+    amplitude: f64,
+    rays: usize,
+    pieces: usize,
+    jitter: bool,
+) -> (f64, usize) {
+    let m = medium();
+    let mesh = scene::bumpy_sphere(frequency, amplitude, 6.0)
+        .build()
+        .unwrap();
+    let mut state = 0x2545f4914f6cdd1du64;
+    let mut rnd = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (mut worst, mut worst_ray) = (0.0f64, 0);
+    for (ray, (o, d)) in eye_rays(rays).into_iter().enumerate() {
+        let Some((a, b)) = chord(&mesh, o, d) else {
+            continue;
+        };
+        let cuts: Vec<f64> = (1..pieces)
+            .map(|k| {
+                let j = if jitter { rnd() - 0.5 } else { 0.0 };
+                (k as f64 + j) / pieces as f64
+            })
+            .collect();
+        let whole = radiance(&mesh, &m, a, b);
+        if whole == 0.0 {
+            continue;
+        }
+        let sum = split_sum(&mesh, &m, a, b, &cuts);
+        let rel = (sum - whole).abs() / whole;
+        if rel > worst {
+            (worst, worst_ray) = (rel, ray);
+        }
+    }
+    (worst, worst_ray)
+}
+
+/// Tiny pieces put a fold just inside or outside a piece's end, and many range-end solves next to
+/// one. The sum of 200 piece integrals (each within the quadrature's 1e-10 of its own) reaches
+/// 3.6e-9 of the whole here, hence the looser bound.
+#[test]
+#[ignore = "~30 s in release: cargo test --release --test scatter_split -- --ignored --nocapture"]
+fn many_small_pieces_sum_to_the_whole() {
+    let mut worst: f64 = 0.0;
+    for (frequency, amplitude) in [(8, 0.0), (8, 0.05), (6, 0.05), (16, 0.05)] {
+        for pieces in [3, 37, 200] {
+            let (w, ray) = worst_split(frequency, amplitude, 24, pieces, true);
+            println!("sphere {frequency}, amplitude {amplitude}: {pieces} pieces, worst {w:.2e} (ray {ray})");
+            worst = worst.max(w);
+        }
+    }
+    assert!(worst <= 1e-8, "{worst:.3e}");
 }

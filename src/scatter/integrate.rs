@@ -6,6 +6,9 @@ use smallvec::SmallVec;
 
 use super::constraint::{Constraint, EyeSegment};
 use super::contribution::{path_contribution, DistanceFactor, Medium};
+use super::fold::{
+    fold_pairs, integrate_fold_pair, integrate_lone_fold, integrate_piece_along_arc,
+};
 use super::interval::{owned_solutions_at, seeds_at, triangle_support, Ownership, SupportInterval};
 use super::mesh::RefractiveMesh;
 use super::newton::NewtonSettings;
@@ -279,7 +282,40 @@ pub fn triangle_contribution(
     }
     let mut sum = 0.0;
     let mut paths = 0;
-    for piece in &support.intervals {
+    // The two branches meeting at a fold are integrated together along the curve (see `fold`).
+    let mut done: SmallVec<[bool; 4]> = smallvec::smallvec![false; support.intervals.len()];
+    for (i, j) in fold_pairs(&support.intervals, range) {
+        let (p, q) = (&support.intervals[i], &support.intervals[j]);
+        if let Some(v) = integrate_fold_pair(
+            &c, p, q, range, own, intensity, medium, options, stats, &mut paths,
+        ) {
+            sum += v;
+            done[i] = true;
+            done[j] = true;
+        }
+    }
+    // A fold without a partner: the other branch crossed one edge twice between two scan points.
+    for (i, piece) in support.intervals.iter().enumerate() {
+        if !done[i] && piece.folds[0] != piece.folds[1] {
+            if let Some(v) = integrate_lone_fold(
+                &c, piece, range, own, intensity, medium, options, stats, &mut paths,
+            ) {
+                sum += v;
+                done[i] = true;
+            }
+        }
+    }
+    for (i, piece) in support.intervals.iter().enumerate() {
+        if !done[i] && !support.consistent {
+            if let Some(v) = integrate_piece_along_arc(
+                &c, piece, range, own, intensity, medium, options, stats, &mut paths,
+            ) {
+                sum += v;
+                done[i] = true;
+            }
+        }
+    }
+    for (piece, _) in support.intervals.iter().zip(&done).filter(|(_, &d)| !d) {
         sum += integrate_piece(
             &c, piece, own, intensity, medium, options, stats, &mut paths,
         );

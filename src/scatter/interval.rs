@@ -206,9 +206,10 @@ pub fn owned_solutions_at(
     out
 }
 
-/// Physical interior solutions inside the triangle at `x`: the first seed that converges decides (a small
-/// triangle holds at most one solution away from caustics); with `all`, every seed is tried and
-/// distinct solutions are collected.
+/// Physical interior solutions inside the triangle at `x`: the first seed that converges inside decides (a small
+/// triangle holds at most one solution away from caustics; a seed converging to the curve outside
+/// the triangle does not stop the search, or a tiny range crossed by a branch without edge events
+/// would lose it); with `all`, every seed is tried and distinct solutions are collected.
 pub fn solutions_at(
     c: &Constraint,
     x: f64,
@@ -225,9 +226,9 @@ pub fn solutions_at(
                 && out.iter().all(|q| (*q - ab).length() > DISTINCT)
             {
                 out.push(ab);
-            }
-            if !all {
-                break;
+                if !all {
+                    break;
+                }
             }
         }
     }
@@ -350,8 +351,21 @@ pub fn triangle_support(
             }
         }
     }
-    anchors.extend(start.iter().map(|&ab| (xs, 1.0, ab)));
-    anchors.extend(end.iter().map(|&ab| (xe, -1.0, ab)));
+    // A branch through a range end starts exactly there when the solve at the end converges
+    // (else at the inset, 1e-7 of the range short): the pieces of a split then tile the segment.
+    let at_end = |x_end: f64, x_in: f64, ab: DVec2, counters: &mut NewtonCounters| {
+        solve_interior(c, x_end, ab, settings, counters)
+            .filter(|&e| inside_triangle(e) && is_physical(c, x_end, e))
+            .map_or((x_in, ab), |e| (x_end, e))
+    };
+    for &ab in &start {
+        let (x, ab) = at_end(x_lo, xs, ab, interior);
+        anchors.push((x, 1.0, ab));
+    }
+    for &ab in &end {
+        let (x, ab) = at_end(x_hi, xe, ab, interior);
+        anchors.push((x, -1.0, ab));
+    }
     let mut intervals: SmallVec<[SupportInterval; 4]> = SmallVec::new();
     let mut consumed: SmallVec<[bool; 8]> = smallvec::smallvec![false; anchors.len()];
     for i in 0..anchors.len() {

@@ -34,6 +34,7 @@
 pub mod bvh;
 pub mod constraint;
 pub mod contribution;
+mod fold;
 pub mod integrate;
 pub mod interval;
 pub mod mesh;
