@@ -15,6 +15,8 @@ use crate::error::{ensure_finite3, Error, Result};
 use crate::{Deriv3, Order};
 
 use super::dd;
+
+mod sliver;
 use super::form_factor::{
     clip_edge_term, edge_term_exact, outer_self, sym_outer, EdgeFrame, ExactEnds,
 };
@@ -417,6 +419,7 @@ macro_rules! cached_rule {
         }
     };
 }
+cached_rule!(gauss_legendre_2, 2);
 cached_rule!(gauss_legendre_3, 3);
 cached_rule!(gauss_legendre_4, 4);
 cached_rule!(gauss_legendre_5, 5);
@@ -607,7 +610,25 @@ pub(crate) fn triangle_rule(
     geometry: (DVec3, f64),
     rule: Rule,
 ) -> Deriv3 {
-    let rule = rule.0;
+    tensor_rule(r_a, ab, bc, n, order, geometry, (0.0, 1.0, rule.0), rule.0)
+}
+
+/// [`triangle_rule`] restricted to `s ∈ [s0, s1]` (the part of the triangle between two lines
+/// parallel to `bc`), with Gauss rules `s_rule` along `s` and `t_rule` along `t`: thin triangles
+/// need many points along their length and few across (see `sliver`). With `[0, 1]` the nodes
+/// and weights are exactly those of `s_rule`, so [`triangle_rule`] is unchanged bit for bit.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn tensor_rule(
+    r_a: DVec3,
+    ab: DVec3,
+    bc: DVec3,
+    n: DVec3,
+    order: Order,
+    geometry: (DVec3, f64),
+    (s0, s1, s_rule): (f64, f64, &[(f64, f64)]),
+    t_rule: &[(f64, f64)],
+) -> Deriv3 {
     let mut out = Deriv3::constant(0.0);
     let (normal, c_t) = geometry;
     // Moments of the integrand's derivatives, assembled once after the loop:
@@ -619,8 +640,10 @@ pub(crate) fn triangle_rule(
     let mut v6 = DVec3::ZERO; // Σ w r/‖r‖⁶
     let mut s6 = 0.0; // Σ w (n·r)/‖r‖⁶
     let (mut xx, mut yy, mut zz, mut xy, mut xz, mut yz) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for &(s, ws) in rule {
-        for &(t, wt) in rule {
+    let span = s1 - s0;
+    for &(s, ws) in s_rule {
+        let (s, ws) = (s0 + span * s, ws * span);
+        for &(t, wt) in t_rule {
             let weight = ws * wt * s;
             let r = r_a + s * ab + (s * t) * bc;
             let inv2 = 1.0 / r.length_squared();
@@ -931,7 +954,13 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
             } else {
                 MAX_PIECES
             };
-            quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
+            // A sliver seen from afar is thin in one direction only: the anisotropic rule first.
+            if plane.is_thin() && !(near_plane || cut) {
+                quadrature = sliver::sliver_quadrature(&verts, n, order);
+            }
+            if quadrature.is_none() {
+                quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
+            }
         }
         match quadrature {
             Some(q) => {
