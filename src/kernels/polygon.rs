@@ -275,6 +275,12 @@ impl Plane {
     pub(crate) fn is_thin(&self) -> bool {
         self.twice_area < THIN_POLYGON * self.extent * self.extent
     }
+
+    /// Whether the polygon is a sliver whose edge sum would cancel far beyond
+    /// [`THIN_CANCELLATION_LIMIT`] (it cancels by about the inverse of `2·area / extent²`).
+    fn is_very_thin(&self) -> bool {
+        self.twice_area < VERY_THIN_POLYGON * self.extent * self.extent
+    }
 }
 
 fn orient2(a: DVec2, b: DVec2, c: DVec2) -> f64 {
@@ -860,6 +866,20 @@ fn clip_line_hessian(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) -
 /// rounded edge vectors, has lost more than ~2 digits.
 const THIN_POLYGON: f64 = 1e-2;
 
+/// Below this `2·area / extent²` a sliver's edge sum cancels by ~1e5, beyond
+/// [`THIN_CANCELLATION_LIMIT`]: [`evaluate`] tries the sliver rule without computing the edge sum.
+const VERY_THIN_POLYGON: f64 = 1e-5;
+
+/// Whether the triangle is a sliver by [`VERY_THIN_POLYGON`] (from its rounded edge vectors,
+/// accurate to ~1e-11 relative at that threshold; non-finite input gives `false`): its form factor
+/// goes to [`evaluate`] directly, where the sliver rule applies unless x is near it.
+#[inline]
+pub(crate) fn is_very_thin_triangle([a, b, c]: [DVec3; 3]) -> bool {
+    let (ab, ac) = (b - a, c - a);
+    let extent2 = ab.length_squared().max(ac.length_squared());
+    ab.cross(ac).length() < VERY_THIN_POLYGON * extent2
+}
+
 /// Below this `|h_P| / max ‖r‖`, the height of x over the polygon's plane is recomputed by
 /// [`exact_height`] (the rounded one has lost more than ~3 digits).
 const NEAR_PLANE_HEIGHT: f64 = 1e-3;
@@ -920,8 +940,17 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         .fold(0.0, f64::max);
     let far = far_field_rule(centroid.length(), radius);
     let mut used_quadrature = far.is_some();
+    // Far thinner than the edge sum's limit, a sliver goes to its rule without the edge sum.
+    let sliver = if far.is_none() && plane.is_very_thin() && !(near_plane || cut) {
+        sliver::sliver_quadrature(&verts, n, order)
+    } else {
+        None
+    };
     let mut d = if let Some(rule) = far {
         far_field(&verts, n, order, exact, rule)
+    } else if let Some(q) = sliver {
+        used_quadrature = true;
+        q
     } else {
         let mut sum = Deriv3::constant(0.0);
         let mut magnitude = 0.0;

@@ -55,7 +55,9 @@ fn rule(points: usize) -> &'static [(f64, f64)] {
 /// The Bernstein-ellipse parameter of the point `z = re + i·im` for the interval [−1, 1]: the
 /// sum of the semi-axes of the ellipse with foci ±1 through `z`.
 fn bernstein(re: f64, im: f64) -> f64 {
-    let a = 0.5 * ((re - 1.0).hypot(im) + (re + 1.0).hypot(im));
+    // Plain square roots: the arguments are ratios of lengths in scaled units (no overflow).
+    let (im2, lo, hi) = (im * im, re - 1.0, re + 1.0);
+    let a = 0.5 * ((lo * lo + im2).sqrt() + (hi * hi + im2).sqrt());
     a + (a * a - 1.0).max(0.0).sqrt()
 }
 
@@ -109,7 +111,7 @@ fn thin_piece(
     let segment_distance = (p.r + s_foot.clamp(0.0, 1.0) * spine).length();
     // Across: every t-line has length ≤ width and lies ≥ segment_distance − width from x.
     let across_distance = segment_distance - width;
-    if !(across_distance > 0.0) {
+    if across_distance.is_nan() || across_distance <= 0.0 {
         return None;
     }
     let rho_t = bernstein(0.0, 2.0 * across_distance / width);
@@ -117,7 +119,7 @@ fn thin_piece(
     let t_rule = rule(t_points);
     // Along: the poles of the t-lines are within `width` of the spine's.
     let pole_distance = line_distance - width;
-    if !(pole_distance > 0.0) {
+    if pole_distance.is_nan() || pole_distance <= 0.0 {
         return None;
     }
     let ab = pq1;
