@@ -156,3 +156,47 @@ fn thin_piece(
     }
     Some(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::subdivided_quadrature;
+    use super::*;
+
+    fn vertex(v: DVec3, x: DVec3) -> ClipVertex {
+        ClipVertex {
+            u: v,
+            r: v - x,
+            r_lo: DVec3::ZERO,
+            on_line: false,
+        }
+    }
+
+    /// The sliver rule is taken for a cap and a needle seen from afar, agrees with the isotropic
+    /// subdivision (an independent rule) to 1e-12, and declines when x is within a width of it.
+    #[test]
+    fn sliver_rule_agrees_with_the_subdivision_and_declines_near_x() {
+        let n = DVec3::new(0.1, -0.2, 1.0).normalize();
+        let x = DVec3::new(0.4, 0.1, -0.7);
+        for apex in [DVec3::new(0.5, 1e-6, 0.0), DVec3::new(1.0, 1e-6, 0.0)] {
+            let t = [DVec3::ZERO, DVec3::X, apex].map(|v| vertex(v, x));
+            let d = sliver_quadrature(&t, n, Order::Hessian).expect("sliver rule declined");
+            let r = subdivided_quadrature(&t, n, Order::Hessian, true, 100_000).unwrap();
+            assert!(
+                (d.value - r.value).abs() <= 1e-12 * r.value.abs(),
+                "{d:?} {r:?}"
+            );
+            let g = r.gradient.abs().max_element();
+            assert!((d.gradient - r.gradient).abs().max_element() <= 1e-12 * g);
+            let max = |m: glam::DMat3| {
+                m.to_cols_array()
+                    .iter()
+                    .fold(0.0, |a: f64, v| a.max(v.abs()))
+            };
+            assert!(max(d.hessian - r.hessian) <= 1e-11 * max(r.hessian));
+        }
+        // x 1e-7 above the cap's middle: the width is not small against the distance
+        let near = DVec3::new(0.5, 5e-7, -1e-7);
+        let t = [DVec3::ZERO, DVec3::X, DVec3::new(0.5, 1e-6, 0.0)].map(|v| vertex(v, near));
+        assert!(sliver_quadrature(&t, n, Order::Value).is_none());
+    }
+}
