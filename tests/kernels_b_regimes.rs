@@ -154,6 +154,73 @@ fn slivers_across_the_edge_sum_limit_against_the_reference() {
     );
 }
 
+/// Slivers beyond the edge sum's limit (apex 1e-4..1e-8 of the length), in both shapes: caps
+/// (a flat obtuse triangle, the apex over the middle of the long edge) and needles (two long edges
+/// and a short base, the apex at the end), seen from 0.05..3 lengths away, through both entry
+/// points and every order, against the reference at the hard-regime contract. These take the
+/// anisotropic sliver rule (`src/kernels/polygon/sliver.rs`).
+#[test]
+fn thin_slivers_caps_and_needles_against_the_reference() {
+    let mut big = Big::new();
+    let mut rng = Rng(1818);
+    let mut worst = [0.0f64; 3];
+    let mut count = 0;
+    for k in 0..20 {
+        let s = 10f64.powf(rng.range(-3.0, 3.0));
+        let a = rng.vec(s);
+        let b = a + rng.unit() * s;
+        let perp = (b - a).any_orthonormal_vector();
+        let needle = k % 2 == 1;
+        // the apex's foot on ab: near an end for needles, inside for caps
+        let along = if needle {
+            rng.range(-0.02, 0.02)
+        } else {
+            rng.range(0.1, 0.9)
+        };
+        let foot = a + (b - a) * along;
+        let x = (a + b) * 0.5 + rng.unit() * (s * 10f64.powf(rng.range(-0.3, 0.5)));
+        for j in 0..9 {
+            let height = 10f64.powf(-4.0 - 0.5 * j as f64);
+            let t = [a, b, foot + perp * (s * height)];
+            let Some(n) = (0..1000)
+                .map(|_| rng.unit())
+                .find(|n| t.iter().all(|v| n.dot(*v - x) > 0.0))
+            else {
+                continue;
+            };
+            let r = big.polygon_reference(x, n, &t, true);
+            let tri =
+                kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
+            let grad =
+                kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Gradient).unwrap();
+            let value =
+                kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Value).unwrap();
+            let poly = kernels::polygon_form_factor(x, n, &t, Order::Hessian).unwrap();
+            let e = errors(&tri, &r);
+            max3(&mut worst, e);
+            max3(&mut worst, errors(&poly, &r));
+            max3(
+                &mut worst,
+                [rel_scalar(value.value, r.value, 1e-300), 0.0, 0.0],
+            );
+            max3(
+                &mut worst,
+                [0.0, rel_vec(grad.gradient, r.gradient, 1e-300), 0.0],
+            );
+            count += 4;
+        }
+    }
+    println!(
+        "slivers, caps and needles, apex 1e-4..1e-8: n={count} worst error value {:.1e} gradient {:.1e} Hessian {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(count >= 100, "too few configurations ({count})");
+    assert!(
+        worst.iter().zip(HARD).all(|(e, t)| *e <= t),
+        "errors exceed the hard-regime targets"
+    );
+}
+
 /// x just above the interior of a triangle (1e-4..1e-10 of its size from the plane) with a random
 /// receiver normal (usually clipping it): the edge sum does not cancel there, and the kernel keeps
 /// it without the near-plane recomputation. Against the reference at the hard-regime contract.

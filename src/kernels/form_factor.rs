@@ -147,6 +147,10 @@ pub fn triangle_form_factor(
     c: DVec3,
     order: Order,
 ) -> Result<Deriv3> {
+    // Lambert's sum and the replay would cancel and be declined: straight to the sliver rule.
+    if polygon::is_very_thin_triangle([a, b, c]) {
+        return polygon_form_factor(x, n, &[a, b, c], order);
+    }
     let lambert_value = || lambert::triangle_value(x, n, [a, b, c]);
     if order == Order::Value {
         if let Some(f) = lambert_value() {

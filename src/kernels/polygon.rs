@@ -15,6 +15,8 @@ use crate::error::{ensure_finite3, Error, Result};
 use crate::{Deriv3, Order};
 
 use super::dd;
+
+mod sliver;
 use super::form_factor::{
     clip_edge_term, edge_term_exact, outer_self, sym_outer, EdgeFrame, ExactEnds,
 };
@@ -273,6 +275,12 @@ impl Plane {
     pub(crate) fn is_thin(&self) -> bool {
         self.twice_area < THIN_POLYGON * self.extent * self.extent
     }
+
+    /// Whether the polygon is a sliver whose edge sum would cancel far beyond
+    /// [`THIN_CANCELLATION_LIMIT`] (it cancels by about the inverse of `2·area / extent²`).
+    fn is_very_thin(&self) -> bool {
+        self.twice_area < VERY_THIN_POLYGON * self.extent * self.extent
+    }
 }
 
 fn orient2(a: DVec2, b: DVec2, c: DVec2) -> f64 {
@@ -417,6 +425,7 @@ macro_rules! cached_rule {
         }
     };
 }
+cached_rule!(gauss_legendre_2, 2);
 cached_rule!(gauss_legendre_3, 3);
 cached_rule!(gauss_legendre_4, 4);
 cached_rule!(gauss_legendre_5, 5);
@@ -607,7 +616,25 @@ pub(crate) fn triangle_rule(
     geometry: (DVec3, f64),
     rule: Rule,
 ) -> Deriv3 {
-    let rule = rule.0;
+    tensor_rule(r_a, ab, bc, n, order, geometry, (0.0, 1.0, rule.0), rule.0)
+}
+
+/// [`triangle_rule`] restricted to `s ∈ [s0, s1]` (the part of the triangle between two lines
+/// parallel to `bc`), with Gauss rules `s_rule` along `s` and `t_rule` along `t`: thin triangles
+/// need many points along their length and few across (see `sliver`). With `[0, 1]` the nodes
+/// and weights are exactly those of `s_rule`, so [`triangle_rule`] is unchanged bit for bit.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn tensor_rule(
+    r_a: DVec3,
+    ab: DVec3,
+    bc: DVec3,
+    n: DVec3,
+    order: Order,
+    geometry: (DVec3, f64),
+    (s0, s1, s_rule): (f64, f64, &[(f64, f64)]),
+    t_rule: &[(f64, f64)],
+) -> Deriv3 {
     let mut out = Deriv3::constant(0.0);
     let (normal, c_t) = geometry;
     // Moments of the integrand's derivatives, assembled once after the loop:
@@ -619,8 +646,10 @@ pub(crate) fn triangle_rule(
     let mut v6 = DVec3::ZERO; // Σ w r/‖r‖⁶
     let mut s6 = 0.0; // Σ w (n·r)/‖r‖⁶
     let (mut xx, mut yy, mut zz, mut xy, mut xz, mut yz) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for &(s, ws) in rule {
-        for &(t, wt) in rule {
+    let span = s1 - s0;
+    for &(s, ws) in s_rule {
+        let (s, ws) = (s0 + span * s, ws * span);
+        for &(t, wt) in t_rule {
             let weight = ws * wt * s;
             let r = r_a + s * ab + (s * t) * bc;
             let inv2 = 1.0 / r.length_squared();
@@ -837,6 +866,20 @@ fn clip_line_hessian(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) -
 /// rounded edge vectors, has lost more than ~2 digits.
 const THIN_POLYGON: f64 = 1e-2;
 
+/// Below this `2·area / extent²` a sliver's edge sum cancels by ~1e5, beyond
+/// [`THIN_CANCELLATION_LIMIT`]: [`evaluate`] tries the sliver rule without computing the edge sum.
+const VERY_THIN_POLYGON: f64 = 1e-5;
+
+/// Whether the triangle is a sliver by [`VERY_THIN_POLYGON`] (from its rounded edge vectors,
+/// accurate to ~1e-11 relative at that threshold; non-finite input gives `false`): its form factor
+/// goes to [`evaluate`] directly, where the sliver rule applies unless x is near it.
+#[inline]
+pub(crate) fn is_very_thin_triangle([a, b, c]: [DVec3; 3]) -> bool {
+    let (ab, ac) = (b - a, c - a);
+    let extent2 = ab.length_squared().max(ac.length_squared());
+    ab.cross(ac).length() < VERY_THIN_POLYGON * extent2
+}
+
 /// Below this `|h_P| / max ‖r‖`, the height of x over the polygon's plane is recomputed by
 /// [`exact_height`] (the rounded one has lost more than ~3 digits).
 const NEAR_PLANE_HEIGHT: f64 = 1e-3;
@@ -897,8 +940,17 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         .fold(0.0, f64::max);
     let far = far_field_rule(centroid.length(), radius);
     let mut used_quadrature = far.is_some();
+    // Far thinner than the edge sum's limit, a sliver goes to its rule without the edge sum.
+    let sliver = if far.is_none() && plane.is_very_thin() && !(near_plane || cut) {
+        sliver::sliver_quadrature(&verts, n, order)
+    } else {
+        None
+    };
     let mut d = if let Some(rule) = far {
         far_field(&verts, n, order, exact, rule)
+    } else if let Some(q) = sliver {
+        used_quadrature = true;
+        q
     } else {
         let mut sum = Deriv3::constant(0.0);
         let mut magnitude = 0.0;
@@ -931,7 +983,13 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
             } else {
                 MAX_PIECES
             };
-            quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
+            // A sliver seen from afar is thin in one direction only: the anisotropic rule first.
+            if plane.is_thin() && !(near_plane || cut) {
+                quadrature = sliver::sliver_quadrature(&verts, n, order);
+            }
+            if quadrature.is_none() {
+                quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
+            }
         }
         match quadrature {
             Some(q) => {
