@@ -54,8 +54,8 @@ impl Lanes {
     #[inline(always)]
     fn set(&mut self, i: usize, x: DVec3, n: DVec3, y: [DVec3; 3]) {
         for axis in 0..3 {
-            for k in 0..3 {
-                self.v[k][axis][i] = y[k][axis];
+            for (vk, yk) in self.v.iter_mut().zip(&y) {
+                vk[axis][i] = yk[axis];
             }
             self.x[axis][i] = x[axis];
             self.n[axis][i] = n[axis];

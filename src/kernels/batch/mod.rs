@@ -15,8 +15,11 @@
 //! with, per lane, a certificate that the lane is in the regime where the single kernel itself uses
 //! that formula with margin (`|A|` large against its rounding bound, `A² + D²` not cancelling,
 //! coordinates in range, every output finite). Lanes whose certificate fails (x near the plane, an
-//! edge or a vertex, extreme scales) are evaluated by the single kernel. The form factors call the
-//! single kernel per element.
+//! edge or a vertex, extreme scales) are evaluated by the single kernel. The form factor's value
+//! ([`Order::Value`]) is evaluated in the same kind of lanes by the single kernel's far form of
+//! Lambert's sum, replayed operation for operation without FMA, so that an accepted lane is the
+//! single call's value bit for bit; lanes outside that form, and the gradient and Hessian orders,
+//! call the single kernel per element.
 //!
 //! Errors: invalid input gives [`Error::InvalidArgument`] before anything is computed; an element
 //! whose single-element call fails (x on an edge, x in a triangle's plane with derivatives
