@@ -402,3 +402,97 @@ fn validation_errors_name_the_first_bad_element() {
         "{m}"
     );
 }
+
+/// A mesh light as renderers hold it: `count` triangles of about `size` scattered over a slab at
+/// distance 1..2 above the origin, in f32 with float4 rows (w garbage) and uint4 index rows.
+fn light_f32(rng: &mut Lcg, count: usize, size: f64) -> (Vec<f32>, Vec<u32>) {
+    let (mut v, mut ix) = (Vec::new(), Vec::new());
+    for t in 0..count as u32 {
+        let c = DVec3::new(
+            rng.range(-0.5, 0.5),
+            rng.range(-0.5, 0.5),
+            rng.range(1.0, 2.0),
+        );
+        for _ in 0..3 {
+            let p = c + rng.unit() * size * rng.next();
+            v.extend([p.x as f32, p.y as f32, p.z as f32, f32::NAN]);
+        }
+        ix.extend([3 * t, 3 * t + 1, 3 * t + 2, 7]);
+    }
+    (v, ix)
+}
+
+#[test]
+fn form_factor_values_in_lanes_are_the_single_calls_bit_for_bit() {
+    // The value path runs in SIMD lanes (far form of Lambert's sum, certified per lane; the rest by
+    // the single kernel). Accepted lanes replay the single kernel's operations in order without FMA,
+    // so every value must equal the single call exactly, sums included (same order of addition):
+    // near lights (size 0.3: Lambert's sum), far ones (size 1e-2 and 1e-4: the far form), receivers
+    // with tilted normals (clipped triangles), f32 strided and f64 indexed layouts, and batch
+    // lengths that are not multiples of the lane count.
+    let mut rng = Lcg(21);
+    let mut compared = 0;
+    for (size, count) in [(0.3, 37), (0.1, 200), (1e-2, 65), (1e-4, 33)] {
+        let (vf, ixf) = light_f32(&mut rng, count, size);
+        let f32_mesh = kernels::TriangleMesh::new(
+            kernels::VertexData::F32(&vf),
+            4,
+            3 * count,
+            Some(&ixf),
+            4,
+            count,
+        )
+        .unwrap();
+        let vd: Vec<DVec3> = vf
+            .chunks(4)
+            .map(|p| DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+            .collect();
+        let ixd: Vec<[u32; 3]> = ixf.chunks(4).map(|t| [t[0], t[1], t[2]]).collect();
+        let f64_mesh = kernels::TriangleMesh::indexed(&vd, &ixd).unwrap();
+        for _ in 0..6 {
+            let x = DVec3::new(
+                rng.range(-0.3, 0.3),
+                rng.range(-0.3, 0.3),
+                rng.range(-0.2, 0.2),
+            );
+            let n = (DVec3::Z + rng.unit() * rng.range(0.0, 1.2)).normalize();
+            for mesh in [&f32_mesh, &f64_mesh] {
+                let mut each = vec![Deriv3::default(); mesh.len()];
+                kernels::mesh_form_factor_each(x, n, mesh, Order::Value, &mut each).unwrap();
+                let sum = kernels::mesh_form_factor(x, n, mesh, Order::Value).unwrap();
+                let mut total = 0.0;
+                for (t, d) in each.iter().enumerate() {
+                    let [a, b, c] = mesh.triangle(t);
+                    let r = kernels::triangle_form_factor(x, n, a, b, c, Order::Value).unwrap();
+                    assert_eq!(
+                        d.value.to_bits(),
+                        r.value.to_bits(),
+                        "x={x} n={n} triangle {t}"
+                    );
+                    assert_eq!(d.gradient, DVec3::ZERO);
+                    total += r.value;
+                    compared += 1;
+                }
+                assert_eq!(sum.value.to_bits(), total.to_bits(), "x={x} n={n}");
+            }
+            // Many receivers against one triangle of the light.
+            let [a, b, c] = f64_mesh.triangle(0);
+            let points: Vec<DVec3> = (0..45)
+                .map(|_| x + rng.unit() * rng.range(0.0, 0.2))
+                .collect();
+            let normals: Vec<DVec3> = (0..45)
+                .map(|_| (DVec3::Z + rng.unit() * rng.range(0.0, 1.2)).normalize())
+                .collect();
+            let mut out = vec![Deriv3::default(); points.len()];
+            kernels::points_form_factor(&points, &normals, a, b, c, Order::Value, &mut out)
+                .unwrap();
+            for i in 0..points.len() {
+                let r = kernels::triangle_form_factor(points[i], normals[i], a, b, c, Order::Value)
+                    .unwrap();
+                assert_eq!(out[i].value.to_bits(), r.value.to_bits(), "point {i}");
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 4000, "{compared}");
+}

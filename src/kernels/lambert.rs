@@ -50,7 +50,7 @@ fn in_range(r: DVec3) -> bool {
 /// the robust path divides, so that normals within the tolerance give the same bits.
 #[inline]
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
-fn unit(n: DVec3) -> Option<DVec3> {
+pub(super) fn unit(n: DVec3) -> Option<DVec3> {
     let len = n.length();
     // n / 1 is n: skip the three divisions for normals whose computed length is exactly 1.
     ((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE).then(|| if len == 1.0 { n } else { n / len })

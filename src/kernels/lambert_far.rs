@@ -80,7 +80,7 @@ pub(crate) enum Far {
 
 /// `ψ(σ) = arcsin(σ)/σ − 1` from `t = σ² ≤ 1/20` (Horner).
 #[inline(always)]
-fn psi(t: f64) -> f64 {
+pub(super) fn psi(t: f64) -> f64 {
     let mut p = PSI[11];
     for c in PSI[..11].iter().rev() {
         p = p * t + c;

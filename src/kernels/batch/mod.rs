@@ -15,14 +15,18 @@
 //! with, per lane, a certificate that the lane is in the regime where the single kernel itself uses
 //! that formula with margin (`|A|` large against its rounding bound, `A² + D²` not cancelling,
 //! coordinates in range, every output finite). Lanes whose certificate fails (x near the plane, an
-//! edge or a vertex, extreme scales) are evaluated by the single kernel. The form factors call the
-//! single kernel per element.
+//! edge or a vertex, extreme scales) are evaluated by the single kernel. The form factor's value
+//! ([`Order::Value`]) is evaluated in the same kind of lanes by the single kernel's far form of
+//! Lambert's sum, replayed operation for operation without FMA, so that an accepted lane is the
+//! single call's value bit for bit; lanes outside that form, and the gradient and Hessian orders,
+//! call the single kernel per element.
 //!
 //! Errors: invalid input gives [`Error::InvalidArgument`] before anything is computed; an element
 //! whose single-element call fails (x on an edge, x in a triangle's plane with derivatives
 //! requested, ...) fails the whole call with that error, its message prefixed with the element's
 //! kind and index ("triangle 12: ..."). Per-element outputs are unspecified after an error.
 
+mod form_factor_lanes;
 mod mesh;
 mod solid_angle_lanes;
 
@@ -125,6 +129,17 @@ pub fn mesh_form_factor(x: DVec3, n: DVec3, mesh: &TriangleMesh, order: Order) -
     ensure_finite3(x, "x")?;
     check_normal(n)?;
     let mut sum = Deriv3::constant(0.0);
+    if order == Order::Value {
+        let ln = form_factor_lanes::lane_normal(n);
+        form_factor_lanes::run_on(
+            solid_angle_lanes::best_isa(),
+            mesh.len(),
+            |t| (x, ln, mesh.triangle(t)),
+            |t| form_factor(x, n, mesh.triangle(t), order, "triangle", t),
+            |_, d| sum.value += d.value,
+        )?;
+        return Ok(sum);
+    }
     for t in 0..mesh.len() {
         add(
             &mut sum,
@@ -146,6 +161,16 @@ pub fn mesh_form_factor_each(
     ensure_finite3(x, "x")?;
     check_normal(n)?;
     check_len(out.len(), mesh.len(), "out", "triangles")?;
+    if order == Order::Value {
+        let ln = form_factor_lanes::lane_normal(n);
+        return form_factor_lanes::run_on(
+            solid_angle_lanes::best_isa(),
+            mesh.len(),
+            |t| (x, ln, mesh.triangle(t)),
+            |t| form_factor(x, n, mesh.triangle(t), order, "triangle", t),
+            |t, d| out[t] = d,
+        );
+    }
     for (t, o) in out.iter_mut().enumerate() {
         *o = form_factor(x, n, mesh.triangle(t), order, "triangle", t)?;
     }
@@ -174,6 +199,21 @@ pub fn points_form_factor(
     ensure_finite3(a, "a")?;
     ensure_finite3(b, "b")?;
     ensure_finite3(c, "c")?;
+    if order == Order::Value {
+        return form_factor_lanes::run_on(
+            solid_angle_lanes::best_isa(),
+            points.len(),
+            |i| {
+                (
+                    points[i],
+                    form_factor_lanes::lane_normal(normals[i]),
+                    [a, b, c],
+                )
+            },
+            |i| form_factor(points[i], normals[i], [a, b, c], order, "point", i),
+            |i, d| out[i] = d,
+        );
+    }
     for (i, o) in out.iter_mut().enumerate() {
         *o = form_factor(points[i], normals[i], [a, b, c], order, "point", i)?;
     }

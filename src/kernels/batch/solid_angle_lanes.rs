@@ -382,7 +382,7 @@ pub(super) fn run_on(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
     /// Every ISA this machine runs (the portable one always).
