@@ -496,3 +496,47 @@ fn form_factor_values_in_lanes_are_the_single_calls_bit_for_bit() {
     }
     assert!(compared > 4000, "{compared}");
 }
+
+#[test]
+fn form_factor_lanes_match_the_single_call_on_very_thin_slivers() {
+    // Very thin slivers (2·area below 1e-5 of the extent squared) have their own route in the
+    // single kernel; a lane that accepts one must still return the single call's bits.
+    let mut rng = Lcg(77);
+    let mut compared = 0;
+    for (size, apex) in [(1e-2, 1e-7), (1e-3, 1e-9), (0.2, 1e-8)] {
+        let tris: Vec<[DVec3; 3]> = (0..40)
+            .map(|_| {
+                let a = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 1.0);
+                let along = rng.unit().cross(DVec3::Z).normalize() * size;
+                let across = along.cross(rng.unit()).normalize() * (apex * size);
+                [a, a + along, a + 0.5 * along + across]
+            })
+            .collect();
+        let verts: Vec<DVec3> = tris.iter().flatten().copied().collect();
+        let idx: Vec<[u32; 3]> = (0..tris.len() as u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect();
+        let mesh = kernels::TriangleMesh::indexed(&verts, &idx).unwrap();
+        for _ in 0..4 {
+            let x = DVec3::new(
+                rng.range(-0.3, 0.3),
+                rng.range(-0.3, 0.3),
+                rng.range(-0.2, 0.2),
+            );
+            let n = (DVec3::Z + rng.unit() * rng.range(0.0, 0.5)).normalize();
+            let mut each = vec![Deriv3::default(); mesh.len()];
+            kernels::mesh_form_factor_each(x, n, &mesh, Order::Value, &mut each).unwrap();
+            for (t, d) in each.iter().enumerate() {
+                let [a, b, c] = mesh.triangle(t);
+                let single = kernels::triangle_form_factor(x, n, a, b, c, Order::Value);
+                let hessian = kernels::triangle_form_factor(x, n, a, b, c, Order::Hessian);
+                if let (Ok(r), Ok(h)) = (single, hessian) {
+                    assert_eq!(d.value.to_bits(), r.value.to_bits(), "x={x} n={n} {t}");
+                    assert_eq!(h.value.to_bits(), r.value.to_bits(), "order, x={x} {t}");
+                    compared += 1;
+                }
+            }
+        }
+    }
+    assert!(compared >= 400, "{compared}");
+}
