@@ -120,9 +120,11 @@ fn solve_at(
 }
 
 /// Up to three more Newton steps in (x, ν) from a converged arc point, each kept only if it lowers
-/// |f|: the 1e-10 residual of a converged solve leaves x off by ~1e-10 (absolute), and where the
-/// point locates an arc's exit from the x range that error moves the end of the quadrature, by up to
-/// 1e-8 of a short piece (issue 19); quadratic convergence takes it to the rounding floor.
+/// |f|; quadratic convergence takes the 1e-10 residual of a converged solve to the rounding floor.
+/// That residual leaves x off by ~1e-10 (absolute): where the point locates an arc's exit from the
+/// x range it moved the end of the quadrature by up to 1e-8 of a short piece, and at the quadrature
+/// nodes it biased a whole fold arc by 3e-9 (same-signed errors, not noise), so that the same
+/// support integrated as one arc or as an arc plus x pieces disagreed (issue 19).
 fn polish_at(c: &Constraint, chord: &Chord, s: f64, pt: ArcPoint) -> ArcPoint {
     let mut pt = pt;
     let Some(mut v) = c.eval(pt.x, pt.ab, true) else {
@@ -452,7 +454,9 @@ fn integrate_arc(
         for (k, &s) in ss.iter().enumerate() {
             stats.samples += 1;
             values[k] = 0.0;
-            let Some(pt) = solve_at(c, &chord, s, guess(s), settings, stats) else {
+            let Some(pt) = solve_at(c, &chord, s, guess(s), settings, stats)
+                .map(|pt| polish_at(c, &chord, s, pt))
+            else {
                 failed = true;
                 continue;
             };
