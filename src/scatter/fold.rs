@@ -119,6 +119,47 @@ fn solve_at(
     None
 }
 
+/// Up to three more Newton steps in (x, ν) from a converged arc point, each kept only if it lowers
+/// |f|; quadratic convergence takes the 1e-10 residual of a converged solve to the rounding floor.
+/// That residual leaves x off by ~1e-10 (absolute): where the point locates an arc's exit from the
+/// x range it moved the end of the quadrature by up to 1e-8 of a short piece, and at the quadrature
+/// nodes it biased a whole fold arc by 3e-9 (same-signed errors, not noise), so that the same
+/// support integrated as one arc or as an arc plus x pieces disagreed (issue 19).
+fn polish_at(c: &Constraint, chord: &Chord, s: f64, pt: ArcPoint) -> ArcPoint {
+    let mut pt = pt;
+    let Some(mut v) = c.eval(pt.x, pt.ab, true) else {
+        return pt;
+    };
+    for _ in 0..3 {
+        let r = v.f.length();
+        let j = v.jacobian;
+        let jn = j.y_axis * chord.n.x + j.z_axis * chord.n.y;
+        let Some(step) = pinv_solve(j.x_axis, jn, v.f) else {
+            break;
+        };
+        let (x, nu) = (pt.x - step.x, pt.nu - step.y);
+        let ab = chord.at(s, nu);
+        match c.eval(x, ab, true) {
+            Some(vn) if vn.f.length() < r => {
+                let jn = vn.jacobian.y_axis * chord.n.x + vn.jacobian.z_axis * chord.n.y;
+                let js = vn.jacobian.y_axis * chord.d.x + vn.jacobian.z_axis * chord.d.y;
+                let Some(dx) = pinv_solve(vn.jacobian.x_axis, jn, -js) else {
+                    break;
+                };
+                pt = ArcPoint {
+                    x,
+                    nu,
+                    ab,
+                    dx_ds: dx.x,
+                };
+                v = vn;
+            }
+            _ => break,
+        }
+    }
+    pt
+}
+
 /// The solution at the fold-free end of a piece that ends at a fold on one side.
 fn regular_end(p: &SupportInterval) -> Option<(f64, DVec2)> {
     match p.folds {
@@ -348,8 +389,10 @@ fn trace_arc(
                     if !(mid > lo && mid < hi) {
                         break;
                     }
-                    match solve_at(c, &chord, mid, (last.1, last.2), settings, stats) {
-                        Some(pt) if valid(&pt, 0.0) => {
+                    let pt = solve_at(c, &chord, mid, (last.1, last.2), settings, stats)
+                        .map(|pt| polish_at(c, &chord, mid, pt));
+                    match pt {
+                        Some(pt) if valid(&pt, 0.0) && inside_triangle(pt.ab) => {
                             lo = mid;
                             last = (mid, pt.x, pt.nu);
                         }
@@ -411,7 +454,9 @@ fn integrate_arc(
         for (k, &s) in ss.iter().enumerate() {
             stats.samples += 1;
             values[k] = 0.0;
-            let Some(pt) = solve_at(c, &chord, s, guess(s), settings, stats) else {
+            let Some(pt) = solve_at(c, &chord, s, guess(s), settings, stats)
+                .map(|pt| polish_at(c, &chord, s, pt))
+            else {
                 failed = true;
                 continue;
             };
