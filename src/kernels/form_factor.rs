@@ -599,43 +599,29 @@ fn maybe_far(v: [DVec3; 3], x: DVec3) -> bool {
 /// otherwise.
 // Not inlined: the generic path only pays the call's test, not this function's frame.
 #[inline(never)]
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn triangle_far_field_fast(
     x: DVec3,
     n: DVec3,
     v: [DVec3; 3],
     order: Order,
 ) -> Option<(Deriv3, f64)> {
-    let r = [v[0] - x, v[1] - x, v[2] - x];
-    let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
-    in_fast_range(&[r[0], r[1], r[2], u[1], u[2]])?;
-    let len = n.length();
-    if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) {
-        return None;
-    }
-    let n = n / len;
-    for rk in &r {
-        if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
-            return None;
-        }
-    }
-    let plane = polygon::triangle_plane(&u)?;
+    let FastSetup {
+        r,
+        u,
+        n,
+        plane,
+        far: rule,
+        h_p,
+    } = fast_setup(x, n, v)?;
     if plane.is_thin() {
         return None;
     }
-    let (rule, h_p) = polygon::fast_decisions(&r, &plane)?;
     let rule = rule?;
     // The robust path's non-exact fan geometry of (v0, v1, v2) and its triangle rule.
     let normal = u[1].cross(u[2]);
     let geometry = (normal, normal.dot(r[0]));
-    let mut d = polygon::triangle_rule(r[0], u[1], u[2] - u[1], n, order, geometry, rule);
-    if h_p < 0.0 {
-        d.value = -d.value;
-        d.gradient = -d.gradient;
-        d.hessian = -d.hessian;
-    }
-    d.value = d.value.clamp(0.0, 1.0);
-    d.is_finite().then_some((d, rule.min_ratio()))
+    let d = polygon::triangle_rule(r[0], u[1], u[2] - u[1], n, order, geometry, rule);
+    Some((oriented(d, h_p)?, rule.min_ratio()))
 }
 
 /// The fast evaluation of [`triangle_form_factor`] when the robust path's decisions are certain:
@@ -652,26 +638,14 @@ pub(crate) fn triangle_form_factor_fast(
     v: [DVec3; 3],
     order: Order,
 ) -> Option<Deriv3> {
-    let r = [v[0] - x, v[1] - x, v[2] - x];
-    // Positions relative to the first vertex, as the robust path forms them (its edge vectors are
-    // differences of these).
-    let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
-    in_fast_range(&[r[0], r[1], r[2], u[1], u[2]])?;
-    let len = n.length();
-    if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) {
-        return None;
-    }
-    let n = n / len;
-    // Heights over the tangent plane: the f64 dot product errs by less than 4u·(|n|·|r|) (one
-    // rounding in r, three in the dot product), so above 8u·(|n|·|r|) the exact height is positive
-    // and the robust clip keeps every vertex without cutting.
-    for rk in &r {
-        if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
-            return None;
-        }
-    }
-    let plane = polygon::triangle_plane(&u)?;
-    let (far, h_p) = polygon::fast_decisions(&r, &plane)?;
+    let FastSetup {
+        r,
+        u,
+        n,
+        plane,
+        far,
+        h_p,
+    } = fast_setup(x, n, v)?;
     if far.is_some() {
         return None;
     }
@@ -689,13 +663,68 @@ pub(crate) fn triangle_form_factor_fast(
     if !(magnitude <= polygon::cancellation_limit(&plane, false) * sum.value.abs()) {
         return None;
     }
-    if h_p < 0.0 {
-        sum.value = -sum.value;
-        sum.gradient = -sum.gradient;
-        sum.hessian = -sum.hessian;
+    oriented(sum, h_p)
+}
+
+/// What both replays of the robust triangle path ([`triangle_form_factor_fast`],
+/// [`triangle_far_field_fast`]) decide first, with the robust path's own operations.
+struct FastSetup {
+    /// `v_i − x`.
+    r: [DVec3; 3],
+    /// Positions relative to the first vertex, as the robust path forms them (its edge vectors
+    /// are differences of these).
+    u: [DVec3; 3],
+    /// The unit receiver normal.
+    n: DVec3,
+    plane: polygon::Plane,
+    /// The far-field rule, when the robust path would integrate by quadrature.
+    far: Option<polygon::Rule>,
+    /// Signed height of `x` over the triangle's plane.
+    h_p: f64,
+}
+
+/// `None` when the robust path would rescale, clip, or treat `x` as near the triangle's plane, or
+/// for invalid input.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+fn fast_setup(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<FastSetup> {
+    let r = [v[0] - x, v[1] - x, v[2] - x];
+    let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
+    in_fast_range(&[r[0], r[1], r[2], u[1], u[2]])?;
+    let len = n.length();
+    if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) {
+        return None;
     }
-    sum.value = sum.value.clamp(0.0, 1.0);
-    sum.is_finite().then_some(sum)
+    let n = n / len;
+    // Heights over the tangent plane: the f64 dot product errs by less than 4u·(|n|·|r|) (one
+    // rounding in r, three in the dot product), so above 8u·(|n|·|r|) the exact height is positive
+    // and the robust clip keeps every vertex without cutting.
+    for rk in &r {
+        if !(n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs())) {
+            return None;
+        }
+    }
+    let plane = polygon::triangle_plane(&u)?;
+    let (far, h_p) = polygon::fast_decisions(&r, &plane)?;
+    Some(FastSetup {
+        r,
+        u,
+        n,
+        plane,
+        far,
+        h_p,
+    })
+}
+
+/// The robust path's last step: the form factor's sign follows the side of the plane `x` is on
+/// (the edge sum's orientation), clamped to [0, 1]; `None` if not finite.
+fn oriented(mut d: Deriv3, h_p: f64) -> Option<Deriv3> {
+    if h_p < 0.0 {
+        d.value = -d.value;
+        d.gradient = -d.gradient;
+        d.hessian = -d.hessian;
+    }
+    d.value = d.value.clamp(0.0, 1.0);
+    d.is_finite().then_some(d)
 }
 
 #[cfg(test)]
