@@ -25,11 +25,11 @@
 
 use glam::DVec2;
 
-use super::constraint::Constraint;
+use super::constraint::{Constraint, ConstraintValue};
 use super::contribution::{path_contribution, Medium};
 use super::integrate::ScatterOptions;
 use super::interval::{is_physical, Ownership, SupportInterval};
-use super::newton::{inside_triangle, pinv_solve, precision_floor, NewtonSettings};
+use super::newton::{inside_triangle, pinv_solve, polish_steps, precision_floor, NewtonSettings};
 use super::quadrature::{self, Adaptive};
 use super::stats::ScatterStats;
 
@@ -126,38 +126,31 @@ fn solve_at(
 /// nodes it biased a whole fold arc by 3e-9 (same-signed errors, not noise), so that the same
 /// support integrated as one arc or as an arc plus x pieces disagreed (issue 19).
 fn polish_at(c: &Constraint, chord: &Chord, s: f64, pt: ArcPoint) -> ArcPoint {
-    let mut pt = pt;
-    let Some(mut v) = c.eval(pt.x, pt.ab, true) else {
+    let Some(v) = c.eval(pt.x, pt.ab, true) else {
         return pt;
     };
-    for _ in 0..3 {
-        let r = v.f.length();
-        let j = v.jacobian;
-        let jn = j.y_axis * chord.n.x + j.z_axis * chord.n.y;
-        let Some(step) = pinv_solve(j.x_axis, jn, v.f) else {
-            break;
-        };
-        let (x, nu) = (pt.x - step.x, pt.nu - step.y);
-        let ab = chord.at(s, nu);
-        match c.eval(x, ab, true) {
-            Some(vn) if vn.f.length() < r => {
-                let jn = vn.jacobian.y_axis * chord.n.x + vn.jacobian.z_axis * chord.n.y;
-                let js = vn.jacobian.y_axis * chord.d.x + vn.jacobian.z_axis * chord.d.y;
-                let Some(dx) = pinv_solve(vn.jacobian.x_axis, jn, -js) else {
-                    break;
-                };
-                pt = ArcPoint {
-                    x,
-                    nu,
-                    ab,
-                    dx_ds: dx.x,
-                };
-                v = vn;
-            }
-            _ => break,
-        }
-    }
-    pt
+    let across =
+        |v: &ConstraintValue, dir: DVec2| v.jacobian.y_axis * dir.x + v.jacobian.z_axis * dir.y;
+    polish_steps(
+        pt,
+        v,
+        |pt, v| {
+            let step = pinv_solve(v.jacobian.x_axis, across(v, chord.n), v.f)?;
+            let (x, nu) = (pt.x - step.x, pt.nu - step.y);
+            Some(ArcPoint {
+                x,
+                nu,
+                ab: chord.at(s, nu),
+                dx_ds: pt.dx_ds,
+            })
+        },
+        |pt| {
+            let v = c.eval(pt.x, pt.ab, true)?;
+            let dx = pinv_solve(v.jacobian.x_axis, across(&v, chord.n), -across(&v, chord.d))?;
+            pt.dx_ds = dx.x;
+            Some(v)
+        },
+    )
 }
 
 /// The solution at the fold-free end of a piece that ends at a fold on one side.

@@ -21,7 +21,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::constraint::{refract_in, Constraint};
+use super::constraint::{refract_in, Constraint, ConstraintValue};
 
 /// Iteration caps and tolerances of the Newton solves.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -187,25 +187,41 @@ pub fn solve_interior(
 /// quadratic convergence takes a 1e-10 residual to the rounding floor, so that the solution's
 /// distance to an edge is known to ~1e-13 of the triangle's size (ownership of shared edges).
 pub fn polish(c: &Constraint, x: f64, ab: DVec2) -> DVec2 {
-    let mut ab = ab;
-    let Some(mut v) = c.eval(x, ab, true) else {
+    let Some(v) = c.eval(x, ab, true) else {
         return ab;
     };
+    polish_steps(
+        ab,
+        v,
+        |ab, v| pinv_solve(v.jacobian.y_axis, v.jacobian.z_axis, v.f).map(|step| *ab - step),
+        |ab| c.eval(x, *ab, true),
+    )
+}
+
+/// The polishing loop shared by every solve: up to three Newton steps from a converged `point`
+/// with constraint value `value`, each kept only if it lowers |f|. `step` proposes the Newton
+/// candidate (`None` stops); `eval` evaluates a candidate, completing any fields derived from its
+/// value (`None` stops).
+pub(crate) fn polish_steps<P>(
+    mut point: P,
+    mut value: ConstraintValue,
+    mut step: impl FnMut(&P, &ConstraintValue) -> Option<P>,
+    mut eval: impl FnMut(&mut P) -> Option<ConstraintValue>,
+) -> P {
     for _ in 0..3 {
-        let r = v.f.length();
-        let Some(step) = pinv_solve(v.jacobian.y_axis, v.jacobian.z_axis, v.f) else {
+        let r = value.f.length();
+        let Some(mut candidate) = step(&point, &value) else {
             break;
         };
-        let cand = ab - step;
-        match c.eval(x, cand, true) {
-            Some(vn) if vn.f.length() < r => {
-                ab = cand;
-                v = vn;
+        match eval(&mut candidate) {
+            Some(v) if v.f.length() < r => {
+                point = candidate;
+                value = v;
             }
             _ => break,
         }
     }
-    ab
+    point
 }
 
 /// The smallest |f| double precision can resolve at (x, α, β): rounding P and V (or L) by ε times
@@ -360,28 +376,17 @@ struct EdgeRoot {
 /// 1.7-long segment, issue 19): a piece integrated in x up to that crossing then misses (or adds)
 /// F·δx, ~1e-8 of a triangle, while an arc through the same end (`fold.rs`) does not, so the same
 /// support split differently disagreed by that much. Quadratic convergence takes it to the floor.
-fn polish_edge(
-    c: &Constraint,
-    edge: &Edge,
-    (mut x, mut t): (f64, f64),
-    mut v: super::constraint::ConstraintValue,
-) -> (f64, f64) {
-    for _ in 0..3 {
-        let r = v.f.length();
-        let j = v.jacobian;
-        let jt = j.y_axis * edge.dir.x + j.z_axis * edge.dir.y;
-        let Some(step) = pinv_solve(j.x_axis, jt, v.f) else {
-            break;
-        };
-        let (xn, tn) = (x - step.x, t - step.y);
-        match c.eval(xn, edge.at(tn), true) {
-            Some(vn) if vn.f.length() < r => {
-                (x, t, v) = (xn, tn, vn);
-            }
-            _ => break,
-        }
-    }
-    (x, t)
+fn polish_edge(c: &Constraint, edge: &Edge, xt: (f64, f64), v: ConstraintValue) -> (f64, f64) {
+    polish_steps(
+        xt,
+        v,
+        |&(x, t), v| {
+            let j = v.jacobian;
+            let jt = j.y_axis * edge.dir.x + j.z_axis * edge.dir.y;
+            pinv_solve(j.x_axis, jt, v.f).map(|step| (x - step.x, t - step.y))
+        },
+        |&mut (x, t)| c.eval(x, edge.at(t), true),
+    )
 }
 
 fn solve_edge(
