@@ -31,6 +31,7 @@ use crate::{Deriv3, Order};
 
 use super::dd;
 use super::lambert;
+use super::lambert_clipped;
 use super::lambert_polygon;
 use super::polygon;
 
@@ -151,7 +152,11 @@ pub fn triangle_form_factor(
     if polygon::is_very_thin_triangle([a, b, c]) {
         return polygon_form_factor(x, n, &[a, b, c], order);
     }
-    let lambert_value = || lambert::triangle_value(x, n, [a, b, c]);
+    // Lambert's sum, over the clipped triangle when the tangent plane cuts it.
+    let lambert_value = || {
+        lambert::triangle_value(x, n, [a, b, c])
+            .or_else(|| lambert_clipped::triangle_value(x, n, [a, b, c]))
+    };
     if order == Order::Value {
         if let Some(f) = lambert_value() {
             return Ok(Deriv3::constant(f));
@@ -179,9 +184,7 @@ pub fn triangle_form_factor(
         Some(d) => d,
         None => polygon::form_factor(x, n, &[a, b, c], order)?,
     };
-    Ok(with_lambert_value(d, order, || {
-        lambert::triangle_value(x, n, [a, b, c])
-    }))
+    Ok(with_lambert_value(d, order, lambert_value))
 }
 
 /// Form factor from a differential area at `x` with unit normal `n` to a planar simple polygon:

@@ -41,7 +41,7 @@ pub(crate) const FAST_TOLERANCE: f64 = 5e-13;
 /// factors stay far from overflow, and from underflow relative to the largest — and finite.
 #[inline]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn in_range(r: DVec3) -> bool {
+pub(super) fn in_range(r: DVec3) -> bool {
     let m = r.abs().max_element();
     m > 1e-30 && m < 1e30
 }
@@ -59,7 +59,7 @@ pub(super) fn unit(n: DVec3) -> Option<DVec3> {
 /// One Lambert edge term times 2π, `β (n·w)/s`, and its error bound times 2π / u, from
 /// `r_a`, `r_b`, `e = b − a` and `‖r_a‖²`.
 #[inline]
-fn edge(n: DVec3, ra: DVec3, rb: DVec3, e: DVec3, ra2: f64) -> (f64, f64) {
+pub(super) fn edge(n: DVec3, ra: DVec3, rb: DVec3, e: DVec3, ra2: f64) -> (f64, f64) {
     let w = ra.cross(e);
     let s = w.length();
     let c = ra.dot(rb);

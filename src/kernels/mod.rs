@@ -5,6 +5,7 @@ pub mod batch;
 mod dd;
 pub mod form_factor;
 mod lambert;
+mod lambert_clipped;
 mod lambert_far;
 mod lambert_polygon;
 pub mod marched;
