@@ -89,8 +89,9 @@ fn call(c: &Case, order: Order) {
 
 /// `RADDIFF_REGIMES_PROFILE="CASE,ORDER,CALLS"`: the calls of one case, nothing else.
 fn profile(spec: &str) {
-    let parts: Vec<&str> = spec.split(',').map(str::trim).collect();
-    let [case, order, calls] = parts[..] else {
+    // From the right: case names contain commas.
+    let parts: Vec<&str> = spec.rsplitn(3, ',').map(str::trim).collect();
+    let [calls, order, case] = parts[..] else {
         panic!("RADDIFF_REGIMES_PROFILE must be CASE,ORDER,CALLS");
     };
     let case = cases()

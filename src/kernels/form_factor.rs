@@ -148,9 +148,13 @@ pub fn triangle_form_factor(
     c: DVec3,
     order: Order,
 ) -> Result<Deriv3> {
-    // Lambert's sum and the replay would cancel and be declined: straight to the sliver rule.
+    // Lambert's sum and the replay would cancel and be declined: straight to the sliver rule
+    // (`polygon_form_factor` has no fast path for three vertices).
     if polygon::is_very_thin_triangle([a, b, c]) {
-        return polygon_form_factor(x, n, &[a, b, c], order);
+        return match polygon::triangle_form_factor_in_range(x, n, [a, b, c], order) {
+            Some(d) => d,
+            None => polygon_form_factor(x, n, &[a, b, c], order),
+        };
     }
     // Lambert's sum, over the clipped triangle when the tangent plane cuts it.
     let lambert_value = || {
@@ -182,7 +186,10 @@ pub fn triangle_form_factor(
     }
     let d = match triangle_form_factor_fast(x, n, [a, b, c], order) {
         Some(d) => d,
-        None => polygon::form_factor(x, n, &[a, b, c], order)?,
+        None => match polygon::triangle_form_factor_in_range(x, n, [a, b, c], order) {
+            Some(d) => d?,
+            None => polygon::form_factor(x, n, &[a, b, c], order)?,
+        },
     };
     Ok(with_lambert_value(d, order, lambert_value))
 }
