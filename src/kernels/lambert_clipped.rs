@@ -143,7 +143,8 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     }
     let (mut sum, mut magnitude, mut err) = (0.0, 0.0, 0.0);
     for k in 0..count {
-        let (a, b) = (points[k], points[(k + 1) % count]);
+        let next = if k + 1 == count { 0 } else { k + 1 };
+        let (a, b) = (&points[k], &points[next]);
         // Each edge vector is one rounding of the exact difference of its ends.
         let e = match (a.vertex, b.vertex) {
             (Some(i), Some(j)) => v[j] - v[i],
