@@ -263,42 +263,63 @@ fn deriv_size(d: &Deriv3, order: Order) -> (f64, f64) {
 
 /// Value, gradient (and Hessian at [`Order::Hessian`]) of
 /// [`triangle_form_factor`](super::triangle_form_factor) by the analytic derivatives of Lambert's
-/// sum, for `order` above [`Order::Value`]. Taken when the value is certified as in
-/// [`triangle_value`], every edge has `sin β ≥ DERIV_MIN_SINE` (no cancelling near-line terms) and
-/// neither the gradient nor the Hessian sum cancels by more than 100x; `None` otherwise.
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
+/// sum, for `order` above [`Order::Value`]: [`certified_derivs`] for three vertices.
 pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Deriv3> {
     let (n, r, r2) = unclipped_triangle(x, n, v)?;
-    let scale = INV_2PI;
-    let (d0, e0, s0) = edge_derivs(n, r[0], r[1], v[1] - v[0], r2[0], order);
-    let (d1, e1, s1) = edge_derivs(n, r[1], r[2], v[2] - v[1], r2[1], order);
-    let (d2, e2, s2) = edge_derivs(n, r[2], r[0], v[0] - v[2], r2[2], order);
-    let sum = Deriv3 {
-        value: d0.value + d1.value + d2.value,
-        gradient: d0.gradient + d1.gradient + d2.gradient,
-        hessian: d0.hessian + d1.hessian + d2.hessian,
-    };
-    let magnitude = d0.value.abs() + d1.value.abs() + d2.value.abs();
-    let err = U * (e0 + e1 + e2 + 5.0 * magnitude);
-    if !(s0 && s1 && s2 && err <= FAST_TOLERANCE * sum.value.abs()) {
+    certified_derivs(n, &v, &r, &r2, order)
+}
+
+/// Value, gradient (and Hessian at [`Order::Hessian`]) of the form factor of an unclipped polygon
+/// (`unclipped`'s output, any `M ≥ 3`) by the analytic derivatives of Lambert's sum
+/// ([`edge_derivs`] per edge), for `order` above [`Order::Value`]. Taken when Lambert's value is
+/// certified (as in [`certified_sum`]'s near branch: `u(Σ err_i + (M + 2) Σ|f_i|)` within
+/// [`FAST_TOLERANCE`]), every edge has `sin β ≥ DERIV_MIN_SINE` (no cancelling near-line terms)
+/// and neither the gradient nor the Hessian sum cancels by more than [`CANCELLATION`] (summed
+/// max-norms of the edge terms' parts against the max-norm of their sum); `None` otherwise.
+///
+/// The value is the one [`certified_sum`] gives, bit for bit, so that it does not depend on the
+/// order asked for: that sum's far form needs `20‖e_i‖² ≤ ‖r_{i+1}‖²` on every edge, hence
+/// `sin β_i ≤ ‖e_i‖/‖r_{i+1}‖ ≤ 1/√20 < DERIV_MIN_SINE`, which this path declines, and otherwise
+/// it is this same Lambert sum, summed in the same order.
+/// Derivatives are per unit length (gradient) and per squared length (Hessian), signed so that
+/// the form factor is two-sided (the sum's sign is the polygon's orientation as seen from `x`).
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub(super) fn certified_derivs<const M: usize>(
+    n: DVec3,
+    v: &[DVec3; M],
+    r: &[DVec3; M],
+    r2: &[f64; M],
+    order: Order,
+) -> Option<Deriv3> {
+    let mut sum = Deriv3::constant(0.0);
+    let (mut magnitude, mut err, mut steep) = (0.0, 0.0, true);
+    let (mut g_mag, mut h_mag) = (0.0, 0.0);
+    for i in 0..M {
+        let j = (i + 1) % M;
+        let (d, e, s) = edge_derivs(n, r[i], r[j], v[j] - v[i], r2[i], order);
+        sum.value += d.value;
+        sum.gradient += d.gradient;
+        sum.hessian += d.hessian;
+        magnitude += d.value.abs();
+        err += e;
+        steep &= s;
+        let (g, h) = deriv_size(&d, order);
+        g_mag += g;
+        h_mag += h;
+    }
+    let err = U * (err + (M as f64 + 2.0) * magnitude);
+    if !(steep && err <= FAST_TOLERANCE * sum.value.abs()) {
         return None;
     }
-    let parts = [
-        deriv_size(&d0, order),
-        deriv_size(&d1, order),
-        deriv_size(&d2, order),
-    ];
     let total = deriv_size(&sum, order);
-    let (g_mag, h_mag) = parts
-        .iter()
-        .fold((0.0, 0.0), |(g, h), p| (g + p.0, h + p.1));
     if !(g_mag <= CANCELLATION * total.0 && h_mag <= CANCELLATION * total.1) {
         return None;
     }
     // Orientation as seen from x: the form factor is two-sided.
-    let scale = scale.copysign(sum.value);
+    let scale = INV_2PI.copysign(sum.value);
     let out = Deriv3 {
-        value: (sum.value * scale).min(1.0),
+        value: (sum.value.abs() * INV_2PI).min(1.0),
         gradient: sum.gradient * scale,
         hessian: sum.hessian * scale,
     };
@@ -620,6 +641,8 @@ mod tests {
                         );
                         let p = crate::kernels::triangle_form_factor(x, *nr, a, b, TRI[2], order);
                         assert_eq!(p.unwrap(), d);
+                        // The value is the Value order's, bit for bit.
+                        assert_eq!(Some(d.value), triangle_value(x, *nr, TRI), "t = {t:e}");
                         if !order.hessian() {
                             assert_eq!(d.hessian, DMat3::ZERO);
                         }
