@@ -25,7 +25,6 @@
 
 use glam::{DMat3, DVec3};
 
-use super::form_factor::{outer_self, sym_outer};
 use super::lambert_far::{self, Far};
 use super::polygon;
 use crate::{Deriv3, Order};
@@ -202,7 +201,7 @@ fn edge_derivs(
     e: DVec3,
     ra2: f64,
     order: Order,
-) -> (Deriv3, f64, bool) {
+) -> (Terms, f64, bool) {
     let w = ra.cross(e);
     let s2 = w.length_squared();
     let s = s2.sqrt();
@@ -216,7 +215,11 @@ fn edge_derivs(
     let p = s2 + c * c;
     let steep = s2 >= DERIV_MIN_SINE * DERIV_MIN_SINE * p;
     let err = 36.0 * beta + 20.0 * (c - ra2).abs() * g;
-    let mut d = Deriv3::constant(nw * g);
+    let mut d = Terms {
+        value: nw * g,
+        gradient: DVec3::ZERO,
+        hessian: [0.0; 6],
+    };
     if order.gradient() {
         let k = w.cross(e);
         let m = ra + rb;
@@ -234,27 +237,72 @@ fn edge_derivs(
             let a_kk = 3.0 * (beta * inv_s - c * inv_p) * inv_s2 * inv_s2
                 - 2.0 * c * inv_s2 * inv_p * inv_p;
             let diag = nw * (a_q * e.length_squared() - 2.0 * inv_p);
-            d.hessian = DMat3::from_diagonal(DVec3::splat(diag))
-                + sym_outer(nxe, grad_i)
-                + sym_outer(m * (-2.0 * nw * inv_p * inv_p), k)
-                + outer_self(k) * (nw * a_kk)
-                + outer_self(m) * (2.0 * nw * c * inv_p * inv_p)
-                - outer_self(e) * (nw * a_q);
+            // diag 𝟙 + (n×e)∇Iᵀ + ∇I(n×e)ᵀ + (mm kᵀ + k mmᵀ) + kk kᵀ + cm mᵀ − de eᵀ, on the six
+            // distinct entries only.
+            let mm = m * (-2.0 * nw * inv_p * inv_p);
+            let kk = k * (nw * a_kk);
+            let cm = m * (2.0 * nw * c * inv_p * inv_p);
+            let de = e * (nw * a_q);
+            let entry = |i: usize, j: usize| {
+                nxe[i] * grad_i[j]
+                    + grad_i[i] * nxe[j]
+                    + (mm[i] * k[j] + k[i] * mm[j])
+                    + kk[i] * k[j]
+                    + cm[i] * m[j]
+                    - de[i] * e[j]
+            };
+            d.hessian = [
+                diag + entry(0, 0),
+                diag + entry(1, 1),
+                diag + entry(2, 2),
+                entry(0, 1),
+                entry(0, 2),
+                entry(1, 2),
+            ];
         }
     }
     (d, err, steep)
 }
 
+/// An edge term's value, gradient and symmetric Hessian by its six distinct entries
+/// `[xx, yy, zz, xy, xz, yz]` (assembled and summed on these: a third fewer operations than on
+/// full matrices).
+#[derive(Clone, Copy)]
+struct Terms {
+    value: f64,
+    gradient: DVec3,
+    hessian: [f64; 6],
+}
+
+impl Terms {
+    fn add(&mut self, t: &Terms) {
+        self.value += t.value;
+        self.gradient += t.gradient;
+        for (a, b) in self.hessian.iter_mut().zip(t.hessian) {
+            *a += b;
+        }
+    }
+
+    /// The full result with `value`, derivatives scaled by `scale` (a zero Hessian stays zero).
+    fn scaled(&self, value: f64, scale: f64) -> Deriv3 {
+        let h = self.hessian.map(|e| e * scale);
+        Deriv3 {
+            value,
+            gradient: self.gradient * scale,
+            hessian: DMat3::from_cols(
+                DVec3::new(h[0], h[3], h[4]),
+                DVec3::new(h[3], h[1], h[5]),
+                DVec3::new(h[4], h[5], h[2]),
+            ),
+        }
+    }
+}
+
 /// `‖·‖_∞` of the derivative part of `d` at `order` (gradient, and Hessian when asked).
 #[inline]
-fn deriv_size(d: &Deriv3, order: Order) -> (f64, f64) {
+fn deriv_size(d: &Terms, order: Order) -> (f64, f64) {
     let h = if order.hessian() {
-        d.hessian
-            .x_axis
-            .abs()
-            .max(d.hessian.y_axis.abs())
-            .max(d.hessian.z_axis.abs())
-            .max_element()
+        d.hessian.iter().fold(0.0f64, |m, e| m.max(e.abs()))
     } else {
         0.0
     };
@@ -292,15 +340,17 @@ pub(super) fn certified_derivs<const M: usize>(
     r2: &[f64; M],
     order: Order,
 ) -> Option<Deriv3> {
-    let mut sum = Deriv3::constant(0.0);
+    let mut sum = Terms {
+        value: 0.0,
+        gradient: DVec3::ZERO,
+        hessian: [0.0; 6],
+    };
     let (mut magnitude, mut err, mut steep) = (0.0, 0.0, true);
     let (mut g_mag, mut h_mag) = (0.0, 0.0);
     for i in 0..M {
         let j = (i + 1) % M;
         let (d, e, s) = edge_derivs(n, r[i], r[j], v[j] - v[i], r2[i], order);
-        sum.value += d.value;
-        sum.gradient += d.gradient;
-        sum.hessian += d.hessian;
+        sum.add(&d);
         magnitude += d.value.abs();
         err += e;
         steep &= s;
@@ -318,11 +368,7 @@ pub(super) fn certified_derivs<const M: usize>(
     }
     // Orientation as seen from x: the form factor is two-sided.
     let scale = INV_2PI.copysign(sum.value);
-    let out = Deriv3 {
-        value: (sum.value.abs() * INV_2PI).min(1.0),
-        gradient: sum.gradient * scale,
-        hessian: sum.hessian * scale,
-    };
+    let out = sum.scaled((sum.value.abs() * INV_2PI).min(1.0), scale);
     out.is_finite().then_some(out)
 }
 
@@ -347,11 +393,7 @@ pub(crate) fn edge_derivs_checked(
     if !(steep && U * (err + 3.0 * d.value.abs()) <= FAST_TOLERANCE * d.value.abs()) {
         return None;
     }
-    let out = Deriv3 {
-        value: d.value * scale,
-        gradient: d.gradient * scale,
-        hessian: d.hessian * scale,
-    };
+    let out = d.scaled(d.value * scale, scale);
     out.is_finite().then_some(out)
 }
 
