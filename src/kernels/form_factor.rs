@@ -165,7 +165,7 @@ pub fn triangle_form_factor(
         if let Some(f) = lambert_value() {
             return Ok(Deriv3::constant(f));
         }
-        if maybe_far([a, b, c], x) {
+        if maybe_far(&[a, b, c], x) {
             if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
                 return Ok(d);
             }
@@ -175,7 +175,7 @@ pub fn triangle_form_factor(
         // cancel): the far-field quadrature first. Its value is replaced by Lambert's where that is
         // certified (its cancellation-free far form reaches any distance), so that the value is
         // the same for every order.
-        if maybe_far([a, b, c], x) {
+        if maybe_far(&[a, b, c], x) {
             if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
                 return Ok(with_lambert_value(d, order, lambert_value));
             }
@@ -226,7 +226,11 @@ pub fn triangle_form_factor(
 /// * **Fast path.** For [`Order::Value`], a strictly convex polygon of 4 to 8 vertices entirely
 ///   above the tangent plane, which passes the validation below by a wide margin, is evaluated by
 ///   Lambert's sum (or its cancellation-free far-field form) with a running error bound, accepted
-///   within 5e-13; the other orders return that same value when it is certified.
+///   within 5e-13; the other orders return that same value when it is certified. Gradient and
+///   Hessian of such a polygon come from the analytic derivatives of Lambert's per-edge terms when
+///   its value is certified, no edge's line passes near `x` (the angle each edge subtends has
+///   `sin β ≥ 1/4`) and neither derivative sum cancels by more than 100x; otherwise from the
+///   robust path below.
 /// * **Validation.** `x`, `n` and every vertex must be finite; `n` unit length within a relative
 ///   1e-6 (it is renormalized); at least 3 vertices; planar within 1e-8 of the polygon's extent;
 ///   simple (no two non-adjacent edges touch; checked in O(count²) for count > 3). Violations give
@@ -253,6 +257,17 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
     if order == Order::Value {
         if let Some(f) = lambert_polygon::polygon_value(x, n, vertices) {
             return Ok(Deriv3::constant(f));
+        }
+    } else {
+        // As for triangles: far away the replay of the robust far-field rule first (Lambert's
+        // derivative sums would cancel and be declined), with the certified value.
+        if let Some((d, _)) = polygon_far_field_fast(x, n, vertices, order) {
+            return Ok(with_lambert_value(d, order, || {
+                lambert_polygon::polygon_value(x, n, vertices)
+            }));
+        }
+        if let Some(d) = lambert_polygon::polygon_derivs(x, n, vertices, order) {
+            return Ok(d);
         }
     }
     let d = polygon::form_factor(x, n, vertices, order)?;
@@ -546,8 +561,10 @@ const FAST_RANGE: (f64, f64) = (1e-30, 1e30);
 
 /// `‖v‖_∞` of the differences, `None` outside [`FAST_RANGE`] (NaN and infinities included).
 #[inline]
-fn in_fast_range(vs: &[DVec3]) -> Option<()> {
-    let m = vs.iter().fold(0.0f64, |m, v| m.max(v.abs().max_element()));
+fn in_fast_range<'a>(vs: impl IntoIterator<Item = &'a DVec3>) -> Option<()> {
+    let m = vs
+        .into_iter()
+        .fold(0.0f64, |m, v| m.max(v.abs().max_element()));
     (m > FAST_RANGE.0 && m < FAST_RANGE.1).then_some(())
 }
 
@@ -589,14 +606,17 @@ pub(crate) fn edge_form_factor_fast(
 }
 
 /// A cheap necessary condition for the robust path's far-field decision (vertex centroid at least
-/// [`polygon::FAR_FIELD_RATIO`] radii `R` from x): then `‖a − x‖ ≥ 15 R` and every edge is at most
-/// `2R`, so `‖a − x‖_∞ ≥ ‖a − x‖/√3 ≥ 4.3 max(‖b − a‖_∞, ‖c − a‖_∞)`; 4 leaves room for rounding.
-/// Max-norms keep it to a few instructions on the generic path. It only decides whether
-/// [`triangle_far_field_fast`] is tried first, which replays the exact decision.
+/// [`polygon::FAR_FIELD_RATIO`] radii `R` from x): then `‖v_0 − x‖ ≥ 15 R` and every vertex is
+/// within `2R` of `v_0`, so `‖v_0 − x‖_∞ ≥ ‖v_0 − x‖/√3 ≥ 4.3 max_k ‖v_k − v_0‖_∞`; 4 leaves room
+/// for rounding. Max-norms keep it to a few instructions on the generic path. It only decides
+/// whether [`far_field_fast`] is tried first, which replays the exact decision.
 #[inline(always)]
-fn maybe_far(v: [DVec3; 3], x: DVec3) -> bool {
-    let edges = (v[1] - v[0]).abs().max((v[2] - v[0]).abs()).max_element();
-    (v[0] - x).abs().max_element() >= 4.0 * edges
+fn maybe_far<const M: usize>(v: &[DVec3; M], x: DVec3) -> bool {
+    let mut edges = (v[1] - v[0]).abs();
+    for vk in &v[2..] {
+        edges = edges.max((*vk - v[0]).abs());
+    }
+    (v[0] - x).abs().max_element() >= 4.0 * edges.max_element()
 }
 
 /// The far-field evaluation of [`triangle_form_factor`] when the robust path's decisions are
@@ -615,6 +635,47 @@ pub(crate) fn triangle_far_field_fast(
     v: [DVec3; 3],
     order: Order,
 ) -> Option<(Deriv3, f64)> {
+    far_field_fast(x, n, v, polygon::triangle_plane, order)
+}
+
+/// [`triangle_far_field_fast`] for a polygon of 4 to 8 vertices (`None` for other counts): the
+/// robust path's validation ([`polygon::Plane::new`], so invalid polygons are declined and left to
+/// the robust path's errors) and decisions, then its far-field rule on the fan triangles from
+/// `v_0`, on the same f64 differences: bit-for-bit the robust result.
+#[inline(never)]
+pub(crate) fn polygon_far_field_fast(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3],
+    order: Order,
+) -> Option<(Deriv3, f64)> {
+    fn at<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<(Deriv3, f64)> {
+        let v: [DVec3; M] = v.try_into().ok()?;
+        if !maybe_far(&v, x) {
+            return None;
+        }
+        far_field_fast(x, n, v, |u| polygon::Plane::new(u).ok(), order)
+    }
+    match v.len() {
+        4 => at::<4>(x, n, v, order),
+        5 => at::<5>(x, n, v, order),
+        6 => at::<6>(x, n, v, order),
+        7 => at::<7>(x, n, v, order),
+        8 => at::<8>(x, n, v, order),
+        _ => None,
+    }
+}
+
+/// The far-field replay shared by [`triangle_far_field_fast`] and [`polygon_far_field_fast`]
+/// (`plane_of` validates the polygon given relative to `v_0` as the robust path does).
+#[inline(always)]
+fn far_field_fast<const M: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; M],
+    plane_of: impl FnOnce(&[DVec3; M]) -> Option<polygon::Plane>,
+    order: Order,
+) -> Option<(Deriv3, f64)> {
     let FastSetup {
         r,
         u,
@@ -622,16 +683,23 @@ pub(crate) fn triangle_far_field_fast(
         plane,
         far: rule,
         h_p,
-    } = fast_setup(x, n, v)?;
+    } = fast_setup(x, n, v, plane_of)?;
     if plane.is_thin() {
         return None;
     }
     let rule = rule?;
-    // The robust path's non-exact fan geometry of (v0, v1, v2) and its triangle rule.
-    let normal = u[1].cross(u[2]);
-    let geometry = (normal, normal.dot(r[0]));
-    let d = polygon::triangle_rule(r[0], u[1], u[2] - u[1], n, order, geometry, rule);
-    Some((oriented(d, h_p)?, rule.min_ratio()))
+    // The robust path's non-exact fan geometry of (v_0, v_k, v_{k+1}) (its u_0 is exactly zero)
+    // and its triangle rule, accumulated from zero in the same order.
+    let mut sum = Deriv3::constant(0.0);
+    for k in 1..M - 1 {
+        let normal = u[k].cross(u[k + 1]);
+        let geometry = (normal, normal.dot(r[0]));
+        let d = polygon::triangle_rule(r[0], u[k], u[k + 1] - u[k], n, order, geometry, rule);
+        sum.value += d.value;
+        sum.gradient += d.gradient;
+        sum.hessian += d.hessian;
+    }
+    Some((oriented(sum, h_p)?, rule.min_ratio()))
 }
 
 /// The fast evaluation of [`triangle_form_factor`] when the robust path's decisions are certain:
@@ -655,7 +723,7 @@ pub(crate) fn triangle_form_factor_fast(
         plane,
         far,
         h_p,
-    } = fast_setup(x, n, v)?;
+    } = fast_setup(x, n, v, polygon::triangle_plane)?;
     if far.is_some() {
         return None;
     }
@@ -676,14 +744,14 @@ pub(crate) fn triangle_form_factor_fast(
     oriented(sum, h_p)
 }
 
-/// What both replays of the robust triangle path ([`triangle_form_factor_fast`],
-/// [`triangle_far_field_fast`]) decide first, with the robust path's own operations.
-struct FastSetup {
+/// What the replays of the robust path ([`triangle_form_factor_fast`], [`far_field_fast`]) decide
+/// first, with the robust path's own operations.
+struct FastSetup<const M: usize> {
     /// `v_i − x`.
-    r: [DVec3; 3],
+    r: [DVec3; M],
     /// Positions relative to the first vertex, as the robust path forms them (its edge vectors
     /// are differences of these).
-    u: [DVec3; 3],
+    u: [DVec3; M],
     /// The unit receiver normal.
     n: DVec3,
     plane: polygon::Plane,
@@ -693,13 +761,20 @@ struct FastSetup {
     h_p: f64,
 }
 
-/// `None` when the robust path would rescale, clip, or treat `x` as near the triangle's plane, or
-/// for invalid input.
+/// `None` when the robust path would rescale, clip, or treat `x` as near the polygon's plane, when
+/// `plane_of` (the robust path's plane and validation for the positions relative to `v_0`)
+/// declines, or for invalid input.
+#[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn fast_setup(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<FastSetup> {
-    let r = [v[0] - x, v[1] - x, v[2] - x];
-    let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
-    in_fast_range(&[r[0], r[1], r[2], u[1], u[2]])?;
+fn fast_setup<const M: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; M],
+    plane_of: impl FnOnce(&[DVec3; M]) -> Option<polygon::Plane>,
+) -> Option<FastSetup<M>> {
+    let r = v.map(|vk| vk - x);
+    let u: [DVec3; M] = std::array::from_fn(|k| if k == 0 { DVec3::ZERO } else { v[k] - v[0] });
+    in_fast_range(r.iter().chain(&u[1..]))?;
     let len = n.length();
     if !((len - 1.0).abs() <= polygon::NORMAL_TOLERANCE) {
         return None;
@@ -713,7 +788,7 @@ fn fast_setup(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<FastSetup> {
             return None;
         }
     }
-    let plane = polygon::triangle_plane(&u)?;
+    let plane = plane_of(&u)?;
     let (far, h_p) = polygon::fast_decisions(&r, &plane)?;
     Some(FastSetup {
         r,
@@ -922,6 +997,91 @@ mod tests {
         assert!(triangle_far_field_fast(x, n(), sliver, Order::Hessian).is_none());
         assert!(
             triangle_form_factor(x, n(), sliver[0], sliver[1], sliver[2], Order::Hessian).is_ok()
+        );
+    }
+
+    /// The polygon far-field replay, as the triangle's above for a quad and a pentagon (each
+    /// fan triangle through every rule switch): bit-for-bit the robust path wherever taken, taken
+    /// beyond 16 radii, declined below; through the entry point at every order with the certified
+    /// value; invalid polygons far away are declined and refused by the robust path.
+    #[test]
+    fn polygon_far_field_fast_path_equals_robust_across_its_rule_switches() {
+        let quad: Vec<DVec3> = [(-0.5, -0.4), (0.6, -0.5), (0.7, 0.6), (-0.4, 0.5)]
+            .map(|(x, y)| DVec3::new(x, y, 1.0 + 0.1 * x + 0.1 * y))
+            .to_vec();
+        let pentagon: Vec<DVec3> = (0..5)
+            .map(|i| {
+                let phi = std::f64::consts::TAU * i as f64 / 5.0;
+                DVec3::new(phi.cos(), phi.sin(), 1.2 + 0.3 * phi.sin())
+            })
+            .collect();
+        for v in [&quad, &pentagon] {
+            let centroid = v.iter().sum::<DVec3>() / v.len() as f64;
+            let radius = v
+                .iter()
+                .map(|p| (*p - centroid).length())
+                .fold(0.0, f64::max);
+            for dir in [-n(), DVec3::new(0.5, -0.6, -0.4).normalize()] {
+                let steps = 400;
+                for k in 0..=steps {
+                    let ratio = 1e7 * (8.0f64 / 1e7).powf(k as f64 / steps as f64);
+                    let x = centroid + dir * (ratio * radius);
+                    let got = polygon_far_field_fast(x, n(), v, Order::Hessian);
+                    if ratio > 16.0 * (1.0 + 1e-9) {
+                        let (got, min_ratio) = got.unwrap_or_else(|| panic!("declined at {ratio}"));
+                        assert!(ratio >= min_ratio * (1.0 - 1e-12), "{ratio} < {min_ratio}");
+                        let robust = polygon::form_factor(x, n(), v, Order::Hessian).unwrap();
+                        assert_eq!(got, robust, "at {ratio}");
+                        let g = polygon::form_factor(x, n(), v, Order::Gradient).unwrap();
+                        let fast_g = polygon_far_field_fast(x, n(), v, Order::Gradient).unwrap();
+                        assert_eq!(fast_g.0, g, "at {ratio}");
+                        let entry = |o| polygon_form_factor(x, n(), v, o).unwrap();
+                        let (value, hessian) = (entry(Order::Value), entry(Order::Hessian));
+                        assert_eq!(value.value, hessian.value, "at {ratio}");
+                        assert_eq!(
+                            (hessian.gradient, hessian.hessian),
+                            (got.gradient, got.hessian)
+                        );
+                    } else if ratio < 16.0 * (1.0 - 1e-9) {
+                        assert!(got.is_none(), "taken at {ratio}");
+                    }
+                }
+            }
+            // Three or nine vertices: not this replay's.
+            let x = centroid - n() * (1e3 * radius);
+            assert!(polygon_far_field_fast(x, n(), &v[..3], Order::Hessian).is_none());
+            let mut nine = v.clone();
+            while nine.len() < 9 {
+                nine.push(nine[nine.len() - 1] + (v[0] - nine[nine.len() - 1]) * 0.01);
+            }
+            assert!(polygon_far_field_fast(x, n(), &nine, Order::Hessian).is_none());
+        }
+        // Far away but invalid: declined, and the robust path reports InvalidArgument.
+        let x = DVec3::new(0.0, 0.0, -1e3);
+        let mut bow = quad.clone();
+        bow.swap(1, 2);
+        let mut bent = quad.clone();
+        bent[2].z += 1e-3;
+        for v in [&bow, &bent] {
+            assert!(polygon_far_field_fast(x, DVec3::Z, v, Order::Hessian).is_none());
+            for o in [Order::Value, Order::Gradient, Order::Hessian] {
+                assert!(matches!(
+                    polygon_form_factor(x, DVec3::Z, v, o),
+                    Err(Error::InvalidArgument(_))
+                ));
+            }
+        }
+        // A far non-convex (arrowhead) polygon is valid: the replay takes it, bit for bit.
+        let arrow = [
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(1.0, 0.5, 1.0),
+            DVec3::new(0.0, 1.0, 1.0),
+            DVec3::new(0.3, 0.5, 1.0),
+        ];
+        let (got, _) = polygon_far_field_fast(x, DVec3::Z, &arrow, Order::Hessian).unwrap();
+        assert_eq!(
+            got,
+            polygon::form_factor(x, DVec3::Z, &arrow, Order::Hessian).unwrap()
         );
     }
 

@@ -25,7 +25,6 @@
 
 use glam::{DMat3, DVec3};
 
-use super::form_factor::{outer_self, sym_outer};
 use super::lambert_far::{self, Far};
 use super::polygon;
 use crate::{Deriv3, Order};
@@ -202,7 +201,7 @@ fn edge_derivs(
     e: DVec3,
     ra2: f64,
     order: Order,
-) -> (Deriv3, f64, bool) {
+) -> (Terms, f64, bool) {
     let w = ra.cross(e);
     let s2 = w.length_squared();
     let s = s2.sqrt();
@@ -216,7 +215,11 @@ fn edge_derivs(
     let p = s2 + c * c;
     let steep = s2 >= DERIV_MIN_SINE * DERIV_MIN_SINE * p;
     let err = 36.0 * beta + 20.0 * (c - ra2).abs() * g;
-    let mut d = Deriv3::constant(nw * g);
+    let mut d = Terms {
+        value: nw * g,
+        gradient: DVec3::ZERO,
+        hessian: [0.0; 6],
+    };
     if order.gradient() {
         let k = w.cross(e);
         let m = ra + rb;
@@ -234,27 +237,72 @@ fn edge_derivs(
             let a_kk = 3.0 * (beta * inv_s - c * inv_p) * inv_s2 * inv_s2
                 - 2.0 * c * inv_s2 * inv_p * inv_p;
             let diag = nw * (a_q * e.length_squared() - 2.0 * inv_p);
-            d.hessian = DMat3::from_diagonal(DVec3::splat(diag))
-                + sym_outer(nxe, grad_i)
-                + sym_outer(m * (-2.0 * nw * inv_p * inv_p), k)
-                + outer_self(k) * (nw * a_kk)
-                + outer_self(m) * (2.0 * nw * c * inv_p * inv_p)
-                - outer_self(e) * (nw * a_q);
+            // diag 𝟙 + (n×e)∇Iᵀ + ∇I(n×e)ᵀ + (mm kᵀ + k mmᵀ) + kk kᵀ + cm mᵀ − de eᵀ, on the six
+            // distinct entries only.
+            let mm = m * (-2.0 * nw * inv_p * inv_p);
+            let kk = k * (nw * a_kk);
+            let cm = m * (2.0 * nw * c * inv_p * inv_p);
+            let de = e * (nw * a_q);
+            let entry = |i: usize, j: usize| {
+                nxe[i] * grad_i[j]
+                    + grad_i[i] * nxe[j]
+                    + (mm[i] * k[j] + k[i] * mm[j])
+                    + kk[i] * k[j]
+                    + cm[i] * m[j]
+                    - de[i] * e[j]
+            };
+            d.hessian = [
+                diag + entry(0, 0),
+                diag + entry(1, 1),
+                diag + entry(2, 2),
+                entry(0, 1),
+                entry(0, 2),
+                entry(1, 2),
+            ];
         }
     }
     (d, err, steep)
 }
 
+/// An edge term's value, gradient and symmetric Hessian by its six distinct entries
+/// `[xx, yy, zz, xy, xz, yz]` (assembled and summed on these: a third fewer operations than on
+/// full matrices).
+#[derive(Clone, Copy)]
+struct Terms {
+    value: f64,
+    gradient: DVec3,
+    hessian: [f64; 6],
+}
+
+impl Terms {
+    fn add(&mut self, t: &Terms) {
+        self.value += t.value;
+        self.gradient += t.gradient;
+        for (a, b) in self.hessian.iter_mut().zip(t.hessian) {
+            *a += b;
+        }
+    }
+
+    /// The full result with `value`, derivatives scaled by `scale` (a zero Hessian stays zero).
+    fn scaled(&self, value: f64, scale: f64) -> Deriv3 {
+        let h = self.hessian.map(|e| e * scale);
+        Deriv3 {
+            value,
+            gradient: self.gradient * scale,
+            hessian: DMat3::from_cols(
+                DVec3::new(h[0], h[3], h[4]),
+                DVec3::new(h[3], h[1], h[5]),
+                DVec3::new(h[4], h[5], h[2]),
+            ),
+        }
+    }
+}
+
 /// `‖·‖_∞` of the derivative part of `d` at `order` (gradient, and Hessian when asked).
 #[inline]
-fn deriv_size(d: &Deriv3, order: Order) -> (f64, f64) {
+fn deriv_size(d: &Terms, order: Order) -> (f64, f64) {
     let h = if order.hessian() {
-        d.hessian
-            .x_axis
-            .abs()
-            .max(d.hessian.y_axis.abs())
-            .max(d.hessian.z_axis.abs())
-            .max_element()
+        d.hessian.iter().fold(0.0f64, |m, e| m.max(e.abs()))
     } else {
         0.0
     };
@@ -263,45 +311,64 @@ fn deriv_size(d: &Deriv3, order: Order) -> (f64, f64) {
 
 /// Value, gradient (and Hessian at [`Order::Hessian`]) of
 /// [`triangle_form_factor`](super::triangle_form_factor) by the analytic derivatives of Lambert's
-/// sum, for `order` above [`Order::Value`]. Taken when the value is certified as in
-/// [`triangle_value`], every edge has `sin β ≥ DERIV_MIN_SINE` (no cancelling near-line terms) and
-/// neither the gradient nor the Hessian sum cancels by more than 100x; `None` otherwise.
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
+/// sum, for `order` above [`Order::Value`]: [`certified_derivs`] for three vertices.
 pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Deriv3> {
     let (n, r, r2) = unclipped_triangle(x, n, v)?;
-    let scale = INV_2PI;
-    let (d0, e0, s0) = edge_derivs(n, r[0], r[1], v[1] - v[0], r2[0], order);
-    let (d1, e1, s1) = edge_derivs(n, r[1], r[2], v[2] - v[1], r2[1], order);
-    let (d2, e2, s2) = edge_derivs(n, r[2], r[0], v[0] - v[2], r2[2], order);
-    let sum = Deriv3 {
-        value: d0.value + d1.value + d2.value,
-        gradient: d0.gradient + d1.gradient + d2.gradient,
-        hessian: d0.hessian + d1.hessian + d2.hessian,
+    certified_derivs(n, &v, &r, &r2, order)
+}
+
+/// Value, gradient (and Hessian at [`Order::Hessian`]) of the form factor of an unclipped polygon
+/// (`unclipped`'s output, any `M ≥ 3`) by the analytic derivatives of Lambert's sum
+/// ([`edge_derivs`] per edge), for `order` above [`Order::Value`]. Taken when Lambert's value is
+/// certified (as in [`certified_sum`]'s near branch: `u(Σ err_i + (M + 2) Σ|f_i|)` within
+/// [`FAST_TOLERANCE`]), every edge has `sin β ≥ DERIV_MIN_SINE` (no cancelling near-line terms)
+/// and neither the gradient nor the Hessian sum cancels by more than [`CANCELLATION`] (summed
+/// max-norms of the edge terms' parts against the max-norm of their sum); `None` otherwise.
+///
+/// The value is the one [`certified_sum`] gives, bit for bit, so that it does not depend on the
+/// order asked for: that sum's far form needs `20‖e_i‖² ≤ ‖r_{i+1}‖²` on every edge, hence
+/// `sin β_i ≤ ‖e_i‖/‖r_{i+1}‖ ≤ 1/√20 < DERIV_MIN_SINE`, which this path declines, and otherwise
+/// it is this same Lambert sum, summed in the same order.
+/// Derivatives are per unit length (gradient) and per squared length (Hessian), signed so that
+/// the form factor is two-sided (the sum's sign is the polygon's orientation as seen from `x`).
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub(super) fn certified_derivs<const M: usize>(
+    n: DVec3,
+    v: &[DVec3; M],
+    r: &[DVec3; M],
+    r2: &[f64; M],
+    order: Order,
+) -> Option<Deriv3> {
+    let mut sum = Terms {
+        value: 0.0,
+        gradient: DVec3::ZERO,
+        hessian: [0.0; 6],
     };
-    let magnitude = d0.value.abs() + d1.value.abs() + d2.value.abs();
-    let err = U * (e0 + e1 + e2 + 5.0 * magnitude);
-    if !(s0 && s1 && s2 && err <= FAST_TOLERANCE * sum.value.abs()) {
+    let (mut magnitude, mut err, mut steep) = (0.0, 0.0, true);
+    let (mut g_mag, mut h_mag) = (0.0, 0.0);
+    for i in 0..M {
+        let j = (i + 1) % M;
+        let (d, e, s) = edge_derivs(n, r[i], r[j], v[j] - v[i], r2[i], order);
+        sum.add(&d);
+        magnitude += d.value.abs();
+        err += e;
+        steep &= s;
+        let (g, h) = deriv_size(&d, order);
+        g_mag += g;
+        h_mag += h;
+    }
+    let err = U * (err + (M as f64 + 2.0) * magnitude);
+    if !(steep && err <= FAST_TOLERANCE * sum.value.abs()) {
         return None;
     }
-    let parts = [
-        deriv_size(&d0, order),
-        deriv_size(&d1, order),
-        deriv_size(&d2, order),
-    ];
     let total = deriv_size(&sum, order);
-    let (g_mag, h_mag) = parts
-        .iter()
-        .fold((0.0, 0.0), |(g, h), p| (g + p.0, h + p.1));
     if !(g_mag <= CANCELLATION * total.0 && h_mag <= CANCELLATION * total.1) {
         return None;
     }
     // Orientation as seen from x: the form factor is two-sided.
-    let scale = scale.copysign(sum.value);
-    let out = Deriv3 {
-        value: (sum.value * scale).min(1.0),
-        gradient: sum.gradient * scale,
-        hessian: sum.hessian * scale,
-    };
+    let scale = INV_2PI.copysign(sum.value);
+    let out = sum.scaled((sum.value.abs() * INV_2PI).min(1.0), scale);
     out.is_finite().then_some(out)
 }
 
@@ -326,11 +393,7 @@ pub(crate) fn edge_derivs_checked(
     if !(steep && U * (err + 3.0 * d.value.abs()) <= FAST_TOLERANCE * d.value.abs()) {
         return None;
     }
-    let out = Deriv3 {
-        value: d.value * scale,
-        gradient: d.gradient * scale,
-        hessian: d.hessian * scale,
-    };
+    let out = d.scaled(d.value * scale, scale);
     out.is_finite().then_some(out)
 }
 
@@ -620,6 +683,8 @@ mod tests {
                         );
                         let p = crate::kernels::triangle_form_factor(x, *nr, a, b, TRI[2], order);
                         assert_eq!(p.unwrap(), d);
+                        // The value is the Value order's, bit for bit.
+                        assert_eq!(Some(d.value), triangle_value(x, *nr, TRI), "t = {t:e}");
                         if !order.hessian() {
                             assert_eq!(d.hessian, DMat3::ZERO);
                         }

@@ -287,7 +287,7 @@ pub(crate) struct Plane {
 }
 
 impl Plane {
-    fn new(u: &[DVec3]) -> Result<Self> {
+    pub(crate) fn new(u: &[DVec3]) -> Result<Self> {
         let count = u.len();
         // Newell's normal, relative to the first vertex (u[0] = 0).
         let mut nn = DVec3::ZERO;
