@@ -584,7 +584,7 @@ pub(crate) fn edge_form_factor_fast(
 /// Max-norms keep it to a few instructions on the generic path. It only decides whether
 /// [`triangle_far_field_fast`] is tried first, which replays the exact decision.
 #[inline(always)]
-fn maybe_far(v: [DVec3; 3], x: DVec3) -> bool {
+pub(crate) fn maybe_far(v: [DVec3; 3], x: DVec3) -> bool {
     let edges = (v[1] - v[0]).abs().max((v[2] - v[0]).abs()).max_element();
     (v[0] - x).abs().max_element() >= 4.0 * edges
 }
@@ -668,25 +668,25 @@ pub(crate) fn triangle_form_factor_fast(
 
 /// What both replays of the robust triangle path ([`triangle_form_factor_fast`],
 /// [`triangle_far_field_fast`]) decide first, with the robust path's own operations.
-struct FastSetup {
+pub(crate) struct FastSetup {
     /// `v_i − x`.
-    r: [DVec3; 3],
+    pub(crate) r: [DVec3; 3],
     /// Positions relative to the first vertex, as the robust path forms them (its edge vectors
     /// are differences of these).
-    u: [DVec3; 3],
+    pub(crate) u: [DVec3; 3],
     /// The unit receiver normal.
-    n: DVec3,
-    plane: polygon::Plane,
+    pub(crate) n: DVec3,
+    pub(crate) plane: polygon::Plane,
     /// The far-field rule, when the robust path would integrate by quadrature.
-    far: Option<polygon::Rule>,
+    pub(crate) far: Option<polygon::Rule>,
     /// Signed height of `x` over the triangle's plane.
-    h_p: f64,
+    pub(crate) h_p: f64,
 }
 
 /// `None` when the robust path would rescale, clip, or treat `x` as near the triangle's plane, or
 /// for invalid input.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn fast_setup(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<FastSetup> {
+pub(crate) fn fast_setup(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<FastSetup> {
     let r = [v[0] - x, v[1] - x, v[2] - x];
     let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
     in_fast_range(&[r[0], r[1], r[2], u[1], u[2]])?;
@@ -717,7 +717,7 @@ fn fast_setup(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<FastSetup> {
 
 /// The robust path's last step: the form factor's sign follows the side of the plane `x` is on
 /// (the edge sum's orientation), clamped to [0, 1]; `None` if not finite.
-fn oriented(mut d: Deriv3, h_p: f64) -> Option<Deriv3> {
+pub(crate) fn oriented(mut d: Deriv3, h_p: f64) -> Option<Deriv3> {
     if h_p < 0.0 {
         d.value = -d.value;
         d.gradient = -d.gradient;

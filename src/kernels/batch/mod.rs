@@ -26,6 +26,7 @@
 //! requested, ...) fails the whole call with that error, its message prefixed with the element's
 //! kind and index ("triangle 12: ..."). Per-element outputs are unspecified after an error.
 
+mod far_field_lanes;
 mod form_factor_lanes;
 mod mesh;
 mod solid_angle_lanes;
@@ -129,23 +130,14 @@ pub fn mesh_form_factor(x: DVec3, n: DVec3, mesh: &TriangleMesh, order: Order) -
     ensure_finite3(x, "x")?;
     check_normal(n)?;
     let mut sum = Deriv3::constant(0.0);
-    if order == Order::Value {
-        let ln = form_factor_lanes::lane_normal(n);
-        form_factor_lanes::run_on(
-            solid_angle_lanes::best_isa(),
-            mesh.len(),
-            |t| (x, ln, mesh.triangle(t)),
-            |t| form_factor(x, n, mesh.triangle(t), order, "triangle", t),
-            |_, d| sum.value += d.value,
-        )?;
-        return Ok(sum);
-    }
-    for t in 0..mesh.len() {
-        add(
-            &mut sum,
-            &form_factor(x, n, mesh.triangle(t), order, "triangle", t)?,
-        );
-    }
+    form_factors(
+        solid_angle_lanes::best_isa(),
+        mesh.len(),
+        |t| (x, n, mesh.triangle(t)),
+        order,
+        "triangle",
+        |_, d| add(&mut sum, &d),
+    )?;
     Ok(sum)
 }
 
@@ -161,20 +153,14 @@ pub fn mesh_form_factor_each(
     ensure_finite3(x, "x")?;
     check_normal(n)?;
     check_len(out.len(), mesh.len(), "out", "triangles")?;
-    if order == Order::Value {
-        let ln = form_factor_lanes::lane_normal(n);
-        return form_factor_lanes::run_on(
-            solid_angle_lanes::best_isa(),
-            mesh.len(),
-            |t| (x, ln, mesh.triangle(t)),
-            |t| form_factor(x, n, mesh.triangle(t), order, "triangle", t),
-            |t, d| out[t] = d,
-        );
-    }
-    for (t, o) in out.iter_mut().enumerate() {
-        *o = form_factor(x, n, mesh.triangle(t), order, "triangle", t)?;
-    }
-    Ok(())
+    form_factors(
+        solid_angle_lanes::best_isa(),
+        mesh.len(),
+        |t| (x, n, mesh.triangle(t)),
+        order,
+        "triangle",
+        |t, d| out[t] = d,
+    )
 }
 
 /// The form factor from a differential area at each of `points` (unit normal `normals[i]`) to the
@@ -199,25 +185,55 @@ pub fn points_form_factor(
     ensure_finite3(a, "a")?;
     ensure_finite3(b, "b")?;
     ensure_finite3(c, "c")?;
+    form_factors(
+        solid_angle_lanes::best_isa(),
+        points.len(),
+        |i| (points[i], normals[i], [a, b, c]),
+        order,
+        "point",
+        |i, d| out[i] = d,
+    )
+}
+
+/// The form factor of `count` elements (receiver, normal, triangle `get(i)`), each the single
+/// call's, handed to `sink(i, result)` in increasing `i`: the value in the far form's lanes, the
+/// gradient and Hessian in the far-field rule's lanes, the rest by the single call (whose error,
+/// labelled `what i`, stops the run).
+fn form_factors(
+    isa: solid_angle_lanes::Isa,
+    count: usize,
+    get: impl Fn(usize) -> (DVec3, DVec3, [DVec3; 3]),
+    order: Order,
+    what: &str,
+    sink: impl FnMut(usize, Deriv3),
+) -> Result<()> {
+    let fallback = |i: usize| {
+        let (x, n, y) = get(i);
+        form_factor(x, n, y, order, what, i)
+    };
     if order == Order::Value {
         return form_factor_lanes::run_on(
-            solid_angle_lanes::best_isa(),
-            points.len(),
+            isa,
+            count,
             |i| {
-                (
-                    points[i],
-                    form_factor_lanes::lane_normal(normals[i]),
-                    [a, b, c],
-                )
+                let (x, n, y) = get(i);
+                (x, form_factor_lanes::lane_normal(n), y)
             },
-            |i| form_factor(points[i], normals[i], [a, b, c], order, "point", i),
-            |i, d| out[i] = d,
+            fallback,
+            sink,
         );
     }
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = form_factor(points[i], normals[i], [a, b, c], order, "point", i)?;
-    }
-    Ok(())
+    far_field_lanes::run_on(
+        isa,
+        count,
+        |i| {
+            let (x, n, y) = get(i);
+            (x, n, form_factor_lanes::lane_normal(n), y)
+        },
+        order,
+        fallback,
+        sink,
+    )
 }
 
 /// Tolerance of [`zero_area`], above the polygon kernel's 1e-13 so that every triangle it rejects
