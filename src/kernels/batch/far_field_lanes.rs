@@ -251,13 +251,19 @@ struct Group {
     len: usize,
 }
 
-/// Per-chunk state: each slot's replay, then its lane result (oriented, `None` if not finite).
+/// An element: receiver, normal, the normal as the value lanes take it, triangle.
+type Element = (DVec3, DVec3, DVec3, [DVec3; 3]);
+
+/// Per-chunk state, by slot (sized for the chunk, not [`CHUNK`], so that small batches stay cheap).
 struct Chunk {
-    accepted: [Option<Accepted>; CHUNK],
-    result: [Option<Deriv3>; CHUNK],
-    /// Chunk slots with a lane result, and Lambert's value for each.
+    elements: Vec<Element>,
+    /// The replay's outcome.
+    accepted: Vec<Option<Accepted>>,
+    /// The lane result (oriented, `None` if not finite).
+    result: Vec<Option<Deriv3>>,
+    /// Slots with a lane result, and Lambert's value for each.
     taken: Vec<usize>,
-    values: [Option<f64>; CHUNK],
+    values: Vec<Option<f64>>,
 }
 
 impl Group {
@@ -318,25 +324,32 @@ pub(super) fn run_on(
         return Ok(());
     }
     let mut groups: [Option<Group>; RULES] = Default::default();
-    let mut chunk = Box::new(Chunk {
-        accepted: [None; CHUNK],
-        result: [None; CHUNK],
-        taken: Vec::with_capacity(CHUNK),
-        values: [None; CHUNK],
-    });
+    let size = CHUNK.min(count);
+    let mut chunk = Chunk {
+        elements: Vec::with_capacity(size),
+        accepted: Vec::with_capacity(size),
+        result: Vec::with_capacity(size),
+        taken: Vec::with_capacity(size),
+        values: vec![None; size],
+    };
     let mut start = 0;
     while start < count {
         let m = CHUNK.min(count - start);
+        chunk.elements.clear();
+        chunk.elements.extend((start..start + m).map(&get));
+        chunk.accepted.clear();
+        chunk.result.clear();
+        chunk.result.resize(m, None);
         for slot in 0..m {
-            chunk.result[slot] = None;
-            let (x, n, _, v) = get(start + slot);
-            chunk.accepted[slot] = classify(x, n, v).map(|(rule, inputs, accepted)| {
+            let (x, n, _, v) = chunk.elements[slot];
+            let accepted = classify(x, n, v).map(|(rule, inputs, accepted)| {
                 let g = groups[rule_index(rule)].get_or_insert_with(|| Group::new(rule));
                 g.lanes.set(g.len, inputs);
                 g.slots[g.len] = slot;
                 g.len += 1;
                 accepted
             });
+            chunk.accepted.push(accepted);
             if let Some(g) = groups.iter_mut().flatten().find(|g| g.len == BATCH) {
                 g.flush(isa, order, &mut chunk);
             }
@@ -345,29 +358,33 @@ pub(super) fn run_on(
             g.flush(isa, order, &mut chunk);
         }
         // Lambert's value where certified, as the single call puts it in.
-        chunk.taken.clear();
-        chunk
-            .taken
-            .extend((0..m).filter(|&s| chunk.result[s].is_some()));
-        let Chunk { taken, values, .. } = &mut *chunk;
+        let Chunk {
+            elements,
+            result,
+            taken,
+            values,
+            ..
+        } = &mut chunk;
+        taken.clear();
+        taken.extend((0..m).filter(|&s| result[s].is_some()));
         form_factor_lanes::lambert_values(
             isa,
             taken.len(),
             |k| {
-                let (x, _, ln, v) = get(start + taken[k]);
+                let (x, _, ln, v) = elements[taken[k]];
                 (x, ln, v)
             },
             |k| {
-                let (x, n, _, v) = get(start + taken[k]);
+                let (x, n, _, v) = elements[taken[k]];
                 lambert::triangle_value(x, n, v)
             },
             values,
         );
         let mut k = 0;
-        for slot in 0..m {
-            let d = match chunk.result[slot] {
+        for (slot, r) in result.iter().enumerate() {
+            let d = match *r {
                 Some(mut d) => {
-                    if let Some(f) = chunk.values[k] {
+                    if let Some(f) = values[k] {
                         d.value = f;
                     }
                     k += 1;
@@ -542,7 +559,7 @@ mod tests {
                     form_factors(
                         isa,
                         count,
-                        |t| (x, n, mesh.triangle(t)),
+                        |t| (x, n, form_factor_lanes::lane_normal(n), mesh.triangle(t)),
                         order,
                         "t",
                         |t, d| {

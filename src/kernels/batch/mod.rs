@@ -130,10 +130,11 @@ pub fn mesh_form_factor(x: DVec3, n: DVec3, mesh: &TriangleMesh, order: Order) -
     ensure_finite3(x, "x")?;
     check_normal(n)?;
     let mut sum = Deriv3::constant(0.0);
+    let ln = form_factor_lanes::lane_normal(n);
     form_factors(
         solid_angle_lanes::best_isa(),
         mesh.len(),
-        |t| (x, n, mesh.triangle(t)),
+        |t| (x, n, ln, mesh.triangle(t)),
         order,
         "triangle",
         |_, d| add(&mut sum, &d),
@@ -153,10 +154,11 @@ pub fn mesh_form_factor_each(
     ensure_finite3(x, "x")?;
     check_normal(n)?;
     check_len(out.len(), mesh.len(), "out", "triangles")?;
+    let ln = form_factor_lanes::lane_normal(n);
     form_factors(
         solid_angle_lanes::best_isa(),
         mesh.len(),
-        |t| (x, n, mesh.triangle(t)),
+        |t| (x, n, ln, mesh.triangle(t)),
         order,
         "triangle",
         |t, d| out[t] = d,
@@ -188,27 +190,31 @@ pub fn points_form_factor(
     form_factors(
         solid_angle_lanes::best_isa(),
         points.len(),
-        |i| (points[i], normals[i], [a, b, c]),
+        |i| {
+            let n = normals[i];
+            (points[i], n, form_factor_lanes::lane_normal(n), [a, b, c])
+        },
         order,
         "point",
         |i, d| out[i] = d,
     )
 }
 
-/// The form factor of `count` elements (receiver, normal, triangle `get(i)`), each the single
-/// call's, handed to `sink(i, result)` in increasing `i`: the value in the far form's lanes, the
-/// gradient and Hessian in the far-field rule's lanes, the rest by the single call (whose error,
-/// labelled `what i`, stops the run).
+/// The form factor of `count` elements, each the single call's, handed to `sink(i, result)` in
+/// increasing `i`. Element `i` is `get(i)`: receiver, normal, the normal as the value lanes take it
+/// ([`form_factor_lanes::lane_normal`], computed once per normal by the caller), triangle. The
+/// value comes from the far form's lanes, the gradient and Hessian from the far-field rule's lanes,
+/// the rest from the single call (whose error, labelled `what i`, stops the run).
 fn form_factors(
     isa: solid_angle_lanes::Isa,
     count: usize,
-    get: impl Fn(usize) -> (DVec3, DVec3, [DVec3; 3]),
+    get: impl Fn(usize) -> (DVec3, DVec3, DVec3, [DVec3; 3]),
     order: Order,
     what: &str,
     sink: impl FnMut(usize, Deriv3),
 ) -> Result<()> {
     let fallback = |i: usize| {
-        let (x, n, y) = get(i);
+        let (x, n, _, y) = get(i);
         form_factor(x, n, y, order, what, i)
     };
     if order == Order::Value {
@@ -216,24 +222,14 @@ fn form_factors(
             isa,
             count,
             |i| {
-                let (x, n, y) = get(i);
-                (x, form_factor_lanes::lane_normal(n), y)
+                let (x, _, ln, y) = get(i);
+                (x, ln, y)
             },
             fallback,
             sink,
         );
     }
-    far_field_lanes::run_on(
-        isa,
-        count,
-        |i| {
-            let (x, n, y) = get(i);
-            (x, n, form_factor_lanes::lane_normal(n), y)
-        },
-        order,
-        fallback,
-        sink,
-    )
+    far_field_lanes::run_on(isa, count, &get, order, fallback, sink)
 }
 
 /// Tolerance of [`zero_area`], above the polygon kernel's 1e-13 so that every triangle it rejects
