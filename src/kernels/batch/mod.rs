@@ -18,8 +18,13 @@
 //! edge or a vertex, extreme scales) are evaluated by the single kernel. The form factor's value
 //! ([`Order::Value`]) is evaluated in the same kind of lanes by the single kernel's far form of
 //! Lambert's sum, replayed operation for operation without FMA, so that an accepted lane is the
-//! single call's value bit for bit; lanes outside that form, and the gradient and Hessian orders,
-//! call the single kernel per element.
+//! single call's value bit for bit; lanes outside that form call the single kernel. The gradient and
+//! Hessian orders replay, per element, the single kernel's decisions before its far-field Gauss
+//! rule (where it integrates the triangle by quadrature: 16 radii away and beyond, unclipped, not a
+//! sliver) and evaluate that rule in lanes, grouped by rule and with the same operations, so that
+//! a taken element is again the single call's result bit for bit (value included: Lambert's value
+//! from the value lanes where the single call takes it); the other elements call the single
+//! kernel.
 //!
 //! Errors: invalid input gives [`Error::InvalidArgument`] before anything is computed; an element
 //! whose single-element call fails (x on an edge, x in a triangle's plane with derivatives
