@@ -11,9 +11,11 @@
 //! (one element per lane, the rule's nodes in the same order). The lane code is the rule's loop body
 //! with the same operations in the same order, with no FMA contraction (Rust never contracts, and
 //! the code has plain products and sums) and correctly rounded division in every instruction set;
-//! the sums are then assembled by the rule's own formulas, oriented and checked by the kernel's
-//! `oriented`, and given Lambert's value from the value lanes (`form_factor_lanes`) or its scalar
-//! call. An accepted element is therefore the single call's result **bit for bit** (the tests assert
+//! the sums are then assembled by a replay of the rule's closing formulas (glam's operations, in
+//! its order), oriented and checked by the kernel's own `oriented`, and given Lambert's value from
+//! the value lanes (`form_factor_lanes`) or its scalar call. The loop body and the assembly are
+//! copies of `polygon::tensor_rule`'s: a change there must be made here too, and the bit-equality
+//! tests fail until it is. An accepted element is therefore the single call's result **bit for bit** (the tests assert
 //! equality); a non-finite result, and every element the replay declines (near, clipped, thin, near
 //! the plane, invalid), goes to the single kernel.
 //!
