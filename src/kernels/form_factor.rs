@@ -611,7 +611,7 @@ pub(crate) fn edge_form_factor_fast(
 /// for rounding. Max-norms keep it to a few instructions on the generic path. It only decides
 /// whether [`far_field_fast`] is tried first, which replays the exact decision.
 #[inline(always)]
-fn maybe_far<const M: usize>(v: &[DVec3; M], x: DVec3) -> bool {
+pub(crate) fn maybe_far<const M: usize>(v: &[DVec3; M], x: DVec3) -> bool {
     let mut edges = (v[1] - v[0]).abs();
     for vk in &v[2..] {
         edges = edges.max((*vk - v[0]).abs());
@@ -746,19 +746,19 @@ pub(crate) fn triangle_form_factor_fast(
 
 /// What the replays of the robust path ([`triangle_form_factor_fast`], [`far_field_fast`]) decide
 /// first, with the robust path's own operations.
-struct FastSetup<const M: usize> {
+pub(crate) struct FastSetup<const M: usize> {
     /// `v_i − x`.
-    r: [DVec3; M],
+    pub(crate) r: [DVec3; M],
     /// Positions relative to the first vertex, as the robust path forms them (its edge vectors
     /// are differences of these).
-    u: [DVec3; M],
+    pub(crate) u: [DVec3; M],
     /// The unit receiver normal.
-    n: DVec3,
-    plane: polygon::Plane,
+    pub(crate) n: DVec3,
+    pub(crate) plane: polygon::Plane,
     /// The far-field rule, when the robust path would integrate by quadrature.
-    far: Option<polygon::Rule>,
+    pub(crate) far: Option<polygon::Rule>,
     /// Signed height of `x` over the triangle's plane.
-    h_p: f64,
+    pub(crate) h_p: f64,
 }
 
 /// `None` when the robust path would rescale, clip, or treat `x` as near the polygon's plane, when
@@ -766,7 +766,7 @@ struct FastSetup<const M: usize> {
 /// declines, or for invalid input.
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn fast_setup<const M: usize>(
+pub(crate) fn fast_setup<const M: usize>(
     x: DVec3,
     n: DVec3,
     v: [DVec3; M],
@@ -802,7 +802,7 @@ fn fast_setup<const M: usize>(
 
 /// The robust path's last step: the form factor's sign follows the side of the plane `x` is on
 /// (the edge sum's orientation), clamped to [0, 1]; `None` if not finite.
-fn oriented(mut d: Deriv3, h_p: f64) -> Option<Deriv3> {
+pub(crate) fn oriented(mut d: Deriv3, h_p: f64) -> Option<Deriv3> {
     if h_p < 0.0 {
         d.value = -d.value;
         d.gradient = -d.gradient;

@@ -535,7 +535,7 @@ cached_rule!(gauss_legendre_8, 8);
 /// A far-field quadrature rule: Gauss-Legendre nodes and weights on [0, 1], used in both directions
 /// of the Duffy-mapped fan triangle.
 #[derive(Clone, Copy)]
-pub(crate) struct Rule(&'static [(f64, f64)]);
+pub(crate) struct Rule(pub(crate) &'static [(f64, f64)]);
 
 impl Rule {
     /// The smallest distance-over-radius ratio at which [`far_field_rule`] returns this rule.

@@ -204,15 +204,14 @@ pub(super) fn lane_normal(n: DVec3) -> DVec3 {
     lambert::unit(n).unwrap_or(DVec3::NAN)
 }
 
-/// The form factor value of `count` elements, element `i` being receiver, normal (from
-/// [`lane_normal`]) and triangle `get(i)`, handed to `sink(i, value)` in increasing `i`. Lanes
-/// not certified take `fallback(i)` (the single call), whose error stops the run.
-pub(super) fn run_on(
+/// Runs the lanes over `count` elements, element `i` being receiver, normal (from [`lane_normal`])
+/// and triangle `get(i)`: `each(i, Some(value))` where the far form certified the value,
+/// `each(i, None)` elsewhere, in increasing `i`; an error from `each` stops the run.
+fn batches(
     isa: Isa,
     count: usize,
     get: impl Fn(usize) -> (DVec3, DVec3, [DVec3; 3]),
-    fallback: impl Fn(usize) -> Result<Deriv3>,
-    mut sink: impl FnMut(usize, Deriv3),
+    mut each: impl FnMut(usize, Option<f64>) -> Result<()>,
 ) -> Result<()> {
     if count == 0 {
         return Ok(());
@@ -236,16 +235,48 @@ pub(super) fn run_on(
         }
         evaluate_on(isa, &mut lanes);
         for i in 0..m {
-            let d = if lanes.ok[i] != 0 {
-                Deriv3::constant(lanes.out[i])
-            } else {
-                fallback(start + i)?
-            };
-            sink(start + i, d);
+            each(start + i, (lanes.ok[i] != 0).then_some(lanes.out[i]))?;
         }
         start += m;
     }
     Ok(())
+}
+
+/// The form factor value of `count` elements, element `i` being receiver, normal (from
+/// [`lane_normal`]) and triangle `get(i)`, handed to `sink(i, value)` in increasing `i`. Lanes
+/// not certified take `fallback(i)` (the single call), whose error stops the run.
+pub(super) fn run_on(
+    isa: Isa,
+    count: usize,
+    get: impl Fn(usize) -> (DVec3, DVec3, [DVec3; 3]),
+    fallback: impl Fn(usize) -> Result<Deriv3>,
+    mut sink: impl FnMut(usize, Deriv3),
+) -> Result<()> {
+    batches(isa, count, get, |i, value| {
+        let d = match value {
+            Some(f) => Deriv3::constant(f),
+            None => fallback(i)?,
+        };
+        sink(i, d);
+        Ok(())
+    })
+}
+
+/// `lambert::triangle_value` (Lambert's certified value, `None` where it declines) of `count`
+/// elements given as for [`run_on`], into `out[i]`: from the lanes where they certify the far
+/// form (the same bits), from `scalar(i)` (that call) elsewhere.
+pub(super) fn lambert_values(
+    isa: Isa,
+    count: usize,
+    get: impl Fn(usize) -> (DVec3, DVec3, [DVec3; 3]),
+    scalar: impl Fn(usize) -> Option<f64>,
+    out: &mut [Option<f64>],
+) {
+    let done = batches(isa, count, get, |i, value| {
+        out[i] = value.or_else(|| scalar(i));
+        Ok(())
+    });
+    debug_assert!(done.is_ok());
 }
 
 #[cfg(test)]

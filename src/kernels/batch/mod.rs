@@ -18,14 +18,20 @@
 //! edge or a vertex, extreme scales) are evaluated by the single kernel. The form factor's value
 //! ([`Order::Value`]) is evaluated in the same kind of lanes by the single kernel's far form of
 //! Lambert's sum, replayed operation for operation without FMA, so that an accepted lane is the
-//! single call's value bit for bit; lanes outside that form, and the gradient and Hessian orders,
-//! call the single kernel per element.
+//! single call's value bit for bit; lanes outside that form call the single kernel. The gradient and
+//! Hessian orders replay, per element, the single kernel's decisions before its far-field Gauss
+//! rule (where it integrates the triangle by quadrature: 16 radii away and beyond, unclipped, not a
+//! sliver) and evaluate that rule in lanes, grouped by rule and with the same operations, so that
+//! a taken element is again the single call's result bit for bit (value included: Lambert's value
+//! from the value lanes where the single call takes it); the other elements call the single
+//! kernel.
 //!
 //! Errors: invalid input gives [`Error::InvalidArgument`] before anything is computed; an element
 //! whose single-element call fails (x on an edge, x in a triangle's plane with derivatives
 //! requested, ...) fails the whole call with that error, its message prefixed with the element's
 //! kind and index ("triangle 12: ..."). Per-element outputs are unspecified after an error.
 
+mod far_field_lanes;
 mod form_factor_lanes;
 mod mesh;
 mod solid_angle_lanes;
@@ -129,23 +135,15 @@ pub fn mesh_form_factor(x: DVec3, n: DVec3, mesh: &TriangleMesh, order: Order) -
     ensure_finite3(x, "x")?;
     check_normal(n)?;
     let mut sum = Deriv3::constant(0.0);
-    if order == Order::Value {
-        let ln = form_factor_lanes::lane_normal(n);
-        form_factor_lanes::run_on(
-            solid_angle_lanes::best_isa(),
-            mesh.len(),
-            |t| (x, ln, mesh.triangle(t)),
-            |t| form_factor(x, n, mesh.triangle(t), order, "triangle", t),
-            |_, d| sum.value += d.value,
-        )?;
-        return Ok(sum);
-    }
-    for t in 0..mesh.len() {
-        add(
-            &mut sum,
-            &form_factor(x, n, mesh.triangle(t), order, "triangle", t)?,
-        );
-    }
+    let ln = form_factor_lanes::lane_normal(n);
+    form_factors(
+        solid_angle_lanes::best_isa(),
+        mesh.len(),
+        |t| (x, n, ln, mesh.triangle(t)),
+        order,
+        "triangle",
+        |_, d| add(&mut sum, &d),
+    )?;
     Ok(sum)
 }
 
@@ -161,20 +159,15 @@ pub fn mesh_form_factor_each(
     ensure_finite3(x, "x")?;
     check_normal(n)?;
     check_len(out.len(), mesh.len(), "out", "triangles")?;
-    if order == Order::Value {
-        let ln = form_factor_lanes::lane_normal(n);
-        return form_factor_lanes::run_on(
-            solid_angle_lanes::best_isa(),
-            mesh.len(),
-            |t| (x, ln, mesh.triangle(t)),
-            |t| form_factor(x, n, mesh.triangle(t), order, "triangle", t),
-            |t, d| out[t] = d,
-        );
-    }
-    for (t, o) in out.iter_mut().enumerate() {
-        *o = form_factor(x, n, mesh.triangle(t), order, "triangle", t)?;
-    }
-    Ok(())
+    let ln = form_factor_lanes::lane_normal(n);
+    form_factors(
+        solid_angle_lanes::best_isa(),
+        mesh.len(),
+        |t| (x, n, ln, mesh.triangle(t)),
+        order,
+        "triangle",
+        |t, d| out[t] = d,
+    )
 }
 
 /// The form factor from a differential area at each of `points` (unit normal `normals[i]`) to the
@@ -199,25 +192,49 @@ pub fn points_form_factor(
     ensure_finite3(a, "a")?;
     ensure_finite3(b, "b")?;
     ensure_finite3(c, "c")?;
+    form_factors(
+        solid_angle_lanes::best_isa(),
+        points.len(),
+        |i| {
+            let n = normals[i];
+            (points[i], n, form_factor_lanes::lane_normal(n), [a, b, c])
+        },
+        order,
+        "point",
+        |i, d| out[i] = d,
+    )
+}
+
+/// The form factor of `count` elements, each the single call's, handed to `sink(i, result)` in
+/// increasing `i`. Element `i` is `get(i)`: receiver, normal, the normal as the value lanes take it
+/// ([`form_factor_lanes::lane_normal`], computed once per normal by the caller), triangle. The
+/// value comes from the far form's lanes, the gradient and Hessian from the far-field rule's lanes,
+/// the rest from the single call (whose error, labelled `what i`, stops the run).
+fn form_factors(
+    isa: solid_angle_lanes::Isa,
+    count: usize,
+    get: impl Fn(usize) -> (DVec3, DVec3, DVec3, [DVec3; 3]),
+    order: Order,
+    what: &str,
+    sink: impl FnMut(usize, Deriv3),
+) -> Result<()> {
+    let fallback = |i: usize| {
+        let (x, n, _, y) = get(i);
+        form_factor(x, n, y, order, what, i)
+    };
     if order == Order::Value {
         return form_factor_lanes::run_on(
-            solid_angle_lanes::best_isa(),
-            points.len(),
+            isa,
+            count,
             |i| {
-                (
-                    points[i],
-                    form_factor_lanes::lane_normal(normals[i]),
-                    [a, b, c],
-                )
+                let (x, _, ln, y) = get(i);
+                (x, ln, y)
             },
-            |i| form_factor(points[i], normals[i], [a, b, c], order, "point", i),
-            |i, d| out[i] = d,
+            fallback,
+            sink,
         );
     }
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = form_factor(points[i], normals[i], [a, b, c], order, "point", i)?;
-    }
-    Ok(())
+    far_field_lanes::run_on(isa, count, &get, order, fallback, sink)
 }
 
 /// Tolerance of [`zero_area`], above the polygon kernel's 1e-13 so that every triangle it rejects

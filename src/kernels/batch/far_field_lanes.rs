@@ -1,0 +1,616 @@
+//! The triangle form factor's gradient and Hessian in SIMD lanes where the single kernel integrates
+//! by its far-field Gauss rule, and the single kernel as the fallback.
+//!
+//! Far from `x` (vertex centroid at least 16 radii away), `triangle_form_factor` takes its
+//! derivatives from `form_factor::triangle_far_field_fast`: an `n`x`n` Gauss-Legendre rule on the
+//! Duffy-mapped triangle (`polygon::triangle_rule`), `n` picked by distance over radius
+//! (`polygon::far_field_rule`), with the value replaced by Lambert's where that is certified. Here
+//! each element first replays, in scalar code and with the kernel's own functions, every decision
+//! the single call takes before the rule (not a sliver, `maybe_far`, `fast_setup`, not thin, a rule
+//! picked); the accepted elements are grouped by rule, and each group's quadrature sums run in lanes
+//! (one element per lane, the rule's nodes in the same order). The lane code is the rule's loop body
+//! with the same operations in the same order, with no FMA contraction (Rust never contracts, and
+//! the code has plain products and sums) and correctly rounded division in every instruction set;
+//! the sums are then assembled by a replay of the rule's closing formulas (glam's operations, in
+//! its order), oriented and checked by the kernel's own `oriented`, and given Lambert's value from
+//! the value lanes (`form_factor_lanes`) or its scalar call. The loop body and the assembly are
+//! copies of `polygon::tensor_rule`'s: a change there must be made here too, and the bit-equality
+//! tests fail until it is. An accepted element is therefore the single call's result **bit for bit** (the tests assert
+//! equality); a non-finite result, and every element the replay declines (near, clipped, thin, near
+//! the plane, invalid), goes to the single kernel.
+//!
+//! Elements are classified in chunks of [`CHUNK`] and emitted in order, so sums add the per-element
+//! results in the same order as a loop over single calls.
+
+use glam::{DMat3, DVec3};
+
+use super::super::form_factor::{fast_setup, maybe_far, oriented, sym_outer};
+use super::super::lambert;
+use super::super::polygon::{self, Rule};
+use super::form_factor_lanes;
+use super::solid_angle_lanes::Isa;
+use crate::error::Result;
+use crate::{Deriv3, Order};
+
+/// Lanes per evaluation (a multiple of the widest vector, 8 f64).
+const BATCH: usize = 32;
+
+/// Elements classified before their results are emitted in order: large enough that the partly
+/// filled groups flushed at its end cost little.
+const CHUNK: usize = 256;
+
+/// The far-field rules by point count (`polygon::FAR_FIELD_RULES`: 3, 4, 5, 6 and 8).
+const RULES: usize = 5;
+
+const FRAC_1_PI: f64 = std::f64::consts::FRAC_1_PI;
+
+/// The quadrature's running sums, in `polygon::tensor_rule`'s names: `q0`, `s4`, `u6` (3), `v6`
+/// (3), `s6`, then `xx, yy, zz, xy, xz, yz`.
+const SUMS: usize = 15;
+
+/// One node of the tensor rule as `tensor_rule` forms it: `s`, `s·t` and the weight `ws·wt·s`
+/// (the same for every lane, so computed once).
+#[derive(Clone, Copy)]
+struct Node {
+    s: f64,
+    st: f64,
+    weight: f64,
+}
+
+/// The nodes of `rule` on `s ∈ [0, 1]`, with `tensor_rule`'s operations (its `s0 + span·s` with
+/// `s0 = 0`, `span = 1` changes no bit, and is kept so that the claim does not rest on that).
+fn nodes(rule: Rule) -> Vec<Node> {
+    let (s0, s1) = (0.0, 1.0);
+    let span = s1 - s0;
+    let mut out = Vec::with_capacity(rule.0.len() * rule.0.len());
+    for &(s, ws) in rule.0 {
+        let (s, ws) = (s0 + span * s, ws * span);
+        for &(t, wt) in rule.0 {
+            out.push(Node {
+                s,
+                st: s * t,
+                weight: ws * wt * s,
+            });
+        }
+    }
+    out
+}
+
+/// Structure-of-arrays batch: `triangle_rule`'s inputs `r_a`, `ab`, `bc`, `n` as `[axis][lane]`,
+/// and the sums it accumulates, `[sum][lane]`.
+struct Lanes {
+    r_a: [[f64; BATCH]; 3],
+    ab: [[f64; BATCH]; 3],
+    bc: [[f64; BATCH]; 3],
+    n: [[f64; BATCH]; 3],
+    sums: [[f64; BATCH]; SUMS],
+}
+
+impl Lanes {
+    fn new() -> Box<Lanes> {
+        Box::new(Lanes {
+            r_a: [[0.0; BATCH]; 3],
+            ab: [[0.0; BATCH]; 3],
+            bc: [[0.0; BATCH]; 3],
+            n: [[0.0; BATCH]; 3],
+            sums: [[0.0; BATCH]; SUMS],
+        })
+    }
+
+    #[inline(always)]
+    fn set(&mut self, i: usize, [r_a, ab, bc, n]: [DVec3; 4]) {
+        for axis in 0..3 {
+            self.r_a[axis][i] = r_a[axis];
+            self.ab[axis][i] = ab[axis];
+            self.bc[axis][i] = bc[axis];
+            self.n[axis][i] = n[axis];
+        }
+    }
+}
+
+/// `W` lanes from `base`, their sums in registers over every node (`tensor_rule`'s loop body with
+/// the gradient on, the Hessian's sums when `HESSIAN`; glam's `dot` is `(x·x' + y·y') + z·z'`).
+#[inline(always)]
+fn block<const W: usize, const HESSIAN: bool>(l: &mut Lanes, base: usize, nodes: &[Node]) {
+    let load = |v: &[[f64; BATCH]; 3]| -> [[f64; W]; 3] {
+        std::array::from_fn(|axis| std::array::from_fn(|j| v[axis][base + j]))
+    };
+    let (r_a, ab, bc, n) = (load(&l.r_a), load(&l.ab), load(&l.bc), load(&l.n));
+    let mut acc = [[0.0f64; W]; SUMS];
+    for node in nodes {
+        for j in 0..W {
+            let r: [f64; 3] =
+                std::array::from_fn(|a| r_a[a][j] + node.s * ab[a][j] + node.st * bc[a][j]);
+            let inv2 = 1.0 / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+            let inv4 = inv2 * inv2;
+            let nr = n[0][j] * r[0] + n[1][j] * r[1] + n[2][j] * r[2];
+            let weight = node.weight;
+            acc[0][j] += weight * nr * inv4;
+            let w6 = weight * inv4 * inv2;
+            acc[1][j] += weight * inv4;
+            let w6nr = w6 * nr;
+            for a in 0..3 {
+                acc[2 + a][j] += w6nr * r[a];
+            }
+            if HESSIAN {
+                for a in 0..3 {
+                    acc[5 + a][j] += w6 * r[a];
+                }
+                acc[8][j] += w6 * nr;
+                let w8 = w6 * nr * inv2;
+                acc[9][j] += w8 * r[0] * r[0];
+                acc[10][j] += w8 * r[1] * r[1];
+                acc[11][j] += w8 * r[2] * r[2];
+                acc[12][j] += w8 * r[0] * r[1];
+                acc[13][j] += w8 * r[0] * r[2];
+                acc[14][j] += w8 * r[1] * r[2];
+            }
+        }
+    }
+    for (sum, a) in l.sums.iter_mut().zip(&acc) {
+        sum[base..base + W].copy_from_slice(a);
+    }
+}
+
+/// Every lane's sums, `W` lanes at a time (the vector width: the sums stay in registers).
+#[inline(always)]
+fn evaluate<const W: usize>(l: &mut Lanes, nodes: &[Node], hessian: bool) {
+    for base in (0..BATCH).step_by(W) {
+        if hessian {
+            block::<W, true>(l, base, nodes);
+        } else {
+            block::<W, false>(l, base, nodes);
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn evaluate_avx2(l: &mut Lanes, nodes: &[Node], hessian: bool) {
+    evaluate::<4>(l, nodes, hessian)
+}
+
+#[cfg(all(target_arch = "x86_64", raddiff_avx512))]
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,fma")]
+unsafe fn evaluate_avx512(l: &mut Lanes, nodes: &[Node], hessian: bool) {
+    evaluate::<8>(l, nodes, hessian)
+}
+
+fn evaluate_on(isa: Isa, l: &mut Lanes, nodes: &[Node], hessian: bool) {
+    match isa {
+        Isa::Portable => evaluate::<2>(l, nodes, hessian),
+        // SAFETY: `best_isa` (or the test choosing it) checked that the CPU has these features.
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { evaluate_avx2(l, nodes, hessian) },
+        // SAFETY: as above.
+        #[cfg(all(target_arch = "x86_64", raddiff_avx512))]
+        Isa::Avx512 => unsafe { evaluate_avx512(l, nodes, hessian) },
+    }
+}
+
+/// `tensor_rule`'s result from lane `i`'s sums, with its operations (glam's, in its order).
+fn assemble(l: &Lanes, i: usize, n: DVec3, (normal, c_t): (DVec3, f64), order: Order) -> Deriv3 {
+    let s: [f64; SUMS] = std::array::from_fn(|k| l.sums[k][i]);
+    let (q0, s4, s6) = (s[0], s[1], s[8]);
+    let (u6, v6) = (DVec3::new(s[2], s[3], s[4]), DVec3::new(s[5], s[6], s[7]));
+    let (xx, yy, zz, xy, xz, yz) = (s[9], s[10], s[11], s[12], s[13], s[14]);
+    let mut out = Deriv3::constant(0.0);
+    let q1 = 4.0 * u6 - s4 * n;
+    out.value = FRAC_1_PI * c_t * q0;
+    if order.gradient() {
+        out.gradient = FRAC_1_PI * (c_t * q1 - q0 * normal);
+        if order.hessian() {
+            let q2 = DMat3::from_cols(
+                DVec3::new(xx, xy, xz),
+                DVec3::new(xy, yy, yz),
+                DVec3::new(xz, yz, zz),
+            ) * 24.0
+                - sym_outer(n, v6) * 4.0
+                - DMat3::IDENTITY * (4.0 * s6);
+            out.hessian = (q2 * c_t - sym_outer(normal, q1)) * FRAC_1_PI;
+        }
+    }
+    out
+}
+
+/// What the assembly needs of an element the replay accepted: the unit normal, the fan geometry
+/// `(2·area·N̂, 2·area·N̂·r_a)` and the height over the plane (the orientation).
+#[derive(Clone, Copy)]
+struct Accepted {
+    n: DVec3,
+    geometry: (DVec3, f64),
+    h_p: f64,
+}
+
+/// The single call's decisions before its far-field rule (`triangle_form_factor` for gradient and
+/// Hessian orders, then `triangle_far_field_fast`), replayed with its own functions: the rule and
+/// `triangle_rule`'s inputs where it would integrate by that rule, `None` where it would not.
+#[inline]
+fn classify(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<(Rule, [DVec3; 4], Accepted)> {
+    if polygon::is_very_thin_triangle(v) || !maybe_far(&v, x) {
+        return None;
+    }
+    let setup = fast_setup(x, n, v, polygon::triangle_plane)?;
+    if setup.plane.is_thin() {
+        return None;
+    }
+    let rule = setup.far?;
+    let (r, u) = (setup.r, setup.u);
+    let normal = u[1].cross(u[2]);
+    let accepted = Accepted {
+        n: setup.n,
+        geometry: (normal, normal.dot(r[0])),
+        h_p: setup.h_p,
+    };
+    Some((rule, [r[0], u[1], u[2] - u[1], setup.n], accepted))
+}
+
+/// The elements of one rule awaiting evaluation: lane `k` is chunk slot `slots[k]`.
+struct Group {
+    nodes: Vec<Node>,
+    lanes: Box<Lanes>,
+    slots: [usize; BATCH],
+    len: usize,
+}
+
+/// An element: receiver, normal, the normal as the value lanes take it, triangle.
+type Element = (DVec3, DVec3, DVec3, [DVec3; 3]);
+
+/// Per-chunk state, by slot (sized for the chunk, not [`CHUNK`], so that small batches stay cheap).
+struct Chunk {
+    elements: Vec<Element>,
+    /// The replay's outcome.
+    accepted: Vec<Option<Accepted>>,
+    /// The lane result (oriented, `None` if not finite).
+    result: Vec<Option<Deriv3>>,
+    /// Slots with a lane result, and Lambert's value for each.
+    taken: Vec<usize>,
+    values: Vec<Option<f64>>,
+}
+
+impl Group {
+    fn new(rule: Rule) -> Group {
+        Group {
+            nodes: nodes(rule),
+            lanes: Lanes::new(),
+            slots: [0; BATCH],
+            len: 0,
+        }
+    }
+
+    /// Evaluates the pending lanes and stores their results in `chunk`.
+    fn flush(&mut self, isa: Isa, order: Order, chunk: &mut Chunk) {
+        if self.len == 0 {
+            return;
+        }
+        // Unused lanes get a harmless far triangle (their outputs are ignored).
+        for i in self.len..BATCH {
+            let far = [DVec3::Z * 10.0, DVec3::X * 0.1, DVec3::Y * 0.1, DVec3::Z];
+            self.lanes.set(i, far);
+        }
+        evaluate_on(isa, &mut self.lanes, &self.nodes, order.hessian());
+        for (k, &slot) in self.slots[..self.len].iter().enumerate() {
+            let a = chunk.accepted[slot].expect("grouped slots were accepted");
+            let d = assemble(&self.lanes, k, a.n, a.geometry, order);
+            chunk.result[slot] = oriented(d, a.h_p);
+        }
+        self.len = 0;
+    }
+}
+
+/// Index of a rule among [`RULES`] (by its point count).
+fn rule_index(rule: Rule) -> usize {
+    match rule.0.len() {
+        3 => 0,
+        4 => 1,
+        5 => 2,
+        6 => 3,
+        _ => 4,
+    }
+}
+
+/// The form factor of `count` elements at `order` (gradient or Hessian), element `i` being
+/// receiver `x`, normal `n`, the normal as the value lanes take it (`form_factor_lanes::lane_normal`)
+/// and triangle `get(i)`, handed to `sink(i, result)` in increasing `i`. Elements the lanes do not
+/// take get `fallback(i)` (the single call), whose error stops the run.
+pub(super) fn run_on(
+    isa: Isa,
+    count: usize,
+    get: impl Fn(usize) -> (DVec3, DVec3, DVec3, [DVec3; 3]),
+    order: Order,
+    fallback: impl Fn(usize) -> Result<Deriv3>,
+    mut sink: impl FnMut(usize, Deriv3),
+) -> Result<()> {
+    debug_assert!(order.gradient());
+    if count == 0 {
+        return Ok(());
+    }
+    let mut groups: [Option<Group>; RULES] = Default::default();
+    let size = CHUNK.min(count);
+    let mut chunk = Chunk {
+        elements: Vec::with_capacity(size),
+        accepted: Vec::with_capacity(size),
+        result: Vec::with_capacity(size),
+        taken: Vec::with_capacity(size),
+        values: vec![None; size],
+    };
+    let mut start = 0;
+    while start < count {
+        let m = CHUNK.min(count - start);
+        chunk.elements.clear();
+        chunk.elements.extend((start..start + m).map(&get));
+        chunk.accepted.clear();
+        chunk.result.clear();
+        chunk.result.resize(m, None);
+        for slot in 0..m {
+            let (x, n, _, v) = chunk.elements[slot];
+            let accepted = classify(x, n, v).map(|(rule, inputs, accepted)| {
+                let g = groups[rule_index(rule)].get_or_insert_with(|| Group::new(rule));
+                g.lanes.set(g.len, inputs);
+                g.slots[g.len] = slot;
+                g.len += 1;
+                accepted
+            });
+            chunk.accepted.push(accepted);
+            if let Some(g) = groups.iter_mut().flatten().find(|g| g.len == BATCH) {
+                g.flush(isa, order, &mut chunk);
+            }
+        }
+        for g in groups.iter_mut().flatten() {
+            g.flush(isa, order, &mut chunk);
+        }
+        // Lambert's value where certified, as the single call puts it in.
+        let Chunk {
+            elements,
+            result,
+            taken,
+            values,
+            ..
+        } = &mut chunk;
+        taken.clear();
+        taken.extend((0..m).filter(|&s| result[s].is_some()));
+        form_factor_lanes::lambert_values(
+            isa,
+            taken.len(),
+            |k| {
+                let (x, _, ln, v) = elements[taken[k]];
+                (x, ln, v)
+            },
+            |k| {
+                let (x, n, _, v) = elements[taken[k]];
+                lambert::triangle_value(x, n, v)
+            },
+            values,
+        );
+        let mut k = 0;
+        for (slot, r) in result.iter().enumerate() {
+            let d = match *r {
+                Some(mut d) => {
+                    if let Some(f) = values[k] {
+                        d.value = f;
+                    }
+                    k += 1;
+                    d
+                }
+                None => fallback(start + slot)?,
+            };
+            sink(start + slot, d);
+        }
+        start += m;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::solid_angle_lanes::tests::isas;
+    use super::super::{add, form_factor, form_factors, TriangleMesh, VertexData};
+    use super::*;
+    use std::cell::Cell;
+
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn point(&mut self, s: f64) -> DVec3 {
+            DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * s
+        }
+    }
+
+    fn bits(d: &Deriv3) -> Vec<u64> {
+        let mut v = vec![d.value.to_bits()];
+        v.extend(d.gradient.to_array().map(f64::to_bits));
+        v.extend(d.hessian.to_cols_array().map(f64::to_bits));
+        v
+    }
+
+    /// Elements at every far-field rule's distance and nearer, some clipped by the receiver's
+    /// tangent plane, some slivers (thin and very thin), some seen from below their plane.
+    fn elements() -> Vec<(DVec3, DVec3, [DVec3; 3])> {
+        let mut rng = Lcg(11);
+        let mut elems = Vec::new();
+        for k in 0..3000 {
+            // Distance over size: near (edge sum), then each rule's range (3.6e4+, 1.5e3+, 280+,
+            // 100+, 16+ radii; the radius is about half the size).
+            let ratio = [2.0, 12.0, 20.0, 45.0, 80.0, 300.0, 1e3, 5e3, 2e5][k % 9];
+            let size = [0.1, 1e-3, 30.0][(k / 9) % 3];
+            let dir = DVec3::new(
+                rng.next() - 0.5,
+                rng.next() - 0.5,
+                if k % 5 == 0 { -1.0 } else { 1.0 },
+            );
+            let c = dir.normalize() * (ratio * size);
+            let mut y = [0, 1, 2].map(|_| c + rng.point(size));
+            match k % 23 {
+                // A sliver of aspect 1e-3 (thin: the replay declines) and 1e-7 (very thin).
+                3 => y[2] = (y[0] + y[1]) * 0.5 + rng.point(size * 1e-3),
+                4 => y[2] = (y[0] + y[1]) * 0.5 + rng.point(size * 1e-7),
+                _ => {}
+            }
+            let x = rng.point(0.1 * size);
+            // Mostly facing the triangle, sometimes tilted enough to clip it.
+            let facing = if k % 7 == 0 { 0.0 } else { 1.0 };
+            let n = (dir.normalize() * facing + rng.point(3.0)).normalize();
+            elems.push((x, n, y));
+        }
+        elems
+    }
+
+    #[test]
+    fn lanes_are_the_single_call_bit_for_bit_on_every_isa() {
+        let elems = elements();
+        let mut per_rule = [0usize; RULES];
+        for (x, n, y) in &elems {
+            if let Some((rule, ..)) = classify(*x, *n, *y) {
+                per_rule[rule_index(rule)] += 1;
+            }
+        }
+        // Every rule's lanes are exercised, and many elements go to the single kernel.
+        let taken: usize = per_rule.iter().sum();
+        assert!(per_rule.iter().all(|&c| c >= 50), "{per_rule:?}");
+        assert!(taken > 1000 && taken < 2700, "{taken}");
+        for isa in isas() {
+            for order in [Order::Gradient, Order::Hessian] {
+                let single = |i: usize| {
+                    let (x, n, [a, b, c]) = elems[i];
+                    crate::kernels::triangle_form_factor(x, n, a, b, c, order)
+                };
+                let fell_back = Cell::new(0);
+                let mut seen = 0;
+                run_on(
+                    isa,
+                    elems.len(),
+                    |i| {
+                        let (x, n, y) = elems[i];
+                        (x, n, form_factor_lanes::lane_normal(n), y)
+                    },
+                    order,
+                    |i| {
+                        fell_back.set(fell_back.get() + 1);
+                        single(i)
+                    },
+                    |i, d| {
+                        assert_eq!(i, seen);
+                        seen += 1;
+                        let reference = single(i).unwrap();
+                        assert_eq!(bits(&d), bits(&reference), "{isa:?} {order:?} element {i}");
+                    },
+                )
+                .unwrap();
+                assert_eq!(seen, elems.len());
+                // Only the declined elements (and none of the taken ones) called the kernel.
+                assert_eq!(fell_back.get(), elems.len() - taken, "{isa:?} {order:?}");
+            }
+        }
+    }
+
+    /// A mesh light like the benchmark's (f32, 1024 triangles ~0.1 in size 1-2 above the
+    /// receiver), every third one flipped, stored with a vertex stride of 4 floats; the same in
+    /// f64, packed; and the same lifted far away.
+    #[test]
+    fn meshes_near_and_far_f32_strided_and_f64_sums_and_each_are_bit_for_bit() {
+        let mut rng = Lcg(1);
+        let count = 1024;
+        let mut v32 = Vec::new();
+        let mut ix = Vec::new();
+        for t in 0..count as u32 {
+            let c = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, 1.0 + rng.next());
+            for _ in 0..3 {
+                let p = c + rng.point(0.1);
+                v32.extend([p.x as f32, p.y as f32, p.z as f32, f32::NAN]);
+            }
+            let o = if t % 3 == 0 { [0, 2, 1] } else { [0, 1, 2] };
+            ix.extend(o.map(|k| 3 * t + k));
+        }
+        let strided =
+            TriangleMesh::new(VertexData::F32(&v32), 4, 3 * count, Some(&ix), 3, count).unwrap();
+        // Lifted by 5 to 2000 (rules of 6 down to 3 points).
+        let far: Vec<f64> = v32
+            .chunks(4)
+            .enumerate()
+            .flat_map(|(i, p)| {
+                let lift = [0.0, 5.0, 20.0, 2e3][(i / 3) % 4];
+                [p[0] as f64, p[1] as f64, p[2] as f64 + lift]
+            })
+            .collect();
+        let near: Vec<f64> = v32
+            .chunks(4)
+            .flat_map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
+            .collect();
+        let packed_near =
+            TriangleMesh::new(VertexData::F64(&near), 3, 3 * count, Some(&ix), 3, count).unwrap();
+        let packed_far =
+            TriangleMesh::new(VertexData::F64(&far), 3, 3 * count, Some(&ix), 3, count).unwrap();
+        let x = DVec3::new(0.05, -0.03, 0.0);
+        let n = DVec3::new(0.1, 0.0, 1.0).normalize();
+        for mesh in [&strided, &packed_near, &packed_far] {
+            let taken = (0..count)
+                .filter(|&t| classify(x, n, mesh.triangle(t)).is_some())
+                .count();
+            assert!(taken > count / 2, "{taken}");
+            for isa in isas() {
+                for order in [Order::Gradient, Order::Hessian] {
+                    let single = |t: usize| form_factor(x, n, mesh.triangle(t), order, "t", t);
+                    let mut reference = Deriv3::constant(0.0);
+                    let mut sum = Deriv3::constant(0.0);
+                    form_factors(
+                        isa,
+                        count,
+                        |t| (x, n, form_factor_lanes::lane_normal(n), mesh.triangle(t)),
+                        order,
+                        "t",
+                        |t, d| {
+                            let r = single(t).unwrap();
+                            assert_eq!(bits(&d), bits(&r), "{isa:?} {order:?} {t}");
+                            add(&mut reference, &r);
+                            add(&mut sum, &d);
+                        },
+                    )
+                    .unwrap();
+                    assert_eq!(bits(&sum), bits(&reference), "{isa:?} {order:?}");
+                }
+            }
+        }
+    }
+
+    /// The benchmark's mesh light (`benches/kernels_batch.rs`, same generator): which path each
+    /// triangle's single call takes for its derivatives (the figures docs/kernels.md quotes).
+    #[test]
+    fn benchmark_mesh_paths() {
+        let mut rng = Lcg(1);
+        let x = DVec3::new(0.05, -0.03, 0.0);
+        let mut per_rule = [0usize; RULES];
+        let (mut thin, mut near) = (0, 0);
+        for _ in 0..1024 {
+            let (cx, cy, cz) = (rng.next() - 0.5, rng.next() - 0.5, 1.0 + rng.next());
+            let y = [0, 1, 2].map(|_| {
+                let d = [rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5];
+                DVec3::new(
+                    (cx + 0.1 * d[0]) as f32 as f64,
+                    (cy + 0.1 * d[1]) as f32 as f64,
+                    (cz + 0.1 * d[2]) as f32 as f64,
+                )
+            });
+            match classify(x, DVec3::Z, y) {
+                Some((rule, ..)) => per_rule[rule_index(rule)] += 1,
+                None if polygon::is_very_thin_triangle(y)
+                    || fast_setup(x, DVec3::Z, y, polygon::triangle_plane)
+                        .is_some_and(|s| s.plane.is_thin()) =>
+                {
+                    thin += 1
+                }
+                // Nearer than 16 radii (the edge sum).
+                None => near += 1,
+            }
+        }
+        println!(
+            "bench mesh: rules [3, 4, 5, 6, 8] points {per_rule:?}, slivers {thin}, near {near}"
+        );
+        assert_eq!((per_rule, thin, near), ([0, 0, 0, 5, 1013], 0, 6));
+    }
+}
