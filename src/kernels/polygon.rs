@@ -537,24 +537,52 @@ fn gauss_legendre_16() -> &'static [(f64, f64); 16] {
 /// than one bit to cancellation.
 const NEAR_PLANE_CANCELLATION: f64 = 2.0;
 
-/// Below this `|h_P| / d_e` for every edge (x close to the polygon's plane compared with its
-/// distance to every edge line, in the plane), the value is recomputed by [`near_plane_value`].
+/// Below this `|h_P| / d_e` for every edge not in the tangent plane (x close to the polygon's
+/// plane compared with its distance to every such edge line, in the plane), the value is
+/// recomputed by [`near_plane_value`]; at or above it for some edge, that function declines.
 const NEAR_PLANE_RATIO: f64 = 0.1;
 
 /// The signed edge-sum value for x near the polygon's plane, without the cancellation of the plain
-/// sum. Split `n = n_N N̂ + n_t`. The `n_t` part has no cancellation (each term is O(h_P)). The `N̂`
-/// part is the parallel-receiver form factor, whose edge terms are O(1) and sum to O(h_P²) outside
-/// the polygon; per edge it equals `(Δψ_e − G_e)/2π` with `Δψ_e` the signed angle the edge subtends
-/// at the foot point of x in the plane and `G_e = ∫ ε cos²ψ/(1 + ε cos²ψ) dψ` over the edge's
-/// angular range (`ε = h_P²/d_e²`, `d_e` the in-plane distance to the edge line). `ΣΔψ_e` is
-/// exactly `2π·winding`, and the `G_e` are small and integrated by a 16-point Gauss rule (the
-/// integrand's poles are `asinh(1/√ε) ≥ 3` away from the real axis). `None` when not applicable.
-fn near_plane_value(
-    verts: &[ClipVertex],
-    n: DVec3,
-    plane_n: DVec3,
-    h_p: f64,
-) -> Result<Option<f64>> {
+/// sum (the convention of [`edge_term_exact`]: positive when the loop's right-hand normal `N̂`
+/// points away from x, i.e. for `h_P = N̂·(v − x) > 0`; both signs of `h_P` are handled alike).
+///
+/// Edges not in the tangent plane. Split `n = n_N N̂ + n_t`. With `r_a = q_a + h_P N̂` (`q_a` in the
+/// plane) the lever arm is `r_a × e = q_a × e + h_P N̂ × e`, where `q_a × e` is along `N̂`. So the
+/// `n_t` part of the term is `h_P n_t·(N̂ × ê) A_1/2π` (`A_1 = ∫ ds/‖r‖²`): O(h_P), no cancellation.
+/// The `N̂` part is the parallel-receiver term `d_e A_1/2π` (`d_e = N̂·(r_a × ê)`, the signed
+/// in-plane distance from the foot point `x_P` of x to the edge line); with `s = |d_e| tan ψ` it is
+/// `(Δψ_e − G_e)/2π`, `Δψ_e` the signed angle the edge subtends at `x_P`, and
+/// `G_e = ∫ ε cos²ψ/(1 + ε cos²ψ) dψ` over the edge's angular range (`ε = h_P²/d_e²`), in closed
+/// form by [`near_plane_deficit`].
+///
+/// Edges in the tangent plane (the clip edges, and input edges whose ends lie exactly on it). Their
+/// line ℓ is where the tangent plane meets the polygon's plane, so it passes within
+/// `D = |h_P|/‖n_t‖` of x and `D_P = |n_N| D` of `x_P`: `ε` is not small and the split above
+/// fails. But `r_a` and `e` both lie in the tangent plane, so `w = r_a × e = ±‖w‖ n`, and the whole
+/// term is `sign(n·w) β_c/2π` with `β_c = atan2(D L, D² + s_a s_b)` (`s_a, s_b` the abscissae of the
+/// ends along ℓ from the foot of x, `L = s_b − s_a`): the edge's own closed form, taken from its
+/// double-double cross product (`EdgeFrame::with_exact_ends`). Its in-plane angle at `x_P` is
+/// `Δψ_c = atan2(d_c L, s_a s_b + d_c²)` with `d_c = N̂·w/L = sign(n·w) n_N D` (x and `x_P` have the
+/// same abscissae: ℓ ⊥ N̂). Outside the polygon the clip segment lies on one side of the foot
+/// (`s_a s_b > 0`), so both angles are O(h_P) and computed without cancellation.
+///
+/// The sum. `Σ_all Δψ = 2π W` exactly (`W` the winding number of the clipped loop about `x_P`,
+/// rounded from the f64 sum), so
+///
+/// ```text
+/// 2π F = n_N (2π W − Σ_clip Δψ_c − Σ_other G_e) + Σ_other h_P n_t·(N̂ × ê) A_1 + Σ_clip sign(n·w) β_c,
+/// ```
+///
+/// a sum of O(h_P) terms (the O(h_P²) `G_e` aside) when x is outside (`W = 0`). Per clip edge the
+/// two O(h_P) parts `sign(n·w) (β(D) − |n_N| β(|n_N| D))` cancel only by `1 − n_N² = ‖n_t‖²`,
+/// i.e. when the receiver faces the polygon's plane nearly head-on (where `D_P` is large and the
+/// clip edge could as well take the general split). Non-convex polygons can be clipped into
+/// several clip edges, including bridges that run along ℓ in both directions; each is its own
+/// closed form and the bridges' terms cancel between themselves, O(h_P) each.
+///
+/// `None` when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near
+/// its line in the plane, which includes x near a clip vertex), or a term is undefined.
+fn near_plane_value(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) -> Option<f64> {
     let count = verts.len();
     let h2 = h_p * h_p;
     let n_par = n.dot(plane_n);
@@ -562,44 +590,94 @@ fn near_plane_value(
     let mut transverse = 0.0;
     let mut turning = 0.0;
     let mut small = 0.0;
+    let nt2 = n_t.length_squared();
+    // Σ sign(n·w) (β_c − n_N sign(n·w) Δψ_c) over the edges in the tangent plane.
+    let mut tangent = 0.0;
     for i in 0..count {
         let (a, b) = (verts[i], verts[(i + 1) % count]);
-        let e = b.u - a.u;
-        let len = e.length();
-        if len == 0.0 {
+        let ends = ExactEnds {
+            a: [a.r, a.r_lo],
+            b: [b.r, b.r_lo],
+        };
+        // As in `evaluate`: a clip point's `u` is rounded independently of its exact `r`.
+        let e = if a.on_line || b.on_line {
+            let (ra, rb) = (dd::Dd3::new(a.r, a.r_lo), dd::Dd3::new(b.r, b.r_lo));
+            rb.sub(&ra).to_dvec3()
+        } else {
+            b.u - a.u
+        };
+        let Some(frame) = EdgeFrame::with_exact_ends(a.r, e, Some(&ends)) else {
+            continue;
+        };
+        let len = frame.len;
+        // Signed in-plane distance of x_P from the edge line: N̂·(r_a × ê), from the (exact when x
+        // is near the line) lever arm.
+        let d = plane_n.dot(frame.w) / len;
+        let (sa, sb) = (frame.sa, frame.sb);
+        let dpsi = (d * len).atan2(sa * sb + d * d);
+        turning += dpsi;
+        if a.on_line && b.on_line {
+            // The clip edge's whole term minus its share n_N Δψ_c of the parallel part.
+            let sigma = n.dot(frame.w).signum();
+            tangent += sigma * tangent_excess(frame.h, len, sa * sb, n_par.abs(), nt2);
             continue;
         }
-        let e_hat = e / len;
-        // in-plane vectors from the foot point of x to the endpoints
-        let qa = a.r - plane_n.dot(a.r) * plane_n;
-        let qb = b.r - plane_n.dot(b.r) * plane_n;
-        let d = plane_n.dot(qa.cross(e_hat));
-        if h_p.abs() >= NEAR_PLANE_RATIO * d.abs() || d.is_nan() {
-            return Ok(None);
+        #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+        if !(h_p.abs() < NEAR_PLANE_RATIO * d.abs()) {
+            return None;
         }
-        let dpsi = plane_n.dot(qa.cross(qb)).atan2(qa.dot(qb));
-        let sa = qa.dot(e_hat);
-        let (psi_a, psi_b) = ((sa / d.abs()).atan(), ((sa + len) / d.abs()).atan());
-        let eps = h2 / (d * d);
-        let mut g = 0.0;
-        for &(t, w) in gauss_legendre_16() {
-            let c = (psi_a + t * (psi_b - psi_a)).cos();
-            let c2e = eps * c * c;
-            g += w * c2e / (1.0 + c2e);
-        }
-        g *= (psi_b - psi_a).abs();
-        turning += dpsi;
-        small += g.copysign(dpsi);
-        // n_t·(r_a × e) = h_P n_t·(N × e): the in-plane part of r_a × e is exactly h_P N × e, and
-        // taking it from the plane avoids the cancellation against the large N part.
-        if let Some(frame) = EdgeFrame::new(a.r, e) {
-            let nu_t = h_p * n_t.dot(plane_n.cross(e_hat));
-            transverse += 0.5 * FRAC_1_PI * nu_t * frame.moments(Order::Value)?.a1;
-        }
+        small += near_plane_deficit(d.abs(), h2, sa, sb).copysign(d);
+        // n_t·(r_a × e) = h_P n_t·(N̂ × e): the in-plane part of r_a × e is exactly h_P N̂ × e, and
+        // taking it from the plane avoids the cancellation against the large N̂ part.
+        let nu_t = h_p * n_t.dot(plane_n.cross(frame.e_hat));
+        transverse += nu_t * frame.moments(Order::Value).ok()?.a1;
     }
     let winding = (turning / std::f64::consts::TAU).round();
-    let parallel = winding - small * (0.5 * FRAC_1_PI);
-    Ok(Some(n_par * parallel + transverse))
+    let parallel = std::f64::consts::TAU * winding - small;
+    Some(0.5 * FRAC_1_PI * (n_par * parallel + transverse + tangent))
+}
+
+/// `β(D) − c β(cD)` with `β(t) = atan2(t L, t² + P)`: for an edge in the tangent plane at distance
+/// `d = D` from x (`L` its length, `P = s_a s_b` the product of its ends' abscissae from the foot of
+/// x, `c = |n_N|`, `nt2 = ‖n_t‖² = 1 − c²`), its term `β_c` less its share `c β(cD) = sign(n·w) n_N Δψ_c`
+/// of the parallel part (see [`near_plane_value`]).
+///
+/// Outside the polygon (`P > 0`) both angles are O(D) and agree to `1 − c`, which is small when the
+/// receiver faces the plane nearly head-on. With `u = DL/(D² + P)` and `v = cDL/(c²D² + P)` (the
+/// tangents of the two angles), `β(D) − cβ(cD) = atan((u − v)/(1 + uv)) + (1 − c) atan(v)`, and
+/// `u − v = DL (1 − c)(P − cD²)/((D² + P)(c²D² + P))`, with `1 − c = ‖n_t‖²/(1 + c)`: every part
+/// carries its factor `1 − c` explicitly, so nothing cancels. Otherwise (`P ≤ 0`, the foot's
+/// projection on the edge's line inside the segment) the angles are not small and are subtracted
+/// as they are.
+fn tangent_excess(d: f64, len: f64, p: f64, c: f64, nt2: f64) -> f64 {
+    let beta = |t: f64| (t * len).atan2(t * t + p);
+    if p <= 0.0 {
+        return beta(d) - c * beta(c * d);
+    }
+    let one_minus_c = nt2 / (1.0 + c);
+    let (d2, cd2) = (d * d, c * c * d * d);
+    let u = d * len / (d2 + p);
+    let v = c * d * len / (cd2 + p);
+    let u_minus_v = d * len * one_minus_c * (p - c * d2) / ((d2 + p) * (cd2 + p));
+    (u_minus_v / (1.0 + u * v)).atan() + one_minus_c * v.atan()
+}
+
+/// `G_e = ∫ ε cos²ψ/(1 + ε cos²ψ) dψ` for an edge at in-plane distance `d > 0` from the foot point
+/// of x, `h2 = h_P²`, abscissae `s_a < s_b` along its line (`ψ = atan(s/d)`, `ε = h_P²/d²`).
+///
+/// With `s = d tan ψ` the integrand is `d h²/((d² + s²)(H² + s²)) ds`, `H² = d² + h_P²`, which splits
+/// into `d/(d² + s²) − d/(H² + s²)`: `G_e = [atan(s/d) − atan(s/H)] + (1 − d/H) [atan(s/H)]`, both
+/// brackets taken between `s_a` and `s_b`. Written that way each part is a difference of angles
+/// that agree to O(ε) and would lose everything to rounding; instead
+/// `atan(s/d) − atan(s/H) = atan2(s k, d H + s²)` and `1 − d/H = k/H` with `k = H − d = h²/(H + d)`,
+/// all without cancellation. What remains is a difference of two O(ε) angles (at `s_b` and `s_a`),
+/// whose rounding error is O(ε·u), far below the O(h_P) value it corrects.
+fn near_plane_deficit(d: f64, h2: f64, sa: f64, sb: f64) -> f64 {
+    let big_h = (d * d + h2).sqrt();
+    let k = h2 / (big_h + d);
+    let delta = |s: f64| (s * k).atan2(d * big_h + s * s);
+    let spread = (big_h * (sb - sa)).atan2(big_h * big_h + sa * sb);
+    delta(sb) - delta(sa) + k / big_h * spread
 }
 
 /// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, `rule` in
@@ -976,8 +1054,18 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
             magnitude += t.value.abs();
             accumulate(&mut sum, t);
         }
+        let cancels = magnitude > cancellation_limit(&plane, near_plane || cut) * sum.value.abs();
+        // x near the plane with the polygon clipped: the clip edges' closed form makes the value
+        // a sum of O(h_P) terms, and the edge sum's derivatives (whose terms are not small
+        // against the derivatives themselves, the clip line's 1/h_P² parts being removed by
+        // `clip_edge_term`) keep the hard-regime accuracy (measured in
+        // `tests/kernels_b_near_plane.rs`).
+        let mut split = None;
+        if cancels && near_plane && cut {
+            split = near_plane_value(&verts, n, plane.normal, h_p);
+        }
         let mut quadrature = None;
-        if magnitude > cancellation_limit(&plane, near_plane || cut) * sum.value.abs() {
+        if cancels && split.is_none() {
             let max_pieces = if near_plane && cut {
                 MAX_PIECES_NEAR_PLANE
             } else {
@@ -1001,10 +1089,11 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                 // own size), also near the plane: x above the polygon's interior, where the terms
                 // share a sign. Only a cancelling sum needs the near-plane split (and its 16-point
                 // integrals per edge).
-                if magnitude > NEAR_PLANE_CANCELLATION * sum.value.abs() {
-                    if let Some(v) = near_plane_value(&verts, n, plane.normal, h_p)? {
-                        sum.value = v;
-                    }
+                if split.is_none() && magnitude > NEAR_PLANE_CANCELLATION * sum.value.abs() {
+                    split = near_plane_value(&verts, n, plane.normal, h_p);
+                }
+                if let Some(v) = split {
+                    sum.value = v;
                 }
                 sum
             }
@@ -1148,6 +1237,48 @@ mod tests {
         assert!(at_16[0] > 1e-14 && at_16[0] < 1e-12, "{at_16:?}");
         assert!(at_16[2] > 1e-12 && at_16[2] < 1e-8, "{at_16:?}");
         assert!(fits(8, 31.0));
+    }
+
+    /// The closed form of [`near_plane_deficit`] against a composite 16-point Gauss rule (64
+    /// panels in ψ) of its defining integral `∫ ε cos²ψ/(1 + ε cos²ψ) dψ`, whose terms are positive
+    /// (no cancellation): for `ε` from 1e-2 down to 1e-24 and edges on one side of the foot, across
+    /// it and far along their line, the difference is within a few ulps of `ε` (the scale of the
+    /// two angle differences it subtracts), far below the O(h_P) value it enters.
+    #[test]
+    fn near_plane_deficit_matches_its_integral() {
+        for (d, sa, sb) in [
+            (1.0, -0.7, 2.3),
+            (0.3, 0.1, 0.4),
+            (0.05, 1.0, 3.0),
+            (2.0, -5.0, -1.5),
+            (1e-3, -1.0, 1e-2),
+        ] {
+            for k in 1..=12 {
+                let h = d * 10f64.powi(-k) * 0.9;
+                let eps = (h / d) * (h / d);
+                let (pa, pb) = ((sa / d).atan(), (sb / d).atan());
+                let panels = 64;
+                let mut reference = 0.0;
+                for p in 0..panels {
+                    let (lo, hi) = (
+                        pa + (pb - pa) * p as f64 / panels as f64,
+                        pa + (pb - pa) * (p + 1) as f64 / panels as f64,
+                    );
+                    for &(t, w) in gauss_legendre_16() {
+                        let c = (lo + t * (hi - lo)).cos();
+                        let c2e = eps * c * c;
+                        reference += w * (hi - lo) * c2e / (1.0 + c2e);
+                    }
+                }
+                let got = near_plane_deficit(d, h * h, sa, sb);
+                let bound = 8.0 * f64::EPSILON * eps * (pa.abs() + pb.abs() + 1.0);
+                assert!(
+                    (got - reference).abs() <= bound,
+                    "d={d} h={h:e} s=[{sa}, {sb}]: {got:e} vs {reference:e}"
+                );
+                assert!(got > 0.0);
+            }
+        }
     }
 
     /// Coordinates whose differences overflow take `Scaled::new`'s second attempt (pre-scaled by
