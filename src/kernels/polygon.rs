@@ -17,9 +17,7 @@ use crate::{Deriv3, Order};
 use super::dd;
 
 mod sliver;
-use super::form_factor::{
-    clip_edge_term, edge_term_exact, outer_self, sym_outer, EdgeFrame, ExactEnds,
-};
+use super::form_factor::{clip_edge_term, frame_term, outer_self, sym_outer, EdgeFrame, ExactEnds};
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).
 pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;
@@ -543,7 +541,7 @@ const NEAR_PLANE_CANCELLATION: f64 = 2.0;
 const NEAR_PLANE_RATIO: f64 = 0.1;
 
 /// The signed edge-sum value for x near the polygon's plane, without the cancellation of the plain
-/// sum (the convention of [`edge_term_exact`]: positive when the loop's right-hand normal `N̂`
+/// sum (the convention of the edge terms, [`frame_term`]: positive when the loop's right-hand normal `N̂`
 /// points away from x, i.e. for `h_P = N̂·(v − x) > 0`; both signs of `h_P` are handled alike).
 ///
 /// Edges not in the tangent plane. Split `n = n_N N̂ + n_t`. With `r_a = q_a + h_P N̂` (`q_a` in the
@@ -582,32 +580,32 @@ const NEAR_PLANE_RATIO: f64 = 0.1;
 ///
 /// `None` when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near
 /// its line in the plane, which includes x near a clip vertex), or a term is undefined.
-fn near_plane_value(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) -> Option<f64> {
+fn near_plane_value(
+    verts: &[ClipVertex],
+    frames: &[Option<EdgeFrame>],
+    n: DVec3,
+    plane_n: DVec3,
+    h_p: f64,
+) -> Option<f64> {
     let count = verts.len();
     let h2 = h_p * h_p;
     let n_par = n.dot(plane_n);
     let n_t = n - n_par * plane_n;
+    let nt2 = n_t.length_squared();
     let mut transverse = 0.0;
     let mut turning = 0.0;
     let mut small = 0.0;
-    let nt2 = n_t.length_squared();
     // Σ sign(n·w) (β_c − n_N sign(n·w) Δψ_c) over the edges in the tangent plane.
     let mut tangent = 0.0;
-    for i in 0..count {
-        let (a, b) = (verts[i], verts[(i + 1) % count]);
-        let ends = ExactEnds {
-            a: [a.r, a.r_lo],
-            b: [b.r, b.r_lo],
-        };
-        // As in `evaluate`: a clip point's `u` is rounded independently of its exact `r`.
-        let e = if a.on_line || b.on_line {
-            let (ra, rb) = (dd::Dd3::new(a.r, a.r_lo), dd::Dd3::new(b.r, b.r_lo));
-            rb.sub(&ra).to_dvec3()
-        } else {
-            b.u - a.u
-        };
-        let Some(frame) = EdgeFrame::with_exact_ends(a.r, e, Some(&ends)) else {
-            continue;
+    for (i, frame) in frames.iter().enumerate() {
+        let on_line = verts[i].on_line && verts[(i + 1) % count].on_line;
+        let frame = match frame {
+            Some(f) => *f,
+            None if on_line => match frame_of(verts, i) {
+                Some(f) => f,
+                None => continue,
+            },
+            None => continue,
         };
         let len = frame.len;
         // Signed in-plane distance of x_P from the edge line: N̂·(r_a × ê), from the (exact when x
@@ -616,7 +614,7 @@ fn near_plane_value(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) ->
         let (sa, sb) = (frame.sa, frame.sb);
         let dpsi = (d * len).atan2(sa * sb + d * d);
         turning += dpsi;
-        if a.on_line && b.on_line {
+        if on_line {
             // The clip edge's whole term minus its share n_N Δψ_c of the parallel part.
             let sigma = n.dot(frame.w).signum();
             tangent += sigma * tangent_excess(frame.h, len, sa * sb, n_par.abs(), nt2);
@@ -626,15 +624,95 @@ fn near_plane_value(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) ->
         if !(h_p.abs() < NEAR_PLANE_RATIO * d.abs()) {
             return None;
         }
-        small += near_plane_deficit(d.abs(), h2, sa, sb).copysign(d);
+        let deficit = near_plane_deficit(d.abs(), h2, sa, sb, dpsi.abs());
+        small += deficit.g.copysign(d);
         // n_t·(r_a × e) = h_P n_t·(N̂ × e): the in-plane part of r_a × e is exactly h_P N̂ × e, and
-        // taking it from the plane avoids the cancellation against the large N̂ part.
+        // taking it from the plane avoids the cancellation against the large N̂ part. The edge's
+        // A_1 = atan2(H L, H² + s_a s_b)/H (H = √(d² + h_P²), its distance from x) comes with the
+        // deficit.
         let nu_t = h_p * n_t.dot(plane_n.cross(frame.e_hat));
-        transverse += nu_t * frame.moments(Order::Value).ok()?.a1;
+        transverse += nu_t * deficit.spread / deficit.big_h;
     }
     let winding = (turning / std::f64::consts::TAU).round();
     let parallel = std::f64::consts::TAU * winding - small;
     Some(0.5 * FRAC_1_PI * (n_par * parallel + transverse + tangent))
+}
+
+/// The frames of the loop's edges as the edge sum builds them ([`frame_of`]), pushed onto `out`
+/// (filled in place: returning the small vector would copy it); `None` for the clip edges (when
+/// `cut`), whose terms [`clip_edge_term`] forms from its own frame.
+fn edge_frames(verts: &[ClipVertex], cut: bool, out: &mut Frames) {
+    let count = verts.len();
+    for i in 0..count {
+        let clip_edge = cut && verts[i].on_line && verts[(i + 1) % count].on_line;
+        out.push(if clip_edge { None } else { frame_of(verts, i) });
+    }
+}
+
+/// The frame of the edge from vertex `i` of the loop to the next: a clip point's `u` is rounded
+/// independently of its exact `r`, so the edge vector of an edge with a clip point is taken from
+/// the exact ends, and the frame's cross product is recomputed in double-double when x is near the
+/// edge's line. `None` for a zero-length edge.
+fn frame_of(verts: &[ClipVertex], i: usize) -> Option<EdgeFrame> {
+    let (a, b) = (&verts[i], &verts[(i + 1) % verts.len()]);
+    let ends = ExactEnds {
+        a: [a.r, a.r_lo],
+        b: [b.r, b.r_lo],
+    };
+    EdgeFrame::with_exact_ends(a.r, edge_vector(a, b), Some(&ends))
+}
+
+type Frames = SmallVec<[Option<EdgeFrame>; 10]>;
+
+/// Whether the foot point of x (`h_p N̂` from x) lies inside the clipped loop, by the crossing
+/// number of the loop projected along the dominant axis of `N̂` (bridges along the clip line cross
+/// in pairs and leave the parity alone). Only used to choose between two accurate evaluations
+/// (see [`evaluate`]), so a foot on or next to the boundary may go either way.
+fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
+    let a = plane_n.abs();
+    let project = |v: DVec3| {
+        if a.x >= a.y && a.x >= a.z {
+            DVec2::new(v.y, v.z)
+        } else if a.y >= a.z {
+            DVec2::new(v.z, v.x)
+        } else {
+            DVec2::new(v.x, v.y)
+        }
+    };
+    let foot = project(plane_n * h_p);
+    let count = verts.len();
+    let mut inside = false;
+    for i in 0..count {
+        let p = project(verts[i].r) - foot;
+        let q = project(verts[(i + 1) % count].r) - foot;
+        // The edge crosses the ray from the foot along +x: it straddles y = 0 at a positive x.
+        let dy = q.y - p.y;
+        if (p.y > 0.0) != (q.y > 0.0) && ((p.x * dy - p.y * (q.x - p.x)) > 0.0) == (dy > 0.0) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// The edge vector from `a` to `b` (see [`edge_frames`]).
+fn edge_vector(a: &ClipVertex, b: &ClipVertex) -> DVec3 {
+    if a.on_line || b.on_line {
+        let (ra, rb) = (dd::Dd3::new(a.r, a.r_lo), dd::Dd3::new(b.r, b.r_lo));
+        rb.sub(&ra).to_dvec3()
+    } else {
+        b.u - a.u
+    }
+}
+
+/// `atan(z)`, by its series where `|z|` is small (the arguments of the near-plane corrections are
+/// O(h_P) or O(ε)): below 1e-4 three terms are exact to 1e-28 relative.
+fn atan_small(z: f64) -> f64 {
+    if z.abs() < 1e-4 {
+        let z2 = z * z;
+        z * (1.0 - z2 * (1.0 / 3.0 - 0.2 * z2))
+    } else {
+        z.atan()
+    }
 }
 
 /// `β(D) − c β(cD)` with `β(t) = atan2(t L, t² + P)`: for an edge in the tangent plane at distance
@@ -659,25 +737,42 @@ fn tangent_excess(d: f64, len: f64, p: f64, c: f64, nt2: f64) -> f64 {
     let u = d * len / (d2 + p);
     let v = c * d * len / (cd2 + p);
     let u_minus_v = d * len * one_minus_c * (p - c * d2) / ((d2 + p) * (cd2 + p));
-    (u_minus_v / (1.0 + u * v)).atan() + one_minus_c * v.atan()
+    atan_small(u_minus_v / (1.0 + u * v)) + one_minus_c * atan_small(v)
+}
+
+/// What [`near_plane_deficit`] returns for one edge.
+struct Deficit {
+    /// `G_e`.
+    g: f64,
+    /// `atan(s_b/H) − atan(s_a/H)`, the angle the edge subtends at x (`H A_1`).
+    spread: f64,
+    /// `H = √(d² + h_P²)`, the distance from x to the edge's line.
+    big_h: f64,
 }
 
 /// `G_e = ∫ ε cos²ψ/(1 + ε cos²ψ) dψ` for an edge at in-plane distance `d > 0` from the foot point
-/// of x, `h2 = h_P²`, abscissae `s_a < s_b` along its line (`ψ = atan(s/d)`, `ε = h_P²/d²`).
+/// of x, `h2 = h_P²`, abscissae `s_a < s_b` along its line (`ψ = atan(s/d)`, `ε = h_P²/d²`), given
+/// `abs_dpsi = atan(s_b/d) − atan(s_a/d)` (the unsigned angle at the foot, which the caller has).
 ///
 /// With `s = d tan ψ` the integrand is `d h²/((d² + s²)(H² + s²)) ds`, `H² = d² + h_P²`, which splits
 /// into `d/(d² + s²) − d/(H² + s²)`: `G_e = [atan(s/d) − atan(s/H)] + (1 − d/H) [atan(s/H)]`, both
 /// brackets taken between `s_a` and `s_b`. Written that way each part is a difference of angles
 /// that agree to O(ε) and would lose everything to rounding; instead
-/// `atan(s/d) − atan(s/H) = atan2(s k, d H + s²)` and `1 − d/H = k/H` with `k = H − d = h²/(H + d)`,
-/// all without cancellation. What remains is a difference of two O(ε) angles (at `s_b` and `s_a`),
-/// whose rounding error is O(ε·u), far below the O(h_P) value it corrects.
-fn near_plane_deficit(d: f64, h2: f64, sa: f64, sb: f64) -> f64 {
+/// `δ(s) = atan(s/d) − atan(s/H) = atan(s k/(d H + s²))` and `1 − d/H = k/H` with
+/// `k = H − d = h²/(H + d)`, all without cancellation, and the second bracket is
+/// `abs_dpsi − [δ]`. What remains is a difference of two O(ε) angles (at `s_b` and `s_a`), whose
+/// rounding error is O(ε·u), far below the O(h_P) value it corrects.
+fn near_plane_deficit(d: f64, h2: f64, sa: f64, sb: f64, abs_dpsi: f64) -> Deficit {
     let big_h = (d * d + h2).sqrt();
     let k = h2 / (big_h + d);
-    let delta = |s: f64| (s * k).atan2(d * big_h + s * s);
-    let spread = (big_h * (sb - sa)).atan2(big_h * big_h + sa * sb);
-    delta(sb) - delta(sa) + k / big_h * spread
+    let delta = |s: f64| atan_small(s * k / (d * big_h + s * s));
+    let dd = delta(sb) - delta(sa);
+    let spread = abs_dpsi - dd;
+    Deficit {
+        g: dd + k / big_h * spread,
+        spread,
+        big_h,
+    }
 }
 
 /// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, `rule` in
@@ -1030,72 +1125,83 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         used_quadrature = true;
         q
     } else {
-        let mut sum = Deriv3::constant(0.0);
-        let mut magnitude = 0.0;
-        for i in 0..verts.len() {
-            let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
-            let ends = ExactEnds {
-                a: [a.r, a.r_lo],
-                b: [b.r, b.r_lo],
-            };
-            // A clip point's `u` is rounded independently of its (exact) `r`: take the edge
-            // vector from the exact ends so that both describe the same segment.
-            let e = if a.on_line || b.on_line {
-                let (ra, rb) = (dd::Dd3::new(a.r, a.r_lo), dd::Dd3::new(b.r, b.r_lo));
-                rb.sub(&ra).to_dvec3()
-            } else {
-                b.u - a.u
-            };
-            let t = if cut && a.on_line && b.on_line {
-                clip_edge_term(a.r, e, n, order, Some(&ends))?
-            } else {
-                edge_term_exact(a.r, e, n, order, Some(&ends))?
-            };
-            magnitude += t.value.abs();
-            accumulate(&mut sum, t);
-        }
-        let cancels = magnitude > cancellation_limit(&plane, near_plane || cut) * sum.value.abs();
-        // x near the plane with the polygon clipped: the clip edges' closed form makes the value
-        // a sum of O(h_P) terms, and the edge sum's derivatives (whose terms are not small
-        // against the derivatives themselves, the clip line's 1/h_P² parts being removed by
-        // `clip_edge_term`) keep the hard-regime accuracy (measured in
-        // `tests/kernels_b_near_plane.rs`).
-        let mut split = None;
-        if cancels && near_plane && cut {
-            split = near_plane_value(&verts, n, plane.normal, h_p);
-        }
-        let mut quadrature = None;
-        if cancels && split.is_none() {
-            let max_pieces = if near_plane && cut {
-                MAX_PIECES_NEAR_PLANE
-            } else {
-                MAX_PIECES
-            };
-            // A sliver seen from afar is thin in one direction only: the anisotropic rule first.
-            if plane.is_thin() && !(near_plane || cut) {
-                quadrature = sliver::sliver_quadrature(&verts, n, order);
-            }
-            if quadrature.is_none() {
-                quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
-            }
-        }
-        match quadrature {
-            Some(q) => {
-                used_quadrature = true;
-                q
-            }
-            None => {
-                // Without cancellation the plain sum is accurate (every term to a few ulps of its
-                // own size), also near the plane: x above the polygon's interior, where the terms
-                // share a sign. Only a cancelling sum needs the near-plane split (and its 16-point
-                // integrals per edge).
-                if split.is_none() && magnitude > NEAR_PLANE_CANCELLATION * sum.value.abs() {
-                    split = near_plane_value(&verts, n, plane.normal, h_p);
+        let mut frames = Frames::new();
+        edge_frames(&verts, cut, &mut frames);
+        // x near the plane with the polygon clipped: the clip line passes within ~h_P of x and the
+        // edge terms, O(1), cancel down to the O(h_P) value. The near-plane split, with the clip
+        // edges in closed form, is a sum of O(h_P) terms instead (see `near_plane_value`). It is
+        // taken for the value whenever it applies and the foot of x is outside the clipped loop
+        // (above the interior the terms share a sign and the plain sum is accurate, and cheaper
+        // for the derivatives), without looking at the sum, so that `Order::Value` skips the
+        // edge sum and the value does not depend on the order. The derivatives come from the
+        // edge sum: its terms are not large against
+        // the derivatives (∂F/∂h_P is O(1) while F is O(h_P); `clip_edge_term` removes the clip
+        // line's 1/h_P and 1/h_P² parts analytically, clip-line motion included), which
+        // `tests/kernels_b_near_plane.rs` measures against the 320-bit reference.
+        let mut split = if near_plane && cut && !foot_inside(&verts, plane.normal, h_p) {
+            near_plane_value(&verts, &frames, n, plane.normal, h_p)
+        } else {
+            None
+        };
+        match (split, order) {
+            (Some(v), Order::Value) => Deriv3::constant(v),
+            _ => {
+                let mut sum = Deriv3::constant(0.0);
+                let mut magnitude = 0.0;
+                for (i, frame) in frames.iter().enumerate() {
+                    let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
+                    let t = if cut && a.on_line && b.on_line {
+                        let ends = ExactEnds {
+                            a: [a.r, a.r_lo],
+                            b: [b.r, b.r_lo],
+                        };
+                        clip_edge_term(a.r, edge_vector(&a, &b), n, order, Some(&ends))?
+                    } else if let Some(f) = frame {
+                        frame_term(f, n, order)?
+                    } else {
+                        continue;
+                    };
+                    magnitude += t.value.abs();
+                    accumulate(&mut sum, t);
                 }
-                if let Some(v) = split {
-                    sum.value = v;
+                let cancels =
+                    magnitude > cancellation_limit(&plane, near_plane || cut) * sum.value.abs();
+                let mut quadrature = None;
+                if cancels && split.is_none() {
+                    let max_pieces = if near_plane && cut {
+                        MAX_PIECES_NEAR_PLANE
+                    } else {
+                        MAX_PIECES
+                    };
+                    // A sliver seen from afar is thin in one direction only: the anisotropic rule
+                    // first.
+                    if plane.is_thin() && !(near_plane || cut) {
+                        quadrature = sliver::sliver_quadrature(&verts, n, order);
+                    }
+                    if quadrature.is_none() {
+                        quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
+                    }
                 }
-                sum
+                match quadrature {
+                    Some(q) => {
+                        used_quadrature = true;
+                        q
+                    }
+                    None => {
+                        // Without cancellation the plain sum is accurate (every term to a few ulps
+                        // of its own size), also near the plane: x above the polygon's interior,
+                        // where the terms share a sign. Only a cancelling sum needs the near-plane
+                        // split.
+                        if split.is_none() && magnitude > NEAR_PLANE_CANCELLATION * sum.value.abs()
+                        {
+                            split = near_plane_value(&verts, &frames, n, plane.normal, h_p);
+                        }
+                        if let Some(v) = split {
+                            sum.value = v;
+                        }
+                        sum
+                    }
+                }
             }
         }
     };
@@ -1270,7 +1376,13 @@ mod tests {
                         reference += w * (hi - lo) * c2e / (1.0 + c2e);
                     }
                 }
-                let got = near_plane_deficit(d, h * h, sa, sb);
+                let got = near_plane_deficit(d, h * h, sa, sb, pb - pa);
+                let want_spread =
+                    (sb / (d * d + h * h).sqrt()).atan() - (sa / (d * d + h * h).sqrt()).atan();
+                assert!(
+                    (got.spread - want_spread).abs() <= 8.0 * f64::EPSILON * (pa.abs() + pb.abs())
+                );
+                let got = got.g;
                 let bound = 8.0 * f64::EPSILON * eps * (pa.abs() + pb.abs() + 1.0);
                 assert!(
                     (got - reference).abs() <= bound,
