@@ -462,3 +462,50 @@ fn continuous_across_the_near_plane_switch() {
     assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
     assert!(within(jump, [1e-12, 1e-11, 1e-9]), "jump {jump:?}");
 }
+
+/// The clip line cutting a small corner off the triangle (through a point 1e-1..1e-3 of the way
+/// from a vertex to the centroid): seen from the corner's side, the visible part is small against
+/// its distance from x and the split's O(h_P) parts cancel as well (the split declines beyond
+/// `SPLIT_CANCELLATION_LIMIT` and the quadrature takes over); from the other side it is most of
+/// the triangle. Both meet the contract.
+#[test]
+fn small_corner_cut_off() {
+    let mut big = Big::new();
+    let mut rng = Rng(1865);
+    let mut worst = [0.0f64; 3];
+    let mut count = 0;
+    for j in 0..6 {
+        let c = triangle_config(&mut rng);
+        let t = &c.verts;
+        let k = j % 3;
+        let centroid = (t[0] + t[1] + t[2]) / 3.0;
+        for fraction in [1e-1, 1e-2, 1e-3] {
+            let inner = t[k] + (centroid - t[k]) * fraction;
+            let along = (inner - c.foot).normalize();
+            for sign in [1.0, -1.0] {
+                let config = Config {
+                    verts: t.clone(),
+                    foot: c.foot,
+                    normal: c.normal,
+                    across: c.normal.cross(along) * sign,
+                    size: c.size,
+                };
+                for h in [1e-4, 1e-7, 1e-10] {
+                    let theta = TILTS[1 + (j + count) % 4];
+                    let (x, n) = config.at(h, if count % 2 == 0 { 1.0 } else { -1.0 }, theta, 1.0);
+                    if !t.iter().any(|v| n.dot(*v - x) > 0.0) {
+                        continue;
+                    }
+                    max3(&mut worst, check(&mut big, x, n, t));
+                    count += 1;
+                }
+            }
+        }
+    }
+    println!(
+        "small corner cut off: n={count} worst value {:.1e} gradient {:.1e} Hessian {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(count > 50, "only {count} configurations");
+    assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
+}

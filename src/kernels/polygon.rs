@@ -540,6 +540,15 @@ const NEAR_PLANE_CANCELLATION: f64 = 2.0;
 /// recomputed by [`near_plane_value`]; at or above it for some edge, that function declines.
 const NEAR_PLANE_RATIO: f64 = 0.1;
 
+/// Above this ratio of the near-plane split's parts (in magnitude) to its sum, [`evaluate`] does not
+/// take the split up front for a clipped polygon (the value would keep ~`u` times this ratio): the
+/// O(h_P) parts then cancel too, which happens when the visible part is small against its distance
+/// from x (the clip line cuts a small corner off the polygon), where the edge sum's derivatives
+/// cancel as well and the quadrature takes over. Measured: the walks of
+/// `tests/kernels_b_near_plane.rs` cancel by 25 to ~150; the accuracy test's worst case (a corner
+/// of 1e-12 relative value) by far more.
+const SPLIT_CANCELLATION_LIMIT: f64 = 1e3;
+
 /// The signed edge-sum value for x near the polygon's plane, without the cancellation of the plain
 /// sum (the convention of the edge terms, [`frame_term`]: positive when the loop's right-hand normal `N̂`
 /// points away from x, i.e. for `h_P = N̂·(v − x) > 0`; both signs of `h_P` are handled alike).
@@ -579,13 +588,15 @@ const NEAR_PLANE_RATIO: f64 = 0.1;
 /// closed form and the bridges' terms cancel between themselves, O(h_P) each.
 ///
 /// `None` when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near
-/// its line in the plane, which includes x near a clip vertex), or a term is undefined.
+/// its line in the plane, which includes x near a clip vertex), a term is undefined, or the parts
+/// sum to less than `1/max_cancellation` of their magnitudes.
 fn near_plane_value(
     verts: &[ClipVertex],
     frames: &[Option<EdgeFrame>],
     n: DVec3,
     plane_n: DVec3,
     h_p: f64,
+    max_cancellation: f64,
 ) -> Option<f64> {
     let count = verts.len();
     let h2 = h_p * h_p;
@@ -597,6 +608,8 @@ fn near_plane_value(
     let mut small = 0.0;
     // Σ sign(n·w) (β_c − n_N sign(n·w) Δψ_c) over the edges in the tangent plane.
     let mut tangent = 0.0;
+    // Σ of the parts' magnitudes, to measure the split's own cancellation.
+    let mut magnitude = 0.0;
     for (i, frame) in frames.iter().enumerate() {
         let on_line = verts[i].on_line && verts[(i + 1) % count].on_line;
         let frame = match frame {
@@ -617,7 +630,9 @@ fn near_plane_value(
         if on_line {
             // The clip edge's whole term minus its share n_N Δψ_c of the parallel part.
             let sigma = n.dot(frame.w).signum();
-            tangent += sigma * tangent_excess(frame.h, len, sa * sb, n_par.abs(), nt2);
+            let t = tangent_excess(frame.h, len, sa * sb, n_par.abs(), nt2);
+            tangent += sigma * t;
+            magnitude += t.abs();
             continue;
         }
         #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
@@ -626,16 +641,25 @@ fn near_plane_value(
         }
         let deficit = near_plane_deficit(d.abs(), h2, sa, sb, dpsi.abs());
         small += deficit.g.copysign(d);
+        magnitude += (n_par * deficit.g).abs();
         // n_t·(r_a × e) = h_P n_t·(N̂ × e): the in-plane part of r_a × e is exactly h_P N̂ × e, and
         // taking it from the plane avoids the cancellation against the large N̂ part. The edge's
         // A_1 = atan2(H L, H² + s_a s_b)/H (H = √(d² + h_P²), its distance from x) comes with the
         // deficit.
         let nu_t = h_p * n_t.dot(plane_n.cross(frame.e_hat));
-        transverse += nu_t * deficit.spread / deficit.big_h;
+        let t = nu_t * deficit.spread / deficit.big_h;
+        transverse += t;
+        magnitude += t.abs();
     }
     let winding = (turning / std::f64::consts::TAU).round();
     let parallel = std::f64::consts::TAU * winding - small;
-    Some(0.5 * FRAC_1_PI * (n_par * parallel + transverse + tangent))
+    let total = n_par * parallel + transverse + tangent;
+    magnitude += (n_par * std::f64::consts::TAU * winding).abs();
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+    if !(magnitude <= max_cancellation * total.abs()) {
+        return None;
+    }
+    Some(0.5 * FRAC_1_PI * total)
 }
 
 /// The frames of the loop's edges as the edge sum builds them ([`frame_of`]), pushed onto `out`
@@ -1139,7 +1163,14 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         // line's 1/h_P and 1/h_P² parts analytically, clip-line motion included), which
         // `tests/kernels_b_near_plane.rs` measures against the 320-bit reference.
         let mut split = if near_plane && cut && !foot_inside(&verts, plane.normal, h_p) {
-            near_plane_value(&verts, &frames, n, plane.normal, h_p)
+            near_plane_value(
+                &verts,
+                &frames,
+                n,
+                plane.normal,
+                h_p,
+                SPLIT_CANCELLATION_LIMIT,
+            )
         } else {
             None
         };
@@ -1194,7 +1225,14 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                         // split.
                         if split.is_none() && magnitude > NEAR_PLANE_CANCELLATION * sum.value.abs()
                         {
-                            split = near_plane_value(&verts, &frames, n, plane.normal, h_p);
+                            split = near_plane_value(
+                                &verts,
+                                &frames,
+                                n,
+                                plane.normal,
+                                h_p,
+                                f64::INFINITY,
+                            );
                         }
                         if let Some(v) = split {
                             sum.value = v;
