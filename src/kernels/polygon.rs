@@ -610,6 +610,17 @@ fn near_plane_value(
     let mut tangent = 0.0;
     // Σ of the parts' magnitudes, to measure the split's own cancellation.
     let mut magnitude = 0.0;
+    // The cheap test first: every edge off the tangent plane far enough from x_P (in units of
+    // h_P), before any angle is computed.
+    for (i, frame) in frames.iter().enumerate() {
+        if let Some(f) = frame {
+            let on_line = verts[i].on_line && verts[(i + 1) % count].on_line;
+            #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+            if !on_line && !(h_p.abs() * f.len < NEAR_PLANE_RATIO * plane_n.dot(f.w).abs()) {
+                return None;
+            }
+        }
+    }
     for (i, frame) in frames.iter().enumerate() {
         let on_line = verts[i].on_line && verts[(i + 1) % count].on_line;
         let frame = match frame {
@@ -634,10 +645,6 @@ fn near_plane_value(
             tangent += sigma * t;
             magnitude += t.abs();
             continue;
-        }
-        #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
-        if !(h_p.abs() < NEAR_PLANE_RATIO * d.abs()) {
-            return None;
         }
         let deficit = near_plane_deficit(d.abs(), h2, sa, sb, dpsi.abs());
         small += deficit.g.copysign(d);
