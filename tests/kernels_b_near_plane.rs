@@ -267,8 +267,8 @@ fn walk(big: &mut Big, configs: &[Config], rng: &mut Rng, label: &str) -> [f64; 
                 let face = if (j + k as usize) % 2 == 0 { 1.0 } else { -1.0 };
                 let (x, n) = c.at(h, side, theta, face);
                 let e = check(big, x, n, &c.verts);
-                if std::env::var_os("KB_TILT").is_some() {
-                    eprintln!("TILT j={j} theta={theta} face={face} side={side} h={h:e} err={e:?}");
+                if std::env::var_os("KB_VERBOSE").is_some() {
+                    eprintln!("config {j} tilt {theta} face {face} side {side} h {h:e}: {e:?}");
                 }
                 max3(&mut worst, e);
                 count += 1;

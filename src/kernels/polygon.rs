@@ -581,9 +581,11 @@ const SPLIT_CANCELLATION_LIMIT: f64 = 1e3;
 /// ```
 ///
 /// a sum of O(h_P) terms (the O(h_P²) `G_e` aside) when x is outside (`W = 0`). Per clip edge the
-/// two O(h_P) parts `sign(n·w) (β(D) − |n_N| β(|n_N| D))` cancel only by `1 − n_N² = ‖n_t‖²`,
-/// i.e. when the receiver faces the polygon's plane nearly head-on (where `D_P` is large and the
-/// clip edge could as well take the general split). Non-convex polygons can be clipped into
+/// two O(h_P) parts combine into `sign(n·w) (β(D) − |n_N| β(|n_N| D))`, which [`tangent_excess`]
+/// evaluates with its factor `1 − |n_N|` explicit (a receiver facing the plane head-on would
+/// otherwise lose `1/‖n_t‖²`). The O(h_P) parts of different edges still cancel by a geometric
+/// factor (25-150 in `tests/kernels_b_near_plane.rs`; far more when the clip line cuts a small
+/// corner off, which `max_cancellation` refuses). Non-convex polygons can be clipped into
 /// several clip edges, including bridges that run along ℓ in both directions; each is its own
 /// closed form and the bridges' terms cancel between themselves, O(h_P) each.
 ///
@@ -950,11 +952,12 @@ fn fan_geometry(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, exact: bool) -> 
 
 /// Most triangles [`subdivided_quadrature`] may use before giving up.
 const MAX_PIECES: usize = 256;
-/// The same for x near the polygon's plane with part of the polygon clipped away, where the edge
-/// sum cancels for an intrinsic reason (the clip line passes within ~h_P of x, and the edge terms
-/// of size O(1) sum to the small integral over a region where n·r is small) that neither exact
-/// inputs nor the near-plane split remove. Graded refinement towards x takes ~1500 pieces at
-/// h_P = 1e-6 (about a millisecond for the Hessian): the price of a rare configuration.
+/// The same for x near the polygon's plane with part of the polygon clipped away and the foot of x
+/// outside the visible part, when [`near_plane_value`] declines: x also within `10 h_P` of an edge
+/// line, or the split's own parts cancelling (a small corner cut off). There the edge sum's O(1)
+/// terms sum to the O(h_P) value, and graded refinement towards x takes up to ~1500 pieces at
+/// h_P = 1e-6 (about a millisecond for the Hessian). Elsewhere in this configuration the split
+/// takes the value in closed form (the cancellation is not intrinsic: see [`near_plane_value`]).
 const MAX_PIECES_NEAR_PLANE: usize = 4096;
 
 /// The fan triangles of the loop, bisected along their longest edge until each is far from x
@@ -1435,6 +1438,41 @@ mod tests {
                 );
                 assert!(got > 0.0);
             }
+        }
+    }
+
+    /// [`tangent_excess`] against the plain difference `β(D) − cβ(cD)` where that has nothing to
+    /// cancel (`c` up to 0.7, and `P ≤ 0`), and against the first terms of its expansion in `D`,
+    /// `(1 − c²) D L/P`, as the receiver turns head-on (`1 − c` down to 1e-12) for `D` small.
+    #[test]
+    fn tangent_excess_against_direct_and_series() {
+        let beta = |t: f64, len: f64, p: f64| (t * len).atan2(t * t + p);
+        for (d, len, p) in [
+            (1e-3, 0.8, 0.3),
+            (1e-6, 2.0, 1.5),
+            (0.2, 1.0, 0.05),
+            (1e-3, 1.0, -0.2),
+        ] {
+            for c in [0.0, 0.3, 0.7] {
+                let direct = beta(d, len, p) - c * beta(c * d, len, p);
+                let got = tangent_excess(d, len, p, c, 1.0 - c * c);
+                assert!(
+                    (got - direct).abs() <= 1e-14 * direct.abs(),
+                    "d={d} L={len} P={p} c={c}: {got:e} vs {direct:e}"
+                );
+            }
+        }
+        let (d, len, p) = (1e-9, 0.8, 0.3);
+        for k in 2..=12 {
+            let nt2 = 10f64.powi(-k);
+            let c = (1.0 - nt2).sqrt();
+            // β(t) = tL/P − O(t³): the O(D³) remainder is ~1e-18 relative here.
+            let series = nt2 * d * len / p;
+            let got = tangent_excess(d, len, p, c, nt2);
+            assert!(
+                (got - series).abs() <= 1e-14 * series,
+                "1 − c² = {nt2:e}: {got:e} vs {series:e}"
+            );
         }
     }
 
