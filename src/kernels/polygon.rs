@@ -605,6 +605,10 @@ fn near_plane_value(
     let n_par = n.dot(plane_n);
     let n_t = n - n_par * plane_n;
     let nt2 = n_t.length_squared();
+    if nt2 == 0.0 {
+        // n along N̂: nothing is clipped and no edge lies in the tangent plane.
+        return None;
+    }
     let mut transverse = 0.0;
     let mut turning = 0.0;
     let mut small = 0.0;
@@ -623,15 +627,35 @@ fn near_plane_value(
             }
         }
     }
+    // The clip line ℓ (where the tangent plane meets the polygon's plane) runs along n × N̂; its
+    // point nearest x is p = (h_P/‖n_t‖²)(N̂ − n_N n) (n·p = 0, N̂·p = h_P), at D = |h_P|/‖n_t‖.
+    // An edge on ℓ has r_a × e = p × e, so sign(n·w) = sign(e·(n × p)) = sign(h_P e·(n × N̂)) and
+    // N̂·w/L = sign(n·w) n_N D: its geometry comes from the exact height without a double-double
+    // cross product.
+    let n_x_plane = n.cross(plane_n);
+    let big_d = h_p.abs() / nt2.sqrt();
     for (i, frame) in frames.iter().enumerate() {
-        let on_line = verts[i].on_line && verts[(i + 1) % count].on_line;
-        let frame = match frame {
-            Some(f) => *f,
-            None if on_line => match frame_of(verts, i) {
-                Some(f) => f,
-                None => continue,
-            },
-            None => continue,
+        let (a, b) = (&verts[i], &verts[(i + 1) % count]);
+        if a.on_line && b.on_line {
+            // The clip edge's whole term minus its share n_N Δψ_c of the parallel part.
+            let e = edge_vector(a, b);
+            let len = e.length();
+            if len == 0.0 {
+                continue;
+            }
+            let e_hat = e / len;
+            let sa = a.r.dot(e_hat) + a.r_lo.dot(e_hat);
+            let sb = b.r.dot(e_hat) + b.r_lo.dot(e_hat);
+            let sigma = (h_p * e.dot(n_x_plane)).signum();
+            let d = sigma * n_par * big_d;
+            turning += (d * len).atan2(sa * sb + d * d);
+            let t = tangent_excess(big_d, len, sa * sb, n_par.abs(), nt2);
+            tangent += sigma * t;
+            magnitude += t.abs();
+            continue;
+        }
+        let Some(frame) = frame else {
+            continue;
         };
         let len = frame.len;
         // Signed in-plane distance of x_P from the edge line: N̂·(r_a × ê), from the (exact when x
@@ -640,14 +664,6 @@ fn near_plane_value(
         let (sa, sb) = (frame.sa, frame.sb);
         let dpsi = (d * len).atan2(sa * sb + d * d);
         turning += dpsi;
-        if on_line {
-            // The clip edge's whole term minus its share n_N Δψ_c of the parallel part.
-            let sigma = n.dot(frame.w).signum();
-            let t = tangent_excess(frame.h, len, sa * sb, n_par.abs(), nt2);
-            tangent += sigma * t;
-            magnitude += t.abs();
-            continue;
-        }
         let deficit = near_plane_deficit(d.abs(), h2, sa, sb, dpsi.abs());
         small += deficit.g.copysign(d);
         magnitude += (n_par * deficit.g).abs();
