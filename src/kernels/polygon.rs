@@ -567,8 +567,10 @@ const SPLIT_CANCELLATION_LIMIT: f64 = 1e3;
 /// `D = |h_P|/‖n_t‖` of x and `D_P = |n_N| D` of `x_P`: `ε` is not small and the split above
 /// fails. But `r_a` and `e` both lie in the tangent plane, so `w = r_a × e = ±‖w‖ n`, and the whole
 /// term is `sign(n·w) β_c/2π` with `β_c = atan2(D L, D² + s_a s_b)` (`s_a, s_b` the abscissae of the
-/// ends along ℓ from the foot of x, `L = s_b − s_a`): the edge's own closed form, taken from its
-/// double-double cross product (`EdgeFrame::with_exact_ends`). Its in-plane angle at `x_P` is
+/// ends along ℓ from the foot of x, `L = s_b − s_a`): the edge's own closed form. `D` and the sign
+/// come from the exact height rather than from the edge's near-degenerate cross product: ℓ's
+/// point nearest x is `p = (h_P/‖n_t‖²)(N̂ − n_N n)` (`n·p = 0`, `N̂·p = h_P`), so `D = |h_P|/‖n_t‖`
+/// and `w = p × e`, `sign(n·w) = sign(h_P e·(n × N̂))`. Its in-plane angle at `x_P` is
 /// `Δψ_c = atan2(d_c L, s_a s_b + d_c²)` with `d_c = N̂·w/L = sign(n·w) n_N D` (x and `x_P` have the
 /// same abscissae: ℓ ⊥ N̂). Outside the polygon the clip segment lies on one side of the foot
 /// (`s_a s_b > 0`), so both angles are O(h_P) and computed without cancellation.
