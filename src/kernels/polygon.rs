@@ -17,9 +17,7 @@ use crate::{Deriv3, Order};
 use super::dd;
 
 mod sliver;
-use super::form_factor::{
-    clip_edge_term, edge_term_exact, outer_self, sym_outer, EdgeFrame, ExactEnds,
-};
+use super::form_factor::{clip_edge_term, frame_term, outer_self, sym_outer, EdgeFrame, ExactEnds};
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).
 pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;
@@ -637,69 +635,295 @@ fn gauss_legendre_16() -> &'static [(f64, f64); 16] {
 /// than one bit to cancellation.
 const NEAR_PLANE_CANCELLATION: f64 = 2.0;
 
-/// Below this `|h_P| / d_e` for every edge (x close to the polygon's plane compared with its
-/// distance to every edge line, in the plane), the value is recomputed by [`near_plane_value`].
+/// Below this `|h_P| / d_e` for every edge not in the tangent plane (x close to the polygon's
+/// plane compared with its distance to every such edge line, in the plane), the value is
+/// recomputed by [`near_plane_value`]; at or above it for some edge, that function declines.
 const NEAR_PLANE_RATIO: f64 = 0.1;
 
+/// Above this ratio of the near-plane split's parts (in magnitude) to its sum, [`evaluate`] does not
+/// take the split up front for a clipped polygon (the value would keep ~`u` times this ratio): the
+/// O(h_P) parts then cancel too, which happens when the visible part is small against its distance
+/// from x (the clip line cuts a small corner off the polygon), where the edge sum's derivatives
+/// cancel as well and the quadrature takes over. Measured: the walks of
+/// `tests/kernels_b_near_plane.rs` cancel by 25 to ~150; the accuracy test's worst case (a corner
+/// of 1e-12 relative value) by far more.
+const SPLIT_CANCELLATION_LIMIT: f64 = 1e3;
+
 /// The signed edge-sum value for x near the polygon's plane, without the cancellation of the plain
-/// sum. Split `n = n_N N̂ + n_t`. The `n_t` part has no cancellation (each term is O(h_P)). The `N̂`
-/// part is the parallel-receiver form factor, whose edge terms are O(1) and sum to O(h_P²) outside
-/// the polygon; per edge it equals `(Δψ_e − G_e)/2π` with `Δψ_e` the signed angle the edge subtends
-/// at the foot point of x in the plane and `G_e = ∫ ε cos²ψ/(1 + ε cos²ψ) dψ` over the edge's
-/// angular range (`ε = h_P²/d_e²`, `d_e` the in-plane distance to the edge line). `ΣΔψ_e` is
-/// exactly `2π·winding`, and the `G_e` are small and integrated by a 16-point Gauss rule (the
-/// integrand's poles are `asinh(1/√ε) ≥ 3` away from the real axis). `None` when not applicable.
+/// sum (the convention of the edge terms, [`frame_term`]: positive when the loop's right-hand normal `N̂`
+/// points away from x, i.e. for `h_P = N̂·(v − x) > 0`; both signs of `h_P` are handled alike).
+///
+/// Edges not in the tangent plane. Split `n = n_N N̂ + n_t`. With `r_a = q_a + h_P N̂` (`q_a` in the
+/// plane) the lever arm is `r_a × e = q_a × e + h_P N̂ × e`, where `q_a × e` is along `N̂`. So the
+/// `n_t` part of the term is `h_P n_t·(N̂ × ê) A_1/2π` (`A_1 = ∫ ds/‖r‖²`): O(h_P), no cancellation.
+/// The `N̂` part is the parallel-receiver term `d_e A_1/2π` (`d_e = N̂·(r_a × ê)`, the signed
+/// in-plane distance from the foot point `x_P` of x to the edge line); with `s = |d_e| tan ψ` it is
+/// `(Δψ_e − G_e)/2π`, `Δψ_e` the signed angle the edge subtends at `x_P`, and
+/// `G_e = ∫ ε cos²ψ/(1 + ε cos²ψ) dψ` over the edge's angular range (`ε = h_P²/d_e²`), in closed
+/// form by [`near_plane_deficit`].
+///
+/// Edges in the tangent plane (the clip edges, and input edges whose ends lie exactly on it). Their
+/// line ℓ is where the tangent plane meets the polygon's plane, so it passes within
+/// `D = |h_P|/‖n_t‖` of x and `D_P = |n_N| D` of `x_P`: `ε` is not small and the split above
+/// fails. But `r_a` and `e` both lie in the tangent plane, so `w = r_a × e = ±‖w‖ n`, and the whole
+/// term is `sign(n·w) β_c/2π` with `β_c = atan2(D L, D² + s_a s_b)` (`s_a, s_b` the abscissae of the
+/// ends along ℓ from the foot of x, `L = s_b − s_a`): the edge's own closed form. `D` and the sign
+/// come from the exact height rather than from the edge's near-degenerate cross product: ℓ's
+/// point nearest x is `p = (h_P/‖n_t‖²)(N̂ − n_N n)` (`n·p = 0`, `N̂·p = h_P`), so `D = |h_P|/‖n_t‖`
+/// and `w = p × e`, `sign(n·w) = sign(h_P e·(n × N̂))`. Its in-plane angle at `x_P` is
+/// `Δψ_c = atan2(d_c L, s_a s_b + d_c²)` with `d_c = N̂·w/L = sign(n·w) n_N D` (x and `x_P` have the
+/// same abscissae: ℓ ⊥ N̂). Outside the polygon the clip segment lies on one side of the foot
+/// (`s_a s_b > 0`), so both angles are O(h_P) and computed without cancellation.
+///
+/// The sum. `Σ_all Δψ = 2π W` exactly (`W` the winding number of the clipped loop about `x_P`,
+/// rounded from the f64 sum), so
+///
+/// ```text
+/// 2π F = n_N (2π W − Σ_clip Δψ_c − Σ_other G_e) + Σ_other h_P n_t·(N̂ × ê) A_1 + Σ_clip sign(n·w) β_c,
+/// ```
+///
+/// a sum of O(h_P) terms (the O(h_P²) `G_e` aside) when x is outside (`W = 0`). Per clip edge the
+/// two O(h_P) parts combine into `sign(n·w) (β(D) − |n_N| β(|n_N| D))`, which [`tangent_excess`]
+/// evaluates with its factor `1 − |n_N|` explicit (a receiver facing the plane head-on would
+/// otherwise lose `1/‖n_t‖²`). The O(h_P) parts of different edges still cancel by a geometric
+/// factor (25-150 in `tests/kernels_b_near_plane.rs`; far more when the clip line cuts a small
+/// corner off, which `max_cancellation` refuses). Non-convex polygons can be clipped into
+/// several clip edges, including bridges that run along ℓ in both directions; each is its own
+/// closed form and the bridges' terms cancel between themselves, O(h_P) each.
+///
+/// `None` when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near
+/// its line in the plane, which includes x near a clip vertex), a term is undefined, or the parts
+/// sum to less than `1/max_cancellation` of their magnitudes.
 fn near_plane_value(
     verts: &[ClipVertex],
+    frames: &[Option<EdgeFrame>],
     n: DVec3,
     plane_n: DVec3,
     h_p: f64,
-) -> Result<Option<f64>> {
+    max_cancellation: f64,
+) -> Option<f64> {
     let count = verts.len();
     let h2 = h_p * h_p;
     let n_par = n.dot(plane_n);
     let n_t = n - n_par * plane_n;
+    let nt2 = n_t.length_squared();
+    if nt2 == 0.0 {
+        // n along N̂: nothing is clipped and no edge lies in the tangent plane.
+        return None;
+    }
     let mut transverse = 0.0;
     let mut turning = 0.0;
     let mut small = 0.0;
-    for i in 0..count {
-        let (a, b) = (verts[i], verts[(i + 1) % count]);
-        let e = b.u - a.u;
-        let len = e.length();
-        if len == 0.0 {
-            continue;
-        }
-        let e_hat = e / len;
-        // in-plane vectors from the foot point of x to the endpoints
-        let qa = a.r - plane_n.dot(a.r) * plane_n;
-        let qb = b.r - plane_n.dot(b.r) * plane_n;
-        let d = plane_n.dot(qa.cross(e_hat));
-        if h_p.abs() >= NEAR_PLANE_RATIO * d.abs() || d.is_nan() {
-            return Ok(None);
-        }
-        let dpsi = plane_n.dot(qa.cross(qb)).atan2(qa.dot(qb));
-        let sa = qa.dot(e_hat);
-        let (psi_a, psi_b) = ((sa / d.abs()).atan(), ((sa + len) / d.abs()).atan());
-        let eps = h2 / (d * d);
-        let mut g = 0.0;
-        for &(t, w) in gauss_legendre_16() {
-            let c = (psi_a + t * (psi_b - psi_a)).cos();
-            let c2e = eps * c * c;
-            g += w * c2e / (1.0 + c2e);
-        }
-        g *= (psi_b - psi_a).abs();
-        turning += dpsi;
-        small += g.copysign(dpsi);
-        // n_t·(r_a × e) = h_P n_t·(N × e): the in-plane part of r_a × e is exactly h_P N × e, and
-        // taking it from the plane avoids the cancellation against the large N part.
-        if let Some(frame) = EdgeFrame::new(a.r, e) {
-            let nu_t = h_p * n_t.dot(plane_n.cross(e_hat));
-            transverse += 0.5 * FRAC_1_PI * nu_t * frame.moments(Order::Value)?.a1;
+    // Σ sign(n·w) (β_c − n_N sign(n·w) Δψ_c) over the edges in the tangent plane.
+    let mut tangent = 0.0;
+    // Σ of the parts' magnitudes, to measure the split's own cancellation.
+    let mut magnitude = 0.0;
+    // The cheap test first: every edge off the tangent plane far enough from x_P (in units of
+    // h_P), before any angle is computed.
+    for (i, frame) in frames.iter().enumerate() {
+        if let Some(f) = frame {
+            let on_line = verts[i].on_line && verts[(i + 1) % count].on_line;
+            #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+            if !on_line && !(h_p.abs() * f.len < NEAR_PLANE_RATIO * plane_n.dot(f.w).abs()) {
+                return None;
+            }
         }
     }
+    // The clip line ℓ (where the tangent plane meets the polygon's plane) runs along n × N̂; its
+    // point nearest x is p = (h_P/‖n_t‖²)(N̂ − n_N n) (n·p = 0, N̂·p = h_P), at D = |h_P|/‖n_t‖.
+    // An edge on ℓ has r_a × e = p × e, so sign(n·w) = sign(e·(n × p)) = sign(h_P e·(n × N̂)) and
+    // N̂·w/L = sign(n·w) n_N D: its geometry comes from the exact height without a double-double
+    // cross product.
+    let n_x_plane = n.cross(plane_n);
+    let big_d = h_p.abs() / nt2.sqrt();
+    for (i, frame) in frames.iter().enumerate() {
+        let (a, b) = (&verts[i], &verts[(i + 1) % count]);
+        if a.on_line && b.on_line {
+            // The clip edge's whole term minus its share n_N Δψ_c of the parallel part.
+            let e = edge_vector(a, b);
+            let len = e.length();
+            if len == 0.0 {
+                continue;
+            }
+            let e_hat = e / len;
+            let sa = a.r.dot(e_hat) + a.r_lo.dot(e_hat);
+            let sb = b.r.dot(e_hat) + b.r_lo.dot(e_hat);
+            let sigma = (h_p * e.dot(n_x_plane)).signum();
+            let d = sigma * n_par * big_d;
+            turning += (d * len).atan2(sa * sb + d * d);
+            let t = tangent_excess(big_d, len, sa * sb, n_par.abs(), nt2);
+            tangent += sigma * t;
+            magnitude += t.abs();
+            continue;
+        }
+        let Some(frame) = frame else {
+            continue;
+        };
+        let len = frame.len;
+        // Signed in-plane distance of x_P from the edge line: N̂·(r_a × ê), from the (exact when x
+        // is near the line) lever arm.
+        let d = plane_n.dot(frame.w) / len;
+        let (sa, sb) = (frame.sa, frame.sb);
+        let dpsi = (d * len).atan2(sa * sb + d * d);
+        turning += dpsi;
+        let deficit = near_plane_deficit(d.abs(), h2, sa, sb, dpsi.abs());
+        small += deficit.g.copysign(d);
+        magnitude += (n_par * deficit.g).abs();
+        // n_t·(r_a × e) = h_P n_t·(N̂ × e): the in-plane part of r_a × e is exactly h_P N̂ × e, and
+        // taking it from the plane avoids the cancellation against the large N̂ part. The edge's
+        // A_1 = atan2(H L, H² + s_a s_b)/H (H = √(d² + h_P²), its distance from x) comes with the
+        // deficit.
+        let nu_t = h_p * n_t.dot(plane_n.cross(frame.e_hat));
+        let t = nu_t * deficit.spread / deficit.big_h;
+        transverse += t;
+        magnitude += t.abs();
+    }
     let winding = (turning / std::f64::consts::TAU).round();
-    let parallel = winding - small * (0.5 * FRAC_1_PI);
-    Ok(Some(n_par * parallel + transverse))
+    let parallel = std::f64::consts::TAU * winding - small;
+    let total = n_par * parallel + transverse + tangent;
+    magnitude += (n_par * std::f64::consts::TAU * winding).abs();
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+    if !(magnitude <= max_cancellation * total.abs()) {
+        return None;
+    }
+    Some(0.5 * FRAC_1_PI * total)
+}
+
+/// The frames of the loop's edges as the edge sum builds them ([`frame_of`]), pushed onto `out`
+/// (filled in place: returning the small vector would copy it); `None` for the clip edges (when
+/// `cut`), whose terms [`clip_edge_term`] forms from its own frame.
+fn edge_frames(verts: &[ClipVertex], cut: bool, out: &mut Frames) {
+    let count = verts.len();
+    for i in 0..count {
+        let clip_edge = cut && verts[i].on_line && verts[(i + 1) % count].on_line;
+        out.push(if clip_edge { None } else { frame_of(verts, i) });
+    }
+}
+
+/// The frame of the edge from vertex `i` of the loop to the next: a clip point's `u` is rounded
+/// independently of its exact `r`, so the edge vector of an edge with a clip point is taken from
+/// the exact ends, and the frame's cross product is recomputed in double-double when x is near the
+/// edge's line. `None` for a zero-length edge.
+fn frame_of(verts: &[ClipVertex], i: usize) -> Option<EdgeFrame> {
+    let (a, b) = (&verts[i], &verts[(i + 1) % verts.len()]);
+    let ends = ExactEnds {
+        a: [a.r, a.r_lo],
+        b: [b.r, b.r_lo],
+    };
+    EdgeFrame::with_exact_ends(a.r, edge_vector(a, b), Some(&ends))
+}
+
+type Frames = SmallVec<[Option<EdgeFrame>; 10]>;
+
+/// Whether the foot point of x (`h_p N̂` from x) lies inside the clipped loop, by the crossing
+/// number of the loop projected along the dominant axis of `N̂` (bridges along the clip line cross
+/// in pairs and leave the parity alone). Only used to choose between two accurate evaluations
+/// (see [`evaluate`]), so a foot on or next to the boundary may go either way.
+fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
+    let a = plane_n.abs();
+    let project = |v: DVec3| {
+        if a.x >= a.y && a.x >= a.z {
+            DVec2::new(v.y, v.z)
+        } else if a.y >= a.z {
+            DVec2::new(v.z, v.x)
+        } else {
+            DVec2::new(v.x, v.y)
+        }
+    };
+    let foot = project(plane_n * h_p);
+    let count = verts.len();
+    let mut inside = false;
+    for i in 0..count {
+        let p = project(verts[i].r) - foot;
+        let q = project(verts[(i + 1) % count].r) - foot;
+        // The edge crosses the ray from the foot along +x: it straddles y = 0 at a positive x.
+        let dy = q.y - p.y;
+        if (p.y > 0.0) != (q.y > 0.0) && ((p.x * dy - p.y * (q.x - p.x)) > 0.0) == (dy > 0.0) {
+            inside = !inside;
+        }
+    }
+    inside
+}
+
+/// The edge vector from `a` to `b` (see [`edge_frames`]).
+fn edge_vector(a: &ClipVertex, b: &ClipVertex) -> DVec3 {
+    if a.on_line || b.on_line {
+        let (ra, rb) = (dd::Dd3::new(a.r, a.r_lo), dd::Dd3::new(b.r, b.r_lo));
+        rb.sub(&ra).to_dvec3()
+    } else {
+        b.u - a.u
+    }
+}
+
+/// `atan(z)`, by its series where `|z|` is small (the arguments of the near-plane corrections are
+/// O(h_P) or O(ε)): below 1e-4 three terms are exact to 1e-28 relative.
+fn atan_small(z: f64) -> f64 {
+    if z.abs() < 1e-4 {
+        let z2 = z * z;
+        z * (1.0 - z2 * (1.0 / 3.0 - 0.2 * z2))
+    } else {
+        z.atan()
+    }
+}
+
+/// `β(D) − c β(cD)` with `β(t) = atan2(t L, t² + P)`: for an edge in the tangent plane at distance
+/// `d = D` from x (`L` its length, `P = s_a s_b` the product of its ends' abscissae from the foot of
+/// x, `c = |n_N|`, `nt2 = ‖n_t‖² = 1 − c²`), its term `β_c` less its share `c β(cD) = sign(n·w) n_N Δψ_c`
+/// of the parallel part (see [`near_plane_value`]).
+///
+/// Outside the polygon (`P > 0`) both angles are O(D) and agree to `1 − c`, which is small when the
+/// receiver faces the plane nearly head-on. With `u = DL/(D² + P)` and `v = cDL/(c²D² + P)` (the
+/// tangents of the two angles), `β(D) − cβ(cD) = atan((u − v)/(1 + uv)) + (1 − c) atan(v)`, and
+/// `u − v = DL (1 − c)(P − cD²)/((D² + P)(c²D² + P))`, with `1 − c = ‖n_t‖²/(1 + c)`: every part
+/// carries its factor `1 − c` explicitly, so nothing cancels. Otherwise (`P ≤ 0`, the foot's
+/// projection on the edge's line inside the segment) the angles are not small and are subtracted
+/// as they are.
+fn tangent_excess(d: f64, len: f64, p: f64, c: f64, nt2: f64) -> f64 {
+    let beta = |t: f64| (t * len).atan2(t * t + p);
+    if p <= 0.0 {
+        return beta(d) - c * beta(c * d);
+    }
+    let one_minus_c = nt2 / (1.0 + c);
+    let (d2, cd2) = (d * d, c * c * d * d);
+    let u = d * len / (d2 + p);
+    let v = c * d * len / (cd2 + p);
+    let u_minus_v = d * len * one_minus_c * (p - c * d2) / ((d2 + p) * (cd2 + p));
+    atan_small(u_minus_v / (1.0 + u * v)) + one_minus_c * atan_small(v)
+}
+
+/// What [`near_plane_deficit`] returns for one edge.
+struct Deficit {
+    /// `G_e`.
+    g: f64,
+    /// `atan(s_b/H) − atan(s_a/H)`, the angle the edge subtends at x (`H A_1`).
+    spread: f64,
+    /// `H = √(d² + h_P²)`, the distance from x to the edge's line.
+    big_h: f64,
+}
+
+/// `G_e = ∫ ε cos²ψ/(1 + ε cos²ψ) dψ` for an edge at in-plane distance `d > 0` from the foot point
+/// of x, `h2 = h_P²`, abscissae `s_a < s_b` along its line (`ψ = atan(s/d)`, `ε = h_P²/d²`), given
+/// `abs_dpsi = atan(s_b/d) − atan(s_a/d)` (the unsigned angle at the foot, which the caller has).
+///
+/// With `s = d tan ψ` the integrand is `d h²/((d² + s²)(H² + s²)) ds`, `H² = d² + h_P²`, which splits
+/// into `d/(d² + s²) − d/(H² + s²)`: `G_e = [atan(s/d) − atan(s/H)] + (1 − d/H) [atan(s/H)]`, both
+/// brackets taken between `s_a` and `s_b`. Written that way each part is a difference of angles
+/// that agree to O(ε) and would lose everything to rounding; instead
+/// `δ(s) = atan(s/d) − atan(s/H) = atan(s k/(d H + s²))` and `1 − d/H = k/H` with
+/// `k = H − d = h²/(H + d)`, all without cancellation, and the second bracket is
+/// `abs_dpsi − [δ]`. What remains is a difference of two O(ε) angles (at `s_b` and `s_a`), whose
+/// rounding error is O(ε·u), far below the O(h_P) value it corrects.
+fn near_plane_deficit(d: f64, h2: f64, sa: f64, sb: f64, abs_dpsi: f64) -> Deficit {
+    let big_h = (d * d + h2).sqrt();
+    let k = h2 / (big_h + d);
+    let delta = |s: f64| atan_small(s * k / (d * big_h + s * s));
+    let dd = delta(sb) - delta(sa);
+    let spread = abs_dpsi - dd;
+    Deficit {
+        g: dd + k / big_h * spread,
+        spread,
+        big_h,
+    }
 }
 
 /// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, `rule` in
@@ -846,11 +1070,12 @@ fn fan_geometry(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, exact: bool) -> 
 
 /// Most triangles [`subdivided_quadrature`] may use before giving up.
 const MAX_PIECES: usize = 256;
-/// The same for x near the polygon's plane with part of the polygon clipped away, where the edge
-/// sum cancels for an intrinsic reason (the clip line passes within ~h_P of x, and the edge terms
-/// of size O(1) sum to the small integral over a region where n·r is small) that neither exact
-/// inputs nor the near-plane split remove. Graded refinement towards x takes ~1500 pieces at
-/// h_P = 1e-6 (about a millisecond for the Hessian): the price of a rare configuration.
+/// The same for x near the polygon's plane with part of the polygon clipped away and the foot of x
+/// outside the visible part, when [`near_plane_value`] declines: x also within `10 h_P` of an edge
+/// line, or the split's own parts cancelling (a small corner cut off). There the edge sum's O(1)
+/// terms sum to the O(h_P) value, and graded refinement towards x takes up to ~1500 pieces at
+/// h_P = 1e-6 (about a millisecond for the Hessian). Elsewhere in this configuration the split
+/// takes the value in closed form (the cancellation is not intrinsic: see [`near_plane_value`]).
 const MAX_PIECES_NEAR_PLANE: usize = 4096;
 
 /// The fan triangles of the loop, bisected along their longest edge until each is far from x
@@ -1052,61 +1277,97 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         used_quadrature = true;
         q
     } else {
-        let mut sum = Deriv3::constant(0.0);
-        let mut magnitude = 0.0;
-        for i in 0..verts.len() {
-            let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
-            let ends = ExactEnds {
-                a: [a.r, a.r_lo],
-                b: [b.r, b.r_lo],
-            };
-            // A clip point's `u` is rounded independently of its (exact) `r`: take the edge
-            // vector from the exact ends so that both describe the same segment.
-            let e = if a.on_line || b.on_line {
-                let (ra, rb) = (dd::Dd3::new(a.r, a.r_lo), dd::Dd3::new(b.r, b.r_lo));
-                rb.sub(&ra).to_dvec3()
-            } else {
-                b.u - a.u
-            };
-            let t = if cut && a.on_line && b.on_line {
-                clip_edge_term(a.r, e, n, order, Some(&ends))?
-            } else {
-                edge_term_exact(a.r, e, n, order, Some(&ends))?
-            };
-            magnitude += t.value.abs();
-            accumulate(&mut sum, t);
-        }
-        let mut quadrature = None;
-        if magnitude > cancellation_limit(&plane, near_plane || cut) * sum.value.abs() {
-            let max_pieces = if near_plane && cut {
-                MAX_PIECES_NEAR_PLANE
-            } else {
-                MAX_PIECES
-            };
-            // A sliver seen from afar is thin in one direction only: the anisotropic rule first.
-            if plane.is_thin() && !(near_plane || cut) {
-                quadrature = sliver::sliver_quadrature(&verts, n, order);
-            }
-            if quadrature.is_none() {
-                quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
-            }
-        }
-        match quadrature {
-            Some(q) => {
-                used_quadrature = true;
-                q
-            }
-            None => {
-                // Without cancellation the plain sum is accurate (every term to a few ulps of its
-                // own size), also near the plane: x above the polygon's interior, where the terms
-                // share a sign. Only a cancelling sum needs the near-plane split (and its 16-point
-                // integrals per edge).
-                if magnitude > NEAR_PLANE_CANCELLATION * sum.value.abs() {
-                    if let Some(v) = near_plane_value(&verts, n, plane.normal, h_p)? {
-                        sum.value = v;
+        let mut frames = Frames::new();
+        edge_frames(&verts, cut, &mut frames);
+        // x near the plane with the polygon clipped: the clip line passes within ~h_P of x and the
+        // edge terms, O(1), cancel down to the O(h_P) value. The near-plane split, with the clip
+        // edges in closed form, is a sum of O(h_P) terms instead (see `near_plane_value`). It is
+        // taken for the value whenever it applies and the foot of x is outside the clipped loop
+        // (above the interior the terms share a sign and the plain sum is accurate, and cheaper
+        // for the derivatives), without looking at the sum, so that `Order::Value` skips the
+        // edge sum and the value does not depend on the order. The derivatives come from the
+        // edge sum: its terms are not large against
+        // the derivatives (∂F/∂h_P is O(1) while F is O(h_P); `clip_edge_term` removes the clip
+        // line's 1/h_P and 1/h_P² parts analytically, clip-line motion included), which
+        // `tests/kernels_b_near_plane.rs` measures against the 320-bit reference.
+        let mut split = if near_plane && cut && !foot_inside(&verts, plane.normal, h_p) {
+            near_plane_value(
+                &verts,
+                &frames,
+                n,
+                plane.normal,
+                h_p,
+                SPLIT_CANCELLATION_LIMIT,
+            )
+        } else {
+            None
+        };
+        match (split, order) {
+            (Some(v), Order::Value) => Deriv3::constant(v),
+            _ => {
+                let mut sum = Deriv3::constant(0.0);
+                let mut magnitude = 0.0;
+                for (i, frame) in frames.iter().enumerate() {
+                    let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
+                    let t = if cut && a.on_line && b.on_line {
+                        let ends = ExactEnds {
+                            a: [a.r, a.r_lo],
+                            b: [b.r, b.r_lo],
+                        };
+                        clip_edge_term(a.r, edge_vector(&a, &b), n, order, Some(&ends))?
+                    } else if let Some(f) = frame {
+                        frame_term(f, n, order)?
+                    } else {
+                        continue;
+                    };
+                    magnitude += t.value.abs();
+                    accumulate(&mut sum, t);
+                }
+                let cancels =
+                    magnitude > cancellation_limit(&plane, near_plane || cut) * sum.value.abs();
+                let mut quadrature = None;
+                if cancels && split.is_none() {
+                    let max_pieces = if near_plane && cut {
+                        MAX_PIECES_NEAR_PLANE
+                    } else {
+                        MAX_PIECES
+                    };
+                    // A sliver seen from afar is thin in one direction only: the anisotropic rule
+                    // first.
+                    if plane.is_thin() && !(near_plane || cut) {
+                        quadrature = sliver::sliver_quadrature(&verts, n, order);
+                    }
+                    if quadrature.is_none() {
+                        quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
                     }
                 }
-                sum
+                match quadrature {
+                    Some(q) => {
+                        used_quadrature = true;
+                        q
+                    }
+                    None => {
+                        // Without cancellation the plain sum is accurate (every term to a few ulps
+                        // of its own size), also near the plane: x above the polygon's interior,
+                        // where the terms share a sign. Only a cancelling sum needs the near-plane
+                        // split.
+                        if split.is_none() && magnitude > NEAR_PLANE_CANCELLATION * sum.value.abs()
+                        {
+                            split = near_plane_value(
+                                &verts,
+                                &frames,
+                                n,
+                                plane.normal,
+                                h_p,
+                                f64::INFINITY,
+                            );
+                        }
+                        if let Some(v) = split {
+                            sum.value = v;
+                        }
+                        sum
+                    }
+                }
             }
         }
     };
@@ -1248,6 +1509,89 @@ mod tests {
         assert!(at_16[0] > 1e-14 && at_16[0] < 1e-12, "{at_16:?}");
         assert!(at_16[2] > 1e-12 && at_16[2] < 1e-8, "{at_16:?}");
         assert!(fits(8, 31.0));
+    }
+
+    /// The closed form of [`near_plane_deficit`] against a composite 16-point Gauss rule (64
+    /// panels in ψ) of its defining integral `∫ ε cos²ψ/(1 + ε cos²ψ) dψ`, whose terms are positive
+    /// (no cancellation): for `ε` from 1e-2 down to 1e-24 and edges on one side of the foot, across
+    /// it and far along their line, the difference is within a few ulps of `ε` (the scale of the
+    /// two angle differences it subtracts), far below the O(h_P) value it enters.
+    #[test]
+    fn near_plane_deficit_matches_its_integral() {
+        for (d, sa, sb) in [
+            (1.0, -0.7, 2.3),
+            (0.3, 0.1, 0.4),
+            (0.05, 1.0, 3.0),
+            (2.0, -5.0, -1.5),
+            (1e-3, -1.0, 1e-2),
+        ] {
+            for k in 1..=12 {
+                let h = d * 10f64.powi(-k) * 0.9;
+                let eps = (h / d) * (h / d);
+                let (pa, pb) = ((sa / d).atan(), (sb / d).atan());
+                let panels = 64;
+                let mut reference = 0.0;
+                for p in 0..panels {
+                    let (lo, hi) = (
+                        pa + (pb - pa) * p as f64 / panels as f64,
+                        pa + (pb - pa) * (p + 1) as f64 / panels as f64,
+                    );
+                    for &(t, w) in gauss_legendre_16() {
+                        let c = (lo + t * (hi - lo)).cos();
+                        let c2e = eps * c * c;
+                        reference += w * (hi - lo) * c2e / (1.0 + c2e);
+                    }
+                }
+                let got = near_plane_deficit(d, h * h, sa, sb, pb - pa);
+                let want_spread =
+                    (sb / (d * d + h * h).sqrt()).atan() - (sa / (d * d + h * h).sqrt()).atan();
+                assert!(
+                    (got.spread - want_spread).abs() <= 8.0 * f64::EPSILON * (pa.abs() + pb.abs())
+                );
+                let got = got.g;
+                let bound = 8.0 * f64::EPSILON * eps * (pa.abs() + pb.abs() + 1.0);
+                assert!(
+                    (got - reference).abs() <= bound,
+                    "d={d} h={h:e} s=[{sa}, {sb}]: {got:e} vs {reference:e}"
+                );
+                assert!(got > 0.0);
+            }
+        }
+    }
+
+    /// [`tangent_excess`] against the plain difference `β(D) − cβ(cD)` where that has nothing to
+    /// cancel (`c` up to 0.7, and `P ≤ 0`), and against the first terms of its expansion in `D`,
+    /// `(1 − c²) D L/P`, as the receiver turns head-on (`1 − c` down to 1e-12) for `D` small.
+    #[test]
+    fn tangent_excess_against_direct_and_series() {
+        let beta = |t: f64, len: f64, p: f64| (t * len).atan2(t * t + p);
+        for (d, len, p) in [
+            (1e-3, 0.8, 0.3),
+            (1e-6, 2.0, 1.5),
+            (0.2, 1.0, 0.05),
+            (1e-3, 1.0, -0.2),
+        ] {
+            for c in [0.0, 0.3, 0.7] {
+                let direct = beta(d, len, p) - c * beta(c * d, len, p);
+                let got = tangent_excess(d, len, p, c, 1.0 - c * c);
+                assert!(
+                    (got - direct).abs() <= 1e-14 * direct.abs(),
+                    "d={d} L={len} P={p} c={c}: {got:e} vs {direct:e}"
+                );
+            }
+        }
+        let (d, len, p) = (1e-9, 0.8, 0.3);
+        for k in 2..=12 {
+            let nt2 = 10f64.powi(-k);
+            let c = (1.0 - nt2).sqrt();
+            // β(t) = tL/P − O(t³): the O(D³) remainder is ~1e-18 relative here.
+            let series = nt2 * d * len / p;
+            let got = tangent_excess(d, len, p, c, nt2);
+            assert!(
+                (got - series).abs() <= 1e-14 * series,
+                "1 − c² = {nt2:e}: {got:e} vs {series:e}"
+            );
+        }
     }
 
     /// Coordinates whose differences overflow take `Scaled::new`'s second attempt (pre-scaled by
