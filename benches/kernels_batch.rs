@@ -3,12 +3,19 @@
 //! points against one triangle, at each order. Generic configurations: every triangle fully above
 //! the receiver's tangent plane, about one to three sizes of the light away.
 //!
-//! `cargo bench --bench kernels_batch -- --warm-up-time 1 --measurement-time 3`
+//! Before the criterion groups, a table gives the mesh-light rows as the fastest of many interleaved
+//! repetitions in one process (`RADDIFF_BATCH_REPS`, default 300): on a machine shared with other
+//! jobs the minimum of short runs is far less sensitive to the load than criterion's means.
+//!
+//! `cargo bench --bench kernels_batch -- --warm-up-time 1 --measurement-time 3` (append a filter
+//! that matches nothing, `nomatch`, for the table alone); `RADDIFF_SIMD=avx2` or `portable` caps
+//! the instruction set.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use raddiff::glam::DVec3;
 use raddiff::{kernels, Deriv3, Order};
 use std::hint::black_box;
+use std::time::Instant;
 
 const COUNT: usize = 1024;
 
@@ -53,12 +60,91 @@ fn order_name(order: Order) -> &'static str {
     }
 }
 
+/// Microseconds of the fastest of `reps` runs of each of `runs`, interleaved.
+fn fastest<const N: usize>(reps: usize, mut runs: [&mut dyn FnMut(); N]) -> [f64; N] {
+    let mut best = [f64::INFINITY; N];
+    for _ in 0..reps {
+        for (b, run) in best.iter_mut().zip(runs.iter_mut()) {
+            let t = Instant::now();
+            run();
+            *b = b.min(t.elapsed().as_secs_f64() * 1e6);
+        }
+    }
+    best
+}
+
+/// Sum of a loop of single-element calls (what the batch replaces), for every order.
+fn loop_sum(d: impl Iterator<Item = Deriv3>) -> f64 {
+    d.map(|d| d.value + d.gradient.x + d.hessian.x_axis.x).sum()
+}
+
+/// The mesh-light rows as the fastest of interleaved repetitions (module documentation).
+fn fastest_table(mesh: &kernels::TriangleMesh, x: DVec3, n: DVec3) {
+    let reps: usize = std::env::var("RADDIFF_BATCH_REPS")
+        .map_or(300, |s| s.parse().expect("RADDIFF_BATCH_REPS is a count"));
+    let mut out = vec![Deriv3::default(); mesh.len()];
+    println!("\nmesh light, {COUNT} triangles: fastest of {reps} interleaved runs, µs (ratio to the loop)");
+    println!("| kernel | order | loop | sum | each |");
+    println!("|---|---|---|---|---|");
+    for order in [Order::Value, Order::Gradient, Order::Hessian] {
+        let name = order_name(order);
+        let [l, s, e] = fastest(
+            reps,
+            [
+                &mut || {
+                    black_box(loop_sum((0..mesh.len()).map(|t| {
+                        let [p, q, r] = mesh.triangle(t);
+                        kernels::triangle_solid_angle(black_box(x), p, q, r, order).unwrap()
+                    })));
+                },
+                &mut || {
+                    black_box(kernels::mesh_solid_angle(black_box(x), mesh, order).unwrap());
+                },
+                &mut || {
+                    kernels::mesh_solid_angle_each(black_box(x), mesh, order, &mut out).unwrap();
+                    black_box(&out);
+                },
+            ],
+        );
+        println!(
+            "| solid angle | {name} | {l:.1} | {s:.1} ({:.2}x) | {e:.1} ({:.2}x) |",
+            l / s,
+            l / e
+        );
+        let [l, s, e] = fastest(
+            reps,
+            [
+                &mut || {
+                    black_box(loop_sum((0..mesh.len()).map(|t| {
+                        let [p, q, r] = mesh.triangle(t);
+                        kernels::triangle_form_factor(black_box(x), n, p, q, r, order).unwrap()
+                    })));
+                },
+                &mut || {
+                    black_box(kernels::mesh_form_factor(black_box(x), n, mesh, order).unwrap());
+                },
+                &mut || {
+                    kernels::mesh_form_factor_each(black_box(x), n, mesh, order, &mut out).unwrap();
+                    black_box(&out);
+                },
+            ],
+        );
+        println!(
+            "| form factor | {name} | {l:.1} | {s:.1} ({:.2}x) | {e:.1} ({:.2}x) |",
+            l / s,
+            l / e
+        );
+    }
+    println!();
+}
+
 fn mesh_benches(c: &mut Criterion) {
     let mut rng = Lcg(1);
     let (v, ix) = light(&mut rng);
     let mesh = kernels::TriangleMesh::indexed_f32(&v, &ix).unwrap();
     let x = DVec3::new(0.05, -0.03, 0.0);
     let n = DVec3::Z;
+    fastest_table(&mesh, x, n);
     let mut out = vec![Deriv3::default(); COUNT];
     for order in [Order::Value, Order::Gradient, Order::Hessian] {
         let name = order_name(order);
