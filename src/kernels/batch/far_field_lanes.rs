@@ -567,8 +567,8 @@ mod tests {
                         |t, d| {
                             let r = single(t).unwrap();
                             assert_eq!(bits(&d), bits(&r), "{isa:?} {order:?} {t}");
-                            add(&mut reference, &r);
-                            add(&mut sum, &d);
+                            add(&mut reference, &r, order);
+                            add(&mut sum, &d, order);
                         },
                     )
                     .unwrap();
