@@ -104,6 +104,9 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     if kept == 0 || kept == 3 {
         return None;
     }
+    if surely_declined(&v, &r) {
+        return None;
+    }
     let exact: [Dd3; 3] = std::array::from_fn(|k| from_parts(r[k], difference_error(v[k], x)));
     let mut points = [LoopVertex {
         exact: exact[0],
@@ -158,6 +161,10 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
         sum += f;
         magnitude += f.abs();
         err += e_k;
+        // |sum| ≤ 2π: past this the final test cannot pass.
+        if U * err > FAST_TOLERANCE * std::f64::consts::TAU {
+            return None;
+        }
     }
     let err = U * (err + (count as f64 + 2.0) * magnitude);
     if !(err <= FAST_TOLERANCE * sum.abs()) {
@@ -165,6 +172,28 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     }
     // The sum's sign is the triangle's orientation as seen from x; the form factor is two-sided.
     Some((sum.abs() * INV_2PI).min(1.0))
+}
+
+/// Configurations whose final test is bound to fail, recognized before the exact clip points and
+/// the arctangents (declining is always safe; these only save the work): `x` within a sine of 1e-3
+/// of a triangle edge's segment (`β > π/2`: Lambert's bound grows like `1/sin β`), and `x` within
+/// 1e-4 of the size from the triangle's plane outside the triangle (the sum cancels by about
+/// size/height). Both are the robust path's cases.
+fn surely_declined(v: &[DVec3; 3], r: &[DVec3; 3]) -> bool {
+    let normal = (v[1] - v[0]).cross(v[2] - v[0]);
+    let mut sides = [0.0; 3];
+    for i in 0..3 {
+        let j = (i + 1) % 3;
+        let w = r[i].cross(r[j]);
+        sides[i] = normal.dot(w);
+        let (c, s) = (r[i].dot(r[j]), w.length());
+        if c < 0.0 && s < 1e-3 * r[i].length() * r[j].length() {
+            return true;
+        }
+    }
+    let near_plane = normal.dot(r[0]).abs() < 1e-4 * normal.length() * r[0].length();
+    let inside = sides.iter().all(|&t| t > 0.0) || sides.iter().all(|&t| t < 0.0);
+    near_plane && !inside
 }
 
 /// The clip edge's term times 2π, `±β`, and its error bound times 2π / u (module documentation),
