@@ -216,13 +216,15 @@ pub fn triangle_form_factor(
 ///   (`x` near the plane, a thin visible part; for slivers, `2·area < 1e-2·extent²`, only beyond
 ///   1e4x: their edge terms are accurate to a few ulps, so the sum keeps a few ulps times the
 ///   cancellation, within the hard-regime contract), the fan triangles are
-///   bisected until each is 16 radii away and integrated the same way (at most 256 pieces, or 4096
-///   when `x` is near the plane and the polygon is clipped, which costs up to ~1 ms; otherwise the
-///   edge sum is kept, with the parallel part of the value recomputed without cancellation when
-///   `x` is near the plane). Near-singular quantities (the cross product `r_a × r_b` near an
-///   edge's line, the height over the plane near it, a sliver's normal, the clip points) are
-///   computed in double-double from the exact differences `v − x`, only when needed. Measured
-///   worst errors per regime are in the README.
+///   bisected until each is 16 radii away and integrated the same way (at most 256 pieces).
+///   With `x` near the plane, outside the (clipped) polygon, the value comes from a near-plane
+///   split without cancellation (exact winding number, small per-edge terms, the clip edges in
+///   closed form) and the derivatives from the edge sum; only where that split's own parts cancel
+///   (the clip line cutting a tiny corner off) does the quadrature run, with up to 4096 pieces
+///   (~1 ms). Near-singular quantities (the cross product `r_a × r_b` near an edge's line, the
+///   height over the plane near it, a sliver's normal, the clip points) are computed in
+///   double-double from the exact differences `v − x`, only when needed. Measured worst errors per
+///   regime are in `docs/kernels.md`.
 /// * **Fast path.** For [`Order::Value`], a strictly convex polygon of 4 to 8 vertices entirely
 ///   above the tangent plane, which passes the validation below by a wide margin, is evaluated by
 ///   Lambert's sum (or its cancellation-free far-field form) with a running error bound, accepted
