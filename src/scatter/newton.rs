@@ -329,7 +329,7 @@ pub(crate) const EDGE_SCAN_INTERVALS: usize = 24;
 
 /// All crossings of the solution curve with edge `edge_index` whose x lies in `[x_lo, x_hi]`.
 ///
-/// The edge is scanned at 25 points (24 intervals) for sign changes of the coplanarity of
+/// The edge is scanned at `EDGE_SCAN_INTERVALS` + 1 points for sign changes of the coplanarity of
 /// the refracted ray with the eye line; each bracket is solved by safeguarded Newton on (x, t) with
 /// the pseudo-inverse of the 3x2 Jacobian [∂f/∂x, ∂f/∂t]. A crossing is kept only if f vanishes
 /// (coplanar but parallel or non-intersecting lines are rejected) with V in front of P.
