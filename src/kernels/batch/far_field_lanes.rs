@@ -403,24 +403,10 @@ pub(super) fn run_on(
 
 #[cfg(test)]
 mod tests {
-    use super::super::solid_angle_lanes::tests::isas;
+    use super::super::solid_angle_lanes::tests::{isas, Lcg};
     use super::super::{add, form_factor, form_factors, TriangleMesh, VertexData};
     use super::*;
     use std::cell::Cell;
-
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn point(&mut self, s: f64) -> DVec3 {
-            DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * s
-        }
-    }
 
     fn bits(d: &Deriv3) -> Vec<u64> {
         let mut v = vec![d.value.to_bits()];

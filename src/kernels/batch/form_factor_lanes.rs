@@ -281,23 +281,9 @@ pub(super) fn lambert_values(
 
 #[cfg(test)]
 mod tests {
-    use super::super::solid_angle_lanes::tests::isas;
+    use super::super::solid_angle_lanes::tests::{isas, Lcg};
     use super::*;
     use crate::Order;
-
-    struct Lcg(u64);
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn point(&mut self, s: f64) -> DVec3 {
-            DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * s
-        }
-    }
 
     #[test]
     fn accepted_lanes_are_the_single_call_bit_for_bit_on_every_isa() {

@@ -385,6 +385,24 @@ pub(super) fn run_on(
 pub(super) mod tests {
     use super::*;
 
+    /// The lane tests' deterministic generator.
+    pub(crate) struct Lcg(pub(crate) u64);
+
+    impl Lcg {
+        pub(crate) fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+
+        /// A point in the cube of side `s` centred at the origin.
+        pub(crate) fn point(&mut self, s: f64) -> DVec3 {
+            DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * s
+        }
+    }
+
     /// Every ISA this machine runs (the portable one always).
     pub(crate) fn isas() -> Vec<Isa> {
         #[allow(unused_mut)]
