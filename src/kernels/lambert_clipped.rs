@@ -357,5 +357,9 @@ mod tests {
         assert_eq!(triangle_value(DVec3::ZERO, plane_n, v), None);
         assert_eq!(triangle_value(DVec3::ZERO, -plane_n, v), None);
         assert_eq!(triangle_value(centroid + plane_n * 1e-3, n * 2.0, v), None);
+        let nan = DVec3::new(0.0, f64::NAN, 0.0);
+        let near = centroid + plane_n * 1e-6;
+        assert_eq!(triangle_value(near + nan, n, v), None);
+        assert_eq!(triangle_value(near, n, [v[0], v[1] + nan, v[2]]), None);
     }
 }

@@ -189,6 +189,10 @@ pub(crate) fn triangle_form_factor_in_range(
     v: [DVec3; 3],
     order: Order,
 ) -> Option<Result<Deriv3>> {
+    // Non-finite input goes to `form_factor`, which refuses it (`f64::max` would skip a NaN).
+    if !(x.is_finite() && v.iter().all(|vk| vk.is_finite())) {
+        return None;
+    }
     let r = v.map(|vk| vk - x);
     let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
     let largest = r
@@ -272,6 +276,35 @@ mod in_range_tests {
             }
         }
         assert!(compared > 8000, "{compared}");
+    }
+
+    /// Non-finite input is left to `form_factor`, which refuses it with `InvalidArgument`.
+    #[test]
+    fn non_finite_input_is_not_taken() {
+        let v = [
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::X + DVec3::Z,
+            DVec3::Y + DVec3::Z,
+        ];
+        let x = DVec3::new(0.2, 0.2, 0.0);
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let odd = DVec3::new(0.1, bad, 0.3);
+            for order in [Order::Value, Order::Gradient, Order::Hessian] {
+                assert!(triangle_form_factor_in_range(odd, DVec3::Z, v, order).is_none());
+                assert!(
+                    triangle_form_factor_in_range(x, DVec3::Z, [v[0], odd, v[2]], order).is_none()
+                );
+                assert!(triangle_form_factor_in_range(x, odd, v, order).is_none());
+                for (x, n, v) in [
+                    (odd, DVec3::Z, v),
+                    (x, DVec3::Z, [v[0], v[1], odd]),
+                    (x, odd, v),
+                ] {
+                    let got = crate::kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order);
+                    assert!(matches!(got, Err(Error::InvalidArgument(_))), "{got:?}");
+                }
+            }
+        }
     }
 }
 
