@@ -128,6 +128,26 @@ impl Dd3 {
         }
     }
 
+    /// `hi + lo` componentwise for pairs that are already a double-double's parts (`hi` the
+    /// rounded sum `hi + lo`, as two-sum and the double-double operations leave them): the bits
+    /// of [`Dd3::new`] for such pairs (signed zeros included) with two additions per component
+    /// instead of a two-sum. For other pairs `hi + lo` is still the exact sum but `lo` is left as
+    /// it is (not renormalized).
+    #[inline]
+    pub(crate) fn from_parts(hi: DVec3, lo: DVec3) -> Dd3 {
+        // With hi = fl(hi + lo), two-sum returns hi itself (and zeros as hi + lo does) and lo up
+        // to the sign of a zero, which it always returns positive: `lo + 0.0`.
+        let part = |h: f64, l: f64| Dd {
+            hi: h + l,
+            lo: l + 0.0,
+        };
+        Dd3 {
+            x: part(hi.x, lo.x),
+            y: part(hi.y, lo.y),
+            z: part(hi.z, lo.z),
+        }
+    }
+
     /// `a − b` exactly.
     pub(crate) fn diff(a: DVec3, b: DVec3) -> Dd3 {
         Dd3::new(a, -b)
@@ -253,6 +273,50 @@ mod tests {
         let a = Dd::new(3.0, 2f64.powi(-60));
         let z = a.mul_f64(0.0);
         assert_eq!((z.hi, z.lo), (0.0, 0.0));
+    }
+
+    /// `from_parts` is `new` for the pairs the kernels store (two-sum outputs of coordinate
+    /// differences, and double-double parts), bit for bit including the signs of zeros.
+    #[test]
+    fn from_parts_matches_new_on_two_sum_outputs() {
+        let mut state = 0x853c_49e6_748f_ea9b_u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let m = (state >> 11) as f64 / (1u64 << 53) as f64 + 0.5;
+            let e = ((state >> 3) % 61) as i32 - 30;
+            let s = if state & 1 == 0 { 1.0 } else { -1.0 };
+            // Zeros of both signs and equal operands too, where two-sum's signs are delicate.
+            match (state >> 20) % 16 {
+                0 => 0.0 * s,
+                _ => s * m * 2f64.powi(e),
+            }
+        };
+        let bits = |d: Dd3| [d.x.hi, d.x.lo, d.y.hi, d.y.lo, d.z.hi, d.z.lo].map(f64::to_bits);
+        for k in 0..30_000 {
+            let (v, x) = (
+                DVec3::new(next(), next(), next()),
+                DVec3::new(next(), next(), next()),
+            );
+            let x = if k % 5 == 0 { v } else { x };
+            // As `Scaled` stores them: r = v − x rounded, r_lo its two-sum error.
+            let pair = |a: f64, b: f64| two_sum(a, -b);
+            let (px, py, pz) = (pair(v.x, x.x), pair(v.y, x.y), pair(v.z, x.z));
+            let (hi, lo) = (DVec3::new(px.0, py.0, pz.0), DVec3::new(px.1, py.1, pz.1));
+            assert_eq!(
+                bits(Dd3::from_parts(hi, lo)),
+                bits(Dd3::new(hi, lo)),
+                "{v} {x}"
+            );
+            // As clip points store them: the parts of a double-double sum.
+            let (h2, l2) = Dd3::new(hi, lo).add(&Dd3::diff(x, v)).split();
+            assert_eq!(bits(Dd3::from_parts(h2, l2)), bits(Dd3::new(h2, l2)));
+        }
+        // Not a double-double (|lo| > ulp(hi)/2): `new` renormalizes, `from_parts` does not.
+        let (hi, lo) = (DVec3::splat(1.0), DVec3::splat(0.75));
+        assert_eq!(Dd3::new(hi, lo).x.hi, 1.75);
+        assert_eq!(Dd3::from_parts(hi, lo).x.lo, 0.75);
     }
 
     #[test]

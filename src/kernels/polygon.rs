@@ -79,7 +79,10 @@ fn exponent(v: f64) -> i32 {
 pub(crate) struct Scaled {
     pub u: Points,
     pub r: Points,
-    /// The rounding errors of `r`: `r + r_lo` is exactly `(v − x)` in scaled units.
+    /// The rounding errors of `r`: `r + r_lo` is exactly `(v − x)` in scaled units, and `r` is
+    /// that sum rounded (a double-double's parts, read with [`dd::Dd3::from_parts`]) unless the
+    /// rescaling pushed a component of `r_lo` below the normal range (coordinates ~1e-292 of the
+    /// largest), where the pair is exact but not renormalized.
     pub r_lo: Points,
     /// d(scaled coordinate)/d(world coordinate).
     inv_scale: f64,
@@ -468,7 +471,7 @@ fn clip(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mut ClipLoop) 
     let count = u.len();
     let (u, r_lo) = (&u[..count], &r_lo[..count]);
     let r = &r[..count];
-    let exact = |i: usize| dd::Dd3::new(r[i], r_lo[i]);
+    let exact = |i: usize| dd::Dd3::from_parts(r[i], r_lo[i]);
     // Heights over the tangent plane in double-double, so that the clip points (which land near
     // x whenever x is near the polygon's plane) are placed from exact data. A stack array for
     // the usual small polygons (a growable vector's pushes and indexing cost more than the
@@ -877,7 +880,10 @@ fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
 /// The edge vector from `a` to `b` (see [`edge_frames`]).
 fn edge_vector(a: &ClipVertex, b: &ClipVertex) -> DVec3 {
     if a.on_line || b.on_line {
-        let (ra, rb) = (dd::Dd3::new(a.r, a.r_lo), dd::Dd3::new(b.r, b.r_lo));
+        let (ra, rb) = (
+            dd::Dd3::from_parts(a.r, a.r_lo),
+            dd::Dd3::from_parts(b.r, b.r_lo),
+        );
         rb.sub(&ra).to_dvec3()
     } else {
         b.u - a.u
@@ -1088,9 +1094,9 @@ fn fan_geometry(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, exact: bool) -> 
         return (normal, normal.dot(a.r));
     }
     let (ra, rb, rc) = (
-        dd::Dd3::new(a.r, a.r_lo),
-        dd::Dd3::new(b.r, b.r_lo),
-        dd::Dd3::new(c.r, c.r_lo),
+        dd::Dd3::from_parts(a.r, a.r_lo),
+        dd::Dd3::from_parts(b.r, b.r_lo),
+        dd::Dd3::from_parts(c.r, c.r_lo),
     );
     let bc = rb.cross(&rc);
     let normal = ra.cross(&rb).add(&bc).add(&rc.cross(&ra));
@@ -1243,7 +1249,7 @@ const NEAR_PLANE_HEIGHT: f64 = 1e-3;
 /// `det(r_0, r_i, r_{i+1})` summed in double-double.
 fn exact_height(s: &Scaled, twice_area: f64) -> f64 {
     let (hi, lo) = (&s.r[..], &s.r_lo[..s.r.len()]);
-    let r = |i: usize| dd::Dd3::new(hi[i], lo[i]);
+    let r = |i: usize| dd::Dd3::from_parts(hi[i], lo[i]);
     let r0 = r(0);
     let mut volume = dd::Dd::new(0.0, 0.0);
     let mut prev = r(1);
