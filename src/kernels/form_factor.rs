@@ -548,8 +548,8 @@ pub(crate) struct ExactEnds {
 impl ExactEnds {
     /// `r_a × r_b` (= `r_a × e`) in double-double, rounded once.
     fn cross(&self) -> DVec3 {
-        let a = dd::Dd3::new(self.a[0], self.a[1]);
-        let b = dd::Dd3::new(self.b[0], self.b[1]);
+        let a = dd::Dd3::from_parts(self.a[0], self.a[1]);
+        let b = dd::Dd3::from_parts(self.b[0], self.b[1]);
         a.cross(&b).to_dvec3()
     }
 }

@@ -79,7 +79,10 @@ fn exponent(v: f64) -> i32 {
 pub(crate) struct Scaled {
     pub u: Points,
     pub r: Points,
-    /// The rounding errors of `r`: `r + r_lo` is exactly `(v − x)` in scaled units.
+    /// The rounding errors of `r`: `r + r_lo` is exactly `(v − x)` in scaled units, and `r` is
+    /// that sum rounded (a double-double's parts, read with [`dd::Dd3::from_parts`]) unless the
+    /// rescaling pushed a component of `r_lo` below the normal range (coordinates ~1e-292 of the
+    /// largest), where the pair is exact but not renormalized.
     pub r_lo: Points,
     /// d(scaled coordinate)/d(world coordinate).
     inv_scale: f64,
@@ -323,7 +326,7 @@ impl Plane {
         // Newell's normal, relative to the first vertex (u[0] = 0).
         let mut nn = DVec3::ZERO;
         for i in 0..count {
-            nn += u[i].cross(u[(i + 1) % count]);
+            nn += u[i].cross(u[next(i, count)]);
         }
         let extent = u.iter().map(|v| v.length()).fold(0.0, f64::max);
         let twice_area = nn.length();
@@ -481,18 +484,47 @@ struct ClipVertex {
     on_line: bool,
 }
 
-/// Sutherland-Hodgman clip by the half-space `n·r ≥ 0`. Returns the clipped loop and whether any
-/// vertex was cut away.
-fn clip(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3) -> (SmallVec<[ClipVertex; 10]>, bool) {
+/// The clipped loop: a triangle clips to at most 4 vertices, a polygon of `count` vertices to at
+/// most `count` plus one per sign change of the heights.
+type ClipLoop = SmallVec<[ClipVertex; 10]>;
+
+/// The index after `i` in a loop of `count` vertices (`(i + 1) % count` without the division).
+#[inline]
+fn next(i: usize, count: usize) -> usize {
+    if i + 1 == count {
+        0
+    } else {
+        i + 1
+    }
+}
+
+/// Sutherland-Hodgman clip by the half-space `n·r ≥ 0`, onto `out` (empty; filled in place, as
+/// returning the loop by value copies it). Returns whether any vertex was cut away.
+fn clip(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mut ClipLoop) -> bool {
     let count = u.len();
-    let exact = |i: usize| dd::Dd3::new(r[i], r_lo[i]);
+    let (u, r_lo) = (&u[..count], &r_lo[..count]);
+    let r = &r[..count];
+    let exact = |i: usize| dd::Dd3::from_parts(r[i], r_lo[i]);
     // Heights over the tangent plane in double-double, so that the clip points (which land near
-    // x whenever x is near the polygon's plane) are placed from exact data.
-    let d: SmallVec<[dd::Dd; 8]> = (0..count).map(|i| exact(i).dot_f64(n)).collect();
-    let mut out = SmallVec::new();
+    // x whenever x is near the polygon's plane) are placed from exact data. A stack array for
+    // the usual small polygons (a growable vector's pushes and indexing cost more than the
+    // heights' arithmetic).
+    const ZERO: dd::Dd = dd::Dd { hi: 0.0, lo: 0.0 };
+    let mut inline = [ZERO; 8];
+    let mut spilled = Vec::new();
+    let d: &mut [dd::Dd] = if count <= inline.len() {
+        &mut inline[..count]
+    } else {
+        spilled.resize(count, ZERO);
+        &mut spilled
+    };
+    for (i, di) in d.iter_mut().enumerate() {
+        *di = exact(i).dot_f64(n);
+    }
+    let d = &*d;
     let mut cut = false;
     for i in 0..count {
-        let j = (i + 1) % count;
+        let j = next(i, count);
         let (di, dj) = (d[i].hi, d[j].hi);
         if di >= 0.0 {
             out.push(ClipVertex {
@@ -517,7 +549,7 @@ fn clip(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3) -> (SmallVec<[ClipVe
             });
         }
     }
-    (out, cut)
+    cut
 }
 
 /// Gauss-Legendre nodes and weights on [0, 1] (Newton on the Legendre polynomial).
@@ -755,7 +787,7 @@ fn near_plane_value(
     // h_P), before any angle is computed.
     for (i, frame) in frames.iter().enumerate() {
         if let Some(f) = frame {
-            let on_line = verts[i].on_line && verts[(i + 1) % count].on_line;
+            let on_line = verts[i].on_line && verts[next(i, count)].on_line;
             #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
             if !on_line && !(h_p.abs() * f.len < NEAR_PLANE_RATIO * plane_n.dot(f.w).abs()) {
                 return None;
@@ -770,7 +802,7 @@ fn near_plane_value(
     let n_x_plane = n.cross(plane_n);
     let big_d = h_p.abs() / nt2.sqrt();
     for (i, frame) in frames.iter().enumerate() {
-        let (a, b) = (&verts[i], &verts[(i + 1) % count]);
+        let (a, b) = (&verts[i], &verts[next(i, count)]);
         if a.on_line && b.on_line {
             // The clip edge's whole term minus its share n_N Δψ_c of the parallel part.
             let e = edge_vector(a, b);
@@ -828,7 +860,7 @@ fn near_plane_value(
 fn edge_frames(verts: &[ClipVertex], cut: bool, out: &mut Frames) {
     let count = verts.len();
     for i in 0..count {
-        let clip_edge = cut && verts[i].on_line && verts[(i + 1) % count].on_line;
+        let clip_edge = cut && verts[i].on_line && verts[next(i, count)].on_line;
         out.push(if clip_edge { None } else { frame_of(verts, i) });
     }
 }
@@ -838,7 +870,7 @@ fn edge_frames(verts: &[ClipVertex], cut: bool, out: &mut Frames) {
 /// the exact ends, and the frame's cross product is recomputed in double-double when x is near the
 /// edge's line. `None` for a zero-length edge.
 fn frame_of(verts: &[ClipVertex], i: usize) -> Option<EdgeFrame> {
-    let (a, b) = (&verts[i], &verts[(i + 1) % verts.len()]);
+    let (a, b) = (&verts[i], &verts[next(i, verts.len())]);
     let ends = ExactEnds {
         a: [a.r, a.r_lo],
         b: [b.r, b.r_lo],
@@ -868,7 +900,7 @@ fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
     let mut inside = false;
     for i in 0..count {
         let p = project(verts[i].r) - foot;
-        let q = project(verts[(i + 1) % count].r) - foot;
+        let q = project(verts[next(i, count)].r) - foot;
         // The edge crosses the ray from the foot along +x: it straddles y = 0 at a positive x.
         let dy = q.y - p.y;
         if (p.y > 0.0) != (q.y > 0.0) && ((p.x * dy - p.y * (q.x - p.x)) > 0.0) == (dy > 0.0) {
@@ -881,7 +913,10 @@ fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
 /// The edge vector from `a` to `b` (see [`edge_frames`]).
 fn edge_vector(a: &ClipVertex, b: &ClipVertex) -> DVec3 {
     if a.on_line || b.on_line {
-        let (ra, rb) = (dd::Dd3::new(a.r, a.r_lo), dd::Dd3::new(b.r, b.r_lo));
+        let (ra, rb) = (
+            dd::Dd3::from_parts(a.r, a.r_lo),
+            dd::Dd3::from_parts(b.r, b.r_lo),
+        );
         rb.sub(&ra).to_dvec3()
     } else {
         b.u - a.u
@@ -1092,9 +1127,9 @@ fn fan_geometry(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex, exact: bool) -> 
         return (normal, normal.dot(a.r));
     }
     let (ra, rb, rc) = (
-        dd::Dd3::new(a.r, a.r_lo),
-        dd::Dd3::new(b.r, b.r_lo),
-        dd::Dd3::new(c.r, c.r_lo),
+        dd::Dd3::from_parts(a.r, a.r_lo),
+        dd::Dd3::from_parts(b.r, b.r_lo),
+        dd::Dd3::from_parts(c.r, c.r_lo),
     );
     let bc = rb.cross(&rc);
     let normal = ra.cross(&rb).add(&bc).add(&rc.cross(&ra));
@@ -1203,7 +1238,7 @@ fn clip_line_hessian(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) -
     let count = verts.len();
     let mut integral = 0.0;
     for i in 0..count {
-        let (a, b) = (verts[i], verts[(i + 1) % count]);
+        let (a, b) = (verts[i], verts[next(i, count)]);
         if !(a.on_line && b.on_line) {
             continue;
         }
@@ -1246,11 +1281,12 @@ const NEAR_PLANE_HEIGHT: f64 = 1e-3;
 /// differences `r_i = v_i − x`: `r_0 · Σ_i r_i × r_{i+1} / (2·area)` with the triple products
 /// `det(r_0, r_i, r_{i+1})` summed in double-double.
 fn exact_height(s: &Scaled, twice_area: f64) -> f64 {
-    let r = |i: usize| dd::Dd3::new(s.r[i], s.r_lo[i]);
+    let (hi, lo) = (&s.r[..], &s.r_lo[..s.r.len()]);
+    let r = |i: usize| dd::Dd3::from_parts(hi[i], lo[i]);
     let r0 = r(0);
     let mut volume = dd::Dd::new(0.0, 0.0);
     let mut prev = r(1);
-    for i in 2..s.r.len() {
+    for i in 2..hi.len() {
         let next = r(i);
         volume = volume.add(r0.dot(&prev.cross(&next)));
         prev = next;
@@ -1284,7 +1320,11 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     }
     // Quadrature geometry from exact differences near the plane and for slivers.
     let exact = near_plane || plane.is_thin();
-    let (verts, cut) = clip(&s.u, &s.r, &s.r_lo, n);
+    let mut clipped = ClipLoop::new();
+    let cut = clip(&s.u, &s.r, &s.r_lo, n, &mut clipped);
+    // One slice for the whole evaluation: indexing the small vector checks where its data lives
+    // at every access.
+    let verts: &[ClipVertex] = &clipped;
     if verts.len() < 3 {
         return Ok(Deriv3::constant(0.0));
     }
@@ -1300,18 +1340,18 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     let mut used_quadrature = far.is_some();
     // Far thinner than the edge sum's limit, a sliver goes to its rule without the edge sum.
     let sliver = if far.is_none() && plane.is_very_thin() && !(near_plane || cut) {
-        sliver::sliver_quadrature(&verts, n, order)
+        sliver::sliver_quadrature(verts, n, order)
     } else {
         None
     };
     let mut d = if let Some(rule) = far {
-        far_field(&verts, n, order, exact, rule)
+        far_field(verts, n, order, exact, rule)
     } else if let Some(q) = sliver {
         used_quadrature = true;
         q
     } else {
         let mut frames = Frames::new();
-        edge_frames(&verts, cut, &mut frames);
+        edge_frames(verts, cut, &mut frames);
         // x near the plane with the polygon clipped: the clip line passes within ~h_P of x and the
         // edge terms, O(1), cancel down to the O(h_P) value. The near-plane split, with the clip
         // edges in closed form, is a sum of O(h_P) terms instead (see `near_plane_value`). It is
@@ -1323,9 +1363,9 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         // the derivatives (∂F/∂h_P is O(1) while F is O(h_P); `clip_edge_term` removes the clip
         // line's 1/h_P and 1/h_P² parts analytically, clip-line motion included), which
         // `tests/kernels_b_near_plane.rs` measures against the 320-bit reference.
-        let mut split = if near_plane && cut && !foot_inside(&verts, plane.normal, h_p) {
+        let mut split = if near_plane && cut && !foot_inside(verts, plane.normal, h_p) {
             near_plane_value(
-                &verts,
+                verts,
                 &frames,
                 n,
                 plane.normal,
@@ -1341,7 +1381,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                 let mut sum = Deriv3::constant(0.0);
                 let mut magnitude = 0.0;
                 for (i, frame) in frames.iter().enumerate() {
-                    let (a, b) = (verts[i], verts[(i + 1) % verts.len()]);
+                    let (a, b) = (verts[i], verts[next(i, verts.len())]);
                     let t = if cut && a.on_line && b.on_line {
                         let ends = ExactEnds {
                             a: [a.r, a.r_lo],
@@ -1368,10 +1408,10 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                     // A sliver seen from afar is thin in one direction only: the anisotropic rule
                     // first.
                     if plane.is_thin() && !(near_plane || cut) {
-                        quadrature = sliver::sliver_quadrature(&verts, n, order);
+                        quadrature = sliver::sliver_quadrature(verts, n, order);
                     }
                     if quadrature.is_none() {
-                        quadrature = subdivided_quadrature(&verts, n, order, exact, max_pieces);
+                        quadrature = subdivided_quadrature(verts, n, order, exact, max_pieces);
                     }
                 }
                 match quadrature {
@@ -1387,7 +1427,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                         if split.is_none() && magnitude > NEAR_PLANE_CANCELLATION * sum.value.abs()
                         {
                             split = near_plane_value(
-                                &verts,
+                                verts,
                                 &frames,
                                 n,
                                 plane.normal,
@@ -1411,7 +1451,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         d.hessian = -d.hessian;
     }
     if used_quadrature && cut && order.hessian() {
-        d.hessian += clip_line_hessian(&verts, n, plane.normal, h_p)?;
+        d.hessian += clip_line_hessian(verts, n, plane.normal, h_p)?;
     }
     // The clipped, visible part satisfies 0 ≤ F ≤ 1; rounding may step outside by an ulp.
     d.value = d.value.clamp(0.0, 1.0);
