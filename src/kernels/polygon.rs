@@ -442,10 +442,12 @@ fn segments_touch(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
         || (d4 == 0.0 && on_segment(a, b, d))
 }
 
-/// Rejects polygons where two non-adjacent edges touch (projected on the dominant plane).
-fn check_simple(u: &[DVec3], normal: DVec3) -> Result<()> {
+/// Projection onto the coordinate plane most nearly parallel to a plane of normal `normal` (drops
+/// the coordinate of its largest component, keeping a right-handed pair): orientation tests in 2D
+/// then agree with those in the plane, up to the sign of that component.
+fn dominant_projection(normal: DVec3) -> impl Fn(DVec3) -> DVec2 {
     let a = normal.abs();
-    let project = |v: DVec3| {
+    move |v: DVec3| {
         if a.x >= a.y && a.x >= a.z {
             DVec2::new(v.y, v.z)
         } else if a.y >= a.z {
@@ -453,7 +455,12 @@ fn check_simple(u: &[DVec3], normal: DVec3) -> Result<()> {
         } else {
             DVec2::new(v.x, v.y)
         }
-    };
+    }
+}
+
+/// Rejects polygons where two non-adjacent edges touch (projected on the dominant plane).
+fn check_simple(u: &[DVec3], normal: DVec3) -> Result<()> {
+    let project = dominant_projection(normal);
     let p: SmallVec<[DVec2; 8]> = u.iter().map(|v| project(*v)).collect();
     let count = p.len();
     for i in 0..count {
@@ -885,16 +892,7 @@ type Frames = SmallVec<[Option<EdgeFrame>; 10]>;
 /// in pairs and leave the parity alone). Only used to choose between two accurate evaluations
 /// (see [`evaluate`]), so a foot on or next to the boundary may go either way.
 fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
-    let a = plane_n.abs();
-    let project = |v: DVec3| {
-        if a.x >= a.y && a.x >= a.z {
-            DVec2::new(v.y, v.z)
-        } else if a.y >= a.z {
-            DVec2::new(v.z, v.x)
-        } else {
-            DVec2::new(v.x, v.y)
-        }
-    };
+    let project = dominant_projection(plane_n);
     let foot = project(plane_n * h_p);
     let count = verts.len();
     let mut inside = false;
