@@ -1025,7 +1025,6 @@ fn tensor_rule(
     (s0, s1, s_rule): (f64, f64, &[(f64, f64)]),
     t_rule: &[(f64, f64)],
 ) -> Deriv3 {
-    let mut out = Deriv3::constant(0.0);
     let (normal, c_t) = geometry;
     // Moments of the integrand's derivatives, assembled once after the loop:
     // ∇q = 4 (n·r) r/‖r‖⁶ − n/‖r‖⁴,
@@ -1064,22 +1063,53 @@ fn tensor_rule(
             }
         }
     }
-    let q1 = 4.0 * u6 - s4 * n;
-    let q2 = DMat3::from_cols(
-        DVec3::new(xx, xy, xz),
-        DVec3::new(xy, yy, yz),
-        DVec3::new(xz, yz, zz),
-    ) * 24.0
-        - sym_outer(n, v6) * 4.0
-        - DMat3::IDENTITY * (4.0 * s6);
-    out.value = FRAC_1_PI * c_t * q0;
-    if order.gradient() {
-        out.gradient = FRAC_1_PI * (c_t * q1 - q0 * normal);
-        if order.hessian() {
-            out.hessian = (q2 * c_t - sym_outer(normal, q1)) * FRAC_1_PI;
+    let sums = RuleSums {
+        q0,
+        s4,
+        u6,
+        v6,
+        s6,
+        second: [xx, yy, zz, xy, xz, yz],
+    };
+    sums.assemble(n, (normal, c_t), order)
+}
+
+/// The sums a fan triangle's Gauss rule accumulates (see [`tensor_rule`]): `q0 = Σ w (n·r)/‖r‖⁴`,
+/// `s4 = Σ w/‖r‖⁴`, `u6 = Σ w (n·r) r/‖r‖⁶`, `v6 = Σ w r/‖r‖⁶`, `s6 = Σ w (n·r)/‖r‖⁶` and the
+/// entries `xx, yy, zz, xy, xz, yz` of `Σ w (n·r) r rᵀ/‖r‖⁸`. The batch lanes accumulate the same
+/// sums and assemble them here, so that both give the same bits.
+pub(crate) struct RuleSums {
+    pub(crate) q0: f64,
+    pub(crate) s4: f64,
+    pub(crate) u6: DVec3,
+    pub(crate) v6: DVec3,
+    pub(crate) s6: f64,
+    pub(crate) second: [f64; 6],
+}
+
+impl RuleSums {
+    /// The signed form factor and its derivatives from the sums, for the fan geometry
+    /// `(2·area·N̂, 2·area·N̂·r_a)` and the receiver normal `n` (`Order` decides what is formed).
+    pub(crate) fn assemble(&self, n: DVec3, (normal, c_t): (DVec3, f64), order: Order) -> Deriv3 {
+        let mut out = Deriv3::constant(0.0);
+        let q1 = 4.0 * self.u6 - self.s4 * n;
+        out.value = FRAC_1_PI * c_t * self.q0;
+        if order.gradient() {
+            out.gradient = FRAC_1_PI * (c_t * q1 - self.q0 * normal);
+            if order.hessian() {
+                let [xx, yy, zz, xy, xz, yz] = self.second;
+                let q2 = DMat3::from_cols(
+                    DVec3::new(xx, xy, xz),
+                    DVec3::new(xy, yy, yz),
+                    DVec3::new(xz, yz, zz),
+                ) * 24.0
+                    - sym_outer(n, self.v6) * 4.0
+                    - DMat3::IDENTITY * (4.0 * self.s6);
+                out.hessian = (q2 * c_t - sym_outer(normal, q1)) * FRAC_1_PI;
+            }
         }
+        out
     }
-    out
 }
 
 fn accumulate(sum: &mut Deriv3, d: Deriv3) {

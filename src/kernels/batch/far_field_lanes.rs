@@ -22,11 +22,11 @@
 //! Elements are classified in chunks of [`CHUNK`] and emitted in order, so sums add the per-element
 //! results in the same order as a loop over single calls.
 
-use glam::{DMat3, DVec3};
+use glam::DVec3;
 
-use super::super::form_factor::{fast_setup, maybe_far, oriented, sym_outer};
+use super::super::form_factor::{fast_setup, maybe_far, oriented};
 use super::super::lambert;
-use super::super::polygon::{self, Rule};
+use super::super::polygon::{self, Rule, RuleSums};
 use super::form_factor_lanes;
 use super::solid_angle_lanes::Isa;
 use crate::error::Result;
@@ -41,8 +41,6 @@ const CHUNK: usize = 256;
 
 /// The far-field rules by point count (`polygon::FAR_FIELD_RULES`: 3, 4, 5, 6 and 8).
 const RULES: usize = 5;
-
-const FRAC_1_PI: f64 = std::f64::consts::FRAC_1_PI;
 
 /// The quadrature's running sums, in `polygon::tensor_rule`'s names: `q0`, `s4`, `u6` (3), `v6`
 /// (3), `s6`, then `xx, yy, zz, xy, xz, yz`.
@@ -188,29 +186,18 @@ fn evaluate_on(isa: Isa, l: &mut Lanes, nodes: &[Node], hessian: bool) {
     }
 }
 
-/// `tensor_rule`'s result from lane `i`'s sums, with its operations (glam's, in its order).
-fn assemble(l: &Lanes, i: usize, n: DVec3, (normal, c_t): (DVec3, f64), order: Order) -> Deriv3 {
+/// `tensor_rule`'s result from lane `i`'s sums, by its own assembly.
+fn assemble(l: &Lanes, i: usize, n: DVec3, geometry: (DVec3, f64), order: Order) -> Deriv3 {
     let s: [f64; SUMS] = std::array::from_fn(|k| l.sums[k][i]);
-    let (q0, s4, s6) = (s[0], s[1], s[8]);
-    let (u6, v6) = (DVec3::new(s[2], s[3], s[4]), DVec3::new(s[5], s[6], s[7]));
-    let (xx, yy, zz, xy, xz, yz) = (s[9], s[10], s[11], s[12], s[13], s[14]);
-    let mut out = Deriv3::constant(0.0);
-    let q1 = 4.0 * u6 - s4 * n;
-    out.value = FRAC_1_PI * c_t * q0;
-    if order.gradient() {
-        out.gradient = FRAC_1_PI * (c_t * q1 - q0 * normal);
-        if order.hessian() {
-            let q2 = DMat3::from_cols(
-                DVec3::new(xx, xy, xz),
-                DVec3::new(xy, yy, yz),
-                DVec3::new(xz, yz, zz),
-            ) * 24.0
-                - sym_outer(n, v6) * 4.0
-                - DMat3::IDENTITY * (4.0 * s6);
-            out.hessian = (q2 * c_t - sym_outer(normal, q1)) * FRAC_1_PI;
-        }
+    RuleSums {
+        q0: s[0],
+        s4: s[1],
+        u6: DVec3::new(s[2], s[3], s[4]),
+        v6: DVec3::new(s[5], s[6], s[7]),
+        s6: s[8],
+        second: [s[9], s[10], s[11], s[12], s[13], s[14]],
     }
-    out
+    .assemble(n, geometry, order)
 }
 
 /// What the assembly needs of an element the replay accepted: the unit normal, the fan geometry
