@@ -156,12 +156,7 @@ impl Config {
 /// and a random interior point.
 fn triangle_config(rng: &mut Rng) -> Config {
     let s = 10f64.powf(rng.range(-3.0, 3.0));
-    let t = loop {
-        let t = [rng.vec(s), rng.vec(s), rng.vec(s)];
-        if (t[1] - t[0]).cross(t[2] - t[0]).length() > 0.05 * s * s {
-            break t;
-        }
-    };
+    let t = rng.fat_triangle(s);
     let normal = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
     let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
     let size = e1.length().max(e2.length()).max((t[2] - t[1]).length());

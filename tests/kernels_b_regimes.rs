@@ -50,12 +50,7 @@ fn far_field_rule_switches_against_the_reference() {
         let (mut worst, mut worst_jump, mut count) = ([0.0f64; 3], [0.0f64; 3], 0);
         for k in 0..8 {
             let s = 10f64.powf(rng.range(-3.0, 3.0));
-            let t = loop {
-                let t = [rng.vec(s), rng.vec(s), rng.vec(s)];
-                if (t[1] - t[0]).cross(t[2] - t[0]).length() > 0.05 * s * s {
-                    break t;
-                }
-            };
+            let t = rng.fat_triangle(s);
             let c = (t[0] + t[1] + t[2]) / 3.0;
             let radius = t.iter().map(|v| (*v - c).length()).fold(0.0, f64::max);
             let dir = rng.unit();
@@ -232,12 +227,7 @@ fn near_the_plane_over_the_interior_against_the_reference() {
     let mut count = 0;
     for k in 0..24 {
         let s = 10f64.powf(rng.range(-3.0, 3.0));
-        let t = loop {
-            let t = [rng.vec(s), rng.vec(s), rng.vec(s)];
-            if (t[1] - t[0]).cross(t[2] - t[0]).length() > 0.05 * s * s {
-                break t;
-            }
-        };
+        let t = rng.fat_triangle(s);
         let normal = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
         let (u, v) = (rng.range(0.05, 0.9), rng.uniform());
         let v = v * (0.95 - u);

@@ -342,4 +342,14 @@ impl Rng {
             self.range(-1., 1.),
         ) * scale
     }
+    /// A random triangle in the cube of half-side `scale`, redrawn until twice its area exceeds
+    /// `0.05 scale²` (no slivers).
+    pub fn fat_triangle(&mut self, scale: f64) -> [DVec3; 3] {
+        loop {
+            let t = [self.vec(scale), self.vec(scale), self.vec(scale)];
+            if (t[1] - t[0]).cross(t[2] - t[0]).length() > 0.05 * scale * scale {
+                return t;
+            }
+        }
+    }
 }
