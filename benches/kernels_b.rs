@@ -7,11 +7,15 @@
 //! value, same interleaved rounds) and error against 320-bit references (`tests/kernels_b_common`)
 //! side by side.
 //!
-//! `cargo bench --bench kernels_b -- --warm-up-time 1 --measurement-time 3`
+//! `cargo bench --bench kernels_b -- --warm-up-time 1 --measurement-time 3`; append a filter that
+//! matches nothing (`nomatch`) for the table alone.
+//! For profilers, `RADDIFF_KERNELS_B_PROFILE="CASE,ORDER,CALLS"` runs one case only and exits (CASE
+//! is a case name, ORDER is `value`, `gradient` or `hessian`), e.g.
+//! `RADDIFF_KERNELS_B_PROFILE="quad,hessian,20000" valgrind --tool=callgrind <bench binary>`.
 
 use std::hint::black_box;
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, Criterion};
 use glam::{DMat3, DVec3};
 use num_dual::{DualNum, HyperDual64};
 use raddiff::{kernels, Deriv3, Order};
@@ -337,6 +341,44 @@ fn cases() -> Vec<Case> {
     ]
 }
 
+const ORDERS: [(&str, Order); 3] = [
+    ("value", Order::Value),
+    ("gradient", Order::Gradient),
+    ("hessian", Order::Hessian),
+];
+
+/// One call of the kernel a case benchmarks (triangles through their own entry point, which has
+/// the triangle fast paths).
+fn call(case: &Case, order: Order) -> Deriv3 {
+    let (x, n, v) = (black_box(case.x), black_box(case.n), black_box(&case.verts));
+    if v.len() == 3 {
+        kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order)
+    } else {
+        kernels::polygon_form_factor(x, n, v, order)
+    }
+    .unwrap()
+}
+
+/// `RADDIFF_KERNELS_B_PROFILE="CASE,ORDER,CALLS"`: the calls of one case, nothing else.
+fn profile(spec: &str) {
+    let parts: Vec<&str> = spec.split(',').map(str::trim).collect();
+    let [case, order, calls] = parts[..] else {
+        panic!("RADDIFF_KERNELS_B_PROFILE must be CASE,ORDER,CALLS");
+    };
+    let case = cases()
+        .into_iter()
+        .find(|c| c.name == case)
+        .expect("unknown case");
+    let order = ORDERS
+        .iter()
+        .find(|(name, _)| *name == order)
+        .expect("ORDER is value, gradient or hessian")
+        .1;
+    for _ in 0..calls.parse::<usize>().expect("CALLS") {
+        black_box(call(&case, order));
+    }
+}
+
 fn bench(c: &mut Criterion) {
     report_time_and_error();
     println!("\nHessian error against the analytic kernel (max entry error / max entry):");
@@ -360,34 +402,8 @@ fn bench(c: &mut Criterion) {
     for case in cases() {
         let mut g = c.benchmark_group(format!("form_factor/{}", case.name));
         let (x, n, v) = (case.x, case.n, case.verts.clone());
-        for (label, order) in [
-            ("value", Order::Value),
-            ("gradient", Order::Gradient),
-            ("hessian", Order::Hessian),
-        ] {
-            g.bench_function(label, |b| {
-                b.iter(|| {
-                    // Triangles through their own entry point (which has the fast path).
-                    if v.len() == 3 {
-                        kernels::triangle_form_factor(
-                            black_box(x),
-                            black_box(n),
-                            v[0],
-                            v[1],
-                            v[2],
-                            order,
-                        )
-                    } else {
-                        kernels::polygon_form_factor(
-                            black_box(x),
-                            black_box(n),
-                            black_box(&v),
-                            order,
-                        )
-                    }
-                    .unwrap()
-                })
-            });
+        for (label, order) in ORDERS {
+            g.bench_function(label, |b| b.iter(|| call(&case, order)));
         }
         g.bench_function("textbook_value", |b| {
             b.iter(|| textbook_value(black_box(x), n, &v))
@@ -403,5 +419,13 @@ fn bench(c: &mut Criterion) {
     }
 }
 
+fn main() {
+    if let Ok(spec) = std::env::var("RADDIFF_KERNELS_B_PROFILE") {
+        profile(&spec);
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}
+
 criterion_group!(benches, bench);
-criterion_main!(benches);
