@@ -10,7 +10,7 @@
 //! `cargo bench --bench kernels_b -- --warm-up-time 1 --measurement-time 3`; append a filter that
 //! matches nothing (`nomatch`) for the table alone.
 //! For profilers, `RADDIFF_KERNELS_B_PROFILE="CASE,ORDER,CALLS"` runs one case only and exits (CASE
-//! is a case name, ORDER is `value`, `gradient` or `hessian`), e.g.
+//! is a case name of the table, ORDER is `value`, `gradient` or `hessian`), e.g.
 //! `RADDIFF_KERNELS_B_PROFILE="quad,hessian,20000" valgrind --tool=callgrind <bench binary>`.
 
 use std::hint::black_box;
@@ -84,14 +84,7 @@ form factors: time (ns, ratio to the textbook value) and error vs 320-bit refere
         "dual hess (tb)"
     );
     let mut all = cases();
-    // The per-edge term alone, one edge of the generic triangle.
-    let edge = all[0].verts[..2].to_vec();
-    all.push(Case {
-        name: "edge term",
-        x: all[0].x,
-        n: all[0].n,
-        verts: edge,
-    });
+    all.push(edge_case(&all[0]));
     for case in all {
         let (x, n, v) = (case.x, case.n, case.verts.clone());
         let is_edge = v.len() == 2;
@@ -279,6 +272,16 @@ struct Case {
     verts: Vec<DVec3>,
 }
 
+/// The per-edge term alone: the first edge of the generic triangle `tri`.
+fn edge_case(tri: &Case) -> Case {
+    Case {
+        name: "edge term",
+        x: tri.x,
+        n: tri.n,
+        verts: tri.verts[..2].to_vec(),
+    }
+}
+
 fn cases() -> Vec<Case> {
     let n = DVec3::new(0.2, -0.1, 1.0).normalize();
     let pentagon: Vec<DVec3> = (0..5)
@@ -348,10 +351,12 @@ const ORDERS: [(&str, Order); 3] = [
 ];
 
 /// One call of the kernel a case benchmarks (triangles through their own entry point, which has
-/// the triangle fast paths).
+/// the triangle fast paths; two vertices are the edge term).
 fn call(case: &Case, order: Order) -> Deriv3 {
     let (x, n, v) = (black_box(case.x), black_box(case.n), black_box(&case.verts));
-    if v.len() == 3 {
+    if v.len() == 2 {
+        kernels::edge_form_factor(x, n, v[0], v[1], order)
+    } else if v.len() == 3 {
         kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order)
     } else {
         kernels::polygon_form_factor(x, n, v, order)
@@ -365,7 +370,9 @@ fn profile(spec: &str) {
     let [case, order, calls] = parts[..] else {
         panic!("RADDIFF_KERNELS_B_PROFILE must be CASE,ORDER,CALLS");
     };
-    let case = cases()
+    let mut all = cases();
+    all.push(edge_case(&all[0]));
+    let case = all
         .into_iter()
         .find(|c| c.name == case)
         .expect("unknown case");
