@@ -270,9 +270,9 @@ fn edge_terms<L: Lane>(
         let m = ra + rb;
         let inv_p = p.recip();
         let inv_s2 = s2.recip();
-        // ∇I = a_q k + m/P with a_q = (c/P − I)/s² (the bracket cancels like 1 − sin 2β/2β, at
-        // most ~20x for sin β ≥ DERIV_MIN_SINE): fewer operations than ∇β/s − β k/s³, same
-        // cancellation.
+        // ∇I = a_q k + m/P with a_q = (c/P − I)/s²: the bracket is I (sin 2β/2β − 1), which
+        // cancels at most ~24x for sin β ≥ DERIV_MIN_SINE, as ∇β/s − β k/s³ did; fewer
+        // operations.
         let a_q = (c * inv_p - g) * inv_s2;
         let grad_i = kv.scale(a_q) + m.scale(inv_p);
         let nxe = n.cross(e);
