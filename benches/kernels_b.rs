@@ -7,11 +7,15 @@
 //! value, same interleaved rounds) and error against 320-bit references (`tests/kernels_b_common`)
 //! side by side.
 //!
-//! `cargo bench --bench kernels_b -- --warm-up-time 1 --measurement-time 3`
+//! `cargo bench --bench kernels_b -- --warm-up-time 1 --measurement-time 3`; append a filter that
+//! matches nothing (`nomatch`) for the table alone.
+//! For profilers, `RADDIFF_KERNELS_B_PROFILE="CASE,ORDER,CALLS"` runs one case only and exits (CASE
+//! is a case name of the table, ORDER is `value`, `gradient` or `hessian`), e.g.
+//! `RADDIFF_KERNELS_B_PROFILE="quad,hessian,20000" valgrind --tool=callgrind <bench binary>`.
 
 use std::hint::black_box;
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, Criterion};
 use glam::{DMat3, DVec3};
 use num_dual::{DualNum, HyperDual64};
 use raddiff::{kernels, Deriv3, Order};
@@ -80,14 +84,7 @@ form factors: time (ns, ratio to the textbook value) and error vs 320-bit refere
         "dual hess (tb)"
     );
     let mut all = cases();
-    // The per-edge term alone, one edge of the generic triangle.
-    let edge = all[0].verts[..2].to_vec();
-    all.push(Case {
-        name: "edge term",
-        x: all[0].x,
-        n: all[0].n,
-        verts: edge,
-    });
+    all.push(edge_case(&all[0]));
     for case in all {
         let (x, n, v) = (case.x, case.n, case.verts.clone());
         let is_edge = v.len() == 2;
@@ -275,6 +272,16 @@ struct Case {
     verts: Vec<DVec3>,
 }
 
+/// The per-edge term alone: the first edge of the generic triangle `tri`.
+fn edge_case(tri: &Case) -> Case {
+    Case {
+        name: "edge term",
+        x: tri.x,
+        n: tri.n,
+        verts: tri.verts[..2].to_vec(),
+    }
+}
+
 fn cases() -> Vec<Case> {
     let n = DVec3::new(0.2, -0.1, 1.0).normalize();
     let pentagon: Vec<DVec3> = (0..5)
@@ -337,6 +344,48 @@ fn cases() -> Vec<Case> {
     ]
 }
 
+const ORDERS: [(&str, Order); 3] = [
+    ("value", Order::Value),
+    ("gradient", Order::Gradient),
+    ("hessian", Order::Hessian),
+];
+
+/// One call of the kernel a case benchmarks (triangles through their own entry point, which has
+/// the triangle fast paths; two vertices are the edge term).
+fn call(case: &Case, order: Order) -> Deriv3 {
+    let (x, n, v) = (black_box(case.x), black_box(case.n), black_box(&case.verts));
+    if v.len() == 2 {
+        kernels::edge_form_factor(x, n, v[0], v[1], order)
+    } else if v.len() == 3 {
+        kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order)
+    } else {
+        kernels::polygon_form_factor(x, n, v, order)
+    }
+    .unwrap()
+}
+
+/// `RADDIFF_KERNELS_B_PROFILE="CASE,ORDER,CALLS"`: the calls of one case, nothing else.
+fn profile(spec: &str) {
+    let parts: Vec<&str> = spec.split(',').map(str::trim).collect();
+    let [case, order, calls] = parts[..] else {
+        panic!("RADDIFF_KERNELS_B_PROFILE must be CASE,ORDER,CALLS");
+    };
+    let mut all = cases();
+    all.push(edge_case(&all[0]));
+    let case = all
+        .into_iter()
+        .find(|c| c.name == case)
+        .expect("unknown case");
+    let order = ORDERS
+        .iter()
+        .find(|(name, _)| *name == order)
+        .expect("ORDER is value, gradient or hessian")
+        .1;
+    for _ in 0..calls.parse::<usize>().expect("CALLS") {
+        black_box(call(&case, order));
+    }
+}
+
 fn bench(c: &mut Criterion) {
     report_time_and_error();
     println!("\nHessian error against the analytic kernel (max entry error / max entry):");
@@ -360,34 +409,8 @@ fn bench(c: &mut Criterion) {
     for case in cases() {
         let mut g = c.benchmark_group(format!("form_factor/{}", case.name));
         let (x, n, v) = (case.x, case.n, case.verts.clone());
-        for (label, order) in [
-            ("value", Order::Value),
-            ("gradient", Order::Gradient),
-            ("hessian", Order::Hessian),
-        ] {
-            g.bench_function(label, |b| {
-                b.iter(|| {
-                    // Triangles through their own entry point (which has the fast path).
-                    if v.len() == 3 {
-                        kernels::triangle_form_factor(
-                            black_box(x),
-                            black_box(n),
-                            v[0],
-                            v[1],
-                            v[2],
-                            order,
-                        )
-                    } else {
-                        kernels::polygon_form_factor(
-                            black_box(x),
-                            black_box(n),
-                            black_box(&v),
-                            order,
-                        )
-                    }
-                    .unwrap()
-                })
-            });
+        for (label, order) in ORDERS {
+            g.bench_function(label, |b| b.iter(|| call(&case, order)));
         }
         g.bench_function("textbook_value", |b| {
             b.iter(|| textbook_value(black_box(x), n, &v))
@@ -403,5 +426,13 @@ fn bench(c: &mut Criterion) {
     }
 }
 
+fn main() {
+    if let Ok(spec) = std::env::var("RADDIFF_KERNELS_B_PROFILE") {
+        profile(&spec);
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}
+
 criterion_group!(benches, bench);
-criterion_main!(benches);

@@ -26,6 +26,7 @@
 use glam::{DMat3, DVec3};
 
 use super::lambert_far::{self, Far};
+use super::lanes::{Lane, Pair, V3};
 use super::polygon;
 use crate::{Deriv3, Order};
 
@@ -108,7 +109,8 @@ pub(super) fn unclipped<const M: usize>(
             return None;
         }
     }
-    Some((n, r, r.map(|rk| rk.length_squared())))
+    // from_fn, not map: the map was an out-of-line call (callgrind).
+    Some((n, r, std::array::from_fn(|k| r[k].length_squared())))
 }
 
 /// The triangle case of [`unclipped`] (both triangle fast paths share it).
@@ -188,11 +190,13 @@ const DERIV_MIN_SINE: f64 = 0.25;
 /// `∇c = −m`, `∇k = Q`):
 ///
 /// ```text
-/// ∇β = (c k/s + s m)/P,   ∇I = ∇β/s − β k/s³,
+/// ∇β = (c k/s + s m)/P,   ∇I = ∇β/s − β k/s³ = a_q k + m/P,   a_q = (c/P − I)/s²,
 /// Hβ = [c Q/s − c k kᵀ/s³ − 2s 𝟙]/P − [2c k kᵀ/s + (s − c²/s)(m kᵀ + k mᵀ) − 2sc m mᵀ]/P²,
 /// HI = Hβ/s − (∇β kᵀ + k ∇βᵀ)/s³ − β Q/s³ + 3β k kᵀ/s⁵,
 /// 2π∇f = (n × e) I + (n·w) ∇I,   2π Hf = (n × e)∇Iᵀ + ∇I (n × e)ᵀ + (n·w) HI.
 /// ```
+///
+/// The arithmetic is [`edge_terms`] on one lane; polygons run it on two edges at a time.
 #[inline]
 fn edge_derivs(
     n: DVec3,
@@ -202,66 +206,106 @@ fn edge_derivs(
     ra2: f64,
     order: Order,
 ) -> (Terms, f64, bool) {
+    let (n, ra, rb, e) = (
+        V3::from_dvec(n),
+        V3::from_dvec(ra),
+        V3::from_dvec(rb),
+        V3::from_dvec(e),
+    );
     let w = ra.cross(e);
-    let s2 = w.length_squared();
+    let s2 = w.dot(w);
     let s = s2.sqrt();
     let c = ra.dot(rb);
-    let beta = s.atan2(c);
-    let inv_s = 1.0 / s;
-    // Divided as `edge` divides (not `beta * inv_s`): the value must have the same bits whatever
-    // the order asked for.
-    let g = beta / s;
+    let t = edge_terms(n, ra, rb, e, ra2, (w, s2, s, c, s.atan2(c)), order);
+    let d = Terms {
+        value: t.value,
+        gradient: t.gradient.to_dvec(),
+        hessian: t.hessian,
+    };
+    (d, t.err, steep(s2, t.p))
+}
+
+/// Whether `sin β ≥ DERIV_MIN_SINE`, from `s²` and `P = s² + c²`.
+#[inline(always)]
+fn steep(s2: f64, p: f64) -> bool {
+    s2 >= DERIV_MIN_SINE * DERIV_MIN_SINE * p
+}
+
+/// [`edge_derivs`]' terms per lane ([`Lane`]: one edge or two side by side), and its `P`.
+struct LaneTerms<L> {
+    value: L,
+    gradient: V3<L>,
+    hessian: [L; 6],
+    err: L,
+    p: L,
+}
+
+/// [`edge_derivs`] per lane from `w = r_a × e`, `s² = w·w`, `s`, `c = r_a·r_b` and
+/// `β = atan2(s, c)` (computed by the caller, which calls `atan2` per lane). Every lane rounds as
+/// the one-lane (`f64`) instance does: the value is `edge`'s, bit for bit.
+#[inline(always)]
+fn edge_terms<L: Lane>(
+    n: V3<L>,
+    ra: V3<L>,
+    rb: V3<L>,
+    e: V3<L>,
+    ra2: L,
+    (w, s2, s, c, beta): (V3<L>, L, L, L, L),
+    order: Order,
+) -> LaneTerms<L> {
+    let k = L::splat;
+    // Divided as `edge` divides: the value must have the same bits whatever the order asked for.
+    let g = beta.div(s);
     let nw = n.dot(w);
     let p = s2 + c * c;
-    let steep = s2 >= DERIV_MIN_SINE * DERIV_MIN_SINE * p;
-    let err = 36.0 * beta + 20.0 * (c - ra2).abs() * g;
-    let mut d = Terms {
+    let mut t = LaneTerms {
         value: nw * g,
-        gradient: DVec3::ZERO,
-        hessian: [0.0; 6],
+        gradient: V3::splat(DVec3::ZERO),
+        hessian: [k(0.0); 6],
+        err: k(36.0) * beta + k(20.0) * (c - ra2).abs() * g,
+        p,
     };
     if order.gradient() {
-        let k = w.cross(e);
+        let kv = w.cross(e);
         let m = ra + rb;
-        let inv_p = 1.0 / p;
-        let inv_s2 = inv_s * inv_s;
-        let grad_beta = (k * (c * inv_s) + m * s) * inv_p;
-        let grad_i = (grad_beta - k * (beta * inv_s2)) * inv_s;
+        let inv_p = p.recip();
+        let inv_s2 = s2.recip();
+        // ∇I = a_q k + m/P with a_q = (c/P − I)/s²: the bracket is I (sin 2β/2β − 1), which
+        // cancels at most ~24x for sin β ≥ DERIV_MIN_SINE, as ∇β/s − β k/s³ did; fewer
+        // operations.
+        let a_q = (c * inv_p - g) * inv_s2;
+        let grad_i = kv.scale(a_q) + m.scale(inv_p);
         let nxe = n.cross(e);
-        d.gradient = nxe * g + grad_i * nw;
+        t.gradient = nxe.scale(g) + grad_i.scale(nw);
         if order.hessian() {
             // HI collected on 𝟙, e eᵀ, k kᵀ, m kᵀ + k mᵀ, m mᵀ (Q = ‖e‖²𝟙 − e eᵀ; the
-            // (m kᵀ + k mᵀ) coefficients of Hβ/s and of the ∇β kᵀ term sum to −2/P²).
-            let inv_s3 = inv_s2 * inv_s;
-            let a_q = c * inv_s2 * inv_p - beta * inv_s3;
-            let a_kk = 3.0 * (beta * inv_s - c * inv_p) * inv_s2 * inv_s2
-                - 2.0 * c * inv_s2 * inv_p * inv_p;
-            let diag = nw * (a_q * e.length_squared() - 2.0 * inv_p);
-            // diag 𝟙 + (n×e)∇Iᵀ + ∇I(n×e)ᵀ + (mm kᵀ + k mmᵀ) + kk kᵀ + cm mᵀ − de eᵀ, on the six
-            // distinct entries only.
-            let mm = m * (-2.0 * nw * inv_p * inv_p);
-            let kk = k * (nw * a_kk);
-            let cm = m * (2.0 * nw * c * inv_p * inv_p);
-            let de = e * (nw * a_q);
-            let entry = |i: usize, j: usize| {
-                nxe[i] * grad_i[j]
-                    + grad_i[i] * nxe[j]
-                    + (mm[i] * k[j] + k[i] * mm[j])
-                    + kk[i] * k[j]
-                    + cm[i] * m[j]
-                    - de[i] * e[j]
+            // (m kᵀ + k mᵀ) coefficients of Hβ/s and of the ∇β kᵀ term sum to −2/P²), then
+            // 2π Hf = diag 𝟙 + (X kᵀ + k Xᵀ) + (Y mᵀ + m Yᵀ) − (n·w) a_q e eᵀ with
+            // X = a_q (n×e) − 2(n·w)/P² m + (n·w) a_kk/2 k and Y = (n×e)/P + (n·w) c/P² m:
+            // two symmetric products instead of five.
+            let a_kk = -(k(3.0) * a_q + k(2.0) * c * inv_p * inv_p) * inv_s2;
+            let diag = nw * (a_q * e.dot(e) - k(2.0) * inv_p);
+            let nw_p2 = nw * inv_p * inv_p;
+            let xv = nxe.scale(a_q) - m.scale(k(2.0) * nw_p2) + kv.scale(k(0.5) * nw * a_kk);
+            let yv = nxe.scale(inv_p) + m.scale(nw_p2 * c);
+            let de = e.scale(nw * a_q);
+            let dia =
+                |x: L, kk: L, y: L, mm: L, d: L, ee: L| (x * kk + y * mm) * k(2.0) - d * ee + diag;
+            let off = |xi: L, xj: L, ki: L, kj: L, yi: L, yj: L, mi: L, mj: L, di: L, ej: L| {
+                xi * kj + ki * xj + yi * mj + mi * yj - di * ej
             };
-            d.hessian = [
-                diag + entry(0, 0),
-                diag + entry(1, 1),
-                diag + entry(2, 2),
-                entry(0, 1),
-                entry(0, 2),
-                entry(1, 2),
+            let (x, y) = (xv, yv);
+            t.hessian = [
+                dia(x.x, kv.x, y.x, m.x, de.x, e.x),
+                dia(x.y, kv.y, y.y, m.y, de.y, e.y),
+                dia(x.z, kv.z, y.z, m.z, de.z, e.z),
+                off(x.x, x.y, kv.x, kv.y, y.x, y.y, m.x, m.y, de.x, e.y),
+                off(x.x, x.z, kv.x, kv.z, y.x, y.z, m.x, m.z, de.x, e.z),
+                off(x.y, x.z, kv.y, kv.z, y.y, y.z, m.y, m.z, de.y, e.z),
             ];
         }
     }
-    (d, err, steep)
+    t
 }
 
 /// An edge term's value, gradient and symmetric Hessian by its six distinct entries
@@ -275,12 +319,19 @@ struct Terms {
 }
 
 impl Terms {
-    fn add(&mut self, t: &Terms) {
-        self.value += t.value;
-        self.gradient += t.gradient;
-        for (a, b) in self.hessian.iter_mut().zip(t.hessian) {
-            *a += b;
-        }
+    /// Whether every entry is finite (then so is the result [`Terms::scaled`] gives with a finite
+    /// scale of at most 1). Inline, on products by zero (NaN exactly for a NaN or infinite entry):
+    /// `Deriv3::is_finite` was an out-of-line call of ~30 instructions.
+    #[inline(always)]
+    fn is_finite(&self) -> bool {
+        let h = &self.hessian;
+        let zero = |a: f64, b: f64| a * 0.0 + b * 0.0;
+        let z = zero(self.value, self.gradient.x)
+            + zero(self.gradient.y, self.gradient.z)
+            + zero(h[0], h[1])
+            + zero(h[2], h[3])
+            + zero(h[4], h[5]);
+        z == 0.0
     }
 
     /// The full result with `value`, derivatives scaled by `scale` (a zero Hessian stays zero).
@@ -340,36 +391,94 @@ pub(super) fn certified_derivs<const M: usize>(
     r2: &[f64; M],
     order: Order,
 ) -> Option<Deriv3> {
+    // One copy per order, so that the per-edge order tests fold away in the inlined edge terms.
+    match order {
+        Order::Value => derivs_at(n, v, r, r2, Order::Value),
+        Order::Gradient => derivs_at(n, v, r, r2, Order::Gradient),
+        Order::Hessian => derivs_at(n, v, r, r2, Order::Hessian),
+    }
+}
+
+/// [`certified_derivs`] at one order.
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+fn derivs_at<const M: usize>(
+    n: DVec3,
+    v: &[DVec3; M],
+    r: &[DVec3; M],
+    r2: &[f64; M],
+    order: Order,
+) -> Option<Deriv3> {
     let mut sum = Terms {
         value: 0.0,
         gradient: DVec3::ZERO,
         hessian: [0.0; 6],
     };
-    let (mut magnitude, mut err, mut steep) = (0.0, 0.0, true);
+    let (mut magnitude, mut err, mut is_steep) = (0.0, 0.0, true);
     let (mut g_mag, mut h_mag) = (0.0, 0.0);
-    for i in 0..M {
-        let j = (i + 1) % M;
-        let (d, e, s) = edge_derivs(n, r[i], r[j], v[j] - v[i], r2[i], order);
-        sum.add(&d);
-        magnitude += d.value.abs();
-        err += e;
-        steep &= s;
-        let (g, h) = deriv_size(&d, order);
-        g_mag += g;
-        h_mag += h;
+    let n2 = V3::<Pair>::splat(n);
+    // Edges i and i + 1 in the two lanes; for odd M the last pair's second lane repeats edge 0
+    // (with a stand-in angle, no atan2) and is ignored. Every sum below runs over the edges in
+    // order, as certified_sum's does (the value must be its bits).
+    for i in (0..M).step_by(2) {
+        let (i1, lanes) = if i + 1 < M { (i + 1, 2) } else { (0, 1) };
+        let (j, j1) = ((i + 1) % M, (i1 + 1) % M);
+        let ra = V3::pair(r[i], r[i1]);
+        let rb = V3::pair(r[j], r[j1]);
+        let e = V3::pair(v[j] - v[i], v[j1] - v[i1]);
+        let w = ra.cross(e);
+        let s2 = w.dot(w);
+        let s = s2.sqrt();
+        let c = ra.dot(rb);
+        let beta1 = if lanes == 2 {
+            s.get(1).atan2(c.get(1))
+        } else {
+            1.0
+        };
+        let beta = Pair::new(s.get(0).atan2(c.get(0)), beta1);
+        let ra2 = Pair::new(r2[i], r2[i1]);
+        let t = edge_terms(n2, ra, rb, e, ra2, (w, s2, s, c, beta), order);
+        // The max-norms of each edge's gradient and Hessian, for the cancellation test.
+        let g_size = if order.gradient() {
+            let g = &t.gradient;
+            g.x.abs().max(g.y.abs()).max(g.z.abs())
+        } else {
+            Pair::splat(0.0)
+        };
+        let h_size = if order.hessian() {
+            let h = t.hessian.map(|hk| hk.abs());
+            h[0].max(h[1]).max(h[2]).max(h[3]).max(h[4]).max(h[5])
+        } else {
+            Pair::splat(0.0)
+        };
+        for l in 0..lanes {
+            let f = t.value.get(l);
+            sum.value += f;
+            sum.gradient += t.gradient.lane(l);
+            for (a, hk) in sum.hessian.iter_mut().zip(&t.hessian) {
+                *a += hk.get(l);
+            }
+            magnitude += f.abs();
+            err += t.err.get(l);
+            is_steep &= steep(s2.get(l), t.p.get(l));
+            g_mag += g_size.get(l);
+            h_mag += h_size.get(l);
+        }
     }
     let err = U * (err + (M as f64 + 2.0) * magnitude);
-    if !(steep && err <= FAST_TOLERANCE * sum.value.abs()) {
+    if !(is_steep && err <= FAST_TOLERANCE * sum.value.abs()) {
         return None;
     }
     let total = deriv_size(&sum, order);
     if !(g_mag <= CANCELLATION * total.0 && h_mag <= CANCELLATION * total.1) {
         return None;
     }
+    if !sum.is_finite() {
+        return None;
+    }
     // Orientation as seen from x: the form factor is two-sided.
     let scale = INV_2PI.copysign(sum.value);
-    let out = sum.scaled((sum.value.abs() * INV_2PI).min(1.0), scale);
-    out.is_finite().then_some(out)
+    Some(sum.scaled((sum.value.abs() * INV_2PI).min(1.0), scale))
 }
 
 /// Value and derivatives of [`edge_form_factor`](super::edge_form_factor) by the analytic

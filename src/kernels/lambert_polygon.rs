@@ -43,26 +43,38 @@ const MARGIN: f64 = 1e-3;
 fn convex_and_valid<const M: usize>(v: &[DVec3; M]) -> bool {
     let d: [DVec3; M] = std::array::from_fn(|k| v[k] - v[0]);
     let e: [DVec3; M] = std::array::from_fn(|i| v[(i + 1) % M] - v[i]);
+    // The fan's cross products d_k × d_{k+1} (k = 1..M−2) serve Newell's normal and the monotone
+    // fan test; the one for k = 1 is also the half-plane test's d_1 × d_2.
+    let fan: [DVec3; M] = std::array::from_fn(|k| {
+        if k >= 1 && k + 1 < M {
+            d[k].cross(d[k + 1])
+        } else {
+            DVec3::ZERO
+        }
+    });
     let mut normal = DVec3::ZERO;
-    for k in 1..M - 1 {
-        normal += d[k].cross(d[k + 1]);
+    for f in &fan[1..M - 1] {
+        normal += *f;
     }
     let nn = normal.length_squared();
-    let extent2 = d.iter().map(|dk| dk.length_squared()).fold(0.0, f64::max);
+    let extent2 = d[1..]
+        .iter()
+        .map(|dk| dk.length_squared())
+        .fold(0.0, f64::max);
     if !(nn > AREA * AREA * extent2 * extent2) {
         return false;
     }
-    let e2 = e.map(|ei| ei.length_squared());
+    let e2: [f64; M] = std::array::from_fn(|i| e[i].length_squared());
     let m2 = MARGIN * MARGIN;
     for k in 1..M {
         let h = d[k].dot(normal);
         if !(h * h <= PLANARITY * PLANARITY * extent2 * nn) {
             return false;
         }
-        if k + 1 < M && !(d[k].cross(d[k + 1]).dot(normal) > 0.0) {
+        if k + 1 < M && !(fan[k].dot(normal) > 0.0) {
             return false;
         }
-        if k > 1 && !(d[1].cross(d[k]).dot(normal) > 0.0) {
+        if k > 2 && !(d[1].cross(d[k]).dot(normal) > 0.0) {
             return false;
         }
     }

@@ -8,6 +8,7 @@ mod lambert;
 mod lambert_clipped;
 mod lambert_far;
 mod lambert_polygon;
+mod lanes;
 pub mod marched;
 pub mod polygon;
 pub mod segment;
