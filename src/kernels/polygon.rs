@@ -18,8 +18,8 @@ use super::dd;
 
 mod near_plane_triangle;
 mod sliver;
-pub(crate) use near_plane_triangle::triangle_value as near_plane_triangle_value;
 use super::form_factor::{clip_edge_term, frame_term, outer_self, sym_outer, EdgeFrame, ExactEnds};
+pub(crate) use near_plane_triangle::triangle_value as near_plane_triangle_value;
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).
 pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;
@@ -793,6 +793,7 @@ impl From<EdgeFrame> for InPlaneEdge {
 /// `None` when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near
 /// its line in the plane, which includes x near a clip vertex), a term is undefined, or the parts
 /// sum to less than `1/max_cancellation` of their magnitudes.
+#[inline]
 fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     verts: &[ClipVertex],
     frames: &[Option<E>],
@@ -922,6 +923,7 @@ type Frames = SmallVec<[Option<EdgeFrame>; 10]>;
 /// number of the loop projected along the dominant axis of `N̂` (bridges along the clip line cross
 /// in pairs and leave the parity alone). Only used to choose between two accurate evaluations
 /// (see [`evaluate`]), so a foot on or next to the boundary may go either way.
+#[inline]
 fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
     let project = dominant_projection(plane_n);
     let foot = project(plane_n * h_p);
@@ -989,7 +991,10 @@ fn tangent_excess(d: f64, len: f64, p: f64, c: f64, nt2: f64) -> (f64, f64) {
     let u_minus_v = d * len * one_minus_c * (p - c * d2) / ((d2 + p) * (cd2 + p));
     // β(cD) = atan(v): its second argument c²D² + P is positive.
     let beta_c = atan_small(v);
-    (atan_small(u_minus_v / (1.0 + u * v)) + one_minus_c * beta_c, beta_c)
+    (
+        atan_small(u_minus_v / (1.0 + u * v)) + one_minus_c * beta_c,
+        beta_c,
+    )
 }
 
 /// What [`near_plane_deficit`] returns for one edge.

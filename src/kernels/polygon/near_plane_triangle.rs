@@ -68,8 +68,7 @@ fn triangle_value_in(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     // Nothing can be clipped when every rounded height over the tangent plane is positive beyond
     // its rounding bound (as in the fast paths): the common case leaves before any
     // double-double arithmetic.
-    if r
-        .iter()
+    if r.iter()
         .all(|rk| n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs()))
     {
         return None;
@@ -89,7 +88,8 @@ fn triangle_value_in(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
         .map(|rk| rk.length_squared())
         .fold(0.0, f64::max)
         .sqrt();
-    if !(h_rounded.abs() > 4.0 * f64::EPSILON * r_max && h_rounded.abs() < NEAR_PLANE_HEIGHT * r_max)
+    if !(h_rounded.abs() > 4.0 * f64::EPSILON * r_max
+        && h_rounded.abs() < NEAR_PLANE_HEIGHT * r_max)
     {
         return None;
     }
@@ -104,7 +104,8 @@ fn triangle_value_in(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
             continue;
         }
         let e = u[j] - u[i];
-        if !(h_rounded.abs() * e.length() < NEAR_PLANE_RATIO * plane.normal.dot(r[i].cross(e)).abs())
+        if !(h_rounded.abs() * e.length()
+            < NEAR_PLANE_RATIO * plane.normal.dot(r[i].cross(e)).abs())
         {
             return None;
         }
@@ -315,7 +316,95 @@ mod tests {
         // Every configuration where the robust path takes its split for the value, the route
         // takes too.
         assert_eq!(taken, split, "route {taken}, robust split {split}");
+        println!("route taken in {taken} of 20000 configurations");
         assert!(taken > 2000, "{taken}");
+    }
+
+    /// The entry point's value on both sides of the switch in `t` between the route answering (at
+    /// `t0`) and declining (at `t1`), bisected until the two points are adjacent (their `x` a few
+    /// ulps apart; `n` fixed): the two sides (the route, and the robust path's edge sum or
+    /// quadrature) agree to 1e-12 of the value beyond the first-order change `∇F·Δx` (the
+    /// gradient from the robust path on the declining side). Returns that excess, relative.
+    fn across_the_switch(
+        x_of: &dyn Fn(f64) -> DVec3,
+        n: DVec3,
+        v: [DVec3; 3],
+        (mut t0, mut t1): (f64, f64),
+    ) -> f64 {
+        let route = |t: f64| triangle_value(x_of(t), n, v);
+        assert!(
+            route(t0).is_some() && route(t1).is_none(),
+            "no switch in [{t0}, {t1}]"
+        );
+        for _ in 0..200 {
+            let mid = 0.5 * (t0 + t1);
+            if mid == t0 || mid == t1 {
+                break;
+            }
+            if route(mid).is_some() {
+                t0 = mid;
+            } else {
+                t1 = mid;
+            }
+        }
+        let entry = |t: f64, order| {
+            let x = x_of(t);
+            crate::kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order).unwrap()
+        };
+        let (a, b) = (entry(t0, Order::Value).value, entry(t1, Order::Gradient));
+        let change = b.gradient.dot(x_of(t1) - x_of(t0));
+        ((b.value - a - change).abs() - 1e-9 * change.abs()).max(0.0) / a
+    }
+
+    /// Continuity where the route starts or stops answering, for fat random triangles at scales
+    /// 1e-3..1e3 and tilts 10-80 degrees: x's foot approaching an edge line outside the triangle
+    /// (the split's limit `|h_P| = 0.1 d_e`, 1e-5 and 1e-8 sizes from the plane) and x rising
+    /// through the near-plane limit (`|h_P| = 1e-3 r_max`) outside the triangle.
+    #[test]
+    fn continuous_where_the_route_switches() {
+        let mut state = 17;
+        let mut worst = [0.0f64; 2];
+        for k in 0..24 {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let mut c = || lcg(&mut state);
+            let v = [
+                DVec3::new(0.0, 0.0, 1.0),
+                DVec3::new(1.0, 0.1 * c(), 1.2),
+                DVec3::new(0.2 + 0.3 * c(), 0.9, 0.8),
+            ]
+            .map(|p| p * scale);
+            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            let e = (v[1] - v[0]).normalize();
+            // Away from the triangle, beside edge (0, 1), past its midpoint.
+            let out = plane_n.cross(e);
+            let out = if out.dot(v[2] - v[0]) > 0.0 {
+                -out
+            } else {
+                out
+            };
+            let base = v[0] + (v[1] - v[0]) * (0.3 + 0.4 * c());
+            let centroid = (v[0] + v[1] + v[2]) / 3.0;
+            let tilt = (10.0 + 70.0 * c()).to_radians();
+            // The receiver tilted about the line from `base` to the centroid, so that its
+            // tangent plane cuts the triangle along that line.
+            let across = plane_n.cross((centroid - base).normalize());
+            let n = (plane_n * tilt.cos() + across * tilt.sin()).normalize();
+            // (a) The foot towards the edge line, h_P fixed.
+            let h = [1e-5, 1e-8][k % 2] * scale;
+            let x_of = |d: f64| base + out * (d * scale) + plane_n * h;
+            let d = h / scale;
+            worst[0] = worst[0].max(across_the_switch(&x_of, n, v, (100.0 * d, 3.0 * d)));
+            // (b) x rising at a foot 0.2 sizes outside, through 1e-3 of r_max.
+            let foot = base + out * (0.2 * scale);
+            let x_of = |t: f64| foot + plane_n * (t * scale);
+            worst[1] = worst[1].max(across_the_switch(&x_of, n, v, (5e-4, 2e-3)));
+        }
+        println!(
+            "jumps beyond the first-order change at the route's switches: edge line {:.1e}, \
+             height 1e-3 {:.1e}",
+            worst[0], worst[1]
+        );
+        assert!(worst.iter().all(|w| *w <= 1e-12), "{worst:?}");
     }
 
     /// Whether `evaluate` takes its near-plane split for the value of this configuration (its
@@ -352,7 +441,8 @@ mod tests {
             .iter()
             .map(|v| (v.r - centroid).length())
             .fold(0.0, f64::max);
-        if far_field_rule(centroid.length(), radius).is_some() || foot_inside(&loop_, plane.normal, h_p)
+        if far_field_rule(centroid.length(), radius).is_some()
+            || foot_inside(&loop_, plane.normal, h_p)
         {
             return false;
         }
