@@ -91,11 +91,6 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     if !r.iter().all(|rk| lambert::in_range(*rk)) {
         return None;
     }
-    // The geometric declines first: they need neither the normal nor the heights, and outside the
-    // triangle near its plane (the robust path's near-plane split) they decide alone.
-    if left_to_the_robust_path(&v, &r) {
-        return None;
-    }
     let n = lambert::unit(n)?;
     let heights = r.map(|rk| n.dot(rk));
     // The computed heights err by less than half of this (see the module documentation).
@@ -110,6 +105,9 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     }
     let kept = above.iter().filter(|&&a| a).count();
     if kept == 0 || kept == 3 {
+        return None;
+    }
+    if left_to_the_robust_path(&v, &r) {
         return None;
     }
     let exact: [Dd3; 3] = std::array::from_fn(|k| from_parts(r[k], difference_error(v[k], x)));
@@ -189,8 +187,7 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
 /// size from the plane outside the triangle (the sum cancels by about size/height).
 fn left_to_the_robust_path(v: &[DVec3; 3], r: &[DVec3; 3]) -> bool {
     let normal = (v[1] - v[0]).cross(v[2] - v[0]);
-    let len = [r[0].length(), r[1].length(), r[2].length()];
-    let r_max = len[0].max(len[1]).max(len[2]);
+    let r_max = r.iter().fold(0.0f64, |m, rk| m.max(rk.length()));
     let height = normal.dot(r[0]).abs();
     let scale = normal.length();
     if height >= 1e-3 * scale * r_max {
@@ -201,8 +198,8 @@ fn left_to_the_robust_path(v: &[DVec3; 3], r: &[DVec3; 3]) -> bool {
         let j = (i + 1) % 3;
         let w = r[i].cross(r[j]);
         sides[i] = normal.dot(w);
-        // The sine only where the edge is seen under an obtuse angle.
-        if r[i].dot(r[j]) < 0.0 && w.length() < 1e-3 * len[i] * len[j] {
+        let (c, s) = (r[i].dot(r[j]), w.length());
+        if c < 0.0 && s < 1e-3 * r[i].length() * r[j].length() {
             return true;
         }
     }
