@@ -15,7 +15,7 @@ use glam::DVec3;
 
 use super::{
     edge_vector, exact_height_of, far_field_rule, foot_inside, near_plane_value, next,
-    triangle_plane, ClipVertex, InPlaneEdge, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO,
+    triangle_plane, ClipVertex, InPlaneEdge, Plane, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO,
     SPLIT_CANCELLATION_LIMIT,
 };
 use crate::kernels::dd::{self, Dd3};
@@ -31,27 +31,29 @@ use crate::kernels::lambert;
 // Not inlined: the callers that do not take it pay for the call's test only.
 #[inline(never)]
 pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
+    let s = screen(x, n, v)?;
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx2_fma() {
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
-        return unsafe { triangle_value_fma(x, n, v) };
+        return unsafe { split_fma(x, v, &s) };
     }
-    triangle_value_in(x, n, v)
+    split(x, v, &s)
 }
 
-/// [`triangle_value`] compiled with FMA: the double-double products (exact height, clip points)
-/// become single instructions instead of calls to `fma`. The fused product's error term is exact
-/// either way, and nothing else is fused (Rust does not contract `a * b + c`), so the bits are
-/// those of the portable build.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn triangle_value_fma(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
-    triangle_value_in(x, n, v)
+/// What [`screen`] hands to [`split`].
+struct Screened {
+    r: [DVec3; 3],
+    u: [DVec3; 3],
+    /// The unit receiver normal.
+    n: DVec3,
+    plane: Plane,
 }
 
+/// The robust path's decisions that need no double-double arithmetic (in its order), and a cheap
+/// f64 test of the split's edge-line limit; `None` where the route declines.
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
-fn triangle_value_in(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
+fn screen(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Screened> {
     if !(x.is_finite() && v.iter().all(|vk| vk.is_finite())) {
         return None;
     }
@@ -110,6 +112,24 @@ fn triangle_value_in(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
             return None;
         }
     }
+    Some(Screened { r, u, n, plane })
+}
+
+/// [`split`] compiled with FMA: the double-double products (exact height, clip points) become
+/// single instructions instead of calls to `fma`. The fused product's error term is exact either
+/// way, and nothing else is fused (Rust does not contract `a * b + c`), so the bits are those of
+/// the portable build.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn split_fma(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
+    split(x, v, s)
+}
+
+/// The exact height, the clip, the remaining decisions and the split itself.
+#[inline(always)]
+fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
+    let Screened { r, u, n, plane } = s;
+    let (r, u, n) = (*r, *u, *n);
     let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
     let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
     let h_p = exact_height_of(&r, &r_lo, plane.twice_area);
@@ -287,14 +307,16 @@ mod tests {
     #[test]
     fn the_route_returns_the_robust_bits() {
         let mut state = 5;
-        let (mut taken, mut split) = (0, 0);
+        let (mut taken, mut robust_split) = (0, 0);
         for k in 0..20000 {
             let scale = [1e-3, 1.0, 1e3][k % 3];
             let (x, n, v) = configuration(&mut state, scale);
             let got = triangle_value(x, n, v);
             assert_eq!(
                 got.map(f64::to_bits),
-                triangle_value_in(x, n, v).map(f64::to_bits),
+                screen(x, n, v)
+                    .and_then(|s| split(x, v, &s))
+                    .map(f64::to_bits),
                 "{k}: dispatch vs portable"
             );
             let Ok(want) = form_factor(x, n, &v, Order::Value) else {
@@ -311,11 +333,14 @@ mod tests {
             if let (Ok(value), Ok(hessian)) = (entry(Order::Value), entry(Order::Hessian)) {
                 assert_eq!(value.value.to_bits(), hessian.value.to_bits(), "{k}: order");
             }
-            split += usize::from(robust_takes_the_split(x, n, v));
+            robust_split += usize::from(robust_takes_the_split(x, n, v));
         }
         // Every configuration where the robust path takes its split for the value, the route
         // takes too.
-        assert_eq!(taken, split, "route {taken}, robust split {split}");
+        assert_eq!(
+            taken, robust_split,
+            "route {taken}, robust split {robust_split}"
+        );
         println!("route taken in {taken} of 20000 configurations");
         assert!(taken > 2000, "{taken}");
     }
