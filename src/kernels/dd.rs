@@ -1,11 +1,14 @@
 //! Double-double arithmetic (`hi + lo`, ~106 significant bits) from the error-free transformations
 //! two-sum and two-product (fused multiply-add). The kernels use it only for the few quantities that
 //! are near-singular in their inputs (heights over a plane or an edge line, exact coordinate
-//! differences), so the generic paths keep plain `f64` speed.
+//! differences), so the generic paths keep plain `f64` speed. Every operation is forced inline:
+//! callers compiled with FMA enabled (see `polygon::near_plane_triangle`) then get the fused
+//! multiply-add as one instruction instead of a call per product.
 
 use glam::DVec3;
 
 /// `a + b = s + err` exactly.
+#[inline(always)]
 pub(crate) fn two_sum(a: f64, b: f64) -> (f64, f64) {
     let s = a + b;
     let bb = s - a;
@@ -21,16 +24,19 @@ pub(crate) struct Dd {
 
 impl Dd {
     /// `hi + lo`, renormalized.
+    #[inline(always)]
     pub(crate) fn new(hi: f64, lo: f64) -> Dd {
         let (hi, lo) = two_sum(hi, lo);
         Dd { hi, lo }
     }
 
     /// `a − b` exactly.
+    #[inline(always)]
     pub(crate) fn diff(a: f64, b: f64) -> Dd {
         Dd::new(a, -b)
     }
 
+    #[inline(always)]
     pub(crate) fn add(self, o: Dd) -> Dd {
         let (s, e) = two_sum(self.hi, o.hi);
         let e = e + self.lo + o.lo;
@@ -41,6 +47,7 @@ impl Dd {
         }
     }
 
+    #[inline(always)]
     pub(crate) fn neg(self) -> Dd {
         Dd {
             hi: -self.hi,
@@ -48,10 +55,12 @@ impl Dd {
         }
     }
 
+    #[inline(always)]
     pub(crate) fn sub(self, o: Dd) -> Dd {
         self.add(o.neg())
     }
 
+    #[inline(always)]
     pub(crate) fn mul(self, o: Dd) -> Dd {
         let p = self.hi * o.hi;
         let e = self.hi.mul_add(o.hi, -p) + (self.hi * o.lo + self.lo * o.hi);
@@ -64,6 +73,7 @@ impl Dd {
 
     /// Product with a plain `f64`: [`Dd::mul`] with `o.lo = 0`, without its two zero-valued
     /// terms (it gives the same bits up to the sign of a zero `lo`).
+    #[inline(always)]
     pub(crate) fn mul_f64(self, f: f64) -> Dd {
         let p = self.hi * f;
         let e = self.hi.mul_add(f, -p) + self.lo * f;
@@ -74,6 +84,7 @@ impl Dd {
         }
     }
 
+    #[inline(always)]
     pub(crate) fn div(self, o: Dd) -> Dd {
         let q1 = self.hi / o.hi;
         let rem = self.sub(o.mul(Dd { hi: q1, lo: 0.0 }));
@@ -82,6 +93,7 @@ impl Dd {
     }
 
     /// Square root (one Newton correction of the f64 root); 0 for non-positive input.
+    #[inline(always)]
     pub(crate) fn sqrt(self) -> Dd {
         if self.hi <= 0.0 {
             return Dd { hi: 0.0, lo: 0.0 };
@@ -98,6 +110,7 @@ impl Dd {
     }
 
     /// Multiplication by a power of two (exact).
+    #[inline(always)]
     pub(crate) fn scale(self, f: f64) -> Dd {
         Dd {
             hi: self.hi * f,
@@ -105,6 +118,7 @@ impl Dd {
         }
     }
 
+    #[inline(always)]
     pub(crate) fn to_f64(self) -> f64 {
         self.hi + self.lo
     }
@@ -120,6 +134,7 @@ pub(crate) struct Dd3 {
 
 impl Dd3 {
     /// `hi + lo` componentwise, renormalized.
+    #[inline(always)]
     pub(crate) fn new(hi: DVec3, lo: DVec3) -> Dd3 {
         Dd3 {
             x: Dd::new(hi.x, lo.x),
@@ -133,7 +148,7 @@ impl Dd3 {
     /// of [`Dd3::new`] for such pairs (signed zeros included) with two additions per component
     /// instead of a two-sum. For other pairs `hi + lo` is still the exact sum but `lo` is left as
     /// it is (not renormalized).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn from_parts(hi: DVec3, lo: DVec3) -> Dd3 {
         // With hi = fl(hi + lo), two-sum returns hi itself (and zeros as hi + lo does) and lo up
         // to the sign of a zero, which it always returns positive: `lo + 0.0`.
@@ -149,10 +164,12 @@ impl Dd3 {
     }
 
     /// `a − b` exactly.
+    #[inline(always)]
     pub(crate) fn diff(a: DVec3, b: DVec3) -> Dd3 {
         Dd3::new(a, -b)
     }
 
+    #[inline(always)]
     pub(crate) fn cross(&self, o: &Dd3) -> Dd3 {
         Dd3 {
             x: self.y.mul(o.z).sub(self.z.mul(o.y)),
@@ -161,6 +178,7 @@ impl Dd3 {
         }
     }
 
+    #[inline(always)]
     pub(crate) fn add(&self, o: &Dd3) -> Dd3 {
         Dd3 {
             x: self.x.add(o.x),
@@ -169,6 +187,7 @@ impl Dd3 {
         }
     }
 
+    #[inline(always)]
     pub(crate) fn sub(&self, o: &Dd3) -> Dd3 {
         Dd3 {
             x: self.x.sub(o.x),
@@ -178,6 +197,7 @@ impl Dd3 {
     }
 
     /// Product with a double-double scalar.
+    #[inline(always)]
     pub(crate) fn scale(&self, f: Dd) -> Dd3 {
         Dd3 {
             x: self.x.mul(f),
@@ -187,6 +207,7 @@ impl Dd3 {
     }
 
     /// Multiplication by a power of two (exact).
+    #[inline(always)]
     pub(crate) fn scale_pow2(&self, f: f64) -> Dd3 {
         Dd3 {
             x: self.x.scale(f),
@@ -195,11 +216,13 @@ impl Dd3 {
         }
     }
 
+    #[inline(always)]
     pub(crate) fn dot(&self, o: &Dd3) -> Dd {
         self.x.mul(o.x).add(self.y.mul(o.y)).add(self.z.mul(o.z))
     }
 
     /// `self · v` for an f64 vector.
+    #[inline(always)]
     pub(crate) fn dot_f64(&self, v: DVec3) -> Dd {
         // `dot` with `Dd3::new(v, 0)` (an exact, renormalization-free pair) spelled with
         // `mul_f64`: the same sums of the same products, about half the operations.
@@ -210,6 +233,7 @@ impl Dd3 {
     }
 
     /// The leading parts (`hi`) and the remainders (`lo`).
+    #[inline(always)]
     pub(crate) fn split(&self) -> (DVec3, DVec3) {
         (
             DVec3::new(self.x.hi, self.y.hi, self.z.hi),
@@ -217,6 +241,7 @@ impl Dd3 {
         )
     }
 
+    #[inline(always)]
     pub(crate) fn to_dvec3(self) -> DVec3 {
         DVec3::new(self.x.to_f64(), self.y.to_f64(), self.z.to_f64())
     }

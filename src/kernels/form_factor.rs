@@ -165,6 +165,11 @@ pub fn triangle_form_factor(
         if let Some(f) = lambert_value() {
             return Ok(Deriv3::constant(f));
         }
+        // x near the plane outside the visible part: the robust path's near-plane split (its
+        // bits) without the robust path's set-up.
+        if let Some(f) = polygon::near_plane_triangle_value(x, n, [a, b, c]) {
+            return Ok(Deriv3::constant(f));
+        }
         if maybe_far(&[a, b, c], x) {
             if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
                 return Ok(d);
@@ -306,7 +311,7 @@ pub(crate) struct EdgeFrame {
 /// Below this `‖w‖ / (‖r_a‖ ‖e‖)` (the sine of the angle between `r_a` and the edge), the f64 cross
 /// product `w = r_a × e` has lost more than ~1% of its digits to the rounding of `r_a` and `e`, and
 /// [`EdgeFrame::with_exact_ends`] recomputes it in double-double from the exact endpoints.
-const NEAR_LINE_SINE: f64 = 1e-2;
+pub(crate) const NEAR_LINE_SINE: f64 = 1e-2;
 
 impl EdgeFrame {
     /// `None` for a zero-length edge.

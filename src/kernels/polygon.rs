@@ -16,8 +16,10 @@ use crate::{Deriv3, Order};
 
 use super::dd;
 
+mod near_plane_triangle;
 mod sliver;
 use super::form_factor::{clip_edge_term, frame_term, outer_self, sym_outer, EdgeFrame, ExactEnds};
+pub(crate) use near_plane_triangle::triangle_value as near_plane_triangle_value;
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).
 pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;
@@ -721,6 +723,31 @@ const NEAR_PLANE_RATIO: f64 = 0.1;
 /// of 1e-12 relative value) by far more.
 const SPLIT_CANCELLATION_LIMIT: f64 = 1e3;
 
+/// What [`near_plane_value`] reads of an edge's frame ([`EdgeFrame`]'s fields of the same names):
+/// the value-only route builds just these.
+#[derive(Clone, Copy)]
+pub(crate) struct InPlaneEdge {
+    pub e_hat: DVec3,
+    pub len: f64,
+    /// `r_a × e`.
+    pub w: DVec3,
+    pub sa: f64,
+    pub sb: f64,
+}
+
+impl From<EdgeFrame> for InPlaneEdge {
+    #[inline]
+    fn from(f: EdgeFrame) -> Self {
+        InPlaneEdge {
+            e_hat: f.e_hat,
+            len: f.len,
+            w: f.w,
+            sa: f.sa,
+            sb: f.sb,
+        }
+    }
+}
+
 /// The signed edge-sum value for x near the polygon's plane, without the cancellation of the plain
 /// sum (the convention of the edge terms, [`frame_term`]: positive when the loop's right-hand normal `N̂`
 /// points away from x, i.e. for `h_P = N̂·(v − x) > 0`; both signs of `h_P` are handled alike).
@@ -766,9 +793,10 @@ const SPLIT_CANCELLATION_LIMIT: f64 = 1e3;
 /// `None` when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near
 /// its line in the plane, which includes x near a clip vertex), a term is undefined, or the parts
 /// sum to less than `1/max_cancellation` of their magnitudes.
-fn near_plane_value(
+#[inline]
+fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     verts: &[ClipVertex],
-    frames: &[Option<EdgeFrame>],
+    frames: &[Option<E>],
     n: DVec3,
     plane_n: DVec3,
     h_p: f64,
@@ -794,6 +822,7 @@ fn near_plane_value(
     // h_P), before any angle is computed.
     for (i, frame) in frames.iter().enumerate() {
         if let Some(f) = frame {
+            let f: InPlaneEdge = (*f).into();
             let on_line = verts[i].on_line && verts[next(i, count)].on_line;
             #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
             if !on_line && !(h_p.abs() * f.len < NEAR_PLANE_RATIO * plane_n.dot(f.w).abs()) {
@@ -821,9 +850,11 @@ fn near_plane_value(
             let sa = a.r.dot(e_hat) + a.r_lo.dot(e_hat);
             let sb = b.r.dot(e_hat) + b.r_lo.dot(e_hat);
             let sigma = (h_p * e.dot(n_x_plane)).signum();
-            let d = sigma * n_par * big_d;
-            turning += (d * len).atan2(sa * sb + d * d);
-            let t = tangent_excess(big_d, len, sa * sb, n_par.abs(), nt2);
+            // Its in-plane angle Δψ_c = atan2(d_c L, s_a s_b + d_c²), d_c = σ n_N D, is
+            // σ sign(n_N) β(|n_N| D), which `tangent_excess` forms anyway (to rounding, which
+            // the winding number's rounding to an integer absorbs).
+            let (t, beta_c) = tangent_excess(big_d, len, sa * sb, n_par.abs(), nt2);
+            turning += (sigma * n_par.signum()) * beta_c;
             tangent += sigma * t;
             magnitude += t.abs();
             continue;
@@ -831,6 +862,7 @@ fn near_plane_value(
         let Some(frame) = frame else {
             continue;
         };
+        let frame: InPlaneEdge = (*frame).into();
         let len = frame.len;
         // Signed in-plane distance of x_P from the edge line: N̂·(r_a × ê), from the (exact when x
         // is near the line) lever arm.
@@ -891,6 +923,7 @@ type Frames = SmallVec<[Option<EdgeFrame>; 10]>;
 /// number of the loop projected along the dominant axis of `N̂` (bridges along the clip line cross
 /// in pairs and leave the parity alone). Only used to choose between two accurate evaluations
 /// (see [`evaluate`]), so a foot on or next to the boundary may go either way.
+#[inline]
 fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
     let project = dominant_projection(plane_n);
     let foot = project(plane_n * h_p);
@@ -943,18 +976,25 @@ fn atan_small(z: f64) -> f64 {
 /// `u − v = DL (1 − c)(P − cD²)/((D² + P)(c²D² + P))`, with `1 − c = ‖n_t‖²/(1 + c)`: every part
 /// carries its factor `1 − c` explicitly, so nothing cancels. Otherwise (`P ≤ 0`, the foot's
 /// projection on the edge's line inside the segment) the angles are not small and are subtracted
-/// as they are.
-fn tangent_excess(d: f64, len: f64, p: f64, c: f64, nt2: f64) -> f64 {
+/// as they are. Returned with `β(cD)` itself (from the same arctangent where `P > 0`, else the
+/// same `atan2`), which gives the edge's in-plane angle for the winding number.
+fn tangent_excess(d: f64, len: f64, p: f64, c: f64, nt2: f64) -> (f64, f64) {
     let beta = |t: f64| (t * len).atan2(t * t + p);
     if p <= 0.0 {
-        return beta(d) - c * beta(c * d);
+        let beta_c = beta(c * d);
+        return (beta(d) - c * beta_c, beta_c);
     }
     let one_minus_c = nt2 / (1.0 + c);
     let (d2, cd2) = (d * d, c * c * d * d);
     let u = d * len / (d2 + p);
     let v = c * d * len / (cd2 + p);
     let u_minus_v = d * len * one_minus_c * (p - c * d2) / ((d2 + p) * (cd2 + p));
-    atan_small(u_minus_v / (1.0 + u * v)) + one_minus_c * atan_small(v)
+    // β(cD) = atan(v): its second argument c²D² + P is positive.
+    let beta_c = atan_small(v);
+    (
+        atan_small(u_minus_v / (1.0 + u * v)) + one_minus_c * beta_c,
+        beta_c,
+    )
 }
 
 /// What [`near_plane_deficit`] returns for one edge.
@@ -1310,7 +1350,14 @@ const NEAR_PLANE_HEIGHT: f64 = 1e-3;
 /// differences `r_i = v_i − x`: `r_0 · Σ_i r_i × r_{i+1} / (2·area)` with the triple products
 /// `det(r_0, r_i, r_{i+1})` summed in double-double.
 fn exact_height(s: &Scaled, twice_area: f64) -> f64 {
-    let (hi, lo) = (&s.r[..], &s.r_lo[..s.r.len()]);
+    exact_height_of(&s.r, &s.r_lo, twice_area)
+}
+
+/// [`exact_height`] from the parts `hi + lo` of the differences `v_i − x` (inlined into the callers,
+/// which may be compiled with FMA: see `near_plane_triangle`).
+#[inline(always)]
+fn exact_height_of(hi: &[DVec3], lo: &[DVec3], twice_area: f64) -> f64 {
+    let lo = &lo[..hi.len()];
     let r = |i: usize| dd::Dd3::from_parts(hi[i], lo[i]);
     let r0 = r(0);
     let mut volume = dd::Dd::new(0.0, 0.0);
@@ -1675,7 +1722,7 @@ mod tests {
         ] {
             for c in [0.0, 0.3, 0.7] {
                 let direct = beta(d, len, p) - c * beta(c * d, len, p);
-                let got = tangent_excess(d, len, p, c, 1.0 - c * c);
+                let got = tangent_excess(d, len, p, c, 1.0 - c * c).0;
                 assert!(
                     (got - direct).abs() <= 1e-14 * direct.abs(),
                     "d={d} L={len} P={p} c={c}: {got:e} vs {direct:e}"
@@ -1688,7 +1735,7 @@ mod tests {
             let c = (1.0 - nt2).sqrt();
             // β(t) = tL/P − O(t³): the O(D³) remainder is ~1e-18 relative here.
             let series = nt2 * d * len / p;
-            let got = tangent_excess(d, len, p, c, nt2);
+            let got = tangent_excess(d, len, p, c, nt2).0;
             assert!(
                 (got - series).abs() <= 1e-14 * series,
                 "1 − c² = {nt2:e}: {got:e} vs {series:e}"

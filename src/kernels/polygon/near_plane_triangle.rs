@@ -1,0 +1,493 @@
+//! The value of a triangle's form factor with `x` near its plane, outside the part the tangent plane
+//! leaves visible: the robust path's near-plane split ([`near_plane_value`]) without the rest of its
+//! set-up.
+//!
+//! For `Order::Value` in this configuration [`evaluate`](super::evaluate) builds the generic
+//! machinery (growable vectors, Newell's plane with its planarity check, the fan's far-field test,
+//! full edge frames) and then uses only the split. This route replays exactly the decisions and the
+//! operations of that evaluation which the split's result depends on, on fixed-size arrays, so that
+//! it returns the robust path's bits (the gradient and Hessian orders, which still take their value
+//! from the robust path's split, agree with it bit for bit), and declines (`None`) wherever the
+//! robust path would not take the split for the value: `x` not near the plane, nothing clipped, the
+//! foot of `x` inside the clipped loop, the far field, or the split itself declining.
+//!
+//! Its f64 screen runs in the portable build; what follows (the exact height and clip points in
+//! double-double, the frames and the split) is compiled a second time with AVX2 and FMA where the
+//! CPU has them (`RADDIFF_SIMD` caps it, see `simd`), with the same bits. Measured by callgrind on
+//! `benches/kernels_regimes.rs`'s "1e-6 from the plane, outside" value: 6704 instructions per call
+//! through the robust path, 5490 by this route portable, 4571 with FMA (docs/kernels.md, "Hard
+//! regimes").
+
+use glam::DVec3;
+
+use super::{
+    edge_vector, exact_height_of, far_field_rule, foot_inside, near_plane_value, next,
+    triangle_plane, ClipVertex, InPlaneEdge, Plane, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO,
+    SPLIT_CANCELLATION_LIMIT,
+};
+use crate::kernels::dd::{self, Dd3};
+use crate::kernels::form_factor::NEAR_LINE_SINE;
+use crate::kernels::lambert;
+
+/// The value of [`triangle_form_factor`](crate::kernels::triangle_form_factor) for
+/// `Order::Value` (form factor, dimensionless, in `[0, 1]`) when the robust path would take it from
+/// its near-plane split, bit for bit; `None` when it would not (see the module documentation), and
+/// for input outside the unscaled range of
+/// [`triangle_form_factor_in_range`](super::triangle_form_factor_in_range) (coordinate differences
+/// in (1e-30, 1e30)) or invalid input, which the callers leave to the robust path.
+// Not inlined: the callers that do not take it pay for the call's test only.
+#[inline(never)]
+pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
+    let s = screen(x, n, v)?;
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2_fma() {
+        // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
+        return unsafe { split_fma(x, v, &s) };
+    }
+    split(x, v, &s)
+}
+
+/// What [`screen`] hands to [`split`].
+struct Screened {
+    r: [DVec3; 3],
+    u: [DVec3; 3],
+    /// The unit receiver normal.
+    n: DVec3,
+    plane: Plane,
+}
+
+/// The robust path's decisions that need no double-double arithmetic (in its order), and a cheap
+/// f64 test of the split's edge-line limit; `None` where the route declines.
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+fn screen(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Screened> {
+    if !(x.is_finite() && v.iter().all(|vk| vk.is_finite())) {
+        return None;
+    }
+    let r = v.map(|vk| vk - x);
+    let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
+    // Spelled out: the iterator chain of `triangle_form_factor_in_range` cost ~100 instructions.
+    let largest = (r[0].abs().max(r[1].abs()))
+        .max(r[2].abs().max(u[1].abs().max(u[2].abs())))
+        .max_element();
+    if !(largest > 1e-30 && largest < 1e30) {
+        return None;
+    }
+    let n = lambert::unit(n)?;
+    // Nothing can be clipped when every rounded height over the tangent plane is positive beyond
+    // its rounding bound (as in the fast paths): the common case leaves before any
+    // double-double arithmetic.
+    if r.iter()
+        .all(|rk| n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs()))
+    {
+        return None;
+    }
+    let plane = triangle_plane(&u)?;
+    // The first nearest vertex, as `evaluate`'s `min_by` picks it.
+    let mut nearest = r[0];
+    for rk in &r[1..] {
+        if rk.length_squared() < nearest.length_squared() {
+            nearest = *rk;
+        }
+    }
+    let h_rounded = plane.normal.dot(nearest);
+    // One root for r_max: the root of the largest square is the largest root.
+    let r_max = r
+        .iter()
+        .map(|rk| rk.length_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
+    if !(h_rounded.abs() > 4.0 * f64::EPSILON * r_max
+        && h_rounded.abs() < NEAR_PLANE_HEIGHT * r_max)
+    {
+        return None;
+    }
+    // The split declines when x's foot is within 10 |h_P| of the line of an edge of the clipped
+    // loop (x near an edge line, or near a clip vertex): those edges lie on the lines of the
+    // triangle's edges that keep a vertex above the tangent plane. Tested here in f64 on the
+    // triangle's edges, before the double-double set-up; a decline only sends the call to the
+    // robust path, which takes the same decisions exactly.
+    for i in 0..3 {
+        let j = next(i, 3);
+        if n.dot(r[i]) < 0.0 && n.dot(r[j]) < 0.0 {
+            continue;
+        }
+        let e = u[j] - u[i];
+        if !(h_rounded.abs() * e.length()
+            < NEAR_PLANE_RATIO * plane.normal.dot(r[i].cross(e)).abs())
+        {
+            return None;
+        }
+    }
+    Some(Screened { r, u, n, plane })
+}
+
+/// [`split`] compiled with FMA: the double-double products (exact height, clip points) become
+/// single instructions instead of calls to `fma`. The fused product's error term is exact either
+/// way, and nothing else is fused (Rust does not contract `a * b + c`), so the bits are those of
+/// the portable build.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn split_fma(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
+    split(x, v, s)
+}
+
+/// The exact height, the clip, the remaining decisions and the split itself.
+#[inline(always)]
+fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
+    let Screened { r, u, n, plane } = s;
+    let (r, u, n) = (*r, *u, *n);
+    let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
+    let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
+    let h_p = exact_height_of(&r, &r_lo, plane.twice_area);
+    let (loop_, count) = clip_triangle(&u, &r, &r_lo, n)?;
+    let verts = &loop_[..count];
+    let centroid = verts.iter().map(|v| v.r).sum::<DVec3>() / count as f64;
+    let radius = verts
+        .iter()
+        .map(|v| (v.r - centroid).length_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
+    if far_field_rule(centroid.length(), radius).is_some() {
+        return None;
+    }
+    if foot_inside(verts, plane.normal, h_p) {
+        return None;
+    }
+    let mut frames = [None; 4];
+    for (i, frame) in frames[..count].iter_mut().enumerate() {
+        let (a, b) = (&verts[i], &verts[next(i, count)]);
+        if !(a.on_line && b.on_line) {
+            *frame = in_plane_edge(a, b);
+        }
+    }
+    let value = near_plane_value(
+        verts,
+        &frames[..count],
+        n,
+        plane.normal,
+        h_p,
+        SPLIT_CANCELLATION_LIMIT,
+    )?;
+    // The edge sum's sign convention, then the clamp of the visible part's value.
+    let value = if h_p < 0.0 { -value } else { value };
+    let value = value.clamp(0.0, 1.0);
+    value.is_finite().then_some(value)
+}
+
+/// [`clip`](super::clip) for a triangle, on a fixed array (the same operations, so the same
+/// vertices): the loop and its length, `None` when nothing is cut away or fewer than three
+/// vertices remain.
+#[inline(always)]
+fn clip_triangle(
+    u: &[DVec3; 3],
+    r: &[DVec3; 3],
+    r_lo: &[DVec3; 3],
+    n: DVec3,
+) -> Option<([ClipVertex; 4], usize)> {
+    let exact = [
+        Dd3::from_parts(r[0], r_lo[0]),
+        Dd3::from_parts(r[1], r_lo[1]),
+        Dd3::from_parts(r[2], r_lo[2]),
+    ];
+    // Written out: `[0, 1, 2].map` of the products did not inline (~450 instructions).
+    let d = [
+        exact[0].dot_f64(n),
+        exact[1].dot_f64(n),
+        exact[2].dot_f64(n),
+    ];
+    let mut out = [ClipVertex {
+        u: DVec3::ZERO,
+        r: DVec3::ZERO,
+        r_lo: DVec3::ZERO,
+        on_line: false,
+    }; 4];
+    let (mut count, mut cut) = (0, false);
+    for i in 0..3 {
+        let j = next(i, 3);
+        let (di, dj) = (d[i].hi, d[j].hi);
+        if di >= 0.0 {
+            out[count] = ClipVertex {
+                u: u[i],
+                r: r[i],
+                r_lo: r_lo[i],
+                on_line: di == 0.0,
+            };
+            count += 1;
+        } else {
+            cut = true;
+        }
+        if (di > 0.0 && dj < 0.0) || (di < 0.0 && dj > 0.0) {
+            let t = d[i].div(d[i].add(d[j].neg()));
+            let (ri, rj) = (exact[i], exact[j]);
+            let (rc, rc_lo) = ri.add(&rj.sub(&ri).scale(t)).split();
+            out[count] = ClipVertex {
+                u: u[i] + t.hi * (u[j] - u[i]),
+                r: rc,
+                r_lo: rc_lo,
+                on_line: true,
+            };
+            count += 1;
+        }
+    }
+    (cut && count >= 3).then_some((out, count))
+}
+
+/// The parts of [`EdgeFrame::with_exact_ends`](crate::kernels::form_factor::EdgeFrame) that
+/// [`near_plane_value`] reads, by the same operations (the double-double cross product and
+/// abscissae when x is near the edge's line); `None` for a zero-length edge.
+#[inline(always)]
+fn in_plane_edge(a: &ClipVertex, b: &ClipVertex) -> Option<InPlaneEdge> {
+    let e = edge_vector(a, b);
+    let len = e.length();
+    if len == 0.0 {
+        return None;
+    }
+    let e_hat = e / len;
+    let mut w = a.r.cross(e);
+    let mut sa = a.r.dot(e_hat);
+    let mut sb = sa + len;
+    let bound = NEAR_LINE_SINE * len;
+    if w.length_squared() < bound * bound * a.r.length_squared() {
+        // `ExactEnds::cross`: r_a × r_b in double-double, rounded once.
+        w = Dd3::from_parts(a.r, a.r_lo)
+            .cross(&Dd3::from_parts(b.r, b.r_lo))
+            .to_dvec3();
+        sa = a.r.dot(e_hat) + a.r_lo.dot(e_hat);
+        sb = b.r.dot(e_hat) + b.r_lo.dot(e_hat);
+    }
+    Some(InPlaneEdge {
+        e_hat,
+        len,
+        w,
+        sa,
+        sb,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernels::polygon::form_factor;
+    use crate::Order;
+
+    fn lcg(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A random configuration near the triangle's plane: a triangle of size `scale` (offset from
+    /// the origin), `x` at a random in-plane point (inside or outside, near edges and vertices
+    /// too) lifted by `±10^-(1..13)` sizes, and a receiver normal tilted by 2-88 degrees from the
+    /// plane's, so that the tangent plane usually cuts the triangle.
+    fn configuration(state: &mut u64, scale: f64) -> (DVec3, DVec3, [DVec3; 3]) {
+        let mut c = || lcg(state);
+        let offset = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5) * 10.0 * scale;
+        let mut p = || DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5) * scale + offset;
+        let v = [p(), p(), p()];
+        let mut c = || lcg(state);
+        let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+        // Barycentric coordinates in [-1, 2): outside more often than inside.
+        let (a, b) = (3.0 * c() - 1.0, 3.0 * c() - 1.0);
+        let mut foot = v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b;
+        if c() < 0.2 {
+            // On an edge's line or at a vertex, where the split declines.
+            let k = (3.0 * c()) as usize % 3;
+            foot = v[k] + (v[(k + 1) % 3] - v[k]) * (3.0 * c() - 1.0) * f64::from(c() < 0.5);
+        }
+        let side = if c() < 0.5 { -1.0 } else { 1.0 };
+        let x = foot + plane_n * side * scale * 10f64.powf(-1.0 - 12.0 * c());
+        let tilt = (2.0 + 86.0 * c()).to_radians();
+        let t = plane_n.any_orthonormal_vector();
+        let phi = 6.3 * c();
+        let t = t * phi.cos() + plane_n.cross(t) * phi.sin();
+        let n = (plane_n * tilt.cos() + t * tilt.sin()).normalize();
+        let n = if c() < 0.5 { n } else { -n };
+        (x, n, v)
+    }
+
+    /// Wherever the route answers it returns the robust evaluation's bits, with and without FMA, and
+    /// it answers wherever the robust evaluation takes its near-plane split for the value; the
+    /// entry point's value is the same at every order.
+    #[test]
+    fn the_route_returns_the_robust_bits() {
+        let mut state = 5;
+        let (mut taken, mut robust_split) = (0, 0);
+        for k in 0..20000 {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let (x, n, v) = configuration(&mut state, scale);
+            let got = triangle_value(x, n, v);
+            assert_eq!(
+                got.map(f64::to_bits),
+                screen(x, n, v)
+                    .and_then(|s| split(x, v, &s))
+                    .map(f64::to_bits),
+                "{k}: dispatch vs portable"
+            );
+            let Ok(want) = form_factor(x, n, &v, Order::Value) else {
+                assert!(got.is_none(), "{k}");
+                continue;
+            };
+            if let Some(f) = got {
+                taken += 1;
+                assert_eq!(f.to_bits(), want.value.to_bits(), "{k}: {x:?} {n:?} {v:?}");
+            }
+            // The entry point's value does not depend on the order (the route serves the value
+            // order where Lambert's certified sums decline).
+            let entry = |order| crate::kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order);
+            if let (Ok(value), Ok(hessian)) = (entry(Order::Value), entry(Order::Hessian)) {
+                assert_eq!(value.value.to_bits(), hessian.value.to_bits(), "{k}: order");
+            }
+            robust_split += usize::from(robust_takes_the_split(x, n, v));
+        }
+        // Every configuration where the robust path takes its split for the value, the route
+        // takes too.
+        assert_eq!(
+            taken, robust_split,
+            "route {taken}, robust split {robust_split}"
+        );
+        println!("route taken in {taken} of 20000 configurations");
+        assert!(taken > 2000, "{taken}");
+    }
+
+    /// The entry point's value on both sides of the switch in `t` between the route answering (at
+    /// `t0`) and declining (at `t1`), bisected until the two points are adjacent (their `x` a few
+    /// ulps apart; `n` fixed): the two sides (the route, and the robust path's edge sum or
+    /// quadrature) agree to 1e-12 of the value beyond the first-order change `∇F·Δx` (the
+    /// gradient from the robust path on the declining side). Returns that excess, relative.
+    fn across_the_switch(
+        x_of: &dyn Fn(f64) -> DVec3,
+        n: DVec3,
+        v: [DVec3; 3],
+        (mut t0, mut t1): (f64, f64),
+    ) -> f64 {
+        let route = |t: f64| triangle_value(x_of(t), n, v);
+        assert!(
+            route(t0).is_some() && route(t1).is_none(),
+            "no switch in [{t0}, {t1}]"
+        );
+        for _ in 0..200 {
+            let mid = 0.5 * (t0 + t1);
+            if mid == t0 || mid == t1 {
+                break;
+            }
+            if route(mid).is_some() {
+                t0 = mid;
+            } else {
+                t1 = mid;
+            }
+        }
+        let entry = |t: f64, order| {
+            let x = x_of(t);
+            crate::kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order).unwrap()
+        };
+        let (a, b) = (entry(t0, Order::Value).value, entry(t1, Order::Gradient));
+        let change = b.gradient.dot(x_of(t1) - x_of(t0));
+        ((b.value - a - change).abs() - 1e-9 * change.abs()).max(0.0) / a
+    }
+
+    /// Continuity where the route starts or stops answering, for fat random triangles at scales
+    /// 1e-3..1e3 and tilts 10-80 degrees: x's foot approaching an edge line outside the triangle
+    /// (the split's limit `|h_P| = 0.1 d_e`, 1e-5 and 1e-8 sizes from the plane) and x rising
+    /// through the near-plane limit (`|h_P| = 1e-3 r_max`) outside the triangle.
+    #[test]
+    fn continuous_where_the_route_switches() {
+        let mut state = 17;
+        let mut worst = [0.0f64; 2];
+        for k in 0..24 {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let mut c = || lcg(&mut state);
+            let v = [
+                DVec3::new(0.0, 0.0, 1.0),
+                DVec3::new(1.0, 0.1 * c(), 1.2),
+                DVec3::new(0.2 + 0.3 * c(), 0.9, 0.8),
+            ]
+            .map(|p| p * scale);
+            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            let e = (v[1] - v[0]).normalize();
+            // Away from the triangle, beside edge (0, 1), past its midpoint.
+            let out = plane_n.cross(e);
+            let out = if out.dot(v[2] - v[0]) > 0.0 {
+                -out
+            } else {
+                out
+            };
+            let base = v[0] + (v[1] - v[0]) * (0.3 + 0.4 * c());
+            let centroid = (v[0] + v[1] + v[2]) / 3.0;
+            let tilt = (10.0 + 70.0 * c()).to_radians();
+            // The receiver tilted about the line from `base` to the centroid, so that its
+            // tangent plane cuts the triangle along that line.
+            let across = plane_n.cross((centroid - base).normalize());
+            let n = (plane_n * tilt.cos() + across * tilt.sin()).normalize();
+            // (a) The foot towards the edge line, h_P fixed.
+            let h = [1e-5, 1e-8][k % 2] * scale;
+            let x_of = |d: f64| base + out * (d * scale) + plane_n * h;
+            let d = h / scale;
+            worst[0] = worst[0].max(across_the_switch(&x_of, n, v, (100.0 * d, 3.0 * d)));
+            // (b) x rising at a foot 0.2 sizes outside, through 1e-3 of r_max.
+            let foot = base + out * (0.2 * scale);
+            let x_of = |t: f64| foot + plane_n * (t * scale);
+            worst[1] = worst[1].max(across_the_switch(&x_of, n, v, (5e-4, 2e-3)));
+        }
+        println!(
+            "jumps beyond the first-order change at the route's switches: edge line {:.1e}, \
+             height 1e-3 {:.1e}",
+            worst[0], worst[1]
+        );
+        assert!(worst.iter().all(|w| *w <= 1e-12), "{worst:?}");
+    }
+
+    /// Whether `evaluate` takes its near-plane split for the value of this configuration (its
+    /// decisions, through the route's own steps but with the robust path's `clip` and frames).
+    fn robust_takes_the_split(x: DVec3, n: DVec3, v: [DVec3; 3]) -> bool {
+        use super::super::{clip, edge_frames, exact_height, ClipLoop, Frames, Plane, Scaled};
+        let Ok(scaled) = Scaled::new(x, &v) else {
+            return false;
+        };
+        let Ok(plane) = Plane::new(&scaled.u) else {
+            return false;
+        };
+        let Ok(n) = super::super::unit_normal(n) else {
+            return false;
+        };
+        let r_max = scaled.r.iter().map(|r| r.length()).fold(0.0, f64::max);
+        let nearest = scaled
+            .r
+            .iter()
+            .min_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
+            .copied()
+            .unwrap();
+        let h = plane.normal.dot(nearest);
+        if h.abs() <= 4.0 * f64::EPSILON * r_max || h.abs() >= NEAR_PLANE_HEIGHT * r_max {
+            return false;
+        }
+        let h_p = exact_height(&scaled, plane.twice_area);
+        let mut loop_ = ClipLoop::new();
+        if !clip(&scaled.u, &scaled.r, &scaled.r_lo, n, &mut loop_) || loop_.len() < 3 {
+            return false;
+        }
+        let centroid = loop_.iter().map(|v| v.r).sum::<DVec3>() / loop_.len() as f64;
+        let radius = loop_
+            .iter()
+            .map(|v| (v.r - centroid).length())
+            .fold(0.0, f64::max);
+        if far_field_rule(centroid.length(), radius).is_some()
+            || foot_inside(&loop_, plane.normal, h_p)
+        {
+            return false;
+        }
+        let mut frames = Frames::new();
+        edge_frames(&loop_, true, &mut frames);
+        near_plane_value(
+            &loop_,
+            &frames,
+            n,
+            plane.normal,
+            h_p,
+            SPLIT_CANCELLATION_LIMIT,
+        )
+        .is_some()
+    }
+}
