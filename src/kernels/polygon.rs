@@ -208,6 +208,10 @@ pub(crate) fn triangle_form_factor_in_range(
     let n = super::lambert::unit(n)?;
     let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
     let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
+    // A sliver seen from afar: the sliver rule without `evaluate`'s set-up (the same bits).
+    if let Some(d) = sliver::unclipped_sliver(&u, &r, &r_lo, n, order) {
+        return Some(Ok(d));
+    }
     let scaled = Scaled {
         u: Points::from_slice(&u),
         r: Points::from_slice(&r),
