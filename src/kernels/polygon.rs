@@ -1371,8 +1371,10 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         .fold(0.0, f64::max);
     let far = far_field_rule(centroid.length(), radius);
     let mut used_quadrature = far.is_some();
-    // Far thinner than the edge sum's limit, a sliver goes to its rule without the edge sum.
-    let sliver = if far.is_none() && plane.is_very_thin() && !(near_plane || cut) {
+    // Far thinner than the edge sum's limit, a sliver goes to its rule without the edge sum, near
+    // its plane too: the rule needs x far from the sliver compared with its width only, and its
+    // height comes from the exact triple product (`sliver_geometry`), not from h_P.
+    let sliver = if far.is_none() && plane.is_very_thin() && !cut {
         sliver::sliver_quadrature(verts, n, order)
     } else {
         None
@@ -1438,9 +1440,9 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                     } else {
                         MAX_PIECES
                     };
-                    // A sliver seen from afar is thin in one direction only: the anisotropic rule
-                    // first.
-                    if plane.is_thin() && !(near_plane || cut) {
+                    // A sliver seen from afar (or from near its plane, but far compared with its
+                    // width) is thin in one direction only: the anisotropic rule first.
+                    if plane.is_thin() && !cut {
                         quadrature = sliver::sliver_quadrature(verts, n, order);
                     }
                     if quadrature.is_none() {
