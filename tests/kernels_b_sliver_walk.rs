@@ -17,7 +17,6 @@
 
 mod kernels_b_common;
 
-use glam::DVec3;
 use kernels_b_common::*;
 use raddiff::{kernels, Deriv3, Order};
 
@@ -46,6 +45,8 @@ fn walk(seed: u64, distances: &[f64]) -> Vec<(f64, [f64; 3], usize, usize)> {
     let mut out = Vec::new();
     for &distance in distances {
         let (mut worst, mut count, mut refused) = ([0.0f64; 3], 0, 0);
+        // apex 1e-6 and thinner: the sliver rule's domain (unless x is too close)
+        let mut worst_thin = [0.0f64; 3];
         for rep in 0..4 {
             let s = 10f64.powf(rng.range(-3.0, 3.0));
             let a = rng.vec(s);
@@ -85,14 +86,15 @@ fn walk(seed: u64, distances: &[f64]) -> Vec<(f64, [f64; 3], usize, usize)> {
                         continue;
                     };
                     let e = errors(&d, &r);
-                    max3(
-                        &mut worst,
-                        [
-                            e[0],
-                            if order.gradient() { e[1] } else { 0.0 },
-                            if order.hessian() { e[2] } else { 0.0 },
-                        ],
-                    );
+                    let e = [
+                        e[0],
+                        if order.gradient() { e[1] } else { 0.0 },
+                        if order.hessian() { e[2] } else { 0.0 },
+                    ];
+                    max3(&mut worst, e);
+                    if height <= 1e-6 {
+                        max3(&mut worst_thin, e);
+                    }
                     let v = *value.get_or_insert(d.value);
                     assert_eq!(v.to_bits(), d.value.to_bits(), "value depends on the order");
                     count += 1;
@@ -102,6 +104,10 @@ fn walk(seed: u64, distances: &[f64]) -> Vec<(f64, [f64; 3], usize, usize)> {
         println!(
             "slivers, apex 1e-3..1e-12, x {distance:.0e} lengths away: n={count} (refused {refused}) worst error value {:.1e} gradient {:.1e} Hessian {:.1e}",
             worst[0], worst[1], worst[2]
+        );
+        println!(
+            "    of which apex 1e-6..1e-12: worst error value {:.1e} gradient {:.1e} Hessian {:.1e}",
+            worst_thin[0], worst_thin[1], worst_thin[2]
         );
         out.push((distance, worst, count, refused));
     }

@@ -14,15 +14,34 @@
 //!
 //! Error bound (per direction; the tensor rule's error is at most their sum). The integrands
 //! `(n·r)/‖r‖⁴ … (n·r) r rᵀ/‖r‖⁸` are analytic along any line except at the two complex zeros of
-//! `‖r‖²`, where they have poles of order at most 4. An `m`-point Gauss rule on an interval whose
-//! normalized pole `z` lies on the Bernstein ellipse of parameter `ρ` has error at most
-//! `(64/15) M_σ σ^{-2m} / (σ² − 1)` for any `σ < ρ`, with `M_σ` the integrand's maximum on the
-//! ellipse `E_σ`, at most `(1 − σ/ρ)^{-4}` times its real maximum (up to the scale of the
-//! interval). With `σ = ρ·2m/(2m + 4)` (the minimizer of `σ^{-2m}(1 − σ/ρ)^{-4}`) the bound is
-//! below ~1e-15 of the integrand's scale when `ρ ≥` 4.5 (16 points), 18 (8 points) along, and
-//! 3.2e4 (2 points), 1.2e3 (3), 230 (4), 18 (8) across. Along the length, intervals of `s` are
-//! bisected until one of the two rules applies; across, the pole of the line `t ↦ r(s, t)` is at
-//! least `D` (the distance of x to the piece) from the segment of length `≤ w`.
+//! `‖r‖²`, where they have poles of order `k` ≤ 4 (2 for the value, 3 for the gradient, 4 for
+//! the Hessian). An `m`-point Gauss rule on an interval whose normalized pole `z` lies on the
+//! Bernstein ellipse of parameter `ρ` has error at most `(64/15) M_σ σ^{-2m} / (σ² − 1)` for any
+//! `σ < ρ`, with `M_σ` the integrand's maximum on the ellipse `E_σ`, at most `(1 − σ/ρ)^{-k}`
+//! times its real maximum (up to the scale of the interval). With `σ = ρ·2m/(2m + k)` (the
+//! minimizer of `σ^{-2m}(1 − σ/ρ)^{-k}`), the thresholds below keep
+//! `(64/15) (1 − σ/ρ)^{-4} σ^{-2m}` under 1e-15 (the factor `1/(σ² − 1)`, below 1/19 wherever
+//! a rule is used, is left as a margin for the ratio of the integrand's maximum to its mean on
+//! an interval): along, `ρ ≥` 17.8 (8 points), 13.2 (9), 10.4 (10), 8.6 (11), 7.3 (12),
+//! 6.3 (13), 5.6 (14), 5.1 (15), 4.5 (16; 1.5e-15 there); across, 3.2e4 (2 points), 1.2e3 (3),
+//! 230 (4), 18 (8). Along the length, intervals of `s` are bisected until one of these rules
+//! applies (one interval unless x is closer than about the length); across, the pole of the line
+//! `t ↦ r(s, t)` is at least `D` (the distance of x to the piece) from the segment of length
+//! `≤ w`. Every rule between 8 and 16 points is used: a seen-from-afar piece (ρ ≈ 6 for x a
+//! length away) takes 13 or 14 points instead of 16.
+//!
+//! One rule for every order. The value's poles have order 2, so the value alone could use lower
+//! thresholds (13 points from ρ = 5.3 instead of 6.3, 16 from 3.9 instead of 4.5). But the value
+//! must not depend on the order (the value of an `Order::Hessian` call is that of the
+//! `Order::Value` call, bit for bit), so the derivative orders would need a second pass with the
+//! value's rule, costing them more than the value saves; the thresholds are the Hessian's.
+//!
+//! Entry points: [`sliver_quadrature`] from `evaluate` (after its set-up) and
+//! [`unclipped_sliver`] from `triangle_form_factor_in_range` (the same bits without the set-up).
+//! x may be near the sliver's plane: the rule needs x far from the sliver compared with its width
+//! only, and [`sliver_geometry`] takes the height from the exact triple product.
+
+use std::sync::OnceLock;
 
 use glam::DVec3;
 
@@ -30,7 +49,7 @@ use super::dd::two_sum;
 
 use super::{
     accumulate, fast_decisions, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3,
-    gauss_legendre_4, gauss_legendre_8, tensor_rule, triangle_plane, ClipVertex,
+    gauss_legendre_4, gauss_legendre_8, legendre_rule, tensor_rule, triangle_plane, ClipVertex,
     PLANARITY_TOLERANCE,
 };
 use crate::{Deriv3, Order};
@@ -41,16 +60,40 @@ const MAX_INTERVALS: usize = 48;
 
 /// `(ρ, points)`: the Gauss rules along the length and the smallest Bernstein parameter at which
 /// each is used (module documentation).
-const ALONG: [(f64, usize); 2] = [(18.0, 8), (4.5, 16)];
+const ALONG: [(f64, usize); 9] = [
+    (17.8, 8),
+    (13.2, 9),
+    (10.4, 10),
+    (8.6, 11),
+    (7.3, 12),
+    (6.3, 13),
+    (5.6, 14),
+    (5.1, 15),
+    (4.5, 16),
+];
 /// The same across the width.
 const ACROSS: [(f64, usize); 4] = [(3.2e4, 2), (1.2e3, 3), (230.0, 4), (18.0, 8)];
 
+/// The `points`-point Gauss-Legendre rule on [0, 1] (2, 3, 4, 8..=16), computed once.
 fn rule(points: usize) -> &'static [(f64, f64)] {
+    macro_rules! cached {
+        ($n:literal) => {{
+            static RULE: OnceLock<[(f64, f64); $n]> = OnceLock::new();
+            &RULE.get_or_init(legendre_rule::<$n>)[..]
+        }};
+    }
     match points {
         2 => gauss_legendre_2(),
         3 => gauss_legendre_3(),
         4 => gauss_legendre_4(),
         8 => gauss_legendre_8(),
+        9 => cached!(9),
+        10 => cached!(10),
+        11 => cached!(11),
+        12 => cached!(12),
+        13 => cached!(13),
+        14 => cached!(14),
+        15 => cached!(15),
         _ => gauss_legendre_16(),
     }
 }
@@ -88,7 +131,7 @@ pub(super) fn unclipped_sliver(
         .iter()
         .map(|v| plane.normal.dot(*v).abs())
         .fold(0.0, f64::max);
-    if !(off_plane <= PLANARITY_TOLERANCE * plane.extent) {
+    if off_plane > PLANARITY_TOLERANCE * plane.extent {
         return None;
     }
     // x not near the plane (so not in it either) and no far-field rule.
@@ -257,47 +300,73 @@ impl ThinPiece {
         })
     }
 
-    /// The piece's share of the form factor, for its `(2·area·N̂, 2·area·N̂·r_p)`; `None` when the
-    /// length needs more than [`MAX_INTERVALS`] intervals.
-    fn integrate(&self, n: DVec3, order: Order, geometry: (DVec3, f64)) -> Option<Deriv3> {
+    /// The Gauss rule along `s ∈ [s0, s1]` if one applies (module documentation).
+    fn along_points(&self, s0: f64, s1: f64) -> Option<usize> {
+        let (mid, half) = (0.5 * (s0 + s1), 0.5 * (s1 - s0));
+        let rho = bernstein(
+            (self.s_foot - mid) / half,
+            self.pole_distance / (self.length * half),
+        );
+        ALONG.iter().find(|(r, _)| rho >= *r).map(|r| r.1)
+    }
+
+    /// The tensor rule on `s ∈ [s0, s1]` with `points` along.
+    fn interval(
+        &self,
+        n: DVec3,
+        order: Order,
+        geometry: (DVec3, f64),
+        (s0, s1): (f64, f64),
+        points: usize,
+    ) -> Deriv3 {
         let (r_p, ab, q1q2, t_rule) = (self.r_p, self.pq1, self.q1q2, self.t_rule);
+        let along = (s0, s1, rule(points));
+        // A literal order and a fixed-length rule across let the inlined loop drop the unused
+        // sums and unroll the short direction (the same operations, the same bits).
+        match (order, t_rule) {
+            (Order::Value, &[t0, t1]) => {
+                tensor_rule(r_p, ab, q1q2, n, Order::Value, geometry, along, &[t0, t1])
+            }
+            (Order::Value, _) => {
+                tensor_rule(r_p, ab, q1q2, n, Order::Value, geometry, along, t_rule)
+            }
+            (Order::Gradient, _) => {
+                tensor_rule(r_p, ab, q1q2, n, Order::Gradient, geometry, along, t_rule)
+            }
+            (Order::Hessian, _) => {
+                tensor_rule(r_p, ab, q1q2, n, Order::Hessian, geometry, along, t_rule)
+            }
+        }
+    }
+
+    /// The piece's share of the form factor, for its `(2·area·N̂, 2·area·N̂·r_p)`; `None` when the
+    /// length needs more than [`MAX_INTERVALS`] intervals. Intervals are bisected until a rule
+    /// applies (depth first, right half first).
+    fn integrate(&self, n: DVec3, order: Order, geometry: (DVec3, f64)) -> Option<Deriv3> {
+        // x far compared with the length (the usual case): one interval, no stack to set up.
+        if let Some(points) = self.along_points(0.0, 1.0) {
+            return Some(self.interval(n, order, geometry, (0.0, 1.0), points));
+        }
         let mut out = Deriv3::constant(0.0);
         let mut stack: [(f64, f64); MAX_INTERVALS] = [(0.0, 0.0); MAX_INTERVALS];
-        stack[0] = (0.0, 1.0);
-        let (mut top, mut used) = (1, 0);
+        stack[0] = (0.0, 0.5);
+        stack[1] = (0.5, 1.0);
+        let (mut top, mut used) = (2, 0);
         while top > 0 {
             top -= 1;
             let (s0, s1) = stack[top];
-            let (mid, half) = (0.5 * (s0 + s1), 0.5 * (s1 - s0));
-            let rho = bernstein(
-                (self.s_foot - mid) / half,
-                self.pole_distance / (self.length * half),
-            );
-            if let Some(&(_, points)) = ALONG.iter().find(|(r, _)| rho >= *r) {
-                let along = (s0, s1, rule(points));
-                // A literal order and a fixed-length rule across let the inlined loop drop the
-                // unused sums and unroll the short direction (the same operations, the same bits).
-                let d = match (order, t_rule) {
-                    (Order::Value, &[t0, t1]) => {
-                        tensor_rule(r_p, ab, q1q2, n, Order::Value, geometry, along, &[t0, t1])
-                    }
-                    (Order::Value, _) => {
-                        tensor_rule(r_p, ab, q1q2, n, Order::Value, geometry, along, t_rule)
-                    }
-                    (Order::Gradient, _) => {
-                        tensor_rule(r_p, ab, q1q2, n, Order::Gradient, geometry, along, t_rule)
-                    }
-                    (Order::Hessian, _) => {
-                        tensor_rule(r_p, ab, q1q2, n, Order::Hessian, geometry, along, t_rule)
-                    }
-                };
-                accumulate(&mut out, d);
+            if let Some(points) = self.along_points(s0, s1) {
+                accumulate(
+                    &mut out,
+                    self.interval(n, order, geometry, (s0, s1), points),
+                );
                 used += 1;
                 continue;
             }
             if top + used + 2 > MAX_INTERVALS {
                 return None;
             }
+            let mid = 0.5 * (s0 + s1);
             stack[top] = (s0, mid);
             stack[top + 1] = (mid, s1);
             top += 2;
@@ -318,6 +387,102 @@ mod tests {
             r_lo: DVec3::ZERO,
             on_line: false,
         }
+    }
+
+    /// Every rule along integrates the polynomials it should (degree ≤ 2m − 1) on [0, 1].
+    #[test]
+    fn rules_along_integrate_their_polynomials() {
+        for &(_, m) in &ALONG {
+            let r = rule(m);
+            assert_eq!(r.len(), m);
+            for degree in 0..2 * m as i32 {
+                let q: f64 = r.iter().map(|&(s, w)| w * s.powi(degree)).sum();
+                let exact = 1.0 / (degree + 1) as f64;
+                // powi rounds once per factor, and a node's rounding moves s^d by d ulps
+                let tolerance = 1e-15 * (degree + 1) as f64 * exact;
+                assert!(
+                    (q - exact).abs() <= tolerance,
+                    "{m} points, degree {degree}: {q}"
+                );
+            }
+        }
+    }
+
+    /// The `ρ` of a piece's whole length.
+    fn rho_whole(piece: &ThinPiece) -> f64 {
+        bernstein(
+            (piece.s_foot - 0.5) / 0.5,
+            piece.pole_distance / (piece.length * 0.5),
+        )
+    }
+
+    /// Continuity at every switch along: x below a cap at the distance where the first piece's
+    /// `ρ` crosses each threshold, on both sides (1e-9 apart), against the isotropic subdivision
+    /// (an independent rule) and against each other (the jump of the error).
+    #[test]
+    fn switches_along_are_continuous() {
+        let n = DVec3::new(0.1, -0.2, 1.0).normalize();
+        let tri = [DVec3::ZERO, DVec3::X, DVec3::new(0.5, 1e-6, 0.0)];
+        let at = |depth: f64| {
+            let x = DVec3::new(0.4, 0.3 * depth, -depth);
+            tri.map(|v| vertex(v, x))
+        };
+        let first_piece = |t: &[ClipVertex; 3]| {
+            let ab = t[1].u - t[0].u;
+            let share = (t[2].u - t[0].u).dot(ab) / ab.length_squared();
+            let f = ClipVertex {
+                u: t[0].u + share * ab,
+                r: t[0].r + share * (t[1].r - t[0].r),
+                r_lo: DVec3::ZERO,
+                on_line: false,
+            };
+            ThinPiece::new(&t[0], &f, &t[2]).unwrap()
+        };
+        let mut seen = 0;
+        for &(threshold, points) in &ALONG {
+            // ρ grows with the depth of x: bisect for the depth where it meets the threshold.
+            let (mut lo, mut hi) = (1e-3f64, 1e3f64);
+            for _ in 0..200 {
+                let mid = (lo * hi).sqrt();
+                if rho_whole(&first_piece(&at(mid))) < threshold {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let mut errors = Vec::new();
+            for depth in [hi * (1.0 - 1e-9), hi * (1.0 + 1e-9)] {
+                let t = at(depth);
+                let piece = first_piece(&t);
+                let chosen = ALONG
+                    .iter()
+                    .find(|(r, _)| rho_whole(&piece) >= *r)
+                    .map(|r| r.1);
+                errors.push(chosen);
+                let d = sliver_quadrature(&t, n, Order::Hessian).unwrap();
+                let r = subdivided_quadrature(&t, n, Order::Hessian, true, 100_000).unwrap();
+                let max = |m: glam::DMat3| {
+                    m.to_cols_array()
+                        .iter()
+                        .fold(0.0, |a: f64, v| a.max(v.abs()))
+                };
+                let e = [
+                    (d.value - r.value) / r.value.abs(),
+                    ((d.gradient - r.gradient).abs().max_element())
+                        / r.gradient.abs().max_element(),
+                    max(d.hessian - r.hessian) / max(r.hessian),
+                ];
+                assert!(
+                    e[0].abs() <= 2e-14 && e[1] <= 2e-14 && e[2] <= 1e-13,
+                    "{points} points at ρ = {threshold}: {e:?}"
+                );
+            }
+            // the switch happens there: the finer rule below, this one above
+            let below = errors[0].unwrap_or(usize::MAX);
+            assert!(below > points && errors[1] == Some(points), "{errors:?}");
+            seen += 1;
+        }
+        assert_eq!(seen, ALONG.len());
     }
 
     fn lcg(state: &mut u64) -> f64 {
