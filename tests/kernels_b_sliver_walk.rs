@@ -143,3 +143,93 @@ fn thin_slivers_are_not_refused() {
         assert_eq!(refused, 0, "x {distance} lengths away");
     }
 }
+
+/// Continuity where x crosses the near-plane boundary (height 1e-3 of the largest vertex
+/// distance): beyond it `triangle_form_factor` takes the sliver rule's direct entry, within it
+/// `evaluate` recomputes the height and takes the same rule. On both sides (1e-9 apart in
+/// height, found by bisection on the kernel's own measure) the errors against the reference, and their signed difference (the jump of the
+/// error across the switch) within 1e-13 of the value and of the largest derivative entries.
+#[test]
+fn near_plane_boundary_is_continuous_for_slivers() {
+    let mut big = Big::new();
+    let mut rng = Rng(1815);
+    let mut worst_jump = [0.0f64; 3];
+    let mut compared = 0;
+    for k in 0..12 {
+        let s = 10f64.powf(rng.range(-3.0, 3.0));
+        let a = rng.vec(s);
+        let b = a + rng.unit() * s;
+        let ab = (b - a).normalize();
+        let perp = ab.any_orthonormal_vector();
+        let height = 10f64.powf(-6.0 - 4.0 * rng.uniform());
+        let t = [
+            a,
+            b,
+            a + (b - a) * rng.range(0.1, 0.9) + perp * (s * height),
+        ];
+        // in the plane, beside the sliver, 0.05..1 lengths from its long edge
+        let q = a + (b - a) * rng.range(-0.5, 1.5) - perp * (s * 10f64.powf(rng.range(-1.3, 0.0)));
+        let side = if k % 2 == 0 { 1.0 } else { -1.0 };
+        // The kernel's measure: the rounded plane normal's height of the nearest vertex over the
+        // largest vertex distance; bisect the offset along the normal for where it is 1e-3.
+        let plane_n = (t[1] - t[0]).cross(t[2] - t[0]).normalize();
+        let ratio = |lambda: f64| {
+            let x = q + plane_n * (side * lambda);
+            let r = t.map(|v| v - x);
+            let nearest = r
+                .iter()
+                .min_by(|p, q| p.length_squared().total_cmp(&q.length_squared()))
+                .copied()
+                .unwrap();
+            let r_max = r.iter().map(|v| v.length()).fold(0.0, f64::max);
+            plane_n.dot(nearest).abs() / r_max
+        };
+        let (mut lo, mut hi) = (1e-6 * s, 1e2 * s);
+        while hi / lo - 1.0 > 1e-9 {
+            let mid = (lo * hi).sqrt();
+            if ratio(mid) < 1e-3 {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        assert!(ratio(lo) < 1e-3 && ratio(hi) >= 1e-3);
+        let mut errs = Vec::new();
+        for lambda in [lo, hi] {
+            let x = q + plane_n * (side * lambda);
+            let n = (0..1000)
+                .map(|_| (plane_n * -side + rng.unit() * 0.5).normalize())
+                .find(|n| t.iter().all(|v| n.dot(*v - x) > 0.0))
+                .expect("a normal facing the sliver");
+            let r = big.polygon_reference(x, n, &t, true);
+            let d = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
+            let e = errors(&d, &r);
+            assert!(within_contract(&e), "{k}: {e:?}");
+            // signed errors, normalized like `errors`
+            let g = r.gradient.abs().max_element();
+            let h = r
+                .hessian
+                .to_cols_array()
+                .iter()
+                .fold(0.0f64, |m, v| m.max(v.abs()));
+            errs.push([
+                (d.value - r.value) / r.value.abs(),
+                (d.gradient - r.gradient).max_element() / g,
+                (d.hessian - r.hessian)
+                    .to_cols_array()
+                    .iter()
+                    .fold(0.0f64, |m, v| m.max(*v))
+                    / h,
+            ]);
+            compared += 1;
+        }
+        for i in 0..3 {
+            worst_jump[i] = worst_jump[i].max((errs[0][i] - errs[1][i]).abs());
+        }
+    }
+    println!(
+        "near-plane boundary, slivers apex 1e-6..1e-10: n={compared} jump of the error value {:.1e} gradient {:.1e} Hessian {:.1e}",
+        worst_jump[0], worst_jump[1], worst_jump[2]
+    );
+    assert!(worst_jump.iter().all(|j| *j <= 1e-13), "{worst_jump:?}");
+}
