@@ -98,6 +98,21 @@ fn rule(points: usize) -> &'static [(f64, f64)] {
     }
 }
 
+/// The rules of [`ALONG`] and [`ACROSS`] by their number of points (empty elsewhere).
+type RuleTable = [&'static [(f64, f64)]; 17];
+
+/// The [`RuleTable`], built once: one look-up per sliver instead of one per rule used.
+fn rules() -> &'static RuleTable {
+    static RULES: OnceLock<RuleTable> = OnceLock::new();
+    RULES.get_or_init(|| {
+        let mut table: RuleTable = [&[]; 17];
+        for &(_, points) in ALONG.iter().chain(&ACROSS) {
+            table[points] = rule(points);
+        }
+        table
+    })
+}
+
 /// The Bernstein-ellipse parameter of the point `z = re + i·im` for the interval [−1, 1]: the
 /// sum of the semi-axes of the ellipse with foci ±1 through `z`.
 fn bernstein(re: f64, im: f64) -> f64 {
@@ -186,13 +201,14 @@ pub(super) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) ->
         on_line: false,
     };
     // Both pieces are checked before the geometry is formed: declining is then cheap.
+    let table = rules();
     let mut pieces = [None, None];
     for (slot, (p, q1, q2, part)) in pieces
         .iter_mut()
         .zip([(a, f, c, share), (b, c, f, 1.0 - share)])
     {
         if part > 0.0 {
-            *slot = Some((ThinPiece::new(&p, &q1, &q2)?, part));
+            *slot = Some((ThinPiece::new(&p, &q1, &q2, table)?, part));
         }
     }
     let (normal, c_t) = sliver_geometry(&a, &b, &c);
@@ -264,11 +280,17 @@ struct ThinPiece {
     /// A lower bound on the distance of the t-lines' poles from the spine's line.
     pole_distance: f64,
     t_rule: &'static [(f64, f64)],
+    rules: &'static RuleTable,
 }
 
 impl ThinPiece {
     /// `None` when x is too close to the piece for the rule.
-    fn new(p: &ClipVertex, q1: &ClipVertex, q2: &ClipVertex) -> Option<ThinPiece> {
+    fn new(
+        p: &ClipVertex,
+        q1: &ClipVertex,
+        q2: &ClipVertex,
+        rules: &'static RuleTable,
+    ) -> Option<ThinPiece> {
         let (pq1, q1q2) = (q1.u - p.u, q2.u - q1.u);
         let spine = pq1 + 0.5 * q1q2;
         let length = spine.length();
@@ -296,7 +318,8 @@ impl ThinPiece {
             length,
             s_foot,
             pole_distance,
-            t_rule: rule(t_points),
+            t_rule: rules[t_points],
+            rules,
         })
     }
 
@@ -320,7 +343,7 @@ impl ThinPiece {
         points: usize,
     ) -> Deriv3 {
         let (r_p, ab, q1q2, t_rule) = (self.r_p, self.pq1, self.q1q2, self.t_rule);
-        let along = (s0, s1, rule(points));
+        let along = (s0, s1, self.rules[points]);
         // A literal order and a fixed-length rule across let the inlined loop drop the unused
         // sums and unroll the short direction (the same operations, the same bits).
         match (order, t_rule) {
@@ -389,11 +412,15 @@ mod tests {
         }
     }
 
-    /// Every rule along integrates the polynomials it should (degree ≤ 2m − 1) on [0, 1].
+    /// The table holds every rule used, and each rule along integrates the polynomials it should
+    /// (degree ≤ 2m − 1) on [0, 1].
     #[test]
     fn rules_along_integrate_their_polynomials() {
+        for &(_, m) in &ACROSS {
+            assert_eq!(rules()[m].len(), m);
+        }
         for &(_, m) in &ALONG {
-            let r = rule(m);
+            let r = rules()[m];
             assert_eq!(r.len(), m);
             for degree in 0..2 * m as i32 {
                 let q: f64 = r.iter().map(|&(s, w)| w * s.powi(degree)).sum();
@@ -436,7 +463,7 @@ mod tests {
                 r_lo: DVec3::ZERO,
                 on_line: false,
             };
-            ThinPiece::new(&t[0], &f, &t[2]).unwrap()
+            ThinPiece::new(&t[0], &f, &t[2], rules()).unwrap()
         };
         let mut seen = 0;
         for &(threshold, points) in &ALONG {
