@@ -1402,9 +1402,15 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     let far = far_field_rule(centroid.length(), radius);
     let mut used_quadrature = far.is_some();
     // Far thinner than the edge sum's limit, a sliver goes to its rule without the edge sum, near
-    // its plane too: the rule needs x far from the sliver compared with its width only, and its
-    // height comes from the exact triple product (`sliver_geometry`), not from h_P.
-    let sliver = if far.is_none() && plane.is_very_thin() && !cut {
+    // its plane too (the rule needs x far from the sliver compared with its width only, and its
+    // height comes from the exact triple product, `sliver_geometry`, not from h_P) unless x is
+    // over the sliver: there the edge sum's terms share a sign, and the rule would bisect
+    // towards x.
+    let sliver = if far.is_none()
+        && plane.is_very_thin()
+        && !cut
+        && !(near_plane && foot_inside(verts, plane.normal, h_p))
+    {
         sliver::sliver_quadrature(verts, n, order)
     } else {
         None
@@ -1471,7 +1477,9 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                         MAX_PIECES
                     };
                     // A sliver seen from afar (or from near its plane, but far compared with its
-                    // width) is thin in one direction only: the anisotropic rule first.
+                    // width) is thin in one direction only: the anisotropic rule first. Near the
+                    // plane it needs x far from the sliver compared with its width only, and its
+                    // height comes from the exact triple product (`sliver_geometry`), not h_P.
                     if plane.is_thin() && !cut {
                         quadrature = sliver::sliver_quadrature(verts, n, order);
                     }
