@@ -111,11 +111,14 @@ fn profile(spec: &str) {
 /// ns per call, minimum over interleaved rounds, for every case and order.
 fn ratio_table(cases: &[Case]) {
     let (rounds, max_calls) = (40, 1000);
-    // Calls per round: up to 1000, fewer for slow cases (about 2 ms a round).
+    // Calls per round: up to 1000, fewer for slow cases (about 2 ms a round). Timed after a first
+    // call, which may initialize the quadrature rules (once per process, tens of µs): calibrating
+    // on it would give that case few calls per round, each round paying for cold caches.
     let calls: Vec<[usize; 3]> = cases
         .iter()
         .map(|c| {
             ORDERS.map(|(_, order)| {
+                call(c, order);
                 let start = Instant::now();
                 call(c, order);
                 let ns = start.elapsed().as_secs_f64() * 1e9;

@@ -151,7 +151,7 @@ pub fn triangle_form_factor(
     // Lambert's sum and the replay would cancel and be declined: straight to the sliver rule
     // (`polygon_form_factor` has no fast path for three vertices).
     if polygon::is_very_thin_triangle([a, b, c]) {
-        return match polygon::triangle_form_factor_in_range(x, n, [a, b, c], order) {
+        return match polygon::very_thin_triangle_form_factor_in_range(x, n, [a, b, c], order) {
             Some(d) => d,
             None => polygon_form_factor(x, n, &[a, b, c], order),
         };

@@ -187,12 +187,35 @@ impl Scaled {
 /// range keeps away, so the result has the bits of [`form_factor`]'s; the saving is its generic
 /// set-up (validation, the rescaling pass over growable vectors), about a fifth of a clipped
 /// triangle's evaluation.
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn triangle_form_factor_in_range(
     x: DVec3,
     n: DVec3,
     v: [DVec3; 3],
     order: Order,
+) -> Option<Result<Deriv3>> {
+    in_range(x, n, v, order, false)
+}
+
+/// [`triangle_form_factor_in_range`] for a triangle [`is_very_thin_triangle`] accepts: the sliver
+/// rule's direct entry first (the same bits; `sliver::unclipped_sliver`), then `evaluate`. Only
+/// for such triangles, as the direct entry's plane costs the others ~100 instructions for nothing.
+pub(crate) fn very_thin_triangle_form_factor_in_range(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    order: Order,
+) -> Option<Result<Deriv3>> {
+    in_range(x, n, v, order, true)
+}
+
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+#[inline(always)] // one copy per entry, without the other's branch
+fn in_range(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    order: Order,
+    very_thin: bool,
 ) -> Option<Result<Deriv3>> {
     // Non-finite input goes to `form_factor`, which refuses it (`f64::max` would skip a NaN).
     if !(x.is_finite() && v.iter().all(|vk| vk.is_finite())) {
@@ -210,6 +233,12 @@ pub(crate) fn triangle_form_factor_in_range(
     let n = super::lambert::unit(n)?;
     let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
     let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
+    // A sliver seen from afar: the sliver rule without `evaluate`'s set-up (the same bits).
+    if very_thin {
+        if let Some(d) = sliver::unclipped_sliver(&u, &r, &r_lo, n, order) {
+            return Some(Ok(d));
+        }
+    }
     let scaled = Scaled {
         u: Points::from_slice(&u),
         r: Points::from_slice(&r),
@@ -259,7 +288,12 @@ mod in_range_tests {
             let v = v.map(|vk| vk * scale + DVec3::splat(offset));
             let x = x * scale + DVec3::splat(offset);
             for order in [Order::Value, Order::Gradient, Order::Hessian] {
-                let Some(fast) = triangle_form_factor_in_range(x, n, v, order) else {
+                let entry = if is_very_thin_triangle(v) {
+                    very_thin_triangle_form_factor_in_range
+                } else {
+                    triangle_form_factor_in_range
+                };
+                let Some(fast) = entry(x, n, v, order) else {
                     continue;
                 };
                 let robust = form_factor(x, n, &v, order);
@@ -1414,8 +1448,16 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         .fold(0.0, f64::max);
     let far = far_field_rule(centroid.length(), radius);
     let mut used_quadrature = far.is_some();
-    // Far thinner than the edge sum's limit, a sliver goes to its rule without the edge sum.
-    let sliver = if far.is_none() && plane.is_very_thin() && !(near_plane || cut) {
+    // Far thinner than the edge sum's limit, a sliver goes to its rule without the edge sum, near
+    // its plane too (the rule needs x far from the sliver compared with its width only, and its
+    // height comes from the exact triple product, `sliver_geometry`, not from h_P) unless x is
+    // over the sliver: there the edge sum's terms share a sign, and the rule would bisect
+    // towards x.
+    let sliver = if far.is_none()
+        && plane.is_very_thin()
+        && !cut
+        && !(near_plane && foot_inside(verts, plane.normal, h_p))
+    {
         sliver::sliver_quadrature(verts, n, order)
     } else {
         None
@@ -1481,9 +1523,11 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                     } else {
                         MAX_PIECES
                     };
-                    // A sliver seen from afar is thin in one direction only: the anisotropic rule
-                    // first.
-                    if plane.is_thin() && !(near_plane || cut) {
+                    // A sliver seen from afar (or from near its plane, but far compared with its
+                    // width) is thin in one direction only: the anisotropic rule first. Near the
+                    // plane it needs x far from the sliver compared with its width only, and its
+                    // height comes from the exact triple product (`sliver_geometry`), not h_P.
+                    if plane.is_thin() && !cut {
                         quadrature = sliver::sliver_quadrature(verts, n, order);
                     }
                     if quadrature.is_none() {

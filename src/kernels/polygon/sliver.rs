@@ -14,21 +14,43 @@
 //!
 //! Error bound (per direction; the tensor rule's error is at most their sum). The integrands
 //! `(n·r)/‖r‖⁴ … (n·r) r rᵀ/‖r‖⁸` are analytic along any line except at the two complex zeros of
-//! `‖r‖²`, where they have poles of order at most 4. An `m`-point Gauss rule on an interval whose
-//! normalized pole `z` lies on the Bernstein ellipse of parameter `ρ` has error at most
-//! `(64/15) M_σ σ^{-2m} / (σ² − 1)` for any `σ < ρ`, with `M_σ` the integrand's maximum on the
-//! ellipse `E_σ`, at most `(1 − σ/ρ)^{-4}` times its real maximum (up to the scale of the
-//! interval). With `σ = ρ·2m/(2m + 4)` (the minimizer of `σ^{-2m}(1 − σ/ρ)^{-4}`) the bound is
-//! below ~1e-15 of the integrand's scale when `ρ ≥` 4.5 (16 points), 18 (8 points) along, and
-//! 3.2e4 (2 points), 1.2e3 (3), 230 (4), 18 (8) across. Along the length, intervals of `s` are
-//! bisected until one of the two rules applies; across, the pole of the line `t ↦ r(s, t)` is at
-//! least `D` (the distance of x to the piece) from the segment of length `≤ w`.
+//! `‖r‖²`, where they have poles of order `k` ≤ 4 (2 for the value, 3 for the gradient, 4 for
+//! the Hessian). An `m`-point Gauss rule on an interval whose normalized pole `z` lies on the
+//! Bernstein ellipse of parameter `ρ` has error at most `(64/15) M_σ σ^{-2m} / (σ² − 1)` for any
+//! `σ < ρ`, with `M_σ` the integrand's maximum on the ellipse `E_σ`, at most `(1 − σ/ρ)^{-k}`
+//! times its real maximum (up to the scale of the interval). With `σ = ρ·2m/(2m + k)` (the
+//! minimizer of `σ^{-2m}(1 − σ/ρ)^{-k}`), the thresholds below keep
+//! `(64/15) (1 − σ/ρ)^{-4} σ^{-2m}` under 1e-15 (the factor `1/(σ² − 1)`, below 1/19 wherever
+//! a rule is used, is left as a margin for the ratio of the integrand's maximum to its mean on
+//! an interval): along, `ρ ≥` 17.8 (8 points), 13.2 (9), 10.4 (10), 8.6 (11), 7.3 (12),
+//! 6.3 (13), 5.6 (14), 5.1 (15), 4.5 (16; 1.5e-15 there); across, 3.2e4 (2 points), 1.2e3 (3),
+//! 230 (4), 18 (8). Along the length, intervals of `s` are bisected until one of these rules
+//! applies (one interval unless x is closer than about the length); across, the pole of the line
+//! `t ↦ r(s, t)` is at least `D` (the distance of x to the piece) from the segment of length
+//! `≤ w`. Every rule between 8 and 16 points is used: a seen-from-afar piece (ρ ≈ 6 for x a
+//! length away) takes 13 or 14 points instead of 16.
+//!
+//! One rule for every order. The value's poles have order 2, so the value alone could use lower
+//! thresholds (13 points from ρ = 5.3 instead of 6.3, 16 from 3.9 instead of 4.5). But the value
+//! must not depend on the order (the value of an `Order::Hessian` call is that of the
+//! `Order::Value` call, bit for bit), so the derivative orders would need a second pass with the
+//! value's rule, costing them more than the value saves; the thresholds are the Hessian's.
+//!
+//! Entry points: [`sliver_quadrature`] from `evaluate` (after its set-up) and
+//! [`unclipped_sliver`] from `triangle_form_factor_in_range` (the same bits without the set-up).
+//! x may be near the sliver's plane: the rule needs x far from the sliver compared with its width
+//! only, and [`sliver_geometry`] takes the height from the exact triple product.
+
+use std::sync::OnceLock;
 
 use glam::DVec3;
 
+use super::dd::two_sum;
+
 use super::{
-    accumulate, fan_geometry, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3,
-    gauss_legendre_4, gauss_legendre_8, tensor_rule, ClipVertex,
+    accumulate, fast_decisions, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3,
+    gauss_legendre_4, gauss_legendre_8, legendre_rule, tensor_rule, triangle_plane, ClipVertex,
+    PLANARITY_TOLERANCE,
 };
 use crate::{Deriv3, Order};
 
@@ -38,18 +60,57 @@ const MAX_INTERVALS: usize = 48;
 
 /// `(ρ, points)`: the Gauss rules along the length and the smallest Bernstein parameter at which
 /// each is used (module documentation).
-const ALONG: [(f64, usize); 2] = [(18.0, 8), (4.5, 16)];
+const ALONG: [(f64, usize); 9] = [
+    (17.8, 8),
+    (13.2, 9),
+    (10.4, 10),
+    (8.6, 11),
+    (7.3, 12),
+    (6.3, 13),
+    (5.6, 14),
+    (5.1, 15),
+    (4.5, 16),
+];
 /// The same across the width.
 const ACROSS: [(f64, usize); 4] = [(3.2e4, 2), (1.2e3, 3), (230.0, 4), (18.0, 8)];
 
+/// The `points`-point Gauss-Legendre rule on [0, 1] (2, 3, 4, 8..=16), computed once.
 fn rule(points: usize) -> &'static [(f64, f64)] {
+    macro_rules! cached {
+        ($n:literal) => {{
+            static RULE: OnceLock<[(f64, f64); $n]> = OnceLock::new();
+            &RULE.get_or_init(legendre_rule::<$n>)[..]
+        }};
+    }
     match points {
         2 => gauss_legendre_2(),
         3 => gauss_legendre_3(),
         4 => gauss_legendre_4(),
         8 => gauss_legendre_8(),
+        9 => cached!(9),
+        10 => cached!(10),
+        11 => cached!(11),
+        12 => cached!(12),
+        13 => cached!(13),
+        14 => cached!(14),
+        15 => cached!(15),
         _ => gauss_legendre_16(),
     }
+}
+
+/// The rules of [`ALONG`] and [`ACROSS`] by their number of points (empty elsewhere).
+type RuleTable = [&'static [(f64, f64)]; 17];
+
+/// The [`RuleTable`], built once: one look-up per sliver instead of one per rule used.
+fn rules() -> &'static RuleTable {
+    static RULES: OnceLock<RuleTable> = OnceLock::new();
+    RULES.get_or_init(|| {
+        let mut table: RuleTable = [&[]; 17];
+        for &(_, points) in ALONG.iter().chain(&ACROSS) {
+            table[points] = rule(points);
+        }
+        table
+    })
 }
 
 /// The Bernstein-ellipse parameter of the point `z = re + i·im` for the interval [−1, 1]: the
@@ -59,6 +120,64 @@ fn bernstein(re: f64, im: f64) -> f64 {
     let (im2, lo, hi) = (im * im, re - 1.0, re + 1.0);
     let a = 0.5 * ((lo * lo + im2).sqrt() + (hi * hi + im2).sqrt());
     a + (a * a - 1.0).max(0.0).sqrt()
+}
+
+/// [`evaluate`](super::evaluate)'s sliver branch for a triangle given by `u` (relative to its
+/// first vertex), `r` (relative to x) and `r_lo` (`r + r_lo` exact), without the set-up that
+/// branch does not use: the same decisions from the same rounded quantities (plane, height,
+/// far-field switch), the tangent-plane clip replaced by a test that every vertex is above the
+/// plane by more than the rounding of `n·r` (then the clip keeps the triangle as it is), so the
+/// result has the robust path's bits. `None` whenever the robust path would do anything else
+/// (x near the plane or near the sliver, a clip, a zero-area or non-planar triangle, a far-field
+/// rule, a non-finite result); the caller then takes that path.
+pub(super) fn unclipped_sliver(
+    u: &[DVec3; 3],
+    r: &[DVec3; 3],
+    r_lo: &[DVec3; 3],
+    n: DVec3,
+    order: Order,
+) -> Option<Deriv3> {
+    let plane = triangle_plane(u)?;
+    if !plane.is_very_thin() {
+        return None;
+    }
+    // `Plane::new`'s planarity check (a triangle fails it only by rounding).
+    let off_plane = u
+        .iter()
+        .map(|v| plane.normal.dot(*v).abs())
+        .fold(0.0, f64::max);
+    if off_plane > PLANARITY_TOLERANCE * plane.extent {
+        return None;
+    }
+    // x not near the plane (so not in it either) and no far-field rule.
+    let (far, h_p) = fast_decisions(r, &plane)?;
+    if far.is_some() {
+        return None;
+    }
+    // `clip` compares the exact heights n·(r + r_lo) with zero; the rounded n·r is within
+    // ~4ε‖r‖ of them (‖n‖ = 1 + O(ε)), so a margin of 1e-13‖r‖ certifies every sign.
+    let above = |v: &DVec3| {
+        let h = n.dot(*v);
+        h > 0.0 && h * h > 1e-26 * v.length_squared()
+    };
+    if !r.iter().all(above) {
+        return None;
+    }
+    let verts = [0, 1, 2].map(|k| ClipVertex {
+        u: u[k],
+        r: r[k],
+        r_lo: r_lo[k],
+        on_line: false,
+    });
+    let mut d = sliver_quadrature(&verts, n, order)?;
+    // As `evaluate` finishes: the sign of the height, then the clamp of the value.
+    if h_p < 0.0 {
+        d.value = -d.value;
+        d.gradient = -d.gradient;
+        d.hessian = -d.hessian;
+    }
+    d.value = d.value.clamp(0.0, 1.0);
+    d.is_finite().then_some(d)
 }
 
 /// The signed form factor of a sliver triangle (x origin of the `r`; nothing clipped) by the
@@ -81,85 +200,206 @@ pub(super) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) ->
         r_lo: DVec3::ZERO,
         on_line: false,
     };
-    let (normal, c_t) = fan_geometry(&a, &b, &c, true);
-    let mut out = Deriv3::constant(0.0);
-    for (p, q1, q2, part) in [(a, f, c, share), (b, c, f, 1.0 - share)] {
+    // Both pieces are checked before the geometry is formed: declining is then cheap.
+    let table = rules();
+    let mut pieces = [None, None];
+    for (slot, (p, q1, q2, part)) in pieces
+        .iter_mut()
+        .zip([(a, f, c, share), (b, c, f, 1.0 - share)])
+    {
         if part > 0.0 {
-            let geometry = (normal * part, c_t * part);
-            accumulate(&mut out, thin_piece(&p, &q1, &q2, n, order, geometry)?);
+            *slot = Some((ThinPiece::new(&p, &q1, &q2, table)?, part));
         }
+    }
+    let (normal, c_t) = sliver_geometry(&a, &b, &c);
+    let mut out = Deriv3::constant(0.0);
+    for (piece, part) in pieces.into_iter().flatten() {
+        accumulate(
+            &mut out,
+            piece.integrate(n, order, (normal * part, c_t * part))?,
+        );
     }
     Some(out)
 }
 
-/// One piece `(p, q₁, q₂)` with `q₁q₂` short, Duffy-mapped from `p`.
-fn thin_piece(
-    p: &ClipVertex,
-    q1: &ClipVertex,
-    q2: &ClipVertex,
-    n: DVec3,
-    order: Order,
-    geometry: (DVec3, f64),
-) -> Option<Deriv3> {
-    let (pq1, q1q2) = (q1.u - p.u, q2.u - q1.u);
-    let spine = pq1 + 0.5 * q1q2;
-    let length = spine.length();
-    let width = q1q2.length();
-    // x relative to the spine p + s·spine: foot parameter and distance from the line.
-    let s_foot = -p.r.dot(spine) / (length * length);
-    let line_distance = p.r.cross(spine).length() / length;
-    let segment_distance = (p.r + s_foot.clamp(0.0, 1.0) * spine).length();
-    // Across: every t-line has length ≤ width and lies ≥ segment_distance − width from x.
-    let across_distance = segment_distance - width;
-    if across_distance.is_nan() || across_distance <= 0.0 {
-        return None;
+/// `(2·area·N̂, 2·area·N̂·r_a)` of the triangle `(a, b, c)` from the exact differences
+/// (`r + r_lo`), each to a few ulps: a sliver's normal from rounded edge vectors would have lost
+/// ~`log10(1/aspect)` digits. `N = (b − a) × (c − a)` with the edge vectors split into a leading
+/// part and its remainder: the leading parts' products are exact (two-product) and the remainder
+/// terms, ~ε of them, need only f64. Then `N·r_a` (the triple product `det(r_a, r_b, r_c)`) is a
+/// compensated dot product, accurate to a few ulps while it cancels by less than ~1e15: x off the
+/// plane by more than ~1e-15 of its distance (closer, `evaluate` takes x as in the plane).
+fn sliver_geometry(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex) -> (DVec3, f64) {
+    // q − a as a leading part and its remainder: two-sum per component on r, plus the r_lo.
+    let edge = |q: &ClipVertex| {
+        let (x, y) = (q.r, -a.r);
+        let d = x + y;
+        let yy = d - x;
+        (d, ((x - (d - yy)) + (y - yy)) + (q.r_lo - a.r_lo))
+    };
+    let ((e1, l1), (e2, l2)) = (edge(b), edge(c));
+    // One component of e1 × e2: e1[i]·e2[j] − e1[j]·e2[i], as leading part and remainder.
+    let component = |i: usize, j: usize| {
+        let (p, pe) = two_prod(e1[i], e2[j]);
+        let (q, qe) = two_prod(e1[j], e2[i]);
+        let (s, se) = two_sum(p, -q);
+        let rest = (pe - qe) + ((e1[i] * l2[j] + l1[i] * e2[j]) - (e1[j] * l2[i] + l1[j] * e2[i]));
+        two_sum(s, se + rest)
+    };
+    let (x, y, z) = (component(1, 2), component(2, 0), component(0, 1));
+    let (hi, lo) = (DVec3::new(x.0, y.0, z.0), DVec3::new(x.1, y.1, z.1));
+    // Σ N_k r_k with N = hi + lo, r_a = r + r_lo: the leading products summed exactly (two-sum
+    // chain), the remainder products in f64.
+    let (mut sum, mut err) = two_prod(hi.x, a.r.x);
+    for k in 1..3 {
+        let (p, pe) = two_prod(hi[k], a.r[k]);
+        let (s, se) = two_sum(sum, p);
+        sum = s;
+        err += pe + se;
     }
-    let rho_t = bernstein(0.0, 2.0 * across_distance / width);
-    let t_points = ACROSS.iter().find(|(r, _)| rho_t >= *r)?.1;
-    let t_rule = rule(t_points);
-    // Along: the poles of the t-lines are within `width` of the spine's.
-    let pole_distance = line_distance - width;
-    if pole_distance.is_nan() || pole_distance <= 0.0 {
-        return None;
-    }
-    let ab = pq1;
-    let mut out = Deriv3::constant(0.0);
-    let mut stack: [(f64, f64); MAX_INTERVALS] = [(0.0, 0.0); MAX_INTERVALS];
-    stack[0] = (0.0, 1.0);
-    let (mut top, mut used) = (1, 0);
-    while top > 0 {
-        top -= 1;
-        let (s0, s1) = stack[top];
-        let (mid, half) = (0.5 * (s0 + s1), 0.5 * (s1 - s0));
-        let rho = bernstein((s_foot - mid) / half, pole_distance / (length * half));
-        if let Some(&(_, points)) = ALONG.iter().find(|(r, _)| rho >= *r) {
-            let d = tensor_rule(
-                p.r,
-                ab,
-                q1q2,
-                n,
-                order,
-                geometry,
-                (s0, s1, rule(points)),
-                t_rule,
-            );
-            accumulate(&mut out, d);
-            used += 1;
-            continue;
-        }
-        if top + used + 2 > MAX_INTERVALS {
+    err += hi.dot(a.r_lo) + lo.dot(a.r);
+    (hi + lo, sum + err)
+}
+
+/// `a·b = p + err` exactly (no overflow or underflow).
+#[inline]
+fn two_prod(a: f64, b: f64) -> (f64, f64) {
+    let p = a * b;
+    (p, a.mul_add(b, -p))
+}
+
+/// One piece `(p, q₁, q₂)` with `q₁q₂` short, Duffy-mapped from `p`, and its rules.
+struct ThinPiece {
+    r_p: DVec3,
+    pq1: DVec3,
+    q1q2: DVec3,
+    length: f64,
+    /// The parameter of the foot of x on the spine `p + s·spine`.
+    s_foot: f64,
+    /// A lower bound on the distance of the t-lines' poles from the spine's line.
+    pole_distance: f64,
+    t_rule: &'static [(f64, f64)],
+    rules: &'static RuleTable,
+}
+
+impl ThinPiece {
+    /// `None` when x is too close to the piece for the rule.
+    fn new(
+        p: &ClipVertex,
+        q1: &ClipVertex,
+        q2: &ClipVertex,
+        rules: &'static RuleTable,
+    ) -> Option<ThinPiece> {
+        let (pq1, q1q2) = (q1.u - p.u, q2.u - q1.u);
+        let spine = pq1 + 0.5 * q1q2;
+        let length = spine.length();
+        let width = q1q2.length();
+        // x relative to the spine p + s·spine: foot parameter and distance from the line.
+        let s_foot = -p.r.dot(spine) / (length * length);
+        let line_distance = p.r.cross(spine).length() / length;
+        let segment_distance = (p.r + s_foot.clamp(0.0, 1.0) * spine).length();
+        // Across: every t-line has length ≤ width and lies ≥ segment_distance − width from x.
+        let across_distance = segment_distance - width;
+        if across_distance.is_nan() || across_distance <= 0.0 {
             return None;
         }
-        stack[top] = (s0, mid);
-        stack[top + 1] = (mid, s1);
-        top += 2;
+        let rho_t = bernstein(0.0, 2.0 * across_distance / width);
+        let t_points = ACROSS.iter().find(|(r, _)| rho_t >= *r)?.1;
+        // Along: the poles of the t-lines are within `width` of the spine's.
+        let pole_distance = line_distance - width;
+        if pole_distance.is_nan() || pole_distance <= 0.0 {
+            return None;
+        }
+        Some(ThinPiece {
+            r_p: p.r,
+            pq1,
+            q1q2,
+            length,
+            s_foot,
+            pole_distance,
+            t_rule: rules[t_points],
+            rules,
+        })
     }
-    Some(out)
+
+    /// The Gauss rule along `s ∈ [s0, s1]` if one applies (module documentation).
+    fn along_points(&self, s0: f64, s1: f64) -> Option<usize> {
+        let (mid, half) = (0.5 * (s0 + s1), 0.5 * (s1 - s0));
+        let rho = bernstein(
+            (self.s_foot - mid) / half,
+            self.pole_distance / (self.length * half),
+        );
+        ALONG.iter().find(|(r, _)| rho >= *r).map(|r| r.1)
+    }
+
+    /// The tensor rule on `s ∈ [s0, s1]` with `points` along.
+    fn interval(
+        &self,
+        n: DVec3,
+        order: Order,
+        geometry: (DVec3, f64),
+        (s0, s1): (f64, f64),
+        points: usize,
+    ) -> Deriv3 {
+        let (r_p, ab, q1q2, t_rule) = (self.r_p, self.pq1, self.q1q2, self.t_rule);
+        let along = (s0, s1, self.rules[points]);
+        // A literal order and a fixed-length rule across let the inlined loop drop the unused
+        // sums and unroll the short direction (the same operations, the same bits).
+        match (order, t_rule) {
+            (Order::Value, &[t0, t1]) => {
+                tensor_rule(r_p, ab, q1q2, n, Order::Value, geometry, along, &[t0, t1])
+            }
+            (Order::Value, _) => {
+                tensor_rule(r_p, ab, q1q2, n, Order::Value, geometry, along, t_rule)
+            }
+            (Order::Gradient, _) => {
+                tensor_rule(r_p, ab, q1q2, n, Order::Gradient, geometry, along, t_rule)
+            }
+            (Order::Hessian, _) => {
+                tensor_rule(r_p, ab, q1q2, n, Order::Hessian, geometry, along, t_rule)
+            }
+        }
+    }
+
+    /// The piece's share of the form factor, for its `(2·area·N̂, 2·area·N̂·r_p)`; `None` when the
+    /// length needs more than [`MAX_INTERVALS`] intervals. Intervals are bisected until a rule
+    /// applies (depth first, right half first).
+    fn integrate(&self, n: DVec3, order: Order, geometry: (DVec3, f64)) -> Option<Deriv3> {
+        // x far compared with the length (the usual case): one interval, no stack to set up.
+        if let Some(points) = self.along_points(0.0, 1.0) {
+            return Some(self.interval(n, order, geometry, (0.0, 1.0), points));
+        }
+        let mut out = Deriv3::constant(0.0);
+        let mut stack: [(f64, f64); MAX_INTERVALS] = [(0.0, 0.0); MAX_INTERVALS];
+        stack[0] = (0.0, 0.5);
+        stack[1] = (0.5, 1.0);
+        let (mut top, mut used) = (2, 0);
+        while top > 0 {
+            top -= 1;
+            let (s0, s1) = stack[top];
+            if let Some(points) = self.along_points(s0, s1) {
+                accumulate(
+                    &mut out,
+                    self.interval(n, order, geometry, (s0, s1), points),
+                );
+                used += 1;
+                continue;
+            }
+            if top + used + 2 > MAX_INTERVALS {
+                return None;
+            }
+            let mid = 0.5 * (s0 + s1);
+            stack[top] = (s0, mid);
+            stack[top + 1] = (mid, s1);
+            top += 2;
+        }
+        Some(out)
+    }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::subdivided_quadrature;
+    use super::super::{fan_geometry, subdivided_quadrature};
     use super::*;
 
     fn vertex(v: DVec3, x: DVec3) -> ClipVertex {
@@ -169,6 +409,219 @@ mod tests {
             r_lo: DVec3::ZERO,
             on_line: false,
         }
+    }
+
+    /// The table holds every rule used, and each rule along integrates the polynomials it should
+    /// (degree ≤ 2m − 1) on [0, 1].
+    #[test]
+    fn rules_along_integrate_their_polynomials() {
+        for &(_, m) in &ACROSS {
+            assert_eq!(rules()[m].len(), m);
+        }
+        for &(_, m) in &ALONG {
+            let r = rules()[m];
+            assert_eq!(r.len(), m);
+            for degree in 0..2 * m as i32 {
+                let q: f64 = r.iter().map(|&(s, w)| w * s.powi(degree)).sum();
+                let exact = 1.0 / (degree + 1) as f64;
+                // powi rounds once per factor, and a node's rounding moves s^d by d ulps
+                let tolerance = 1e-15 * (degree + 1) as f64 * exact;
+                assert!(
+                    (q - exact).abs() <= tolerance,
+                    "{m} points, degree {degree}: {q}"
+                );
+            }
+        }
+    }
+
+    /// The `ρ` of a piece's whole length.
+    fn rho_whole(piece: &ThinPiece) -> f64 {
+        bernstein(
+            (piece.s_foot - 0.5) / 0.5,
+            piece.pole_distance / (piece.length * 0.5),
+        )
+    }
+
+    /// Continuity at every switch along: x below a cap at the distance where the first piece's
+    /// `ρ` crosses each threshold, on both sides (1e-9 apart), against the isotropic subdivision
+    /// (an independent rule) and against each other (the jump of the error).
+    #[test]
+    fn switches_along_are_continuous() {
+        let n = DVec3::new(0.1, -0.2, 1.0).normalize();
+        let tri = [DVec3::ZERO, DVec3::X, DVec3::new(0.5, 1e-6, 0.0)];
+        let at = |depth: f64| {
+            let x = DVec3::new(0.4, 0.3 * depth, -depth);
+            tri.map(|v| vertex(v, x))
+        };
+        let first_piece = |t: &[ClipVertex; 3]| {
+            let ab = t[1].u - t[0].u;
+            let share = (t[2].u - t[0].u).dot(ab) / ab.length_squared();
+            let f = ClipVertex {
+                u: t[0].u + share * ab,
+                r: t[0].r + share * (t[1].r - t[0].r),
+                r_lo: DVec3::ZERO,
+                on_line: false,
+            };
+            ThinPiece::new(&t[0], &f, &t[2], rules()).unwrap()
+        };
+        let mut seen = 0;
+        for &(threshold, points) in &ALONG {
+            // ρ grows with the depth of x: bisect for the depth where it meets the threshold.
+            let (mut lo, mut hi) = (1e-3f64, 1e3f64);
+            for _ in 0..200 {
+                let mid = (lo * hi).sqrt();
+                if rho_whole(&first_piece(&at(mid))) < threshold {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            let mut errors = Vec::new();
+            for depth in [hi * (1.0 - 1e-9), hi * (1.0 + 1e-9)] {
+                let t = at(depth);
+                let piece = first_piece(&t);
+                let chosen = ALONG
+                    .iter()
+                    .find(|(r, _)| rho_whole(&piece) >= *r)
+                    .map(|r| r.1);
+                errors.push(chosen);
+                let d = sliver_quadrature(&t, n, Order::Hessian).unwrap();
+                let r = subdivided_quadrature(&t, n, Order::Hessian, true, 100_000).unwrap();
+                let max = |m: glam::DMat3| {
+                    m.to_cols_array()
+                        .iter()
+                        .fold(0.0, |a: f64, v| a.max(v.abs()))
+                };
+                let e = [
+                    (d.value - r.value) / r.value.abs(),
+                    ((d.gradient - r.gradient).abs().max_element())
+                        / r.gradient.abs().max_element(),
+                    max(d.hessian - r.hessian) / max(r.hessian),
+                ];
+                assert!(
+                    e[0].abs() <= 2e-14 && e[1] <= 2e-14 && e[2] <= 1e-13,
+                    "{points} points at ρ = {threshold}: {e:?}"
+                );
+            }
+            // the switch happens there: the finer rule below, this one above
+            let below = errors[0].unwrap_or(usize::MAX);
+            assert!(below > points && errors[1] == Some(points), "{errors:?}");
+            seen += 1;
+        }
+        assert_eq!(seen, ALONG.len());
+    }
+
+    /// The sliver's geometry agrees with the double-double fan geometry (an independent
+    /// evaluation from the same exact differences) to a few ulps of `‖N‖` and of `N·r_a`, for
+    /// apex 1e-4..1e-12 of the length and x 1e-6..1e2 lengths from the plane.
+    #[test]
+    fn sliver_geometry_matches_the_double_double_fan_geometry() {
+        let mut state = 1817;
+        for _ in 0..2000 {
+            let mut c = || lcg(&mut state);
+            let scale = 10f64.powf(6.0 * c() - 3.0);
+            let a = DVec3::new(c(), c(), c()) * scale;
+            let b = a + DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize() * scale;
+            let perp = (b - a).any_orthonormal_vector();
+            let apex = a + (b - a) * c() + perp * (scale * 10f64.powf(-4.0 - 8.0 * c()));
+            let normal = (b - a).cross(perp).normalize();
+            let x = (a + b) * 0.5
+                + DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5) * scale
+                + normal * (scale * 10f64.powf(-6.0 + 8.0 * c()));
+            let exact = |v: DVec3| {
+                let r = v - x;
+                let err = |p: f64, q: f64| super::super::dd::two_sum(p, -q).1;
+                ClipVertex {
+                    u: v - a,
+                    r,
+                    r_lo: DVec3::new(err(v.x, x.x), err(v.y, x.y), err(v.z, x.z)),
+                    on_line: false,
+                }
+            };
+            let t = [exact(a), exact(b), exact(apex)];
+            let (n1, c1) = sliver_geometry(&t[0], &t[1], &t[2]);
+            let (n2, c2) = fan_geometry(&t[0], &t[1], &t[2], true);
+            assert!(
+                (n1 - n2).length() <= 4.0 * f64::EPSILON * n2.length(),
+                "{n1} {n2}"
+            );
+            assert!(
+                (c1 - c2).abs() <= 8.0 * f64::EPSILON * c2.abs(),
+                "{c1} {c2}"
+            );
+        }
+    }
+
+    fn lcg(state: &mut u64) -> f64 {
+        *state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (*state >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// The direct entry gives `evaluate`'s bits whenever it answers, and answers for slivers seen
+    /// from afar: slivers with apex 1e-5..1e-12 of their length, x from 1e-7 (where the rule
+    /// declines) to 10 lengths away, receiver normals that clip the sliver or graze a vertex.
+    #[test]
+    fn direct_entry_gives_the_bits_of_evaluate() {
+        let mut state = 1818;
+        let (mut taken, mut declined) = (0, 0);
+        for k in 0..4000 {
+            let mut c = || lcg(&mut state);
+            let scale = 10f64.powf(6.0 * c() - 3.0);
+            let a = DVec3::new(c(), c(), c()) * scale;
+            let b = a + DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize() * scale;
+            let perp = (b - a).any_orthonormal_vector();
+            let height = 10f64.powf(-5.0 - 7.0 * c());
+            let apex = a + (b - a) * (1.2 * c() - 0.1) + perp * (height * scale);
+            let v = [a, b, apex];
+            // Mostly 1e-3..10 lengths away, sometimes closer. Within ~1e-2 lengths x is usually
+            // within 1e-3·r_max of the plane, which the robust path handles (declined here).
+            let exponent = if k % 5 == 0 {
+                -7.0 + 4.0 * c()
+            } else {
+                -3.0 + 4.0 * c()
+            };
+            let distance = 10f64.powf(exponent) * scale;
+            let x = (a + b) * 0.5 + DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5) * distance;
+            let mut random_unit = || DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize();
+            let n = match k % 4 {
+                // every vertex above the tangent plane (if one of 100 tries finds such a normal)
+                0 | 1 => (0..100)
+                    .map(|_| random_unit())
+                    .find(|n| v.iter().all(|vk| n.dot(*vk - x) > 0.0))
+                    .unwrap_or(DVec3::Z),
+                2 => random_unit(),
+                // grazing: the tangent plane through a vertex (up to rounding)
+                _ => (a - x).any_orthonormal_vector(),
+            };
+            let r = v.map(|vk| vk - x);
+            let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
+            let err = |p: f64, q: f64| super::super::dd::two_sum(p, -q).1;
+            let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
+            let scaled = super::super::Scaled {
+                u: super::super::Points::from_slice(&u),
+                r: super::super::Points::from_slice(&r),
+                r_lo: super::super::Points::from_slice(&r_lo),
+                inv_scale: 1.0,
+            };
+            for order in [Order::Value, Order::Gradient, Order::Hessian] {
+                let Some(direct) = unclipped_sliver(&u, &r, &r_lo, n, order) else {
+                    declined += 1;
+                    continue;
+                };
+                taken += 1;
+                let robust = super::super::evaluate(&scaled, n, order).unwrap();
+                let bits = |d: &Deriv3| {
+                    let mut b = vec![d.value.to_bits()];
+                    b.extend(d.gradient.to_array().map(f64::to_bits));
+                    b.extend(d.hessian.to_cols_array().map(f64::to_bits));
+                    b
+                };
+                assert_eq!(bits(&direct), bits(&robust), "{k} {order:?}");
+            }
+        }
+        assert!(taken > 2000 && declined > 2000, "{taken} {declined}");
     }
 
     /// The sliver rule is taken for a cap and a needle seen from afar, agrees with the isotropic
