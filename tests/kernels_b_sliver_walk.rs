@@ -11,9 +11,9 @@
 //! 3e-2 lengths and 1.6e-5 at 1e-3 lengths for apex 1e-12 on this walk at 23482ac; the sliver rule
 //! now takes those (worst 4e-13).
 //!
-//! A gap of the kernel (not of the sliver rule) is kept as an ignored test that asserts the
-//! contract: slivers thinner than ~1e-9 are refused as "not planar" (`Plane::new` measures its
-//! normal's rounding against `PLANARITY_TOLERANCE`); the walk counts and skips them.
+//! Slivers thinner than ~1e-9 used to be refused as "not planar" (`Plane::new` measured the
+//! rounding of a triangle's normal against `PLANARITY_TOLERANCE`); triangles now skip that check,
+//! and the walk asserts that none is refused.
 
 mod kernels_b_common;
 
@@ -134,10 +134,9 @@ fn sliver_walk_apex_1e3_to_1e12_against_the_reference() {
     }
 }
 
-/// Known gap: slivers thinner than ~1e-9 of their length are refused with "polygon is not
-/// planar" (a triangle is planar; the check measures the rounding of its normal).
+/// Slivers down to apex 1e-12 of their length are evaluated, not refused as "not planar" (a
+/// triangle is planar; the check measured the rounding of its normal).
 #[test]
-#[ignore = "known gap: thin triangles refused as not planar (see the module documentation)"]
 fn thin_slivers_are_not_refused() {
     for (distance, _, _, refused) in walk(1814, &[3e-2, 0.3]) {
         assert_eq!(refused, 0, "x {distance} lengths away");

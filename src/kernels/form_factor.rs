@@ -239,7 +239,8 @@ pub fn triangle_form_factor(
 ///   `sin β ≥ 1/4`) and neither derivative sum cancels by more than 100x; otherwise from the
 ///   robust path below.
 /// * **Validation.** `x`, `n` and every vertex must be finite; `n` unit length within a relative
-///   1e-6 (it is renormalized); at least 3 vertices; planar within 1e-8 of the polygon's extent;
+///   1e-6 (it is renormalized); at least 3 vertices; planar within 1e-8 of the polygon's extent
+///   (4 or more vertices: a triangle is planar however thin);
 ///   simple (no two non-adjacent edges touch; checked in O(count²) for count > 3). Violations give
 ///   [`Error::InvalidArgument`].
 /// * **Limits.** A polygon with (numerically) zero area (`2·area ≤ 1e-13 extent²`, the extent being

@@ -372,14 +372,16 @@ impl Plane {
             )));
         }
         let normal = nn / twice_area;
-        let off_plane = u.iter().map(|v| normal.dot(*v).abs()).fold(0.0, f64::max);
-        if off_plane > PLANARITY_TOLERANCE * extent {
-            return Err(Error::InvalidArgument(format!(
-                "polygon is not planar: a vertex is {off_plane:e} from its plane \
-                 (tolerance {PLANARITY_TOLERANCE:e} x extent {extent:e})"
-            )));
-        }
+        // A triangle is planar by construction: for a thin one the test would measure only the
+        // rounding of its normal (~u extent²/area), and refuse valid slivers below ~1e-9.
         if count > 3 {
+            let off_plane = u.iter().map(|v| normal.dot(*v).abs()).fold(0.0, f64::max);
+            if off_plane > PLANARITY_TOLERANCE * extent {
+                return Err(Error::InvalidArgument(format!(
+                    "polygon is not planar: a vertex is {off_plane:e} from its plane \
+                     (tolerance {PLANARITY_TOLERANCE:e} x extent {extent:e})"
+                )));
+            }
             check_simple(u, normal)?;
         }
         Ok(Plane {

@@ -50,7 +50,6 @@ use super::dd::two_sum;
 use super::{
     accumulate, fast_decisions, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3,
     gauss_legendre_4, gauss_legendre_8, legendre_rule, tensor_rule, triangle_plane, ClipVertex,
-    PLANARITY_TOLERANCE,
 };
 use crate::{Deriv3, Order};
 
@@ -139,14 +138,6 @@ pub(super) fn unclipped_sliver(
 ) -> Option<Deriv3> {
     let plane = triangle_plane(u)?;
     if !plane.is_very_thin() {
-        return None;
-    }
-    // `Plane::new`'s planarity check (a triangle fails it only by rounding).
-    let off_plane = u
-        .iter()
-        .map(|v| plane.normal.dot(*v).abs())
-        .fold(0.0, f64::max);
-    if off_plane > PLANARITY_TOLERANCE * plane.extent {
         return None;
     }
     // x not near the plane (so not in it either) and no far-field rule.
