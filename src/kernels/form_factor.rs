@@ -32,6 +32,7 @@ use crate::{Deriv3, Order};
 use super::dd;
 use super::lambert;
 use super::lambert_clipped;
+use super::lambert_clipped_derivs;
 use super::lambert_polygon;
 use super::polygon;
 
@@ -183,15 +184,34 @@ pub fn triangle_form_factor(
         if let Some(d) = lambert::triangle_derivs(x, n, [a, b, c], order) {
             return Ok(d);
         }
+        // Near the plane with the tangent plane cutting the triangle: the derivatives of the
+        // certified clipped loop, whose value is `lambert_value`'s. Its loop (or its absence) is
+        // kept for the value below: computing it twice cost ~400 instructions where it declines.
+        let clipped = lambert_clipped::certified_loop(x, n, [a, b, c]);
+        if let Some(d) = clipped
+            .as_ref()
+            .and_then(|l| lambert_clipped_derivs::loop_derivs(l, order))
+        {
+            return Ok(d);
+        }
+        let d = robust_triangle(x, n, [a, b, c], order)?;
+        return Ok(with_lambert_value(d, order, || {
+            lambert::triangle_value(x, n, [a, b, c]).or(clipped.map(|l| l.value()))
+        }));
     }
-    let d = match triangle_form_factor_fast(x, n, [a, b, c], order) {
-        Some(d) => d,
-        None => match polygon::triangle_form_factor_in_range(x, n, [a, b, c], order) {
-            Some(d) => d?,
-            None => polygon::form_factor(x, n, &[a, b, c], order)?,
-        },
-    };
+    let d = robust_triangle(x, n, [a, b, c], order)?;
     Ok(with_lambert_value(d, order, lambert_value))
+}
+
+/// The triangle's form factor past the Lambert and far-field paths.
+fn robust_triangle(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Result<Deriv3> {
+    Ok(match triangle_form_factor_fast(x, n, v, order) {
+        Some(d) => d,
+        None => match polygon::triangle_form_factor_in_range(x, n, v, order) {
+            Some(d) => d?,
+            None => polygon::form_factor(x, n, &v, order)?,
+        },
+    })
 }
 
 /// Form factor from a differential area at `x` with unit normal `n` to a planar simple polygon:
@@ -475,6 +495,20 @@ pub(crate) fn clip_edge_term(
     if !order.gradient() {
         return Ok(out);
     }
+    let (gradient, hessian) = clip_edge_derivs(&f, n, order.hessian());
+    out.gradient = INV_2PI * gradient;
+    if order.hessian() {
+        out.hessian = hessian * INV_2PI;
+    }
+    Ok(out)
+}
+
+/// `2π` times the gradient and (when `hessian`, else zero) the Hessian of [`clip_edge_term`] from
+/// the edge's frame (only `e_hat`, `len`, `p`, `h`, `sa`, `sb` are read). No division by `h`:
+/// bounded as `x` approaches the clip line, and changed only by `O(δ)` when the frame's inputs
+/// move by `δ` (the derivative fast path for clipped triangles relies on both).
+#[inline]
+pub(crate) fn clip_edge_derivs(f: &EdgeFrame, n: DVec3, hessian: bool) -> (DVec3, DMat3) {
     let (sa, sb, h, len) = (f.sa, f.sb, f.h, f.len);
     let h2 = h * h;
     let ra2 = sa * sa + h2;
@@ -484,16 +518,16 @@ pub(crate) fn clip_edge_term(
     let qp = q.dot(f.p);
     let b2 = len * (sa + sb) / (2.0 * rab2);
     let s_rho2 = len * (h2 - sa * sb) / rab2;
-    out.gradient = INV_2PI * (-s_rho2 * q - 2.0 * qp * b2 * f.e_hat);
-    if order.hessian() {
-        let b3 = len * (sa + sb) * (ra2 + rb2) / (4.0 * rab2 * rab2);
-        let bracket = h2 * h2 - 2.0 * sa * sb * h2 - sa * sb * (sa * sa + sa * sb + sb * sb);
-        let s_rho4 = len * bracket / (rab2 * rab2);
-        out.hessian = ((outer_self(q) - outer_self(f.e_hat)) * (-2.0 * qp * s_rho4)
-            + sym_outer(q, f.e_hat) * (2.0 * (b2 - 4.0 * h2 * b3)))
-            * INV_2PI;
+    let gradient = -s_rho2 * q - 2.0 * qp * b2 * f.e_hat;
+    if !hessian {
+        return (gradient, DMat3::ZERO);
     }
-    Ok(out)
+    let b3 = len * (sa + sb) * (ra2 + rb2) / (4.0 * rab2 * rab2);
+    let bracket = h2 * h2 - 2.0 * sa * sb * h2 - sa * sb * (sa * sa + sa * sb + sb * sb);
+    let s_rho4 = len * bracket / (rab2 * rab2);
+    let hess = (outer_self(q) - outer_self(f.e_hat)) * (-2.0 * qp * s_rho4)
+        + sym_outer(q, f.e_hat) * (2.0 * (b2 - 4.0 * h2 * b3));
+    (gradient, hess)
 }
 
 /// The edge term for `r_a = a − x` and `e = b − a` (in any consistent length unit), unit `n`.

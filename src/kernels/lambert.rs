@@ -225,6 +225,36 @@ fn edge_derivs(
     (d, t.err, steep(s2, t.p))
 }
 
+/// `2π` times one Lambert edge term's gradient and Hessian (entries `[xx, yy, zz, xy, xz, yz]`,
+/// zero below [`Order::Hessian`]) and its `sin²β` (the caller chooses its own floor: see
+/// [`DERIV_MIN_SINE`]), for the clipped-triangle derivative path, whose loop is not a polygon of
+/// input vertices.
+#[inline(always)]
+pub(super) fn edge_derivatives(
+    n: DVec3,
+    ra: DVec3,
+    rb: DVec3,
+    e: DVec3,
+    order: Order,
+) -> (DVec3, [f64; 6], f64) {
+    let (ra, rb, e) = (V3::from_dvec(ra), V3::from_dvec(rb), V3::from_dvec(e));
+    let w = ra.cross(e);
+    let s2 = w.dot(w);
+    let s = s2.sqrt();
+    let c = ra.dot(rb);
+    let ra2 = ra.dot(ra);
+    let t = edge_terms(
+        V3::from_dvec(n),
+        ra,
+        rb,
+        e,
+        ra2,
+        (w, s2, s, c, s.atan2(c)),
+        order,
+    );
+    (t.gradient.to_dvec(), t.hessian, s2 / t.p)
+}
+
 /// Whether `sin β ≥ DERIV_MIN_SINE`, from `s²` and `P = s² + c²`.
 #[inline(always)]
 fn steep(s2: f64, p: f64) -> bool {
@@ -508,7 +538,7 @@ pub(crate) fn edge_derivs_checked(
 
 /// Largest ratio of the summed magnitudes of the edge terms' derivatives to the magnitude of their
 /// sum accepted by the derivative fast path (as the robust path's value cancellation limit).
-const CANCELLATION: f64 = 1e2;
+pub(super) const CANCELLATION: f64 = 1e2;
 
 #[cfg(test)]
 mod tests {

@@ -54,11 +54,23 @@ const U: f64 = 0.5 * f64::EPSILON;
 /// rounding `hi`, the triangle vertex it is (`None` for a clip point), and for a clip point the
 /// bound on its displacement along the triangle's edge.
 #[derive(Clone, Copy)]
-struct LoopVertex {
+pub(super) struct LoopVertex {
     exact: Dd3,
-    hi: DVec3,
-    vertex: Option<usize>,
-    displacement: f64,
+    pub(super) hi: DVec3,
+    pub(super) vertex: Option<usize>,
+    pub(super) displacement: f64,
+}
+
+/// The clipped loop of a certified [`triangle_value`], for the derivative path
+/// ([`lambert_clipped_derivs`](super::lambert_clipped_derivs)): the unit normal, the loop's
+/// vertices (`count` of them), its edge vectors (`edges[k]` from vertex `k` to the next, each one
+/// rounding of the exact difference) and `2π` times the signed certified sum.
+pub(super) struct ClippedLoop {
+    pub(super) n: DVec3,
+    pub(super) points: [LoopVertex; 4],
+    pub(super) edges: [DVec3; 4],
+    pub(super) count: usize,
+    pub(super) sum: f64,
 }
 
 /// `hi + lo` as a double-double vector, for `lo` the exact rounding error of `hi` (already
@@ -85,8 +97,21 @@ fn difference_error(v: DVec3, x: DVec3) -> DVec3 {
 /// clipped triangle when its tangent plane certainly cuts it and the error bound (module
 /// documentation) is within [`FAST_TOLERANCE`] of the result; `None` otherwise, including when
 /// nothing is clipped (the unclipped path's case) and for invalid input.
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
+    Some(certified_loop(x, n, v)?.value())
+}
+
+impl ClippedLoop {
+    /// The form factor: the sum's sign is the triangle's orientation as seen from x, and the form
+    /// factor is two-sided.
+    pub(super) fn value(&self) -> f64 {
+        (self.sum.abs() * INV_2PI).min(1.0)
+    }
+}
+
+/// [`triangle_value`]'s loop and signed sum (times `2π`) when it certifies the value.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
     let r = v.map(|vk| vk - x);
     if !r.iter().all(|rk| lambert::in_range(*rk)) {
         return None;
@@ -148,6 +173,7 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
         }
     }
     let (mut sum, mut magnitude, mut err) = (0.0, 0.0, 0.0);
+    let mut edges = [DVec3::ZERO; 4];
     for k in 0..count {
         let next = if k + 1 == count { 0 } else { k + 1 };
         let (a, b) = (&points[k], &points[next]);
@@ -156,6 +182,7 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
             (Some(i), Some(j)) => v[j] - v[i],
             _ => b.exact.sub(&a.exact).to_dvec3(),
         };
+        edges[k] = e;
         let (f, e_k) = if a.vertex.is_none() && b.vertex.is_none() {
             clip_edge(n, a.hi, b.hi, e, a.displacement.max(b.displacement))?
         } else {
@@ -173,8 +200,13 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     if !(err <= FAST_TOLERANCE * sum.abs()) {
         return None;
     }
-    // The sum's sign is the triangle's orientation as seen from x; the form factor is two-sided.
-    Some((sum.abs() * INV_2PI).min(1.0))
+    Some(ClippedLoop {
+        n,
+        points,
+        edges,
+        count,
+        sum,
+    })
 }
 
 /// Whether this path leaves the configuration to the robust one before the exact clip points and
