@@ -79,10 +79,17 @@ impl Config {
     }
 }
 
-/// The kernel at every order against the reference; whether the fast path answered (its
+/// The kernel at every order against the reference (the fast path's result within `fast_bound`);
+/// whether the fast path answered (its
 /// derivatives differ from the robust path's `polygon_form_factor`, which has no fast path for
 /// three vertices, in some bit) and the errors.
-fn check(big: &mut Big, x: DVec3, n: DVec3, t: &[DVec3; 3]) -> (bool, [f64; 3]) {
+fn check(
+    big: &mut Big,
+    x: DVec3,
+    n: DVec3,
+    t: &[DVec3; 3],
+    fast_bound: [f64; 3],
+) -> (bool, [f64; 3]) {
     let r = big.polygon_reference(x, n, t, true);
     let d = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
     let g = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Gradient).unwrap();
@@ -98,7 +105,7 @@ fn check(big: &mut Big, x: DVec3, n: DVec3, t: &[DVec3; 3]) -> (bool, [f64; 3]) 
     }
     if fast {
         assert!(
-            within(e, GENERIC),
+            within(e, fast_bound),
             "fast path {e:?} at x={x:?} n={n:?} t={t:?}"
         );
     }
@@ -129,7 +136,7 @@ fn interior_walk_to_the_plane() {
                 let theta = TILTS[(j + k as usize) % TILTS.len()];
                 let face = if (j + k as usize) % 2 == 0 { 1.0 } else { -1.0 };
                 let (x, n) = c.at(foot, h, side, theta, rng.range(0.0, 6.3), face);
-                let (fast, e) = check(&mut big, x, n, &c.t);
+                let (fast, e) = check(&mut big, x, n, &c.t, GENERIC);
                 max3(&mut worst, e);
                 if fast {
                     max3(&mut worst_fast, e);
@@ -153,6 +160,47 @@ fn interior_walk_to_the_plane() {
 }
 
 #[test]
+fn outside_walk_to_the_plane() {
+    // The foot of x outside the triangle (0.05 to 0.7 of the size beyond an edge line), the
+    // tangent plane tilted about a line through the foot and the triangle's interior.
+    let mut big = Big::new();
+    let mut rng = Rng(1821);
+    let configs: Vec<Config> = (0..8).map(|_| Config::new(&mut rng)).collect();
+    let (mut overall, mut worst_fast, mut fast_count, mut total) = ([0.0f64; 3], [0.0f64; 3], 0, 0);
+    for k in 2..=12 {
+        let h = 10f64.powi(-k) * rng.range(1.0, 3.0);
+        for (j, c) in configs.iter().enumerate() {
+            let beyond = rng.range(0.05, 0.7);
+            let (a, b) = (0.5 - 0.5 * beyond, -beyond);
+            let foot = c.point(a, b);
+            let inner = c.point(rng.range(0.2, 0.4), rng.range(0.2, 0.4));
+            let along = (inner - foot).normalize();
+            // φ such that the tilt is about `along`: towards normal × along.
+            let tilt_dir = c.normal.cross(along);
+            for side in [1.0, -1.0] {
+                let theta = TILTS[(j + k as usize) % TILTS.len()];
+                let x = foot + c.normal * (side * h * c.size);
+                let n = (c.normal * (side * theta.cos()) + tilt_dir * theta.sin()).normalize();
+                let (fast, e) = check(&mut big, x, n, &c.t, GENERIC);
+                max3(&mut overall, e);
+                if fast {
+                    max3(&mut worst_fast, e);
+                    fast_count += 1;
+                }
+                total += 1;
+            }
+        }
+    }
+    println!("outside: worst {overall:?}, fast path {worst_fast:?} in {fast_count} of {total}");
+    assert!(within(overall, HARD), "{overall:?}");
+    // 42 of the 176 steps when this test was written (1e-3 to 1e-12 sizes; the others decline on
+    // cancelling sums or near an edge line, to the robust path).
+    assert!(fast_count * 5 >= total, "{fast_count} of {total}");
+}
+
+/// Near an edge line or a vertex the hard contract holds; the fast path may answer there (its
+/// worst, near a vertex, 1.8e-12 in the gradient when this test was written).
+#[test]
 fn near_edge_lines_and_vertices() {
     let mut big = Big::new();
     let mut rng = Rng(1819);
@@ -166,7 +214,7 @@ fn near_edge_lines_and_vertices() {
                 for h in [1e-4, 1e-7] {
                     let theta = TILTS[j % TILTS.len()];
                     let (x, n) = c.at(foot, h, 1.0, theta, rng.range(0.0, 6.3), 1.0);
-                    max3(&mut worst, check(&mut big, x, n, &c.t).1);
+                    max3(&mut worst, check(&mut big, x, n, &c.t, HARD).1);
                 }
             }
         }
@@ -189,7 +237,7 @@ fn continuous_across_the_switch() {
         for k in 0..=24 {
             let h = 3e-4 * 10f64.powf(k as f64 / 24.0);
             let (x, n) = c.at(foot, h, 1.0, 0.7, phi, 1.0);
-            let (fast, e) = check(&mut big, x, n, &c.t);
+            let (fast, e) = check(&mut big, x, n, &c.t, GENERIC);
             fast_seen |= fast;
             robust_seen |= !fast;
             max3(&mut worst, e);

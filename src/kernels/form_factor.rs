@@ -166,11 +166,7 @@ pub fn triangle_form_factor(
         if let Some(f) = lambert_value() {
             return Ok(Deriv3::constant(f));
         }
-        if maybe_far(&[a, b, c], x) {
-            if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
-                return Ok(d);
-            }
-        }
+        return value_past_lambert(x, n, [a, b, c]);
     } else {
         // Far away Lambert's derivatives would be computed only to be declined (their sums
         // cancel): the far-field quadrature first. Its value is replaced by Lambert's where that is
@@ -188,19 +184,34 @@ pub fn triangle_form_factor(
         // certified clipped loop, whose value is `lambert_value`'s. Its loop (or its absence) is
         // kept for the value below: computing it twice cost ~400 instructions where it declines.
         let clipped = lambert_clipped::certified_loop(x, n, [a, b, c]);
-        if let Some(d) = clipped
-            .as_ref()
-            .and_then(|l| lambert_clipped_derivs::loop_derivs(l, order))
-        {
-            return Ok(d);
+        if let Some(l) = &clipped {
+            if let Some(d) = lambert_clipped_derivs::loop_derivs(l, l.value(), order) {
+                return Ok(d);
+            }
+        } else if let Some(l) = lambert_clipped::uncertified_loop(x, n, [a, b, c]) {
+            // Outside the triangle (the sum cancels) or on the clip line: the same derivatives,
+            // the value from the value order's path (no Lambert value here: clipped, uncertified).
+            if let Some(d) = lambert_clipped_derivs::loop_derivs(&l, 0.0, order) {
+                let value = value_past_lambert(x, n, [a, b, c])?.value;
+                return Ok(Deriv3 { value, ..d });
+            }
         }
         let d = robust_triangle(x, n, [a, b, c], order)?;
         return Ok(with_lambert_value(d, order, || {
             lambert::triangle_value(x, n, [a, b, c]).or(clipped.map(|l| l.value()))
         }));
     }
-    let d = robust_triangle(x, n, [a, b, c], order)?;
-    Ok(with_lambert_value(d, order, lambert_value))
+}
+
+/// The value order's result where Lambert's value is not certified: the far-field path, else the
+/// robust one.
+fn value_past_lambert(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Result<Deriv3> {
+    if maybe_far(&v, x) {
+        if let Some((d, _)) = triangle_far_field_fast(x, n, v, Order::Value) {
+            return Ok(d);
+        }
+    }
+    robust_triangle(x, n, v, Order::Value)
 }
 
 /// The triangle's form factor past the Lambert and far-field paths.

@@ -38,7 +38,7 @@ use glam::{DMat3, DVec3};
 
 use super::form_factor::{clip_edge_derivs, EdgeFrame};
 use super::lambert::{self, CANCELLATION, INV_2PI};
-use super::lambert_clipped::{self, ClippedLoop, LoopVertex};
+use super::lambert_clipped::{ClippedLoop, LoopVertex};
 use crate::{Deriv3, Order};
 
 const U: f64 = 0.5 * f64::EPSILON;
@@ -64,18 +64,20 @@ const MIN_SINE: f64 = 1.0 / 32.0;
 /// [`loop_derivs`] on the loop it keeps for the value; this is the tests' entry.
 #[cfg(test)]
 pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Deriv3> {
-    let clipped = lambert_clipped::certified_loop(x, n, v)?;
-    loop_derivs(&clipped, order)
+    let clipped = super::lambert_clipped::certified_loop(x, n, v)?;
+    loop_derivs(&clipped, clipped.value(), order)
 }
 
-/// [`triangle_derivs`] from a certified loop.
-pub(super) fn loop_derivs(clipped: &ClippedLoop, order: Order) -> Option<Deriv3> {
+/// [`triangle_derivs`] from a loop (certified, or [`lambert_clipped::uncertified_loop`]: the
+/// derivatives need only its orientation), with `value` as the value.
+pub(super) fn loop_derivs(clipped: &ClippedLoop, value: f64, order: Order) -> Option<Deriv3> {
     // One copy per order, so that the order tests fold away in the inlined edge terms.
-    match order {
+    let d = match order {
         Order::Value => None,
         Order::Gradient => derivs_at(clipped, Order::Gradient),
         Order::Hessian => derivs_at(clipped, Order::Hessian),
-    }
+    };
+    d.map(|d| Deriv3 { value, ..d })
 }
 
 /// Max-norm of a Hessian's six distinct entries.
@@ -148,7 +150,7 @@ fn derivs_at(clipped: &ClippedLoop, order: Order) -> Option<Deriv3> {
     let scale = INV_2PI.copysign(clipped.sum);
     let h = hessian.map(|e| e * scale);
     Some(Deriv3 {
-        value: clipped.value(),
+        value: 0.0,
         gradient: gradient * scale,
         hessian: DMat3::from_cols(
             DVec3::new(h[0], h[3], h[4]),
@@ -189,7 +191,7 @@ fn clip_term(n: DVec3, ra: DVec3, rb: DVec3, e: DVec3, order: Order) -> (DVec3, 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kernels::polygon;
+    use crate::kernels::{lambert_clipped, polygon};
 
     fn lcg(state: &mut u64) -> f64 {
         *state = state
@@ -304,6 +306,59 @@ mod tests {
         println!("accepted {accepted} of {tried}; worst vs robust {worst:?}");
         println!("buckets {buckets:?}");
         assert!(accepted * 10 >= tried * 7, "{accepted} of {tried}");
+    }
+
+    /// The loop without the value's certificate (x's foot outside the triangle or inside, 1e-4 to
+    /// 1e-12 sizes from the plane): its orientation is the certified sum's sign wherever that is
+    /// certified, and wherever its derivatives are accepted they agree with the robust path.
+    #[test]
+    fn uncertified_loops_agree_with_the_robust_path() {
+        let mut state = 5;
+        let (mut accepted, mut outside, mut worst) = (0, 0, (0.0f64, 0.0f64));
+        for k in 0..3000 {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let mut p = || {
+                DVec3::new(
+                    lcg(&mut state) - 0.5,
+                    lcg(&mut state) - 0.5,
+                    0.3 * lcg(&mut state),
+                )
+            };
+            let v = [p() * scale, p() * scale, p() * scale];
+            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            let (a, b) = (2.4 * lcg(&mut state) - 0.7, 2.4 * lcg(&mut state) - 0.7);
+            let foot = v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b;
+            let height = scale * 10f64.powf(-4.0 - 8.0 * lcg(&mut state));
+            let side = if lcg(&mut state) < 0.5 { 1.0 } else { -1.0 };
+            let x = foot + plane_n * (height * side);
+            let tilt = (10.0 + 70.0 * lcg(&mut state)).to_radians();
+            let t = plane_n.any_orthonormal_vector();
+            let phi = 6.3 * lcg(&mut state);
+            let t = t * phi.cos() + plane_n.cross(t) * phi.sin();
+            let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
+            let Some(l) = lambert_clipped::uncertified_loop(x, n, v) else {
+                continue;
+            };
+            if let Some(c) = lambert_clipped::certified_loop(x, n, v) {
+                assert_eq!(c.sum.signum(), l.sum, "orientation at {x:?} {n:?} {v:?}");
+            }
+            for order in [Order::Gradient, Order::Hessian] {
+                if let Some(d) = loop_derivs(&l, 0.0, order) {
+                    let is_outside = a.min(b).min(1.0 - a - b) < 0.0;
+                    accepted += 1;
+                    outside += usize::from(is_outside);
+                    let r = robust(x, n, v, order);
+                    let (g, h) = rel(&d, &r);
+                    let h = if order.hessian() { h } else { 0.0 };
+                    worst = (worst.0.max(g), worst.1.max(h));
+                    assert!(g < 1e-10 && h < 1e-9, "{g:e} {h:e} at {x:?} {n:?} {v:?}");
+                }
+            }
+        }
+        println!(
+            "uncertified loops: accepted {accepted} ({outside} outside); worst vs robust {worst:?}"
+        );
+        assert!(outside > 100, "{outside}");
     }
 
     /// `benches/kernels_regimes.rs` "1e-6 above the plane" (with a loop edge at sin β = 0.076) is
