@@ -230,6 +230,16 @@ pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clip
     {
         return None;
     }
+    // Within a sine of 1e-3 of a triangle edge's segment the clip point on it is within ~1e-3 of
+    // the size from x, where the derivatives decline on its displacement: without the loop.
+    for i in 0..3 {
+        let (ri, rj) = (cut.r[i], cut.r[(i + 1) % 3]);
+        if ri.dot(rj) < 0.0
+            && ri.cross(rj).length_squared() < 1e-6 * ri.length_squared() * rj.length_squared()
+        {
+            return None;
+        }
+    }
     let (points, count) = build_loop(x, &v, &cut);
     let mut edges = [DVec3::ZERO; 4];
     for k in 0..count {

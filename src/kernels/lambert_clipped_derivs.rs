@@ -94,15 +94,20 @@ fn derivs_at(clipped: &ClippedLoop, order: Order) -> Option<Deriv3> {
     let (mut g_mag, mut h_mag) = (0.0, 0.0);
     // Σ over edges of the term's size times the relative displacement of its clip-point ends.
     let (mut moved, mut h_moved) = (0.0, 0.0);
+    let shift = |p: &LoopVertex| match p.vertex {
+        Some(_) => 0.0,
+        // The displacement along the triangle's edge and the rounding of the point.
+        None => (p.displacement + 2.0 * U * p.hi.length()) / p.hi.length(),
+    };
+    // A clip point that close to x (relative to its displacement) fails the displacement test
+    // below unless its edges' terms are tiny: declined before the edge terms.
+    if !(0..clipped.count).all(|k| shift(&clipped.points[k]) <= MOVED_TOLERANCE) {
+        return None;
+    }
     for k in 0..clipped.count {
         let next = if k + 1 == clipped.count { 0 } else { k + 1 };
         let (a, b) = (&clipped.points[k], &clipped.points[next]);
         let e = clipped.edges[k];
-        let shift = |p: &LoopVertex| match p.vertex {
-            Some(_) => 0.0,
-            // The displacement along the triangle's edge and the rounding of the point.
-            None => (p.displacement + 2.0 * U * p.hi.length()) / p.hi.length(),
-        };
         let shifted = shift(a) + shift(b);
         // The growth of an edge's rounding errors below sin β = 1/4, relative to there.
         let (g, h, growth) = if a.vertex.is_none() && b.vertex.is_none() {
