@@ -163,44 +163,43 @@ pub fn triangle_form_factor(
             .or_else(|| lambert_clipped::triangle_value(x, n, [a, b, c]))
     };
     if order == Order::Value {
-        if let Some(f) = lambert_value() {
-            return Ok(Deriv3::constant(f));
+        return match lambert_value() {
+            Some(f) => Ok(Deriv3::constant(f)),
+            None => value_past_lambert(x, n, [a, b, c]),
+        };
+    }
+    // Far away Lambert's derivatives would be computed only to be declined (their sums
+    // cancel): the far-field quadrature first. Its value is replaced by Lambert's where that is
+    // certified (its cancellation-free far form reaches any distance), so that the value is
+    // the same for every order.
+    if maybe_far(&[a, b, c], x) {
+        if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
+            return Ok(with_lambert_value(d, order, lambert_value));
         }
-        return value_past_lambert(x, n, [a, b, c]);
-    } else {
-        // Far away Lambert's derivatives would be computed only to be declined (their sums
-        // cancel): the far-field quadrature first. Its value is replaced by Lambert's where that is
-        // certified (its cancellation-free far form reaches any distance), so that the value is
-        // the same for every order.
-        if maybe_far(&[a, b, c], x) {
-            if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
-                return Ok(with_lambert_value(d, order, lambert_value));
-            }
-        }
-        if let Some(d) = lambert::triangle_derivs(x, n, [a, b, c], order) {
+    }
+    if let Some(d) = lambert::triangle_derivs(x, n, [a, b, c], order) {
+        return Ok(d);
+    }
+    // Near the plane with the tangent plane cutting the triangle: the derivatives of the
+    // certified clipped loop, whose value is `lambert_value`'s. Its loop (or its absence) is
+    // kept for the value below: computing it twice cost ~400 instructions where it declines.
+    let clipped = lambert_clipped::certified_loop(x, n, [a, b, c]);
+    if let Some(l) = &clipped {
+        if let Some(d) = lambert_clipped_derivs::loop_derivs(l, l.value(), order) {
             return Ok(d);
         }
-        // Near the plane with the tangent plane cutting the triangle: the derivatives of the
-        // certified clipped loop, whose value is `lambert_value`'s. Its loop (or its absence) is
-        // kept for the value below: computing it twice cost ~400 instructions where it declines.
-        let clipped = lambert_clipped::certified_loop(x, n, [a, b, c]);
-        if let Some(l) = &clipped {
-            if let Some(d) = lambert_clipped_derivs::loop_derivs(l, l.value(), order) {
-                return Ok(d);
-            }
-        } else if let Some(l) = lambert_clipped::uncertified_loop(x, n, [a, b, c]) {
-            // Outside the triangle (the sum cancels) or on the clip line: the same derivatives,
-            // the value from the value order's path (no Lambert value here: clipped, uncertified).
-            if let Some(d) = lambert_clipped_derivs::loop_derivs(&l, 0.0, order) {
-                let value = value_past_lambert(x, n, [a, b, c])?.value;
-                return Ok(Deriv3 { value, ..d });
-            }
+    } else if let Some(l) = lambert_clipped::uncertified_loop(x, n, [a, b, c]) {
+        // Outside the triangle (the sum cancels) or on the clip line: the same derivatives,
+        // the value from the value order's path (no Lambert value here: clipped, uncertified).
+        if let Some(d) = lambert_clipped_derivs::loop_derivs(&l, 0.0, order) {
+            let value = value_past_lambert(x, n, [a, b, c])?.value;
+            return Ok(Deriv3 { value, ..d });
         }
-        let d = robust_triangle(x, n, [a, b, c], order)?;
-        return Ok(with_lambert_value(d, order, || {
-            lambert::triangle_value(x, n, [a, b, c]).or(clipped.map(|l| l.value()))
-        }));
     }
+    let d = robust_triangle(x, n, [a, b, c], order)?;
+    Ok(with_lambert_value(d, order, || {
+        lambert::triangle_value(x, n, [a, b, c]).or(clipped.map(|l| l.value()))
+    }))
 }
 
 /// The value order's result where Lambert's value is not certified: the far-field path, else the
