@@ -1,6 +1,6 @@
 //! Derivative fast path of the point-to-triangle form factor when the receiver's tangent plane
 //! cuts the triangle near its plane: the gradient and Hessian of Lambert's sum over the clipped
-//! loop that [`lambert_clipped`] certifies for the value.
+//! loop that [`lambert_clipped`](super::lambert_clipped) builds for the value.
 //!
 //! **The derivatives of a clipped form factor.** `F(x) = ∫_{T(x)} K(x, y) dA_y` over the part
 //! `T(x)` of the triangle above the tangent plane, with `K ∝ (n·(y − x))(N·(x − y))/‖y − x‖⁴`.
@@ -25,14 +25,21 @@
 //! inputs (`ê`, `s_a`, `s_b`, `ρ`, the foot vector `p`) move by `O(δ)` and whose output is a
 //! polynomial in them over `‖r_a‖²‖r_b‖²` (no `1/ρ`): it moves by `O(δ)` relative to its size.
 //! The ordinary edges' terms are smooth in their ends at distances `O(‖r‖)` from `x`, so they move
-//! by `O(δ/‖r‖)` relatively. Together `O(u)` times the cancellation factor, measured at up to
-//! ~1e-13 (gradient) and ~1e-12 (Hessian) against the 320-bit reference in
-//! `tests/kernels_b_clipped_derivs.rs` down to `h_P = 1e-12`.
+//! by `O(δ/‖r‖)` relatively, which is the displacement test: the sum over edges of each term's size
+//! times the relative displacement `δ/‖r‖` of its clip-point ends, times 4 (the terms are
+//! homogeneous of degree −1 and −2 in the distances), must stay within [`MOVED_TOLERANCE`] of the
+//! result. Measured against the 320-bit reference (`tests/kernels_b_clipped_derivs.rs`, `h_P` down
+//! to 1e-12 of the size): worst 2e-15 (gradient) and 4e-15 (Hessian) over the interior, 1.1e-14
+//! and 3.7e-15 outside; 1.8e-12 and 4.2e-12 with `x` near a vertex.
 //!
-//! The value is [`lambert_clipped::triangle_value`]'s, bit for bit (the same certified sum), so
-//! that it does not depend on the order. The path is taken only where that value is certified:
-//! near the plane (`|h_P|` below 1e-3 of the size), above the clipped triangle's interior, not
-//! within ~1e-9 of the clip line nor near a triangle edge's line.
+//! The value does not depend on the order. Where [`lambert_clipped`](super::lambert_clipped)
+//! certifies it (near the plane,
+//! `|h_P|` below 1e-3 of the size, over the clipped triangle's interior, not within ~1e-9 of the
+//! clip line nor near a triangle edge's line) the value is that one, bit for bit, from the same
+//! loop. Elsewhere below 1e-3 of the size (outside the triangle, where Lambert's sum cancels, and
+//! next to the clip line) the loop is built without the certificate
+//! ([`uncertified_loop`](super::lambert_clipped::uncertified_loop)), and the caller takes the
+//! value from the value order's own path.
 
 use glam::{DMat3, DVec3};
 
@@ -58,8 +65,9 @@ const MIN_SINE: f64 = 1.0 / 32.0;
 
 /// Value, gradient (and Hessian at [`Order::Hessian`]) of
 /// [`triangle_form_factor`](super::triangle_form_factor) over the clipped loop of
-/// [`lambert_clipped::certified_loop`] (module documentation), for `order` above
-/// [`Order::Value`]; `None` where that loop is not certified or the derivatives are not accepted.
+/// [`certified_loop`](super::lambert_clipped::certified_loop) (module documentation), for `order`
+/// above [`Order::Value`]; `None` where that loop is not certified or the derivatives are not
+/// accepted.
 /// Derivatives per unit length (gradient) and per squared length (Hessian). The kernel calls
 /// [`loop_derivs`] on the loop it keeps for the value; this is the tests' entry.
 #[cfg(test)]
@@ -68,7 +76,8 @@ pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -
     loop_derivs(&clipped, clipped.value(), order)
 }
 
-/// [`triangle_derivs`] from a loop (certified, or [`lambert_clipped::uncertified_loop`]: the
+/// The derivatives of `triangle_derivs` from a loop (certified, or
+/// [`uncertified_loop`](super::lambert_clipped::uncertified_loop): the
 /// derivatives need only its orientation), with `value` as the value.
 pub(super) fn loop_derivs(clipped: &ClippedLoop, value: f64, order: Order) -> Option<Deriv3> {
     // One copy per order, so that the order tests fold away in the inlined edge terms.
