@@ -64,11 +64,14 @@ pub(super) struct LoopVertex {
 /// The clipped loop of a certified [`triangle_value`], for the derivative path
 /// ([`lambert_clipped_derivs`](super::lambert_clipped_derivs)): the unit normal, the loop's
 /// vertices (`count` of them), its edge vectors (`edges[k]` from vertex `k` to the next, each one
-/// rounding of the exact difference) and `2π` times the signed certified sum.
+/// rounding of the exact difference), the ordinary edges' angles `β` where the value computed
+/// them (NaN otherwise) and `2π` times the signed certified sum.
+#[derive(Clone)]
 pub(super) struct ClippedLoop {
     pub(super) n: DVec3,
     pub(super) points: [LoopVertex; 4],
     pub(super) edges: [DVec3; 4],
+    pub(super) angles: [f64; 4],
     pub(super) count: usize,
     pub(super) sum: f64,
 }
@@ -250,6 +253,7 @@ pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clip
         n: cut.n,
         points,
         edges,
+        angles: [f64::NAN; 4],
         count,
         sum: side.signum(),
     })
@@ -266,6 +270,7 @@ pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clippe
     let (points, count) = build_loop(x, &v, &cut);
     let (mut sum, mut magnitude, mut err) = (0.0, 0.0, 0.0);
     let mut edges = [DVec3::ZERO; 4];
+    let mut angles = [f64::NAN; 4];
     for k in 0..count {
         let next = if k + 1 == count { 0 } else { k + 1 };
         let (a, b) = (&points[k], &points[next]);
@@ -274,7 +279,9 @@ pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clippe
         let (f, e_k) = if a.vertex.is_none() && b.vertex.is_none() {
             clip_edge(n, a.hi, b.hi, e, a.displacement.max(b.displacement))?
         } else {
-            lambert::edge(n, a.hi, b.hi, e, a.hi.length_squared())
+            let (f, err, beta) = lambert::edge_and_angle(n, a.hi, b.hi, e, a.hi.length_squared());
+            angles[k] = beta;
+            (f, err)
         };
         sum += f;
         magnitude += f.abs();
@@ -292,6 +299,7 @@ pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clippe
         n,
         points,
         edges,
+        angles,
         count,
         sum,
     })

@@ -123,7 +123,8 @@ fn derivs_at(clipped: &ClippedLoop, order: Order) -> Option<Deriv3> {
             let (g, h) = clip_term(n, a.hi, b.hi, e, order);
             (g, h, 1.0)
         } else {
-            let (g, h, sin2) = lambert::edge_derivatives(n, a.hi, b.hi, e, order);
+            let (g, h, sin2) =
+                lambert::edge_derivatives(n, a.hi, b.hi, e, clipped.angles[k], order);
             if !(sin2 >= MIN_SINE * MIN_SINE) {
                 return None;
             }
@@ -287,6 +288,7 @@ mod tests {
                                         pa.hi,
                                         pb.hi,
                                         c.edges[k],
+                                        f64::NAN,
                                         Order::Hessian,
                                     )
                                     .2
@@ -311,6 +313,10 @@ mod tests {
                     worst = (worst.0.max(g), worst.1.max(h));
                     assert!(g < 1e-11 && h < 1e-10, "{g:e} {h:e} at {x:?} {n:?} {v:?}");
                     assert_eq!(Some(d.value), lambert_clipped::triangle_value(x, n, v));
+                    // The value's angles are the ones the derivatives would recompute.
+                    let mut fresh = lambert_clipped::certified_loop(x, n, v).unwrap();
+                    fresh.angles = [f64::NAN; 4];
+                    assert_eq!(loop_derivs(&fresh, d.value, order), Some(d));
                     let public =
                         crate::kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order);
                     assert_eq!(public.unwrap(), d);
