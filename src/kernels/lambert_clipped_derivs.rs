@@ -228,9 +228,24 @@ mod tests {
         )
     }
 
+    /// The smallest `sin β` of a loop's ordinary edges.
+    fn smallest_sine(c: &ClippedLoop) -> f64 {
+        let mut smallest = 1.0f64;
+        for k in 0..c.count {
+            let (a, b) = (&c.points[k], &c.points[(k + 1) % c.count]);
+            if a.vertex.is_some() || b.vertex.is_some() {
+                let e = c.edges[k];
+                let sin2 =
+                    lambert::edge_derivatives(c.n, a.hi, b.hi, e, f64::NAN, Order::Gradient).2;
+                smallest = smallest.min(sin2.sqrt());
+            }
+        }
+        smallest
+    }
+
     /// Random clipped configurations 1e-3 to 1e-12 sizes above or below the triangle's interior:
     /// wherever the path accepts, it agrees with the robust (exact-clip) path, its value is the
-    /// value order's bits and the public kernel returns it; it accepts at least 70 % of those
+    /// value order's bits and the public kernel returns it; it accepts at least 60 % of those
     /// whose value is certified, away from the triangle's edges.
     #[test]
     fn random_clipped_triangles_agree_with_the_robust_path() {
@@ -275,43 +290,16 @@ mod tests {
                     accepted += usize::from(away && order == Order::Hessian);
                     let r = robust(x, n, v, order);
                     let (g, h) = rel(&d, &r);
-                    {
-                        let c = lambert_clipped::certified_loop(x, n, v).unwrap();
-                        let mut ms = 1.0f64;
-                        for k in 0..c.count {
-                            let nx = (k + 1) % c.count;
-                            let (pa, pb) = (&c.points[k], &c.points[nx]);
-                            if pa.vertex.is_some() || pb.vertex.is_some() {
-                                ms = ms.min(
-                                    lambert::edge_derivatives(
-                                        c.n,
-                                        pa.hi,
-                                        pb.hi,
-                                        c.edges[k],
-                                        f64::NAN,
-                                        Order::Hessian,
-                                    )
-                                    .2
-                                    .sqrt(),
-                                );
-                            }
-                        }
-                        let b = if ms >= 0.25 {
-                            0
-                        } else if ms >= 0.125 {
-                            1
-                        } else if ms >= 1.0 / 16.0 {
-                            2
-                        } else {
-                            3
-                        };
-                        buckets[b].0 = buckets[b].0.max(g);
-                        buckets[b].1 = buckets[b].1.max(h);
-                        buckets[b].2 += 1;
-                    }
                     let h = if order.hessian() { h } else { 0.0 };
+                    // Per range of the smallest sin β: [1/4, 1], [1/8, 1/4), [1/16, 1/8), below.
+                    let sine = smallest_sine(&lambert_clipped::certified_loop(x, n, v).unwrap());
+                    let bucket = ((0.25 / sine).log2().floor().max(0.0) as usize + 1).min(3);
+                    let bucket = if sine >= 0.25 { 0 } else { bucket };
+                    buckets[bucket].0 = buckets[bucket].0.max(g);
+                    buckets[bucket].1 = buckets[bucket].1.max(h);
+                    buckets[bucket].2 += 1;
                     worst = (worst.0.max(g), worst.1.max(h));
-                    assert!(g < 1e-11 && h < 1e-10, "{g:e} {h:e} at {x:?} {n:?} {v:?}");
+                    assert!(g < 1e-12 && h < 1e-10, "{g:e} {h:e} at {x:?} {n:?} {v:?}");
                     assert_eq!(Some(d.value), lambert_clipped::triangle_value(x, n, v));
                     // The value's angles are the ones the derivatives would recompute.
                     let mut fresh = lambert_clipped::certified_loop(x, n, v).unwrap();
@@ -324,8 +312,10 @@ mod tests {
             }
         }
         println!("accepted {accepted} of {tried}; worst vs robust {worst:?}");
-        println!("buckets {buckets:?}");
-        assert!(accepted * 10 >= tried * 7, "{accepted} of {tried}");
+        println!("worst (gradient, Hessian, count) per smallest sin β, from 1/4 down: {buckets:?}");
+        // 4221 of 6014 when this test was written: the rest decline on the clip points'
+        // displacement bound (conservative: the errors where accepted are ~100x below it).
+        assert!(accepted * 10 >= tried * 6, "{accepted} of {tried}");
     }
 
     /// The loop without the value's certificate (x's foot outside the triangle or inside, 1e-4 to
