@@ -32,6 +32,7 @@ use crate::{Deriv3, Order};
 use super::dd;
 use super::lambert;
 use super::lambert_clipped;
+use super::lambert_clipped_derivs;
 use super::lambert_polygon;
 use super::polygon;
 
@@ -162,41 +163,69 @@ pub fn triangle_form_factor(
             .or_else(|| lambert_clipped::triangle_value(x, n, [a, b, c]))
     };
     if order == Order::Value {
-        if let Some(f) = lambert_value() {
-            return Ok(Deriv3::constant(f));
+        return match lambert_value() {
+            Some(f) => Ok(Deriv3::constant(f)),
+            None => value_past_lambert(x, n, [a, b, c]),
+        };
+    }
+    // Far away Lambert's derivatives would be computed only to be declined (their sums
+    // cancel): the far-field quadrature first. Its value is replaced by Lambert's where that is
+    // certified (its cancellation-free far form reaches any distance), so that the value is
+    // the same for every order.
+    if maybe_far(&[a, b, c], x) {
+        if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
+            return Ok(with_lambert_value(d, order, lambert_value));
         }
-        // x near the plane outside the visible part: the robust path's near-plane split (its
-        // bits) without the robust path's set-up.
-        if let Some(f) = polygon::near_plane_triangle_value(x, n, [a, b, c]) {
-            return Ok(Deriv3::constant(f));
+    }
+    if let Some(d) = lambert::triangle_derivs(x, n, [a, b, c], order) {
+        return Ok(d);
+    }
+    // Near the plane with the tangent plane cutting the triangle: the derivatives of the
+    // certified clipped loop, whose value is `lambert_value`'s. Its loop (or its absence) is
+    // kept for the value below: computing it twice cost ~400 instructions where it declines.
+    let clipped = lambert_clipped::certified_loop(x, n, [a, b, c]);
+    if let Some(l) = &clipped {
+        if let Some(d) = lambert_clipped_derivs::loop_derivs(l, l.value(), order) {
+            return Ok(d);
         }
-        if maybe_far(&[a, b, c], x) {
-            if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
-                return Ok(d);
-            }
+    } else if let Some(l) = lambert_clipped::uncertified_loop(x, n, [a, b, c]) {
+        // Outside the triangle (the sum cancels) or on the clip line: the same derivatives,
+        // the value from the value order's path (no Lambert value here: clipped, uncertified).
+        if let Some(d) = lambert_clipped_derivs::loop_derivs(&l, 0.0, order) {
+            let value = value_past_lambert(x, n, [a, b, c])?.value;
+            return Ok(Deriv3 { value, ..d });
         }
-    } else {
-        // Far away Lambert's derivatives would be computed only to be declined (their sums
-        // cancel): the far-field quadrature first. Its value is replaced by Lambert's where that is
-        // certified (its cancellation-free far form reaches any distance), so that the value is
-        // the same for every order.
-        if maybe_far(&[a, b, c], x) {
-            if let Some((d, _)) = triangle_far_field_fast(x, n, [a, b, c], order) {
-                return Ok(with_lambert_value(d, order, lambert_value));
-            }
-        }
-        if let Some(d) = lambert::triangle_derivs(x, n, [a, b, c], order) {
+    }
+    let d = robust_triangle(x, n, [a, b, c], order)?;
+    Ok(with_lambert_value(d, order, || {
+        lambert::triangle_value(x, n, [a, b, c]).or(clipped.map(|l| l.value()))
+    }))
+}
+
+/// The value order's result where Lambert's value is not certified: with `x` near the plane
+/// outside the visible part the robust path's near-plane split (its bits) without the robust
+/// path's set-up, far away the far-field path, else the robust path.
+fn value_past_lambert(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Result<Deriv3> {
+    if let Some(f) = polygon::near_plane_triangle_value(x, n, v) {
+        return Ok(Deriv3::constant(f));
+    }
+    if maybe_far(&v, x) {
+        if let Some((d, _)) = triangle_far_field_fast(x, n, v, Order::Value) {
             return Ok(d);
         }
     }
-    let d = match triangle_form_factor_fast(x, n, [a, b, c], order) {
+    robust_triangle(x, n, v, Order::Value)
+}
+
+/// The triangle's form factor past the Lambert and far-field paths.
+fn robust_triangle(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Result<Deriv3> {
+    Ok(match triangle_form_factor_fast(x, n, v, order) {
         Some(d) => d,
-        None => match polygon::triangle_form_factor_in_range(x, n, [a, b, c], order) {
+        None => match polygon::triangle_form_factor_in_range(x, n, v, order) {
             Some(d) => d?,
-            None => polygon::form_factor(x, n, &[a, b, c], order)?,
+            None => polygon::form_factor(x, n, &v, order)?,
         },
-    };
-    Ok(with_lambert_value(d, order, lambert_value))
+    })
 }
 
 /// Form factor from a differential area at `x` with unit normal `n` to a planar simple polygon:
@@ -481,6 +510,20 @@ pub(crate) fn clip_edge_term(
     if !order.gradient() {
         return Ok(out);
     }
+    let (gradient, hessian) = clip_edge_derivs(&f, n, order.hessian());
+    out.gradient = INV_2PI * gradient;
+    if order.hessian() {
+        out.hessian = hessian * INV_2PI;
+    }
+    Ok(out)
+}
+
+/// `2π` times the gradient and (when `hessian`, else zero) the Hessian of [`clip_edge_term`] from
+/// the edge's frame (only `e_hat`, `len`, `p`, `h`, `sa`, `sb` are read). No division by `h`:
+/// bounded as `x` approaches the clip line, and changed only by `O(δ)` when the frame's inputs
+/// move by `δ` (the derivative fast path for clipped triangles relies on both).
+#[inline]
+pub(crate) fn clip_edge_derivs(f: &EdgeFrame, n: DVec3, hessian: bool) -> (DVec3, DMat3) {
     let (sa, sb, h, len) = (f.sa, f.sb, f.h, f.len);
     let h2 = h * h;
     let ra2 = sa * sa + h2;
@@ -490,16 +533,16 @@ pub(crate) fn clip_edge_term(
     let qp = q.dot(f.p);
     let b2 = len * (sa + sb) / (2.0 * rab2);
     let s_rho2 = len * (h2 - sa * sb) / rab2;
-    out.gradient = INV_2PI * (-s_rho2 * q - 2.0 * qp * b2 * f.e_hat);
-    if order.hessian() {
-        let b3 = len * (sa + sb) * (ra2 + rb2) / (4.0 * rab2 * rab2);
-        let bracket = h2 * h2 - 2.0 * sa * sb * h2 - sa * sb * (sa * sa + sa * sb + sb * sb);
-        let s_rho4 = len * bracket / (rab2 * rab2);
-        out.hessian = ((outer_self(q) - outer_self(f.e_hat)) * (-2.0 * qp * s_rho4)
-            + sym_outer(q, f.e_hat) * (2.0 * (b2 - 4.0 * h2 * b3)))
-            * INV_2PI;
+    let gradient = -s_rho2 * q - 2.0 * qp * b2 * f.e_hat;
+    if !hessian {
+        return (gradient, DMat3::ZERO);
     }
-    Ok(out)
+    let b3 = len * (sa + sb) * (ra2 + rb2) / (4.0 * rab2 * rab2);
+    let bracket = h2 * h2 - 2.0 * sa * sb * h2 - sa * sb * (sa * sa + sa * sb + sb * sb);
+    let s_rho4 = len * bracket / (rab2 * rab2);
+    let hess = (outer_self(q) - outer_self(f.e_hat)) * (-2.0 * qp * s_rho4)
+        + sym_outer(q, f.e_hat) * (2.0 * (b2 - 4.0 * h2 * b3));
+    (gradient, hess)
 }
 
 /// The edge term for `r_a = a − x` and `e = b − a` (in any consistent length unit), unit `n`.

@@ -60,13 +60,27 @@ pub(super) fn unit(n: DVec3) -> Option<DVec3> {
 /// `r_a`, `r_b`, `e = b − a` and `‖r_a‖²`.
 #[inline]
 pub(super) fn edge(n: DVec3, ra: DVec3, rb: DVec3, e: DVec3, ra2: f64) -> (f64, f64) {
+    let (f, err, _) = edge_and_angle(n, ra, rb, e, ra2);
+    (f, err)
+}
+
+/// [`edge`] and the edge's angle `β` (for a derivative pass over the same edge that would
+/// recompute it: [`edge_derivatives`]).
+#[inline(always)]
+pub(super) fn edge_and_angle(
+    n: DVec3,
+    ra: DVec3,
+    rb: DVec3,
+    e: DVec3,
+    ra2: f64,
+) -> (f64, f64, f64) {
     let w = ra.cross(e);
     let s = w.length();
     let c = ra.dot(rb);
     let beta = s.atan2(c);
     let g = beta / s;
     // r_a·e = r_a·r_b − ‖r_a‖².
-    (n.dot(w) * g, 36.0 * beta + 20.0 * (c - ra2).abs() * g)
+    (n.dot(w) * g, 36.0 * beta + 20.0 * (c - ra2).abs() * g, beta)
 }
 
 /// The value of [`edge_form_factor`](super::edge_form_factor) by Lambert's formula when its error
@@ -223,6 +237,31 @@ fn edge_derivs(
         hessian: t.hessian,
     };
     (d, t.err, steep(s2, t.p))
+}
+
+/// `2π` times one Lambert edge term's gradient and Hessian (entries `[xx, yy, zz, xy, xz, yz]`,
+/// zero below [`Order::Hessian`]) and its `sin²β` (the caller chooses its own floor: see
+/// [`DERIV_MIN_SINE`]), for the clipped-triangle derivative path, whose loop is not a polygon of
+/// input vertices. `angle` is the edge's `β` when [`edge_and_angle`] has already computed it for
+/// these inputs (the same bits as recomputing it), NaN otherwise.
+#[inline(always)]
+pub(super) fn edge_derivatives(
+    n: DVec3,
+    ra: DVec3,
+    rb: DVec3,
+    e: DVec3,
+    angle: f64,
+    order: Order,
+) -> (DVec3, [f64; 6], f64) {
+    let (ra, rb, e) = (V3::from_dvec(ra), V3::from_dvec(rb), V3::from_dvec(e));
+    let w = ra.cross(e);
+    let s2 = w.dot(w);
+    let s = s2.sqrt();
+    let c = ra.dot(rb);
+    let ra2 = ra.dot(ra);
+    let beta = if angle.is_nan() { s.atan2(c) } else { angle };
+    let t = edge_terms(V3::from_dvec(n), ra, rb, e, ra2, (w, s2, s, c, beta), order);
+    (t.gradient.to_dvec(), t.hessian, s2 / t.p)
 }
 
 /// Whether `sin β ≥ DERIV_MIN_SINE`, from `s²` and `P = s² + c²`.
@@ -508,7 +547,7 @@ pub(crate) fn edge_derivs_checked(
 
 /// Largest ratio of the summed magnitudes of the edge terms' derivatives to the magnitude of their
 /// sum accepted by the derivative fast path (as the robust path's value cancellation limit).
-const CANCELLATION: f64 = 1e2;
+pub(super) const CANCELLATION: f64 = 1e2;
 
 #[cfg(test)]
 mod tests {

@@ -54,11 +54,26 @@ const U: f64 = 0.5 * f64::EPSILON;
 /// rounding `hi`, the triangle vertex it is (`None` for a clip point), and for a clip point the
 /// bound on its displacement along the triangle's edge.
 #[derive(Clone, Copy)]
-struct LoopVertex {
+pub(super) struct LoopVertex {
     exact: Dd3,
-    hi: DVec3,
-    vertex: Option<usize>,
-    displacement: f64,
+    pub(super) hi: DVec3,
+    pub(super) vertex: Option<usize>,
+    pub(super) displacement: f64,
+}
+
+/// The clipped loop of a certified [`triangle_value`], for the derivative path
+/// ([`lambert_clipped_derivs`](super::lambert_clipped_derivs)): the unit normal, the loop's
+/// vertices (`count` of them), its edge vectors (`edges[k]` from vertex `k` to the next, each one
+/// rounding of the exact difference), the ordinary edges' angles `β` where the value computed
+/// them (NaN otherwise) and `2π` times the signed certified sum.
+#[derive(Clone)]
+pub(super) struct ClippedLoop {
+    pub(super) n: DVec3,
+    pub(super) points: [LoopVertex; 4],
+    pub(super) edges: [DVec3; 4],
+    pub(super) angles: [f64; 4],
+    pub(super) count: usize,
+    pub(super) sum: f64,
 }
 
 /// `hi + lo` as a double-double vector, for `lo` the exact rounding error of `hi` (already
@@ -85,8 +100,31 @@ fn difference_error(v: DVec3, x: DVec3) -> DVec3 {
 /// clipped triangle when its tangent plane certainly cuts it and the error bound (module
 /// documentation) is within [`FAST_TOLERANCE`] of the result; `None` otherwise, including when
 /// nothing is clipped (the unclipped path's case) and for invalid input.
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
+    Some(certified_loop(x, n, v)?.value())
+}
+
+impl ClippedLoop {
+    /// The form factor: the sum's sign is the triangle's orientation as seen from x, and the form
+    /// factor is two-sided.
+    pub(super) fn value(&self) -> f64 {
+        (self.sum.abs() * INV_2PI).min(1.0)
+    }
+}
+
+/// The tangent plane's cut of the triangle: the unit normal, `r_k = v_k − x`, the heights
+/// `n·r_k` with their error bounds, and which vertices are certainly above; `None` when a height's
+/// sign is uncertain, nothing or everything is clipped, or for invalid input.
+struct Cut {
+    n: DVec3,
+    r: [DVec3; 3],
+    heights: [f64; 3],
+    height_error: [f64; 3],
+    above: [bool; 3],
+}
+
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+fn cut(x: DVec3, n: DVec3, v: &[DVec3; 3]) -> Option<Cut> {
     let r = v.map(|vk| vk - x);
     if !r.iter().all(|rk| lambert::in_range(*rk)) {
         return None;
@@ -107,9 +145,25 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     if kept == 0 || kept == 3 {
         return None;
     }
-    if left_to_the_robust_path(&v, &r) {
-        return None;
-    }
+    Some(Cut {
+        n,
+        r,
+        heights,
+        height_error,
+        above,
+    })
+}
+
+/// The clipped loop's vertices (the first `count`): kept triangle vertices and clip points, in
+/// the triangle's order (module documentation).
+fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ([LoopVertex; 4], usize) {
+    let Cut {
+        r,
+        heights,
+        height_error,
+        above,
+        ..
+    } = cut;
     let exact: [Dd3; 3] = std::array::from_fn(|k| from_parts(r[k], difference_error(v[k], x)));
     let mut points = [LoopVertex {
         exact: exact[0],
@@ -147,19 +201,87 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
             count += 1;
         }
     }
+    (points, count)
+}
+
+/// The loop's edge vector from `a` to `b`: one rounding of the exact difference of its ends.
+#[inline]
+fn edge_vector(v: &[DVec3; 3], a: &LoopVertex, b: &LoopVertex) -> DVec3 {
+    match (a.vertex, b.vertex) {
+        (Some(i), Some(j)) => v[j] - v[i],
+        _ => b.exact.sub(&a.exact).to_dvec3(),
+    }
+}
+
+/// The clipped loop without the value's certificate, for the derivatives where the value comes
+/// from elsewhere (`x` near the plane outside the triangle, where Lambert's sum cancels). Its
+/// `sum` is only the orientation, `±1`: the sign of the certified sum, `sign(N·r_0)` for the
+/// triangle's normal `N = (v_1 − v_0) × (v_2 − v_0)`; `None` when that sign is uncertain (`x`
+/// within rounding of the triangle's plane) or where [`triangle_value`]'s loop is not built.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
+    let cut = cut(x, n, &v)?;
+    let normal = (v[1] - v[0]).cross(v[2] - v[0]);
+    let side = normal.dot(cut.r[0]);
+    // The rounded normal and r_0 are within 4u and u of exact relatively: 8u with a margin.
+    // Taken only near the plane (below 1e-3 of the size, as `left_to_the_robust_path`), where the
+    // robust path's exact geometry makes its derivatives several times dearer.
+    let scale = normal.length();
+    let r_max = cut.r.iter().fold(0.0f64, |m, rk| m.max(rk.length()));
+    if !(side.abs() > 8.0 * f64::EPSILON * scale * cut.r[0].length()
+        && side.abs() < 1e-3 * scale * r_max)
+    {
+        return None;
+    }
+    // Within a sine of 1e-3 of a triangle edge's segment the clip point on it is within ~1e-3 of
+    // the size from x, where the derivatives decline on its displacement: without the loop.
+    for i in 0..3 {
+        let (ri, rj) = (cut.r[i], cut.r[(i + 1) % 3]);
+        if ri.dot(rj) < 0.0
+            && ri.cross(rj).length_squared() < 1e-6 * ri.length_squared() * rj.length_squared()
+        {
+            return None;
+        }
+    }
+    let (points, count) = build_loop(x, &v, &cut);
+    let mut edges = [DVec3::ZERO; 4];
+    for k in 0..count {
+        let next = if k + 1 == count { 0 } else { k + 1 };
+        edges[k] = edge_vector(&v, &points[k], &points[next]);
+    }
+    Some(ClippedLoop {
+        n: cut.n,
+        points,
+        edges,
+        angles: [f64::NAN; 4],
+        count,
+        sum: side.signum(),
+    })
+}
+
+/// [`triangle_value`]'s loop and signed sum (times `2π`) when it certifies the value.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
+    let cut = cut(x, n, &v)?;
+    if left_to_the_robust_path(&v, &cut.r) {
+        return None;
+    }
+    let n = cut.n;
+    let (points, count) = build_loop(x, &v, &cut);
     let (mut sum, mut magnitude, mut err) = (0.0, 0.0, 0.0);
+    let mut edges = [DVec3::ZERO; 4];
+    let mut angles = [f64::NAN; 4];
     for k in 0..count {
         let next = if k + 1 == count { 0 } else { k + 1 };
         let (a, b) = (&points[k], &points[next]);
-        // Each edge vector is one rounding of the exact difference of its ends.
-        let e = match (a.vertex, b.vertex) {
-            (Some(i), Some(j)) => v[j] - v[i],
-            _ => b.exact.sub(&a.exact).to_dvec3(),
-        };
+        let e = edge_vector(&v, a, b);
+        edges[k] = e;
         let (f, e_k) = if a.vertex.is_none() && b.vertex.is_none() {
             clip_edge(n, a.hi, b.hi, e, a.displacement.max(b.displacement))?
         } else {
-            lambert::edge(n, a.hi, b.hi, e, a.hi.length_squared())
+            let (f, err, beta) = lambert::edge_and_angle(n, a.hi, b.hi, e, a.hi.length_squared());
+            angles[k] = beta;
+            (f, err)
         };
         sum += f;
         magnitude += f.abs();
@@ -173,8 +295,14 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     if !(err <= FAST_TOLERANCE * sum.abs()) {
         return None;
     }
-    // The sum's sign is the triangle's orientation as seen from x; the form factor is two-sided.
-    Some((sum.abs() * INV_2PI).min(1.0))
+    Some(ClippedLoop {
+        n,
+        points,
+        edges,
+        angles,
+        count,
+        sum,
+    })
 }
 
 /// Whether this path leaves the configuration to the robust one before the exact clip points and

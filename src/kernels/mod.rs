@@ -6,6 +6,7 @@ mod dd;
 pub mod form_factor;
 mod lambert;
 mod lambert_clipped;
+mod lambert_clipped_derivs;
 mod lambert_far;
 mod lambert_polygon;
 mod lanes;
