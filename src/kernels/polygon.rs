@@ -836,7 +836,7 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     // N̂·w/L = sign(n·w) n_N D: its geometry comes from the exact height without a double-double
     // cross product.
     let n_x_plane = n.cross(plane_n);
-    let big_d = h_p.abs() / nt2.sqrt();
+    let (n_t, nt2, big_d) = grazing_tangent(verts, plane_n, h_p, n_t, nt2);
     for (i, frame) in frames.iter().enumerate() {
         let (a, b) = (&verts[i], &verts[next(i, count)]);
         if a.on_line && b.on_line {
@@ -891,6 +891,63 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
         return None;
     }
     Some(0.5 * FRAC_1_PI * total)
+}
+
+/// Below this `‖n_t‖²` (a receiver within ~0.1 rad of facing the polygon's plane head-on)
+/// [`near_plane_value`] takes `n_t` from the clip line ([`grazing_tangent`]) rather than from
+/// `n − n_N N̂` in f64: the latter's relative error, ~`u/‖n_t‖`, is multiplied by the split's
+/// cancellation (up to [`SPLIT_CANCELLATION_LIMIT`]), which at this threshold keeps it below
+/// ~1e-12 and at 2.5e-6 rad would reach 1e-9.
+const GRAZING_NT2: f64 = 1e-2;
+
+/// The in-plane part `n_t` of the receiver normal, `‖n_t‖²` and the distance `D = |h_P|/‖n_t‖`
+/// from x to the clip line ℓ, for [`near_plane_value`] (`n_t`, `nt2` its f64 estimates).
+///
+/// Why: `n_t = n − n_N N̂` is a difference of nearly equal vectors when the receiver faces the
+/// plane nearly head-on, and the rounded `N̂` (an ulp, ~1e-16) tilts it by ~1e-16/‖n_t‖ rad. The
+/// value is that sensitive to it: per ulp of `n` it moves by ~4e-10 relative at `‖n_t‖` = 2.3e-6
+/// (the example of issue 18's grazing gap), which the f64 route turned into errors of 1.7e-9.
+/// The clip points carry the same information exactly: they are the polygon's edges (exact, in the
+/// plane) cut by the tangent plane in double-double, so ℓ's direction `ê` and x's distance from
+/// it, `D = ‖r_a × r_b‖/L` (double-double cross product: `D ≪ ‖r_a‖` where the receiver is tilted
+/// more), are accurate to a few ulps whatever `‖n_t‖`. Then `‖n_t‖ = |h_P|/D` (the exact height),
+/// and `n_t` is along `N̂ × ê` (in the plane, perpendicular to ℓ = the direction of `n × N̂`; the
+/// rounding of `N̂` now moves it by an ulp of its own size), oriented as the f64 estimate.
+///
+/// Above [`GRAZING_NT2`], or without a clip edge of nonzero length, the f64 estimates as they are
+/// (and `D = |h_P|/‖n_t‖`).
+#[inline]
+fn grazing_tangent(
+    verts: &[ClipVertex],
+    plane_n: DVec3,
+    h_p: f64,
+    n_t: DVec3,
+    nt2: f64,
+) -> (DVec3, f64, f64) {
+    if nt2 < GRAZING_NT2 {
+        let count = verts.len();
+        for i in 0..count {
+            let (a, b) = (&verts[i], &verts[next(i, count)]);
+            if !(a.on_line && b.on_line) {
+                continue;
+            }
+            let (ra, rb) = (
+                dd::Dd3::from_parts(a.r, a.r_lo),
+                dd::Dd3::from_parts(b.r, b.r_lo),
+            );
+            let e = rb.sub(&ra).to_dvec3();
+            let len = e.length();
+            if len == 0.0 {
+                continue;
+            }
+            let big_d = ra.cross(&rb).to_dvec3().length() / len;
+            let norm = h_p.abs() / big_d;
+            let m = plane_n.cross(e) / len;
+            let m = if m.dot(n_t) < 0.0 { -m } else { m };
+            return (m * norm, norm * norm, big_d);
+        }
+    }
+    (n_t, nt2, h_p.abs() / nt2.sqrt())
 }
 
 /// The frames of the loop's edges as the edge sum builds them ([`frame_of`]), pushed onto `out`
