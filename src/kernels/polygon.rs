@@ -723,6 +723,14 @@ const NEAR_PLANE_RATIO: f64 = 0.1;
 /// of 1e-12 relative value) by far more.
 const SPLIT_CANCELLATION_LIMIT: f64 = 1e3;
 
+/// Up to this ratio of the split's parts to its sum the value is still the split's, while above
+/// [`SPLIT_CANCELLATION_LIMIT`] the derivatives come from the quadrature (which then also
+/// integrates a value, discarded). The split's parts are accurate to a few ulps each (the grazing
+/// receiver's `n_t` included, see [`grazing_tangent`]), so its value keeps ~`u` times this ratio,
+/// ~1e-11; the quadrature's value near the plane is worse there (5.5e-10 on issue 18's grazing
+/// example, whose split cancels by 1000.0000016).
+const SPLIT_VALUE_LIMIT: f64 = 1e5;
+
 /// What [`near_plane_value`] reads of an edge's frame ([`EdgeFrame`]'s fields of the same names):
 /// the value-only route builds just these.
 #[derive(Clone, Copy)]
@@ -790,9 +798,10 @@ impl From<EdgeFrame> for InPlaneEdge {
 /// several clip edges, including bridges that run along ℓ in both directions; each is its own
 /// closed form and the bridges' terms cancel between themselves, O(h_P) each.
 ///
-/// `None` when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near
-/// its line in the plane, which includes x near a clip vertex), a term is undefined, or the parts
-/// sum to less than `1/max_cancellation` of their magnitudes.
+/// Returned with the parts' cancellation (their magnitudes' sum over the sum's magnitude). `None`
+/// when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near its line
+/// in the plane, which includes x near a clip vertex), a term is undefined, or the parts sum to
+/// less than `1/max_cancellation` of their magnitudes.
 #[inline]
 fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     verts: &[ClipVertex],
@@ -801,7 +810,7 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     plane_n: DVec3,
     h_p: f64,
     max_cancellation: f64,
-) -> Option<f64> {
+) -> Option<(f64, f64)> {
     let count = verts.len();
     let h2 = h_p * h_p;
     let n_par = n.dot(plane_n);
@@ -890,7 +899,7 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     if !(magnitude <= max_cancellation * total.abs()) {
         return None;
     }
-    Some(0.5 * FRAC_1_PI * total)
+    Some((0.5 * FRAC_1_PI * total, magnitude / total.abs()))
 }
 
 /// Below this `‖n_t‖²` (a receiver within ~0.1 rad of facing the polygon's plane head-on)
@@ -1529,13 +1538,13 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                 n,
                 plane.normal,
                 h_p,
-                SPLIT_CANCELLATION_LIMIT,
+                SPLIT_VALUE_LIMIT,
             )
         } else {
             None
         };
         match (split, order) {
-            (Some(v), Order::Value) => Deriv3::constant(v),
+            (Some((v, _)), Order::Value) => Deriv3::constant(v),
             _ => {
                 let mut sum = Deriv3::constant(0.0);
                 let mut magnitude = 0.0;
@@ -1558,7 +1567,11 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                 let cancels =
                     magnitude > cancellation_limit(&plane, near_plane || cut) * sum.value.abs();
                 let mut quadrature = None;
-                if cancels && split.is_none() {
+                // The derivatives from the edge sum only where the split does not cancel beyond
+                // its limit for them (its value is taken up to `SPLIT_VALUE_LIMIT`).
+                let split_for_derivatives =
+                    split.is_some_and(|(_, c)| c <= SPLIT_CANCELLATION_LIMIT);
+                if cancels && !split_for_derivatives {
                     let max_pieces = if near_plane && cut {
                         MAX_PIECES_NEAR_PLANE
                     } else {
@@ -1574,8 +1587,11 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                     }
                 }
                 match quadrature {
-                    Some(q) => {
+                    Some(mut q) => {
                         used_quadrature = true;
+                        if let Some((v, _)) = split {
+                            q.value = v;
+                        }
                         q
                     }
                     None => {
@@ -1594,7 +1610,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                                 f64::INFINITY,
                             );
                         }
-                        if let Some(v) = split {
+                        if let Some((v, _)) = split {
                             sum.value = v;
                         }
                         sum
