@@ -779,8 +779,9 @@ impl From<EdgeFrame> for InPlaneEdge {
 /// point nearest x is `p = (h_P/‖n_t‖²)(N̂ − n_N n)` (`n·p = 0`, `N̂·p = h_P`), so `D = |h_P|/‖n_t‖`
 /// and `w = p × e`, `sign(n·w) = sign(h_P e·(n × N̂))`. Its in-plane angle at `x_P` is
 /// `Δψ_c = atan2(d_c L, s_a s_b + d_c²)` with `d_c = N̂·w/L = sign(n·w) n_N D` (x and `x_P` have the
-/// same abscissae: ℓ ⊥ N̂). Outside the polygon the clip segment lies on one side of the foot
-/// (`s_a s_b > 0`), so both angles are O(h_P) and computed without cancellation.
+/// same abscissae: ℓ ⊥ N̂). Where the clip segment lies on one side of the foot (`s_a s_b > 0`)
+/// both angles are O(h_P); otherwise (the foot beyond ℓ, outside the polygon too) they are O(1)
+/// but [`tangent_excess`] still forms their combination without cancellation.
 ///
 /// The sum. `Σ_all Δψ = 2π W` exactly (`W` the winding number of the clipped loop about `x_P`,
 /// rounded from the f64 sum), so
@@ -1531,15 +1532,17 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         // the derivatives (∂F/∂h_P is O(1) while F is O(h_P); `clip_edge_term` removes the clip
         // line's 1/h_P and 1/h_P² parts analytically, clip-line motion included), which
         // `tests/kernels_b_near_plane.rs` measures against the 320-bit reference.
-        let mut split = if near_plane && cut && !foot_inside(verts, plane.normal, h_p) {
-            near_plane_value(
-                verts,
-                &frames,
-                n,
-                plane.normal,
-                h_p,
-                SPLIT_VALUE_LIMIT,
-            )
+        // A grazing receiver (`‖n_t‖² < GRAZING_NT2`) whose tangent plane passes beside the
+        // polygon: the split too, for the value only. The quadrature's `n·r` loses
+        // `u‖r‖/|n·r|` there (1.1e-10 of the value at 2.5e-7 rad, 2.6e-11 sizes from the plane),
+        // the split's parts do not.
+        let grazing = near_plane && !cut && {
+            let n_t = n - n.dot(plane.normal) * plane.normal;
+            n_t.length_squared() < GRAZING_NT2
+        };
+        let mut split = if near_plane && (cut || grazing) && !foot_inside(verts, plane.normal, h_p)
+        {
+            near_plane_value(verts, &frames, n, plane.normal, h_p, SPLIT_VALUE_LIMIT)
         } else {
             None
         };
@@ -1569,8 +1572,9 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                 let mut quadrature = None;
                 // The derivatives from the edge sum only where the split does not cancel beyond
                 // its limit for them (its value is taken up to `SPLIT_VALUE_LIMIT`).
+                // (Nothing clipped, the edge sum's derivatives keep their 1/h_P parts: never.)
                 let split_for_derivatives =
-                    split.is_some_and(|(_, c)| c <= SPLIT_CANCELLATION_LIMIT);
+                    cut && split.is_some_and(|(_, c)| c <= SPLIT_CANCELLATION_LIMIT);
                 if cancels && !split_for_derivatives {
                     let max_pieces = if near_plane && cut {
                         MAX_PIECES_NEAR_PLANE

@@ -481,14 +481,6 @@ mod tests {
         }
         let mut frames = Frames::new();
         edge_frames(&loop_, true, &mut frames);
-        near_plane_value(
-            &loop_,
-            &frames,
-            n,
-            plane.normal,
-            h_p,
-            SPLIT_VALUE_LIMIT,
-        )
-        .is_some()
+        near_plane_value(&loop_, &frames, n, plane.normal, h_p, SPLIT_VALUE_LIMIT).is_some()
     }
 }
