@@ -759,6 +759,14 @@ const NEAR_PLANE_RATIO: f64 = 0.1;
 /// of 1e-12 relative value) by far more.
 const SPLIT_CANCELLATION_LIMIT: f64 = 1e3;
 
+/// Up to this ratio of the split's parts to its sum the value is still the split's, while above
+/// [`SPLIT_CANCELLATION_LIMIT`] the derivatives come from the quadrature (which then also
+/// integrates a value, discarded). The split's parts are accurate to a few ulps each (the grazing
+/// receiver's `n_t` included, see [`grazing_tangent`]), so its value keeps ~`u` times this ratio,
+/// ~1e-11; the quadrature's value near the plane is worse there (5.5e-10 on issue 18's grazing
+/// example, whose split cancels by 1000.0000016).
+const SPLIT_VALUE_LIMIT: f64 = 1e5;
+
 /// What [`near_plane_value`] reads of an edge's frame ([`EdgeFrame`]'s fields of the same names):
 /// the value-only route builds just these.
 #[derive(Clone, Copy)]
@@ -807,8 +815,9 @@ impl From<EdgeFrame> for InPlaneEdge {
 /// point nearest x is `p = (h_P/‖n_t‖²)(N̂ − n_N n)` (`n·p = 0`, `N̂·p = h_P`), so `D = |h_P|/‖n_t‖`
 /// and `w = p × e`, `sign(n·w) = sign(h_P e·(n × N̂))`. Its in-plane angle at `x_P` is
 /// `Δψ_c = atan2(d_c L, s_a s_b + d_c²)` with `d_c = N̂·w/L = sign(n·w) n_N D` (x and `x_P` have the
-/// same abscissae: ℓ ⊥ N̂). Outside the polygon the clip segment lies on one side of the foot
-/// (`s_a s_b > 0`), so both angles are O(h_P) and computed without cancellation.
+/// same abscissae: ℓ ⊥ N̂). Where the clip segment lies on one side of the foot (`s_a s_b > 0`)
+/// both angles are O(h_P); otherwise (the foot beyond ℓ, outside the polygon too) they are O(1)
+/// but [`tangent_excess`] still forms their combination without cancellation.
 ///
 /// The sum. `Σ_all Δψ = 2π W` exactly (`W` the winding number of the clipped loop about `x_P`,
 /// rounded from the f64 sum), so
@@ -826,9 +835,10 @@ impl From<EdgeFrame> for InPlaneEdge {
 /// several clip edges, including bridges that run along ℓ in both directions; each is its own
 /// closed form and the bridges' terms cancel between themselves, O(h_P) each.
 ///
-/// `None` when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near
-/// its line in the plane, which includes x near a clip vertex), a term is undefined, or the parts
-/// sum to less than `1/max_cancellation` of their magnitudes.
+/// Returned with the parts' cancellation (their magnitudes' sum over the sum's magnitude). `None`
+/// when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near its line
+/// in the plane, which includes x near a clip vertex), a term is undefined, or the parts sum to
+/// less than `1/max_cancellation` of their magnitudes.
 #[inline]
 fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     verts: &[ClipVertex],
@@ -837,7 +847,7 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     plane_n: DVec3,
     h_p: f64,
     max_cancellation: f64,
-) -> Option<f64> {
+) -> Option<(f64, f64)> {
     let count = verts.len();
     let h2 = h_p * h_p;
     let n_par = n.dot(plane_n);
@@ -872,7 +882,7 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     // N̂·w/L = sign(n·w) n_N D: its geometry comes from the exact height without a double-double
     // cross product.
     let n_x_plane = n.cross(plane_n);
-    let big_d = h_p.abs() / nt2.sqrt();
+    let (n_t, nt2, big_d) = grazing_tangent(verts, n, plane_n, h_p, n_t, nt2);
     for (i, frame) in frames.iter().enumerate() {
         let (a, b) = (&verts[i], &verts[next(i, count)]);
         if a.on_line && b.on_line {
@@ -926,7 +936,90 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     if !(magnitude <= max_cancellation * total.abs()) {
         return None;
     }
-    Some(0.5 * FRAC_1_PI * total)
+    Some((0.5 * FRAC_1_PI * total, magnitude / total.abs()))
+}
+
+/// Below this `‖n_t‖²` (a receiver within ~0.1 rad of facing the polygon's plane head-on)
+/// [`near_plane_value`] takes `n_t` from the clip line ([`grazing_tangent`]) rather than from
+/// `n − n_N N̂` in f64: the latter's relative error, ~`u/‖n_t‖`, is multiplied by the split's
+/// cancellation (up to [`SPLIT_CANCELLATION_LIMIT`]), which at this threshold keeps it below
+/// ~1e-12 and at 2.5e-6 rad would reach 1e-9.
+const GRAZING_NT2: f64 = 1e-2;
+
+/// Below this `‖n_t‖²` (a receiver within 1e-4 rad of facing the polygon's plane head-on, near
+/// the plane and clipping it) [`evaluate`] takes the derivatives from the quadrature even where the
+/// split does not cancel beyond [`SPLIT_CANCELLATION_LIMIT`]: the edge sum's terms are O(1/size)
+/// while the derivatives are O(F/h_P), which vanish with `h_P` for a head-on receiver
+/// (`tests/kernels_b_grazing.rs`: gradient errors up to 6.3e-6 from the edge sum, 3.9e-7 from the
+/// quadrature; above 1e-4 rad the edge sum's were within 5e-11).
+const FACING_NT2: f64 = 1e-8;
+
+/// The in-plane part `n_t` of the receiver normal, `‖n_t‖²` and the distance `D = |h_P|/‖n_t‖`
+/// from x to the clip line ℓ, for [`near_plane_value`] (`n_t`, `nt2` its f64 estimates).
+///
+/// Why: `n_t = n − n_N N̂` is a difference of nearly equal vectors when the receiver faces the
+/// plane nearly head-on, and the rounded `N̂` (an ulp, ~1e-16) tilts it by ~1e-16/‖n_t‖ rad. The
+/// value is that sensitive to it: per ulp of `n` it moves by ~4e-10 relative at `‖n_t‖` = 2.3e-6
+/// (the example of issue 18's grazing gap), which the f64 route turned into errors of 1.7e-9.
+/// The clip points carry the same information exactly: they are the polygon's edges (exact, in the
+/// plane) cut by the tangent plane in double-double, so ℓ's direction `ê` and x's distance from
+/// it, `D = ‖r_a × r_b‖/L` (double-double cross product: `D ≪ ‖r_a‖` where the receiver is tilted
+/// more), are accurate to a few ulps whatever `‖n_t‖`. Then `‖n_t‖ = |h_P|/D` (the exact height),
+/// and `n_t` is along `N̂ × ê` (in the plane, perpendicular to ℓ = the direction of `n × N̂`; the
+/// rounding of `N̂` now moves it by an ulp of its own size), oriented as the f64 estimate.
+///
+/// Above [`GRAZING_NT2`], or without a clip edge of nonzero length, the f64 estimates as they are
+/// (and `D = |h_P|/‖n_t‖`).
+#[inline]
+fn grazing_tangent(
+    verts: &[ClipVertex],
+    n: DVec3,
+    plane_n: DVec3,
+    h_p: f64,
+    n_t: DVec3,
+    nt2: f64,
+) -> (DVec3, f64, f64) {
+    if nt2 < GRAZING_NT2 {
+        let count = verts.len();
+        for i in 0..count {
+            let (a, b) = (&verts[i], &verts[next(i, count)]);
+            if !(a.on_line && b.on_line) {
+                continue;
+            }
+            let (ra, rb) = (
+                dd::Dd3::from_parts(a.r, a.r_lo),
+                dd::Dd3::from_parts(b.r, b.r_lo),
+            );
+            let e = rb.sub(&ra).to_dvec3();
+            let len = e.length();
+            if len == 0.0 {
+                continue;
+            }
+            let big_d = ra.cross(&rb).to_dvec3().length() / len;
+            let norm = h_p.abs() / big_d;
+            let m = plane_n.cross(e) / len;
+            let m = if m.dot(n_t) < 0.0 { -m } else { m };
+            return (m * norm, norm * norm, big_d);
+        }
+        // Nothing clipped (the clip line passes beside the polygon): `n_t` from the polygon's own
+        // normal in double-double, `N' = Σ r_i × r_{i+1}` (the vertices are exact pairs), as
+        // `N' × (n × N') / ‖N'‖²` (`n` is exact): its relative error is then ~u whatever `‖n_t‖`.
+        let exact = |v: &ClipVertex| dd::Dd3::from_parts(v.r, v.r_lo);
+        let mut newell = dd::Dd3::new(DVec3::ZERO, DVec3::ZERO);
+        for i in 0..count {
+            newell = newell.add(&exact(&verts[i]).cross(&exact(&verts[next(i, count)])));
+        }
+        let tangent = newell.cross(&dd::Dd3::new(n, DVec3::ZERO).cross(&newell));
+        let norm2 = newell.dot(&newell);
+        let n_t = DVec3::new(
+            tangent.x.div(norm2).to_f64(),
+            tangent.y.div(norm2).to_f64(),
+            tangent.z.div(norm2).to_f64(),
+        );
+        let nt2 = n_t.length_squared();
+        return (n_t, nt2, h_p.abs() / nt2.sqrt());
+    }
+    (n_t, nt2, h_p.abs() / nt2.sqrt())
 }
 
 /// The frames of the loop's edges as the edge sum builds them ([`frame_of`]), pushed onto `out`
@@ -1011,17 +1104,25 @@ fn atan_small(z: f64) -> f64 {
 /// tangents of the two angles), `β(D) − cβ(cD) = atan((u − v)/(1 + uv)) + (1 − c) atan(v)`, and
 /// `u − v = DL (1 − c)(P − cD²)/((D² + P)(c²D² + P))`, with `1 − c = ‖n_t‖²/(1 + c)`: every part
 /// carries its factor `1 − c` explicitly, so nothing cancels. Otherwise (`P ≤ 0`, the foot's
-/// projection on the edge's line inside the segment) the angles are not small and are subtracted
-/// as they are. Returned with `β(cD)` itself (from the same arctangent where `P > 0`, else the
-/// same `atan2`), which gives the edge's in-plane angle for the winding number.
+/// projection on ℓ inside the segment, which happens outside the polygon too: the foot beyond the
+/// clip line) the angles are O(1) but still agree to `1 − c`; their difference is the angle between
+/// the vectors `(D² + P, DL)` and `(c²D² + P, cDL)`, an `atan2` of their cross product (the same
+/// numerator, factor `1 − c` explicit) and their dot product (positive, no cancellation).
+/// Subtracting the angles as they are lost `~u β/(1 − c)` relative: 8.7e-6 of the value for a
+/// receiver 1.9e-6 rad from head-on (`tests/kernels_b_grazing.rs`). Returned with `β(cD)` itself,
+/// which gives the edge's in-plane angle for the winding number.
 fn tangent_excess(d: f64, len: f64, p: f64, c: f64, nt2: f64) -> (f64, f64) {
-    let beta = |t: f64| (t * len).atan2(t * t + p);
-    if p <= 0.0 {
-        let beta_c = beta(c * d);
-        return (beta(d) - c * beta_c, beta_c);
-    }
     let one_minus_c = nt2 / (1.0 + c);
     let (d2, cd2) = (d * d, c * c * d * d);
+    if p <= 0.0 {
+        // The angles are not small, but they still agree to `1 − c`: their difference is the
+        // angle between (D² + P, DL) and (c²D² + P, cDL), whose cross product is `u − v`'s
+        // numerator and whose dot product is positive (the two directions nearly agree).
+        let beta_c = (c * d * len).atan2(cd2 + p);
+        let cross = d * len * one_minus_c * (p - c * d2);
+        let dot = (d2 + p) * (cd2 + p) + c * d2 * len * len;
+        return (cross.atan2(dot) + one_minus_c * beta_c, beta_c);
+    }
     let u = d * len / (d2 + p);
     let v = c * d * len / (cd2 + p);
     let u_minus_v = d * len * one_minus_c * (p - c * d2) / ((d2 + p) * (cd2 + p));
@@ -1483,20 +1584,24 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         // the derivatives (∂F/∂h_P is O(1) while F is O(h_P); `clip_edge_term` removes the clip
         // line's 1/h_P and 1/h_P² parts analytically, clip-line motion included), which
         // `tests/kernels_b_near_plane.rs` measures against the 320-bit reference.
-        let mut split = if near_plane && cut && !foot_inside(verts, plane.normal, h_p) {
-            near_plane_value(
-                verts,
-                &frames,
-                n,
-                plane.normal,
-                h_p,
-                SPLIT_CANCELLATION_LIMIT,
-            )
+        // A grazing receiver (`‖n_t‖² < GRAZING_NT2`) whose tangent plane passes beside the
+        // polygon: the split too, for the value only. The quadrature's `n·r` loses
+        // `u‖r‖/|n·r|` there (1.1e-10 of the value at 2.5e-7 rad, 2.6e-11 sizes from the plane),
+        // the split's parts do not.
+        let nt2 = if near_plane {
+            (n - n.dot(plane.normal) * plane.normal).length_squared()
+        } else {
+            1.0
+        };
+        let grazing = !cut && nt2 < GRAZING_NT2;
+        let mut split = if near_plane && (cut || grazing) && !foot_inside(verts, plane.normal, h_p)
+        {
+            near_plane_value(verts, &frames, n, plane.normal, h_p, SPLIT_VALUE_LIMIT)
         } else {
             None
         };
         match (split, order) {
-            (Some(v), Order::Value) => Deriv3::constant(v),
+            (Some((v, _)), Order::Value) => Deriv3::constant(v),
             _ => {
                 let mut sum = Deriv3::constant(0.0);
                 let mut magnitude = 0.0;
@@ -1519,7 +1624,14 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                 let cancels =
                     magnitude > cancellation_limit(&plane, near_plane || cut) * sum.value.abs();
                 let mut quadrature = None;
-                if cancels && split.is_none() {
+                // The derivatives from the edge sum only where the split does not cancel beyond
+                // its limit for them (its value is taken up to `SPLIT_VALUE_LIMIT`).
+                // Never with nothing clipped (the edge sum's derivatives keep their 1/h_P parts),
+                // nor for a receiver within 1e-4 rad of head-on (`FACING_NT2`).
+                let split_for_derivatives = cut
+                    && nt2 >= FACING_NT2
+                    && split.is_some_and(|(_, c)| c <= SPLIT_CANCELLATION_LIMIT);
+                if cancels && !split_for_derivatives {
                     let max_pieces = if near_plane && cut {
                         MAX_PIECES_NEAR_PLANE
                     } else {
@@ -1537,8 +1649,11 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                     }
                 }
                 match quadrature {
-                    Some(q) => {
+                    Some(mut q) => {
                         used_quadrature = true;
+                        if let Some((v, _)) = split {
+                            q.value = v;
+                        }
                         q
                     }
                     None => {
@@ -1557,7 +1672,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                                 f64::INFINITY,
                             );
                         }
-                        if let Some(v) = split {
+                        if let Some((v, _)) = split {
                             sum.value = v;
                         }
                         sum

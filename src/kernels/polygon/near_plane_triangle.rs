@@ -23,7 +23,7 @@ use glam::DVec3;
 use super::{
     edge_vector, exact_height_of, far_field_rule, foot_inside, near_plane_value, next,
     triangle_plane, ClipVertex, InPlaneEdge, Plane, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO,
-    SPLIT_CANCELLATION_LIMIT,
+    SPLIT_VALUE_LIMIT,
 };
 use crate::kernels::dd::{self, Dd3};
 use crate::kernels::form_factor::NEAR_LINE_SINE;
@@ -167,8 +167,9 @@ fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
         n,
         plane.normal,
         h_p,
-        SPLIT_CANCELLATION_LIMIT,
-    )?;
+        SPLIT_VALUE_LIMIT,
+    )?
+    .0;
     // The edge sum's sign convention, then the clamp of the visible part's value.
     let value = if h_p < 0.0 { -value } else { value };
     let value = value.clamp(0.0, 1.0);
@@ -480,14 +481,6 @@ mod tests {
         }
         let mut frames = Frames::new();
         edge_frames(&loop_, true, &mut frames);
-        near_plane_value(
-            &loop_,
-            &frames,
-            n,
-            plane.normal,
-            h_p,
-            SPLIT_CANCELLATION_LIMIT,
-        )
-        .is_some()
+        near_plane_value(&loop_, &frames, n, plane.normal, h_p, SPLIT_VALUE_LIMIT).is_some()
     }
 }
