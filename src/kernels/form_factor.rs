@@ -278,6 +278,11 @@ fn robust_triangle(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Result<De
 ///   factor has a crease there): orders above [`Order::Value`] give [`Error::Degenerate`]. A polygon
 ///   entirely below the tangent plane gives 0 with zero derivatives. Derivatives that overflow `f64`
 ///   give [`Error::Degenerate`]; NaN or Inf never come out.
+/// * **Head-on receivers near the plane.** With `n` within ~1e-6 rad of the polygon's normal and
+///   `x` near the plane, the value keeps the hard-regime accuracy but the gradient's relative error
+///   grows like `6u/tilt` (`u` the unit roundoff: 4e-9 at 2.5e-7 rad, 4e-7 at 2e-9 rad); the value
+///   there moves by up to 1e-7 relative per ulp of `n`, so `n` should be as exact as the caller has
+///   it (docs/kernels.md, "Grazing receivers").
 ///
 /// ```
 /// use glam::DVec3;
