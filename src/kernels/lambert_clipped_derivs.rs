@@ -407,7 +407,13 @@ mod tests {
                     .map(|p| (p.hi, p.vertex, p.displacement.to_bits()))
                     .collect();
                 let angles: Vec<_> = l.angles[..l.count].iter().map(|a| a.to_bits()).collect();
-                (l.n, points, l.edges[..l.count].to_vec(), angles, l.sum.to_bits())
+                (
+                    l.n,
+                    points,
+                    l.edges[..l.count].to_vec(),
+                    angles,
+                    l.sum.to_bits(),
+                )
             };
             let shared = lambert_clipped::with_derivative_loop(x, n, v, |l, c| (key(l), c));
             let want = match lambert_clipped::certified_loop(x, n, v) {
@@ -435,7 +441,11 @@ mod tests {
                 };
                 outside += 1;
                 let public = call(order).unwrap();
-                assert_eq!(public.value.to_bits(), value.to_bits(), "{order:?} at {x:?}");
+                assert_eq!(
+                    public.value.to_bits(),
+                    value.to_bits(),
+                    "{order:?} at {x:?}"
+                );
                 assert_eq!(public, Deriv3 { value, ..d }, "{order:?} at {x:?}");
             }
         }
