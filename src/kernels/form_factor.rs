@@ -157,13 +157,9 @@ pub fn triangle_form_factor(
             None => polygon_form_factor(x, n, &[a, b, c], order),
         };
     }
-    // Lambert's sum, over the clipped triangle when the tangent plane cuts it.
-    let lambert_value = || {
-        lambert::triangle_value(x, n, [a, b, c])
-            .or_else(|| lambert_clipped::triangle_value(x, n, [a, b, c]))
-    };
+    let lambert_value = || triangle_lambert_value(x, n, [a, b, c]);
     if order == Order::Value {
-        return match lambert_value() {
+        return match triangle_lambert_value(x, n, [a, b, c]) {
             Some(f) => Ok(Deriv3::constant(f)),
             None => value_past_lambert(x, n, [a, b, c]),
         };
@@ -181,25 +177,62 @@ pub fn triangle_form_factor(
         return Ok(d);
     }
     // Near the plane with the tangent plane cutting the triangle: the derivatives of the
-    // certified clipped loop, whose value is `lambert_value`'s. Its loop (or its absence) is
-    // kept for the value below: computing it twice cost ~400 instructions where it declines.
-    let clipped = lambert_clipped::certified_loop(x, n, [a, b, c]);
-    if let Some(l) = &clipped {
-        if let Some(d) = lambert_clipped_derivs::loop_derivs(l, l.value(), order) {
-            return Ok(d);
-        }
-    } else if let Some(l) = lambert_clipped::uncertified_loop(x, n, [a, b, c]) {
-        // Outside the triangle (the sum cancels) or on the clip line: the same derivatives,
-        // the value from the value order's path (no Lambert value here: clipped, uncertified).
-        if let Some(d) = lambert_clipped_derivs::loop_derivs(&l, 0.0, order) {
+    // certified clipped loop, whose value is `lambert_value`'s, or outside the triangle (the sum
+    // cancels) or on the clip line those of the uncertified loop, with the value order's value
+    // (no Lambert value there: clipped, uncertified). One cut and one loop for both, used in
+    // place; a certified value is kept for the robust path below (computing it twice cost ~400
+    // instructions where the derivatives decline).
+    let clipped = clipped_derivs(x, n, [a, b, c], order);
+    let certified_value = match clipped {
+        Some(ClippedDerivs::Done(d)) => return Ok(d),
+        Some(ClippedDerivs::ValueElsewhere(d)) => {
             let value = value_past_lambert(x, n, [a, b, c])?.value;
             return Ok(Deriv3 { value, ..d });
         }
-    }
+        Some(ClippedDerivs::Declined(value)) => value,
+        None => None,
+    };
     let d = robust_triangle(x, n, [a, b, c], order)?;
     Ok(with_lambert_value(d, order, || {
-        lambert::triangle_value(x, n, [a, b, c]).or(clipped.map(|l| l.value()))
+        lambert::triangle_value(x, n, [a, b, c]).or(certified_value)
     }))
+}
+
+/// Lambert's sum, over the clipped triangle when the tangent plane cuts it (inlined: a closure
+/// here was left out of line, ~40 instructions on the value order's every call).
+#[inline(always)]
+fn triangle_lambert_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
+    lambert::triangle_value(x, n, v).or_else(|| lambert_clipped::triangle_value(x, n, v))
+}
+
+/// The clipped loop's part of [`triangle_form_factor`]'s derivative orders; out of line, so
+/// that the loop's stack frame is not set up on the kernel's other paths.
+#[inline(never)]
+fn clipped_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<ClippedDerivs> {
+    lambert_clipped::with_derivative_loop(x, n, v, |l, certified| {
+        if certified {
+            let value = l.value();
+            match lambert_clipped_derivs::loop_derivs(l, value, order) {
+                Some(d) => ClippedDerivs::Done(d),
+                None => ClippedDerivs::Declined(Some(value)),
+            }
+        } else {
+            match lambert_clipped_derivs::loop_derivs(l, 0.0, order) {
+                Some(d) => ClippedDerivs::ValueElsewhere(d),
+                None => ClippedDerivs::Declined(None),
+            }
+        }
+    })
+}
+
+/// What the derivative orders take from the clipped loop.
+enum ClippedDerivs {
+    /// The certified loop's derivatives and value.
+    Done(Deriv3),
+    /// The uncertified loop's derivatives: the value is the value order's.
+    ValueElsewhere(Deriv3),
+    /// Declined, with the certified value when there is one.
+    Declined(Option<f64>),
 }
 
 /// The value order's result where Lambert's value is not certified: with `x` near the plane

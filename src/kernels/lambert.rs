@@ -402,6 +402,7 @@ fn deriv_size(d: &Terms, order: Order) -> (f64, f64) {
 /// Value, gradient (and Hessian at [`Order::Hessian`]) of
 /// [`triangle_form_factor`](super::triangle_form_factor) by the analytic derivatives of Lambert's
 /// sum, for `order` above [`Order::Value`]: [`certified_derivs`] for three vertices.
+#[inline]
 pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Deriv3> {
     let (n, r, r2) = unclipped_triangle(x, n, v)?;
     certified_derivs(n, &v, &r, &r2, order)

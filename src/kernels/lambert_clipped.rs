@@ -100,6 +100,9 @@ fn difference_error(v: DVec3, x: DVec3) -> DVec3 {
 /// clipped triangle when its tangent plane certainly cuts it and the error bound (module
 /// documentation) is within [`FAST_TOLERANCE`] of the result; `None` otherwise, including when
 /// nothing is clipped (the unclipped path's case) and for invalid input.
+// Out of line, with the loop built in place inside: inlined into the kernel, the loop's frame cost
+// the value order's other paths ~40 instructions; returned by value, its copy ~60.
+#[inline(never)]
 pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     Some(certified_loop(x, n, v)?.value())
 }
@@ -123,6 +126,7 @@ struct Cut {
     above: [bool; 3],
 }
 
+#[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn cut(x: DVec3, n: DVec3, v: &[DVec3; 3]) -> Option<Cut> {
     let r = v.map(|vk| vk - x);
@@ -154,9 +158,12 @@ fn cut(x: DVec3, n: DVec3, v: &[DVec3; 3]) -> Option<Cut> {
     })
 }
 
-/// The clipped loop's vertices (the first `count`): kept triangle vertices and clip points, in
-/// the triangle's order (module documentation).
-fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ([LoopVertex; 4], usize) {
+/// The clipped loop (module documentation): its vertices (the first `count`: kept triangle
+/// vertices and clip points, in the triangle's order) and edge vectors, without angles or sum
+/// (NaN and 0). Built in place by the caller (inlined): the loop is ~560 bytes, whose copies
+/// cost ~60 instructions each.
+#[inline(always)]
+fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ClippedLoop {
     let Cut {
         r,
         heights,
@@ -201,7 +208,14 @@ fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ([LoopVertex; 4], usize) {
             count += 1;
         }
     }
-    (points, count)
+    ClippedLoop {
+        n: cut.n,
+        points,
+        edges: loop_edges(v, &points, count),
+        angles: [f64::NAN; 4],
+        count,
+        sum: 0.0,
+    }
 }
 
 /// The loop's edge vector from `a` to `b`: one rounding of the exact difference of its ends.
@@ -213,74 +227,163 @@ fn edge_vector(v: &[DVec3; 3], a: &LoopVertex, b: &LoopVertex) -> DVec3 {
     }
 }
 
+/// The loop's edge vectors (the first `count`), `edges[k]` from vertex `k` to the next.
+#[inline(always)]
+fn loop_edges(v: &[DVec3; 3], points: &[LoopVertex; 4], count: usize) -> [DVec3; 4] {
+    let mut edges = [DVec3::ZERO; 4];
+    for k in 0..count {
+        let next = if k + 1 == count { 0 } else { k + 1 };
+        edges[k] = edge_vector(v, &points[k], &points[next]);
+    }
+    edges
+}
+
+/// What decides, before the loop is built, which loop the configuration gets: the triangle's
+/// (unnormalized) normal `N = (v_1 − v_0) × (v_2 − v_0)` and the quantities both decisions share.
+struct Screen {
+    /// `N·r_0`: `x`'s height over the triangle's plane times `‖N‖`, signed.
+    side: f64,
+    scale: f64,
+    r_max: f64,
+    r0_length: f64,
+    /// `x` within a sine of 1e-3 of a triangle edge's segment, as [`left_to_the_robust_path`]
+    /// tests it (`s < 1e-3‖r_i‖‖r_j‖`) and as [`uncertified_loop`] does (squared): the two
+    /// roundings may differ at the threshold, and each decision keeps its own.
+    near_edge: bool,
+    near_edge_squared: bool,
+    inside: bool,
+}
+
+#[inline(always)]
+fn screen(v: &[DVec3; 3], r: &[DVec3; 3]) -> Screen {
+    let normal = (v[1] - v[0]).cross(v[2] - v[0]);
+    let length = r.map(|rk| rk.length());
+    let r_max = length.iter().fold(0.0f64, |m, &l| m.max(l));
+    let mut sides = [0.0; 3];
+    let (mut near_edge, mut near_edge_squared) = (false, false);
+    for i in 0..3 {
+        let j = (i + 1) % 3;
+        let w = r[i].cross(r[j]);
+        sides[i] = normal.dot(w);
+        if r[i].dot(r[j]) < 0.0 {
+            let (li2, lj2) = (r[i].length_squared(), r[j].length_squared());
+            near_edge |= w.length() < 1e-3 * length[i] * length[j];
+            near_edge_squared |= w.length_squared() < 1e-6 * li2 * lj2;
+        }
+    }
+    Screen {
+        side: normal.dot(r[0]),
+        scale: normal.length(),
+        r_max,
+        r0_length: length[0],
+        near_edge,
+        near_edge_squared,
+        inside: sides.iter().all(|&t| t > 0.0) || sides.iter().all(|&t| t < 0.0),
+    }
+}
+
+impl Screen {
+    /// [`left_to_the_robust_path`]'s decision, with its operations (kept separate there: the value
+    /// order returns early, before the cross products, away from the plane).
+    fn left_to_the_robust_path(&self) -> bool {
+        let height = self.side.abs();
+        height >= 1e-3 * self.scale * self.r_max
+            || self.near_edge
+            || (height < 1e-4 * self.scale * self.r_max && !self.inside)
+    }
+
+    /// Whether [`uncertified_loop`] builds its loop. The rounded normal and `r_0` are within 4u
+    /// and u of exact relatively: 8u with a margin. Taken only near the plane (below 1e-3 of the
+    /// size, as [`left_to_the_robust_path`]), where the robust path's exact geometry makes its
+    /// derivatives several times dearer. Within a sine of 1e-3 of a triangle edge's segment the
+    /// clip point on it is within ~1e-3 of the size from x, where the derivatives decline on its
+    /// displacement: without the loop.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+    fn uncertified(&self) -> bool {
+        let height = self.side.abs();
+        height > 8.0 * f64::EPSILON * self.scale * self.r0_length
+            && height < 1e-3 * self.scale * self.r_max
+            && !self.near_edge_squared
+    }
+}
+
 /// The clipped loop without the value's certificate, for the derivatives where the value comes
 /// from elsewhere (`x` near the plane outside the triangle, where Lambert's sum cancels). Its
 /// `sum` is only the orientation, `±1`: the sign of the certified sum, `sign(N·r_0)` for the
 /// triangle's normal `N = (v_1 − v_0) × (v_2 − v_0)`; `None` when that sign is uncertain (`x`
 /// within rounding of the triangle's plane) or where [`triangle_value`]'s loop is not built.
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
+#[cfg(test)]
 pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
     let cut = cut(x, n, &v)?;
-    let normal = (v[1] - v[0]).cross(v[2] - v[0]);
-    let side = normal.dot(cut.r[0]);
-    // The rounded normal and r_0 are within 4u and u of exact relatively: 8u with a margin.
-    // Taken only near the plane (below 1e-3 of the size, as `left_to_the_robust_path`), where the
-    // robust path's exact geometry makes its derivatives several times dearer.
-    let scale = normal.length();
-    let r_max = cut.r.iter().fold(0.0f64, |m, rk| m.max(rk.length()));
-    if !(side.abs() > 8.0 * f64::EPSILON * scale * cut.r[0].length()
-        && side.abs() < 1e-3 * scale * r_max)
-    {
+    let screen = screen(&v, &cut.r);
+    if !screen.uncertified() {
         return None;
     }
-    // Within a sine of 1e-3 of a triangle edge's segment the clip point on it is within ~1e-3 of
-    // the size from x, where the derivatives decline on its displacement: without the loop.
-    for i in 0..3 {
-        let (ri, rj) = (cut.r[i], cut.r[(i + 1) % 3]);
-        if ri.dot(rj) < 0.0
-            && ri.cross(rj).length_squared() < 1e-6 * ri.length_squared() * rj.length_squared()
-        {
-            return None;
-        }
-    }
-    let (points, count) = build_loop(x, &v, &cut);
-    let mut edges = [DVec3::ZERO; 4];
-    for k in 0..count {
-        let next = if k + 1 == count { 0 } else { k + 1 };
-        edges[k] = edge_vector(&v, &points[k], &points[next]);
-    }
-    Some(ClippedLoop {
-        n: cut.n,
-        points,
-        edges,
-        angles: [f64::NAN; 4],
-        count,
-        sum: side.signum(),
-    })
+    let mut l = build_loop(x, &v, &cut);
+    l.sum = screen.side.signum();
+    Some(l)
 }
 
 /// [`triangle_value`]'s loop and signed sum (times `2π`) when it certifies the value.
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+#[inline(always)]
 pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
     let cut = cut(x, n, &v)?;
     if left_to_the_robust_path(&v, &cut.r) {
         return None;
     }
-    let n = cut.n;
-    let (points, count) = build_loop(x, &v, &cut);
+    let mut l = build_loop(x, &v, &cut);
+    l.sum = certify(&mut l)?;
+    Some(l)
+}
+
+/// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
+/// [`certified_loop`] when it certifies (`f(loop, true)`), else the [`uncertified_loop`]
+/// (`f(loop, false)`), both from one cut and one built loop (the lists of points and edges are
+/// the same); `None` where neither is built.
+#[inline(always)]
+pub(super) fn with_derivative_loop<R>(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    f: impl FnOnce(&ClippedLoop, bool) -> R,
+) -> Option<R> {
+    let cut = cut(x, n, &v)?;
+    let screen = screen(&v, &cut.r);
+    // Outside the triangle near its plane the certified sum cancels and declines: not tried.
+    let try_certified = !screen.left_to_the_robust_path();
+    let uncertified = screen.uncertified();
+    if !try_certified && !uncertified {
+        return None;
+    }
+    let mut l = build_loop(x, &v, &cut);
+    let certified = try_certified && certify(&mut l).map(|sum| l.sum = sum).is_some();
+    if !certified {
+        if !uncertified {
+            return None;
+        }
+        // A declined certificate may have set some angles.
+        l.angles = [f64::NAN; 4];
+        l.sum = screen.side.signum();
+    }
+    Some(f(&l, certified))
+}
+
+/// The certified signed sum (times `2π`) over the loop, setting its ordinary edges' angles;
+/// `None` when the bound exceeds [`FAST_TOLERANCE`] (some angles may then be set).
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+fn certify(l: &mut ClippedLoop) -> Option<f64> {
     let (mut sum, mut magnitude, mut err) = (0.0, 0.0, 0.0);
-    let mut edges = [DVec3::ZERO; 4];
-    let mut angles = [f64::NAN; 4];
+    let (n, count) = (l.n, l.count);
     for k in 0..count {
         let next = if k + 1 == count { 0 } else { k + 1 };
-        let (a, b) = (&points[k], &points[next]);
-        let e = edge_vector(&v, a, b);
-        edges[k] = e;
+        let (a, b) = (&l.points[k], &l.points[next]);
+        let e = l.edges[k];
         let (f, e_k) = if a.vertex.is_none() && b.vertex.is_none() {
             clip_edge(n, a.hi, b.hi, e, a.displacement.max(b.displacement))?
         } else {
             let (f, err, beta) = lambert::edge_and_angle(n, a.hi, b.hi, e, a.hi.length_squared());
-            angles[k] = beta;
+            l.angles[k] = beta;
             (f, err)
         };
         sum += f;
@@ -295,14 +398,7 @@ pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clippe
     if !(err <= FAST_TOLERANCE * sum.abs()) {
         return None;
     }
-    Some(ClippedLoop {
-        n,
-        points,
-        edges,
-        angles,
-        count,
-        sum,
-    })
+    Some(sum)
 }
 
 /// Whether this path leaves the configuration to the robust one before the exact clip points and
@@ -338,6 +434,7 @@ fn left_to_the_robust_path(v: &[DVec3; 3], r: &[DVec3; 3]) -> bool {
 /// The clip edge's term times 2π, `±β`, and its error bound times 2π / u (module documentation),
 /// for displacements of its ends up to `delta` along the triangle's edges; `None` when the sign is
 /// uncertain (`x` on or within rounding of the clip line).
+#[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 fn clip_edge(n: DVec3, ra: DVec3, rb: DVec3, e: DVec3, delta: f64) -> Option<(f64, f64)> {
     let w = ra.cross(e);

@@ -371,6 +371,88 @@ mod tests {
         assert!(outside > 100, "{outside}");
     }
 
+    /// The kernel's shared loop (`with_derivative_loop`, one cut and one built loop for both
+    /// cases) is the certified loop where that certifies and the uncertified one otherwise, to
+    /// the bit; and with `x` near the plane, its foot outside the triangle (the uncertified
+    /// loop's case), the public gradient and Hessian orders return the value order's value bit
+    /// for bit and the loop's derivatives.
+    #[test]
+    fn the_shared_loop_is_both_loops_and_keeps_the_value_orders_bits() {
+        let mut state = 11;
+        let (mut certified, mut uncertified, mut outside) = (0, 0, 0);
+        for k in 0..3000 {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let mut p = || {
+                DVec3::new(
+                    lcg(&mut state) - 0.5,
+                    lcg(&mut state) - 0.5,
+                    0.3 * lcg(&mut state),
+                )
+            };
+            let v = [p() * scale, p() * scale, p() * scale];
+            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            let (a, b) = (2.4 * lcg(&mut state) - 0.7, 2.4 * lcg(&mut state) - 0.7);
+            let foot = v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b;
+            let height = scale * 10f64.powf(-3.0 - 9.0 * lcg(&mut state));
+            let side = if lcg(&mut state) < 0.5 { 1.0 } else { -1.0 };
+            let x = foot + plane_n * (height * side);
+            let tilt = (10.0 + 70.0 * lcg(&mut state)).to_radians();
+            let t = plane_n.any_orthonormal_vector();
+            let phi = 6.3 * lcg(&mut state);
+            let t = t * phi.cos() + plane_n.cross(t) * phi.sin();
+            let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
+            let key = |l: &ClippedLoop| {
+                let points: Vec<_> = l.points[..l.count]
+                    .iter()
+                    .map(|p| (p.hi, p.vertex, p.displacement.to_bits()))
+                    .collect();
+                let angles: Vec<_> = l.angles[..l.count].iter().map(|a| a.to_bits()).collect();
+                (
+                    l.n,
+                    points,
+                    l.edges[..l.count].to_vec(),
+                    angles,
+                    l.sum.to_bits(),
+                )
+            };
+            let shared = lambert_clipped::with_derivative_loop(x, n, v, |l, c| (key(l), c));
+            let want = match lambert_clipped::certified_loop(x, n, v) {
+                Some(l) => Some((key(&l), true)),
+                None => lambert_clipped::uncertified_loop(x, n, v).map(|l| (key(&l), false)),
+            };
+            assert_eq!(shared, want, "at {x:?} {n:?} {v:?}");
+            match &shared {
+                Some((_, true)) => certified += 1,
+                Some((_, false)) => uncertified += 1,
+                None => {}
+            }
+            let is_outside = a.min(b).min(1.0 - a - b) < 0.0;
+            let Some(l) = lambert_clipped::uncertified_loop(x, n, v) else {
+                continue;
+            };
+            if !is_outside || lambert_clipped::certified_loop(x, n, v).is_some() {
+                continue;
+            }
+            let call = |order| crate::kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order);
+            let value = call(Order::Value).unwrap().value;
+            for order in [Order::Gradient, Order::Hessian] {
+                let Some(d) = loop_derivs(&l, 0.0, order) else {
+                    continue;
+                };
+                outside += 1;
+                let public = call(order).unwrap();
+                assert_eq!(
+                    public.value.to_bits(),
+                    value.to_bits(),
+                    "{order:?} at {x:?}"
+                );
+                assert_eq!(public, Deriv3 { value, ..d }, "{order:?} at {x:?}");
+            }
+        }
+        println!("shared loop: {certified} certified, {uncertified} uncertified; {outside} outside checked");
+        assert!(certified > 50 && uncertified > 50 && outside > 100);
+    }
+
     /// `benches/kernels_regimes.rs` "1e-6 above the plane" (with a loop edge at sin β = 0.076) is
     /// taken at both orders.
     #[test]
