@@ -209,6 +209,31 @@ fn triangle_lambert_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
 /// that the loop's stack frame is not set up on the kernel's other paths.
 #[inline(never)]
 fn clipped_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<ClippedDerivs> {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2_fma() {
+        // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
+        return unsafe { clipped_derivs_fma(x, n, v, order) };
+    }
+    clipped_derivs_with(x, n, v, order)
+}
+
+/// [`clipped_derivs`] compiled with FMA, as `polygon::near_plane_triangle` does for the value:
+/// the loop's double-double clip points and edge vectors use fused products instead of calls to
+/// `fma`, with the same bits (the fused product is correctly rounded either way and Rust fuses
+/// nothing else).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn clipped_derivs_fma(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    order: Order,
+) -> Option<ClippedDerivs> {
+    clipped_derivs_with(x, n, v, order)
+}
+
+#[inline(always)]
+fn clipped_derivs_with(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<ClippedDerivs> {
     lambert_clipped::with_derivative_loop(x, n, v, |l, certified| {
         if certified {
             let value = l.value();
@@ -918,6 +943,65 @@ pub(crate) fn oriented(mut d: Deriv3, h_p: f64) -> Option<Deriv3> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The FMA build of the clipped-loop derivatives gives the portable build's bits, on random
+    /// triangles with `x` 1e-3..1e-12 of their size from the plane, over them and beside them.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn clipped_derivatives_fma_twin_keeps_the_bits() {
+        if !crate::simd::avx2_fma() {
+            return;
+        }
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut unit = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let bits = |d: &ClippedDerivs| -> Vec<u64> {
+            let (tag, d) = match d {
+                ClippedDerivs::Done(d) => (0, *d),
+                ClippedDerivs::ValueElsewhere(d) => (1, *d),
+                ClippedDerivs::Declined(v) => {
+                    return vec![2, v.unwrap_or(f64::NAN).to_bits()];
+                }
+            };
+            let mut out = vec![tag, d.value.to_bits()];
+            out.extend(d.gradient.to_array().map(f64::to_bits));
+            out.extend(d.hessian.to_cols_array().map(f64::to_bits));
+            out
+        };
+        let mut answered = 0;
+        for k in 0..4000 {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let mut p = || DVec3::new(unit() - 0.5, unit() - 0.5, 0.3 * unit()) * scale;
+            let v = [p(), p(), p()];
+            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            let (a, b) = (2.4 * unit() - 0.7, 2.4 * unit() - 0.7);
+            let foot = v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b;
+            let side = if unit() < 0.5 { 1.0 } else { -1.0 };
+            let x = foot + plane_n * (side * scale * 10f64.powf(-3.0 - 9.0 * unit()));
+            let tilt = (10.0 + 70.0 * unit()).to_radians();
+            let t = plane_n.any_orthonormal_vector();
+            let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
+            for order in [Order::Gradient, Order::Hessian] {
+                let portable = clipped_derivs_with(x, n, v, order);
+                // SAFETY: checked above that the CPU has AVX2 and FMA.
+                let fused = unsafe { clipped_derivs_fma(x, n, v, order) };
+                assert_eq!(
+                    portable.as_ref().map(bits),
+                    fused.as_ref().map(bits),
+                    "at {x:?} {n:?} {v:?} {order:?}"
+                );
+                answered += usize::from(matches!(
+                    portable,
+                    Some(ClippedDerivs::Done(_) | ClippedDerivs::ValueElsewhere(_))
+                ));
+            }
+        }
+        assert!(answered > 500, "only {answered} answered");
+    }
 
     const TRI: [DVec3; 3] = [
         DVec3::new(-0.4, -0.3, 1.0),
