@@ -20,18 +20,6 @@ use glam::DVec3;
 use kernels_b_common::*;
 use raddiff::{kernels, Deriv3, Order};
 
-/// The hard-regime contract of issue 18 (value, gradient, Hessian; each part relative to its
-/// largest entry).
-const HARD: [f64; 3] = [1e-10, 1e-9, 1e-8];
-
-fn errors(d: &Deriv3, r: &Reference) -> [f64; 3] {
-    [
-        rel_scalar(d.value, r.value, 1e-300),
-        rel_vec(d.gradient, r.gradient, 1e-300),
-        rel_mat(d.hessian, r.hessian, 1e-300),
-    ]
-}
-
 fn f3(e: [f64; 3]) -> String {
     format!("[{:.1e}, {:.1e}, {:.1e}]", e[0], e[1], e[2])
 }

@@ -14,28 +14,6 @@ use glam::{DVec2, DVec3};
 use kernels_b_common::*;
 use raddiff::{kernels, Deriv3, Order};
 
-/// The hard-regime contract of issue 18 (value, gradient, Hessian; each part relative to its
-/// largest entry).
-const HARD: [f64; 3] = [1e-10, 1e-9, 1e-8];
-
-fn errors(d: &Deriv3, r: &Reference) -> [f64; 3] {
-    [
-        rel_scalar(d.value, r.value, 1e-300),
-        rel_vec(d.gradient, r.gradient, 1e-300),
-        rel_mat(d.hessian, r.hessian, 1e-300),
-    ]
-}
-
-fn max3(a: &mut [f64; 3], b: [f64; 3]) {
-    for k in 0..3 {
-        a[k] = a[k].max(b[k]);
-    }
-}
-
-fn within(e: [f64; 3], bound: [f64; 3]) -> bool {
-    e.iter().zip(bound).all(|(e, b)| *e <= b)
-}
-
 /// A planar polygon given in plane coordinates `(p, q)` and the map into 3D, exact in f64: the
 /// plane is `z = 0.25·X − 0.375·Y` (dyadic slopes), the plane coordinates multiples of 1/64, and the
 /// scale a power of two, so every vertex lies exactly in one plane (the reference sees the same

@@ -17,14 +17,6 @@ const GENERIC: [f64; 3] = [1e-12, 1e-12, 1e-10];
 /// function itself changes by ~1e-13 there), so this is the two rules' disagreement.
 const JUMP: [f64; 3] = [3e-13, 3e-13, 3e-12];
 
-fn errors(d: &Deriv3, r: &Reference) -> [f64; 3] {
-    [
-        rel_scalar(d.value, r.value, 1e-300),
-        rel_vec(d.gradient, r.gradient, 1e-300),
-        rel_mat(d.hessian, r.hessian, 1e-300),
-    ]
-}
-
 /// Relative differences between the two sides of a switch, normalized like the errors.
 fn jump(p: &Deriv3, q: &Deriv3) -> [f64; 3] {
     let r = Reference {
@@ -33,12 +25,6 @@ fn jump(p: &Deriv3, q: &Deriv3) -> [f64; 3] {
         hessian: q.hessian,
     };
     errors(p, &r)
-}
-
-fn max3(a: &mut [f64; 3], b: [f64; 3]) {
-    for k in 0..3 {
-        a[k] = a[k].max(b[k]);
-    }
 }
 
 #[test]
@@ -98,8 +84,6 @@ fn far_field_rule_switches_against_the_reference() {
         "errors exceed the generic targets or the jumps {JUMP:?}"
     );
 }
-
-const HARD: [f64; 3] = [1e-10, 1e-9, 1e-8];
 
 /// Slivers: walks the apex height from 3e-3 down to 3e-6 of the length, across the switch from
 /// the edge sum (cancelling by up to `THIN_CANCELLATION_LIMIT` = 1e4, about the inverse aspect

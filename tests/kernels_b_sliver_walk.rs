@@ -18,23 +18,7 @@
 mod kernels_b_common;
 
 use kernels_b_common::*;
-use raddiff::{kernels, Deriv3, Order};
-
-const HARD: [f64; 3] = [1e-10, 1e-9, 1e-8];
-
-fn errors(d: &Deriv3, r: &Reference) -> [f64; 3] {
-    [
-        rel_scalar(d.value, r.value, 1e-300),
-        rel_vec(d.gradient, r.gradient, 1e-300),
-        rel_mat(d.hessian, r.hessian, 1e-300),
-    ]
-}
-
-fn max3(a: &mut [f64; 3], b: [f64; 3]) {
-    for k in 0..3 {
-        a[k] = a[k].max(b[k]);
-    }
-}
+use raddiff::{kernels, Order};
 
 /// One walk: for each distance (in lengths) 4 slivers (caps and needles) with apex heights
 /// 1e-3..1e-12, at every order. Returns per distance the worst errors, the number of results

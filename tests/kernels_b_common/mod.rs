@@ -353,3 +353,29 @@ impl Rng {
         }
     }
 }
+
+/// The hard-regime contract of issue 18: relative value, gradient, Hessian errors, each part
+/// normalized by its largest entry.
+pub const HARD: [f64; 3] = [1e-10, 1e-9, 1e-8];
+
+/// The errors of `d` against the reference `r`, per part (value, gradient, Hessian), each relative
+/// to the reference's largest entry.
+pub fn errors(d: &raddiff::Deriv3, r: &Reference) -> [f64; 3] {
+    [
+        rel_scalar(d.value, r.value, 1e-300),
+        rel_vec(d.gradient, r.gradient, 1e-300),
+        rel_mat(d.hessian, r.hessian, 1e-300),
+    ]
+}
+
+/// `a = max(a, b)` per part.
+pub fn max3(a: &mut [f64; 3], b: [f64; 3]) {
+    for k in 0..3 {
+        a[k] = a[k].max(b[k]);
+    }
+}
+
+/// Every part of `e` within its `bound`.
+pub fn within(e: [f64; 3], bound: [f64; 3]) -> bool {
+    e.iter().zip(bound).all(|(e, b)| *e <= b)
+}
