@@ -18,7 +18,7 @@ mod kernels_b_common;
 
 use glam::DVec3;
 use kernels_b_common::*;
-use raddiff::{kernels, Deriv3, Order};
+use raddiff::{kernels, Order};
 
 fn f3(e: [f64; 3]) -> String {
     format!("[{:.1e}, {:.1e}, {:.1e}]", e[0], e[1], e[2])

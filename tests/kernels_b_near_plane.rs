@@ -12,7 +12,7 @@ mod kernels_b_common;
 
 use glam::{DVec2, DVec3};
 use kernels_b_common::*;
-use raddiff::{kernels, Deriv3, Order};
+use raddiff::{kernels, Order};
 
 /// A planar polygon given in plane coordinates `(p, q)` and the map into 3D, exact in f64: the
 /// plane is `z = 0.25·X − 0.375·Y` (dyadic slopes), the plane coordinates multiples of 1/64, and the
