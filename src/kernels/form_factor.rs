@@ -953,12 +953,7 @@ mod tests {
             return;
         }
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut unit = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut unit = move || crate::kernels::test_rng::lcg(&mut state);
         let bits = |d: &ClippedDerivs| -> Vec<u64> {
             let (tag, d) = match d {
                 ClippedDerivs::Done(d) => (0, *d),

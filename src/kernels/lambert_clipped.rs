@@ -462,12 +462,7 @@ mod tests {
     use crate::kernels::polygon;
     use crate::Order;
 
-    fn lcg(state: &mut u64) -> f64 {
-        *state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (*state >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::kernels::test_rng::lcg;
 
     fn robust(x: DVec3, n: DVec3, v: [DVec3; 3]) -> f64 {
         polygon::form_factor(x, n, &v, Order::Value).unwrap().value

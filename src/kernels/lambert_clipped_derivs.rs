@@ -208,11 +208,57 @@ mod tests {
     use super::*;
     use crate::kernels::{lambert_clipped, polygon};
 
-    fn lcg(state: &mut u64) -> f64 {
-        *state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (*state >> 11) as f64 / (1u64 << 53) as f64
+    use crate::kernels::test_rng::lcg;
+
+    /// A random triangle of size `scale`, `x` at `scale·10^(d₀ − d₁·U)` from its plane (either
+    /// side) over the foot `v₀ + a(v₁ − v₀) + b(v₂ − v₀)` (inside the triangle when `inside`,
+    /// else within 0.7 of its edges' lengths beyond them), and `n` tilted 10°-80° from the plane's
+    /// normal towards the side of `x`.
+    struct Configuration {
+        x: DVec3,
+        n: DVec3,
+        v: [DVec3; 3],
+        a: f64,
+        b: f64,
+        height: f64,
+    }
+
+    fn near_plane_configuration(
+        state: &mut u64,
+        scale: f64,
+        inside: bool,
+        (d0, d1): (f64, f64),
+    ) -> Configuration {
+        let mut p = || DVec3::new(lcg(state) - 0.5, lcg(state) - 0.5, 0.3 * lcg(state));
+        let v = [p() * scale, p() * scale, p() * scale];
+        let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+        let (a, b) = if inside {
+            let (a, b) = (lcg(state), lcg(state));
+            if a + b > 1.0 {
+                (1.0 - a, 1.0 - b)
+            } else {
+                (a, b)
+            }
+        } else {
+            (2.4 * lcg(state) - 0.7, 2.4 * lcg(state) - 0.7)
+        };
+        let foot = v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b;
+        let height = scale * 10f64.powf(d0 - d1 * lcg(state));
+        let side = if lcg(state) < 0.5 { 1.0 } else { -1.0 };
+        let x = foot + plane_n * (height * side);
+        let tilt = (10.0 + 70.0 * lcg(state)).to_radians();
+        let t = plane_n.any_orthonormal_vector();
+        let phi = 6.3 * lcg(state);
+        let t = t * phi.cos() + plane_n.cross(t) * phi.sin();
+        let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
+        Configuration {
+            x,
+            n,
+            v,
+            a,
+            b,
+            height,
+        }
     }
 
     fn robust(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Deriv3 {
@@ -254,30 +300,14 @@ mod tests {
         let mut buckets = [(0.0f64, 0.0f64, 0); 4];
         for k in 0..20000 {
             let scale = [1e-3, 1.0, 1e3][k % 3];
-            let mut p = || {
-                DVec3::new(
-                    lcg(&mut state) - 0.5,
-                    lcg(&mut state) - 0.5,
-                    0.3 * lcg(&mut state),
-                )
-            };
-            let v = [p() * scale, p() * scale, p() * scale];
-            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-            let (a, b) = (lcg(&mut state), lcg(&mut state));
-            let (a, b) = if a + b > 1.0 {
-                (1.0 - a, 1.0 - b)
-            } else {
-                (a, b)
-            };
-            let foot = v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b;
-            let height = scale * 10f64.powf(-3.0 - 9.0 * lcg(&mut state));
-            let side = if lcg(&mut state) < 0.5 { 1.0 } else { -1.0 };
-            let x = foot + plane_n * (height * side);
-            let tilt = (10.0 + 70.0 * lcg(&mut state)).to_radians();
-            let t = plane_n.any_orthonormal_vector();
-            let phi = 6.3 * lcg(&mut state);
-            let t = t * phi.cos() + plane_n.cross(t) * phi.sin();
-            let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
+            let Configuration {
+                x,
+                n,
+                v,
+                a,
+                b,
+                height,
+            } = near_plane_configuration(&mut state, scale, true, (-3.0, 9.0));
             let inside = a.min(b).min(1.0 - a - b) > 0.05;
             // Where the value is certified (not within ~1e-9 of the clip line, ...), every ordinary
             // edge with sin β ≥ 1/4 is the rule: most of those away from the triangle's edges.
@@ -327,25 +357,8 @@ mod tests {
         let (mut accepted, mut outside, mut worst) = (0, 0, (0.0f64, 0.0f64));
         for k in 0..3000 {
             let scale = [1e-3, 1.0, 1e3][k % 3];
-            let mut p = || {
-                DVec3::new(
-                    lcg(&mut state) - 0.5,
-                    lcg(&mut state) - 0.5,
-                    0.3 * lcg(&mut state),
-                )
-            };
-            let v = [p() * scale, p() * scale, p() * scale];
-            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-            let (a, b) = (2.4 * lcg(&mut state) - 0.7, 2.4 * lcg(&mut state) - 0.7);
-            let foot = v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b;
-            let height = scale * 10f64.powf(-4.0 - 8.0 * lcg(&mut state));
-            let side = if lcg(&mut state) < 0.5 { 1.0 } else { -1.0 };
-            let x = foot + plane_n * (height * side);
-            let tilt = (10.0 + 70.0 * lcg(&mut state)).to_radians();
-            let t = plane_n.any_orthonormal_vector();
-            let phi = 6.3 * lcg(&mut state);
-            let t = t * phi.cos() + plane_n.cross(t) * phi.sin();
-            let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
+            let Configuration { x, n, v, a, b, .. } =
+                near_plane_configuration(&mut state, scale, false, (-4.0, 8.0));
             let Some(l) = lambert_clipped::uncertified_loop(x, n, v) else {
                 continue;
             };
@@ -382,25 +395,8 @@ mod tests {
         let (mut certified, mut uncertified, mut outside) = (0, 0, 0);
         for k in 0..3000 {
             let scale = [1e-3, 1.0, 1e3][k % 3];
-            let mut p = || {
-                DVec3::new(
-                    lcg(&mut state) - 0.5,
-                    lcg(&mut state) - 0.5,
-                    0.3 * lcg(&mut state),
-                )
-            };
-            let v = [p() * scale, p() * scale, p() * scale];
-            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-            let (a, b) = (2.4 * lcg(&mut state) - 0.7, 2.4 * lcg(&mut state) - 0.7);
-            let foot = v[0] + (v[1] - v[0]) * a + (v[2] - v[0]) * b;
-            let height = scale * 10f64.powf(-3.0 - 9.0 * lcg(&mut state));
-            let side = if lcg(&mut state) < 0.5 { 1.0 } else { -1.0 };
-            let x = foot + plane_n * (height * side);
-            let tilt = (10.0 + 70.0 * lcg(&mut state)).to_radians();
-            let t = plane_n.any_orthonormal_vector();
-            let phi = 6.3 * lcg(&mut state);
-            let t = t * phi.cos() + plane_n.cross(t) * phi.sin();
-            let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
+            let Configuration { x, n, v, a, b, .. } =
+                near_plane_configuration(&mut state, scale, false, (-3.0, 9.0));
             let key = |l: &ClippedLoop| {
                 let points: Vec<_> = l.points[..l.count]
                     .iter()

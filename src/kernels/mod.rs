@@ -14,6 +14,8 @@ pub mod marched;
 pub mod polygon;
 pub mod segment;
 pub mod solid_angle;
+#[cfg(test)]
+mod test_rng;
 pub mod transmittance;
 
 pub use batch::*;

@@ -252,12 +252,7 @@ fn in_range(
 mod in_range_tests {
     use super::*;
 
-    fn lcg(state: &mut u64) -> f64 {
-        *state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (*state >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::kernels::test_rng::lcg;
 
     /// Bit for bit the rescaled evaluation, in every regime `evaluate` distinguishes (clipped, near
     /// the plane, near an edge line, slivers, far field, cancelling sums) and at every order.

@@ -272,12 +272,7 @@ mod tests {
     use crate::kernels::polygon::form_factor;
     use crate::Order;
 
-    fn lcg(state: &mut u64) -> f64 {
-        *state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (*state >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::kernels::test_rng::lcg;
 
     /// A random configuration near the triangle's plane: a triangle of size `scale` (offset from
     /// the origin), `x` at a random in-plane point (inside or outside, near edges and vertices

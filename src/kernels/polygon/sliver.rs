@@ -160,15 +160,8 @@ pub(super) fn unclipped_sliver(
         r_lo: r_lo[k],
         on_line: false,
     });
-    let mut d = sliver_quadrature(&verts, n, order)?;
     // As `evaluate` finishes: the sign of the height, then the clamp of the value.
-    if h_p < 0.0 {
-        d.value = -d.value;
-        d.gradient = -d.gradient;
-        d.hessian = -d.hessian;
-    }
-    d.value = d.value.clamp(0.0, 1.0);
-    d.is_finite().then_some(d)
+    crate::kernels::form_factor::oriented(sliver_quadrature(&verts, n, order)?, h_p)
 }
 
 /// The signed form factor of a sliver triangle (x origin of the `r`; nothing clipped) by the
@@ -543,12 +536,7 @@ mod tests {
         }
     }
 
-    fn lcg(state: &mut u64) -> f64 {
-        *state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (*state >> 11) as f64 / (1u64 << 53) as f64
-    }
+    use crate::kernels::test_rng::lcg;
 
     /// The direct entry gives `evaluate`'s bits whenever it answers, and answers for slivers seen
     /// from afar: slivers with apex 1e-5..1e-12 of their length, x from 1e-7 (where the rule
