@@ -142,18 +142,25 @@ proptest! {
         prop_assume!(t.iter().all(|v| n.dot(*v - x) > 0.0));
         let d = kernels::triangle_form_factor(x, n, t[0], t[1], t[2], Order::Hessian).unwrap();
         let mut sum = Deriv3::constant(0.0);
+        let mut magnitudes = (0.0, 0.0, 0.0);
         for i in 0..3 {
             let e = kernels::edge_form_factor(x, n, t[i], t[(i + 1) % 3], Order::Hessian).unwrap();
             sum.value += e.value;
             sum.gradient += e.gradient;
             sum.hessian += e.hessian;
+            let (v, g, h) = scale_of(&e);
+            magnitudes = (magnitudes.0 + v, magnitudes.1 + g, magnitudes.2 + h);
         }
         if sum.value < 0.0 {
             sum.value = -sum.value;
             sum.gradient = -sum.gradient;
             sum.hessian = -sum.hessian;
         }
-        prop_assert!(close(&d, &sum, 1e-11), "{d:?} vs {sum:?}");
+        // The reference is this plain sum, whose rounding errors are relative to its terms: where
+        // they cancel (the triangle small or far, seen edge-on) it is the inaccurate side, so the
+        // tolerance is relative to the terms' magnitudes (the kernel's own accuracy is asserted
+        // against the 320-bit reference in `kernels_b_accuracy`).
+        prop_assert!(close_above(&d, &sum, 1e-11, magnitudes), "{d:?} vs {sum:?}");
     }
 
     /// Arvo's irradiance Jacobian (thesis §5.1): ∇F = ±Jᵀ n for an unclipped polygon.
