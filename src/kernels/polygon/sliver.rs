@@ -10,7 +10,9 @@
 //! at `a` and `b` are acute, so `f` lies on the edge) into `(a, f, c)` and `(b, c, f)`, each
 //! Duffy-mapped from its vertex on the long edge: `r = r_p + s·(q₁ − p) + s·t·(q₂ − q₁)`, with
 //! `q₁q₂` the short edge `fc`. Their `(2·area·N̂, 2·area·N̂·r)` are the shares `t_f` and `1 − t_f`
-//! (`f = a + t_f·ab`) of the whole triangle's, taken from the exact differences.
+//! (`f = a + t_f·ab`) of the whole triangle's, taken from the exact differences; the shares go
+//! into the pieces' weights, so that both pieces add to one set of sums, assembled once. The sums
+//! run two nodes at a time ([`sums`]).
 //!
 //! Error bound (per direction; the tensor rule's error is at most their sum). The integrands
 //! `(n·r)/‖r‖⁴ … (n·r) r rᵀ/‖r‖⁸` are analytic along any line except at the two complex zeros of
@@ -48,10 +50,15 @@ use glam::DVec3;
 use super::dd::two_sum;
 
 use super::{
-    accumulate, fast_decisions, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3,
-    gauss_legendre_4, gauss_legendre_8, legendre_rule, tensor_rule, triangle_plane, ClipVertex,
+    fast_decisions, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3, gauss_legendre_4,
+    gauss_legendre_8, legendre_rule, triangle_plane, ClipVertex, RuleSums,
 };
+use crate::kernels::lanes::{Pair, V3};
 use crate::{Deriv3, Order};
+
+mod sums;
+
+use sums::{LaneSums, PieceFrame};
 
 /// Most intervals along one piece before the sliver rule gives up (x too close to the sliver
 /// compared with its length; the isotropic subdivision takes over).
@@ -195,15 +202,27 @@ pub(super) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) ->
             *slot = Some((ThinPiece::new(&p, &q1, &q2, table)?, part));
         }
     }
-    let (normal, c_t) = sliver_geometry(&a, &b, &c);
-    let mut out = Deriv3::constant(0.0);
-    for (piece, part) in pieces.into_iter().flatten() {
-        accumulate(
-            &mut out,
-            piece.integrate(n, order, (normal * part, c_t * part))?,
-        );
+    let sums = match order {
+        Order::Value => rule_sums::<false, false>(&pieces, n),
+        Order::Gradient => rule_sums::<true, false>(&pieces, n),
+        Order::Hessian => rule_sums::<true, true>(&pieces, n),
+    }?;
+    Some(sums.assemble(n, sliver_geometry(&a, &b, &c), order))
+}
+
+/// Both pieces' sums, the pieces' shares of the whole triangle's geometry in their weights (so
+/// that one assembly serves both), with the derivatives' sums as asked. `None` when a piece needs
+/// more than [`MAX_INTERVALS`] intervals.
+fn rule_sums<const GRADIENT: bool, const HESSIAN: bool>(
+    pieces: &[Option<(ThinPiece, f64)>; 2],
+    n: DVec3,
+) -> Option<RuleSums> {
+    let n = V3::<Pair>::splat(n);
+    let mut sums = LaneSums::new();
+    for (piece, part) in pieces.iter().flatten() {
+        piece.integrate::<GRADIENT, HESSIAN>(&mut sums, &n, *part)?;
     }
-    Some(out)
+    Some(sums.total())
 }
 
 /// `(2·area·N̂, 2·area·N̂·r_a)` of the triangle `(a, b, c)` from the exact differences
@@ -316,44 +335,45 @@ impl ThinPiece {
         ALONG.iter().find(|(r, _)| rho >= *r).map(|r| r.1)
     }
 
-    /// The tensor rule on `s ∈ [s0, s1]` with `points` along.
-    fn interval(
+    /// Adds the tensor rule on `s ∈ [s0, s1]` with `points` along to `sums`.
+    #[inline(always)]
+    fn interval<const GRADIENT: bool, const HESSIAN: bool>(
         &self,
-        n: DVec3,
-        order: Order,
-        geometry: (DVec3, f64),
+        sums: &mut LaneSums,
+        frame: &PieceFrame,
+        n: &V3<Pair>,
         (s0, s1): (f64, f64),
         points: usize,
-    ) -> Deriv3 {
-        let (r_p, ab, q1q2, t_rule) = (self.r_p, self.pq1, self.q1q2, self.t_rule);
+    ) {
         let along = (s0, s1, self.rules[points]);
-        // A literal order and a fixed-length rule across let the inlined loop drop the unused
-        // sums and unroll the short direction (the same operations, the same bits).
-        match (order, t_rule) {
-            (Order::Value, &[t0, t1]) => {
-                tensor_rule(r_p, ab, q1q2, n, Order::Value, geometry, along, &[t0, t1])
-            }
-            (Order::Value, _) => {
-                tensor_rule(r_p, ab, q1q2, n, Order::Value, geometry, along, t_rule)
-            }
-            (Order::Gradient, _) => {
-                tensor_rule(r_p, ab, q1q2, n, Order::Gradient, geometry, along, t_rule)
-            }
-            (Order::Hessian, _) => {
-                tensor_rule(r_p, ab, q1q2, n, Order::Hessian, geometry, along, t_rule)
-            }
+        // A fixed-length rule across lets the inlined loop unroll it (the same operations).
+        match self.t_rule {
+            &[t0, t1] => sums.add::<GRADIENT, HESSIAN>(frame, n, along, &[t0, t1]),
+            t_rule => sums.add::<GRADIENT, HESSIAN>(frame, n, along, t_rule),
         }
     }
 
-    /// The piece's share of the form factor, for its `(2·area·N̂, 2·area·N̂·r_p)`; `None` when the
-    /// length needs more than [`MAX_INTERVALS`] intervals. Intervals are bisected until a rule
-    /// applies (depth first, right half first).
-    fn integrate(&self, n: DVec3, order: Order, geometry: (DVec3, f64)) -> Option<Deriv3> {
+    /// Adds the piece's share `part` of the form factor's sums to `sums`; `None` when the length
+    /// needs more than [`MAX_INTERVALS`] intervals. Intervals are bisected until a rule applies
+    /// (depth first, right half first).
+    #[inline(always)]
+    fn integrate<const GRADIENT: bool, const HESSIAN: bool>(
+        &self,
+        sums: &mut LaneSums,
+        n: &V3<Pair>,
+        part: f64,
+    ) -> Option<()> {
+        let frame = PieceFrame {
+            r_p: self.r_p,
+            ab: self.pq1,
+            bc: self.q1q2,
+            part,
+        };
         // x far compared with the length (the usual case): one interval, no stack to set up.
         if let Some(points) = self.along_points(0.0, 1.0) {
-            return Some(self.interval(n, order, geometry, (0.0, 1.0), points));
+            self.interval::<GRADIENT, HESSIAN>(sums, &frame, n, (0.0, 1.0), points);
+            return Some(());
         }
-        let mut out = Deriv3::constant(0.0);
         let mut stack: [(f64, f64); MAX_INTERVALS] = [(0.0, 0.0); MAX_INTERVALS];
         stack[0] = (0.0, 0.5);
         stack[1] = (0.5, 1.0);
@@ -362,10 +382,7 @@ impl ThinPiece {
             top -= 1;
             let (s0, s1) = stack[top];
             if let Some(points) = self.along_points(s0, s1) {
-                accumulate(
-                    &mut out,
-                    self.interval(n, order, geometry, (s0, s1), points),
-                );
+                self.interval::<GRADIENT, HESSIAN>(sums, &frame, n, (s0, s1), points);
                 used += 1;
                 continue;
             }
@@ -377,7 +394,7 @@ impl ThinPiece {
             stack[top + 1] = (mid, s1);
             top += 2;
         }
-        Some(out)
+        Some(())
     }
 }
 
