@@ -35,6 +35,7 @@ pub(super) struct PieceFrame {
 }
 
 impl LaneSums {
+    #[inline(always)]
     pub(super) fn new() -> Self {
         let zero = Pair::splat(0.0);
         let zero3 = V3::splat(DVec3::ZERO);
@@ -115,6 +116,7 @@ impl LaneSums {
     }
 
     /// The sums over both lanes.
+    #[inline(always)]
     pub(super) fn total(&self) -> RuleSums {
         let sum = |p: Pair| p.get(0) + p.get(1);
         let sum3 = |v: V3<Pair>| DVec3::new(sum(v.x), sum(v.y), sum(v.z));
