@@ -30,7 +30,8 @@
 //! applies (one interval unless x is closer than about the length); across, the pole of the line
 //! `t ↦ r(s, t)` is at least `D` (the distance of x to the piece) from the segment of length
 //! `≤ w`. Every rule between 8 and 16 points is used: a seen-from-afar piece (ρ ≈ 6 for x a
-//! length away) takes 13 or 14 points instead of 16.
+//! length away) takes 13 or 14 points instead of 16. Each threshold is tested as its ellipse
+//! ([`semi_axes`]), which needs no square root.
 //!
 //! One rule for every order. The value's poles have order 2, so the value alone could use lower
 //! thresholds (13 points from ρ = 5.3 instead of 6.3, 16 from 3.9 instead of 4.5). But the value
@@ -104,28 +105,42 @@ fn rule(points: usize) -> &'static [(f64, f64)] {
     }
 }
 
-/// The rules of [`ALONG`] and [`ACROSS`] by their number of points (empty elsewhere).
-type RuleTable = [&'static [(f64, f64)]; 17];
+/// The rules of [`ALONG`] and [`ACROSS`] and their thresholds as ellipses, built once: one
+/// look-up per sliver instead of one per rule used, and no square root per decision.
+struct Rules {
+    /// The rules by their number of points (empty elsewhere).
+    by_points: [&'static [(f64, f64)]; 17],
+    /// [`ALONG`] as `(1/a², 1/b², points)` with `a`, `b` the semi-axes of the threshold's
+    /// ellipse ([`semi_axes`]).
+    along: [(f64, f64, usize); ALONG.len()],
+    /// [`ACROSS`] as `(b, points)`: on the imaginary axis the ellipse is crossed at `±i·b`.
+    across: [(f64, usize); ACROSS.len()],
+}
 
-/// The [`RuleTable`], built once: one look-up per sliver instead of one per rule used.
-fn rules() -> &'static RuleTable {
-    static RULES: OnceLock<RuleTable> = OnceLock::new();
+fn rules() -> &'static Rules {
+    static RULES: OnceLock<Rules> = OnceLock::new();
     RULES.get_or_init(|| {
-        let mut table: RuleTable = [&[]; 17];
+        let mut by_points: [&'static [(f64, f64)]; 17] = [&[]; 17];
         for &(_, points) in ALONG.iter().chain(&ACROSS) {
-            table[points] = rule(points);
+            by_points[points] = rule(points);
         }
-        table
+        Rules {
+            by_points,
+            along: ALONG.map(|(rho, points)| {
+                let (a, b) = semi_axes(rho);
+                (1.0 / (a * a), 1.0 / (b * b), points)
+            }),
+            across: ACROSS.map(|(rho, points)| (semi_axes(rho).1, points)),
+        }
     })
 }
 
-/// The Bernstein-ellipse parameter of the point `z = re + i·im` for the interval [−1, 1]: the
-/// sum of the semi-axes of the ellipse with foci ±1 through `z`.
-fn bernstein(re: f64, im: f64) -> f64 {
-    // Plain square roots: the arguments are ratios of lengths in scaled units (no overflow).
-    let (im2, lo, hi) = (im * im, re - 1.0, re + 1.0);
-    let a = 0.5 * ((lo * lo + im2).sqrt() + (hi * hi + im2).sqrt());
-    a + (a * a - 1.0).max(0.0).sqrt()
+/// The semi-axes `(a, b) = ((ρ + 1/ρ)/2, (ρ − 1/ρ)/2)` of the Bernstein ellipse of parameter
+/// `ρ > 1` for [−1, 1] (foci ±1). The ellipses of larger parameters enclose it, so a point
+/// `z = re + i·im` has a parameter of at least `ρ` exactly when `re²/a² + im²/b² ≥ 1`: the rules
+/// are chosen by that test, without the parameter's square roots.
+fn semi_axes(rho: f64) -> (f64, f64) {
+    (0.5 * (rho + 1.0 / rho), 0.5 * (rho - 1.0 / rho))
 }
 
 /// [`evaluate`](super::evaluate)'s sliver branch for a triangle given by `u` (relative to its
@@ -298,22 +313,23 @@ struct ThinPiece {
     r_p: DVec3,
     pq1: DVec3,
     q1q2: DVec3,
-    length: f64,
     /// The parameter of the foot of x on the spine `p + s·spine`.
     s_foot: f64,
-    /// A lower bound on the distance of the t-lines' poles from the spine's line.
-    pole_distance: f64,
+    /// A lower bound on the distance of the t-lines' poles from the spine's line, over the
+    /// spine's length.
+    pole_over_length: f64,
     t_rule: &'static [(f64, f64)],
-    rules: &'static RuleTable,
+    rules: &'static Rules,
 }
 
 impl ThinPiece {
     /// `None` when x is too close to the piece for the rule.
+    #[inline(always)]
     fn new(
         p: &ClipVertex,
         q1: &ClipVertex,
         q2: &ClipVertex,
-        rules: &'static RuleTable,
+        rules: &'static Rules,
     ) -> Option<ThinPiece> {
         let (pq1, q1q2) = (q1.u - p.u, q2.u - q1.u);
         let spine = pq1 + 0.5 * q1q2;
@@ -328,8 +344,12 @@ impl ThinPiece {
         if across_distance.is_nan() || across_distance <= 0.0 {
             return None;
         }
-        let rho_t = bernstein(0.0, 2.0 * across_distance / width);
-        let t_points = ACROSS.iter().find(|(r, _)| rho_t >= *r)?.1;
+        // Normalized to [−1, 1] the pole is at i·2·across_distance/width or farther.
+        let t_points = rules
+            .across
+            .iter()
+            .find(|&&(b, _)| 2.0 * across_distance >= b * width)?
+            .1;
         // Along: the poles of the t-lines are within `width` of the spine's.
         let pole_distance = line_distance - width;
         if pole_distance.is_nan() || pole_distance <= 0.0 {
@@ -339,22 +359,25 @@ impl ThinPiece {
             r_p: p.r,
             pq1,
             q1q2,
-            length,
             s_foot,
-            pole_distance,
-            t_rule: rules[t_points],
+            pole_over_length: pole_distance / length,
+            t_rule: rules.by_points[t_points],
             rules,
         })
     }
 
     /// The Gauss rule along `s ∈ [s0, s1]` if one applies (module documentation).
+    #[inline(always)]
     fn along_points(&self, s0: f64, s1: f64) -> Option<usize> {
-        let (mid, half) = (0.5 * (s0 + s1), 0.5 * (s1 - s0));
-        let rho = bernstein(
-            (self.s_foot - mid) / half,
-            self.pole_distance / (self.length * half),
-        );
-        ALONG.iter().find(|(r, _)| rho >= *r).map(|r| r.1)
+        // The pole normalized to the interval, [s0, s1] → [−1, 1].
+        let (mid, scale) = (0.5 * (s0 + s1), 2.0 / (s1 - s0));
+        let (re, im) = ((self.s_foot - mid) * scale, self.pole_over_length * scale);
+        let (re2, im2) = (re * re, im * im);
+        self.rules
+            .along
+            .iter()
+            .find(|&&(ia2, ib2, _)| re2 * ia2 + im2 * ib2 >= 1.0)
+            .map(|r| r.2)
     }
 
     /// Adds the tensor rule on `s ∈ [s0, s1]` with `points` along to `sums`.
@@ -367,7 +390,7 @@ impl ThinPiece {
         (s0, s1): (f64, f64),
         points: usize,
     ) {
-        let along = (s0, s1, self.rules[points]);
+        let along = (s0, s1, self.rules.by_points[points]);
         // A fixed-length rule across lets the inlined loop unroll it (the same operations).
         match self.t_rule {
             &[t0, t1] => sums.add::<GRADIENT, HESSIAN>(frame, n, along, &[t0, t1]),
@@ -439,10 +462,10 @@ mod tests {
     #[test]
     fn rules_along_integrate_their_polynomials() {
         for &(_, m) in &ACROSS {
-            assert_eq!(rules()[m].len(), m);
+            assert_eq!(rules().by_points[m].len(), m);
         }
         for &(_, m) in &ALONG {
-            let r = rules()[m];
+            let r = rules().by_points[m];
             assert_eq!(r.len(), m);
             for degree in 0..2 * m as i32 {
                 let q: f64 = r.iter().map(|&(s, w)| w * s.powi(degree)).sum();
@@ -457,12 +480,55 @@ mod tests {
         }
     }
 
+    /// The Bernstein-ellipse parameter of the point `z = re + i·im` for the interval [−1, 1]: the
+    /// sum of the semi-axes of the ellipse with foci ±1 through `z`.
+    fn bernstein(re: f64, im: f64) -> f64 {
+        let (im2, lo, hi) = (im * im, re - 1.0, re + 1.0);
+        let a = 0.5 * ((lo * lo + im2).sqrt() + (hi * hi + im2).sqrt());
+        a + (a * a - 1.0).max(0.0).sqrt()
+    }
+
     /// The `ρ` of a piece's whole length.
     fn rho_whole(piece: &ThinPiece) -> f64 {
-        bernstein(
-            (piece.s_foot - 0.5) / 0.5,
-            piece.pole_distance / (piece.length * 0.5),
-        )
+        bernstein((piece.s_foot - 0.5) / 0.5, piece.pole_over_length / 0.5)
+    }
+
+    /// The ellipse tests choose the rules that the Bernstein parameter `ρ` (from its square
+    /// roots) chooses, along and across, for poles on both sides of every threshold: each random
+    /// point is classified by both wherever its `ρ` is not within 1e-12 of a threshold.
+    #[test]
+    fn ellipse_tests_choose_the_rules_of_the_bernstein_parameter() {
+        let mut state = 1821;
+        let mut compared = 0;
+        for _ in 0..20_000 {
+            let mut c = || lcg(&mut state);
+            let re = 10f64.powf(2.0 * c() - 1.0) * if c() < 0.5 { -1.0 } else { 1.0 };
+            let im = 10f64.powf(2.0 * c() - 1.0);
+            let rho = bernstein(re, im);
+            let near = |r: f64| (rho / r - 1.0).abs() < 1e-12;
+            if ALONG.iter().any(|&(r, _)| near(r)) {
+                continue;
+            }
+            let expected = ALONG.iter().find(|(r, _)| rho >= *r).map(|r| r.1);
+            let (re2, im2) = (re * re, im * im);
+            let chosen = rules()
+                .along
+                .iter()
+                .find(|&&(ia2, ib2, _)| re2 * ia2 + im2 * ib2 >= 1.0)
+                .map(|r| r.2);
+            assert_eq!(chosen, expected, "{re} {im}");
+            // Across: x beside the segment, at `im` half-widths.
+            let im = 10f64.powf(6.0 * c());
+            let rho = bernstein(0.0, im);
+            if ACROSS.iter().any(|&(r, _)| (rho / r - 1.0).abs() < 1e-12) {
+                continue;
+            }
+            let expected = ACROSS.iter().find(|(r, _)| rho >= *r).map(|r| r.1);
+            let chosen = rules().across.iter().find(|&&(b, _)| im >= b).map(|r| r.1);
+            assert_eq!(chosen, expected, "{im}");
+            compared += 1;
+        }
+        assert!(compared > 19_000, "{compared}");
     }
 
     /// Continuity at every switch along: x below a cap at the distance where the first piece's

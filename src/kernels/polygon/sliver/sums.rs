@@ -180,8 +180,8 @@ mod tests {
                 let (p, q) = (c(), c());
                 (p.min(q), p.max(q))
             };
-            let s_rule = rules()[8 + k % 9];
-            let t_rule = rules()[[2, 3, 4, 8][k % 4]];
+            let s_rule = rules().by_points[8 + k % 9];
+            let t_rule = rules().by_points[[2, 3, 4, 8][k % 4]];
             let frame = PieceFrame { r_p, ab, bc, part };
             let along = (s0, s1, s_rule);
             let mut value = None;
