@@ -10,7 +10,9 @@
 //! at `a` and `b` are acute, so `f` lies on the edge) into `(a, f, c)` and `(b, c, f)`, each
 //! Duffy-mapped from its vertex on the long edge: `r = r_p + s·(q₁ − p) + s·t·(q₂ − q₁)`, with
 //! `q₁q₂` the short edge `fc`. Their `(2·area·N̂, 2·area·N̂·r)` are the shares `t_f` and `1 − t_f`
-//! (`f = a + t_f·ab`) of the whole triangle's, taken from the exact differences.
+//! (`f = a + t_f·ab`) of the whole triangle's, taken from the exact differences; the shares go
+//! into the pieces' weights, so that both pieces add to one set of sums, assembled once. The sums
+//! run two nodes at a time ([`sums`]).
 //!
 //! Error bound (per direction; the tensor rule's error is at most their sum). The integrands
 //! `(n·r)/‖r‖⁴ … (n·r) r rᵀ/‖r‖⁸` are analytic along any line except at the two complex zeros of
@@ -28,7 +30,8 @@
 //! applies (one interval unless x is closer than about the length); across, the pole of the line
 //! `t ↦ r(s, t)` is at least `D` (the distance of x to the piece) from the segment of length
 //! `≤ w`. Every rule between 8 and 16 points is used: a seen-from-afar piece (ρ ≈ 6 for x a
-//! length away) takes 13 or 14 points instead of 16.
+//! length away) takes 13 or 14 points instead of 16. Each threshold is tested as its ellipse
+//! ([`semi_axes`]), which needs no square root.
 //!
 //! One rule for every order. The value's poles have order 2, so the value alone could use lower
 //! thresholds (13 points from ρ = 5.3 instead of 6.3, 16 from 3.9 instead of 4.5). But the value
@@ -48,10 +51,15 @@ use glam::DVec3;
 use super::dd::two_sum;
 
 use super::{
-    accumulate, fast_decisions, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3,
-    gauss_legendre_4, gauss_legendre_8, legendre_rule, tensor_rule, triangle_plane, ClipVertex,
+    fast_decisions, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3, gauss_legendre_4,
+    gauss_legendre_8, legendre_rule, triangle_plane, ClipVertex, RuleSums,
 };
+use crate::kernels::lanes::{Pair, V3};
 use crate::{Deriv3, Order};
+
+mod sums;
+
+use sums::{LaneSums, PieceFrame};
 
 /// Most intervals along one piece before the sliver rule gives up (x too close to the sliver
 /// compared with its length; the isotropic subdivision takes over).
@@ -97,28 +105,42 @@ fn rule(points: usize) -> &'static [(f64, f64)] {
     }
 }
 
-/// The rules of [`ALONG`] and [`ACROSS`] by their number of points (empty elsewhere).
-type RuleTable = [&'static [(f64, f64)]; 17];
+/// The rules of [`ALONG`] and [`ACROSS`] and their thresholds as ellipses, built once: one
+/// look-up per sliver instead of one per rule used, and no square root per decision.
+struct Rules {
+    /// The rules by their number of points (empty elsewhere).
+    by_points: [&'static [(f64, f64)]; 17],
+    /// [`ALONG`] as `(1/a², 1/b², points)` with `a`, `b` the semi-axes of the threshold's
+    /// ellipse ([`semi_axes`]).
+    along: [(f64, f64, usize); ALONG.len()],
+    /// [`ACROSS`] as `(b, points)`: on the imaginary axis the ellipse is crossed at `±i·b`.
+    across: [(f64, usize); ACROSS.len()],
+}
 
-/// The [`RuleTable`], built once: one look-up per sliver instead of one per rule used.
-fn rules() -> &'static RuleTable {
-    static RULES: OnceLock<RuleTable> = OnceLock::new();
+fn rules() -> &'static Rules {
+    static RULES: OnceLock<Rules> = OnceLock::new();
     RULES.get_or_init(|| {
-        let mut table: RuleTable = [&[]; 17];
+        let mut by_points: [&'static [(f64, f64)]; 17] = [&[]; 17];
         for &(_, points) in ALONG.iter().chain(&ACROSS) {
-            table[points] = rule(points);
+            by_points[points] = rule(points);
         }
-        table
+        Rules {
+            by_points,
+            along: ALONG.map(|(rho, points)| {
+                let (a, b) = semi_axes(rho);
+                (1.0 / (a * a), 1.0 / (b * b), points)
+            }),
+            across: ACROSS.map(|(rho, points)| (semi_axes(rho).1, points)),
+        }
     })
 }
 
-/// The Bernstein-ellipse parameter of the point `z = re + i·im` for the interval [−1, 1]: the
-/// sum of the semi-axes of the ellipse with foci ±1 through `z`.
-fn bernstein(re: f64, im: f64) -> f64 {
-    // Plain square roots: the arguments are ratios of lengths in scaled units (no overflow).
-    let (im2, lo, hi) = (im * im, re - 1.0, re + 1.0);
-    let a = 0.5 * ((lo * lo + im2).sqrt() + (hi * hi + im2).sqrt());
-    a + (a * a - 1.0).max(0.0).sqrt()
+/// The semi-axes `(a, b) = ((ρ + 1/ρ)/2, (ρ − 1/ρ)/2)` of the Bernstein ellipse of parameter
+/// `ρ > 1` for [−1, 1] (foci ±1). The ellipses of larger parameters enclose it, so a point
+/// `z = re + i·im` has a parameter of at least `ρ` exactly when `re²/a² + im²/b² ≥ 1`: the rules
+/// are chosen by that test, without the parameter's square roots.
+fn semi_axes(rho: f64) -> (f64, f64) {
+    (0.5 * (rho + 1.0 / rho), 0.5 * (rho - 1.0 / rho))
 }
 
 /// [`evaluate`](super::evaluate)'s sliver branch for a triangle given by `u` (relative to its
@@ -168,6 +190,26 @@ pub(super) fn unclipped_sliver(
 /// anisotropic rule, or `None` when x is too close to it for the rule (the width is not small
 /// against the distance, or the length needs more than [`MAX_INTERVALS`] intervals).
 pub(super) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2_fma() {
+        // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
+        return unsafe { sliver_quadrature_fma(verts, n, order) };
+    }
+    sliver_quadrature_with(verts, n, order)
+}
+
+/// [`sliver_quadrature`] compiled with AVX2 and FMA: the geometry's exact products are fused
+/// instead of calls to `fma`, and the paired sums take three-operand instructions instead of
+/// register copies. The same bits: the fused product is correctly rounded either way, and Rust
+/// fuses nothing else (unit-tested).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn sliver_quadrature_fma(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {
+    sliver_quadrature_with(verts, n, order)
+}
+
+#[inline(always)]
+fn sliver_quadrature_with(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {
     if verts.len() != 3 {
         return None;
     }
@@ -195,15 +237,28 @@ pub(super) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) ->
             *slot = Some((ThinPiece::new(&p, &q1, &q2, table)?, part));
         }
     }
-    let (normal, c_t) = sliver_geometry(&a, &b, &c);
-    let mut out = Deriv3::constant(0.0);
-    for (piece, part) in pieces.into_iter().flatten() {
-        accumulate(
-            &mut out,
-            piece.integrate(n, order, (normal * part, c_t * part))?,
-        );
+    let sums = match order {
+        Order::Value => rule_sums::<false, false>(&pieces, n),
+        Order::Gradient => rule_sums::<true, false>(&pieces, n),
+        Order::Hessian => rule_sums::<true, true>(&pieces, n),
+    }?;
+    Some(sums.assemble(n, sliver_geometry(&a, &b, &c), order))
+}
+
+/// Both pieces' sums, the pieces' shares of the whole triangle's geometry in their weights (so
+/// that one assembly serves both), with the derivatives' sums as asked. `None` when a piece needs
+/// more than [`MAX_INTERVALS`] intervals.
+#[inline(always)]
+fn rule_sums<const GRADIENT: bool, const HESSIAN: bool>(
+    pieces: &[Option<(ThinPiece, f64)>; 2],
+    n: DVec3,
+) -> Option<RuleSums> {
+    let n = V3::<Pair>::splat(n);
+    let mut sums = LaneSums::new();
+    for (piece, part) in pieces.iter().flatten() {
+        piece.integrate::<GRADIENT, HESSIAN>(&mut sums, &n, *part)?;
     }
-    Some(out)
+    Some(sums.total())
 }
 
 /// `(2·area·N̂, 2·area·N̂·r_a)` of the triangle `(a, b, c)` from the exact differences
@@ -213,6 +268,7 @@ pub(super) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) ->
 /// terms, ~ε of them, need only f64. Then `N·r_a` (the triple product `det(r_a, r_b, r_c)`) is a
 /// compensated dot product, accurate to a few ulps while it cancels by less than ~1e15: x off the
 /// plane by more than ~1e-15 of its distance (closer, `evaluate` takes x as in the plane).
+#[inline(always)]
 fn sliver_geometry(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex) -> (DVec3, f64) {
     // q − a as a leading part and its remainder: two-sum per component on r, plus the r_lo.
     let edge = |q: &ClipVertex| {
@@ -246,7 +302,7 @@ fn sliver_geometry(a: &ClipVertex, b: &ClipVertex, c: &ClipVertex) -> (DVec3, f6
 }
 
 /// `a·b = p + err` exactly (no overflow or underflow).
-#[inline]
+#[inline(always)]
 fn two_prod(a: f64, b: f64) -> (f64, f64) {
     let p = a * b;
     (p, a.mul_add(b, -p))
@@ -257,22 +313,23 @@ struct ThinPiece {
     r_p: DVec3,
     pq1: DVec3,
     q1q2: DVec3,
-    length: f64,
     /// The parameter of the foot of x on the spine `p + s·spine`.
     s_foot: f64,
-    /// A lower bound on the distance of the t-lines' poles from the spine's line.
-    pole_distance: f64,
+    /// A lower bound on the distance of the t-lines' poles from the spine's line, over the
+    /// spine's length.
+    pole_over_length: f64,
     t_rule: &'static [(f64, f64)],
-    rules: &'static RuleTable,
+    rules: &'static Rules,
 }
 
 impl ThinPiece {
     /// `None` when x is too close to the piece for the rule.
+    #[inline(always)]
     fn new(
         p: &ClipVertex,
         q1: &ClipVertex,
         q2: &ClipVertex,
-        rules: &'static RuleTable,
+        rules: &'static Rules,
     ) -> Option<ThinPiece> {
         let (pq1, q1q2) = (q1.u - p.u, q2.u - q1.u);
         let spine = pq1 + 0.5 * q1q2;
@@ -287,8 +344,12 @@ impl ThinPiece {
         if across_distance.is_nan() || across_distance <= 0.0 {
             return None;
         }
-        let rho_t = bernstein(0.0, 2.0 * across_distance / width);
-        let t_points = ACROSS.iter().find(|(r, _)| rho_t >= *r)?.1;
+        // Normalized to [−1, 1] the pole is at i·2·across_distance/width or farther.
+        let t_points = rules
+            .across
+            .iter()
+            .find(|&&(b, _)| 2.0 * across_distance >= b * width)?
+            .1;
         // Along: the poles of the t-lines are within `width` of the spine's.
         let pole_distance = line_distance - width;
         if pole_distance.is_nan() || pole_distance <= 0.0 {
@@ -298,62 +359,66 @@ impl ThinPiece {
             r_p: p.r,
             pq1,
             q1q2,
-            length,
             s_foot,
-            pole_distance,
-            t_rule: rules[t_points],
+            pole_over_length: pole_distance / length,
+            t_rule: rules.by_points[t_points],
             rules,
         })
     }
 
     /// The Gauss rule along `s ∈ [s0, s1]` if one applies (module documentation).
+    #[inline(always)]
     fn along_points(&self, s0: f64, s1: f64) -> Option<usize> {
-        let (mid, half) = (0.5 * (s0 + s1), 0.5 * (s1 - s0));
-        let rho = bernstein(
-            (self.s_foot - mid) / half,
-            self.pole_distance / (self.length * half),
-        );
-        ALONG.iter().find(|(r, _)| rho >= *r).map(|r| r.1)
+        // The pole normalized to the interval, [s0, s1] → [−1, 1].
+        let (mid, scale) = (0.5 * (s0 + s1), 2.0 / (s1 - s0));
+        let (re, im) = ((self.s_foot - mid) * scale, self.pole_over_length * scale);
+        let (re2, im2) = (re * re, im * im);
+        self.rules
+            .along
+            .iter()
+            .find(|&&(ia2, ib2, _)| re2 * ia2 + im2 * ib2 >= 1.0)
+            .map(|r| r.2)
     }
 
-    /// The tensor rule on `s ∈ [s0, s1]` with `points` along.
-    fn interval(
+    /// Adds the tensor rule on `s ∈ [s0, s1]` with `points` along to `sums`.
+    #[inline(always)]
+    fn interval<const GRADIENT: bool, const HESSIAN: bool>(
         &self,
-        n: DVec3,
-        order: Order,
-        geometry: (DVec3, f64),
+        sums: &mut LaneSums,
+        frame: &PieceFrame,
+        n: &V3<Pair>,
         (s0, s1): (f64, f64),
         points: usize,
-    ) -> Deriv3 {
-        let (r_p, ab, q1q2, t_rule) = (self.r_p, self.pq1, self.q1q2, self.t_rule);
-        let along = (s0, s1, self.rules[points]);
-        // A literal order and a fixed-length rule across let the inlined loop drop the unused
-        // sums and unroll the short direction (the same operations, the same bits).
-        match (order, t_rule) {
-            (Order::Value, &[t0, t1]) => {
-                tensor_rule(r_p, ab, q1q2, n, Order::Value, geometry, along, &[t0, t1])
-            }
-            (Order::Value, _) => {
-                tensor_rule(r_p, ab, q1q2, n, Order::Value, geometry, along, t_rule)
-            }
-            (Order::Gradient, _) => {
-                tensor_rule(r_p, ab, q1q2, n, Order::Gradient, geometry, along, t_rule)
-            }
-            (Order::Hessian, _) => {
-                tensor_rule(r_p, ab, q1q2, n, Order::Hessian, geometry, along, t_rule)
-            }
+    ) {
+        let along = (s0, s1, self.rules.by_points[points]);
+        // A fixed-length rule across lets the inlined loop unroll it (the same operations).
+        match self.t_rule {
+            &[t0, t1] => sums.add::<GRADIENT, HESSIAN>(frame, n, along, &[t0, t1]),
+            t_rule => sums.add::<GRADIENT, HESSIAN>(frame, n, along, t_rule),
         }
     }
 
-    /// The piece's share of the form factor, for its `(2·area·N̂, 2·area·N̂·r_p)`; `None` when the
-    /// length needs more than [`MAX_INTERVALS`] intervals. Intervals are bisected until a rule
-    /// applies (depth first, right half first).
-    fn integrate(&self, n: DVec3, order: Order, geometry: (DVec3, f64)) -> Option<Deriv3> {
+    /// Adds the piece's share `part` of the form factor's sums to `sums`; `None` when the length
+    /// needs more than [`MAX_INTERVALS`] intervals. Intervals are bisected until a rule applies
+    /// (depth first, right half first).
+    #[inline(always)]
+    fn integrate<const GRADIENT: bool, const HESSIAN: bool>(
+        &self,
+        sums: &mut LaneSums,
+        n: &V3<Pair>,
+        part: f64,
+    ) -> Option<()> {
+        let frame = PieceFrame {
+            r_p: self.r_p,
+            ab: self.pq1,
+            bc: self.q1q2,
+            part,
+        };
         // x far compared with the length (the usual case): one interval, no stack to set up.
         if let Some(points) = self.along_points(0.0, 1.0) {
-            return Some(self.interval(n, order, geometry, (0.0, 1.0), points));
+            self.interval::<GRADIENT, HESSIAN>(sums, &frame, n, (0.0, 1.0), points);
+            return Some(());
         }
-        let mut out = Deriv3::constant(0.0);
         let mut stack: [(f64, f64); MAX_INTERVALS] = [(0.0, 0.0); MAX_INTERVALS];
         stack[0] = (0.0, 0.5);
         stack[1] = (0.5, 1.0);
@@ -362,10 +427,7 @@ impl ThinPiece {
             top -= 1;
             let (s0, s1) = stack[top];
             if let Some(points) = self.along_points(s0, s1) {
-                accumulate(
-                    &mut out,
-                    self.interval(n, order, geometry, (s0, s1), points),
-                );
+                self.interval::<GRADIENT, HESSIAN>(sums, &frame, n, (s0, s1), points);
                 used += 1;
                 continue;
             }
@@ -377,7 +439,7 @@ impl ThinPiece {
             stack[top + 1] = (mid, s1);
             top += 2;
         }
-        Some(out)
+        Some(())
     }
 }
 
@@ -400,10 +462,10 @@ mod tests {
     #[test]
     fn rules_along_integrate_their_polynomials() {
         for &(_, m) in &ACROSS {
-            assert_eq!(rules()[m].len(), m);
+            assert_eq!(rules().by_points[m].len(), m);
         }
         for &(_, m) in &ALONG {
-            let r = rules()[m];
+            let r = rules().by_points[m];
             assert_eq!(r.len(), m);
             for degree in 0..2 * m as i32 {
                 let q: f64 = r.iter().map(|&(s, w)| w * s.powi(degree)).sum();
@@ -418,12 +480,55 @@ mod tests {
         }
     }
 
+    /// The Bernstein-ellipse parameter of the point `z = re + i·im` for the interval [−1, 1]: the
+    /// sum of the semi-axes of the ellipse with foci ±1 through `z`.
+    fn bernstein(re: f64, im: f64) -> f64 {
+        let (im2, lo, hi) = (im * im, re - 1.0, re + 1.0);
+        let a = 0.5 * ((lo * lo + im2).sqrt() + (hi * hi + im2).sqrt());
+        a + (a * a - 1.0).max(0.0).sqrt()
+    }
+
     /// The `ρ` of a piece's whole length.
     fn rho_whole(piece: &ThinPiece) -> f64 {
-        bernstein(
-            (piece.s_foot - 0.5) / 0.5,
-            piece.pole_distance / (piece.length * 0.5),
-        )
+        bernstein((piece.s_foot - 0.5) / 0.5, piece.pole_over_length / 0.5)
+    }
+
+    /// The ellipse tests choose the rules that the Bernstein parameter `ρ` (from its square
+    /// roots) chooses, along and across, for poles on both sides of every threshold: each random
+    /// point is classified by both wherever its `ρ` is not within 1e-12 of a threshold.
+    #[test]
+    fn ellipse_tests_choose_the_rules_of_the_bernstein_parameter() {
+        let mut state = 1821;
+        let mut compared = 0;
+        for _ in 0..20_000 {
+            let mut c = || lcg(&mut state);
+            let re = 10f64.powf(2.0 * c() - 1.0) * if c() < 0.5 { -1.0 } else { 1.0 };
+            let im = 10f64.powf(2.0 * c() - 1.0);
+            let rho = bernstein(re, im);
+            let near = |r: f64| (rho / r - 1.0).abs() < 1e-12;
+            if ALONG.iter().any(|&(r, _)| near(r)) {
+                continue;
+            }
+            let expected = ALONG.iter().find(|(r, _)| rho >= *r).map(|r| r.1);
+            let (re2, im2) = (re * re, im * im);
+            let chosen = rules()
+                .along
+                .iter()
+                .find(|&&(ia2, ib2, _)| re2 * ia2 + im2 * ib2 >= 1.0)
+                .map(|r| r.2);
+            assert_eq!(chosen, expected, "{re} {im}");
+            // Across: x beside the segment, at `im` half-widths.
+            let im = 10f64.powf(6.0 * c());
+            let rho = bernstein(0.0, im);
+            if ACROSS.iter().any(|&(r, _)| (rho / r - 1.0).abs() < 1e-12) {
+                continue;
+            }
+            let expected = ACROSS.iter().find(|(r, _)| rho >= *r).map(|r| r.1);
+            let chosen = rules().across.iter().find(|&&(b, _)| im >= b).map(|r| r.1);
+            assert_eq!(chosen, expected, "{im}");
+            compared += 1;
+        }
+        assert!(compared > 19_000, "{compared}");
     }
 
     /// Continuity at every switch along: x below a cap at the distance where the first piece's
@@ -601,6 +706,47 @@ mod tests {
             }
         }
         assert!(taken > 2000 && declined > 2000, "{taken} {declined}");
+    }
+
+    /// The AVX2+FMA build of the rule gives the portable build's bits, on slivers with apex
+    /// 1e-5..1e-12 of their length, sizes 1e-3..1e3 and x 1e-3..10 lengths away, at every order
+    /// (and answers for most of them).
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn fma_twin_keeps_the_bits() {
+        if !crate::simd::avx2_fma() {
+            return;
+        }
+        let mut state = 1820;
+        let mut answered = 0;
+        for _ in 0..3000 {
+            let mut c = || lcg(&mut state);
+            let scale = 10f64.powf(6.0 * c() - 3.0);
+            let a = DVec3::new(c(), c(), c()) * scale;
+            let b = a + DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize() * scale;
+            let perp = (b - a).any_orthonormal_vector();
+            let height = 10f64.powf(-5.0 - 7.0 * c());
+            let apex = a + (b - a) * (1.2 * c() - 0.1) + perp * (height * scale);
+            let x = (a + b) * 0.5
+                + DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5)
+                    * (scale * 10f64.powf(4.0 * c() - 3.0));
+            let n = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize();
+            let t = [a, b, apex].map(|v| vertex(v, x));
+            for order in [Order::Value, Order::Gradient, Order::Hessian] {
+                let portable = sliver_quadrature_with(&t, n, order);
+                // SAFETY: checked above that the CPU has AVX2 and FMA.
+                let fused = unsafe { sliver_quadrature_fma(&t, n, order) };
+                let bits = |d: &Deriv3| {
+                    let mut b = vec![d.value.to_bits()];
+                    b.extend(d.gradient.to_array().map(f64::to_bits));
+                    b.extend(d.hessian.to_cols_array().map(f64::to_bits));
+                    b
+                };
+                assert_eq!(portable.as_ref().map(bits), fused.as_ref().map(bits));
+                answered += usize::from(portable.is_some());
+            }
+        }
+        assert!(answered > 6000, "{answered}");
     }
 
     /// The sliver rule is taken for a cap and a needle seen from afar, agrees with the isotropic

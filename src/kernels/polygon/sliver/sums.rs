@@ -1,0 +1,212 @@
+//! The sliver rule's sums, two nodes at a time.
+//!
+//! Why: the sliver rule evaluates its integrand at 50-60 nodes (13 or 14 along each piece of a
+//! sliver seen from about its length, 2 across), and the scalar loop body spent ~100 instructions
+//! per node on one `r` and its fifteen running sums. Two nodes with the same `t` and neighbouring
+//! `s` in the two lanes of a [`Pair`] take one packed instruction per operation for both. Each
+//! lane rounds as the scalar `f64` code would (no fused multiply-add), and the order of the
+//! operations does not depend on `GRADIENT` or `HESSIAN`, so the value is the same for every
+//! order, bit for bit, on every target.
+
+use glam::DVec3;
+
+use super::super::RuleSums;
+use crate::kernels::lanes::{Pair, V3};
+
+/// The running sums of [`RuleSums`] per lane (lane 0 and lane 1 hold different nodes' terms).
+#[derive(Clone, Copy)]
+pub(super) struct LaneSums {
+    q0: Pair,
+    s4: Pair,
+    u6: V3<Pair>,
+    v6: V3<Pair>,
+    s6: Pair,
+    second: [Pair; 6],
+}
+
+/// A piece `r_p + s·ab + s·t·bc` relative to x, with the share `part` of the whole triangle's
+/// geometry that it takes (folded into the weights, so that both pieces add to the same sums).
+#[derive(Clone, Copy)]
+pub(super) struct PieceFrame {
+    pub(super) r_p: DVec3,
+    pub(super) ab: DVec3,
+    pub(super) bc: DVec3,
+    pub(super) part: f64,
+}
+
+impl LaneSums {
+    #[inline(always)]
+    pub(super) fn new() -> Self {
+        let zero = Pair::splat(0.0);
+        let zero3 = V3::splat(DVec3::ZERO);
+        LaneSums {
+            q0: zero,
+            s4: zero,
+            u6: zero3,
+            v6: zero3,
+            s6: zero,
+            second: [zero; 6],
+        }
+    }
+
+    /// Adds the tensor rule with `s_rule` along `s ∈ [s0, s1]` and `t_rule` across (both on
+    /// [0, 1]) on `piece`, for the receiver normal `n`: the sums `Σ w (n·r)/‖r‖⁴` and, with
+    /// `GRADIENT`, `HESSIAN`, those of the derivatives (see [`RuleSums`]), each weight `w` being
+    /// the node's `w_s·w_t·span·s·part` (`s` is the Duffy map's Jacobian). Pairs of `s` nodes share
+    /// a register; an odd rule's last node is paired with itself at weight zero (it adds zeros).
+    #[inline(always)]
+    pub(super) fn add<const GRADIENT: bool, const HESSIAN: bool>(
+        &mut self,
+        piece: &PieceFrame,
+        n: &V3<Pair>,
+        (s0, s1, s_rule): (f64, f64, &[(f64, f64)]),
+        t_rule: &[(f64, f64)],
+    ) {
+        let span = s1 - s0;
+        let scale = span * piece.part;
+        let (r_p, ab, bc) = (
+            V3::splat(piece.r_p),
+            V3::splat(piece.ab),
+            V3::splat(piece.bc),
+        );
+        for nodes in s_rule.chunks(2) {
+            let (sa, wa) = nodes[0];
+            let (sb, wb) = nodes.get(1).copied().unwrap_or((sa, 0.0));
+            let s = Pair::new(s0 + span * sa, s0 + span * sb);
+            let ws = Pair::new(wa * scale, wb * scale) * s;
+            let base = r_p + ab.scale(s);
+            for &(t, wt) in t_rule {
+                let r = base + bc.scale(s * Pair::splat(t));
+                self.node::<GRADIENT, HESSIAN>(r, n, ws * Pair::splat(wt));
+            }
+        }
+    }
+
+    /// One pair of nodes at `r` (relative to x) with weights `weight`.
+    #[inline(always)]
+    fn node<const GRADIENT: bool, const HESSIAN: bool>(
+        &mut self,
+        r: V3<Pair>,
+        n: &V3<Pair>,
+        weight: Pair,
+    ) {
+        let inv2 = Pair::splat(1.0).div(r.dot(r));
+        let nr = n.dot(r);
+        let w4 = weight * (inv2 * inv2);
+        self.q0 = self.q0 + w4 * nr;
+        if GRADIENT {
+            self.s4 = self.s4 + w4;
+            let w6 = w4 * inv2;
+            let w6nr = w6 * nr;
+            self.u6 = self.u6 + r.scale(w6nr);
+            if HESSIAN {
+                self.v6 = self.v6 + r.scale(w6);
+                self.s6 = self.s6 + w6nr;
+                let w8 = w6nr * inv2;
+                let (wx, wy, wz) = (w8 * r.x, w8 * r.y, w8 * r.z);
+                let s = &mut self.second;
+                s[0] = s[0] + wx * r.x;
+                s[1] = s[1] + wy * r.y;
+                s[2] = s[2] + wz * r.z;
+                s[3] = s[3] + wx * r.y;
+                s[4] = s[4] + wx * r.z;
+                s[5] = s[5] + wy * r.z;
+            }
+        }
+    }
+
+    /// The sums over both lanes.
+    #[inline(always)]
+    pub(super) fn total(&self) -> RuleSums {
+        let sum = |p: Pair| p.get(0) + p.get(1);
+        let sum3 = |v: V3<Pair>| DVec3::new(sum(v.x), sum(v.y), sum(v.z));
+        RuleSums {
+            q0: sum(self.q0),
+            s4: sum(self.s4),
+            u6: sum3(self.u6),
+            v6: sum3(self.v6),
+            s6: sum(self.s6),
+            second: self.second.map(sum),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::tensor_rule;
+    use super::super::rules;
+    use super::*;
+    use crate::kernels::test_rng::lcg;
+    use crate::{Deriv3, Order};
+
+    fn paired(
+        piece: &PieceFrame,
+        n: DVec3,
+        order: Order,
+        geometry: (DVec3, f64),
+        along: (f64, f64, &[(f64, f64)]),
+        t_rule: &[(f64, f64)],
+    ) -> Deriv3 {
+        let mut sums = LaneSums::new();
+        let n2 = V3::splat(n);
+        match order {
+            Order::Value => sums.add::<false, false>(piece, &n2, along, t_rule),
+            Order::Gradient => sums.add::<true, false>(piece, &n2, along, t_rule),
+            Order::Hessian => sums.add::<true, true>(piece, &n2, along, t_rule),
+        }
+        sums.total().assemble(n, geometry, order)
+    }
+
+    /// The paired sums agree with the scalar tensor rule (`polygon::tensor_rule`, one node at a
+    /// time, the piece's share on its geometry instead of its weights) to rounding, for every
+    /// rule along (odd ones pair their last node with a zero weight) and across, on sub-intervals,
+    /// at every order; and the value is the same, bit for bit, at every order.
+    #[test]
+    fn paired_sums_match_the_scalar_tensor_rule() {
+        let mut state = 1819;
+        let mut compared = 0;
+        for k in 0..600 {
+            let mut c = || lcg(&mut state);
+            let r_p = DVec3::new(c() - 0.5, c() - 0.5, c() + 0.2);
+            let ab = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5);
+            let bc = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5) * 10f64.powf(-6.0 * c());
+            let n = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize();
+            let part = c();
+            let geometry = (ab.cross(bc), ab.cross(bc).dot(r_p));
+            let scaled = (geometry.0 * part, geometry.1 * part);
+            let (s0, s1) = if k % 3 == 0 {
+                (0.0, 1.0)
+            } else {
+                let (p, q) = (c(), c());
+                (p.min(q), p.max(q))
+            };
+            let s_rule = rules().by_points[8 + k % 9];
+            let t_rule = rules().by_points[[2, 3, 4, 8][k % 4]];
+            let frame = PieceFrame { r_p, ab, bc, part };
+            let along = (s0, s1, s_rule);
+            let mut value = None;
+            for order in [Order::Value, Order::Gradient, Order::Hessian] {
+                let d = paired(&frame, n, order, geometry, along, t_rule);
+                let r = tensor_rule(r_p, ab, bc, n, order, scaled, along, t_rule);
+                let max = |m: glam::DMat3| {
+                    m.to_cols_array()
+                        .iter()
+                        .fold(0.0, |a: f64, v| a.max(v.abs()))
+                };
+                assert!(
+                    (d.value - r.value).abs() <= 1e-14 * r.value.abs(),
+                    "{k} {order:?}: {} {}",
+                    d.value,
+                    r.value
+                );
+                let g = r.gradient.abs().max_element();
+                assert!((d.gradient - r.gradient).abs().max_element() <= 1e-14 * g);
+                assert!(max(d.hessian - r.hessian) <= 1e-14 * max(r.hessian));
+                let v = *value.get_or_insert(d.value);
+                assert_eq!(v.to_bits(), d.value.to_bits(), "{k} {order:?}");
+                compared += 1;
+            }
+        }
+        assert_eq!(compared, 1800);
+    }
+}
