@@ -47,6 +47,7 @@ use glam::DVec3;
 
 use super::dd::{two_sum, Dd, Dd3};
 use super::lambert::{self, FAST_TOLERANCE, INV_2PI};
+use super::polygon::{self, RouteLoop};
 
 const U: f64 = 0.5 * f64::EPSILON;
 
@@ -158,12 +159,41 @@ fn cut(x: DVec3, n: DVec3, v: &[DVec3; 3]) -> Option<Cut> {
     })
 }
 
+/// Whether `route` lists the same loop as `cut` would build: the kept vertices and the clip
+/// points in the same order (for `i` in 0..3: vertex `i` when kept, then the crossing of edge
+/// `i`). The route clips on exact heights, which have the signs `cut` certified, so it always
+/// does; checked (a few comparisons) rather than assumed.
+#[inline(always)]
+fn same_loop(route: &RouteLoop, cut: &Cut) -> bool {
+    let mut k = 0;
+    for i in 0..3 {
+        let j = (i + 1) % 3;
+        if cut.above[i] {
+            if k >= route.count() || route.is_clip_point(k) {
+                return false;
+            }
+            debug_assert_eq!(route.point(k).0, cut.r[i]);
+            k += 1;
+        }
+        if cut.above[i] != cut.above[j] {
+            if k >= route.count() || !route.is_clip_point(k) {
+                return false;
+            }
+            k += 1;
+        }
+    }
+    k == route.count()
+}
+
 /// The clipped loop (module documentation): its vertices (the first `count`: kept triangle
 /// vertices and clip points, in the triangle's order) and edge vectors, without angles or sum
-/// (NaN and 0). Built in place by the caller (inlined): the loop is ~560 bytes, whose copies
+/// (NaN and 0). With `route` (the value order's route's loop for the same configuration, see
+/// [`with_valued_derivative_loop`]) the points are the route's (the clip points in
+/// double-double) instead of this loop's own; their displacement bounds stay those of this
+/// loop's f64 `t`. Built in place by the caller (inlined): the loop is ~560 bytes, whose copies
 /// cost ~60 instructions each.
 #[inline(always)]
-fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ClippedLoop {
+fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut, route: Option<&RouteLoop>) -> ClippedLoop {
     let Cut {
         r,
         heights,
@@ -171,7 +201,17 @@ fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ClippedLoop {
         above,
         ..
     } = cut;
-    let exact: [Dd3; 3] = std::array::from_fn(|k| from_parts(r[k], difference_error(v[k], x)));
+    let route = route.filter(|route| same_loop(route, cut));
+    // The route's points are these differences' double-double parts already.
+    let exact: [Dd3; 3] = match route {
+        Some(_) => [from_parts(DVec3::ZERO, DVec3::ZERO); 3],
+        None => std::array::from_fn(|k| from_parts(r[k], difference_error(v[k], x))),
+    };
+    let from_route = |route: &RouteLoop, k: usize| {
+        let (hi, lo) = route.point(k);
+        // Already normalized: `hi` is the rounding of `hi + lo`.
+        (from_parts(hi, lo), hi)
+    };
     let mut points = [LoopVertex {
         exact: exact[0],
         hi: r[0],
@@ -183,7 +223,10 @@ fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ClippedLoop {
         let j = (i + 1) % 3;
         if above[i] {
             points[count] = LoopVertex {
-                exact: exact[i],
+                exact: match route {
+                    Some(route) => from_route(route, count).0,
+                    None => exact[i],
+                },
                 hi: r[i],
                 vertex: Some(i),
                 displacement: 0.0,
@@ -197,11 +240,17 @@ fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ClippedLoop {
             // and the division, with a 2x margin for the bound's own rounding.
             let (gi, gj) = (0.5 * height_error[i], 0.5 * height_error[j]);
             let dt = 2.0 * ((gi * (1.0 + t) + gj * t) / total.abs() + 2.0 * U * t);
-            let point = exact[i].add(&exact[j].sub(&exact[i]).scale(Dd { hi: t, lo: 0.0 }));
+            let (point, hi) = match route {
+                Some(route) => from_route(route, count),
+                None => {
+                    let p = exact[i].add(&exact[j].sub(&exact[i]).scale(Dd { hi: t, lo: 0.0 }));
+                    (p, p.to_dvec3())
+                }
+            };
             let edge = (v[j] - v[i]).length();
             points[count] = LoopVertex {
                 exact: point,
-                hi: point.to_dvec3(),
+                hi,
                 vertex: None,
                 displacement: 1.01 * dt * edge,
             };
@@ -312,6 +361,8 @@ impl Screen {
 /// `sum` is only the orientation, `±1`: the sign of the certified sum, `sign(N·r_0)` for the
 /// triangle's normal `N = (v_1 − v_0) × (v_2 − v_0)`; `None` when that sign is uncertain (`x`
 /// within rounding of the triangle's plane) or where [`triangle_value`]'s loop is not built.
+/// Where the certified loop is not tried its clip points are the value order's route's when that
+/// answers, as in [`with_valued_derivative_loop`].
 #[cfg(test)]
 pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
     let cut = cut(x, n, &v)?;
@@ -319,7 +370,10 @@ pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clip
     if !screen.uncertified() {
         return None;
     }
-    let mut l = build_loop(x, &v, &cut);
+    let mut route = RouteLoop::new();
+    let routed = screen.left_to_the_robust_path()
+        && polygon::near_plane_triangle_value_and_loop(x, n, v, &mut route).is_some();
+    let mut l = build_loop(x, &v, &cut, routed.then_some(&route));
     l.sum = screen.side.signum();
     Some(l)
 }
@@ -331,21 +385,56 @@ pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clippe
     if left_to_the_robust_path(&v, &cut.r) {
         return None;
     }
-    let mut l = build_loop(x, &v, &cut);
+    let mut l = build_loop(x, &v, &cut, None);
     l.sum = certify(&mut l)?;
     Some(l)
 }
 
-/// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
-/// [`certified_loop`] when it certifies (`f(loop, true)`), else the [`uncertified_loop`]
-/// (`f(loop, false)`), both from one cut and one built loop (the lists of points and edges are
-/// the same); `None` where neither is built.
-#[inline(always)]
+/// [`with_valued_derivative_loop`] telling `f` only whether the loop is certified.
+#[cfg(test)]
 pub(super) fn with_derivative_loop<R>(
     x: DVec3,
     n: DVec3,
     v: [DVec3; 3],
     f: impl FnOnce(&ClippedLoop, bool) -> R,
+) -> Option<R> {
+    with_valued_derivative_loop(x, n, v, |l, value| f(l, value == LoopValue::Certified))
+}
+
+/// Where the derivative orders' loop ([`with_valued_derivative_loop`]) takes its value from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum LoopValue {
+    /// The certified loop: [`ClippedLoop::value`].
+    Certified,
+    /// The uncertified loop on the clip points of the value order's near-plane route
+    /// ([`polygon::near_plane_triangle_value_and_loop`]), with that route's value: the value
+    /// order's bits.
+    Route(f64),
+    /// The uncertified loop, its value to be taken from the value order's paths; `route_tried`
+    /// when the near-plane route was tried here and declined (the caller need not try it again).
+    Elsewhere { route_tried: bool },
+}
+
+/// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
+/// [`certified_loop`] when it certifies (`f(loop, Certified)`), else the [`uncertified_loop`],
+/// both from one cut and one built loop (the lists of points and edges are the same); `None`
+/// where neither is built.
+///
+/// Outside the triangle near its plane (the certificate is not tried: Lambert's sum cancels)
+/// the value is the value order's near-plane route's, which clips the triangle in double-double
+/// too: the route runs first and the loop takes its clip points (`f(loop, Route(value))`)
+/// instead of clipping a second time. Its points are on the triangle's edge lines and at the
+/// exact crossings to ~u² (double-double `t` and point), so within the displacement bound each
+/// point carries (that of this loop's own f64 `t`, kept so that the derivatives' accept and
+/// decline tests are computed the same way); [`lambert_clipped_derivs`](super::lambert_clipped_derivs)'
+/// accuracy argument needs only that bound and the points on the edge lines to O(u). Where the
+/// route declines, the loop's own points (`f(loop, Elsewhere { route_tried: true })`).
+#[inline(always)]
+pub(super) fn with_valued_derivative_loop<R>(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
 ) -> Option<R> {
     let cut = cut(x, n, &v)?;
     let screen = screen(&v, &cut.r);
@@ -355,17 +444,29 @@ pub(super) fn with_derivative_loop<R>(
     if !try_certified && !uncertified {
         return None;
     }
-    let mut l = build_loop(x, &v, &cut);
-    let certified = try_certified && certify(&mut l).map(|sum| l.sum = sum).is_some();
-    if !certified {
-        if !uncertified {
-            return None;
-        }
-        // A declined certificate may have set some angles.
-        l.angles = [f64::NAN; 4];
+    if !try_certified {
+        let mut route = RouteLoop::new();
+        let value = polygon::near_plane_triangle_value_and_loop(x, n, v, &mut route);
+        let mut l = build_loop(x, &v, &cut, value.is_some().then_some(&route));
         l.sum = screen.side.signum();
+        let value = match value {
+            Some(value) => LoopValue::Route(value),
+            None => LoopValue::Elsewhere { route_tried: true },
+        };
+        return Some(f(&l, value));
     }
-    Some(f(&l, certified))
+    let mut l = build_loop(x, &v, &cut, None);
+    if let Some(sum) = certify(&mut l) {
+        l.sum = sum;
+        return Some(f(&l, LoopValue::Certified));
+    }
+    if !uncertified {
+        return None;
+    }
+    // A declined certificate may have set some angles.
+    l.angles = [f64::NAN; 4];
+    l.sum = screen.side.signum();
+    Some(f(&l, LoopValue::Elsewhere { route_tried: false }))
 }
 
 /// The certified signed sum (times `2π`) over the loop, setting its ordinary edges' angles;

@@ -135,12 +135,89 @@ unsafe fn split_fma(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
 /// The exact height, the clip, the remaining decisions and the split itself.
 #[inline(always)]
 fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
+    let mut loop_ = [CLIP_VERTEX_ZERO; 4];
+    split_loop(x, v, s, &mut loop_).map(|(value, _)| value)
+}
+
+const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
+    u: DVec3::ZERO,
+    r: DVec3::ZERO,
+    r_lo: DVec3::ZERO,
+    on_line: false,
+};
+
+/// The clipped loop [`triangle_value_and_loop`] computed its value on, for the derivative
+/// orders, which use the same clip points instead of clipping a second time: the first
+/// [`count`](RouteLoop::count) points, for `i` in 0..3 vertex `i` when it is kept, then the
+/// crossing of edge `i → i + 1` when there is one. Filled in place by the caller's frame (a
+/// returned loop was copied, ~60 instructions).
+pub(crate) struct RouteLoop {
+    points: [ClipVertex; 4],
+    count: usize,
+}
+
+impl RouteLoop {
+    #[inline(always)]
+    pub(crate) fn new() -> RouteLoop {
+        RouteLoop {
+            points: [CLIP_VERTEX_ZERO; 4],
+            count: 0,
+        }
+    }
+
+    /// The number of points.
+    #[inline(always)]
+    pub(crate) fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Point `k` relative to `x`: `(r, r_lo)` with `r + r_lo` exact and `r` its rounding (for a
+    /// clip point, the double-double clip point: on the triangle's edge line and at the exact
+    /// crossing of the tangent plane to ~u² relative).
+    #[inline(always)]
+    pub(crate) fn point(&self, k: usize) -> (DVec3, DVec3) {
+        (self.points[k].r, self.points[k].r_lo)
+    }
+
+    /// Whether point `k` is a clip point.
+    #[inline(always)]
+    pub(crate) fn is_clip_point(&self, k: usize) -> bool {
+        self.points[k].on_line
+    }
+}
+
+/// [`triangle_value`] with the clipped loop it computed the value on, written to `out`: the
+/// same decisions and operations, so the same value bits and `None` exactly where it declines
+/// (then `out` is unspecified). Inlined into the caller (the derivative orders' clipped path,
+/// itself compiled twice, portable and with FMA, which give the same bits as [`split_fma`]
+/// explains).
+#[inline(always)]
+pub(crate) fn triangle_value_and_loop(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    out: &mut RouteLoop,
+) -> Option<f64> {
+    let s = screen(x, n, v)?;
+    let (value, count) = split_loop(x, v, &s, &mut out.points)?;
+    out.count = count;
+    Some(value)
+}
+
+/// [`split`] with the loop it clipped (in `loop_`) and its length.
+#[inline(always)]
+fn split_loop(
+    x: DVec3,
+    v: [DVec3; 3],
+    s: &Screened,
+    loop_: &mut [ClipVertex; 4],
+) -> Option<(f64, usize)> {
     let Screened { r, u, n, plane } = s;
     let (r, u, n) = (*r, *u, *n);
     let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
     let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
     let h_p = exact_height_of(&r, &r_lo, plane.twice_area);
-    let (loop_, count) = clip_triangle(&u, &r, &r_lo, n)?;
+    let count = clip_triangle(&u, &r, &r_lo, n, loop_)?;
     let verts = &loop_[..count];
     let centroid = verts.iter().map(|v| v.r).sum::<DVec3>() / count as f64;
     let radius = verts
@@ -173,19 +250,20 @@ fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
     // The edge sum's sign convention, then the clamp of the visible part's value.
     let value = if h_p < 0.0 { -value } else { value };
     let value = value.clamp(0.0, 1.0);
-    value.is_finite().then_some(value)
+    value.is_finite().then_some((value, count))
 }
 
 /// [`clip`](super::clip) for a triangle, on a fixed array (the same operations, so the same
-/// vertices): the loop and its length, `None` when nothing is cut away or fewer than three
-/// vertices remain.
+/// vertices): the loop in `out` and its length, `None` when nothing is cut away or fewer than
+/// three vertices remain.
 #[inline(always)]
 fn clip_triangle(
     u: &[DVec3; 3],
     r: &[DVec3; 3],
     r_lo: &[DVec3; 3],
     n: DVec3,
-) -> Option<([ClipVertex; 4], usize)> {
+    out: &mut [ClipVertex; 4],
+) -> Option<usize> {
     let exact = [
         Dd3::from_parts(r[0], r_lo[0]),
         Dd3::from_parts(r[1], r_lo[1]),
@@ -197,12 +275,6 @@ fn clip_triangle(
         exact[1].dot_f64(n),
         exact[2].dot_f64(n),
     ];
-    let mut out = [ClipVertex {
-        u: DVec3::ZERO,
-        r: DVec3::ZERO,
-        r_lo: DVec3::ZERO,
-        on_line: false,
-    }; 4];
     let (mut count, mut cut) = (0, false);
     for i in 0..3 {
         let j = next(i, 3);
@@ -231,7 +303,7 @@ fn clip_triangle(
             count += 1;
         }
     }
-    (cut && count >= 3).then_some((out, count))
+    (cut && count >= 3).then_some(count)
 }
 
 /// The parts of [`EdgeFrame::with_exact_ends`](crate::kernels::form_factor::EdgeFrame) that
