@@ -261,7 +261,11 @@ fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut, route: Option<&RouteLoop>) ->
         n: cut.n,
         points,
         edges: loop_edges(v, &points, count),
-        angles: [f64::NAN; 4],
+        // The route's angles are those of the same edges (the same ends, to their rounding).
+        angles: match route {
+            Some(route) => route.angles(),
+            None => [f64::NAN; 4],
+        },
         count,
         sum: 0.0,
     }
@@ -445,15 +449,13 @@ pub(super) fn with_valued_derivative_loop<R>(
         return None;
     }
     if !try_certified {
-        let mut route = RouteLoop::new();
-        let value = polygon::near_plane_triangle_value_and_loop(x, n, v, &mut route);
-        let mut l = build_loop(x, &v, &cut, value.is_some().then_some(&route));
-        l.sum = screen.side.signum();
-        let value = match value {
-            Some(value) => LoopValue::Route(value),
-            None => LoopValue::Elsewhere { route_tried: true },
-        };
-        return Some(f(&l, value));
+        let side = screen.side.signum();
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::avx2_fma() {
+            // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
+            return Some(unsafe { routed_loop_fma(x, n, v, &cut, side, f) });
+        }
+        return Some(routed_loop(x, n, v, &cut, side, f));
     }
     let mut l = build_loop(x, &v, &cut, None);
     if let Some(sum) = certify(&mut l) {
@@ -467,6 +469,57 @@ pub(super) fn with_valued_derivative_loop<R>(
     l.angles = [f64::NAN; 4];
     l.sum = screen.side.signum();
     Some(f(&l, LoopValue::Elsewhere { route_tried: false }))
+}
+
+/// [`with_valued_derivative_loop`] outside the triangle: the value order's near-plane route,
+/// then the loop on its clip points (or on the loop's own where it declines), oriented by
+/// `side`. Out of line, in a portable and an FMA build (the route's double-double products; the
+/// same bits, see [`polygon::near_plane_triangle_value`]): inlined, its frame and registers
+/// cost the certified loop's callers ~90 instructions.
+#[inline(always)]
+fn routed_loop_body<R>(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    cut: &Cut,
+    side: f64,
+    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+) -> R {
+    let mut route = RouteLoop::new();
+    let value = polygon::near_plane_triangle_value_and_loop(x, n, v, &mut route);
+    let mut l = build_loop(x, &v, cut, value.is_some().then_some(&route));
+    l.sum = side;
+    let value = match value {
+        Some(value) => LoopValue::Route(value),
+        None => LoopValue::Elsewhere { route_tried: true },
+    };
+    f(&l, value)
+}
+
+#[inline(never)]
+fn routed_loop<R>(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    cut: &Cut,
+    side: f64,
+    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+) -> R {
+    routed_loop_body(x, n, v, cut, side, f)
+}
+
+/// [`routed_loop`] compiled with FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn routed_loop_fma<R>(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    cut: &Cut,
+    side: f64,
+    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+) -> R {
+    routed_loop_body(x, n, v, cut, side, f)
 }
 
 /// The certified signed sum (times `2π`) over the loop, setting its ordinary edges' angles;

@@ -837,6 +837,11 @@ impl From<EdgeFrame> for InPlaneEdge {
 /// when not applicable: an edge not in the tangent plane has `|h_P| ≥ 0.1 |d_e|` (x near its line
 /// in the plane, which includes x near a clip vertex), a term is undefined, or the parts sum to
 /// less than `1/max_cancellation` of their magnitudes.
+///
+/// `angles[i]`, where `angles` has an entry `i`, receives the angle edge `i` subtends at x
+/// (`atan(s_b/H) − atan(s_a/H)`, Lambert's `β`, in `[0, π]`, to a few ulps) for the edges off
+/// the tangent plane that reach the sum (entries of other edges are left alone): the clipped
+/// loop's derivatives (`lambert_clipped_derivs`) reuse them instead of an `atan2` each.
 #[inline]
 fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     verts: &[ClipVertex],
@@ -845,6 +850,7 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     plane_n: DVec3,
     h_p: f64,
     max_cancellation: f64,
+    angles: &mut [f64],
 ) -> Option<(f64, f64)> {
     let count = verts.len();
     let h2 = h_p * h_p;
@@ -923,6 +929,9 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
         // deficit.
         let nu_t = h_p * n_t.dot(plane_n.cross(frame.e_hat));
         let t = nu_t * deficit.spread / deficit.big_h;
+        if let Some(angle) = angles.get_mut(i) {
+            *angle = deficit.spread;
+        }
         transverse += t;
         magnitude += t.abs();
     }
@@ -1594,7 +1603,15 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         let grazing = !cut && nt2 < GRAZING_NT2;
         let mut split = if near_plane && (cut || grazing) && !foot_inside(verts, plane.normal, h_p)
         {
-            near_plane_value(verts, &frames, n, plane.normal, h_p, SPLIT_VALUE_LIMIT)
+            near_plane_value(
+                verts,
+                &frames,
+                n,
+                plane.normal,
+                h_p,
+                SPLIT_VALUE_LIMIT,
+                &mut [],
+            )
         } else {
             None
         };
@@ -1668,6 +1685,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                                 plane.normal,
                                 h_p,
                                 f64::INFINITY,
+                                &mut [],
                             );
                         }
                         if let Some((v, _)) = split {

@@ -136,7 +136,7 @@ unsafe fn split_fma(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
 #[inline(always)]
 fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
     let mut loop_ = [CLIP_VERTEX_ZERO; 4];
-    split_loop(x, v, s, &mut loop_).map(|(value, _)| value)
+    split_loop(x, v, s, &mut loop_, &mut []).map(|(value, _)| value)
 }
 
 const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
@@ -153,6 +153,7 @@ const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
 /// returned loop was copied, ~60 instructions).
 pub(crate) struct RouteLoop {
     points: [ClipVertex; 4],
+    angles: [f64; 4],
     count: usize,
 }
 
@@ -161,8 +162,16 @@ impl RouteLoop {
     pub(crate) fn new() -> RouteLoop {
         RouteLoop {
             points: [CLIP_VERTEX_ZERO; 4],
+            angles: [f64::NAN; 4],
             count: 0,
         }
+    }
+
+    /// The angle `β` the edge from point `k` to the next subtends at x where the split computed
+    /// it (the edges off the tangent plane, see `near_plane_value`), NaN otherwise.
+    #[inline(always)]
+    pub(crate) fn angles(&self) -> [f64; 4] {
+        self.angles
     }
 
     /// The number of points.
@@ -199,18 +208,20 @@ pub(crate) fn triangle_value_and_loop(
     out: &mut RouteLoop,
 ) -> Option<f64> {
     let s = screen(x, n, v)?;
-    let (value, count) = split_loop(x, v, &s, &mut out.points)?;
+    let (value, count) = split_loop(x, v, &s, &mut out.points, &mut out.angles)?;
     out.count = count;
     Some(value)
 }
 
-/// [`split`] with the loop it clipped (in `loop_`) and its length.
+/// [`split`] with the loop it clipped (in `loop_`) and its length, and its edges' angles in
+/// `angles` where that has entries (see `near_plane_value`).
 #[inline(always)]
 fn split_loop(
     x: DVec3,
     v: [DVec3; 3],
     s: &Screened,
     loop_: &mut [ClipVertex; 4],
+    angles: &mut [f64],
 ) -> Option<(f64, usize)> {
     let Screened { r, u, n, plane } = s;
     let (r, u, n) = (*r, *u, *n);
@@ -245,6 +256,7 @@ fn split_loop(
         plane.normal,
         h_p,
         SPLIT_VALUE_LIMIT,
+        angles,
     )?
     .0;
     // The edge sum's sign convention, then the clamp of the visible part's value.
@@ -548,6 +560,15 @@ mod tests {
         }
         let mut frames = Frames::new();
         edge_frames(&loop_, true, &mut frames);
-        near_plane_value(&loop_, &frames, n, plane.normal, h_p, SPLIT_VALUE_LIMIT).is_some()
+        near_plane_value(
+            &loop_,
+            &frames,
+            n,
+            plane.normal,
+            h_p,
+            SPLIT_VALUE_LIMIT,
+            &mut [],
+        )
+        .is_some()
     }
 }
