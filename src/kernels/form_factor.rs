@@ -234,26 +234,32 @@ unsafe fn clipped_derivs_fma(
 
 #[inline(always)]
 fn clipped_derivs_with(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<ClippedDerivs> {
-    lambert_clipped::with_valued_derivative_loop(x, n, v, |l, value| match value {
-        LoopValue::Certified => {
-            let value = l.value();
-            match lambert_clipped_derivs::loop_derivs(l, value, order) {
+    lambert_clipped::with_valued_derivative_loop(
+        x,
+        n,
+        v,
+        #[inline(always)]
+        |l, value| match value {
+            LoopValue::Certified => {
+                let value = l.value();
+                match lambert_clipped_derivs::loop_derivs(l, value, order) {
+                    Some(d) => ClippedDerivs::Done(d),
+                    None => ClippedDerivs::Declined(Some(value)),
+                }
+            }
+            // The value order's own value (its near-plane route's bits).
+            LoopValue::Route(value) => match lambert_clipped_derivs::loop_derivs(l, value, order) {
                 Some(d) => ClippedDerivs::Done(d),
-                None => ClippedDerivs::Declined(Some(value)),
-            }
-        }
-        // The value order's own value (its near-plane route's bits).
-        LoopValue::Route(value) => match lambert_clipped_derivs::loop_derivs(l, value, order) {
-            Some(d) => ClippedDerivs::Done(d),
-            None => ClippedDerivs::Declined(None),
-        },
-        LoopValue::Elsewhere { route_tried } => {
-            match lambert_clipped_derivs::loop_derivs(l, 0.0, order) {
-                Some(d) => ClippedDerivs::ValueElsewhere(d, route_tried),
                 None => ClippedDerivs::Declined(None),
+            },
+            LoopValue::Elsewhere { route_tried } => {
+                match lambert_clipped_derivs::loop_derivs(l, 0.0, order) {
+                    Some(d) => ClippedDerivs::ValueElsewhere(d, route_tried),
+                    None => ClippedDerivs::Declined(None),
+                }
             }
-        }
-    })
+        },
+    )
 }
 
 /// What the derivative orders take from the clipped loop.

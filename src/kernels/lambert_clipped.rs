@@ -105,7 +105,7 @@ fn difference_error(v: DVec3, x: DVec3) -> DVec3 {
 // the value order's other paths ~40 instructions; returned by value, its copy ~60.
 #[inline(never)]
 pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
-    Some(certified_loop(x, n, v)?.value())
+    with_certified_loop(x, n, v, ClippedLoop::value)
 }
 
 impl ClippedLoop {
@@ -190,10 +190,16 @@ fn same_loop(route: &RouteLoop, cut: &Cut) -> bool {
 /// (NaN and 0). With `route` (the value order's route's loop for the same configuration, see
 /// [`with_valued_derivative_loop`]) the points are the route's (the clip points in
 /// double-double) instead of this loop's own; their displacement bounds stay those of this
-/// loop's f64 `t`. Built in place by the caller (inlined): the loop is ~560 bytes, whose copies
-/// cost ~60 instructions each.
+/// loop's f64 `t`. Handed to `f` in place: the loop is ~560 bytes, whose copies cost ~60-90
+/// instructions each (a returned loop was copied).
 #[inline(always)]
-fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut, route: Option<&RouteLoop>) -> ClippedLoop {
+fn with_loop<R>(
+    x: DVec3,
+    v: &[DVec3; 3],
+    cut: &Cut,
+    route: Option<&RouteLoop>,
+    f: impl FnOnce(&mut ClippedLoop) -> R,
+) -> R {
     let Cut {
         r,
         heights,
@@ -205,24 +211,41 @@ fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut, route: Option<&RouteLoop>) ->
     // The route's points are these differences' double-double parts already.
     let exact: [Dd3; 3] = match route {
         Some(_) => [from_parts(DVec3::ZERO, DVec3::ZERO); 3],
-        None => std::array::from_fn(|k| from_parts(r[k], difference_error(v[k], x))),
+        // Written out: `from_fn` was left out of line (~70 instructions).
+        None => {
+            let exact = |k: usize| from_parts(r[k], difference_error(v[k], x));
+            [exact(0), exact(1), exact(2)]
+        }
     };
     let from_route = |route: &RouteLoop, k: usize| {
         let (hi, lo) = route.point(k);
         // Already normalized: `hi` is the rounding of `hi + lo`.
         (from_parts(hi, lo), hi)
     };
-    let mut points = [LoopVertex {
-        exact: exact[0],
-        hi: r[0],
-        vertex: Some(0),
-        displacement: 0.0,
-    }; 4];
+    // Filled in place (returned into the caller's frame): a local array moved into the loop
+    // was copied (~60 instructions).
+    let mut l = ClippedLoop {
+        n: cut.n,
+        points: [LoopVertex {
+            exact: exact[0],
+            hi: r[0],
+            vertex: Some(0),
+            displacement: 0.0,
+        }; 4],
+        edges: [DVec3::ZERO; 4],
+        // The route's angles are those of the same edges (the same ends, to their rounding).
+        angles: match route {
+            Some(route) => route.angles(),
+            None => [f64::NAN; 4],
+        },
+        count: 0,
+        sum: 0.0,
+    };
     let mut count = 0;
     for i in 0..3 {
         let j = (i + 1) % 3;
         if above[i] {
-            points[count] = LoopVertex {
+            l.points[count] = LoopVertex {
                 exact: match route {
                     Some(route) => from_route(route, count).0,
                     None => exact[i],
@@ -248,7 +271,7 @@ fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut, route: Option<&RouteLoop>) ->
                 }
             };
             let edge = (v[j] - v[i]).length();
-            points[count] = LoopVertex {
+            l.points[count] = LoopVertex {
                 exact: point,
                 hi,
                 vertex: None,
@@ -257,18 +280,18 @@ fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut, route: Option<&RouteLoop>) ->
             count += 1;
         }
     }
-    ClippedLoop {
-        n: cut.n,
-        points,
-        edges: loop_edges(v, &points, count),
-        // The route's angles are those of the same edges (the same ends, to their rounding).
-        angles: match route {
-            Some(route) => route.angles(),
-            None => [f64::NAN; 4],
-        },
-        count,
-        sum: 0.0,
+    l.count = count;
+    for k in 0..count {
+        let next = if k + 1 == count { 0 } else { k + 1 };
+        let (a, b) = (&l.points[k], &l.points[next]);
+        l.edges[k] = match route {
+            // The route's vector of an edge from a vertex to a clip point (or back) is this
+            // one's: the same rounding of the same double-double difference.
+            Some(route) if a.vertex.is_some() != b.vertex.is_some() => route.edge(k),
+            _ => edge_vector(v, a, b),
+        };
     }
+    f(&mut l)
 }
 
 /// The loop's edge vector from `a` to `b`: one rounding of the exact difference of its ends.
@@ -278,17 +301,6 @@ fn edge_vector(v: &[DVec3; 3], a: &LoopVertex, b: &LoopVertex) -> DVec3 {
         (Some(i), Some(j)) => v[j] - v[i],
         _ => b.exact.sub(&a.exact).to_dvec3(),
     }
-}
-
-/// The loop's edge vectors (the first `count`), `edges[k]` from vertex `k` to the next.
-#[inline(always)]
-fn loop_edges(v: &[DVec3; 3], points: &[LoopVertex; 4], count: usize) -> [DVec3; 4] {
-    let mut edges = [DVec3::ZERO; 4];
-    for k in 0..count {
-        let next = if k + 1 == count { 0 } else { k + 1 };
-        edges[k] = edge_vector(v, &points[k], &points[next]);
-    }
-    edges
 }
 
 /// What decides, before the loop is built, which loop the configuration gets: the triangle's
@@ -377,21 +389,41 @@ pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clip
     let mut route = RouteLoop::new();
     let routed = screen.left_to_the_robust_path()
         && polygon::near_plane_triangle_value_and_loop(x, n, v, &mut route).is_some();
-    let mut l = build_loop(x, &v, &cut, routed.then_some(&route));
-    l.sum = screen.side.signum();
-    Some(l)
+    Some(with_loop(x, &v, &cut, routed.then_some(&route), |l| {
+        l.sum = screen.side.signum();
+        l.clone()
+    }))
 }
 
 /// [`triangle_value`]'s loop and signed sum (times `2π`) when it certifies the value.
-#[inline(always)]
+#[cfg(test)]
 pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
+    with_certified_loop(x, n, v, ClippedLoop::clone)
+}
+
+/// `f` of [`certified_loop`], in place.
+#[inline(always)]
+fn with_certified_loop<R>(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    f: impl FnOnce(&ClippedLoop) -> R,
+) -> Option<R> {
     let cut = cut(x, n, &v)?;
     if left_to_the_robust_path(&v, &cut.r) {
         return None;
     }
-    let mut l = build_loop(x, &v, &cut, None);
-    l.sum = certify(&mut l)?;
-    Some(l)
+    with_loop(
+        x,
+        &v,
+        &cut,
+        None,
+        #[inline(always)]
+        |l| {
+            l.sum = certify(l)?;
+            Some(f(l))
+        },
+    )
 }
 
 /// [`with_valued_derivative_loop`] telling `f` only whether the loop is certified.
@@ -457,18 +489,26 @@ pub(super) fn with_valued_derivative_loop<R>(
         }
         return Some(routed_loop(x, n, v, &cut, side, f));
     }
-    let mut l = build_loop(x, &v, &cut, None);
-    if let Some(sum) = certify(&mut l) {
-        l.sum = sum;
-        return Some(f(&l, LoopValue::Certified));
-    }
-    if !uncertified {
-        return None;
-    }
-    // A declined certificate may have set some angles.
-    l.angles = [f64::NAN; 4];
-    l.sum = screen.side.signum();
-    Some(f(&l, LoopValue::Elsewhere { route_tried: false }))
+    with_loop(
+        x,
+        &v,
+        &cut,
+        None,
+        #[inline(always)]
+        |l| {
+            if let Some(sum) = certify(l) {
+                l.sum = sum;
+                return Some(f(l, LoopValue::Certified));
+            }
+            if !uncertified {
+                return None;
+            }
+            // A declined certificate may have set some angles.
+            l.angles = [f64::NAN; 4];
+            l.sum = screen.side.signum();
+            Some(f(l, LoopValue::Elsewhere { route_tried: false }))
+        },
+    )
 }
 
 /// [`with_valued_derivative_loop`] outside the triangle: the value order's near-plane route,
@@ -487,13 +527,21 @@ fn routed_loop_body<R>(
 ) -> R {
     let mut route = RouteLoop::new();
     let value = polygon::near_plane_triangle_value_and_loop(x, n, v, &mut route);
-    let mut l = build_loop(x, &v, cut, value.is_some().then_some(&route));
-    l.sum = side;
-    let value = match value {
-        Some(value) => LoopValue::Route(value),
-        None => LoopValue::Elsewhere { route_tried: true },
-    };
-    f(&l, value)
+    with_loop(
+        x,
+        &v,
+        cut,
+        value.is_some().then_some(&route),
+        #[inline(always)]
+        |l| {
+            l.sum = side;
+            let value = match value {
+                Some(value) => LoopValue::Route(value),
+                None => LoopValue::Elsewhere { route_tried: true },
+            };
+            f(l, value)
+        },
+    )
 }
 
 #[inline(never)]

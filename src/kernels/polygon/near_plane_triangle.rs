@@ -136,7 +136,7 @@ unsafe fn split_fma(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
 #[inline(always)]
 fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
     let mut loop_ = [CLIP_VERTEX_ZERO; 4];
-    split_loop(x, v, s, &mut loop_, &mut []).map(|(value, _)| value)
+    split_loop(x, v, s, &mut loop_, &mut [], &mut []).map(|(value, _)| value)
 }
 
 const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
@@ -154,6 +154,7 @@ const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
 pub(crate) struct RouteLoop {
     points: [ClipVertex; 4],
     angles: [f64; 4],
+    edges: [DVec3; 4],
     count: usize,
 }
 
@@ -163,8 +164,16 @@ impl RouteLoop {
         RouteLoop {
             points: [CLIP_VERTEX_ZERO; 4],
             angles: [f64::NAN; 4],
+            edges: [DVec3::ZERO; 4],
             count: 0,
         }
+    }
+
+    /// The vector of the edge from point `k` to the next where one of its ends is a clip point
+    /// and the other not: one rounding of the exact difference of the ends (double-double).
+    #[inline(always)]
+    pub(crate) fn edge(&self, k: usize) -> DVec3 {
+        self.edges[k]
     }
 
     /// The angle `β` the edge from point `k` to the next subtends at x where the split computed
@@ -208,13 +217,14 @@ pub(crate) fn triangle_value_and_loop(
     out: &mut RouteLoop,
 ) -> Option<f64> {
     let s = screen(x, n, v)?;
-    let (value, count) = split_loop(x, v, &s, &mut out.points, &mut out.angles)?;
+    let (value, count) = split_loop(x, v, &s, &mut out.points, &mut out.angles, &mut out.edges)?;
     out.count = count;
     Some(value)
 }
 
-/// [`split`] with the loop it clipped (in `loop_`) and its length, and its edges' angles in
-/// `angles` where that has entries (see `near_plane_value`).
+/// [`split`] with the loop it clipped (in `loop_`) and its length, and, where `angles` and
+/// `edges` have entries, its edges' angles (see `near_plane_value`) and the vectors of its edges
+/// off the tangent plane.
 #[inline(always)]
 fn split_loop(
     x: DVec3,
@@ -222,11 +232,15 @@ fn split_loop(
     s: &Screened,
     loop_: &mut [ClipVertex; 4],
     angles: &mut [f64],
+    edges: &mut [DVec3],
 ) -> Option<(f64, usize)> {
     let Screened { r, u, n, plane } = s;
     let (r, u, n) = (*r, *u, *n);
     let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
-    let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
+    let r_lo_of = |vk: DVec3| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z));
+    // Written out: `v.map` was left out of line in the derivative orders' build (~70
+    // instructions).
+    let r_lo = [r_lo_of(v[0]), r_lo_of(v[1]), r_lo_of(v[2])];
     let h_p = exact_height_of(&r, &r_lo, plane.twice_area);
     let count = clip_triangle(&u, &r, &r_lo, n, loop_)?;
     let verts = &loop_[..count];
@@ -246,7 +260,11 @@ fn split_loop(
     for (i, frame) in frames[..count].iter_mut().enumerate() {
         let (a, b) = (&verts[i], &verts[next(i, count)]);
         if !(a.on_line && b.on_line) {
-            *frame = in_plane_edge(a, b);
+            let e = edge_vector(a, b);
+            if let Some(edge) = edges.get_mut(i) {
+                *edge = e;
+            }
+            *frame = in_plane_edge(a, b, e);
         }
     }
     let value = near_plane_value(
@@ -320,10 +338,10 @@ fn clip_triangle(
 
 /// The parts of [`EdgeFrame::with_exact_ends`](crate::kernels::form_factor::EdgeFrame) that
 /// [`near_plane_value`] reads, by the same operations (the double-double cross product and
-/// abscissae when x is near the edge's line); `None` for a zero-length edge.
+/// abscissae when x is near the edge's line), for its edge vector `e` (`edge_vector(a, b)`);
+/// `None` for a zero-length edge.
 #[inline(always)]
-fn in_plane_edge(a: &ClipVertex, b: &ClipVertex) -> Option<InPlaneEdge> {
-    let e = edge_vector(a, b);
+fn in_plane_edge(a: &ClipVertex, b: &ClipVertex, e: DVec3) -> Option<InPlaneEdge> {
     let len = e.length();
     if len == 0.0 {
         return None;
