@@ -214,7 +214,7 @@ fn clipped_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Cli
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
         return unsafe { clipped_derivs_fma(x, n, v, order) };
     }
-    clipped_derivs_with(x, n, v, order)
+    clipped_derivs_with(x, n, v, order, false)
 }
 
 /// [`clipped_derivs`] compiled with FMA, as `polygon::near_plane_triangle` does for the value:
@@ -229,15 +229,24 @@ unsafe fn clipped_derivs_fma(
     v: [DVec3; 3],
     order: Order,
 ) -> Option<ClippedDerivs> {
-    clipped_derivs_with(x, n, v, order)
+    clipped_derivs_with(x, n, v, order, true)
 }
 
+/// [`clipped_derivs`]' body; `fma` when the CPU has AVX2 and FMA, for the parts compiled out of
+/// line twice (see `lambert_clipped::with_valued_derivative_loop`).
 #[inline(always)]
-fn clipped_derivs_with(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<ClippedDerivs> {
+fn clipped_derivs_with(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    order: Order,
+    fma: bool,
+) -> Option<ClippedDerivs> {
     lambert_clipped::with_valued_derivative_loop(
         x,
         n,
         v,
+        fma,
         #[inline(always)]
         |l, value| match value {
             LoopValue::Certified => {
@@ -1003,7 +1012,7 @@ mod tests {
             let t = plane_n.any_orthonormal_vector();
             let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
             for order in [Order::Gradient, Order::Hessian] {
-                let portable = clipped_derivs_with(x, n, v, order);
+                let portable = clipped_derivs_with(x, n, v, order, false);
                 // SAFETY: checked above that the CPU has AVX2 and FMA.
                 let fused = unsafe { clipped_derivs_fma(x, n, v, order) };
                 assert_eq!(

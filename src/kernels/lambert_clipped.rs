@@ -73,6 +73,9 @@ pub(super) struct ClippedLoop {
     pub(super) points: [LoopVertex; 4],
     pub(super) edges: [DVec3; 4],
     pub(super) angles: [f64; 4],
+    /// The angles are the value order's near-plane split's (see
+    /// [`lambert::edge_derivatives`]), not `atan2(s, c)`'s bits.
+    pub(super) split_angles: bool,
     pub(super) count: usize,
     pub(super) sum: f64,
 }
@@ -238,6 +241,7 @@ fn with_loop<R>(
             Some(route) => route.angles(),
             None => [f64::NAN; 4],
         },
+        split_angles: route.is_some(),
         count: 0,
         sum: 0.0,
     };
@@ -388,7 +392,7 @@ pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clip
     }
     let mut route = RouteLoop::new();
     let routed = screen.left_to_the_robust_path()
-        && polygon::near_plane_triangle_value_and_loop(x, n, v, &mut route).is_some();
+        && polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route).is_some();
     Some(with_loop(x, &v, &cut, routed.then_some(&route), |l| {
         l.sum = screen.side.signum();
         l.clone()
@@ -434,7 +438,8 @@ pub(super) fn with_derivative_loop<R>(
     v: [DVec3; 3],
     f: impl FnOnce(&ClippedLoop, bool) -> R,
 ) -> Option<R> {
-    with_valued_derivative_loop(x, n, v, |l, value| f(l, value == LoopValue::Certified))
+    let fma = cfg!(target_arch = "x86_64") && crate::simd::avx2_fma();
+    with_valued_derivative_loop(x, n, v, fma, |l, value| f(l, value == LoopValue::Certified))
 }
 
 /// Where the derivative orders' loop ([`with_valued_derivative_loop`]) takes its value from.
@@ -443,7 +448,7 @@ pub(super) enum LoopValue {
     /// The certified loop: [`ClippedLoop::value`].
     Certified,
     /// The uncertified loop on the clip points of the value order's near-plane route
-    /// ([`polygon::near_plane_triangle_value_and_loop`]), with that route's value: the value
+    /// ([`polygon::near_plane_clipped_triangle_value_and_loop`]), with that route's value: the value
     /// order's bits.
     Route(f64),
     /// The uncertified loop, its value to be taken from the value order's paths; `route_tried`
@@ -454,7 +459,8 @@ pub(super) enum LoopValue {
 /// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
 /// [`certified_loop`] when it certifies (`f(loop, Certified)`), else the [`uncertified_loop`],
 /// both from one cut and one built loop (the lists of points and edges are the same); `None`
-/// where neither is built.
+/// where neither is built. `fma`: the CPU has AVX2 and FMA (checked by the caller), for the
+/// route's FMA build.
 ///
 /// Outside the triangle near its plane (the certificate is not tried: Lambert's sum cancels)
 /// the value is the value order's near-plane route's, which clips the triangle in double-double
@@ -470,6 +476,7 @@ pub(super) fn with_valued_derivative_loop<R>(
     x: DVec3,
     n: DVec3,
     v: [DVec3; 3],
+    fma: bool,
     f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
 ) -> Option<R> {
     let cut = cut(x, n, &v)?;
@@ -482,12 +489,13 @@ pub(super) fn with_valued_derivative_loop<R>(
     }
     if !try_certified {
         let side = screen.side.signum();
+        let _ = fma; // Read on x86-64 only.
         #[cfg(target_arch = "x86_64")]
-        if crate::simd::avx2_fma() {
-            // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
-            return Some(unsafe { routed_loop_fma(x, n, v, &cut, side, f) });
+        if fma {
+            // SAFETY: the caller checked that the CPU has AVX2 and FMA.
+            return Some(unsafe { routed_loop_fma(x, v, &cut, side, f) });
         }
-        return Some(routed_loop(x, n, v, &cut, side, f));
+        return Some(routed_loop(x, v, &cut, side, f));
     }
     with_loop(
         x,
@@ -519,14 +527,13 @@ pub(super) fn with_valued_derivative_loop<R>(
 #[inline(always)]
 fn routed_loop_body<R>(
     x: DVec3,
-    n: DVec3,
     v: [DVec3; 3],
     cut: &Cut,
     side: f64,
     f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
 ) -> R {
     let mut route = RouteLoop::new();
-    let value = polygon::near_plane_triangle_value_and_loop(x, n, v, &mut route);
+    let value = polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route);
     with_loop(
         x,
         &v,
@@ -547,13 +554,12 @@ fn routed_loop_body<R>(
 #[inline(never)]
 fn routed_loop<R>(
     x: DVec3,
-    n: DVec3,
     v: [DVec3; 3],
     cut: &Cut,
     side: f64,
     f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
 ) -> R {
-    routed_loop_body(x, n, v, cut, side, f)
+    routed_loop_body(x, v, cut, side, f)
 }
 
 /// [`routed_loop`] compiled with FMA.
@@ -561,13 +567,12 @@ fn routed_loop<R>(
 #[target_feature(enable = "avx2,fma")]
 unsafe fn routed_loop_fma<R>(
     x: DVec3,
-    n: DVec3,
     v: [DVec3; 3],
     cut: &Cut,
     side: f64,
     f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
 ) -> R {
-    routed_loop_body(x, n, v, cut, side, f)
+    routed_loop_body(x, v, cut, side, f)
 }
 
 /// The certified signed sum (times `2π`) over the loop, setting its ordinary edges' angles;
@@ -728,6 +733,117 @@ mod tests {
             "{certified} of {tried} certified"
         );
         println!("clipped, 1e-7 to 1e-5 sizes above, not near an edge, F > 0.05: {certified} of {tried} certified; worst {worst:e}");
+    }
+
+    /// Outside the triangle near its plane (the route's case, 1e-3 to 1e-12 sizes from the
+    /// plane): wherever the value order's route answers, its loop lists the points the cut's
+    /// own loop lists, in the same order (kept vertices to the bit), each route clip point is
+    /// within the displacement bound the loop carries of the loop's own f64-`t` one, the route's
+    /// vertex-to-clip-point edge vectors are the loop's own rounding of its points' difference,
+    /// and its angles are the angles between the edges' ends to a few ulps; the gradient and
+    /// Hessian orders return the value order's value bit for bit, with the derivatives of the
+    /// shared loop.
+    #[test]
+    fn the_route_loop_is_the_cut_loop_and_keeps_the_value_bits() {
+        let mut state = 23;
+        let (mut routed, mut accepted, mut worst_angle, mut worst_atan2) = (0, 0, 0.0f64, 0.0f64);
+        for k in 0..6000 {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let v = random_triangle(&mut state, scale);
+            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            // Barycentric coordinates in [-0.7, 1.7): mostly outside.
+            let (p, q) = (2.4 * lcg(&mut state) - 0.7, 2.4 * lcg(&mut state) - 0.7);
+            let foot = v[0] + (v[1] - v[0]) * p + (v[2] - v[0]) * q;
+            let side = if lcg(&mut state) < 0.5 { 1.0 } else { -1.0 };
+            let x = foot + plane_n * (side * scale * 10f64.powf(-3.0 - 9.0 * lcg(&mut state)));
+            let tilt = (10.0 + 70.0 * lcg(&mut state)).to_radians();
+            let t = plane_n.any_orthonormal_vector();
+            let phi = 6.3 * lcg(&mut state);
+            let t = t * phi.cos() + plane_n.cross(t) * phi.sin();
+            let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
+            let Some(c) = cut(x, n, &v) else {
+                continue;
+            };
+            let screen = screen(&v, &c.r);
+            if !(screen.left_to_the_robust_path() && screen.uncertified()) {
+                continue;
+            }
+            let mut route = RouteLoop::new();
+            let Some(value) =
+                polygon::near_plane_clipped_triangle_value_and_loop(x, c.n, v, &mut route)
+            else {
+                continue;
+            };
+            routed += 1;
+            assert_eq!(
+                Some(value.to_bits()),
+                polygon::near_plane_triangle_value(x, n, v).map(f64::to_bits)
+            );
+            assert!(same_loop(&route, &c), "{k}: order of the points");
+            let own = with_loop(x, &v, &c, None, |l| l.clone());
+            let shared = with_loop(x, &v, &c, Some(&route), |l| l.clone());
+            assert_eq!(own.count, shared.count);
+            let count = own.count;
+            for i in 0..count {
+                let (a, b) = (&own.points[i], &shared.points[i]);
+                assert_eq!((a.vertex, a.displacement), (b.vertex, b.displacement));
+                if a.vertex.is_some() {
+                    assert_eq!(a.hi, b.hi, "{k}: vertex {i}");
+                } else {
+                    let apart = (a.hi - b.hi).length();
+                    assert!(
+                        apart <= a.displacement + 4.0 * U * a.hi.length(),
+                        "{k}: clip point {i} {apart:e} apart, bound {:e}",
+                        a.displacement
+                    );
+                }
+                let j = (i + 1) % count;
+                let (pa, pb) = (&shared.points[i], &shared.points[j]);
+                assert_eq!(shared.edges[i], edge_vector(&v, pa, pb), "{k}: edge {i}");
+                // Where the derivatives take the split's angle (sin β ≥ 1/4, neither end within
+                // a quarter of the edge's length of x), it is the angle between the ends to a few
+                // ulps.
+                let (w, cosine) = (pa.hi.cross(pb.hi), pa.hi.dot(pb.hi));
+                let sine = w.length() / (pa.hi.length() * pb.hi.length());
+                let angle = shared.angles[i];
+                let e2 = shared.edges[i].length_squared();
+                let near_end = 16.0 * pa.hi.length_squared().min(pb.hi.length_squared()) < e2;
+                if (pa.vertex.is_some() || pb.vertex.is_some()) && sine >= 0.25 && !near_end {
+                    // The reference from the exact ends (double-double cross and dot products).
+                    let w = pa.exact.cross(&pb.exact).to_dvec3().length();
+                    let beta = w.atan2(pa.exact.dot(&pb.exact).to_f64());
+                    let _ = cosine;
+                    let err = (angle - beta).abs() / (U * beta);
+                    worst_angle = worst_angle.max(err);
+                    // For comparison: atan2(s, c) of the loop's rounded inputs, as recomputed.
+                    let e = shared.edges[i];
+                    let recomputed = pa.hi.cross(e).length().atan2(pa.hi.dot(pb.hi));
+                    worst_atan2 = worst_atan2.max((recomputed - beta).abs() / (U * beta));
+                    assert!(err <= 32.0, "{k}: angle {i} off by {err} ulps");
+                }
+            }
+            let call = |order| crate::kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order);
+            let value_order = call(Order::Value).unwrap().value;
+            assert_eq!(value_order.to_bits(), value.to_bits(), "{k}");
+            let mut loop_ = shared.clone();
+            loop_.sum = screen.side.signum();
+            for order in [Order::Gradient, Order::Hessian] {
+                let public = call(order).unwrap();
+                assert_eq!(public.value.to_bits(), value.to_bits(), "{k}: {order:?}");
+                if let Some(d) =
+                    crate::kernels::lambert_clipped_derivs::loop_derivs(&loop_, value, order)
+                {
+                    accepted += 1;
+                    assert_eq!(public, d, "{k}: {order:?}");
+                }
+            }
+        }
+        println!(
+            "route loops: {routed} routed, {accepted} derivatives accepted; where taken, the \
+             split's angles within {worst_angle:.1} ulps (atan2(s, c) of the rounded inputs \
+             {worst_atan2:.1})"
+        );
+        assert!(routed > 300 && accepted > 300, "{routed} {accepted}");
     }
 
     /// Walking x onto the clip line inside the triangle (the clip line through x's foot point): the

@@ -20,8 +20,8 @@ mod near_plane_triangle;
 mod sliver;
 use super::form_factor::{clip_edge_term, frame_term, outer_self, sym_outer, EdgeFrame, ExactEnds};
 pub(crate) use near_plane_triangle::{
-    triangle_value as near_plane_triangle_value,
-    triangle_value_and_loop as near_plane_triangle_value_and_loop, RouteLoop,
+    clipped_triangle_value_and_loop as near_plane_clipped_triangle_value_and_loop,
+    triangle_value as near_plane_triangle_value, RouteLoop,
 };
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).

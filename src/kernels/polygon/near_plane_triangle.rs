@@ -61,6 +61,16 @@ struct Screened {
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
 fn screen(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Screened> {
+    let n = lambert::unit(n)?;
+    screen_with(x, n, v, false)
+}
+
+/// [`screen`] for the unit normal `n = lambert::unit(n_in)?` already computed; `clipped` when
+/// the caller has found, by the same test, some height over the tangent plane not certainly
+/// positive (the test is then skipped: its outcome is known).
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+fn screen_with(x: DVec3, n: DVec3, v: [DVec3; 3], clipped: bool) -> Option<Screened> {
     if !(x.is_finite() && v.iter().all(|vk| vk.is_finite())) {
         return None;
     }
@@ -73,12 +83,13 @@ fn screen(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Screened> {
     if !(largest > 1e-30 && largest < 1e30) {
         return None;
     }
-    let n = lambert::unit(n)?;
     // Nothing can be clipped when every rounded height over the tangent plane is positive beyond
     // its rounding bound (as in the fast paths): the common case leaves before any
-    // double-double arithmetic.
-    if r.iter()
-        .all(|rk| n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs()))
+    // double-double arithmetic. (The robust path normalizes `n` before its range check; both
+    // decline, so the order does not matter.)
+    if !clipped
+        && r.iter()
+            .all(|rk| n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs()))
     {
         return None;
     }
@@ -204,19 +215,22 @@ impl RouteLoop {
     }
 }
 
-/// [`triangle_value`] with the clipped loop it computed the value on, written to `out`: the
-/// same decisions and operations, so the same value bits and `None` exactly where it declines
-/// (then `out` is unspecified). Inlined into the caller (the derivative orders' clipped path,
-/// itself compiled twice, portable and with FMA, which give the same bits as [`split_fma`]
-/// explains).
+/// [`triangle_value`] with the clipped loop it computed the value on, written to `out`, for a
+/// configuration where the caller has found the tangent plane to clip the triangle: `unit` is
+/// `lambert::unit(n)` (the caller's `Some`) and some height `unit·(v_k − x)` is not above
+/// `8ε (|unit|·|v_k − x|)` (the test [`triangle_value`] starts with, whose outcome is then
+/// known). The same decisions and operations, so the same value bits and `None` exactly where
+/// [`triangle_value`] declines (then `out` is unspecified). Inlined into the caller (the
+/// derivative orders' clipped path, itself compiled twice, portable and with FMA, which give the
+/// same bits as [`split_fma`] explains).
 #[inline(always)]
-pub(crate) fn triangle_value_and_loop(
+pub(crate) fn clipped_triangle_value_and_loop(
     x: DVec3,
-    n: DVec3,
+    unit: DVec3,
     v: [DVec3; 3],
     out: &mut RouteLoop,
 ) -> Option<f64> {
-    let s = screen(x, n, v)?;
+    let s = screen_with(x, unit, v, true)?;
     let (value, count) = split_loop(x, v, &s, &mut out.points, &mut out.angles, &mut out.edges)?;
     out.count = count;
     Some(value)
