@@ -243,18 +243,16 @@ fn edge_derivs(
 /// zero below [`Order::Hessian`]) and its `sin²β` (the caller chooses its own floor: see
 /// [`DERIV_MIN_SINE`]), for the clipped-triangle derivative path, whose loop is not a polygon of
 /// input vertices. `angle` is the edge's `β` when it has already been computed, NaN otherwise:
-/// either by [`edge_and_angle`] for these inputs (the same bits as recomputing it; `min_sin2`
-/// 0), or by another accurate evaluation (the near-plane split's, within a few ulps of the true
-/// angle but not bit-consistent with `atan2(s, c)` of these rounded inputs), which is taken only
-/// where `sin²β ≥ min_sin2`: the gradient's bracket `c/P − β/s` amplifies an inconsistency
-/// between `β` and `(s, c)` by ~`1.5/tan²β` (24 at `sin β = 1/4`), so below it is recomputed.
+/// by [`edge_and_angle`] for these inputs (the same bits as recomputing it), or by the
+/// near-plane split where that is well conditioned (within a few ulps of the true angle, not
+/// bit-consistent with `atan2(s, c)` of these rounded inputs: see `polygon::near_plane_value`).
 #[inline(always)]
 pub(super) fn edge_derivatives(
     n: DVec3,
     ra: DVec3,
     rb: DVec3,
     e: DVec3,
-    (angle, min_sin2): (f64, f64),
+    angle: f64,
     order: Order,
 ) -> (DVec3, [f64; 6], f64) {
     let (ra, rb, e) = (V3::from_dvec(ra), V3::from_dvec(rb), V3::from_dvec(e));
@@ -263,12 +261,7 @@ pub(super) fn edge_derivatives(
     let s = s2.sqrt();
     let c = ra.dot(rb);
     let ra2 = ra.dot(ra);
-    #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN recomputes
-    let beta = if angle.is_nan() || !(s2 >= min_sin2 * (s2 + c * c)) {
-        s.atan2(c)
-    } else {
-        angle
-    };
+    let beta = if angle.is_nan() { s.atan2(c) } else { angle };
     let t = edge_terms(V3::from_dvec(n), ra, rb, e, ra2, (w, s2, s, c, beta), order);
     (t.gradient.to_dvec(), t.hessian, s2 / t.p)
 }

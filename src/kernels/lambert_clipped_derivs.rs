@@ -113,26 +113,6 @@ fn derivs_at(clipped: &ClippedLoop, order: Order) -> Option<Deriv3> {
     if !(0..clipped.count).all(|k| shift(&clipped.points[k]) <= MOVED_TOLERANCE) {
         return None;
     }
-    // The split's angles are taken at sin β ≥ 1/4 only (see `lambert::edge_derivatives`); the
-    // certificate's are atan2(s, c)'s bits.
-    let angle_floor = if clipped.split_angles {
-        1.0 / 16.0
-    } else {
-        0.0
-    };
-    // The split forms an edge's far abscissa as `s_a + L` (and its angle from the abscissae): an
-    // end much nearer x than the edge is long (`‖r_b‖ ≪ L`) gets an absolute error
-    // `~u(‖r_a‖ + L)`, which moves the angle by up to `u(‖r_a‖ + L)/‖r_b‖` (133 ulps measured at
-    // `L/‖r_b‖` = 73). Its angle is taken where both ends are at least `L/4` from x (that ratio
-    // at most 9), recomputed elsewhere.
-    let split_angle = |k: usize, a: &LoopVertex, b: &LoopVertex, e: DVec3| {
-        let nearest = a.hi.length_squared().min(b.hi.length_squared());
-        if clipped.split_angles && !(16.0 * nearest >= e.length_squared()) {
-            f64::NAN
-        } else {
-            clipped.angles[k]
-        }
-    };
     for k in 0..clipped.count {
         let next = if k + 1 == clipped.count { 0 } else { k + 1 };
         let (a, b) = (&clipped.points[k], &clipped.points[next]);
@@ -143,14 +123,8 @@ fn derivs_at(clipped: &ClippedLoop, order: Order) -> Option<Deriv3> {
             let (g, h) = clip_term(n, a.hi, b.hi, e, order);
             (g, h, 1.0)
         } else {
-            let (g, h, sin2) = lambert::edge_derivatives(
-                n,
-                a.hi,
-                b.hi,
-                e,
-                (split_angle(k, a, b, e), angle_floor),
-                order,
-            );
+            let (g, h, sin2) =
+                lambert::edge_derivatives(n, a.hi, b.hi, e, clipped.angles[k], order);
             if !(sin2 >= MIN_SINE * MIN_SINE) {
                 return None;
             }
@@ -308,8 +282,7 @@ mod tests {
             if a.vertex.is_some() || b.vertex.is_some() {
                 let e = c.edges[k];
                 let sin2 =
-                    lambert::edge_derivatives(c.n, a.hi, b.hi, e, (f64::NAN, 0.0), Order::Gradient)
-                        .2;
+                    lambert::edge_derivatives(c.n, a.hi, b.hi, e, f64::NAN, Order::Gradient).2;
                 smallest = smallest.min(sin2.sqrt());
             }
         }
