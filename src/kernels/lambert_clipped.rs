@@ -130,14 +130,16 @@ struct Cut {
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn cut(x: DVec3, n: DVec3, v: &[DVec3; 3]) -> Option<Cut> {
-    let r = v.map(|vk| vk - x);
+    // Written out (here and below): array maps were left out of line (~30 instructions each).
+    let r = [v[0] - x, v[1] - x, v[2] - x];
     if !r.iter().all(|rk| lambert::in_range(*rk)) {
         return None;
     }
     let n = lambert::unit(n)?;
-    let heights = r.map(|rk| n.dot(rk));
+    let heights = [n.dot(r[0]), n.dot(r[1]), n.dot(r[2])];
     // The computed heights err by less than half of this (see the module documentation).
-    let height_error = r.map(|rk| 8.0 * f64::EPSILON * n.abs().dot(rk.abs()));
+    let error = |rk: DVec3| 8.0 * f64::EPSILON * n.abs().dot(rk.abs());
+    let height_error = [error(r[0]), error(r[1]), error(r[2])];
     let mut above = [false; 3];
     for k in 0..3 {
         if heights[k] > height_error[k] {
@@ -322,7 +324,7 @@ struct Screen {
 #[inline(always)]
 fn screen(v: &[DVec3; 3], r: &[DVec3; 3]) -> Screen {
     let normal = (v[1] - v[0]).cross(v[2] - v[0]);
-    let length = r.map(|rk| rk.length());
+    let length = [r[0].length(), r[1].length(), r[2].length()];
     let r_max = length.iter().fold(0.0f64, |m, &l| m.max(l));
     let mut sides = [0.0; 3];
     let (mut near_edge, mut near_edge_squared) = (false, false);
