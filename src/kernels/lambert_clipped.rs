@@ -403,7 +403,8 @@ pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clippe
     with_certified_loop(x, n, v, ClippedLoop::clone)
 }
 
-/// `f` of [`certified_loop`], in place.
+/// `f` of [`triangle_value`]'s loop and signed sum (times `2π`) when it certifies the value, in
+/// place (`certified_loop` for the tests).
 #[inline(always)]
 fn with_certified_loop<R>(
     x: DVec3,
@@ -455,7 +456,8 @@ pub(super) enum LoopValue {
 }
 
 /// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
-/// [`certified_loop`] when it certifies (`f(loop, Certified)`), else the [`uncertified_loop`],
+/// certified loop ([`with_certified_loop`]) when it certifies (`f(loop, Certified)`), else the
+/// uncertified loop (`uncertified_loop` for the tests),
 /// both from one cut and one built loop (the lists of points and edges are the same); `None`
 /// where neither is built. `fma`: the CPU has AVX2 and FMA (checked by the caller), for the
 /// route's FMA build.

@@ -6,8 +6,8 @@
 //! machinery (growable vectors, Newell's plane with its planarity check, the fan's far-field test,
 //! full edge frames) and then uses only the split. This route replays exactly the decisions and the
 //! operations of that evaluation which the split's result depends on, on fixed-size arrays, so that
-//! it returns the robust path's bits (the gradient and Hessian orders, which still take their value
-//! from the robust path's split, agree with it bit for bit), and declines (`None`) wherever the
+//! it returns the robust path's bits (the gradient and Hessian orders, which take their value from
+//! this route or the robust path's split, agree with it bit for bit), and declines (`None`) wherever the
 //! robust path would not take the split for the value: `x` not near the plane, nothing clipped, the
 //! foot of `x` inside the clipped loop, the far field, or the split itself declining.
 //!
@@ -17,6 +17,12 @@
 //! `benches/kernels_regimes.rs`'s "1e-6 from the plane, outside" value: 6704 instructions per call
 //! through the robust path, 5490 by this route portable, 4571 with FMA (docs/kernels.md, "Hard
 //! regimes").
+//!
+//! The gradient and Hessian orders run the same route through
+//! [`clipped_triangle_value_and_loop`], which also hands out what the clipped loop's derivatives
+//! (`lambert_clipped_derivs`) would otherwise compute a second time: the clipped loop (its
+//! double-double clip points), the vectors of the edges from a kept vertex to a clip point, and
+//! the well-conditioned edges' angles (see `near_plane_value`).
 
 use glam::DVec3;
 
@@ -157,7 +163,7 @@ const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
     on_line: false,
 };
 
-/// The clipped loop [`triangle_value_and_loop`] computed its value on, for the derivative
+/// The clipped loop [`clipped_triangle_value_and_loop`] computed its value on, for the derivative
 /// orders, which use the same clip points instead of clipping a second time: the first
 /// [`count`](RouteLoop::count) points, for `i` in 0..3 vertex `i` when it is kept, then the
 /// crossing of edge `i → i + 1` when there is one. Filled in place by the caller's frame (a
