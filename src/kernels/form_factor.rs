@@ -31,7 +31,7 @@ use crate::{Deriv3, Order};
 
 use super::dd;
 use super::lambert;
-use super::lambert_clipped;
+use super::lambert_clipped::{self, LoopValue};
 use super::lambert_clipped_derivs;
 use super::lambert_polygon;
 use super::polygon;
@@ -185,8 +185,8 @@ pub fn triangle_form_factor(
     let clipped = clipped_derivs(x, n, [a, b, c], order);
     let certified_value = match clipped {
         Some(ClippedDerivs::Done(d)) => return Ok(d),
-        Some(ClippedDerivs::ValueElsewhere(d)) => {
-            let value = value_past_lambert(x, n, [a, b, c])?.value;
+        Some(ClippedDerivs::ValueElsewhere(d, route_tried)) => {
+            let value = value_past_route(x, n, [a, b, c], !route_tried)?.value;
             return Ok(Deriv3 { value, ..d });
         }
         Some(ClippedDerivs::Declined(value)) => value,
@@ -214,7 +214,7 @@ fn clipped_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Cli
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
         return unsafe { clipped_derivs_fma(x, n, v, order) };
     }
-    clipped_derivs_with(x, n, v, order)
+    clipped_derivs_with(x, n, v, order, false)
 }
 
 /// [`clipped_derivs`] compiled with FMA, as `polygon::near_plane_triangle` does for the value:
@@ -229,33 +229,55 @@ unsafe fn clipped_derivs_fma(
     v: [DVec3; 3],
     order: Order,
 ) -> Option<ClippedDerivs> {
-    clipped_derivs_with(x, n, v, order)
+    clipped_derivs_with(x, n, v, order, true)
 }
 
+/// [`clipped_derivs`]' body; `fma` when the CPU has AVX2 and FMA, for the parts compiled out of
+/// line twice (see `lambert_clipped::with_valued_derivative_loop`).
 #[inline(always)]
-fn clipped_derivs_with(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<ClippedDerivs> {
-    lambert_clipped::with_derivative_loop(x, n, v, |l, certified| {
-        if certified {
-            let value = l.value();
-            match lambert_clipped_derivs::loop_derivs(l, value, order) {
+fn clipped_derivs_with(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    order: Order,
+    fma: bool,
+) -> Option<ClippedDerivs> {
+    lambert_clipped::with_valued_derivative_loop(
+        x,
+        n,
+        v,
+        fma,
+        #[inline(always)]
+        |l, value| match value {
+            LoopValue::Certified => {
+                let value = l.value();
+                match lambert_clipped_derivs::loop_derivs(l, value, order) {
+                    Some(d) => ClippedDerivs::Done(d),
+                    None => ClippedDerivs::Declined(Some(value)),
+                }
+            }
+            // The value order's own value (its near-plane route's bits).
+            LoopValue::Route(value) => match lambert_clipped_derivs::loop_derivs(l, value, order) {
                 Some(d) => ClippedDerivs::Done(d),
-                None => ClippedDerivs::Declined(Some(value)),
-            }
-        } else {
-            match lambert_clipped_derivs::loop_derivs(l, 0.0, order) {
-                Some(d) => ClippedDerivs::ValueElsewhere(d),
                 None => ClippedDerivs::Declined(None),
+            },
+            LoopValue::Elsewhere { route_tried } => {
+                match lambert_clipped_derivs::loop_derivs(l, 0.0, order) {
+                    Some(d) => ClippedDerivs::ValueElsewhere(d, route_tried),
+                    None => ClippedDerivs::Declined(None),
+                }
             }
-        }
-    })
+        },
+    )
 }
 
 /// What the derivative orders take from the clipped loop.
 enum ClippedDerivs {
     /// The certified loop's derivatives and value.
     Done(Deriv3),
-    /// The uncertified loop's derivatives: the value is the value order's.
-    ValueElsewhere(Deriv3),
+    /// The uncertified loop's derivatives: the value is the value order's (whose near-plane
+    /// route was already tried and declined when the flag is set).
+    ValueElsewhere(Deriv3, bool),
     /// Declined, with the certified value when there is one.
     Declined(Option<f64>),
 }
@@ -264,8 +286,16 @@ enum ClippedDerivs {
 /// outside the visible part the robust path's near-plane split (its bits) without the robust
 /// path's set-up, far away the far-field path, else the robust path.
 fn value_past_lambert(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Result<Deriv3> {
-    if let Some(f) = polygon::near_plane_triangle_value(x, n, v) {
-        return Ok(Deriv3::constant(f));
+    value_past_route(x, n, v, true)
+}
+
+/// [`value_past_lambert`], without trying the near-plane route unless `try_route` (the caller
+/// knows it declines).
+fn value_past_route(x: DVec3, n: DVec3, v: [DVec3; 3], try_route: bool) -> Result<Deriv3> {
+    if try_route {
+        if let Some(f) = polygon::near_plane_triangle_value(x, n, v) {
+            return Ok(Deriv3::constant(f));
+        }
     }
     if maybe_far(&v, x) {
         if let Some((d, _)) = triangle_far_field_fast(x, n, v, Order::Value) {
@@ -945,7 +975,8 @@ mod tests {
     use super::*;
 
     /// The FMA build of the clipped-loop derivatives gives the portable build's bits, on random
-    /// triangles with `x` 1e-3..1e-12 of their size from the plane, over them and beside them.
+    /// triangles with `x` 1e-3..1e-12 of their size from the plane, over them and beside them
+    /// (beside them, the value order's near-plane route runs inside, with its value and loop).
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn clipped_derivatives_fma_twin_keeps_the_bits() {
@@ -957,7 +988,7 @@ mod tests {
         let bits = |d: &ClippedDerivs| -> Vec<u64> {
             let (tag, d) = match d {
                 ClippedDerivs::Done(d) => (0, *d),
-                ClippedDerivs::ValueElsewhere(d) => (1, *d),
+                ClippedDerivs::ValueElsewhere(d, route_tried) => (1 + u64::from(*route_tried), *d),
                 ClippedDerivs::Declined(v) => {
                     return vec![2, v.unwrap_or(f64::NAN).to_bits()];
                 }
@@ -981,7 +1012,7 @@ mod tests {
             let t = plane_n.any_orthonormal_vector();
             let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
             for order in [Order::Gradient, Order::Hessian] {
-                let portable = clipped_derivs_with(x, n, v, order);
+                let portable = clipped_derivs_with(x, n, v, order, false);
                 // SAFETY: checked above that the CPU has AVX2 and FMA.
                 let fused = unsafe { clipped_derivs_fma(x, n, v, order) };
                 assert_eq!(
@@ -991,7 +1022,7 @@ mod tests {
                 );
                 answered += usize::from(matches!(
                     portable,
-                    Some(ClippedDerivs::Done(_) | ClippedDerivs::ValueElsewhere(_))
+                    Some(ClippedDerivs::Done(_) | ClippedDerivs::ValueElsewhere(..))
                 ));
             }
         }

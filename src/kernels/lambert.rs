@@ -242,8 +242,10 @@ fn edge_derivs(
 /// `2π` times one Lambert edge term's gradient and Hessian (entries `[xx, yy, zz, xy, xz, yz]`,
 /// zero below [`Order::Hessian`]) and its `sin²β` (the caller chooses its own floor: see
 /// [`DERIV_MIN_SINE`]), for the clipped-triangle derivative path, whose loop is not a polygon of
-/// input vertices. `angle` is the edge's `β` when [`edge_and_angle`] has already computed it for
-/// these inputs (the same bits as recomputing it), NaN otherwise.
+/// input vertices. `angle` is the edge's `β` when it has already been computed, NaN otherwise:
+/// by [`edge_and_angle`] for these inputs (the same bits as recomputing it), or by the
+/// near-plane split where that is well conditioned (within a few ulps of the true angle, not
+/// bit-consistent with `atan2(s, c)` of these rounded inputs: see `polygon::near_plane_value`).
 #[inline(always)]
 pub(super) fn edge_derivatives(
     n: DVec3,

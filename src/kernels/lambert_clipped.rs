@@ -47,6 +47,7 @@ use glam::DVec3;
 
 use super::dd::{two_sum, Dd, Dd3};
 use super::lambert::{self, FAST_TOLERANCE, INV_2PI};
+use super::polygon::{self, RouteLoop};
 
 const U: f64 = 0.5 * f64::EPSILON;
 
@@ -104,7 +105,7 @@ fn difference_error(v: DVec3, x: DVec3) -> DVec3 {
 // the value order's other paths ~40 instructions; returned by value, its copy ~60.
 #[inline(never)]
 pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
-    Some(certified_loop(x, n, v)?.value())
+    with_certified_loop(x, n, v, ClippedLoop::value)
 }
 
 impl ClippedLoop {
@@ -129,14 +130,16 @@ struct Cut {
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn cut(x: DVec3, n: DVec3, v: &[DVec3; 3]) -> Option<Cut> {
-    let r = v.map(|vk| vk - x);
+    // Written out (here and below): array maps were left out of line (~30 instructions each).
+    let r = [v[0] - x, v[1] - x, v[2] - x];
     if !r.iter().all(|rk| lambert::in_range(*rk)) {
         return None;
     }
     let n = lambert::unit(n)?;
-    let heights = r.map(|rk| n.dot(rk));
+    let heights = [n.dot(r[0]), n.dot(r[1]), n.dot(r[2])];
     // The computed heights err by less than half of this (see the module documentation).
-    let height_error = r.map(|rk| 8.0 * f64::EPSILON * n.abs().dot(rk.abs()));
+    let error = |rk: DVec3| 8.0 * f64::EPSILON * n.abs().dot(rk.abs());
+    let height_error = [error(r[0]), error(r[1]), error(r[2])];
     let mut above = [false; 3];
     for k in 0..3 {
         if heights[k] > height_error[k] {
@@ -158,12 +161,47 @@ fn cut(x: DVec3, n: DVec3, v: &[DVec3; 3]) -> Option<Cut> {
     })
 }
 
+/// Whether `route` lists the same loop as `cut` would build: the kept vertices and the clip
+/// points in the same order (for `i` in 0..3: vertex `i` when kept, then the crossing of edge
+/// `i`). The route clips on exact heights, which have the signs `cut` certified, so it always
+/// does; checked (a few comparisons) rather than assumed.
+#[inline(always)]
+fn same_loop(route: &RouteLoop, cut: &Cut) -> bool {
+    let mut k = 0;
+    for i in 0..3 {
+        let j = (i + 1) % 3;
+        if cut.above[i] {
+            if k >= route.count() || route.is_clip_point(k) {
+                return false;
+            }
+            debug_assert_eq!(route.point(k).0, cut.r[i]);
+            k += 1;
+        }
+        if cut.above[i] != cut.above[j] {
+            if k >= route.count() || !route.is_clip_point(k) {
+                return false;
+            }
+            k += 1;
+        }
+    }
+    k == route.count()
+}
+
 /// The clipped loop (module documentation): its vertices (the first `count`: kept triangle
 /// vertices and clip points, in the triangle's order) and edge vectors, without angles or sum
-/// (NaN and 0). Built in place by the caller (inlined): the loop is ~560 bytes, whose copies
-/// cost ~60 instructions each.
+/// (NaN and 0). With `route` (the value order's route's loop for the same configuration, see
+/// [`with_valued_derivative_loop`]) the points are the route's (the clip points in
+/// double-double) instead of this loop's own; their displacement bounds stay those of this
+/// loop's f64 `t`. Handed to `f` in place: the loop is ~560 bytes, whose copies cost ~60-90
+/// instructions each (a returned loop was copied).
 #[inline(always)]
-fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ClippedLoop {
+fn with_loop<R>(
+    x: DVec3,
+    v: &[DVec3; 3],
+    cut: &Cut,
+    route: Option<&RouteLoop>,
+    f: impl FnOnce(&mut ClippedLoop) -> R,
+) -> R {
     let Cut {
         r,
         heights,
@@ -171,19 +209,49 @@ fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ClippedLoop {
         above,
         ..
     } = cut;
-    let exact: [Dd3; 3] = std::array::from_fn(|k| from_parts(r[k], difference_error(v[k], x)));
-    let mut points = [LoopVertex {
-        exact: exact[0],
-        hi: r[0],
-        vertex: Some(0),
-        displacement: 0.0,
-    }; 4];
+    let route = route.filter(|route| same_loop(route, cut));
+    // The route's points are these differences' double-double parts already.
+    let exact: [Dd3; 3] = match route {
+        Some(_) => [from_parts(DVec3::ZERO, DVec3::ZERO); 3],
+        // Written out: `from_fn` was left out of line (~70 instructions).
+        None => {
+            let exact = |k: usize| from_parts(r[k], difference_error(v[k], x));
+            [exact(0), exact(1), exact(2)]
+        }
+    };
+    let from_route = |route: &RouteLoop, k: usize| {
+        let (hi, lo) = route.point(k);
+        // Already normalized: `hi` is the rounding of `hi + lo`.
+        (from_parts(hi, lo), hi)
+    };
+    // Filled in place (returned into the caller's frame): a local array moved into the loop
+    // was copied (~60 instructions).
+    let mut l = ClippedLoop {
+        n: cut.n,
+        points: [LoopVertex {
+            exact: exact[0],
+            hi: r[0],
+            vertex: Some(0),
+            displacement: 0.0,
+        }; 4],
+        edges: [DVec3::ZERO; 4],
+        // The route's angles are those of the same edges (the same ends, to their rounding).
+        angles: match route {
+            Some(route) => route.angles(),
+            None => [f64::NAN; 4],
+        },
+        count: 0,
+        sum: 0.0,
+    };
     let mut count = 0;
     for i in 0..3 {
         let j = (i + 1) % 3;
         if above[i] {
-            points[count] = LoopVertex {
-                exact: exact[i],
+            l.points[count] = LoopVertex {
+                exact: match route {
+                    Some(route) => from_route(route, count).0,
+                    None => exact[i],
+                },
                 hi: r[i],
                 vertex: Some(i),
                 displacement: 0.0,
@@ -197,25 +265,35 @@ fn build_loop(x: DVec3, v: &[DVec3; 3], cut: &Cut) -> ClippedLoop {
             // and the division, with a 2x margin for the bound's own rounding.
             let (gi, gj) = (0.5 * height_error[i], 0.5 * height_error[j]);
             let dt = 2.0 * ((gi * (1.0 + t) + gj * t) / total.abs() + 2.0 * U * t);
-            let point = exact[i].add(&exact[j].sub(&exact[i]).scale(Dd { hi: t, lo: 0.0 }));
+            let (point, hi) = match route {
+                Some(route) => from_route(route, count),
+                None => {
+                    let p = exact[i].add(&exact[j].sub(&exact[i]).scale(Dd { hi: t, lo: 0.0 }));
+                    (p, p.to_dvec3())
+                }
+            };
             let edge = (v[j] - v[i]).length();
-            points[count] = LoopVertex {
+            l.points[count] = LoopVertex {
                 exact: point,
-                hi: point.to_dvec3(),
+                hi,
                 vertex: None,
                 displacement: 1.01 * dt * edge,
             };
             count += 1;
         }
     }
-    ClippedLoop {
-        n: cut.n,
-        points,
-        edges: loop_edges(v, &points, count),
-        angles: [f64::NAN; 4],
-        count,
-        sum: 0.0,
+    l.count = count;
+    for k in 0..count {
+        let next = if k + 1 == count { 0 } else { k + 1 };
+        let (a, b) = (&l.points[k], &l.points[next]);
+        l.edges[k] = match route {
+            // The route's vector of an edge from a vertex to a clip point (or back) is this
+            // one's: the same rounding of the same double-double difference.
+            Some(route) if a.vertex.is_some() != b.vertex.is_some() => route.edge(k),
+            _ => edge_vector(v, a, b),
+        };
     }
+    f(&mut l)
 }
 
 /// The loop's edge vector from `a` to `b`: one rounding of the exact difference of its ends.
@@ -225,17 +303,6 @@ fn edge_vector(v: &[DVec3; 3], a: &LoopVertex, b: &LoopVertex) -> DVec3 {
         (Some(i), Some(j)) => v[j] - v[i],
         _ => b.exact.sub(&a.exact).to_dvec3(),
     }
-}
-
-/// The loop's edge vectors (the first `count`), `edges[k]` from vertex `k` to the next.
-#[inline(always)]
-fn loop_edges(v: &[DVec3; 3], points: &[LoopVertex; 4], count: usize) -> [DVec3; 4] {
-    let mut edges = [DVec3::ZERO; 4];
-    for k in 0..count {
-        let next = if k + 1 == count { 0 } else { k + 1 };
-        edges[k] = edge_vector(v, &points[k], &points[next]);
-    }
-    edges
 }
 
 /// What decides, before the loop is built, which loop the configuration gets: the triangle's
@@ -257,7 +324,7 @@ struct Screen {
 #[inline(always)]
 fn screen(v: &[DVec3; 3], r: &[DVec3; 3]) -> Screen {
     let normal = (v[1] - v[0]).cross(v[2] - v[0]);
-    let length = r.map(|rk| rk.length());
+    let length = [r[0].length(), r[1].length(), r[2].length()];
     let r_max = length.iter().fold(0.0f64, |m, &l| m.max(l));
     let mut sides = [0.0; 3];
     let (mut near_edge, mut near_edge_squared) = (false, false);
@@ -312,6 +379,8 @@ impl Screen {
 /// `sum` is only the orientation, `±1`: the sign of the certified sum, `sign(N·r_0)` for the
 /// triangle's normal `N = (v_1 − v_0) × (v_2 − v_0)`; `None` when that sign is uncertain (`x`
 /// within rounding of the triangle's plane) or where [`triangle_value`]'s loop is not built.
+/// Where the certified loop is not tried its clip points are the value order's route's when that
+/// answers, as in [`with_valued_derivative_loop`].
 #[cfg(test)]
 pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
     let cut = cut(x, n, &v)?;
@@ -319,33 +388,96 @@ pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clip
     if !screen.uncertified() {
         return None;
     }
-    let mut l = build_loop(x, &v, &cut);
-    l.sum = screen.side.signum();
-    Some(l)
+    let mut route = RouteLoop::new();
+    let routed = screen.left_to_the_robust_path()
+        && polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route).is_some();
+    Some(with_loop(x, &v, &cut, routed.then_some(&route), |l| {
+        l.sum = screen.side.signum();
+        l.clone()
+    }))
 }
 
 /// [`triangle_value`]'s loop and signed sum (times `2π`) when it certifies the value.
-#[inline(always)]
+#[cfg(test)]
 pub(super) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
+    with_certified_loop(x, n, v, ClippedLoop::clone)
+}
+
+/// `f` of [`triangle_value`]'s loop and signed sum (times `2π`) when it certifies the value, in
+/// place (`certified_loop` for the tests).
+#[inline(always)]
+fn with_certified_loop<R>(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    f: impl FnOnce(&ClippedLoop) -> R,
+) -> Option<R> {
     let cut = cut(x, n, &v)?;
     if left_to_the_robust_path(&v, &cut.r) {
         return None;
     }
-    let mut l = build_loop(x, &v, &cut);
-    l.sum = certify(&mut l)?;
-    Some(l)
+    with_loop(
+        x,
+        &v,
+        &cut,
+        None,
+        #[inline(always)]
+        |l| {
+            l.sum = certify(l)?;
+            Some(f(l))
+        },
+    )
 }
 
-/// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
-/// [`certified_loop`] when it certifies (`f(loop, true)`), else the [`uncertified_loop`]
-/// (`f(loop, false)`), both from one cut and one built loop (the lists of points and edges are
-/// the same); `None` where neither is built.
-#[inline(always)]
+/// [`with_valued_derivative_loop`] telling `f` only whether the loop is certified.
+#[cfg(test)]
 pub(super) fn with_derivative_loop<R>(
     x: DVec3,
     n: DVec3,
     v: [DVec3; 3],
     f: impl FnOnce(&ClippedLoop, bool) -> R,
+) -> Option<R> {
+    let fma = cfg!(target_arch = "x86_64") && crate::simd::avx2_fma();
+    with_valued_derivative_loop(x, n, v, fma, |l, value| f(l, value == LoopValue::Certified))
+}
+
+/// Where the derivative orders' loop ([`with_valued_derivative_loop`]) takes its value from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum LoopValue {
+    /// The certified loop: [`ClippedLoop::value`].
+    Certified,
+    /// The uncertified loop on the clip points of the value order's near-plane route
+    /// ([`polygon::near_plane_clipped_triangle_value_and_loop`]), with that route's value: the value
+    /// order's bits.
+    Route(f64),
+    /// The uncertified loop, its value to be taken from the value order's paths; `route_tried`
+    /// when the near-plane route was tried here and declined (the caller need not try it again).
+    Elsewhere { route_tried: bool },
+}
+
+/// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
+/// certified loop ([`with_certified_loop`]) when it certifies (`f(loop, Certified)`), else the
+/// uncertified loop (`uncertified_loop` for the tests),
+/// both from one cut and one built loop (the lists of points and edges are the same); `None`
+/// where neither is built. `fma`: the CPU has AVX2 and FMA (checked by the caller), for the
+/// route's FMA build.
+///
+/// Outside the triangle near its plane (the certificate is not tried: Lambert's sum cancels)
+/// the value is the value order's near-plane route's, which clips the triangle in double-double
+/// too: the route runs first and the loop takes its clip points (`f(loop, Route(value))`)
+/// instead of clipping a second time. Its points are on the triangle's edge lines and at the
+/// exact crossings to ~u² (double-double `t` and point), so within the displacement bound each
+/// point carries (that of this loop's own f64 `t`, kept so that the derivatives' accept and
+/// decline tests are computed the same way); [`lambert_clipped_derivs`](super::lambert_clipped_derivs)'
+/// accuracy argument needs only that bound and the points on the edge lines to O(u). Where the
+/// route declines, the loop's own points (`f(loop, Elsewhere { route_tried: true })`).
+#[inline(always)]
+pub(super) fn with_valued_derivative_loop<R>(
+    x: DVec3,
+    n: DVec3,
+    v: [DVec3; 3],
+    fma: bool,
+    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
 ) -> Option<R> {
     let cut = cut(x, n, &v)?;
     let screen = screen(&v, &cut.r);
@@ -355,17 +487,92 @@ pub(super) fn with_derivative_loop<R>(
     if !try_certified && !uncertified {
         return None;
     }
-    let mut l = build_loop(x, &v, &cut);
-    let certified = try_certified && certify(&mut l).map(|sum| l.sum = sum).is_some();
-    if !certified {
-        if !uncertified {
-            return None;
+    if !try_certified {
+        let side = screen.side.signum();
+        let _ = fma; // Read on x86-64 only.
+        #[cfg(target_arch = "x86_64")]
+        if fma {
+            // SAFETY: the caller checked that the CPU has AVX2 and FMA.
+            return Some(unsafe { routed_loop_fma(x, v, &cut, side, f) });
         }
-        // A declined certificate may have set some angles.
-        l.angles = [f64::NAN; 4];
-        l.sum = screen.side.signum();
+        return Some(routed_loop(x, v, &cut, side, f));
     }
-    Some(f(&l, certified))
+    with_loop(
+        x,
+        &v,
+        &cut,
+        None,
+        #[inline(always)]
+        |l| {
+            if let Some(sum) = certify(l) {
+                l.sum = sum;
+                return Some(f(l, LoopValue::Certified));
+            }
+            if !uncertified {
+                return None;
+            }
+            // A declined certificate may have set some angles.
+            l.angles = [f64::NAN; 4];
+            l.sum = screen.side.signum();
+            Some(f(l, LoopValue::Elsewhere { route_tried: false }))
+        },
+    )
+}
+
+/// [`with_valued_derivative_loop`] outside the triangle: the value order's near-plane route,
+/// then the loop on its clip points (or on the loop's own where it declines), oriented by
+/// `side`. Out of line, in a portable and an FMA build (the route's double-double products; the
+/// same bits, see [`polygon::near_plane_triangle_value`]): inlined, its frame and registers
+/// cost the certified loop's callers ~90 instructions.
+#[inline(always)]
+fn routed_loop_body<R>(
+    x: DVec3,
+    v: [DVec3; 3],
+    cut: &Cut,
+    side: f64,
+    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+) -> R {
+    let mut route = RouteLoop::new();
+    let value = polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route);
+    with_loop(
+        x,
+        &v,
+        cut,
+        value.is_some().then_some(&route),
+        #[inline(always)]
+        |l| {
+            l.sum = side;
+            let value = match value {
+                Some(value) => LoopValue::Route(value),
+                None => LoopValue::Elsewhere { route_tried: true },
+            };
+            f(l, value)
+        },
+    )
+}
+
+#[inline(never)]
+fn routed_loop<R>(
+    x: DVec3,
+    v: [DVec3; 3],
+    cut: &Cut,
+    side: f64,
+    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+) -> R {
+    routed_loop_body(x, v, cut, side, f)
+}
+
+/// [`routed_loop`] compiled with FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn routed_loop_fma<R>(
+    x: DVec3,
+    v: [DVec3; 3],
+    cut: &Cut,
+    side: f64,
+    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+) -> R {
+    routed_loop_body(x, v, cut, side, f)
 }
 
 /// The certified signed sum (times `2π`) over the loop, setting its ordinary edges' angles;
@@ -526,6 +733,120 @@ mod tests {
             "{certified} of {tried} certified"
         );
         println!("clipped, 1e-7 to 1e-5 sizes above, not near an edge, F > 0.05: {certified} of {tried} certified; worst {worst:e}");
+    }
+
+    /// Outside the triangle near its plane (the route's case, 1e-3 to 1e-12 sizes from the
+    /// plane): wherever the value order's route answers, its loop lists the points the cut's
+    /// own loop lists, in the same order (kept vertices to the bit), each route clip point is
+    /// within the displacement bound the loop carries of the loop's own f64-`t` one, the route's
+    /// vertex-to-clip-point edge vectors are the loop's own rounding of its points' difference,
+    /// and its angles are the angles between the edges' ends to a few ulps; the gradient and
+    /// Hessian orders return the value order's value bit for bit, with the derivatives of the
+    /// shared loop.
+    #[test]
+    fn the_route_loop_is_the_cut_loop_and_keeps_the_value_bits() {
+        let mut state = 23;
+        let (mut routed, mut accepted, mut worst_angle, mut worst_atan2) = (0, 0, 0.0f64, 0.0f64);
+        for k in 0..6000 {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let v = random_triangle(&mut state, scale);
+            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            // Barycentric coordinates in [-0.7, 1.7): mostly outside.
+            let (p, q) = (2.4 * lcg(&mut state) - 0.7, 2.4 * lcg(&mut state) - 0.7);
+            let foot = v[0] + (v[1] - v[0]) * p + (v[2] - v[0]) * q;
+            let side = if lcg(&mut state) < 0.5 { 1.0 } else { -1.0 };
+            let x = foot + plane_n * (side * scale * 10f64.powf(-3.0 - 9.0 * lcg(&mut state)));
+            let tilt = (10.0 + 70.0 * lcg(&mut state)).to_radians();
+            let t = plane_n.any_orthonormal_vector();
+            let phi = 6.3 * lcg(&mut state);
+            let t = t * phi.cos() + plane_n.cross(t) * phi.sin();
+            let n = (plane_n * side * tilt.cos() + t * tilt.sin()).normalize();
+            let Some(c) = cut(x, n, &v) else {
+                continue;
+            };
+            let screen = screen(&v, &c.r);
+            if !(screen.left_to_the_robust_path() && screen.uncertified()) {
+                continue;
+            }
+            let mut route = RouteLoop::new();
+            let Some(value) =
+                polygon::near_plane_clipped_triangle_value_and_loop(x, c.n, v, &mut route)
+            else {
+                continue;
+            };
+            routed += 1;
+            assert_eq!(
+                Some(value.to_bits()),
+                polygon::near_plane_triangle_value(x, n, v).map(f64::to_bits)
+            );
+            assert!(same_loop(&route, &c), "{k}: order of the points");
+            let own = with_loop(x, &v, &c, None, |l| l.clone());
+            let shared = with_loop(x, &v, &c, Some(&route), |l| l.clone());
+            assert_eq!(own.count, shared.count);
+            let count = own.count;
+            for i in 0..count {
+                let (a, b) = (&own.points[i], &shared.points[i]);
+                assert_eq!((a.vertex, a.displacement), (b.vertex, b.displacement));
+                if a.vertex.is_some() {
+                    assert_eq!(a.hi, b.hi, "{k}: vertex {i}");
+                } else {
+                    let apart = (a.hi - b.hi).length();
+                    assert!(
+                        apart <= a.displacement + 4.0 * U * a.hi.length(),
+                        "{k}: clip point {i} {apart:e} apart, bound {:e}",
+                        a.displacement
+                    );
+                }
+                let j = (i + 1) % count;
+                let (pa, pb) = (&shared.points[i], &shared.points[j]);
+                assert_eq!(shared.edges[i], edge_vector(&v, pa, pb), "{k}: edge {i}");
+                // Where the split hands out an angle (sin β ≥ 1/4, neither end within a quarter
+                // of the edge's length of x), it is the angle between the ends to a few ulps.
+                let sine = pa.hi.cross(pb.hi).length() / (pa.hi.length() * pb.hi.length());
+                let angle = shared.angles[i];
+                let nearest = pa.hi.length_squared().min(pb.hi.length_squared());
+                let e2 = shared.edges[i].length_squared();
+                // The split hands out only well-conditioned angles (margins for the rounding of
+                // its tests).
+                if !angle.is_nan() {
+                    assert!(
+                        sine >= 0.249 && 16.0 * 1.001 * nearest >= e2,
+                        "{k}: edge {i}"
+                    );
+                    // The reference from the exact ends (double-double cross and dot products).
+                    let w = pa.exact.cross(&pb.exact).to_dvec3().length();
+                    let beta = w.atan2(pa.exact.dot(&pb.exact).to_f64());
+                    let err = (angle - beta).abs() / (U * beta);
+                    worst_angle = worst_angle.max(err);
+                    // For comparison: atan2(s, c) of the loop's rounded inputs, as recomputed.
+                    let e = shared.edges[i];
+                    let recomputed = pa.hi.cross(e).length().atan2(pa.hi.dot(pb.hi));
+                    worst_atan2 = worst_atan2.max((recomputed - beta).abs() / (U * beta));
+                    assert!(err <= 32.0, "{k}: angle {i} off by {err} ulps");
+                }
+            }
+            let call = |order| crate::kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order);
+            let value_order = call(Order::Value).unwrap().value;
+            assert_eq!(value_order.to_bits(), value.to_bits(), "{k}");
+            let mut loop_ = shared.clone();
+            loop_.sum = screen.side.signum();
+            for order in [Order::Gradient, Order::Hessian] {
+                let public = call(order).unwrap();
+                assert_eq!(public.value.to_bits(), value.to_bits(), "{k}: {order:?}");
+                if let Some(d) =
+                    crate::kernels::lambert_clipped_derivs::loop_derivs(&loop_, value, order)
+                {
+                    accepted += 1;
+                    assert_eq!(public, d, "{k}: {order:?}");
+                }
+            }
+        }
+        println!(
+            "route loops: {routed} routed, {accepted} derivatives accepted; where taken, the \
+             split's angles within {worst_angle:.1} ulps (atan2(s, c) of the rounded inputs \
+             {worst_atan2:.1})"
+        );
+        assert!(routed > 300 && accepted > 300, "{routed} {accepted}");
     }
 
     /// Walking x onto the clip line inside the triangle (the clip line through x's foot point): the

@@ -38,8 +38,12 @@
 //! clip line nor near a triangle edge's line) the value is that one, bit for bit, from the same
 //! loop. Elsewhere below 1e-3 of the size (outside the triangle, where Lambert's sum cancels, and
 //! next to the clip line) the loop is built without the certificate
-//! ([`uncertified_loop`](super::lambert_clipped::uncertified_loop)), and the caller takes the
-//! value from the value order's own path.
+//! ([`uncertified_loop`](super::lambert_clipped::uncertified_loop)), and the value is the value
+//! order's own. Outside the triangle that is the near-plane route's
+//! (`polygon::near_plane_triangle`), which runs first: the loop takes its double-double clip
+//! points (closer to the exact ones than the loop's own, within the same displacement bounds),
+//! its vertex-to-clip-point edge vectors (the same rounding of the same difference) and, where
+//! well conditioned, its edges' angles, instead of a second clip and an `atan2` per edge.
 
 use glam::{DMat3, DVec3};
 

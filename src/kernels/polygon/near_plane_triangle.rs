@@ -6,8 +6,8 @@
 //! machinery (growable vectors, Newell's plane with its planarity check, the fan's far-field test,
 //! full edge frames) and then uses only the split. This route replays exactly the decisions and the
 //! operations of that evaluation which the split's result depends on, on fixed-size arrays, so that
-//! it returns the robust path's bits (the gradient and Hessian orders, which still take their value
-//! from the robust path's split, agree with it bit for bit), and declines (`None`) wherever the
+//! it returns the robust path's bits (the gradient and Hessian orders, which take their value from
+//! this route or the robust path's split, agree with it bit for bit), and declines (`None`) wherever the
 //! robust path would not take the split for the value: `x` not near the plane, nothing clipped, the
 //! foot of `x` inside the clipped loop, the far field, or the split itself declining.
 //!
@@ -17,6 +17,12 @@
 //! `benches/kernels_regimes.rs`'s "1e-6 from the plane, outside" value: 6704 instructions per call
 //! through the robust path, 5490 by this route portable, 4571 with FMA (docs/kernels.md, "Hard
 //! regimes").
+//!
+//! The gradient and Hessian orders run the same route through
+//! [`clipped_triangle_value_and_loop`], which also hands out what the clipped loop's derivatives
+//! (`lambert_clipped_derivs`) would otherwise compute a second time: the clipped loop (its
+//! double-double clip points), the vectors of the edges from a kept vertex to a clip point, and
+//! the well-conditioned edges' angles (see `near_plane_value`).
 
 use glam::DVec3;
 
@@ -61,6 +67,16 @@ struct Screened {
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
 fn screen(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Screened> {
+    let n = lambert::unit(n)?;
+    screen_with(x, n, v, false)
+}
+
+/// [`screen`] for the unit normal `n = lambert::unit(n_in)?` already computed; `clipped` when
+/// the caller has found, by the same test, some height over the tangent plane not certainly
+/// positive (the test is then skipped: its outcome is known).
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+fn screen_with(x: DVec3, n: DVec3, v: [DVec3; 3], clipped: bool) -> Option<Screened> {
     if !(x.is_finite() && v.iter().all(|vk| vk.is_finite())) {
         return None;
     }
@@ -73,12 +89,13 @@ fn screen(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Screened> {
     if !(largest > 1e-30 && largest < 1e30) {
         return None;
     }
-    let n = lambert::unit(n)?;
     // Nothing can be clipped when every rounded height over the tangent plane is positive beyond
     // its rounding bound (as in the fast paths): the common case leaves before any
-    // double-double arithmetic.
-    if r.iter()
-        .all(|rk| n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs()))
+    // double-double arithmetic. (The robust path normalizes `n` before its range check; both
+    // decline, so the order does not matter.)
+    if !clipped
+        && r.iter()
+            .all(|rk| n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs()))
     {
         return None;
     }
@@ -135,12 +152,117 @@ unsafe fn split_fma(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
 /// The exact height, the clip, the remaining decisions and the split itself.
 #[inline(always)]
 fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
+    let mut loop_ = [CLIP_VERTEX_ZERO; 4];
+    split_loop(x, v, s, &mut loop_, &mut [], &mut []).map(|(value, _)| value)
+}
+
+const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
+    u: DVec3::ZERO,
+    r: DVec3::ZERO,
+    r_lo: DVec3::ZERO,
+    on_line: false,
+};
+
+/// The clipped loop [`clipped_triangle_value_and_loop`] computed its value on, for the derivative
+/// orders, which use the same clip points instead of clipping a second time: the first
+/// [`count`](RouteLoop::count) points, for `i` in 0..3 vertex `i` when it is kept, then the
+/// crossing of edge `i → i + 1` when there is one. Filled in place by the caller's frame (a
+/// returned loop was copied, ~60 instructions).
+pub(crate) struct RouteLoop {
+    points: [ClipVertex; 4],
+    angles: [f64; 4],
+    edges: [DVec3; 4],
+    count: usize,
+}
+
+impl RouteLoop {
+    #[inline(always)]
+    pub(crate) fn new() -> RouteLoop {
+        RouteLoop {
+            points: [CLIP_VERTEX_ZERO; 4],
+            angles: [f64::NAN; 4],
+            edges: [DVec3::ZERO; 4],
+            count: 0,
+        }
+    }
+
+    /// The vector of the edge from point `k` to the next where one of its ends is a clip point
+    /// and the other not: one rounding of the exact difference of the ends (double-double).
+    #[inline(always)]
+    pub(crate) fn edge(&self, k: usize) -> DVec3 {
+        self.edges[k]
+    }
+
+    /// The angle `β` the edge from point `k` to the next subtends at x where the split computed
+    /// it (the edges off the tangent plane, see `near_plane_value`), NaN otherwise.
+    #[inline(always)]
+    pub(crate) fn angles(&self) -> [f64; 4] {
+        self.angles
+    }
+
+    /// The number of points.
+    #[inline(always)]
+    pub(crate) fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Point `k` relative to `x`: `(r, r_lo)` with `r + r_lo` exact and `r` its rounding (for a
+    /// clip point, the double-double clip point: on the triangle's edge line and at the exact
+    /// crossing of the tangent plane to ~u² relative).
+    #[inline(always)]
+    pub(crate) fn point(&self, k: usize) -> (DVec3, DVec3) {
+        (self.points[k].r, self.points[k].r_lo)
+    }
+
+    /// Whether point `k` is a clip point.
+    #[inline(always)]
+    pub(crate) fn is_clip_point(&self, k: usize) -> bool {
+        self.points[k].on_line
+    }
+}
+
+/// [`triangle_value`] with the clipped loop it computed the value on, written to `out`, for a
+/// configuration where the caller has found the tangent plane to clip the triangle: `unit` is
+/// `lambert::unit(n)` (the caller's `Some`) and some height `unit·(v_k − x)` is not above
+/// `8ε (|unit|·|v_k − x|)` (the test [`triangle_value`] starts with, whose outcome is then
+/// known). The same decisions and operations, so the same value bits and `None` exactly where
+/// [`triangle_value`] declines (then `out` is unspecified). Inlined into the caller (the
+/// derivative orders' clipped path, itself compiled twice, portable and with FMA, which give the
+/// same bits as [`split_fma`] explains).
+#[inline(always)]
+pub(crate) fn clipped_triangle_value_and_loop(
+    x: DVec3,
+    unit: DVec3,
+    v: [DVec3; 3],
+    out: &mut RouteLoop,
+) -> Option<f64> {
+    let s = screen_with(x, unit, v, true)?;
+    let (value, count) = split_loop(x, v, &s, &mut out.points, &mut out.angles, &mut out.edges)?;
+    out.count = count;
+    Some(value)
+}
+
+/// [`split`] with the loop it clipped (in `loop_`) and its length, and, where `angles` and
+/// `edges` have entries, its edges' angles (see `near_plane_value`) and the vectors of its edges
+/// off the tangent plane.
+#[inline(always)]
+fn split_loop(
+    x: DVec3,
+    v: [DVec3; 3],
+    s: &Screened,
+    loop_: &mut [ClipVertex; 4],
+    angles: &mut [f64],
+    edges: &mut [DVec3],
+) -> Option<(f64, usize)> {
     let Screened { r, u, n, plane } = s;
     let (r, u, n) = (*r, *u, *n);
     let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
-    let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
+    let r_lo_of = |vk: DVec3| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z));
+    // Written out: `v.map` was left out of line in the derivative orders' build (~70
+    // instructions).
+    let r_lo = [r_lo_of(v[0]), r_lo_of(v[1]), r_lo_of(v[2])];
     let h_p = exact_height_of(&r, &r_lo, plane.twice_area);
-    let (loop_, count) = clip_triangle(&u, &r, &r_lo, n)?;
+    let count = clip_triangle(&u, &r, &r_lo, n, loop_)?;
     let verts = &loop_[..count];
     let centroid = verts.iter().map(|v| v.r).sum::<DVec3>() / count as f64;
     let radius = verts
@@ -158,7 +280,11 @@ fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
     for (i, frame) in frames[..count].iter_mut().enumerate() {
         let (a, b) = (&verts[i], &verts[next(i, count)]);
         if !(a.on_line && b.on_line) {
-            *frame = in_plane_edge(a, b);
+            let e = edge_vector(a, b);
+            if let Some(edge) = edges.get_mut(i) {
+                *edge = e;
+            }
+            *frame = in_plane_edge(a, b, e);
         }
     }
     let value = near_plane_value(
@@ -168,24 +294,26 @@ fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
         plane.normal,
         h_p,
         SPLIT_VALUE_LIMIT,
+        angles,
     )?
     .0;
     // The edge sum's sign convention, then the clamp of the visible part's value.
     let value = if h_p < 0.0 { -value } else { value };
     let value = value.clamp(0.0, 1.0);
-    value.is_finite().then_some(value)
+    value.is_finite().then_some((value, count))
 }
 
 /// [`clip`](super::clip) for a triangle, on a fixed array (the same operations, so the same
-/// vertices): the loop and its length, `None` when nothing is cut away or fewer than three
-/// vertices remain.
+/// vertices): the loop in `out` and its length, `None` when nothing is cut away or fewer than
+/// three vertices remain.
 #[inline(always)]
 fn clip_triangle(
     u: &[DVec3; 3],
     r: &[DVec3; 3],
     r_lo: &[DVec3; 3],
     n: DVec3,
-) -> Option<([ClipVertex; 4], usize)> {
+    out: &mut [ClipVertex; 4],
+) -> Option<usize> {
     let exact = [
         Dd3::from_parts(r[0], r_lo[0]),
         Dd3::from_parts(r[1], r_lo[1]),
@@ -197,12 +325,6 @@ fn clip_triangle(
         exact[1].dot_f64(n),
         exact[2].dot_f64(n),
     ];
-    let mut out = [ClipVertex {
-        u: DVec3::ZERO,
-        r: DVec3::ZERO,
-        r_lo: DVec3::ZERO,
-        on_line: false,
-    }; 4];
     let (mut count, mut cut) = (0, false);
     for i in 0..3 {
         let j = next(i, 3);
@@ -231,15 +353,15 @@ fn clip_triangle(
             count += 1;
         }
     }
-    (cut && count >= 3).then_some((out, count))
+    (cut && count >= 3).then_some(count)
 }
 
 /// The parts of [`EdgeFrame::with_exact_ends`](crate::kernels::form_factor::EdgeFrame) that
 /// [`near_plane_value`] reads, by the same operations (the double-double cross product and
-/// abscissae when x is near the edge's line); `None` for a zero-length edge.
+/// abscissae when x is near the edge's line), for its edge vector `e` (`edge_vector(a, b)`);
+/// `None` for a zero-length edge.
 #[inline(always)]
-fn in_plane_edge(a: &ClipVertex, b: &ClipVertex) -> Option<InPlaneEdge> {
-    let e = edge_vector(a, b);
+fn in_plane_edge(a: &ClipVertex, b: &ClipVertex, e: DVec3) -> Option<InPlaneEdge> {
     let len = e.length();
     if len == 0.0 {
         return None;
@@ -476,6 +598,15 @@ mod tests {
         }
         let mut frames = Frames::new();
         edge_frames(&loop_, true, &mut frames);
-        near_plane_value(&loop_, &frames, n, plane.normal, h_p, SPLIT_VALUE_LIMIT).is_some()
+        near_plane_value(
+            &loop_,
+            &frames,
+            n,
+            plane.normal,
+            h_p,
+            SPLIT_VALUE_LIMIT,
+            &mut [],
+        )
+        .is_some()
     }
 }
