@@ -643,6 +643,18 @@ mod tests {
 
     use crate::kernels::test_rng::lcg;
 
+    /// A sliver of length `scale` (1e-3..1e3) with its apex 1e-5..1e-12 of the length off the
+    /// long edge, from `c`'s uniform draws: `(scale, [a, b, apex])`.
+    fn random_sliver(c: &mut impl FnMut() -> f64) -> (f64, [DVec3; 3]) {
+        let scale = 10f64.powf(6.0 * c() - 3.0);
+        let a = DVec3::new(c(), c(), c()) * scale;
+        let b = a + DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize() * scale;
+        let perp = (b - a).any_orthonormal_vector();
+        let height = 10f64.powf(-5.0 - 7.0 * c());
+        let apex = a + (b - a) * (1.2 * c() - 0.1) + perp * (height * scale);
+        (scale, [a, b, apex])
+    }
+
     /// The direct entry gives `evaluate`'s bits whenever it answers, and answers for slivers seen
     /// from afar: slivers with apex 1e-5..1e-12 of their length, x from 1e-7 (where the rule
     /// declines) to 10 lengths away, receiver normals that clip the sliver or graze a vertex.
@@ -652,12 +664,7 @@ mod tests {
         let (mut taken, mut declined) = (0, 0);
         for k in 0..4000 {
             let mut c = || lcg(&mut state);
-            let scale = 10f64.powf(6.0 * c() - 3.0);
-            let a = DVec3::new(c(), c(), c()) * scale;
-            let b = a + DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize() * scale;
-            let perp = (b - a).any_orthonormal_vector();
-            let height = 10f64.powf(-5.0 - 7.0 * c());
-            let apex = a + (b - a) * (1.2 * c() - 0.1) + perp * (height * scale);
+            let (scale, [a, b, apex]) = random_sliver(&mut c);
             let v = [a, b, apex];
             // Mostly 1e-3..10 lengths away, sometimes closer. Within ~1e-2 lengths x is usually
             // within 1e-3·r_max of the plane, which the robust path handles (declined here).
@@ -721,12 +728,7 @@ mod tests {
         let mut answered = 0;
         for _ in 0..3000 {
             let mut c = || lcg(&mut state);
-            let scale = 10f64.powf(6.0 * c() - 3.0);
-            let a = DVec3::new(c(), c(), c()) * scale;
-            let b = a + DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize() * scale;
-            let perp = (b - a).any_orthonormal_vector();
-            let height = 10f64.powf(-5.0 - 7.0 * c());
-            let apex = a + (b - a) * (1.2 * c() - 0.1) + perp * (height * scale);
+            let (scale, [a, b, apex]) = random_sliver(&mut c);
             let x = (a + b) * 0.5
                 + DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5)
                     * (scale * 10f64.powf(4.0 * c() - 3.0));
