@@ -61,11 +61,16 @@ fn convex_and_valid<const M: usize>(v: &[DVec3; M]) -> bool {
         .iter()
         .map(|dk| dk.length_squared())
         .fold(0.0, f64::max);
+    // Edge lengths first: a sliver with short ends (the usual kind) is declined before the
+    // planarity and turn tests, which it would pass only to fail here (~150 instructions).
+    let e2: [f64; M] = std::array::from_fn(|i| e[i].length_squared());
+    let m2 = MARGIN * MARGIN;
+    if !e2.iter().all(|&l2| l2 >= m2 * extent2) {
+        return false;
+    }
     if !(nn > AREA * AREA * extent2 * extent2) {
         return false;
     }
-    let e2: [f64; M] = std::array::from_fn(|i| e[i].length_squared());
-    let m2 = MARGIN * MARGIN;
     for k in 1..M {
         let h = d[k].dot(normal);
         if !(h * h <= PLANARITY * PLANARITY * extent2 * nn) {
@@ -81,7 +86,7 @@ fn convex_and_valid<const M: usize>(v: &[DVec3; M]) -> bool {
     for i in 0..M {
         let p = (i + M - 1) % M;
         let t = e[p].cross(e[i]).dot(normal);
-        if !(e2[i] >= m2 * extent2 && t > 0.0 && t * t >= m2 * e2[p] * e2[i] * nn) {
+        if !(t > 0.0 && t * t >= m2 * e2[p] * e2[i] * nn) {
             return false;
         }
     }

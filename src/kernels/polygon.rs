@@ -18,8 +18,10 @@ use super::dd;
 
 mod near_plane_triangle;
 mod sliver;
+mod sliver_fan;
 use super::form_factor::{clip_edge_term, frame_term, outer_self, sym_outer, EdgeFrame, ExactEnds};
 pub(crate) use near_plane_triangle::triangle_value as near_plane_triangle_value;
+pub(crate) use sliver_fan::very_thin_polygon;
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).
 pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;
@@ -494,7 +496,19 @@ fn dominant_projection(normal: DVec3) -> impl Fn(DVec3) -> DVec2 {
 /// Rejects polygons where two non-adjacent edges touch (projected on the dominant plane).
 fn check_simple(u: &[DVec3], normal: DVec3) -> Result<()> {
     let project = dominant_projection(normal);
-    let p: SmallVec<[DVec2; 8]> = u.iter().map(|v| project(*v)).collect();
+    // Up to 8 vertices in a fixed array: collecting into the small vector cost more than the
+    // tests for a quad (~200 instructions; the same points and tests either way).
+    let mut fixed = [DVec2::ZERO; 8];
+    let many: SmallVec<[DVec2; 8]>;
+    let p: &[DVec2] = if u.len() <= fixed.len() {
+        for (q, v) in fixed.iter_mut().zip(u) {
+            *q = project(*v);
+        }
+        &fixed[..u.len()]
+    } else {
+        many = u.iter().map(|v| project(*v)).collect();
+        &many
+    };
     let count = p.len();
     for i in 0..count {
         for j in i + 2..count {
