@@ -371,11 +371,12 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
         }
     }
     // A sliver: the fan triangles' sliver rules instead of the robust path's isotropic
-    // subdivision (~30x fewer instructions).
-    let d = match polygon::very_thin_polygon(x, n, vertices, order) {
-        Some(d) => d,
-        None => polygon::form_factor(x, n, vertices, order)?,
-    };
+    // subdivision (~30x fewer instructions). Lambert's paths decline every polygon it takes
+    // (`lambert_polygon::SLIVER_AREA2`): its value is the value order's as it is.
+    if let Some(d) = polygon::very_thin_polygon(x, n, vertices, order) {
+        return Ok(d);
+    }
+    let d = polygon::form_factor(x, n, vertices, order)?;
     Ok(with_lambert_value(d, order, || {
         lambert_polygon::polygon_value(x, n, vertices)
     }))

@@ -11,20 +11,24 @@
 //! is a pointwise factor), so it is additive over a partition. When every fan triangle
 //! `(v_0, v_k, v_{k+1})` has the polygon's orientation, the fan partitions the polygon and its
 //! form factor is the sum of the triangles' (each a non-negative number: no cancellation in the
-//! value). Each triangle is evaluated by the sliver rule's direct entry
-//! ([`unclipped_sliver`](super::sliver::unclipped_sliver): not near the plane, nothing clipped,
-//! no far-field rule, `x` far from the triangle compared with its width), whose result has the
-//! robust path's bits for that triangle; as soon as one triangle is declined, so is the polygon
-//! (the robust path then runs). The derivatives are sums too: a triangle's gradient and Hessian are
+//! value). The decisions of the sliver rule's direct entry
+//! ([`unclipped_sliver`](super::sliver::unclipped_sliver)) are taken once for the polygon (not
+//! near the plane, nothing clipped, no far-field rule), then each triangle is integrated by the
+//! rule ([`sliver_quadrature`], which declines when `x` is not far from the triangle compared
+//! with its width); as soon as one triangle is declined, so is the polygon (the robust path then
+//! runs). Where the robust path on a fan triangle takes the rule too, the sum has its bits up to
+//! the order of the additions. The derivatives are sums too: a triangle's gradient and Hessian are
 //! within its own accuracy relative to its largest entry, and the pieces' derivatives can only
 //! partly cancel (all pieces are seen under the same small width, from the same side), which
 //! `tests/kernels_b_polygon_slivers.rs` measures against 320-bit references.
 
 use glam::DVec3;
 
-use super::sliver::unclipped_sliver;
-use super::{dd, Plane};
+use super::sliver::sliver_quadrature;
+use super::{dd, fast_decisions, ClipVertex, Plane};
+use crate::kernels::form_factor::oriented;
 use crate::kernels::lambert;
+use crate::kernels::lambert_polygon::SLIVER_AREA2;
 use crate::{Deriv3, Order};
 
 /// Smallest `(u_k × u_{k+1})·N / (‖u_k‖‖u_{k+1}‖‖N‖)` of a fan triangle: its orientation is then
@@ -51,15 +55,16 @@ pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -
     for k in 1..m {
         u[k] = v[k] - v[0];
     }
-    // Thin at all? (Newell's normal as `Plane::new` sums it; with a margin, as the robust
-    // validation below decides.) The other polygons that reach the robust path pay only this.
+    // Thin at all? Exactly the complement of the Lambert fast paths' test (the same rounded
+    // normal and extent), so that they never took this polygon; `Plane::new` below decides with
+    // the robust path's threshold. The other polygons that reach the robust path pay only this.
     let mut newell = DVec3::ZERO;
     let mut extent2 = 0.0f64;
     for k in 1..m {
         newell += u[k].cross(u[(k + 1) % m]);
         extent2 = extent2.max(u[k].length_squared());
     }
-    if !(newell.length_squared() < 1.01e-10 * extent2 * extent2) {
+    if !(newell.length_squared() < SLIVER_AREA2 * extent2 * extent2) {
         return None;
     }
     let mut r = [DVec3::ZERO; MAX_VERTICES];
@@ -80,26 +85,42 @@ pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -
     if !plane.is_very_thin() {
         return None;
     }
-    let mut sum = Deriv3::constant(0.0);
+    // The decisions the sliver rule's direct entry takes per triangle, once for the polygon:
+    // x not near the plane (so the side it is on is certain, the same for every fan triangle),
+    // no far-field rule (the robust path's far field takes the polygon), and every vertex above
+    // the tangent plane by more than the rounding of `n·r` (nothing clipped).
+    let (far, h_p) = fast_decisions(&r[..m], &plane)?;
+    if far.is_some() {
+        return None;
+    }
+    let above = |v: &DVec3| {
+        let h = n.dot(*v);
+        h > 0.0 && h * h > 1e-26 * v.length_squared()
+    };
+    if !r[..m].iter().all(above) {
+        return None;
+    }
+    let vertex = |k: usize| ClipVertex {
+        u: u[k],
+        r: r[k],
+        r_lo: r_lo[k],
+        on_line: false,
+    };
     for k in 1..m - 1 {
         let fan = u[k].cross(u[k + 1]);
         let scale = u[k].length() * u[k + 1].length();
         if !(fan.dot(plane.normal) > FAN_SINE * scale) {
             return None;
         }
-        let d = unclipped_sliver(
-            &[DVec3::ZERO, u[k], u[k + 1]],
-            &[r[0], r[k], r[k + 1]],
-            &[r_lo[0], r_lo[k], r_lo[k + 1]],
-            n,
-            order,
-        )?;
+    }
+    let mut sum = Deriv3::constant(0.0);
+    for k in 1..m - 1 {
+        let d = sliver_quadrature(&[vertex(0), vertex(k), vertex(k + 1)], n, order)?;
         sum.value += d.value;
         sum.gradient += d.gradient;
         sum.hessian += d.hessian;
     }
-    sum.value = sum.value.min(1.0);
-    Some(sum)
+    oriented(sum, h_p)
 }
 
 #[cfg(test)]
