@@ -376,7 +376,10 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
     if let Some(d) = polygon::very_thin_polygon(x, n, vertices, order) {
         return Ok(d);
     }
-    let d = polygon::form_factor(x, n, vertices, order)?;
+    let d = match polygon::polygon_form_factor_in_range(x, n, vertices, order) {
+        Some(d) => d?,
+        None => polygon::form_factor(x, n, vertices, order)?,
+    };
     Ok(with_lambert_value(d, order, || {
         lambert_polygon::polygon_value(x, n, vertices)
     }))
