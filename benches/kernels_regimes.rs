@@ -1,9 +1,10 @@
-//! Criterion benches of the point-to-triangle form factor in its hard regimes (issue 18: slivers,
-//! 1e-6 from the plane and 1e6 sizes away, each within 5x of the generic case), at each order.
-//! Before the criterion groups a table gives ns per call and the ratio to the generic case at the
-//! same order, measured in the same interleaved rounds (minimum over 40 rounds), so that every
-//! row sees the same machine load. Accuracy in these configurations is checked by
-//! `tests/kernels_b_accuracy.rs` and `tests/kernels_b_regimes.rs` against 320-bit references.
+//! Criterion benches of the point-to-triangle and point-to-polygon form factors in their hard
+//! regimes (issue 18: slivers, 1e-6 from the plane and 1e6 sizes away, each within 5x of the
+//! generic case), at each order. Before the criterion groups two tables give ns per call and the
+//! ratio to the generic case of the same vertex count at the same order, measured in the same
+//! interleaved rounds (minimum over 40 rounds), so that every row sees the same machine load.
+//! Accuracy in these configurations is checked by `tests/kernels_b_accuracy.rs`,
+//! `tests/kernels_b_regimes.rs` and `tests/kernels_b_near_plane.rs` against 320-bit references.
 //!
 //! `cargo bench --bench kernels_regimes -- --warm-up-time 1 --measurement-time 2` (table and
 //! criterion); append a filter that matches nothing (`nomatch`) for the table alone.
@@ -20,7 +21,8 @@ use raddiff::{kernels, Order};
 
 struct Case {
     name: &'static str,
-    tri: [DVec3; 3],
+    /// Three vertices: `triangle_form_factor`; more: `polygon_form_factor`.
+    v: Vec<DVec3>,
     x: DVec3,
     n: DVec3,
 }
@@ -38,7 +40,6 @@ fn cases() -> Vec<Case> {
         DVec3::new(0.5, 1e-4, 1.0),
     ];
     let sliver_6 = [sliver[0], sliver[1], DVec3::new(0.5, 1e-6, 1.0)];
-    let normal = DVec3::new(0.1, -0.2, 1.0).normalize();
     let plane_n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
     let centroid = (tri[0] + tri[1] + tri[2]) / 3.0;
     let far_dir = DVec3::new(-0.3, -0.2, -1.0).normalize();
@@ -63,17 +64,98 @@ fn cases() -> Vec<Case> {
             outside - plane_n * 1e-6,
         ),
     ];
-    list.into_iter()
-        .map(|(name, tri, x)| {
-            // The receiver faces the triangle, as in the kernels example.
-            let n = if (tri[0] - x).dot(normal) > 0.0 {
-                normal
-            } else {
-                -normal
-            };
-            Case { name, tri, x, n }
+    let mut all: Vec<Case> = list
+        .into_iter()
+        .map(|(name, tri, x)| facing(name, tri.to_vec(), x))
+        .collect();
+    all.extend(polygon_cases());
+    all
+}
+
+/// The receiver faces the polygon, as in the kernels example.
+fn facing(name: &'static str, v: Vec<DVec3>, x: DVec3) -> Case {
+    let normal = DVec3::new(0.1, -0.2, 1.0).normalize();
+    let n = if (v[0] - x).dot(normal) > 0.0 {
+        normal
+    } else {
+        -normal
+    };
+    Case { name, v, x, n }
+}
+
+/// The quad and pentagon of `benches/kernels_b.rs` in the triangle's regimes, each first in its
+/// generic configuration (the baseline of its rows), plus slivers (width 1e-6 of the length).
+fn polygon_cases() -> Vec<Case> {
+    let quad: Vec<DVec3> = [(-0.5, -0.4), (0.6, -0.5), (0.7, 0.6), (-0.4, 0.5)]
+        .map(|(x, y)| DVec3::new(x, y, 1.0 + 0.1 * x + 0.1 * y))
+        .to_vec();
+    let pentagon: Vec<DVec3> = (0..5)
+        .map(|i| {
+            let phi = std::f64::consts::TAU * i as f64 / 5.0;
+            DVec3::new(phi.cos(), phi.sin(), 1.2 + 0.3 * phi.sin())
         })
-        .collect()
+        .collect();
+    // A trapezoid 1 long and 1e-6 wide, and a pentagon on a flat arc as thin.
+    let sliver_quad = vec![
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(0.7, 1e-6, 1.0),
+        DVec3::new(0.2, 1e-6, 1.0),
+    ];
+    let sliver_pentagon = vec![
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(0.8, 0.8e-6, 1.0),
+        DVec3::new(0.5, 1e-6, 1.0),
+        DVec3::new(0.2, 0.8e-6, 1.0),
+    ];
+    let far_dir = DVec3::new(-0.3, -0.2, -1.0).normalize();
+    // `edge`: the edge beyond which x lies outside, one that the tangent plane then cuts.
+    let regimes = |v: &[DVec3], edge: usize, names: [&'static str; 4]| {
+        let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+        let centroid = v.iter().sum::<DVec3>() / v.len() as f64;
+        // In the plane, beyond the edge by a fifth of the centroid's distance to its midpoint.
+        let mid = (v[edge] + v[(edge + 1) % v.len()]) * 0.5;
+        let outside = mid + (mid - centroid) * 0.2;
+        [
+            facing(names[0], v.to_vec(), DVec3::new(0.3, 0.2, 0.1)),
+            facing(names[1], v.to_vec(), centroid + far_dir * 1e6),
+            facing(names[2], v.to_vec(), centroid - plane_n * 1e-6),
+            facing(names[3], v.to_vec(), outside - plane_n * 1e-6),
+        ]
+    };
+    let mut list = Vec::new();
+    list.extend(regimes(
+        &quad,
+        0,
+        [
+            "quad generic",
+            "quad 1e6 sizes away",
+            "quad 1e-6 above the plane",
+            "quad 1e-6 from the plane, outside",
+        ],
+    ));
+    list.push(facing(
+        "quad sliver 1e-6",
+        sliver_quad,
+        DVec3::new(0.4, 0.1, 0.3),
+    ));
+    list.extend(regimes(
+        &pentagon,
+        1,
+        [
+            "pentagon generic",
+            "pentagon 1e6 sizes away",
+            "pentagon 1e-6 above the plane",
+            "pentagon 1e-6 from the plane, outside",
+        ],
+    ));
+    list.push(facing(
+        "pentagon sliver 1e-6",
+        sliver_pentagon,
+        DVec3::new(0.4, 0.1, 0.3),
+    ));
+    list
 }
 
 const ORDERS: [(&str, Order); 3] = [
@@ -83,8 +165,11 @@ const ORDERS: [(&str, Order); 3] = [
 ];
 
 fn call(c: &Case, order: Order) {
-    let t = c.tri;
-    black_box(kernels::triangle_form_factor(black_box(c.x), c.n, t[0], t[1], t[2], order).ok());
+    if let [a, b, t] = c.v[..] {
+        black_box(kernels::triangle_form_factor(black_box(c.x), c.n, a, b, t, order).ok());
+    } else {
+        black_box(kernels::polygon_form_factor(black_box(c.x), c.n, &c.v, order).ok());
+    }
 }
 
 /// `RADDIFF_REGIMES_PROFILE="CASE,ORDER,CALLS"`: the calls of one case, nothing else.
@@ -139,12 +224,24 @@ fn ratio_table(cases: &[Case]) {
             }
         }
     }
-    println!("\ntriangle form factor in hard regimes: ns per call (ratio to the generic case, same order)");
-    println!("| case | value | gradient | Hessian |");
-    println!("|---|---|---|---|");
-    for (k, c) in cases.iter().enumerate() {
-        let cell = |o: usize| format!("{:.0} ns ({:.2}x)", best[k][o], best[k][o] / best[0][o]);
-        println!("| {} | {} | {} | {} |", c.name, cell(0), cell(1), cell(2));
+    // Each row against the first case of its vertex count (the generic one).
+    let baseline = |k: usize| {
+        (0..cases.len())
+            .find(|&j| cases[j].v.len() == cases[k].v.len())
+            .unwrap()
+    };
+    for (title, triangles) in [("triangle", true), ("polygon", false)] {
+        println!("\n{title} form factor in hard regimes: ns per call (ratio to the generic case, same order)");
+        println!("| case | value | gradient | Hessian |");
+        println!("|---|---|---|---|");
+        for (k, c) in cases.iter().enumerate() {
+            if (c.v.len() == 3) != triangles {
+                continue;
+            }
+            let b = baseline(k);
+            let cell = |o: usize| format!("{:.0} ns ({:.2}x)", best[k][o], best[k][o] / best[b][o]);
+            println!("| {} | {} | {} | {} |", c.name, cell(0), cell(1), cell(2));
+        }
     }
     println!("minimum over {rounds} interleaved rounds of up to {max_calls} calls\n");
 }

@@ -8,7 +8,8 @@
 //! products per vertex (`d_k = v_k − v_0`, `e_i = v_{i+1} − v_i`, `N` Newell's normal
 //! `Σ d_k × d_{k+1}`, `X = max ‖d_k‖` the robust path's extent):
 //!
-//! * area: `‖N‖ > 4·1e-13·X²` (the robust limit is 1e-13);
+//! * area: `‖N‖² ≥ 1.01e-10·X⁴`, i.e. `‖N‖ ≳ 1e-5·X²` (the robust limit is 1e-13; thinner
+//!   polygons are slivers, whose sum cancels: `polygon/sliver_fan.rs`);
 //! * planarity: `|d_k·N| ≤ 0.25·1e-8·X‖N‖` (a quarter of the robust tolerance);
 //! * strictly convex, winding once: every edge `‖e_i‖ ≥ 1e-3 X`, every turn
 //!   `(e_{i−1} × e_i)·N ≥ 1e-3 ‖e_{i−1}‖‖e_i‖‖N‖` (a sine of 1e-3), the fan from `v_0` monotone
@@ -31,8 +32,13 @@ use crate::{Deriv3, Order};
 
 /// A quarter of the robust path's planarity tolerance (1e-8 of the extent).
 const PLANARITY: f64 = 0.25e-8;
-/// Four times the robust path's zero-area limit (`2·area ≤ 1e-13 extent²`).
-const AREA: f64 = 4e-13;
+/// `(2·area / extent²)²` below which a polygon is a sliver: these fast paths decline it (far above
+/// the robust path's zero-area limit, `2·area ≤ 1e-13 extent²`) and
+/// [`very_thin_polygon`](super::polygon::very_thin_polygon) may take it, on the same rounded
+/// Newell normal and extent, so that the two never both accept (the sliver path's result needs no
+/// Lambert value). `1.01e-10`: the robust path's sliver threshold (`2·area < 1e-5 extent²`),
+/// squared, with a margin for the rounding of the normal.
+pub(crate) const SLIVER_AREA2: f64 = 1.01e-10;
 /// Smallest edge length and turn sine, relative (see the module documentation).
 const MARGIN: f64 = 1e-3;
 
@@ -61,11 +67,16 @@ fn convex_and_valid<const M: usize>(v: &[DVec3; M]) -> bool {
         .iter()
         .map(|dk| dk.length_squared())
         .fold(0.0, f64::max);
-    if !(nn > AREA * AREA * extent2 * extent2) {
+    // Slivers first (the zero-area limit included), then edge lengths: declined before the
+    // planarity and turn tests, which they would pass only to fail later (~150 instructions).
+    if !(nn >= SLIVER_AREA2 * extent2 * extent2) {
         return false;
     }
     let e2: [f64; M] = std::array::from_fn(|i| e[i].length_squared());
     let m2 = MARGIN * MARGIN;
+    if !e2.iter().all(|&l2| l2 >= m2 * extent2) {
+        return false;
+    }
     for k in 1..M {
         let h = d[k].dot(normal);
         if !(h * h <= PLANARITY * PLANARITY * extent2 * nn) {
@@ -81,7 +92,7 @@ fn convex_and_valid<const M: usize>(v: &[DVec3; M]) -> bool {
     for i in 0..M {
         let p = (i + M - 1) % M;
         let t = e[p].cross(e[i]).dot(normal);
-        if !(e2[i] >= m2 * extent2 && t > 0.0 && t * t >= m2 * e2[p] * e2[i] * nn) {
+        if !(t > 0.0 && t * t >= m2 * e2[p] * e2[i] * nn) {
             return false;
         }
     }

@@ -18,11 +18,13 @@ use super::dd;
 
 mod near_plane_triangle;
 mod sliver;
+mod sliver_fan;
 use super::form_factor::{clip_edge_term, frame_term, outer_self, sym_outer, EdgeFrame, ExactEnds};
 pub(crate) use near_plane_triangle::{
     clipped_triangle_value_and_loop as near_plane_clipped_triangle_value_and_loop,
     triangle_value as near_plane_triangle_value, RouteLoop,
 };
+pub(crate) use sliver_fan::very_thin_polygon;
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).
 pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;
@@ -211,6 +213,44 @@ pub(crate) fn very_thin_triangle_form_factor_in_range(
     in_range(x, n, v, order, true)
 }
 
+/// [`triangle_form_factor_in_range`] for a polygon of any vertex count: [`form_factor`] without
+/// its validation of `x` and the vertices (finite, at least 3: `None` otherwise) and without the
+/// rescaling pass, when every coordinate difference is in (1e-30, 1e30) and `n` within the unit
+/// tolerance. The same bits as [`form_factor`], for the same reason.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(crate) fn polygon_form_factor_in_range(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3],
+    order: Order,
+) -> Option<Result<Deriv3>> {
+    if v.len() < 3 || !(x.is_finite() && v.iter().all(|vk| vk.is_finite())) {
+        return None;
+    }
+    let mut scaled = Scaled {
+        u: Points::new(),
+        r: Points::new(),
+        r_lo: Points::new(),
+        inv_scale: 1.0,
+    };
+    let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
+    let mut largest = 0.0f64;
+    for vk in v {
+        let (u, r) = (*vk - v[0], *vk - x);
+        largest = largest.max(u.abs().max_element().max(r.abs().max_element()));
+        scaled.u.push(u);
+        scaled.r.push(r);
+        scaled
+            .r_lo
+            .push(DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
+    }
+    if !(largest > 1e-30 && largest < 1e30) {
+        return None;
+    }
+    let n = super::lambert::unit(n)?;
+    Some(evaluate(&scaled, n, order).and_then(|d| scaled.finish(d, order)))
+}
+
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 #[inline(always)] // one copy per entry, without the other's branch
 fn in_range(
@@ -305,6 +345,67 @@ mod in_range_tests {
                                 assert_eq!(ha.to_bits(), hb.to_bits(), "{k}");
                             }
                         }
+                    }
+                    (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
+                    (a, b) => panic!("{k}: {a:?} vs {b:?}"),
+                }
+                compared += 1;
+            }
+        }
+        assert!(compared > 8000, "{compared}");
+    }
+
+    /// The polygon entry gives the rescaled bits too: quads and pentagons (convex, non-convex,
+    /// slivers) with x generic, near an edge line, near the plane over them and far away.
+    #[test]
+    fn unscaled_polygons_give_the_rescaled_bits() {
+        let mut state = 17;
+        let mut compared = 0;
+        for k in 0..3000 {
+            let scale = [1e-3, 1.0, 1e3, 3e-20, 7e25][k % 5];
+            let offset = [0.0, 1.0, -1e3][k % 3] * scale;
+            let mut c = || lcg(&mut state);
+            let m = 4 + k % 2;
+            let (t, jitter, tilt) = (DVec3::new(c(), c(), c()) - 0.5, c(), c());
+            let width = if k % 7 == 0 { 1e-6 } else { 1.0 };
+            // A star-shaped polygon around the origin in the plane z = 0.3 x - 0.2 y + 1,
+            // non-convex when a radius is short.
+            let v: Vec<DVec3> = (0..m)
+                .map(|i| {
+                    let phi = std::f64::consts::TAU * (i as f64 + 0.3 * jitter) / m as f64;
+                    let rad = if k % 5 == 1 && i == 2 { 0.3 } else { 1.0 };
+                    let (px, py) = (rad * phi.cos(), width * rad * phi.sin());
+                    DVec3::new(px, py, 1.0 + 0.3 * px - 0.2 * py)
+                })
+                .collect();
+            let plane_n = DVec3::new(-0.3, 0.2, 1.0).normalize();
+            let x = match k % 4 {
+                0 => t * 2.0,
+                1 => v[0] + (v[1] - v[0]) * (t.x + 0.5) + plane_n * 1e-7 * t.y,
+                2 => {
+                    DVec3::new(0.1, 0.05 * width, 1.03) + plane_n * 10f64.powf(-18.0 * (t.z + 0.5))
+                }
+                _ => t * 100.0,
+            };
+            let n = (DVec3::new(t.y, tilt - 0.5, t.x) + plane_n * 0.3).normalize();
+            let v: Vec<DVec3> = v
+                .iter()
+                .map(|vk| *vk * scale + DVec3::splat(offset))
+                .collect();
+            let x = x * scale + DVec3::splat(offset);
+            for order in [Order::Value, Order::Gradient, Order::Hessian] {
+                let Some(fast) = polygon_form_factor_in_range(x, n, &v, order) else {
+                    continue;
+                };
+                match (fast, form_factor(x, n, &v, order)) {
+                    (Ok(a), Ok(b)) => {
+                        let bits = |d: Deriv3| {
+                            let mut all = vec![d.value];
+                            all.extend(d.gradient.to_array());
+                            all.extend(d.hessian.to_cols_array());
+                            all.iter().map(|e| e.to_bits()).collect::<Vec<_>>()
+                        };
+                        assert_eq!(bits(a), bits(b), "{k} {order:?}");
                     }
                     (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string()),
                     (a, b) => panic!("{k}: {a:?} vs {b:?}"),
@@ -497,7 +598,19 @@ fn dominant_projection(normal: DVec3) -> impl Fn(DVec3) -> DVec2 {
 /// Rejects polygons where two non-adjacent edges touch (projected on the dominant plane).
 fn check_simple(u: &[DVec3], normal: DVec3) -> Result<()> {
     let project = dominant_projection(normal);
-    let p: SmallVec<[DVec2; 8]> = u.iter().map(|v| project(*v)).collect();
+    // Up to 8 vertices in a fixed array: collecting into the small vector cost more than the
+    // tests for a quad (~200 instructions; the same points and tests either way).
+    let mut fixed = [DVec2::ZERO; 8];
+    let many: SmallVec<[DVec2; 8]>;
+    let p: &[DVec2] = if u.len() <= fixed.len() {
+        for (q, v) in fixed.iter_mut().zip(u) {
+            *q = project(*v);
+        }
+        &fixed[..u.len()]
+    } else {
+        many = u.iter().map(|v| project(*v)).collect();
+        &many
+    };
     let count = p.len();
     for i in 0..count {
         for j in i + 2..count {

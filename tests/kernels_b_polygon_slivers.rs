@@ -1,0 +1,101 @@
+//! Polygon slivers (4 to 8 vertices, 1e-5.2..1e-8 wide relative to their length), where
+//! `polygon_form_factor` sums its fan triangles' sliver rules: accuracy against 320-bit
+//! references, at every order, from a fifth of a length to 30 lengths away.
+
+mod kernels_b_common;
+
+use glam::DVec3;
+use kernels_b_common::*;
+use raddiff::{kernels, Order};
+
+fn check(big: &mut Big, x: DVec3, n: DVec3, v: &[DVec3], worst: &mut [f64; 3]) -> [f64; 3] {
+    let reference = big.polygon_reference(x, n, v, true);
+    let d = kernels::polygon_form_factor(x, n, v, Order::Hessian)
+        .unwrap_or_else(|e| panic!("{e} for x={x:?} n={n:?} v={v:?}"));
+    let value = kernels::polygon_form_factor(x, n, v, Order::Value).unwrap();
+    assert_eq!(value.value, d.value, "the value depends on the order");
+    let e = errors(&d, &reference);
+    if std::env::var_os("KB_VERBOSE").is_some() {
+        eprintln!("{e:?} x={x:?} n={n:?} v={v:?}\n got {d:?}\n want {reference:?}");
+    }
+    max3(worst, e);
+    e
+}
+
+/// The configurations the fan path's unit tests found furthest from the robust path.
+#[test]
+fn listed_slivers() {
+    let mut big = Big::new();
+    let mut worst = [0.0; 3];
+    let v = [
+        DVec3::new(155.4522336098135, 4.8993349827025305, 18.08696532716087),
+        DVec3::new(153.33463039556614, 53.59298988907875, 43.97794697202801),
+        DVec3::new(153.6928172054076, 45.356590954774, 39.598558005921305),
+        DVec3::new(154.03633654011605, 37.457466229862575, 35.39850166476208),
+        DVec3::new(154.39697020281994, 29.164802623013614, 30.9891961417791),
+        DVec3::new(154.75212288131274, 20.9981726046334, 26.646904152619502),
+        DVec3::new(155.09448118660447, 13.125745376176123, 22.46104321313851),
+    ];
+    let x = DVec3::new(141.76272115320472, 41.68961225964092, 18.140295687696145);
+    let n = DVec3::new(
+        0.28586905484970393,
+        -0.40131773747581834,
+        0.8701855877148431,
+    );
+    println!("7-gon {:?}", check(&mut big, x, n, &v, &mut worst));
+    let w = 1e-7;
+    let v = [
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(0.7, w, 1.0),
+        DVec3::new(0.2, w, 1.0),
+    ];
+    for h in [1.58, 1.0, 0.5] {
+        let x = DVec3::new(0.45, 0.5e-7, 1.0 - h);
+        println!(
+            "quad at {h} {:?}",
+            check(&mut big, x, DVec3::Z, &v, &mut worst)
+        );
+    }
+    println!("worst {worst:?}");
+    assert!(within(worst, HARD), "{worst:?}");
+}
+
+/// A convex sliver: `m` points, the first two the ends of the long side, the others on a flat
+/// parabola `width` high, in a random plane.
+fn sliver(rng: &mut Rng, m: usize, len: f64, width: f64, origin: DVec3) -> Vec<DVec3> {
+    let along = rng.unit();
+    let across = along.any_orthonormal_vector();
+    let mut v = vec![origin, origin + along * len];
+    for k in (1..m - 1).rev() {
+        let t = k as f64 / (m - 1) as f64 + 0.1 * rng.range(-0.5, 0.5) / m as f64;
+        v.push(origin + along * (t * len) + across * (width * 4.0 * t * (1.0 - t)));
+    }
+    v
+}
+
+/// Random convex slivers of 4 to 8 vertices at scales 1e-2..1e2, x from 0.5 to 8 lengths away in
+/// random directions (the fan path's range: closer, the robust path runs, whose subdivision and
+/// edge sum err by up to ~2e-9 on these slivers at 0.2-0.5 lengths; farther, its far-field
+/// rule), receivers tilted up to ~0.6 rad from facing the sliver: value and gradient within
+/// 1e-13, Hessian 1e-11 (measured 7e-16 / 9e-16 / 1.5e-12,
+/// `--nocapture`), far below the hard contract.
+#[test]
+fn random_slivers_against_320_bit_references() {
+    let mut big = Big::new();
+    let mut rng = Rng(18);
+    let mut worst = [0.0; 3];
+    for case in 0..120 {
+        let m = 4 + case % 5;
+        let len = 10f64.powf(rng.range(-2.0, 2.0));
+        let width = len * 10f64.powf(rng.range(-8.0, -5.2));
+        let origin = rng.vec(3.0 * len);
+        let v = sliver(&mut rng, m, len, width, origin);
+        let c = v.iter().sum::<DVec3>() / m as f64;
+        let x = c + rng.unit() * (len * 10f64.powf(rng.range(-0.3, 0.9)));
+        let n = ((c - x).normalize() + rng.vec(0.5)).normalize();
+        check(&mut big, x, n, &v, &mut worst);
+    }
+    println!("worst {worst:?}");
+    assert!(within(worst, [1e-13, 1e-13, 1e-11]), "{worst:?}");
+}
