@@ -118,13 +118,14 @@ fn sliver_frame(
 /// slivers of 4 to 8 vertices 1e-5.2..1e-8 wide: `x` 0.02-0.5 lengths away in random directions
 /// (receivers tilted up to ~1 rad, so many clip the sliver), and `x` 1e-6..1e-2 lengths from the
 /// sliver's plane beside it (facing it, and with the tangent plane cutting it across).
-/// Returns the worst errors without and with clipping, and the largest `Σ_k |piece_k| / |sum|`
+/// Returns the worst errors without and with clipping and with clipping near the plane (below),
+/// and the largest `Σ_k |piece_k| / |sum|`
 /// of the fan triangles' gradients and Hessians (each by its largest entry) where `x` is within
 /// 1e-3 of its largest vertex distance from the plane (where `polygon_form_factor` sums them).
-fn close_slivers() -> ([[f64; 3]; 2], [f64; 2]) {
+fn close_slivers() -> ([[f64; 3]; 3], [f64; 2]) {
     let mut big = Big::new();
     let mut rng = Rng(1802);
-    let mut worst = [[0.0; 3]; 2];
+    let mut worst = [[0.0; 3]; 3];
     let mut ratio = [0.0f64; 2];
     let big_entry = |m: glam::DMat3| m.to_cols_array().iter().fold(0.0f64, |s, e| s.max(e.abs()));
     for case in 0..150 {
@@ -163,6 +164,9 @@ fn close_slivers() -> ([[f64; 3]; 2], [f64; 2]) {
             (h.min(normal.dot(*p - x).abs()), r.max((*p - x).length()))
         });
         if h < 1e-3 * r {
+            if clipped {
+                max3(&mut worst[2], e);
+            }
             let (mut sum, mut pieces) = (raddiff::Deriv3::constant(0.0), [0.0; 2]);
             for k in 1..m - 1 {
                 let d = kernels::triangle_form_factor(x, n, v[0], v[k], v[k + 1], Order::Hessian)
@@ -184,17 +188,22 @@ fn close_slivers() -> ([[f64; 3]; 2], [f64; 2]) {
 }
 
 /// Where the fan path declines: unclipped slivers within 1e-13 (measured 1.2e-15 / 1.1e-15 /
-/// 2.3e-15); clipped ones within the measured bounds below, beyond the sliver contract (see
-/// `clipped_close_slivers_meet_the_sliver_contract`).
+/// 2.3e-15); clipped ones within the measured bounds below (about 2.5x the worst), beyond the
+/// sliver contract (see `clipped_close_slivers_meet_the_sliver_contract`); the fan triangles'
+/// derivatives cancel by less than 2x near the plane.
 #[test]
 fn close_slivers_against_320_bit_references() {
     let (worst, ratio) = close_slivers();
     println!(
-        "unclipped {:?}, clipped {:?}, near-plane fan derivative ratios {ratio:?}",
-        worst[0], worst[1]
+        "unclipped {:?}, clipped {:?}, of which near the plane {:?}, near-plane fan derivative \
+         ratios {ratio:?}",
+        worst[0], worst[1], worst[2]
     );
     assert!(within(worst[0], [1e-13; 3]), "{worst:?}");
-    assert!(within(worst[1], [5e-7, 2e-8, 1e-7]), "{worst:?}");
+    assert!(within(worst[1], [5e-7, 2e-8, 2e-7]), "{worst:?}");
+    // Near the plane, the fan triangles (the robust path reached 1.1e-4 in value there).
+    assert!(within(worst[2], [5e-8, 2e-8, 2e-8]), "{worst:?}");
+    assert!(ratio[0] < 2.0 && ratio[1] < 2.0, "{ratio:?}");
 }
 
 /// The sliver contract on clipped slivers with `x` 0.02-0.5 lengths away or near their plane:
