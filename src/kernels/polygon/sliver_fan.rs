@@ -353,6 +353,64 @@ mod tests {
         assert!(declined && last.is_some());
     }
 
+    /// The near-plane fallback: taken with x within 1e-3 of the largest vertex distance from the
+    /// plane (the sum of the public triangle kernel on the fan, the public entry's result),
+    /// declined farther, for polygons that are not very thin or whose fan turns over, and for
+    /// x in the plane with derivatives (the robust path reports the crease).
+    #[test]
+    fn fan_of_triangles_near_the_plane() {
+        let v = vec![
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(1.0, 0.0, 1.0),
+            DVec3::new(0.7, 1e-7, 1.0),
+            DVec3::new(0.2, 1e-7, 1.0),
+        ];
+        // Beside the sliver, 1e-5 above its plane, the tangent plane cutting it across.
+        let x = DVec3::new(0.5, 0.1, 1.0 - 1e-5);
+        let n = DVec3::new(1.0, 0.0, 0.3).normalize();
+        for order in [Order::Value, Order::Gradient, Order::Hessian] {
+            assert!(very_thin_polygon(x, n, &v, order).is_none());
+            let got = very_thin_polygon_by_triangles(x, n, &v, order).unwrap();
+            let mut want = Deriv3::constant(0.0);
+            for k in 1..3 {
+                let d = crate::kernels::triangle_form_factor(x, n, v[0], v[k], v[k + 1], order)
+                    .unwrap();
+                want.value += d.value;
+                want.gradient += d.gradient;
+                want.hessian += d.hessian;
+            }
+            assert_eq!(got, want);
+            assert!(got.value > 0.0);
+            assert_eq!(
+                crate::kernels::polygon_form_factor(x, n, &v, order).unwrap(),
+                got
+            );
+        }
+        // Farther from the plane than 1e-3 of the distance: the robust path's.
+        let far = DVec3::new(0.5, 0.1, 1.0 - 1e-2);
+        assert!(very_thin_polygon_by_triangles(far, n, &v, Order::Hessian).is_none());
+        let fat = vec![
+            v[0],
+            v[1],
+            DVec3::new(0.7, 0.1, 1.0),
+            DVec3::new(0.2, 0.1, 1.0),
+        ];
+        assert!(very_thin_polygon_by_triangles(x, n, &fat, Order::Hessian).is_none());
+        let arrow = vec![
+            v[0],
+            v[1],
+            DVec3::new(0.5, 1e-7, 1.0),
+            DVec3::new(0.5, 0.5e-7, 1.0),
+        ];
+        assert!(very_thin_polygon_by_triangles(x, n, &arrow, Order::Hessian).is_none());
+        let in_plane = DVec3::new(0.5, 0.1, 1.0);
+        assert!(very_thin_polygon_by_triangles(in_plane, n, &v, Order::Gradient).is_none());
+        assert!(matches!(
+            crate::kernels::polygon_form_factor(in_plane, n, &v, Order::Gradient),
+            Err(crate::Error::Degenerate(_))
+        ));
+    }
+
     #[test]
     fn declines_what_it_must() {
         let n = DVec3::Z;
