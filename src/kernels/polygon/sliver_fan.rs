@@ -15,8 +15,9 @@
 //! ([`unclipped_sliver`](super::sliver::unclipped_sliver)) are taken once for the polygon (not
 //! near the plane, nothing clipped, no far-field rule), then each triangle is integrated by the
 //! rule ([`sliver_quadrature`], which declines when `x` is not far from the triangle compared
-//! with its width); as soon as one triangle is declined, so is the polygon (the robust path then
-//! runs). Where the robust path on a fan triangle takes the rule too, the sum has its bits up to
+//! with its width); as soon as one triangle is declined, so is the polygon (with `x` near its
+//! plane [`very_thin_polygon_by_triangles`] then sums the fan triangles through the triangle
+//! kernel, elsewhere the robust path runs). Where the robust path on a fan triangle takes the rule too, the sum has its bits up to
 //! the order of the additions. The derivatives are sums too: a triangle's gradient and Hessian are
 //! within its own accuracy relative to its largest entry, and the pieces' derivatives can only
 //! partly cancel (all pieces are seen under the same small width, from the same side), which
