@@ -99,3 +99,168 @@ fn random_slivers_against_320_bit_references() {
     println!("worst {worst:?}");
     assert!(within(worst, [1e-13, 1e-13, 1e-11]), "{worst:?}");
 }
+
+/// A sliver as [`sliver`] with the directions it was drawn in: (vertices, along, across).
+fn sliver_frame(
+    rng: &mut Rng,
+    m: usize,
+    len: f64,
+    width: f64,
+    origin: DVec3,
+) -> (Vec<DVec3>, DVec3, DVec3) {
+    let v = sliver(rng, m, len, width, origin);
+    let along = (v[1] - v[0]).normalize();
+    let across = along.any_orthonormal_vector();
+    (v, along, across)
+}
+
+/// Worst errors where the sum of the fan triangles' sliver rules declines, on random convex
+/// slivers of 4 to 8 vertices 1e-5.2..1e-8 wide: `x` 0.02-0.5 lengths away in random directions
+/// (receivers tilted up to ~1 rad, so many clip the sliver), and `x` 1e-6..1e-2 lengths from the
+/// sliver's plane beside it (facing it, and with the tangent plane cutting it across).
+/// Returns the worst errors without and with clipping and with clipping near the plane (below),
+/// and the largest `Σ_k |piece_k| / |sum|`
+/// of the fan triangles' gradients and Hessians (each by its largest entry) where `x` is within
+/// 1e-3 of its largest vertex distance from the plane (where `polygon_form_factor` sums them).
+fn close_slivers() -> ([[f64; 3]; 3], [f64; 2]) {
+    let mut big = Big::new();
+    let mut rng = Rng(1802);
+    let mut worst = [[0.0; 3]; 3];
+    let mut ratio = [0.0f64; 2];
+    let big_entry = |m: glam::DMat3| m.to_cols_array().iter().fold(0.0f64, |s, e| s.max(e.abs()));
+    for case in 0..150 {
+        let group = case % 3;
+        let m = 4 + (case / 3) % 5;
+        let len = 10f64.powf(rng.range(-2.0, 2.0));
+        let width = len * 10f64.powf(rng.range(-8.0, -5.2));
+        let origin = rng.vec(3.0 * len);
+        let (v, along, across) = sliver_frame(&mut rng, m, len, width, origin);
+        let normal = along.cross(across);
+        let c = v.iter().sum::<DVec3>() / m as f64;
+        let (x, n) = if group == 0 {
+            let x = c + rng.unit() * (len * 10f64.powf(rng.range(-1.7, -0.3)));
+            (x, ((c - x).normalize() + rng.vec(1.0)).normalize())
+        } else {
+            let side = if rng.uniform() < 0.5 { 1.0 } else { -1.0 };
+            let height = side * len * 10f64.powf(rng.range(-6.0, -2.0));
+            let beside = len * 10f64.powf(rng.range(-1.7, -0.3));
+            let x = c
+                + across * (beside * side)
+                + normal * height
+                + along * (rng.range(-0.3, 0.3) * len);
+            let n = if group == 1 {
+                ((c - x).normalize() + rng.vec(0.1)).normalize()
+            } else {
+                (along * side - normal * (height.signum() * 0.3)).normalize()
+            };
+            (x, n)
+        };
+        let clipped = v.iter().any(|p| n.dot(*p - x) <= 0.0);
+        let e = check(&mut big, x, n, &v, &mut worst[clipped as usize]);
+        if std::env::var_os("KB_VERBOSE").is_some() {
+            eprintln!("case {case} group {group} clipped {clipped}: {e:?}");
+        }
+        let (h, r) = v.iter().fold((f64::INFINITY, 0.0f64), |(h, r), p| {
+            (h.min(normal.dot(*p - x).abs()), r.max((*p - x).length()))
+        });
+        if h < 1e-3 * r {
+            if clipped {
+                max3(&mut worst[2], e);
+            }
+            let (mut sum, mut pieces) = (raddiff::Deriv3::constant(0.0), [0.0; 2]);
+            for k in 1..m - 1 {
+                let d = kernels::triangle_form_factor(x, n, v[0], v[k], v[k + 1], Order::Hessian)
+                    .unwrap();
+                pieces[0] += d.gradient.abs().max_element();
+                pieces[1] += big_entry(d.hessian);
+                sum.gradient += d.gradient;
+                sum.hessian += d.hessian;
+            }
+            let sums = [sum.gradient.abs().max_element(), big_entry(sum.hessian)];
+            for k in 0..2 {
+                if sums[k] > 0.0 {
+                    ratio[k] = ratio[k].max(pieces[k] / sums[k]);
+                }
+            }
+        }
+    }
+    (worst, ratio)
+}
+
+/// Where the fan path declines: unclipped slivers within 1e-13 (measured 1.2e-15 / 1.1e-15 /
+/// 2.3e-15); clipped ones within the measured bounds below (about 2.5x the worst), beyond the
+/// sliver contract (see `clipped_close_slivers_meet_the_sliver_contract`); the fan triangles'
+/// derivatives cancel by less than 2x near the plane.
+#[test]
+fn close_slivers_against_320_bit_references() {
+    let (worst, ratio) = close_slivers();
+    println!(
+        "unclipped {:?}, clipped {:?}, of which near the plane {:?}, near-plane fan derivative \
+         ratios {ratio:?}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(within(worst[0], [1e-13; 3]), "{worst:?}");
+    assert!(within(worst[1], [5e-7, 2e-8, 2e-7]), "{worst:?}");
+    // Near the plane, the fan triangles (the robust path reached 1.1e-4 in value there).
+    assert!(within(worst[2], [5e-8, 2e-8, 2e-8]), "{worst:?}");
+    assert!(ratio[0] < 2.0 && ratio[1] < 2.0, "{ratio:?}");
+}
+
+/// The sliver contract on clipped slivers with `x` 0.02-0.5 lengths away or near their plane:
+/// NOT met (both the robust path's isotropic subdivision and the triangle kernel on the fan
+/// triangles, which `polygon_form_factor` takes near the plane, err by ~1e-9..2e-7; the sliver
+/// rule declines every clipped polygon). Kept to measure a fix.
+#[test]
+#[ignore = "clipped polygon slivers: measured errors beyond the sliver contract (docs/kernels.md)"]
+fn clipped_close_slivers_meet_the_sliver_contract() {
+    let (worst, _) = close_slivers();
+    println!("clipped {:?}", worst[1]);
+    assert!(within(worst[1], HARD), "{worst:?}");
+}
+
+/// Convex slivers 1e-9..1e-12 wide (4 to 8 vertices, `x` 0.5-8 lengths away as in
+/// `random_slivers_against_320_bit_references`) used to be refused as "not planar": the
+/// validation measured the rounding of their Newell normal (~ε/thinness radians) against 1e-8.
+/// They are accepted now and meet the sliver contract; a sliver 1e-7 wide with one vertex
+/// lifted by 1e-6 of its length, and a unit square with a vertex lifted by 1e-6, are refused.
+#[test]
+fn thinner_slivers_are_planar() {
+    let mut big = Big::new();
+    let mut rng = Rng(1803);
+    let mut worst = [0.0; 3];
+    for case in 0..60 {
+        let m = 4 + case % 5;
+        let len = 10f64.powf(rng.range(-2.0, 2.0));
+        let width = len * 10f64.powf(rng.range(-12.0, -9.0));
+        let origin = rng.vec(3.0 * len);
+        let v = sliver(&mut rng, m, len, width, origin);
+        let c = v.iter().sum::<DVec3>() / m as f64;
+        let x = c + rng.unit() * (len * 10f64.powf(rng.range(-0.3, 0.9)));
+        let n = ((c - x).normalize() + rng.vec(0.5)).normalize();
+        check(&mut big, x, n, &v, &mut worst);
+    }
+    println!("worst {worst:?}");
+    assert!(within(worst, HARD), "{worst:?}");
+    let x = DVec3::new(0.4, 0.1, 0.3);
+    let mut bent = vec![
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(0.7, 1e-7, 1.0),
+        DVec3::new(0.2, 1e-7, 1.0),
+    ];
+    assert!(kernels::polygon_form_factor(x, DVec3::Z, &bent, Order::Value).is_ok());
+    bent[2].z += 1e-6;
+    let square = [
+        DVec3::new(0.0, 0.0, 1.0),
+        DVec3::new(1.0, 0.0, 1.0),
+        DVec3::new(1.0, 1.0, 1.0 + 1e-6),
+        DVec3::new(0.0, 1.0, 1.0),
+    ];
+    for v in [&bent[..], &square[..]] {
+        let got = kernels::polygon_form_factor(x, DVec3::Z, v, Order::Hessian);
+        assert!(
+            matches!(&got, Err(raddiff::Error::InvalidArgument(m)) if m.contains("planar")),
+            "{got:?}"
+        );
+    }
+}

@@ -24,7 +24,7 @@ pub(crate) use near_plane_triangle::{
     clipped_triangle_value_and_loop as near_plane_clipped_triangle_value_and_loop,
     triangle_value as near_plane_triangle_value, RouteLoop,
 };
-pub(crate) use sliver_fan::very_thin_polygon;
+pub(crate) use sliver_fan::{very_thin_polygon, very_thin_polygon_by_triangles};
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).
 pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;
@@ -475,7 +475,18 @@ impl Plane {
         // rounding of its normal (~u extent²/area), and refuse valid slivers below ~1e-9.
         if count > 3 {
             let off_plane = u.iter().map(|v| normal.dot(*v).abs()).fold(0.0, f64::max);
-            if off_plane > PLANARITY_TOLERANCE * extent {
+            // The rounded normal itself is tilted: each rounded cross product is off by at most
+            // `2√3 ε ‖u_i‖‖u_{i+1}‖ ≤ 4ε extent²`, the sum adds `count·ε` per term, so by up to
+            // `(4 + count)·count·ε·extent² / twice_area` radians, which moves a vertex up to that
+            // times `extent` off the plane (`extent²/area ~ 1/thinness`: a quad 1e-10 wide,
+            // ~5e-5 of its extent); the dot product adds a few ε. Twice that is allowed on top of
+            // the tolerance, so that thin but planar polygons are not refused for the normal's
+            // rounding; a polygon bent by less than that cannot be told from a planar one by this
+            // normal and is accepted (the sum it then gets is the one for the rounded plane).
+            let rounding = ((4 + count) * count) as f64 * f64::EPSILON * extent * extent
+                / twice_area
+                + 4.0 * f64::EPSILON;
+            if off_plane > (PLANARITY_TOLERANCE + 2.0 * rounding) * extent {
                 return Err(Error::InvalidArgument(format!(
                     "polygon is not planar: a vertex is {off_plane:e} from its plane \
                      (tolerance {PLANARITY_TOLERANCE:e} x extent {extent:e})"

@@ -15,8 +15,9 @@
 //! ([`unclipped_sliver`](super::sliver::unclipped_sliver)) are taken once for the polygon (not
 //! near the plane, nothing clipped, no far-field rule), then each triangle is integrated by the
 //! rule ([`sliver_quadrature`], which declines when `x` is not far from the triangle compared
-//! with its width); as soon as one triangle is declined, so is the polygon (the robust path then
-//! runs). Where the robust path on a fan triangle takes the rule too, the sum has its bits up to
+//! with its width); as soon as one triangle is declined, so is the polygon (with `x` near its
+//! plane [`very_thin_polygon_by_triangles`] then sums the fan triangles through the triangle
+//! kernel, elsewhere the robust path runs). Where the robust path on a fan triangle takes the rule too, the sum has its bits up to
 //! the order of the additions. The derivatives are sums too: a triangle's gradient and Hessian are
 //! within its own accuracy relative to its largest entry, and the pieces' derivatives can only
 //! partly cancel (all pieces are seen under the same small width, from the same side), which
@@ -121,6 +122,70 @@ pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -
         sum.hessian += d.hessian;
     }
     oriented(sum, h_p)
+}
+
+/// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of the polygons
+/// [`very_thin_polygon`] takes up to its per-triangle decisions (valid, 4 to 8 vertices, very
+/// thin, a fan from `v_0` with the polygon's orientation) with `x` within 1e-3 of its largest
+/// distance to a vertex from the plane (where the robust path's isotropic subdivision errs by up
+/// to 1e-4 of the value on slivers 1e-5.2..1e-8 wide, and this sum by 1.3e-7): the sum
+/// of the fan triangles' [`triangle_form_factor`](crate::kernels::triangle_form_factor), whose
+/// very-thin branch handles `x` near the sliver, near its plane and clipping (the clipped
+/// integrand is pointwise, so additive over the fan). `None` when any condition fails or a
+/// triangle reports an error (the robust path then runs, and reports).
+///
+/// The value is a sum of non-negative pieces, each within the triangles' sliver accuracy of its
+/// own value: the sum is within that accuracy of its value. The derivatives' pieces can partly
+/// cancel: each is within its accuracy of its own largest entry, so the sum's error relative to
+/// its largest entry is bounded by that accuracy times `Σ|piece| / |sum|` (per entry);
+/// `tests/kernels_b_polygon_slivers.rs` measures that ratio.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+pub(crate) fn very_thin_polygon_by_triangles(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3],
+    order: Order,
+) -> Option<Deriv3> {
+    let m = v.len();
+    if !(4..=MAX_VERTICES).contains(&m) || !x.is_finite() || !v.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    let mut u = [DVec3::ZERO; MAX_VERTICES];
+    for k in 1..m {
+        u[k] = v[k] - v[0];
+    }
+    let plane = Plane::new(&u[..m]).ok()?;
+    if !plane.is_very_thin() {
+        return None;
+    }
+    // Only near the plane (the robust path's own `NEAR_PLANE_HEIGHT` switch, on rounded
+    // heights: a decision, not a value). Farther, the triangle kernel on these fan triangles
+    // (long and needle-shaped) is no better than the robust path (both ~1e-8, measured in
+    // `tests/kernels_b_polygon_slivers.rs`), and the robust path is kept.
+    let (mut h_min, mut r_max) = (f64::INFINITY, 0.0f64);
+    for p in v {
+        let r = *p - x;
+        h_min = h_min.min(plane.normal.dot(r).abs());
+        r_max = r_max.max(r.length());
+    }
+    if !(h_min < 1e-3 * r_max) {
+        return None;
+    }
+    for k in 1..m - 1 {
+        let fan = u[k].cross(u[k + 1]);
+        let scale = u[k].length() * u[k + 1].length();
+        if !(fan.dot(plane.normal) > FAN_SINE * scale) {
+            return None;
+        }
+    }
+    let mut sum = Deriv3::constant(0.0);
+    for k in 1..m - 1 {
+        let d = crate::kernels::triangle_form_factor(x, n, v[0], v[k], v[k + 1], order).ok()?;
+        sum.value += d.value;
+        sum.gradient += d.gradient;
+        sum.hessian += d.hessian;
+    }
+    Some(sum)
 }
 
 #[cfg(test)]
@@ -287,6 +352,64 @@ mod tests {
             }
         }
         assert!(declined && last.is_some());
+    }
+
+    /// The near-plane fallback: taken with x within 1e-3 of the largest vertex distance from the
+    /// plane (the sum of the public triangle kernel on the fan, the public entry's result),
+    /// declined farther, for polygons that are not very thin or whose fan turns over, and for
+    /// x in the plane with derivatives (the robust path reports the crease).
+    #[test]
+    fn fan_of_triangles_near_the_plane() {
+        let v = vec![
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(1.0, 0.0, 1.0),
+            DVec3::new(0.7, 1e-7, 1.0),
+            DVec3::new(0.2, 1e-7, 1.0),
+        ];
+        // Beside the sliver, 1e-5 above its plane, the tangent plane cutting it across.
+        let x = DVec3::new(0.5, 0.1, 1.0 - 1e-5);
+        let n = DVec3::new(1.0, 0.0, 0.3).normalize();
+        for order in [Order::Value, Order::Gradient, Order::Hessian] {
+            assert!(very_thin_polygon(x, n, &v, order).is_none());
+            let got = very_thin_polygon_by_triangles(x, n, &v, order).unwrap();
+            let mut want = Deriv3::constant(0.0);
+            for k in 1..3 {
+                let d = crate::kernels::triangle_form_factor(x, n, v[0], v[k], v[k + 1], order)
+                    .unwrap();
+                want.value += d.value;
+                want.gradient += d.gradient;
+                want.hessian += d.hessian;
+            }
+            assert_eq!(got, want);
+            assert!(got.value > 0.0);
+            assert_eq!(
+                crate::kernels::polygon_form_factor(x, n, &v, order).unwrap(),
+                got
+            );
+        }
+        // Farther from the plane than 1e-3 of the distance: the robust path's.
+        let far = DVec3::new(0.5, 0.1, 1.0 - 1e-2);
+        assert!(very_thin_polygon_by_triangles(far, n, &v, Order::Hessian).is_none());
+        let fat = vec![
+            v[0],
+            v[1],
+            DVec3::new(0.7, 0.1, 1.0),
+            DVec3::new(0.2, 0.1, 1.0),
+        ];
+        assert!(very_thin_polygon_by_triangles(x, n, &fat, Order::Hessian).is_none());
+        let arrow = vec![
+            v[0],
+            v[1],
+            DVec3::new(0.5, 1e-7, 1.0),
+            DVec3::new(0.5, 0.5e-7, 1.0),
+        ];
+        assert!(very_thin_polygon_by_triangles(x, n, &arrow, Order::Hessian).is_none());
+        let in_plane = DVec3::new(0.5, 0.1, 1.0);
+        assert!(very_thin_polygon_by_triangles(in_plane, n, &v, Order::Gradient).is_none());
+        assert!(matches!(
+            crate::kernels::polygon_form_factor(in_plane, n, &v, Order::Gradient),
+            Err(crate::Error::Degenerate(_))
+        ));
     }
 
     #[test]
