@@ -571,8 +571,8 @@ enum raddiff_status raddiff_triangle_form_factor(struct raddiff_vec3 x,
 // The same as `raddiff_triangle_form_factor` for a planar simple polygon of `count >= 3`
 // vertices (either orientation). See the Rust `kernels::polygon_form_factor`.
 //
-// `RADDIFF_ERROR_INVALID_ARGUMENT` also for `count < 3`, a non-planar (beyond 1e-8 of its extent)
-// or self-intersecting polygon.
+// `RADDIFF_ERROR_INVALID_ARGUMENT` also for `count < 3`, a non-planar (beyond 1e-8 of its extent
+// plus the rounding of its normal, which matters only for slivers) or self-intersecting polygon.
 //
 // # Safety
 // `vertices` must be NULL or valid for reading `count` `raddiff_vec3`; `out` must be NULL or valid
