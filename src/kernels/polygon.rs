@@ -24,7 +24,7 @@ pub(crate) use near_plane_triangle::{
     clipped_triangle_value_and_loop as near_plane_clipped_triangle_value_and_loop,
     triangle_value as near_plane_triangle_value, RouteLoop,
 };
-pub(crate) use sliver_fan::{very_thin_polygon, very_thin_polygon_by_triangles};
+pub(crate) use sliver_fan::very_thin_polygon_form_factor;
 
 /// Relative tolerance on `‖n‖ − 1` before `n` is rejected (it is renormalized otherwise).
 pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;

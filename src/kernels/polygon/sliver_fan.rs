@@ -40,6 +40,46 @@ const FAN_SINE: f64 = 1e-12;
 /// Most vertices taken (the fan's arrays live on the stack).
 const MAX_VERTICES: usize = 8;
 
+/// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of a very thin polygon:
+/// [`very_thin_polygon`], else [`very_thin_polygon_by_triangles`]; `None` when neither takes it.
+/// Polygons that are not thin at all pay one Newell normal here (each route would otherwise
+/// repeat it, and the second validate the polygon: ~700 instructions on every polygon reaching
+/// the robust path).
+pub(crate) fn very_thin_polygon_form_factor(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3],
+    order: Order,
+) -> Option<Deriv3> {
+    thin_differences(x, v)?;
+    very_thin_polygon(x, n, v, order).or_else(|| very_thin_polygon_by_triangles(x, n, v, order))
+}
+
+/// The differences `v_k − v_0` of a polygon of 4 to 8 finite vertices seen from a finite `x`
+/// when it is thin at all: exactly the complement of the Lambert fast paths' test (the same
+/// rounded Newell normal and extent), so that they never took it; `None` otherwise. `Plane::new`
+/// then decides with the robust path's threshold: the other polygons that reach the robust path
+/// pay only this test here.
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+fn thin_differences(x: DVec3, v: &[DVec3]) -> Option<[DVec3; MAX_VERTICES]> {
+    let m = v.len();
+    if !(4..=MAX_VERTICES).contains(&m) || !x.is_finite() || !v.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    let mut u = [DVec3::ZERO; MAX_VERTICES];
+    for k in 1..m {
+        u[k] = v[k] - v[0];
+    }
+    let mut newell = DVec3::ZERO;
+    let mut extent2 = 0.0f64;
+    for k in 1..m {
+        newell += u[k].cross(u[(k + 1) % m]);
+        extent2 = extent2.max(u[k].length_squared());
+    }
+    (newell.length_squared() < SLIVER_AREA2 * extent2 * extent2).then_some(u)
+}
+
 /// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of a valid polygon of 4 to 8
 /// vertices that is very thin (`2·area < 1e-5·extent²`) with a consistently oriented fan from
 /// `v_0`, as the sum of the fan triangles' sliver rules; `None` when any condition fails or a
@@ -49,25 +89,7 @@ const MAX_VERTICES: usize = 8;
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Deriv3> {
     let m = v.len();
-    if !(4..=MAX_VERTICES).contains(&m) || !x.is_finite() || !v.iter().all(|p| p.is_finite()) {
-        return None;
-    }
-    let mut u = [DVec3::ZERO; MAX_VERTICES];
-    for k in 1..m {
-        u[k] = v[k] - v[0];
-    }
-    // Thin at all? Exactly the complement of the Lambert fast paths' test (the same rounded
-    // normal and extent), so that they never took this polygon; `Plane::new` below decides with
-    // the robust path's threshold. The other polygons that reach the robust path pay only this.
-    let mut newell = DVec3::ZERO;
-    let mut extent2 = 0.0f64;
-    for k in 1..m {
-        newell += u[k].cross(u[(k + 1) % m]);
-        extent2 = extent2.max(u[k].length_squared());
-    }
-    if !(newell.length_squared() < SLIVER_AREA2 * extent2 * extent2) {
-        return None;
-    }
+    let u = thin_differences(x, v)?;
     let mut r = [DVec3::ZERO; MAX_VERTICES];
     let mut r_lo = [DVec3::ZERO; MAX_VERTICES];
     let mut largest = 0.0f64;
@@ -147,13 +169,7 @@ pub(crate) fn very_thin_polygon_by_triangles(
     order: Order,
 ) -> Option<Deriv3> {
     let m = v.len();
-    if !(4..=MAX_VERTICES).contains(&m) || !x.is_finite() || !v.iter().all(|p| p.is_finite()) {
-        return None;
-    }
-    let mut u = [DVec3::ZERO; MAX_VERTICES];
-    for k in 1..m {
-        u[k] = v[k] - v[0];
-    }
+    let u = thin_differences(x, v)?;
     let plane = Plane::new(&u[..m]).ok()?;
     if !plane.is_very_thin() {
         return None;
