@@ -1578,7 +1578,23 @@ pub(crate) fn cancellation_limit(plane: &Plane, near_plane_or_cut: bool) -> f64 
 /// The Hessian term from the motion of the clip line ℓ:
 /// `n nᵀ (|h_P| / (π ‖n_t‖)) ∫_{P∩ℓ} ds/‖r‖⁴`, with `P∩ℓ` the oriented clip edges (bridges of
 /// non-convex polygons traverse ℓ twice in opposite directions and cancel).
-fn clip_line_hessian(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) -> Result<DMat3> {
+///
+/// With `exact_edges` the clip edges come from the clip points' exact differences
+/// ([`edge_vector`]) instead of their rounded `u`, whose difference errs by ~ε·extent: a sliver's
+/// clip edge spans its width, so that error is ~ε/aspect of its length (2.5e-6 of the Hessian for
+/// apex 1e-9 of the length, `tests/kernels_b_clipped_slivers.rs`); short clip edges take
+/// [`short_edge_a2`]; and each clip edge takes `|h_P| / ‖n_t‖` from the plane of the triangle it
+/// forms with the loop's next vertex (`plane_n`, `h_p` only where that triangle is degenerate): a
+/// thin polygon's rounded vertices twist its plane by ~ε/aspect, which cost 5.3e-9 of the
+/// Hessian with the plane of the whole loop (a 6-vertex visible loop 1e-7 wide,
+/// `tests/kernels_b_polygon_slivers.rs`; 5.9e-15 with the edge's own plane).
+fn clip_line_hessian(
+    verts: &[ClipVertex],
+    n: DVec3,
+    plane_n: DVec3,
+    h_p: f64,
+    exact_edges: bool,
+) -> Result<DMat3> {
     let n_t = n - n.dot(plane_n) * plane_n;
     let nt_len = n_t.length();
     let along = (n_t / nt_len).cross(plane_n);
@@ -1589,17 +1605,62 @@ fn clip_line_hessian(verts: &[ClipVertex], n: DVec3, plane_n: DVec3, h_p: f64) -
         if !(a.on_line && b.on_line) {
             continue;
         }
-        let e = b.u - a.u;
+        let e = if exact_edges {
+            edge_vector(&a, &b)
+        } else {
+            b.u - a.u
+        };
         let Some(frame) = EdgeFrame::new(a.r, e) else {
             continue;
         };
-        let a2 = frame.moments(Order::Gradient)?.a2;
-        integral += a2.copysign(e.dot(along));
+        if !exact_edges {
+            integral += frame.moments(Order::Gradient)?.a2.copysign(e.dot(along));
+            continue;
+        }
+        let a2 = if 9.0 * frame.len <= 8.0 * frame.h {
+            short_edge_a2(a.r, e, frame.len)
+        } else {
+            frame.moments(Order::Gradient)?.a2
+        };
+        // The plane at the clip edge: the triangle of the edge and the loop's next vertex. A thin
+        // polygon's rounded vertices twist its plane by ~ε/aspect radians (1e-9 for a width of
+        // 1e-7 of the length), and `|h_P| / ‖n_t‖` follows the plane where the line moves.
+        let c = verts[next(next(i, count), count)];
+        let (local_n, local_h) = sliver::visible_plane(&[a, b, c]).unwrap_or((plane_n, h_p));
+        let local_t = n - n.dot(local_n) * local_n;
+        let local_len = local_t.length();
+        let local_along = (local_t / local_len).cross(local_n);
+        integral += a2.copysign(e.dot(local_along)) * (local_h.abs() / local_len);
     }
     if integral == 0.0 {
         return Ok(DMat3::ZERO);
     }
+    if exact_edges {
+        return Ok(outer_self(n) * (FRAC_1_PI * integral));
+    }
     Ok(outer_self(n) * (h_p.abs() * FRAC_1_PI / nt_len * integral))
+}
+
+/// `∫ ds/‖r‖⁴` along the edge `r_a + t·e`, `t ∈ [0, 1]`, of length `len` at least 9/8 of its
+/// length from x (`9·len ≤ 8·h`, `h` the distance of x from its line), by the 16-point Gauss
+/// rule. On a sliver's clip edge (as short as the sliver is wide) the closed form
+/// ([`EdgeFrame::moments`]) erred by up to 3.8e-8 relative (from the rounded frame of so short an
+/// edge; not analysed further), 3.5e-8 of the Hessian against 320-bit references
+/// (`tests/kernels_b_clipped_slivers.rs`); the rule by ~1e-15. The integrand's
+/// poles (of order 2) lie at `h` from the line, at least `2h/len` half-lengths from the segment,
+/// so on a Bernstein ellipse of parameter `ρ ≥ 4h/len ≥ 4.5` (the ellipse's semi-minor axis
+/// `(ρ − 1/ρ)/2` is its largest distance from the segment), where the sliver rule's threshold for
+/// 16 points (set for poles of order 4) bounds the error by ~1.5e-15. Taken only with
+/// `exact_edges` (slivers), so that other polygons keep their bits.
+fn short_edge_a2(r_a: DVec3, e: DVec3, len: f64) -> f64 {
+    let sum: f64 = gauss_legendre_16()
+        .iter()
+        .map(|&(t, w)| {
+            let r2 = (r_a + t * e).length_squared();
+            w / (r2 * r2)
+        })
+        .sum();
+    sum * len
 }
 
 /// Below this `2·area / extent²` a polygon counts as thin (a sliver): its normal, computed from
@@ -1697,20 +1758,28 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     // height comes from the exact triple product, `sliver_geometry`, not from h_P) unless x is
     // over the sliver: there the edge sum's terms share a sign, and the rule would bisect
     // towards x.
-    let sliver = if far.is_none()
+    // Clipped, the visible part's fan triangles take the rule (`clipped_sliver_quadrature`), also
+    // where the visible part is far-field: the far-field rule and the robust path's edge sum,
+    // subdivision and near-plane split erred by up to 1.2e-4 there, the rule by ~3e-13
+    // (`tests/kernels_b_clipped_slivers.rs`).
+    let sliver = if (far.is_none() || cut)
         && plane.is_very_thin()
-        && !cut
         && !(near_plane && foot_inside(verts, plane.normal, h_p))
     {
-        sliver::sliver_quadrature(verts, n, order)
+        if cut {
+            sliver::clipped_sliver_quadrature(verts, n, order)
+        } else {
+            sliver::sliver_quadrature(verts, n, order)
+        }
     } else {
         None
     };
-    let mut d = if let Some(rule) = far {
-        far_field(verts, n, order, exact, rule)
-    } else if let Some(q) = sliver {
+    let sliver_taken = sliver.is_some();
+    let mut d = if let Some(q) = sliver {
         used_quadrature = true;
         q
+    } else if let Some(rule) = far {
+        far_field(verts, n, order, exact, rule)
     } else {
         let mut frames = Frames::new();
         edge_frames(verts, cut, &mut frames);
@@ -1838,7 +1907,16 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         d.hessian = -d.hessian;
     }
     if used_quadrature && cut && order.hessian() {
-        d.hessian += clip_line_hessian(verts, n, plane.normal, h_p)?;
+        // A sliver's clip edge spans its width and its Newell normal errs by ~ε/aspect: the
+        // clip line's term from the exact geometry (see `clip_line_hessian`), except near the
+        // plane where the robust path answered (its bits unchanged there).
+        let sliver_plane = if plane.is_very_thin() && (!near_plane || sliver_taken) {
+            sliver::visible_plane(verts)
+        } else {
+            None
+        };
+        let (plane_n, height) = sliver_plane.unwrap_or((plane.normal, h_p));
+        d.hessian += clip_line_hessian(verts, n, plane_n, height, sliver_plane.is_some())?;
     }
     // The clipped, visible part satisfies 0 ≤ F ≤ 1; rounding may step outside by an ulp.
     d.value = d.value.clamp(0.0, 1.0);
@@ -2082,6 +2160,31 @@ mod tests {
     /// The bound against the measured quadrature error of the value of a flat-on triangle (the
     /// exact form factor of a parallel receiver from the edge sum at a moderate distance where it
     /// does not cancel): the bound holds, and overestimates.
+    /// The Gauss rule of `short_edge_a2` agrees with the closed form of `EdgeFrame::moments` to
+    /// 1e-14 where that form is accurate (edges 1e-2..8/9 of their distance from x, whose foot on
+    /// the line lies within a few distances), on random edges at scales 1e-3..1e3.
+    #[test]
+    fn short_edge_a2_matches_the_closed_form() {
+        let mut state = 1825;
+        let mut worst = 0.0f64;
+        for _ in 0..2000 {
+            let mut c = || crate::kernels::test_rng::lcg(&mut state);
+            let scale = 10f64.powf(6.0 * c() - 3.0);
+            let dir = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize();
+            let off = dir.any_orthonormal_vector();
+            let h = scale;
+            let len = h * (8.0 / 9.0) * 10f64.powf(-2.0 * c());
+            let r_a = off * h + dir * (scale * (6.0 * c() - 3.0));
+            let e = dir * len;
+            let frame = EdgeFrame::new(r_a, e).unwrap();
+            assert!(9.0 * frame.len <= 8.0 * frame.h * (1.0 + 1e-12));
+            let closed = frame.moments(Order::Gradient).unwrap().a2;
+            let gauss = short_edge_a2(r_a, e, frame.len);
+            worst = worst.max((gauss - closed).abs() / closed);
+        }
+        assert!(worst <= 1e-14, "{worst:e}");
+    }
+
     #[test]
     fn far_field_bound_holds_for_each_rule() {
         let tri = [

@@ -198,6 +198,53 @@ pub(super) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) ->
     sliver_quadrature_with(verts, n, order)
 }
 
+/// The signed form factor of a sliver cut by the receiver's tangent plane, from its visible part
+/// `verts` (the clipped loop, x origin of the `r`, the clip points exact in double-double): the
+/// sum of [`sliver_quadrature`] over the loop's fan triangles from its first vertex; `None` when
+/// the rule declines any piece (the caller then takes the robust path).
+///
+/// The integrand's factor `n·r` vanishes on the clip line, so the derivatives of the clipped
+/// integral are the integrals of the derivatives over the fixed visible part, except for the
+/// Hessian's term from the clip line's motion, which the caller adds (`clip_line_hessian`, with
+/// [`visible_plane`]). The fan pieces of a sliver are slivers (their widths at most the
+/// sliver's), and the clip points' double-double parts give each piece's geometry
+/// ([`sliver_geometry`]) to a few ulps, as for the uncut sliver. The fan's signed sum is the
+/// integral over the loop for any simple loop (each piece's sign comes from its own
+/// orientation), and every piece is checked by the rule to keep x away from it.
+pub(super) fn clipped_sliver_quadrature(
+    verts: &[ClipVertex],
+    n: DVec3,
+    order: Order,
+) -> Option<Deriv3> {
+    let mut total = Deriv3::constant(0.0);
+    for k in 1..verts.len().checked_sub(1)? {
+        let piece = [verts[0], verts[k], verts[k + 1]];
+        super::accumulate(&mut total, sliver_quadrature(&piece, n, order)?);
+    }
+    Some(total)
+}
+
+/// The unit normal of the loop `verts` (x origin of the `r`, the parts `r + r_lo` exact) and
+/// `|h_P|`, the distance of x from its plane, from the fan triangles' exact geometry
+/// ([`sliver_geometry`]); `None` for a loop of zero area. For the clip line's Hessian term of a
+/// clipped sliver, `∝ |h_P| / ‖n_t‖`: the polygon's Newell normal, from rounded edge vectors, errs
+/// by ~ε/aspect in direction, and so do `n_t` and the height taken with it.
+pub(super) fn visible_plane(verts: &[ClipVertex]) -> Option<(DVec3, f64)> {
+    let (mut normal, mut volume) = (DVec3::ZERO, 0.0);
+    for k in 1..verts.len().checked_sub(1)? {
+        // `N·r` is the same at every point of the plane: each piece's from its first vertex.
+        let (nk, ck) = sliver_geometry(&verts[0], &verts[k], &verts[k + 1]);
+        normal += nk;
+        volume += ck;
+    }
+    let twice_area = normal.length();
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+    if !(twice_area > 0.0) {
+        return None;
+    }
+    Some((normal / twice_area, volume.abs() / twice_area))
+}
+
 /// [`sliver_quadrature`] compiled with AVX2 and FMA: the geometry's exact products are fused
 /// instead of calls to `fma`, and the paired sums take three-operand instructions instead of
 /// register copies. The same bits: the fused product is correctly rounded either way, and Rust
