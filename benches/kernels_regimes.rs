@@ -68,6 +68,14 @@ fn cases() -> Vec<Case> {
         .into_iter()
         .map(|(name, tri, x)| facing(name, tri.to_vec(), x))
         .collect();
+    // The apex-1e-6 sliver with the receiver tilted so that its tangent plane cuts off the
+    // vertex at the origin (the sliver rule on the visible part, with the clip line's Hessian).
+    all.push(Case {
+        name: "sliver, apex 1e-6, clipped",
+        v: sliver_6.to_vec(),
+        x: DVec3::new(0.4, 0.1, 0.3),
+        n: DVec3::new(1.0, 0.0, 0.3).normalize(),
+    });
     all.extend(polygon_cases());
     all
 }
