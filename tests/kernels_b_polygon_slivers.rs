@@ -74,6 +74,24 @@ fn sliver(rng: &mut Rng, m: usize, len: f64, width: f64, origin: DVec3) -> Vec<D
     v
 }
 
+/// A random convex sliver of `m` vertices, length 1e-2..1e2, width `10^widths.0..10^widths.1`
+/// of the length, seen from 0.5-8 lengths away in a random direction by a receiver tilted up to
+/// ~0.6 rad from facing it: `(x, n, vertices)`.
+fn sliver_seen_from_afar(
+    rng: &mut Rng,
+    m: usize,
+    widths: (f64, f64),
+) -> (DVec3, DVec3, Vec<DVec3>) {
+    let len = 10f64.powf(rng.range(-2.0, 2.0));
+    let width = len * 10f64.powf(rng.range(widths.0, widths.1));
+    let origin = rng.vec(3.0 * len);
+    let v = sliver(rng, m, len, width, origin);
+    let c = v.iter().sum::<DVec3>() / m as f64;
+    let x = c + rng.unit() * (len * 10f64.powf(rng.range(-0.3, 0.9)));
+    let n = ((c - x).normalize() + rng.vec(0.5)).normalize();
+    (x, n, v)
+}
+
 /// Random convex slivers of 4 to 8 vertices at scales 1e-2..1e2, x from 0.5 to 8 lengths away in
 /// random directions (the fan path's range: closer, the robust path runs, whose subdivision and
 /// edge sum err by up to ~2e-9 on these slivers at 0.2-0.5 lengths; farther, its far-field
@@ -86,14 +104,7 @@ fn random_slivers_against_320_bit_references() {
     let mut rng = Rng(18);
     let mut worst = [0.0; 3];
     for case in 0..120 {
-        let m = 4 + case % 5;
-        let len = 10f64.powf(rng.range(-2.0, 2.0));
-        let width = len * 10f64.powf(rng.range(-8.0, -5.2));
-        let origin = rng.vec(3.0 * len);
-        let v = sliver(&mut rng, m, len, width, origin);
-        let c = v.iter().sum::<DVec3>() / m as f64;
-        let x = c + rng.unit() * (len * 10f64.powf(rng.range(-0.3, 0.9)));
-        let n = ((c - x).normalize() + rng.vec(0.5)).normalize();
+        let (x, n, v) = sliver_seen_from_afar(&mut rng, 4 + case % 5, (-8.0, -5.2));
         check(&mut big, x, n, &v, &mut worst);
     }
     println!("worst {worst:?}");
@@ -230,14 +241,7 @@ fn thinner_slivers_are_planar() {
     let mut rng = Rng(1803);
     let mut worst = [0.0; 3];
     for case in 0..60 {
-        let m = 4 + case % 5;
-        let len = 10f64.powf(rng.range(-2.0, 2.0));
-        let width = len * 10f64.powf(rng.range(-12.0, -9.0));
-        let origin = rng.vec(3.0 * len);
-        let v = sliver(&mut rng, m, len, width, origin);
-        let c = v.iter().sum::<DVec3>() / m as f64;
-        let x = c + rng.unit() * (len * 10f64.powf(rng.range(-0.3, 0.9)));
-        let n = ((c - x).normalize() + rng.vec(0.5)).normalize();
+        let (x, n, v) = sliver_seen_from_afar(&mut rng, 4 + case % 5, (-12.0, -9.0));
         check(&mut big, x, n, &v, &mut worst);
     }
     println!("worst {worst:?}");

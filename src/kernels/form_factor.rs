@@ -408,9 +408,8 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
     }
     // A sliver: the fan triangles' sliver rules instead of the robust path's isotropic
     // subdivision (~30x fewer instructions), or, declined with x near the sliver's plane, the
-    // fan triangles through the triangle kernel's sliver handling (within 1.3e-7 of the value
-    // there, where the robust path's subdivision of the whole polygon errs by up to 1e-4; neither
-    // meets the sliver contract). Lambert's paths decline every polygon these take
+    // fan triangles through the triangle kernel's sliver handling
+    // (`tests/kernels_b_polygon_slivers.rs`). Lambert's paths decline every polygon these take
     // (`lambert_polygon::SLIVER_AREA2`): their value is the value order's as it is.
     if let Some(d) = polygon::very_thin_polygon_form_factor(x, n, vertices, order) {
         return Ok(d);

@@ -55,6 +55,18 @@ pub(crate) fn very_thin_polygon_form_factor(
     very_thin_polygon(x, n, v, order).or_else(|| very_thin_polygon_by_triangles(x, n, v, order))
 }
 
+/// Whether every fan triangle `(v_0, v_k, v_{k+1})` (from the differences `u_k = v_k − v_0`)
+/// certainly has the orientation of the polygon's unit `normal` ([`FAN_SINE`]): the fan then
+/// partitions the polygon.
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails
+fn fan_keeps_orientation(u: &[DVec3], normal: DVec3) -> bool {
+    u[1..].windows(2).all(|w| {
+        let scale = w[0].length() * w[1].length();
+        w[0].cross(w[1]).dot(normal) > FAN_SINE * scale
+    })
+}
+
 /// The differences `v_k − v_0` of a polygon of 4 to 8 finite vertices seen from a finite `x`
 /// when it is thin at all: exactly the complement of the Lambert fast paths' test (the same
 /// rounded Newell normal and extent), so that they never took it; `None` otherwise. `Plane::new`
@@ -129,12 +141,8 @@ pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -
         r_lo: r_lo[k],
         on_line: false,
     };
-    for k in 1..m - 1 {
-        let fan = u[k].cross(u[k + 1]);
-        let scale = u[k].length() * u[k + 1].length();
-        if !(fan.dot(plane.normal) > FAN_SINE * scale) {
-            return None;
-        }
+    if !fan_keeps_orientation(&u[..m], plane.normal) {
+        return None;
     }
     let mut sum = Deriv3::constant(0.0);
     for k in 1..m - 1 {
@@ -149,8 +157,7 @@ pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -
 /// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of the polygons
 /// [`very_thin_polygon`] takes up to its per-triangle decisions (valid, 4 to 8 vertices, very
 /// thin, a fan from `v_0` with the polygon's orientation) with `x` within 1e-3 of its largest
-/// distance to a vertex from the plane (where the robust path's isotropic subdivision errs by up
-/// to 1e-4 of the value on slivers 1e-5.2..1e-8 wide, and this sum by 1.3e-7): the sum
+/// distance to a vertex from the plane: the sum
 /// of the fan triangles' [`triangle_form_factor`](crate::kernels::triangle_form_factor), whose
 /// very-thin branch handles `x` near the sliver, near its plane and clipping (the clipped
 /// integrand is pointwise, so additive over the fan). `None` when any condition fails or a
@@ -175,9 +182,8 @@ pub(crate) fn very_thin_polygon_by_triangles(
         return None;
     }
     // Only near the plane (the robust path's own `NEAR_PLANE_HEIGHT` switch, on rounded
-    // heights: a decision, not a value). Farther, the triangle kernel on these fan triangles
-    // (long and needle-shaped) is no better than the robust path (both ~1e-8, measured in
-    // `tests/kernels_b_polygon_slivers.rs`), and the robust path is kept.
+    // heights: a decision, not a value); farther, the robust path (which takes clipped slivers to
+    // the clipped sliver rule) is kept.
     let (mut h_min, mut r_max) = (f64::INFINITY, 0.0f64);
     for p in v {
         let r = *p - x;
@@ -187,12 +193,8 @@ pub(crate) fn very_thin_polygon_by_triangles(
     if !(h_min < 1e-3 * r_max) {
         return None;
     }
-    for k in 1..m - 1 {
-        let fan = u[k].cross(u[k + 1]);
-        let scale = u[k].length() * u[k + 1].length();
-        if !(fan.dot(plane.normal) > FAN_SINE * scale) {
-            return None;
-        }
+    if !fan_keeps_orientation(&u[..m], plane.normal) {
+        return None;
     }
     let mut sum = Deriv3::constant(0.0);
     for k in 1..m - 1 {
