@@ -16,7 +16,7 @@
 //! near the plane, nothing clipped, no far-field rule), then each triangle is integrated by the
 //! rule ([`sliver_quadrature`], which declines when `x` is not far from the triangle compared
 //! with its width); as soon as one triangle is declined, so is the polygon (with `x` near its
-//! plane [`very_thin_polygon_by_triangles`] then sums the fan triangles through the triangle
+//! plane [`fan_of_triangles`] then sums the fan triangles through the triangle
 //! kernel, elsewhere the robust path runs). Where the robust path on a fan triangle takes the rule too, the sum has its bits up to
 //! the order of the additions. The derivatives are sums too: a triangle's gradient and Hessian are
 //! within its own accuracy relative to its largest entry, and the pieces' derivatives can only
@@ -41,18 +41,17 @@ const FAN_SINE: f64 = 1e-12;
 const MAX_VERTICES: usize = 8;
 
 /// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of a very thin polygon:
-/// [`very_thin_polygon`], else [`very_thin_polygon_by_triangles`]; `None` when neither takes it.
-/// Polygons that are not thin at all pay one Newell normal here (each route would otherwise
-/// repeat it, and the second validate the polygon: ~700 instructions on every polygon reaching
-/// the robust path).
+/// [`fan_rule`], else [`fan_of_triangles`]; `None` when neither takes it.
+/// Polygons that are not thin at all pay one Newell normal here and nothing else (the routes
+/// validate the polygon: ~700 instructions on every polygon reaching the robust path).
 pub(crate) fn very_thin_polygon_form_factor(
     x: DVec3,
     n: DVec3,
     v: &[DVec3],
     order: Order,
 ) -> Option<Deriv3> {
-    thin_differences(x, v)?;
-    very_thin_polygon(x, n, v, order).or_else(|| very_thin_polygon_by_triangles(x, n, v, order))
+    let u = thin_differences(x, v)?;
+    fan_rule(x, n, v, &u, order).or_else(|| fan_of_triangles(x, n, v, &u, order))
 }
 
 /// Whether every fan triangle `(v_0, v_k, v_{k+1})` (from the differences `u_k = v_k − v_0`)
@@ -92,16 +91,28 @@ fn thin_differences(x: DVec3, v: &[DVec3]) -> Option<[DVec3; MAX_VERTICES]> {
     (newell.length_squared() < SLIVER_AREA2 * extent2 * extent2).then_some(u)
 }
 
+/// [`fan_rule`] from the vertices alone (the unit tests' entry).
+#[cfg(test)]
+pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Deriv3> {
+    fan_rule(x, n, v, &thin_differences(x, v)?, order)
+}
+
 /// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of a valid polygon of 4 to 8
 /// vertices that is very thin (`2·area < 1e-5·extent²`) with a consistently oriented fan from
 /// `v_0`, as the sum of the fan triangles' sliver rules; `None` when any condition fails or a
 /// triangle is declined (module documentation), including for invalid input, which the robust
 /// path reports. Coordinates differences must be within (1e-30, 1e30), where no rescaling is
 /// needed.
+/// `u`: the differences of [`thin_differences`].
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Deriv3> {
+fn fan_rule(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3],
+    u: &[DVec3; MAX_VERTICES],
+    order: Order,
+) -> Option<Deriv3> {
     let m = v.len();
-    let u = thin_differences(x, v)?;
     let mut r = [DVec3::ZERO; MAX_VERTICES];
     let mut r_lo = [DVec3::ZERO; MAX_VERTICES];
     let mut largest = 0.0f64;
@@ -154,8 +165,19 @@ pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -
     oriented(sum, h_p)
 }
 
+/// [`fan_of_triangles`] from the vertices alone (the unit tests' entry).
+#[cfg(test)]
+pub(crate) fn very_thin_polygon_by_triangles(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3],
+    order: Order,
+) -> Option<Deriv3> {
+    fan_of_triangles(x, n, v, &thin_differences(x, v)?, order)
+}
+
 /// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of the polygons
-/// [`very_thin_polygon`] takes up to its per-triangle decisions (valid, 4 to 8 vertices, very
+/// [`fan_rule`] takes up to its per-triangle decisions (valid, 4 to 8 vertices, very
 /// thin, a fan from `v_0` with the polygon's orientation) with `x` within 1e-3 of its largest
 /// distance to a vertex from the plane: the sum
 /// of the fan triangles' [`triangle_form_factor`](crate::kernels::triangle_form_factor), whose
@@ -168,15 +190,16 @@ pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -
 /// cancel: each is within its accuracy of its own largest entry, so the sum's error relative to
 /// its largest entry is bounded by that accuracy times `Σ|piece| / |sum|` (per entry);
 /// `tests/kernels_b_polygon_slivers.rs` measures that ratio.
+/// `u`: the differences of [`thin_differences`].
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-pub(crate) fn very_thin_polygon_by_triangles(
+fn fan_of_triangles(
     x: DVec3,
     n: DVec3,
     v: &[DVec3],
+    u: &[DVec3; MAX_VERTICES],
     order: Order,
 ) -> Option<Deriv3> {
     let m = v.len();
-    let u = thin_differences(x, v)?;
     let plane = Plane::new(&u[..m]).ok()?;
     if !plane.is_very_thin() {
         return None;
