@@ -67,7 +67,7 @@ const MAX_INTERVALS: usize = 48;
 
 /// `(ρ, points)`: the Gauss rules along the length and the smallest Bernstein parameter at which
 /// each is used (module documentation).
-const ALONG: [(f64, usize); 9] = [
+const ALONG: [(f64, usize); 13] = [
     (17.8, 8),
     (13.2, 9),
     (10.4, 10),
@@ -77,11 +77,16 @@ const ALONG: [(f64, usize); 9] = [
     (5.6, 14),
     (5.1, 15),
     (4.5, 16),
+    (3.9, 18),
+    (3.44, 20),
+    (3.1, 22),
+    (2.84, 24),
 ];
 /// The same across the width.
 const ACROSS: [(f64, usize); 4] = [(3.2e4, 2), (1.2e3, 3), (230.0, 4), (18.0, 8)];
 
-/// The `points`-point Gauss-Legendre rule on [0, 1] (2, 3, 4, 8..=16), computed once.
+/// The `points`-point Gauss-Legendre rule on [0, 1] (2, 3, 4, 8..=16, 18, 20, 22, 24), computed
+/// once.
 fn rule(points: usize) -> &'static [(f64, f64)] {
     macro_rules! cached {
         ($n:literal) => {{
@@ -101,6 +106,10 @@ fn rule(points: usize) -> &'static [(f64, f64)] {
         13 => cached!(13),
         14 => cached!(14),
         15 => cached!(15),
+        18 => cached!(18),
+        20 => cached!(20),
+        22 => cached!(22),
+        24 => cached!(24),
         _ => gauss_legendre_16(),
     }
 }
@@ -109,7 +118,7 @@ fn rule(points: usize) -> &'static [(f64, f64)] {
 /// look-up per sliver instead of one per rule used, and no square root per decision.
 struct Rules {
     /// The rules by their number of points (empty elsewhere).
-    by_points: [&'static [(f64, f64)]; 17],
+    by_points: [&'static [(f64, f64)]; 25],
     /// [`ALONG`] as `(1/a², 1/b², points)` with `a`, `b` the semi-axes of the threshold's
     /// ellipse ([`semi_axes`]).
     along: [(f64, f64, usize); ALONG.len()],
@@ -120,7 +129,7 @@ struct Rules {
 fn rules() -> &'static Rules {
     static RULES: OnceLock<Rules> = OnceLock::new();
     RULES.get_or_init(|| {
-        let mut by_points: [&'static [(f64, f64)]; 17] = [&[]; 17];
+        let mut by_points: [&'static [(f64, f64)]; 25] = [&[]; 25];
         for &(_, points) in ALONG.iter().chain(&ACROSS) {
             by_points[points] = rule(points);
         }
