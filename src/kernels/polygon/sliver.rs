@@ -119,6 +119,8 @@ fn rule(points: usize) -> &'static [(f64, f64)] {
 struct Rules {
     /// The rules by their number of points (empty elsewhere).
     by_points: [&'static [(f64, f64)]; 25],
+    /// The rules along by their number of points, as the sums take them ([`sums::paired`]).
+    paired: [&'static [[f64; 4]]; 25],
     /// [`ALONG`] as `(1/a², 1/b², points)` with `a`, `b` the semi-axes of the threshold's
     /// ellipse ([`semi_axes`]).
     along: [(f64, f64, usize); ALONG.len()],
@@ -133,8 +135,14 @@ fn rules() -> &'static Rules {
         for &(_, points) in ALONG.iter().chain(&ACROSS) {
             by_points[points] = rule(points);
         }
+        let mut paired: [&'static [[f64; 4]]; 25] = [&[]; 25];
+        for &(_, points) in &ALONG {
+            // Built once per process and kept for it.
+            paired[points] = Box::leak(sums::paired(by_points[points]).into_boxed_slice());
+        }
         Rules {
             by_points,
+            paired,
             along: ALONG.map(|(rho, points)| {
                 let (a, b) = semi_axes(rho);
                 (1.0 / (a * a), 1.0 / (b * b), points)
@@ -271,7 +279,7 @@ fn sliver_quadrature_with(verts: &[ClipVertex], n: DVec3, order: Order) -> Optio
     }
     let len = |i: usize| (verts[(i + 1) % 3].u - verts[i].u).length_squared();
     let i = (0..3).max_by(|&p, &q| len(p).total_cmp(&len(q)))?;
-    let (a, b, c) = (verts[i], verts[(i + 1) % 3], verts[(i + 2) % 3]);
+    let (a, b, c) = (&verts[i], &verts[(i + 1) % 3], &verts[(i + 2) % 3]);
     let ab = b.u - a.u;
     let share = ((c.u - a.u).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
     // The foot's rounding moves it by ~ε·length, which changes the integrand by ~ε·length/d;
@@ -287,10 +295,10 @@ fn sliver_quadrature_with(verts: &[ClipVertex], n: DVec3, order: Order) -> Optio
     let mut pieces = [None, None];
     for (slot, (p, q1, q2, part)) in pieces
         .iter_mut()
-        .zip([(a, f, c, share), (b, c, f, 1.0 - share)])
+        .zip([(a, &f, c, share), (b, c, &f, 1.0 - share)])
     {
         if part > 0.0 {
-            *slot = Some((ThinPiece::new(&p, &q1, &q2, table)?, part));
+            *slot = Some((ThinPiece::new(p, q1, q2, table)?, part));
         }
     }
     let sums = match order {
@@ -298,7 +306,7 @@ fn sliver_quadrature_with(verts: &[ClipVertex], n: DVec3, order: Order) -> Optio
         Order::Gradient => rule_sums::<true, false>(&pieces, n),
         Order::Hessian => rule_sums::<true, true>(&pieces, n),
     }?;
-    Some(sums.assemble(n, sliver_geometry(&a, &b, &c), order))
+    Some(sums.assemble(n, sliver_geometry(a, b, c), order))
 }
 
 /// Both pieces' sums, the pieces' shares of the whole triangle's geometry in their weights (so
@@ -429,11 +437,13 @@ impl ThinPiece {
         let (mid, scale) = (0.5 * (s0 + s1), 2.0 / (s1 - s0));
         let (re, im) = ((self.s_foot - mid) * scale, self.pole_over_length * scale);
         let (re2, im2) = (re * re, im * im);
-        self.rules
-            .along
-            .iter()
-            .find(|&&(ia2, ib2, _)| re2 * ia2 + im2 * ib2 >= 1.0)
-            .map(|r| r.2)
+        // The first rule whose ellipse leaves the pole outside, by bisection: the ellipses shrink
+        // along the table, so `1/a²` and `1/b²` grow and the rounded test (sums and products of
+        // rounded values, each monotone) passes from some entry on: the linear search's choice
+        // in half the tests. A NaN fails every test, as there.
+        let along = &self.rules.along;
+        let first = along.partition_point(|&(ia2, ib2, _)| !(re2 * ia2 + im2 * ib2 >= 1.0));
+        along.get(first).map(|r| r.2)
     }
 
     /// Adds the tensor rule on `s ∈ [s0, s1]` with `points` along to `sums`.
@@ -446,7 +456,7 @@ impl ThinPiece {
         (s0, s1): (f64, f64),
         points: usize,
     ) {
-        let along = (s0, s1, self.rules.by_points[points]);
+        let along = (s0, s1, self.rules.paired[points]);
         // A fixed-length rule across lets the inlined loop unroll it (the same operations).
         match self.t_rule {
             &[t0, t1] => sums.add::<GRADIENT, HESSIAN>(frame, n, along, &[t0, t1]),
