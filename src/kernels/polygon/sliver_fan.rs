@@ -523,6 +523,39 @@ mod tests {
         assert!(near > 100 && far > 100 && taken > 100, "{near} {far} {taken}");
     }
 
+    /// The fan's half-turn test certifies simplicity only where it holds: a thin hexagon whose fan
+    /// from `v_0` keeps its orientation but sweeps more than a turn (its last edge crosses the
+    /// first) fails it, is checked by the robust path's simplicity test and refused, while a
+    /// convex sliver passes it and is taken.
+    #[test]
+    fn a_fan_sweeping_past_a_half_turn_is_checked_for_simplicity() {
+        let at = |degrees: f64, radius: f64| {
+            let a = degrees.to_radians();
+            DVec3::new(radius * a.cos(), radius * a.sin(), 1.0)
+        };
+        let v = vec![
+            at(0.0, 0.0),
+            at(0.0, 1.0),
+            at(120.0, 1e-6),
+            at(240.0, 1e-6),
+            at(359.0, 1e-6),
+            at(370.0, 1e-6),
+        ];
+        let u: Vec<DVec3> = v.iter().map(|p| *p - v[0]).collect();
+        assert_eq!(fan_is_star(&u, DVec3::Z), Some(false));
+        let x = DVec3::new(0.4, 0.1, 0.3);
+        assert!(very_thin_polygon(x, DVec3::Z, &v, Order::Value).is_none());
+        let got = crate::kernels::polygon_form_factor(x, DVec3::Z, &v, Order::Value);
+        assert!(
+            matches!(&got, Err(crate::Error::InvalidArgument(m)) if m.contains("simple")),
+            "{got:?}"
+        );
+        let convex = sliver(&mut 3, 6, 1.0, 1e-7, DVec3::new(0.1, 0.2, 1.0));
+        let u: Vec<DVec3> = convex.iter().map(|p| *p - convex[0]).collect();
+        let normal = thin_polygon(x, &convex).unwrap().plane.normal;
+        assert_eq!(fan_is_star(&u, normal), Some(true));
+    }
+
     #[test]
     fn declines_what_it_must() {
         let n = DVec3::Z;
