@@ -25,13 +25,18 @@
 //! `(64/15) (1 − σ/ρ)^{-4} σ^{-2m}` under 1e-15 (the factor `1/(σ² − 1)`, below 1/19 wherever
 //! a rule is used, is left as a margin for the ratio of the integrand's maximum to its mean on
 //! an interval): along, `ρ ≥` 17.8 (8 points), 13.2 (9), 10.4 (10), 8.6 (11), 7.3 (12),
-//! 6.3 (13), 5.6 (14), 5.1 (15), 4.5 (16; 1.5e-15 there); across, 3.2e4 (2 points), 1.2e3 (3),
-//! 230 (4), 18 (8). Along the length, intervals of `s` are bisected until one of these rules
-//! applies (one interval unless x is closer than about the length); across, the pole of the line
-//! `t ↦ r(s, t)` is at least `D` (the distance of x to the piece) from the segment of length
-//! `≤ w`. Every rule between 8 and 16 points is used: a seen-from-afar piece (ρ ≈ 6 for x a
-//! length away) takes 13 or 14 points instead of 16. Each threshold is tested as its ellipse
-//! ([`semi_axes`]), which needs no square root.
+//! 6.3 (13), 5.6 (14), 5.1 (15), 4.5 (16; 1.52e-15 there), 3.9 (18), 3.44 (20), 3.1 (22),
+//! 2.84 (24); across, 3.2e4 (2 points), 1.2e3 (3), 230 (4), 18 (8) (`thresholds_along_keep_the_
+//! error_bound` checks them against the bound). Along the length, intervals of `s` are bisected
+//! until one of these rules applies (one interval unless x is closer than about half the length);
+//! across, the pole of the line `t ↦ r(s, t)` is at least `D` (the distance of x to the piece)
+//! from the segment of length `≤ w`. Every rule between 8 and 24 points is used: a seen-from-afar
+//! piece (ρ ≈ 6 for x a length away) takes 13 or 14 points instead of 16, and a piece seen from
+//! about its own length (ρ 2.84..4.5) one rule of 18 to 24 points instead of two halves of 12 to
+//! 16 (the rules above 16 are even: the sums take nodes two at a time, so an odd rule costs as
+//! much as the next even one). Each threshold is tested as its ellipse ([`semi_axes`]), which
+//! needs no square root; the ellipses shrink along the table, so the first one that leaves the
+//! pole outside is found by bisection.
 //!
 //! One rule for every order. The value's poles have order 2, so the value alone could use lower
 //! thresholds (13 points from ρ = 5.3 instead of 6.3, 16 from 3.9 instead of 4.5). But the value

@@ -22,6 +22,20 @@
 //! within its own accuracy relative to its largest entry, and the pieces' derivatives can only
 //! partly cancel (all pieces are seen under the same small width, from the same side), which
 //! `tests/kernels_b_polygon_slivers.rs` measures against 320-bit references.
+//!
+//! Validation once ([`thin_polygon`]): the thinness test's Newell normal and extent are the
+//! robust path's own (term for term), so `Plane::validated` runs its area and planarity tests on
+//! them without recomputing; its O(m²) simplicity test is skipped when the fan is sorted by angle
+//! within a half-turn ([`fan_is_star`]), which makes the polygon simple (and runs otherwise).
+//!
+//! Why not one rule over the whole sliver, with pieces that do not overlap along it (strips
+//! between the vertices' abscissae): within the planarity tolerance (1e-8 of the extent, plus
+//! the normal's rounding, ~ε/aspect radians) the fan triangles' planes differ by up to ~1e-2 rad
+//! for a sliver 1e-6 wide, and the form factor of the loop is the flux through flat pieces that
+//! span it. A strip across several fan triangles is not flat: its flux density jumps where it
+//! crosses a fan diagonal (a Gauss rule across would not converge), and a ruled strip's
+//! Jacobian and height would need the strip's corners on the edges in double-double. Not done;
+//! the fan's pieces are each flat, with exact geometry.
 
 use glam::DVec3;
 
