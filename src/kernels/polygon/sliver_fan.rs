@@ -23,7 +23,7 @@
 //! partly cancel (all pieces are seen under the same small width, from the same side), which
 //! `tests/kernels_b_polygon_slivers.rs` measures against 320-bit references.
 //!
-//! Validation once ([`thin_polygon`]): the thinness test's Newell normal and extent are the
+//! Validation once ([`validated`]): the thinness test's Newell normal and extent are the
 //! robust path's own (term for term), so `Plane::validated` runs its area and planarity tests on
 //! them without recomputing; its O(m²) simplicity test is skipped when the fan is sorted by angle
 //! within a half-turn ([`fan_is_star`]), which makes the polygon simple (and runs otherwise).
@@ -64,7 +64,21 @@ pub(crate) fn very_thin_polygon_form_factor(
     v: &[DVec3],
     order: Order,
 ) -> Option<Deriv3> {
-    let thin = thin_polygon(x, v)?;
+    let (u, newell, extent2) = thin_differences(x, v)?;
+    thin_polygon_form_factor(x, n, v, (u, newell, extent2), order)
+}
+
+/// [`very_thin_polygon_form_factor`] past the thinness test. Out of line: inlined, its frame
+/// cost the polygons that are not thin ~40 instructions per call.
+#[inline(never)]
+fn thin_polygon_form_factor(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3],
+    differences: ([DVec3; MAX_VERTICES], DVec3, f64),
+    order: Order,
+) -> Option<Deriv3> {
+    let thin = validated(v.len(), differences)?;
     fan_rule(x, n, v, &thin, order).or_else(|| fan_of_triangles(x, n, v, &thin, order))
 }
 
@@ -103,15 +117,15 @@ fn fan_is_star(u: &[DVec3], normal: DVec3) -> Option<bool> {
     Some((3..m).all(|k| u[1].cross(u[k]).dot(normal) > FAN_SINE * (length[1] * length[k])))
 }
 
-/// The [`ThinPolygon`] of `v` seen from `x` (4 to 8 finite vertices, `x` finite): thin at all by
-/// exactly the complement of the Lambert fast paths' test (the same rounded Newell normal and
-/// extent), so that they never took it, with a fan that keeps its orientation, valid (the robust
-/// path's area, planarity and simplicity tests on the same normal and extent, the simplicity
-/// certified by [`fan_is_star`] where it can) and very thin by the robust path's threshold.
-/// `None` otherwise: the other polygons that reach the robust path pay only the Newell normal.
+/// The differences `u_k = v_k − v_0`, the Newell sum and the squared extent of a polygon of 4 to
+/// 8 finite vertices seen from a finite `x` when it is thin at all: exactly the complement of the
+/// Lambert fast paths' test (the same rounded Newell normal and extent), so that they never took
+/// it; `None` otherwise (the other polygons that reach the robust path pay only this test here).
+/// The Newell sum and extent are `Plane::new`'s, term for term (its first term, `u_0 × u_1`, is
+/// zero).
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn thin_polygon(x: DVec3, v: &[DVec3]) -> Option<ThinPolygon> {
+fn thin_differences(x: DVec3, v: &[DVec3]) -> Option<([DVec3; MAX_VERTICES], DVec3, f64)> {
     let m = v.len();
     if !(4..=MAX_VERTICES).contains(&m) || !x.is_finite() || !v.iter().all(|p| p.is_finite()) {
         return None;
@@ -120,21 +134,35 @@ fn thin_polygon(x: DVec3, v: &[DVec3]) -> Option<ThinPolygon> {
     for k in 1..m {
         u[k] = v[k] - v[0];
     }
-    // `Plane::new`'s Newell sum and extent, term for term (its first term, `u_0 × u_1`, is zero).
     let mut newell = DVec3::ZERO;
     let mut extent2 = 0.0f64;
     for k in 1..m {
         newell += u[k].cross(u[(k + 1) % m]);
         extent2 = extent2.max(u[k].length_squared());
     }
-    if !(newell.length_squared() < SLIVER_AREA2 * extent2 * extent2) {
-        return None;
-    }
+    (newell.length_squared() < SLIVER_AREA2 * extent2 * extent2).then_some((u, newell, extent2))
+}
+
+/// The [`ThinPolygon`] of the `m`-gon whose [`thin_differences`] are given: with a fan that keeps
+/// its orientation, valid (the robust path's area, planarity and simplicity tests on the same
+/// normal and extent, the simplicity certified by [`fan_is_star`] where it can) and very thin by
+/// the robust path's threshold; `None` otherwise.
+#[inline(always)]
+fn validated(
+    m: usize,
+    (u, newell, extent2): ([DVec3; MAX_VERTICES], DVec3, f64),
+) -> Option<ThinPolygon> {
     let normal = newell / newell.length();
     let star = fan_is_star(&u[..m], normal)?;
     // sqrt is monotone and correctly rounded: the root of the max is the max of the roots.
     let plane = Plane::validated(&u[..m], newell, extent2.sqrt(), !star).ok()?;
     plane.is_very_thin().then_some(ThinPolygon { u, plane })
+}
+
+/// [`thin_differences`] then [`validated`] (the unit tests' entry).
+#[cfg(test)]
+fn thin_polygon(x: DVec3, v: &[DVec3]) -> Option<ThinPolygon> {
+    validated(v.len(), thin_differences(x, v)?)
 }
 
 /// [`fan_rule`] from the vertices alone (the unit tests' entry).
@@ -220,7 +248,9 @@ fn near_field_height(r: &[DVec3], r2: &[f64], plane: &Plane) -> Option<f64> {
         .map(|v| (*v - centroid).length_squared())
         .fold(0.0, f64::max)
         .sqrt();
-    far_field_rule(centroid.length(), radius).is_none().then_some(h_p)
+    far_field_rule(centroid.length(), radius)
+        .is_none()
+        .then_some(h_p)
 }
 
 /// [`fan_of_triangles`] from the vertices alone (the unit tests' entry).
@@ -534,7 +564,10 @@ mod tests {
             let want = want.and_then(|(rule, h)| rule.is_none().then_some(h));
             assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "case {case}");
         }
-        assert!(near > 100 && far > 100 && taken > 100, "{near} {far} {taken}");
+        assert!(
+            near > 100 && far > 100 && taken > 100,
+            "{near} {far} {taken}"
+        );
     }
 
     /// The fan's half-turn test certifies simplicity only where it holds: a thin hexagon whose fan
