@@ -464,6 +464,22 @@ impl Plane {
             nn += u[i].cross(u[next(i, count)]);
         }
         let extent = u.iter().map(|v| v.length()).fold(0.0, f64::max);
+        Self::validated(u, nn, extent, true)
+    }
+
+    /// [`Plane::new`] from the Newell sum `nn` and the `extent` the caller computed as `new` does
+    /// (the same bits: the polygon sliver path has them already). `check_simplicity: false` skips
+    /// the O(count²) simplicity test, for callers that have certified it otherwise (a fan from
+    /// `u[0]` sorted by angle within a half-turn, `sliver_fan`). Inlined: as a call it cost
+    /// `Plane::new` ~50 instructions.
+    #[inline(always)]
+    pub(crate) fn validated(
+        u: &[DVec3],
+        nn: DVec3,
+        extent: f64,
+        check_simplicity: bool,
+    ) -> Result<Self> {
+        let count = u.len();
         let twice_area = nn.length();
         if twice_area <= AREA_TOLERANCE * extent * extent || twice_area.is_nan() {
             return Err(Error::Degenerate(format!(
@@ -492,7 +508,9 @@ impl Plane {
                      (tolerance {PLANARITY_TOLERANCE:e} x extent {extent:e})"
                 )));
             }
-            check_simple(u, normal)?;
+            if check_simplicity {
+                check_simple(u, normal)?;
+            }
         }
         Ok(Plane {
             normal,

@@ -25,13 +25,17 @@
 //! `(64/15) (1 − σ/ρ)^{-4} σ^{-2m}` under 1e-15 (the factor `1/(σ² − 1)`, below 1/19 wherever
 //! a rule is used, is left as a margin for the ratio of the integrand's maximum to its mean on
 //! an interval): along, `ρ ≥` 17.8 (8 points), 13.2 (9), 10.4 (10), 8.6 (11), 7.3 (12),
-//! 6.3 (13), 5.6 (14), 5.1 (15), 4.5 (16; 1.5e-15 there); across, 3.2e4 (2 points), 1.2e3 (3),
-//! 230 (4), 18 (8). Along the length, intervals of `s` are bisected until one of these rules
-//! applies (one interval unless x is closer than about the length); across, the pole of the line
-//! `t ↦ r(s, t)` is at least `D` (the distance of x to the piece) from the segment of length
-//! `≤ w`. Every rule between 8 and 16 points is used: a seen-from-afar piece (ρ ≈ 6 for x a
-//! length away) takes 13 or 14 points instead of 16. Each threshold is tested as its ellipse
-//! ([`semi_axes`]), which needs no square root.
+//! 6.3 (13), 5.6 (14), 5.1 (15), 4.5 (16; 1.52e-15 there), 3.9 (18), 3.44 (20), 3.1 (22),
+//! 2.84 (24); across, 3.2e4 (2 points), 1.2e3 (3), 230 (4), 18 (8) (`thresholds_along_keep_the_
+//! error_bound` checks them against the bound). Along the length, intervals of `s` are bisected
+//! until one of these rules applies (one interval unless x is closer than about half the length);
+//! across, the pole of the line `t ↦ r(s, t)` is at least `D` (the distance of x to the piece)
+//! from the segment of length `≤ w`. Every rule between 8 and 24 points is used: a seen-from-afar
+//! piece (ρ ≈ 6 for x a length away) takes 13 or 14 points instead of 16, and a piece seen from
+//! about its own length (ρ 2.84..4.5) one rule of 18 to 24 points instead of two halves of 12 to
+//! 16 (the rules above 16 are even: the sums take nodes two at a time, so an odd rule costs as
+//! much as the next even one). Each threshold is tested as its ellipse ([`semi_axes`]), which
+//! needs no square root.
 //!
 //! One rule for every order. The value's poles have order 2, so the value alone could use lower
 //! thresholds (13 points from ρ = 5.3 instead of 6.3, 16 from 3.9 instead of 4.5). But the value
@@ -67,7 +71,7 @@ const MAX_INTERVALS: usize = 48;
 
 /// `(ρ, points)`: the Gauss rules along the length and the smallest Bernstein parameter at which
 /// each is used (module documentation).
-const ALONG: [(f64, usize); 9] = [
+const ALONG: [(f64, usize); 13] = [
     (17.8, 8),
     (13.2, 9),
     (10.4, 10),
@@ -77,11 +81,16 @@ const ALONG: [(f64, usize); 9] = [
     (5.6, 14),
     (5.1, 15),
     (4.5, 16),
+    (3.9, 18),
+    (3.44, 20),
+    (3.1, 22),
+    (2.84, 24),
 ];
 /// The same across the width.
 const ACROSS: [(f64, usize); 4] = [(3.2e4, 2), (1.2e3, 3), (230.0, 4), (18.0, 8)];
 
-/// The `points`-point Gauss-Legendre rule on [0, 1] (2, 3, 4, 8..=16), computed once.
+/// The `points`-point Gauss-Legendre rule on [0, 1] (2, 3, 4, 8..=16, 18, 20, 22, 24), computed
+/// once.
 fn rule(points: usize) -> &'static [(f64, f64)] {
     macro_rules! cached {
         ($n:literal) => {{
@@ -101,6 +110,10 @@ fn rule(points: usize) -> &'static [(f64, f64)] {
         13 => cached!(13),
         14 => cached!(14),
         15 => cached!(15),
+        18 => cached!(18),
+        20 => cached!(20),
+        22 => cached!(22),
+        24 => cached!(24),
         _ => gauss_legendre_16(),
     }
 }
@@ -109,7 +122,9 @@ fn rule(points: usize) -> &'static [(f64, f64)] {
 /// look-up per sliver instead of one per rule used, and no square root per decision.
 struct Rules {
     /// The rules by their number of points (empty elsewhere).
-    by_points: [&'static [(f64, f64)]; 17],
+    by_points: [&'static [(f64, f64)]; 25],
+    /// The rules along by their number of points, as the sums take them ([`sums::paired`]).
+    paired: [&'static [[f64; 4]]; 25],
     /// [`ALONG`] as `(1/a², 1/b², points)` with `a`, `b` the semi-axes of the threshold's
     /// ellipse ([`semi_axes`]).
     along: [(f64, f64, usize); ALONG.len()],
@@ -120,12 +135,18 @@ struct Rules {
 fn rules() -> &'static Rules {
     static RULES: OnceLock<Rules> = OnceLock::new();
     RULES.get_or_init(|| {
-        let mut by_points: [&'static [(f64, f64)]; 17] = [&[]; 17];
+        let mut by_points: [&'static [(f64, f64)]; 25] = [&[]; 25];
         for &(_, points) in ALONG.iter().chain(&ACROSS) {
             by_points[points] = rule(points);
         }
+        let mut paired: [&'static [[f64; 4]]; 25] = [&[]; 25];
+        for &(_, points) in &ALONG {
+            // Built once per process and kept for it.
+            paired[points] = Box::leak(sums::paired(by_points[points]).into_boxed_slice());
+        }
         Rules {
             by_points,
+            paired,
             along: ALONG.map(|(rho, points)| {
                 let (a, b) = semi_axes(rho);
                 (1.0 / (a * a), 1.0 / (b * b), points)
@@ -262,7 +283,7 @@ fn sliver_quadrature_with(verts: &[ClipVertex], n: DVec3, order: Order) -> Optio
     }
     let len = |i: usize| (verts[(i + 1) % 3].u - verts[i].u).length_squared();
     let i = (0..3).max_by(|&p, &q| len(p).total_cmp(&len(q)))?;
-    let (a, b, c) = (verts[i], verts[(i + 1) % 3], verts[(i + 2) % 3]);
+    let (a, b, c) = (&verts[i], &verts[(i + 1) % 3], &verts[(i + 2) % 3]);
     let ab = b.u - a.u;
     let share = ((c.u - a.u).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
     // The foot's rounding moves it by ~ε·length, which changes the integrand by ~ε·length/d;
@@ -278,10 +299,10 @@ fn sliver_quadrature_with(verts: &[ClipVertex], n: DVec3, order: Order) -> Optio
     let mut pieces = [None, None];
     for (slot, (p, q1, q2, part)) in pieces
         .iter_mut()
-        .zip([(a, f, c, share), (b, c, f, 1.0 - share)])
+        .zip([(a, &f, c, share), (b, c, &f, 1.0 - share)])
     {
         if part > 0.0 {
-            *slot = Some((ThinPiece::new(&p, &q1, &q2, table)?, part));
+            *slot = Some((ThinPiece::new(p, q1, q2, table)?, part));
         }
     }
     let sums = match order {
@@ -289,7 +310,7 @@ fn sliver_quadrature_with(verts: &[ClipVertex], n: DVec3, order: Order) -> Optio
         Order::Gradient => rule_sums::<true, false>(&pieces, n),
         Order::Hessian => rule_sums::<true, true>(&pieces, n),
     }?;
-    Some(sums.assemble(n, sliver_geometry(&a, &b, &c), order))
+    Some(sums.assemble(n, sliver_geometry(a, b, c), order))
 }
 
 /// Both pieces' sums, the pieces' shares of the whole triangle's geometry in their weights (so
@@ -420,6 +441,10 @@ impl ThinPiece {
         let (mid, scale) = (0.5 * (s0 + s1), 2.0 / (s1 - s0));
         let (re, im) = ((self.s_foot - mid) * scale, self.pole_over_length * scale);
         let (re2, im2) = (re * re, im * im);
+        // The first rule whose ellipse leaves the pole outside. A linear search: its branches
+        // are predicted and speculated past, where the branch-free bisection of
+        // `partition_point` (half the tests) put its chain of loads and compares on the set-up's
+        // latency (+10% time on a triangle sliver, callgrind -2%).
         self.rules
             .along
             .iter()
@@ -437,7 +462,7 @@ impl ThinPiece {
         (s0, s1): (f64, f64),
         points: usize,
     ) {
-        let along = (s0, s1, self.rules.by_points[points]);
+        let along = (s0, s1, self.rules.paired[points]);
         // A fixed-length rule across lets the inlined loop unroll it (the same operations).
         match self.t_rule {
             &[t0, t1] => sums.add::<GRADIENT, HESSIAN>(frame, n, along, &[t0, t1]),
@@ -773,6 +798,8 @@ mod tests {
         }
         let mut state = 1820;
         let mut answered = 0;
+        // The rules along chosen for the whole of the first piece: every one is exercised.
+        let mut used = [false; 25];
         for _ in 0..3000 {
             let mut c = || lcg(&mut state);
             let (scale, [a, b, apex]) = random_sliver(&mut c);
@@ -781,6 +808,19 @@ mod tests {
                     * (scale * 10f64.powf(4.0 * c() - 3.0));
             let n = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize();
             let t = [a, b, apex].map(|v| vertex(v, x));
+            let ab = t[1].u - t[0].u;
+            let share = ((t[2].u - t[0].u).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+            let f = ClipVertex {
+                u: t[0].u + share * ab,
+                r: t[0].r + share * (t[1].r - t[0].r),
+                r_lo: DVec3::ZERO,
+                on_line: false,
+            };
+            if let Some(points) =
+                ThinPiece::new(&t[0], &f, &t[2], rules()).and_then(|p| p.along_points(0.0, 1.0))
+            {
+                used[points] = true;
+            }
             for order in [Order::Value, Order::Gradient, Order::Hessian] {
                 let portable = sliver_quadrature_with(&t, n, order);
                 // SAFETY: checked above that the CPU has AVX2 and FMA.
@@ -796,6 +836,33 @@ mod tests {
             }
         }
         assert!(answered > 6000, "{answered}");
+        for &(_, points) in &ALONG {
+            assert!(used[points], "{points} points along never chosen");
+        }
+    }
+
+    /// Each threshold along keeps the module's bound `(64/15) (1 − σ/ρ)^{-4} σ^{-2m}` (Hessian
+    /// poles, `σ = ρ·2m/(2m + 4)`) under 1e-15 (1.52e-15 at 16 points), and is within 3%
+    /// of the smallest `ρ` that does: the table is the bound's, not a guess.
+    #[test]
+    fn thresholds_along_keep_the_error_bound() {
+        let bound = |rho: f64, m: usize| {
+            let m2 = 2.0 * m as f64;
+            let sigma = rho * m2 / (m2 + 4.0);
+            64.0 / 15.0 * (1.0 - sigma / rho).powi(-4) * sigma.powf(-m2)
+        };
+        for &(rho, m) in &ALONG {
+            let limit = if m == 16 { 1.52e-15 } else { 1e-15 };
+            assert!(
+                bound(rho, m) <= limit,
+                "{m} points at {rho}: {:e}",
+                bound(rho, m)
+            );
+            assert!(
+                bound(rho / 1.03, m) > 1e-15,
+                "{m} points: {rho} is far from the bound"
+            );
+        }
     }
 
     /// The sliver rule is taken for a cap and a needle seen from afar, agrees with the isotropic

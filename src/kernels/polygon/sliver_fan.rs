@@ -22,17 +22,32 @@
 //! within its own accuracy relative to its largest entry, and the pieces' derivatives can only
 //! partly cancel (all pieces are seen under the same small width, from the same side), which
 //! `tests/kernels_b_polygon_slivers.rs` measures against 320-bit references.
+//!
+//! Validation once ([`validated`]): the thinness test's Newell normal and extent are the
+//! robust path's own (term for term), so `Plane::validated` runs its area and planarity tests on
+//! them without recomputing; its O(m²) simplicity test is skipped when the fan is sorted by angle
+//! within a half-turn ([`fan_is_star`]), which makes the polygon simple (and runs otherwise).
+//!
+//! Why not one rule over the whole sliver, with pieces that do not overlap along it (strips
+//! between the vertices' abscissae): within the planarity tolerance (1e-8 of the extent, plus
+//! the normal's rounding, ~ε/aspect radians) the fan triangles' planes differ by up to ~1e-2 rad
+//! for a sliver 1e-6 wide, and the form factor of the loop is the flux through flat pieces that
+//! span it. A strip across several fan triangles is not flat: its flux density jumps where it
+//! crosses a fan diagonal (a Gauss rule across would not converge), and a ruled strip's
+//! Jacobian and height would need the strip's corners on the edges in double-double. Not done;
+//! the fan's pieces are each flat, with exact geometry.
 
 use glam::DVec3;
 
 use super::sliver::sliver_quadrature;
-use super::{dd, fast_decisions, ClipVertex, Plane};
+use super::{dd, far_field_rule, ClipVertex, Plane, NEAR_PLANE_HEIGHT};
 use crate::kernels::form_factor::oriented;
 use crate::kernels::lambert;
 use crate::kernels::lambert_polygon::SLIVER_AREA2;
 use crate::{Deriv3, Order};
 
-/// Smallest `(u_k × u_{k+1})·N / (‖u_k‖‖u_{k+1}‖‖N‖)` of a fan triangle: its orientation is then
+/// Smallest `(u_k × u_{k+1})·N / (‖u_k‖‖u_{k+1}‖‖N‖)` of a fan triangle (and of `(u_1 × u_k)`
+/// in [`fan_is_star`]'s half-turn test): its orientation is then
 /// certainly the polygon's (the rounded cross product errs by a few ulps of
 /// `‖u_k‖‖u_{k+1}‖`), and its area is above the triangles' zero-area limit (1e-13).
 const FAN_SINE: f64 = 1e-12;
@@ -42,38 +57,75 @@ const MAX_VERTICES: usize = 8;
 
 /// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of a very thin polygon:
 /// [`fan_rule`], else [`fan_of_triangles`]; `None` when neither takes it.
-/// Polygons that are not thin at all pay one Newell normal here and nothing else (the routes
-/// validate the polygon: ~700 instructions on every polygon reaching the robust path).
+/// Polygons that are not thin at all pay one Newell normal here and nothing else.
 pub(crate) fn very_thin_polygon_form_factor(
     x: DVec3,
     n: DVec3,
     v: &[DVec3],
     order: Order,
 ) -> Option<Deriv3> {
-    let u = thin_differences(x, v)?;
-    fan_rule(x, n, v, &u, order).or_else(|| fan_of_triangles(x, n, v, &u, order))
+    let (u, newell, extent2) = thin_differences(x, v)?;
+    thin_polygon_form_factor(x, n, v, (u, newell, extent2), order)
 }
 
-/// Whether every fan triangle `(v_0, v_k, v_{k+1})` (from the differences `u_k = v_k − v_0`)
-/// certainly has the orientation of the polygon's unit `normal` ([`FAN_SINE`]): the fan then
-/// partitions the polygon.
+/// [`very_thin_polygon_form_factor`] past the thinness test. Out of line: inlined, its frame
+/// cost the polygons that are not thin ~40 instructions per call.
+#[inline(never)]
+fn thin_polygon_form_factor(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3],
+    differences: ([DVec3; MAX_VERTICES], DVec3, f64),
+    order: Order,
+) -> Option<Deriv3> {
+    let thin = validated(v.len(), differences)?;
+    fan_rule(x, n, v, &thin, order).or_else(|| fan_of_triangles(x, n, v, &thin, order))
+}
+
+/// A very thin polygon of 4 to 8 vertices whose fan from `v_0` keeps its orientation, validated
+/// as the robust path validates it: what both routes need.
+struct ThinPolygon {
+    /// `v_k − v_0`.
+    u: [DVec3; MAX_VERTICES],
+    plane: Plane,
+}
+
+/// Whether every fan triangle `(v_0, v_k, v_{k+1})` (from the differences `u_k = v_k − v_0`,
+/// `u_0 = 0`) certainly has the orientation of the polygon's unit `normal` ([`FAN_SINE`]): the
+/// fan then partitions the polygon. `Some(true)` when besides every `u_k` is certainly on the
+/// left of `u_1` (`(u_1 × u_k)·normal > 0`): the vertices are then sorted by angle around `v_0`
+/// within a half-turn, so in the projection along `normal` every edge `v_k v_{k+1}` lies in its
+/// own wedge `[θ_k, θ_{k+1}]` from `v_0` (convex, less than a half-turn) without touching `v_0`,
+/// and the two edges at `v_0` lie on the wedges' outer rays: non-adjacent edges are disjoint, the
+/// polygon is simple, and the robust path's O(m²) simplicity test is not needed. `None` when the
+/// fan turns over (or for NaN).
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails
-fn fan_keeps_orientation(u: &[DVec3], normal: DVec3) -> bool {
-    u[1..].windows(2).all(|w| {
-        let scale = w[0].length() * w[1].length();
-        w[0].cross(w[1]).dot(normal) > FAN_SINE * scale
-    })
+fn fan_is_star(u: &[DVec3], normal: DVec3) -> Option<bool> {
+    let m = u.len();
+    let mut length = [0.0f64; MAX_VERTICES];
+    for k in 1..m {
+        length[k] = u[k].length();
+    }
+    for k in 1..m - 1 {
+        // The rounded cross product errs by a few ulps of ‖u_k‖‖u_{k+1}‖: the margin certifies
+        // the sign.
+        if !(u[k].cross(u[k + 1]).dot(normal) > FAN_SINE * (length[k] * length[k + 1])) {
+            return None;
+        }
+    }
+    Some((3..m).all(|k| u[1].cross(u[k]).dot(normal) > FAN_SINE * (length[1] * length[k])))
 }
 
-/// The differences `v_k − v_0` of a polygon of 4 to 8 finite vertices seen from a finite `x`
-/// when it is thin at all: exactly the complement of the Lambert fast paths' test (the same
-/// rounded Newell normal and extent), so that they never took it; `None` otherwise. `Plane::new`
-/// then decides with the robust path's threshold: the other polygons that reach the robust path
-/// pay only this test here.
+/// The differences `u_k = v_k − v_0`, the Newell sum and the squared extent of a polygon of 4 to
+/// 8 finite vertices seen from a finite `x` when it is thin at all: exactly the complement of the
+/// Lambert fast paths' test (the same rounded Newell normal and extent), so that they never took
+/// it; `None` otherwise (the other polygons that reach the robust path pay only this test here).
+/// The Newell sum and extent are `Plane::new`'s, term for term (its first term, `u_0 × u_1`, is
+/// zero).
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn thin_differences(x: DVec3, v: &[DVec3]) -> Option<[DVec3; MAX_VERTICES]> {
+fn thin_differences(x: DVec3, v: &[DVec3]) -> Option<([DVec3; MAX_VERTICES], DVec3, f64)> {
     let m = v.len();
     if !(4..=MAX_VERTICES).contains(&m) || !x.is_finite() || !v.iter().all(|p| p.is_finite()) {
         return None;
@@ -88,62 +140,70 @@ fn thin_differences(x: DVec3, v: &[DVec3]) -> Option<[DVec3; MAX_VERTICES]> {
         newell += u[k].cross(u[(k + 1) % m]);
         extent2 = extent2.max(u[k].length_squared());
     }
-    (newell.length_squared() < SLIVER_AREA2 * extent2 * extent2).then_some(u)
+    (newell.length_squared() < SLIVER_AREA2 * extent2 * extent2).then_some((u, newell, extent2))
+}
+
+/// The [`ThinPolygon`] of the `m`-gon whose [`thin_differences`] are given: with a fan that keeps
+/// its orientation, valid (the robust path's area, planarity and simplicity tests on the same
+/// normal and extent, the simplicity certified by [`fan_is_star`] where it can) and very thin by
+/// the robust path's threshold; `None` otherwise.
+#[inline(always)]
+fn validated(
+    m: usize,
+    (u, newell, extent2): ([DVec3; MAX_VERTICES], DVec3, f64),
+) -> Option<ThinPolygon> {
+    let normal = newell / newell.length();
+    let star = fan_is_star(&u[..m], normal)?;
+    // sqrt is monotone and correctly rounded: the root of the max is the max of the roots.
+    let plane = Plane::validated(&u[..m], newell, extent2.sqrt(), !star).ok()?;
+    plane.is_very_thin().then_some(ThinPolygon { u, plane })
+}
+
+/// [`thin_differences`] then [`validated`] (the unit tests' entry).
+#[cfg(test)]
+fn thin_polygon(x: DVec3, v: &[DVec3]) -> Option<ThinPolygon> {
+    validated(v.len(), thin_differences(x, v)?)
 }
 
 /// [`fan_rule`] from the vertices alone (the unit tests' entry).
 #[cfg(test)]
 pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Deriv3> {
-    fan_rule(x, n, v, &thin_differences(x, v)?, order)
+    fan_rule(x, n, v, &thin_polygon(x, v)?, order)
 }
 
 /// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of a valid polygon of 4 to 8
 /// vertices that is very thin (`2·area < 1e-5·extent²`) with a consistently oriented fan from
-/// `v_0`, as the sum of the fan triangles' sliver rules; `None` when any condition fails or a
-/// triangle is declined (module documentation), including for invalid input, which the robust
-/// path reports. Coordinates differences must be within (1e-30, 1e30), where no rescaling is
-/// needed.
-/// `u`: the differences of [`thin_differences`].
+/// `v_0` ([`ThinPolygon`]), as the sum of the fan triangles' sliver rules; `None` when any
+/// condition fails or a triangle is declined (module documentation). Coordinates differences
+/// must be within (1e-30, 1e30), where no rescaling is needed.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn fan_rule(
-    x: DVec3,
-    n: DVec3,
-    v: &[DVec3],
-    u: &[DVec3; MAX_VERTICES],
-    order: Order,
-) -> Option<Deriv3> {
+fn fan_rule(x: DVec3, n: DVec3, v: &[DVec3], thin: &ThinPolygon, order: Order) -> Option<Deriv3> {
     let m = v.len();
+    let u = &thin.u;
     let mut r = [DVec3::ZERO; MAX_VERTICES];
     let mut r_lo = [DVec3::ZERO; MAX_VERTICES];
+    let mut r2 = [0.0f64; MAX_VERTICES];
     let mut largest = 0.0f64;
     let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
     for k in 0..m {
         r[k] = v[k] - x;
         r_lo[k] = DVec3::new(err(v[k].x, x.x), err(v[k].y, x.y), err(v[k].z, x.z));
+        r2[k] = r[k].length_squared();
         largest = largest.max(u[k].abs().max_element().max(r[k].abs().max_element()));
     }
     if !(largest > 1e-30 && largest < 1e30) {
         return None;
     }
     let n = lambert::unit(n)?;
-    // The robust path's validation (area, planarity, simplicity) on the same differences.
-    let plane = Plane::new(&u[..m]).ok()?;
-    if !plane.is_very_thin() {
-        return None;
-    }
     // The decisions the sliver rule's direct entry takes per triangle, once for the polygon:
     // x not near the plane (so the side it is on is certain, the same for every fan triangle),
     // no far-field rule (the robust path's far field takes the polygon), and every vertex above
     // the tangent plane by more than the rounding of `n·r` (nothing clipped).
-    let (far, h_p) = fast_decisions(&r[..m], &plane)?;
-    if far.is_some() {
-        return None;
-    }
-    let above = |v: &DVec3| {
-        let h = n.dot(*v);
-        h > 0.0 && h * h > 1e-26 * v.length_squared()
-    };
-    if !r[..m].iter().all(above) {
+    let h_p = near_field_height(&r[..m], &r2[..m], &thin.plane)?;
+    if !(0..m).all(|k| {
+        let h = n.dot(r[k]);
+        h > 0.0 && h * h > 1e-26 * r2[k]
+    }) {
         return None;
     }
     let vertex = |k: usize| ClipVertex {
@@ -152,9 +212,6 @@ fn fan_rule(
         r_lo: r_lo[k],
         on_line: false,
     };
-    if !fan_keeps_orientation(&u[..m], plane.normal) {
-        return None;
-    }
     let mut sum = Deriv3::constant(0.0);
     for k in 1..m - 1 {
         let d = sliver_quadrature(&[vertex(0), vertex(k), vertex(k + 1)], n, order)?;
@@ -165,6 +222,37 @@ fn fan_rule(
     oriented(sum, h_p)
 }
 
+/// [`fast_decisions`] for [`fan_rule`], which declines a far-field rule: the signed height `h_P`
+/// of x when x is not near the plane and the far field does not apply, `None` otherwise. The same
+/// decisions from the same rounded quantities (unit-tested), with the squared distances `r2`
+/// computed once for them and for the clip test.
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+fn near_field_height(r: &[DVec3], r2: &[f64], plane: &Plane) -> Option<f64> {
+    let (mut nearest, mut r2_max, mut sum) = (0, 0.0f64, DVec3::ZERO);
+    for k in 0..r.len() {
+        // `min_by` keeps the first of equal elements.
+        if r2[k] < r2[nearest] {
+            nearest = k;
+        }
+        r2_max = r2_max.max(r2[k]);
+        sum += r[k];
+    }
+    let h_p = plane.normal.dot(r[nearest]);
+    if !(h_p.abs() >= NEAR_PLANE_HEIGHT * r2_max.sqrt()) {
+        return None;
+    }
+    let centroid = sum / r.len() as f64;
+    let radius = r
+        .iter()
+        .map(|v| (*v - centroid).length_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
+    far_field_rule(centroid.length(), radius)
+        .is_none()
+        .then_some(h_p)
+}
+
 /// [`fan_of_triangles`] from the vertices alone (the unit tests' entry).
 #[cfg(test)]
 pub(crate) fn very_thin_polygon_by_triangles(
@@ -173,7 +261,7 @@ pub(crate) fn very_thin_polygon_by_triangles(
     v: &[DVec3],
     order: Order,
 ) -> Option<Deriv3> {
-    fan_of_triangles(x, n, v, &thin_differences(x, v)?, order)
+    fan_of_triangles(x, n, v, &thin_polygon(x, v)?, order)
 }
 
 /// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of the polygons
@@ -190,33 +278,25 @@ pub(crate) fn very_thin_polygon_by_triangles(
 /// cancel: each is within its accuracy of its own largest entry, so the sum's error relative to
 /// its largest entry is bounded by that accuracy times `Σ|piece| / |sum|` (per entry);
 /// `tests/kernels_b_polygon_slivers.rs` measures that ratio.
-/// `u`: the differences of [`thin_differences`].
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn fan_of_triangles(
     x: DVec3,
     n: DVec3,
     v: &[DVec3],
-    u: &[DVec3; MAX_VERTICES],
+    thin: &ThinPolygon,
     order: Order,
 ) -> Option<Deriv3> {
     let m = v.len();
-    let plane = Plane::new(&u[..m]).ok()?;
-    if !plane.is_very_thin() {
-        return None;
-    }
     // Only near the plane (the robust path's own `NEAR_PLANE_HEIGHT` switch, on rounded
     // heights: a decision, not a value); farther, the robust path (which takes clipped slivers to
     // the clipped sliver rule) is kept.
     let (mut h_min, mut r_max) = (f64::INFINITY, 0.0f64);
     for p in v {
         let r = *p - x;
-        h_min = h_min.min(plane.normal.dot(r).abs());
+        h_min = h_min.min(thin.plane.normal.dot(r).abs());
         r_max = r_max.max(r.length());
     }
     if !(h_min < 1e-3 * r_max) {
-        return None;
-    }
-    if !fan_keeps_orientation(&u[..m], plane.normal) {
         return None;
     }
     let mut sum = Deriv3::constant(0.0);
@@ -451,6 +531,76 @@ mod tests {
             crate::kernels::polygon_form_factor(in_plane, n, &v, Order::Gradient),
             Err(crate::Error::Degenerate(_))
         ));
+    }
+
+    /// [`near_field_height`] takes [`fast_decisions`]'s decisions with its height, bit for bit, on
+    /// random slivers seen from 1e-4 to 1e3 lengths away (near the plane, beside, far).
+    #[test]
+    fn near_field_height_decides_as_fast_decisions() {
+        let mut seed = 11u64;
+        let (mut near, mut far, mut taken) = (0, 0, 0);
+        for case in 0..3000 {
+            let m = 4 + case % 5;
+            let origin = DVec3::new(lcg(&mut seed), lcg(&mut seed), lcg(&mut seed));
+            let v = sliver(&mut seed, m, 1.0, 1e-7, origin);
+            let dir = DVec3::new(
+                lcg(&mut seed) - 0.5,
+                lcg(&mut seed) - 0.5,
+                lcg(&mut seed) - 0.5,
+            );
+            let x = origin + dir * 10f64.powf(7.0 * lcg(&mut seed) - 4.0);
+            let Some(thin) = thin_polygon(x, &v) else {
+                continue;
+            };
+            let r: Vec<DVec3> = v.iter().map(|p| *p - x).collect();
+            let r2: Vec<f64> = r.iter().map(|p| p.length_squared()).collect();
+            let got = near_field_height(&r, &r2, &thin.plane);
+            let want = super::super::fast_decisions(&r, &thin.plane);
+            match want {
+                None => near += 1,
+                Some((Some(_), _)) => far += 1,
+                Some((None, _)) => taken += 1,
+            }
+            let want = want.and_then(|(rule, h)| rule.is_none().then_some(h));
+            assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "case {case}");
+        }
+        assert!(
+            near > 100 && far > 100 && taken > 100,
+            "{near} {far} {taken}"
+        );
+    }
+
+    /// The fan's half-turn test certifies simplicity only where it holds: a thin hexagon whose fan
+    /// from `v_0` keeps its orientation but sweeps more than a turn (its last edge crosses the
+    /// first) fails it, is checked by the robust path's simplicity test and refused, while a
+    /// convex sliver passes it and is taken.
+    #[test]
+    fn a_fan_sweeping_past_a_half_turn_is_checked_for_simplicity() {
+        let at = |degrees: f64, radius: f64| {
+            let a = degrees.to_radians();
+            DVec3::new(radius * a.cos(), radius * a.sin(), 1.0)
+        };
+        let v = vec![
+            at(0.0, 0.0),
+            at(0.0, 1.0),
+            at(120.0, 1e-6),
+            at(240.0, 1e-6),
+            at(359.0, 1e-6),
+            at(370.0, 1e-6),
+        ];
+        let u: Vec<DVec3> = v.iter().map(|p| *p - v[0]).collect();
+        assert_eq!(fan_is_star(&u, DVec3::Z), Some(false));
+        let x = DVec3::new(0.4, 0.1, 0.3);
+        assert!(very_thin_polygon(x, DVec3::Z, &v, Order::Value).is_none());
+        let got = crate::kernels::polygon_form_factor(x, DVec3::Z, &v, Order::Value);
+        assert!(
+            matches!(&got, Err(crate::Error::InvalidArgument(m)) if m.contains("simple")),
+            "{got:?}"
+        );
+        let convex = sliver(&mut 3, 6, 1.0, 1e-7, DVec3::new(0.1, 0.2, 1.0));
+        let u: Vec<DVec3> = convex.iter().map(|p| *p - convex[0]).collect();
+        let normal = thin_polygon(x, &convex).unwrap().plane.normal;
+        assert_eq!(fan_is_star(&u, normal), Some(true));
     }
 
     #[test]

@@ -24,6 +24,19 @@ pub(super) struct LaneSums {
     second: [Pair; 6],
 }
 
+/// A Gauss rule `(s, w)` on [0, 1] as [`LaneSums::add`] takes it: its nodes two at a time,
+/// `[s_a, s_b, w_a, w_b]`, an odd rule's last node paired with itself at weight zero (it adds
+/// zeros). Built once per rule: packing the pairs cost a few instructions per pair of nodes.
+pub(super) fn paired(rule: &[(f64, f64)]) -> Vec<[f64; 4]> {
+    rule.chunks(2)
+        .map(|nodes| {
+            let (sa, wa) = nodes[0];
+            let (sb, wb) = nodes.get(1).copied().unwrap_or((sa, 0.0));
+            [sa, sb, wa, wb]
+        })
+        .collect()
+}
+
 /// A piece `r_p + s·ab + s·t·bc` relative to x, with the share `part` of the whole triangle's
 /// geometry that it takes (folded into the weights, so that both pieces add to the same sums).
 #[derive(Clone, Copy)]
@@ -49,17 +62,17 @@ impl LaneSums {
         }
     }
 
-    /// Adds the tensor rule with `s_rule` along `s ∈ [s0, s1]` and `t_rule` across (both on
-    /// [0, 1]) on `piece`, for the receiver normal `n`: the sums `Σ w (n·r)/‖r‖⁴` and, with
-    /// `GRADIENT`, `HESSIAN`, those of the derivatives (see [`RuleSums`]), each weight `w` being
-    /// the node's `w_s·w_t·span·s·part` (`s` is the Duffy map's Jacobian). Pairs of `s` nodes share
-    /// a register; an odd rule's last node is paired with itself at weight zero (it adds zeros).
+    /// Adds the tensor rule with `s_rule` along `s ∈ [s0, s1]` (as [`paired`] gives it) and
+    /// `t_rule` across (both on [0, 1]) on `piece`, for the receiver normal `n`: the sums
+    /// `Σ w (n·r)/‖r‖⁴` and, with `GRADIENT`, `HESSIAN`, those of the derivatives (see
+    /// [`RuleSums`]), each weight `w` being the node's `w_s·w_t·span·s·part` (`s` is the Duffy
+    /// map's Jacobian). Pairs of `s` nodes share a register.
     #[inline(always)]
     pub(super) fn add<const GRADIENT: bool, const HESSIAN: bool>(
         &mut self,
         piece: &PieceFrame,
         n: &V3<Pair>,
-        (s0, s1, s_rule): (f64, f64, &[(f64, f64)]),
+        (s0, s1, s_rule): (f64, f64, &[[f64; 4]]),
         t_rule: &[(f64, f64)],
     ) {
         let span = s1 - s0;
@@ -69,11 +82,11 @@ impl LaneSums {
             V3::splat(piece.ab),
             V3::splat(piece.bc),
         );
-        for nodes in s_rule.chunks(2) {
-            let (sa, wa) = nodes[0];
-            let (sb, wb) = nodes.get(1).copied().unwrap_or((sa, 0.0));
-            let s = Pair::new(s0 + span * sa, s0 + span * sb);
-            let ws = Pair::new(wa * scale, wb * scale) * s;
+        let (s0, span, scale) = (Pair::splat(s0), Pair::splat(span), Pair::splat(scale));
+        for &[sa, sb, wa, wb] in s_rule {
+            // Lane by lane the scalar `s0 + span·s_a` and `(w_a·scale)·s`.
+            let s = s0 + span * Pair::new(sa, sb);
+            let ws = Pair::new(wa, wb) * scale * s;
             let base = r_p + ab.scale(s);
             for &(t, wt) in t_rule {
                 let r = base + bc.scale(s * Pair::splat(t));
@@ -139,12 +152,12 @@ mod tests {
     use crate::kernels::test_rng::lcg;
     use crate::{Deriv3, Order};
 
-    fn paired(
+    fn paired_sums(
         piece: &PieceFrame,
         n: DVec3,
         order: Order,
         geometry: (DVec3, f64),
-        along: (f64, f64, &[(f64, f64)]),
+        along: (f64, f64, &[[f64; 4]]),
         t_rule: &[(f64, f64)],
     ) -> Deriv3 {
         let mut sums = LaneSums::new();
@@ -181,13 +194,13 @@ mod tests {
                 (p.min(q), p.max(q))
             };
             let s_rule = rules().by_points[8 + k % 9];
+            let s_paired = rules().paired[8 + k % 9];
             let t_rule = rules().by_points[[2, 3, 4, 8][k % 4]];
             let frame = PieceFrame { r_p, ab, bc, part };
-            let along = (s0, s1, s_rule);
             let mut value = None;
             for order in [Order::Value, Order::Gradient, Order::Hessian] {
-                let d = paired(&frame, n, order, geometry, along, t_rule);
-                let r = tensor_rule(r_p, ab, bc, n, order, scaled, along, t_rule);
+                let d = paired_sums(&frame, n, order, geometry, (s0, s1, s_paired), t_rule);
+                let r = tensor_rule(r_p, ab, bc, n, order, scaled, (s0, s1, s_rule), t_rule);
                 let max = |m: glam::DMat3| {
                     m.to_cols_array()
                         .iter()
