@@ -390,8 +390,11 @@ fn robust_triangle(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Result<De
 /// # Ok::<(), raddiff::Error>(())
 /// ```
 pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order) -> Result<Deriv3> {
+    // The certified value of a convex polygon clipped near its plane, when the derivative
+    // orders' clipped loop certified it and its derivatives declined.
+    let mut clipped_value = None;
     if order == Order::Value {
-        if let Some(f) = lambert_polygon::polygon_value(x, n, vertices) {
+        if let Some(f) = polygon_lambert_value(x, n, vertices) {
             return Ok(Deriv3::constant(f));
         }
     } else {
@@ -399,11 +402,15 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
         // derivative sums would cancel and be declined), with the certified value.
         if let Some((d, _)) = polygon_far_field_fast(x, n, vertices, order) {
             return Ok(with_lambert_value(d, order, || {
-                lambert_polygon::polygon_value(x, n, vertices)
+                polygon_lambert_value(x, n, vertices)
             }));
         }
-        if let Some(d) = lambert_polygon::polygon_derivs(x, n, vertices, order) {
-            return Ok(d);
+        // Unclipped, Lambert's derivatives; clipped near the plane, those of the certified
+        // clipped loop, with its value.
+        match lambert_polygon::polygon_derivs_or_clipped(x, n, vertices, order) {
+            Some(Ok(d)) => return Ok(d),
+            Some(Err(value)) => clipped_value = Some(value),
+            None => {}
         }
     }
     // A sliver: the fan triangles' sliver rules instead of the robust path's isotropic
@@ -418,9 +425,18 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
         Some(d) => d?,
         None => polygon::form_factor(x, n, vertices, order)?,
     };
+    // The clipped loop's value and Lambert's unclipped one exclude each other (a vertex below
+    // the tangent plane, or none).
     Ok(with_lambert_value(d, order, || {
-        lambert_polygon::polygon_value(x, n, vertices)
+        lambert_polygon::polygon_value(x, n, vertices).or(clipped_value)
     }))
+}
+
+/// Lambert's certified sum for a polygon, over the clipped loop when the tangent plane cuts it:
+/// the value order's fast paths, in their order.
+#[inline(always)]
+fn polygon_lambert_value(x: DVec3, n: DVec3, vertices: &[DVec3]) -> Option<f64> {
+    lambert_polygon::polygon_value_or_clipped(x, n, vertices)
 }
 
 /// Closed-form integrals along an edge, in the edge frame: `A_m = ∫ ds/ρ^{2m}`,
