@@ -358,7 +358,11 @@ fn robust_triangle(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Result<De
 ///   Hessian of such a polygon come from the analytic derivatives of Lambert's per-edge terms when
 ///   its value is certified, no edge's line passes near `x` (the angle each edge subtends has
 ///   `sin β ≥ 1/4`) and neither derivative sum cancels by more than 100x; otherwise from the
-///   robust path below.
+///   robust path below. The same polygons with the tangent plane certainly cutting them and `x`
+///   within 1e-3 of the size from their plane, over their interior, take Lambert's sum over the
+///   clipped loop with its own running bound (clip points formed in double-double on the edges;
+///   declined within ~1e-9 of the clip line, near an edge's segment and where the sum cancels)
+///   and that loop's derivatives, at every order with the same value.
 /// * **Validation.** `x`, `n` and every vertex must be finite; `n` unit length within a relative
 ///   1e-6 (it is renormalized); at least 3 vertices; planar within 1e-8 of the polygon's extent
 ///   plus twice the rounding of its Newell normal (`(4 + count)·count·ε·extent²/(2·area)` of the
@@ -407,10 +411,10 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
         }
         // Unclipped, Lambert's derivatives; clipped near the plane, those of the certified
         // clipped loop, with its value.
-        match lambert_polygon::polygon_derivs_or_clipped(x, n, vertices, order) {
-            Some(Ok(d)) => return Ok(d),
-            Some(Err(value)) => clipped_value = Some(value),
-            None => {}
+        if let Some(d) =
+            lambert_polygon::polygon_derivs_or_clipped(x, n, vertices, order, &mut clipped_value)
+        {
+            return Ok(d);
         }
     }
     // A sliver: the fan triangles' sliver rules instead of the robust path's isotropic

@@ -81,6 +81,8 @@ pub(super) struct ClippedLoop<const N: usize = 4> {
 
 /// `hi + lo` as a double-double vector, for `lo` the exact rounding error of `hi` (already
 /// normalized: no renormalization needed).
+// Always inlined (also below): called from two modules, they were left out of line.
+#[inline(always)]
 pub(super) fn from_parts(hi: DVec3, lo: DVec3) -> Dd3 {
     let dd = |hi: f64, lo: f64| Dd { hi, lo };
     Dd3 {
@@ -91,6 +93,7 @@ pub(super) fn from_parts(hi: DVec3, lo: DVec3) -> Dd3 {
 }
 
 /// The rounding error of `v − x` per component (`(v − x) − fl(v − x)`, exact by two-sum).
+#[inline(always)]
 pub(super) fn difference_error(v: DVec3, x: DVec3) -> DVec3 {
     DVec3::new(
         two_sum(v.x, -x.x).1,

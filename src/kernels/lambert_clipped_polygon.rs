@@ -83,18 +83,14 @@ struct Cut<const M: usize> {
     above: [bool; M],
 }
 
-/// The cut; `None` for invalid input, when a height's sign is uncertain, or unless the vertices
-/// above form one run (two sign changes: something clipped, something kept).
+/// The cut, from the unit normal and `r_k = v_k − x` (each in range); `None`
+/// when a height's sign is uncertain, or unless the vertices above form one run (two sign
+/// changes: something clipped, something kept).
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn cut<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Cut<M>> {
-    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
-    if !r.iter().all(|rk| lambert::in_range(*rk)) {
-        return None;
-    }
-    let n = lambert::unit(n)?;
+fn cut<const M: usize>(n: DVec3, r: &[DVec3; M]) -> Option<Cut<M>> {
     let heights: [f64; M] = std::array::from_fn(|k| n.dot(r[k]));
-    // The computed heights err by less than half of this (`lambert_clipped`'s module doc).
+    // The computed heights err by less than a quarter of this (module documentation).
     let height_error: [f64; M] =
         std::array::from_fn(|k| 8.0 * f64::EPSILON * n.abs().dot(r[k].abs()));
     let mut above = [false; M];
@@ -110,7 +106,7 @@ fn cut<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Cut<M>> {
         .count();
     (changes == 2).then_some(Cut {
         n,
-        r,
+        r: *r,
         heights,
         height_error,
         above,
@@ -129,8 +125,10 @@ fn newell<const M: usize>(v: &[DVec3; M]) -> DVec3 {
 }
 
 /// Whether the configuration is left to the robust path (module documentation, "Where it is
-/// tried"), for the polygon's Newell normal `normal`; squared, without square roots (a decision
-/// on where to try, not part of the certificate).
+/// tried"), for the polygon's Newell normal `normal` and `r_k = v_k − x`; squared, without square
+/// roots (a decision on where to try, not part of the certificate; NaN input passes it, to be
+/// refused next), and outside the polygon near its plane (the robust path's case) returning at
+/// the first edge that sees `x` on the other side.
 #[inline(always)]
 fn left_to_the_robust_path<const M: usize>(normal: DVec3, r: &[DVec3; M]) -> bool {
     let length2: [f64; M] = std::array::from_fn(|k| r[k].length_squared());
@@ -141,18 +139,20 @@ fn left_to_the_robust_path<const M: usize>(normal: DVec3, r: &[DVec3; M]) -> boo
     if height2 >= 1e-6 * scale2 * r_max2 {
         return true;
     }
-    let (mut positive, mut negative) = (true, true);
-    for i in 0..M {
-        let j = if i + 1 == M { 0 } else { i + 1 };
-        let w = r[i].cross(r[j]);
-        let side = normal.dot(w);
-        positive &= side > 0.0;
-        negative &= side < 0.0;
-        if r[i].dot(r[j]) < 0.0 && w.length_squared() < 1e-6 * length2[i] * length2[j] {
-            return true;
+    // Below 1e-4 of the size, x's foot must be inside: every edge sees it on the same side.
+    // Tested first, returning at the first edge that disagrees (the outside case pays for two).
+    if height2 < 1e-8 * scale2 * r_max2 {
+        let first = normal.dot(r[M - 1].cross(r[0]));
+        for i in 0..M - 1 {
+            if !(normal.dot(r[i].cross(r[i + 1])) * first > 0.0) {
+                return true;
+            }
         }
     }
-    height2 < 1e-8 * scale2 * r_max2 && !(positive || negative)
+    (0..M).any(|i| {
+        let j = if i + 1 == M { 0 } else { i + 1 };
+        r[i].dot(r[j]) < 0.0 && r[i].cross(r[j]).length_squared() < 1e-6 * length2[i] * length2[j]
+    })
 }
 
 /// The clipped loop of `cut` (`N ≥ M + 1`; the run of kept vertices, then the two clip points),
@@ -244,12 +244,15 @@ fn with_certified_loop<const M: usize, const N: usize, R>(
     f: impl FnOnce(&ClippedLoop<N>) -> R,
 ) -> Option<R> {
     debug_assert!(N > M);
-    let cut = cut(x, n, v)?;
     // The cheap decisions first: outside near the plane (the robust path's near-plane split)
-    // they decline before the validation (~300 instructions for a quad).
-    if left_to_the_robust_path(newell(v), &cut.r) {
+    // they decline before the range checks, the cut and the validation (~50, ~150 and ~300
+    // instructions for a quad).
+    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
+    if left_to_the_robust_path(newell(v), &r) {
         return None;
     }
+    let (n, r) = differences(x, n, v)?;
+    let cut = cut(n, &r)?;
     convex_normal(v)?;
     with_loop(
         x,
@@ -267,8 +270,8 @@ fn with_certified_loop<const M: usize, const N: usize, R>(
 /// clipped loop (module documentation) when the tangent plane certainly cuts a strictly convex
 /// polygon of `M` (4 to 8) vertices, `x` is near its plane (below 1e-3 of the size) and the
 /// error bound is within [`FAST_TOLERANCE`](super::lambert::FAST_TOLERANCE) of the result;
-/// `None` otherwise, including when nothing is clipped and for invalid input (the robust path
-/// reports it). `N = M + 1`, the loop's capacity. Called by
+/// `None` otherwise, including when nothing is clipped and for invalid polygons (the robust path
+/// reports them). `N = M + 1`, the loop's capacity. Called by
 /// [`lambert_polygon`](super::lambert_polygon)'s entries where the polygon is not certainly
 /// unclipped.
 // Out of line: the loop's frame (~1 KB) stays off the kernel's other paths.
@@ -290,7 +293,7 @@ pub(crate) type Derivs = Result<Deriv3, f64>;
 /// above [`Order::Value`]: `Some(Ok(d))` with `d.value` [`polygon_value`]'s bits,
 /// `Some(Err(value))` where the value is certified but the derivatives decline (an ordinary edge
 /// of the loop below `sin β = 1/32`, a cancelling derivative sum, a clip point too close to `x`
-/// for its displacement), `None` where [`polygon_value`] declines.
+/// for its displacement), `None` where [`polygon_value`] declines. Arguments as there.
 #[inline(never)]
 pub(super) fn polygon_derivs<const M: usize, const N: usize>(
     x: DVec3,
@@ -304,15 +307,29 @@ pub(super) fn polygon_derivs<const M: usize, const N: usize>(
     })
 }
 
-/// [`polygon_value`] for 4 to 8 vertices (the tests' entry).
+/// The unit normal and the differences `r_k = v_k − x`, each in [`lambert::in_range`], as
+/// [`lambert::unclipped`] checks them; `None` otherwise.
+#[inline(always)]
+fn differences<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<(DVec3, [DVec3; M])> {
+    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
+    if !r.iter().all(|rk| lambert::in_range(*rk)) {
+        return None;
+    }
+    Some((lambert::unit(n)?, r))
+}
+
+/// [`polygon_value`] for 4 to 8 vertices from `x`, `n` and the vertices (the tests' entry).
 #[cfg(test)]
 fn value_of(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
+    fn at<const M: usize, const N: usize>(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
+        polygon_value::<M, N>(x, n, v.try_into().ok()?)
+    }
     match v.len() {
-        4 => polygon_value::<4, 5>(x, n, v.try_into().ok()?),
-        5 => polygon_value::<5, 6>(x, n, v.try_into().ok()?),
-        6 => polygon_value::<6, 7>(x, n, v.try_into().ok()?),
-        7 => polygon_value::<7, 8>(x, n, v.try_into().ok()?),
-        8 => polygon_value::<8, 9>(x, n, v.try_into().ok()?),
+        4 => at::<4, 5>(x, n, v),
+        5 => at::<5, 6>(x, n, v),
+        6 => at::<6, 7>(x, n, v),
+        7 => at::<7, 8>(x, n, v),
+        8 => at::<8, 9>(x, n, v),
         _ => None,
     }
 }
@@ -320,12 +337,20 @@ fn value_of(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
 /// [`polygon_derivs`] for 4 to 8 vertices (the tests' entry).
 #[cfg(test)]
 fn derivs_of(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Derivs> {
+    fn at<const M: usize, const N: usize>(
+        x: DVec3,
+        n: DVec3,
+        v: &[DVec3],
+        order: Order,
+    ) -> Option<Derivs> {
+        polygon_derivs::<M, N>(x, n, v.try_into().ok()?, order)
+    }
     match v.len() {
-        4 => polygon_derivs::<4, 5>(x, n, v.try_into().ok()?, order),
-        5 => polygon_derivs::<5, 6>(x, n, v.try_into().ok()?, order),
-        6 => polygon_derivs::<6, 7>(x, n, v.try_into().ok()?, order),
-        7 => polygon_derivs::<7, 8>(x, n, v.try_into().ok()?, order),
-        8 => polygon_derivs::<8, 9>(x, n, v.try_into().ok()?, order),
+        4 => at::<4, 5>(x, n, v, order),
+        5 => at::<5, 6>(x, n, v, order),
+        6 => at::<6, 7>(x, n, v, order),
+        7 => at::<7, 8>(x, n, v, order),
+        8 => at::<8, 9>(x, n, v, order),
         _ => None,
     }
 }
