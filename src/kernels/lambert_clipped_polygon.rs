@@ -130,6 +130,7 @@ fn newell<const M: usize>(v: &[DVec3; M]) -> DVec3 {
 /// refused next), and outside the polygon near its plane (the robust path's case) returning at
 /// the first edge that sees `x` on the other side.
 #[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that a NaN side counts as outside
 fn left_to_the_robust_path<const M: usize>(normal: DVec3, r: &[DVec3; M]) -> bool {
     let length2: [f64; M] = std::array::from_fn(|k| r[k].length_squared());
     let r_max2 = length2.iter().fold(0.0f64, |m, &l| m.max(l));
