@@ -154,7 +154,7 @@ fn derivs<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M], order: Order) -> O
     derivs_or(x, n, v, order, || None)
 }
 
-/// [`derivs`], or `clipped()` where the polygon is not certainly unclipped (as [`value_or`]).
+/// `derivs`, or `clipped()` where the polygon is not certainly unclipped (as [`value_or`]).
 #[inline(always)]
 fn derivs_or<const M: usize>(
     x: DVec3,
@@ -203,7 +203,7 @@ pub(crate) fn polygon_value_or_clipped(x: DVec3, n: DVec3, v: &[DVec3]) -> Optio
     }
 }
 
-/// [`polygon_derivs`], or where the tangent plane cuts the polygon near its plane, the
+/// `polygon_derivs`, or where the tangent plane cuts the polygon near its plane, the
 /// derivatives of the clipped loop ([`lambert_clipped_polygon::polygon_derivs`]); `None` where
 /// neither accepts, with `*clipped_value` the clipped loop's certified value where that is
 /// (written there rather than returned: a wider result cost the unclipped path ~40
