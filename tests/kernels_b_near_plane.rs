@@ -279,6 +279,73 @@ fn nonconvex_polygons_outside_clipped_walk_to_the_plane() {
     assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
 }
 
+/// Convex test shapes in plane coordinates (multiples of 1/64): a quad, a pentagon, a hexagon.
+fn convex_shapes() -> Vec<Vec<DVec2>> {
+    let v = |p: &[(f64, f64)]| p.iter().map(|&(x, y)| DVec2::new(x, y)).collect::<Vec<_>>();
+    vec![
+        v(&[(0.0, 0.0), (4.0, 0.5), (3.5, 4.0), (0.25, 3.0)]),
+        v(&[(2.0, 0.0), (4.0, 1.5), (3.25, 4.0), (0.75, 4.0), (0.0, 1.5)]),
+        v(&[
+            (1.0, 0.0),
+            (3.0, 0.0),
+            (4.0, 2.0),
+            (3.0, 4.0),
+            (1.0, 4.0),
+            (0.0, 2.0),
+        ]),
+    ]
+}
+
+/// A convex polygon from [`convex_shapes`] (exactly planar, scale 2^-10..2^10) with a foot point
+/// inside it, at least 0.2 of its size from every edge line, and a line ℓ through the foot and a
+/// random interior point.
+fn convex_config(rng: &mut Rng, shape: &[DVec2]) -> Config {
+    let plane = Planar::new(rng);
+    let verts: Vec<DVec3> = shape.iter().map(|p| plane.point(*p)).collect();
+    loop {
+        let f = DVec2::new(rng.range(0.0, 4.0), rng.range(0.0, 4.0));
+        if !contains(shape, f) || edge_line_distance(shape, f) < 0.2 {
+            continue;
+        }
+        let inner = DVec2::new(rng.range(0.0, 4.0), rng.range(0.0, 4.0));
+        if !contains(shape, inner) || (inner - f).length() < 0.5 {
+            continue;
+        }
+        let foot = plane.point(f);
+        let along = (plane.point(inner) - foot).normalize();
+        let across = plane.normal.cross(along) * if rng.uniform() < 0.5 { 1.0 } else { -1.0 };
+        return Config {
+            verts,
+            foot,
+            normal: plane.normal,
+            across,
+            size: 4.0 * plane.scale,
+        };
+    }
+}
+
+/// Convex polygons with `x` over their interior (the clipped-loop fast path's regime,
+/// `src/kernels/lambert_clipped_polygon.rs`, below 1e-3 of the size; the robust path above it,
+/// on the clip line and wherever the path declines).
+#[test]
+fn convex_polygons_over_the_interior_walk_to_the_plane() {
+    let mut big = Big::new();
+    let mut rng = Rng(1863);
+    let mut configs = Vec::new();
+    for shape in convex_shapes() {
+        for _ in 0..3 {
+            configs.push(convex_config(&mut rng, &shape));
+        }
+    }
+    let worst = walk(
+        &mut big,
+        &configs,
+        &mut rng,
+        "convex polygons over the interior",
+    );
+    assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
+}
+
 /// The "C" cut by a line through both arms, seen from outside its back: Sutherland-Hodgman
 /// returns one loop whose clip edges include a bridge along the clip line across the gap between
 /// the arms. Every tilt and both sides, 1e-4..1e-10 from the plane.

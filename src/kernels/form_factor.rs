@@ -358,7 +358,11 @@ fn robust_triangle(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Result<De
 ///   Hessian of such a polygon come from the analytic derivatives of Lambert's per-edge terms when
 ///   its value is certified, no edge's line passes near `x` (the angle each edge subtends has
 ///   `sin β ≥ 1/4`) and neither derivative sum cancels by more than 100x; otherwise from the
-///   robust path below.
+///   robust path below. The same polygons with the tangent plane certainly cutting them and `x`
+///   within 1e-3 of the size from their plane, over their interior, take Lambert's sum over the
+///   clipped loop with its own running bound (clip points formed in double-double on the edges;
+///   declined within ~1e-9 of the clip line, near an edge's segment and where the sum cancels)
+///   and that loop's derivatives, at every order with the same value.
 /// * **Validation.** `x`, `n` and every vertex must be finite; `n` unit length within a relative
 ///   1e-6 (it is renormalized); at least 3 vertices; planar within 1e-8 of the polygon's extent
 ///   plus twice the rounding of its Newell normal (`(4 + count)·count·ε·extent²/(2·area)` of the
@@ -390,8 +394,11 @@ fn robust_triangle(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Result<De
 /// # Ok::<(), raddiff::Error>(())
 /// ```
 pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order) -> Result<Deriv3> {
+    // The certified value of a convex polygon clipped near its plane, when the derivative
+    // orders' clipped loop certified it and its derivatives declined.
+    let mut clipped_value = None;
     if order == Order::Value {
-        if let Some(f) = lambert_polygon::polygon_value(x, n, vertices) {
+        if let Some(f) = polygon_lambert_value(x, n, vertices) {
             return Ok(Deriv3::constant(f));
         }
     } else {
@@ -399,10 +406,14 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
         // derivative sums would cancel and be declined), with the certified value.
         if let Some((d, _)) = polygon_far_field_fast(x, n, vertices, order) {
             return Ok(with_lambert_value(d, order, || {
-                lambert_polygon::polygon_value(x, n, vertices)
+                polygon_lambert_value(x, n, vertices)
             }));
         }
-        if let Some(d) = lambert_polygon::polygon_derivs(x, n, vertices, order) {
+        // Unclipped, Lambert's derivatives; clipped near the plane, those of the certified
+        // clipped loop, with its value.
+        if let Some(d) =
+            lambert_polygon::polygon_derivs_or_clipped(x, n, vertices, order, &mut clipped_value)
+        {
             return Ok(d);
         }
     }
@@ -418,9 +429,18 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
         Some(d) => d?,
         None => polygon::form_factor(x, n, vertices, order)?,
     };
+    // The clipped loop's value and Lambert's unclipped one exclude each other (a vertex below
+    // the tangent plane, or none).
     Ok(with_lambert_value(d, order, || {
-        lambert_polygon::polygon_value(x, n, vertices)
+        lambert_polygon::polygon_value(x, n, vertices).or(clipped_value)
     }))
+}
+
+/// Lambert's certified sum for a polygon, over the clipped loop when the tangent plane cuts it:
+/// the value order's fast paths, in their order.
+#[inline(always)]
+fn polygon_lambert_value(x: DVec3, n: DVec3, vertices: &[DVec3]) -> Option<f64> {
+    lambert_polygon::polygon_value_or_clipped(x, n, vertices)
 }
 
 /// Closed-form integrals along an edge, in the edge frame: `A_m = ∫ ds/ρ^{2m}`,

@@ -56,7 +56,7 @@ const U: f64 = 0.5 * f64::EPSILON;
 /// bound on its displacement along the triangle's edge.
 #[derive(Clone, Copy)]
 pub(super) struct LoopVertex {
-    exact: Dd3,
+    pub(super) exact: Dd3,
     pub(super) hi: DVec3,
     pub(super) vertex: Option<usize>,
     pub(super) displacement: f64,
@@ -66,20 +66,24 @@ pub(super) struct LoopVertex {
 /// ([`lambert_clipped_derivs`](super::lambert_clipped_derivs)): the unit normal, the loop's
 /// vertices (`count` of them), its edge vectors (`edges[k]` from vertex `k` to the next, each one
 /// rounding of the exact difference), the ordinary edges' angles `β` where the value computed
-/// them (NaN otherwise) and `2π` times the signed certified sum.
+/// them (NaN otherwise) and `2π` times the signed certified sum. `N` is the capacity: 4 for a
+/// triangle, `M + 1` for a convex polygon of `M` vertices
+/// ([`lambert_clipped_polygon`](super::lambert_clipped_polygon)).
 #[derive(Clone)]
-pub(super) struct ClippedLoop {
+pub(super) struct ClippedLoop<const N: usize = 4> {
     pub(super) n: DVec3,
-    pub(super) points: [LoopVertex; 4],
-    pub(super) edges: [DVec3; 4],
-    pub(super) angles: [f64; 4],
+    pub(super) points: [LoopVertex; N],
+    pub(super) edges: [DVec3; N],
+    pub(super) angles: [f64; N],
     pub(super) count: usize,
     pub(super) sum: f64,
 }
 
 /// `hi + lo` as a double-double vector, for `lo` the exact rounding error of `hi` (already
 /// normalized: no renormalization needed).
-fn from_parts(hi: DVec3, lo: DVec3) -> Dd3 {
+// Always inlined (also below): called from two modules, they were left out of line.
+#[inline(always)]
+pub(super) fn from_parts(hi: DVec3, lo: DVec3) -> Dd3 {
     let dd = |hi: f64, lo: f64| Dd { hi, lo };
     Dd3 {
         x: dd(hi.x, lo.x),
@@ -89,7 +93,8 @@ fn from_parts(hi: DVec3, lo: DVec3) -> Dd3 {
 }
 
 /// The rounding error of `v − x` per component (`(v − x) − fl(v − x)`, exact by two-sum).
-fn difference_error(v: DVec3, x: DVec3) -> DVec3 {
+#[inline(always)]
+pub(super) fn difference_error(v: DVec3, x: DVec3) -> DVec3 {
     DVec3::new(
         two_sum(v.x, -x.x).1,
         two_sum(v.y, -x.y).1,
@@ -108,7 +113,7 @@ pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     with_certified_loop(x, n, v, ClippedLoop::value)
 }
 
-impl ClippedLoop {
+impl<const N: usize> ClippedLoop<N> {
     /// The form factor: the sum's sign is the triangle's orientation as seen from x, and the form
     /// factor is two-sided.
     pub(super) fn value(&self) -> f64 {
@@ -298,7 +303,7 @@ fn with_loop<R>(
 
 /// The loop's edge vector from `a` to `b`: one rounding of the exact difference of its ends.
 #[inline]
-fn edge_vector(v: &[DVec3; 3], a: &LoopVertex, b: &LoopVertex) -> DVec3 {
+pub(super) fn edge_vector<const M: usize>(v: &[DVec3; M], a: &LoopVertex, b: &LoopVertex) -> DVec3 {
     match (a.vertex, b.vertex) {
         (Some(i), Some(j)) => v[j] - v[i],
         _ => b.exact.sub(&a.exact).to_dvec3(),
@@ -579,7 +584,7 @@ unsafe fn routed_loop_fma<R>(
 /// `None` when the bound exceeds [`FAST_TOLERANCE`] (some angles may then be set).
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn certify(l: &mut ClippedLoop) -> Option<f64> {
+pub(super) fn certify<const N: usize>(l: &mut ClippedLoop<N>) -> Option<f64> {
     let (mut sum, mut magnitude, mut err) = (0.0, 0.0, 0.0);
     let (n, count) = (l.n, l.count);
     for k in 0..count {

@@ -83,7 +83,11 @@ pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -
 /// The derivatives of `triangle_derivs` from a loop (certified, or
 /// [`uncertified_loop`](super::lambert_clipped::uncertified_loop): the
 /// derivatives need only its orientation), with `value` as the value.
-pub(super) fn loop_derivs(clipped: &ClippedLoop, value: f64, order: Order) -> Option<Deriv3> {
+pub(super) fn loop_derivs<const N: usize>(
+    clipped: &ClippedLoop<N>,
+    value: f64,
+    order: Order,
+) -> Option<Deriv3> {
     // One copy per order, so that the order tests fold away in the inlined edge terms.
     let d = match order {
         Order::Value => None,
@@ -101,7 +105,7 @@ fn max6(h: &[f64; 6]) -> f64 {
 
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn derivs_at(clipped: &ClippedLoop, order: Order) -> Option<Deriv3> {
+fn derivs_at<const N: usize>(clipped: &ClippedLoop<N>, order: Order) -> Option<Deriv3> {
     let n = clipped.n;
     let (mut gradient, mut hessian) = (DVec3::ZERO, [0.0; 6]);
     let (mut g_mag, mut h_mag) = (0.0, 0.0);

@@ -7,6 +7,7 @@ pub mod form_factor;
 mod lambert;
 mod lambert_clipped;
 mod lambert_clipped_derivs;
+mod lambert_clipped_polygon;
 mod lambert_far;
 mod lambert_polygon;
 mod lanes;
