@@ -1582,9 +1582,10 @@ pub(crate) fn cancellation_limit(plane: &Plane, near_plane_or_cut: bool) -> f64 
 /// With `exact_edges` the clip edges come from the clip points' exact differences
 /// ([`edge_vector`]) instead of their rounded `u`, whose difference errs by ~ε·extent: a sliver's
 /// clip edge spans its width, so that error is ~ε/aspect of its length (2.5e-6 of the Hessian for
-/// apex 1e-9 of the length, `tests/kernels_b_clipped_slivers.rs`); short clip edges take
-/// [`short_edge_a2`]; and each clip edge takes `|h_P| / ‖n_t‖` from the plane of the triangle it
-/// forms with the loop's next vertex (`plane_n`, `h_p` only where that triangle is degenerate): a
+/// apex 1e-9 of the length, `tests/kernels_b_clipped_slivers.rs`), and `∫ ds/‖r‖⁴` is the
+/// closed form's `A_2` ([`EdgeFrame::moments`], a few ulps also on such short edges seen from
+/// near their line's extension, where its series once cancelled to 3.8e-8); and each clip edge
+/// takes `|h_P| / ‖n_t‖` from the plane of the triangle it forms with the loop's next vertex (`plane_n`, `h_p` only where that triangle is degenerate): a
 /// thin polygon's rounded vertices twist its plane by ~ε/aspect, which cost 5.3e-9 of the
 /// Hessian with the plane of the whole loop (a 6-vertex visible loop 1e-7 wide,
 /// `tests/kernels_b_polygon_slivers.rs`; 5.9e-15 with the edge's own plane).
@@ -1613,15 +1614,11 @@ fn clip_line_hessian(
         let Some(frame) = EdgeFrame::new(a.r, e) else {
             continue;
         };
+        let a2 = frame.moments(Order::Gradient)?.a2;
         if !exact_edges {
-            integral += frame.moments(Order::Gradient)?.a2.copysign(e.dot(along));
+            integral += a2.copysign(e.dot(along));
             continue;
         }
-        let a2 = if 9.0 * frame.len <= 8.0 * frame.h {
-            short_edge_a2(a.r, e, frame.len)
-        } else {
-            frame.moments(Order::Gradient)?.a2
-        };
         // The plane at the clip edge: the triangle of the edge and the loop's next vertex. A thin
         // polygon's rounded vertices twist its plane by ~ε/aspect radians (1e-9 for a width of
         // 1e-7 of the length), and `|h_P| / ‖n_t‖` follows the plane where the line moves.
@@ -1639,28 +1636,6 @@ fn clip_line_hessian(
         return Ok(outer_self(n) * (FRAC_1_PI * integral));
     }
     Ok(outer_self(n) * (h_p.abs() * FRAC_1_PI / nt_len * integral))
-}
-
-/// `∫ ds/‖r‖⁴` along the edge `r_a + t·e`, `t ∈ [0, 1]`, of length `len` at least 9/8 of its
-/// length from x (`9·len ≤ 8·h`, `h` the distance of x from its line), by the 16-point Gauss
-/// rule. On a sliver's clip edge (as short as the sliver is wide) the closed form
-/// ([`EdgeFrame::moments`]) erred by up to 3.8e-8 relative (from the rounded frame of so short an
-/// edge; not analysed further), 3.5e-8 of the Hessian against 320-bit references
-/// (`tests/kernels_b_clipped_slivers.rs`); the rule by ~1e-15. The integrand's
-/// poles (of order 2) lie at `h` from the line, at least `2h/len` half-lengths from the segment,
-/// so on a Bernstein ellipse of parameter `ρ ≥ 4h/len ≥ 4.5` (the ellipse's semi-minor axis
-/// `(ρ − 1/ρ)/2` is its largest distance from the segment), where the sliver rule's threshold for
-/// 16 points (set for poles of order 4) bounds the error by ~1.5e-15. Taken only with
-/// `exact_edges` (slivers), so that other polygons keep their bits.
-fn short_edge_a2(r_a: DVec3, e: DVec3, len: f64) -> f64 {
-    let sum: f64 = gauss_legendre_16()
-        .iter()
-        .map(|&(t, w)| {
-            let r2 = (r_a + t * e).length_squared();
-            w / (r2 * r2)
-        })
-        .sum();
-    sum * len
 }
 
 /// Below this `2·area / extent²` a polygon counts as thin (a sliver): its normal, computed from
@@ -2160,31 +2135,6 @@ mod tests {
     /// The bound against the measured quadrature error of the value of a flat-on triangle (the
     /// exact form factor of a parallel receiver from the edge sum at a moderate distance where it
     /// does not cancel): the bound holds, and overestimates.
-    /// The Gauss rule of `short_edge_a2` agrees with the closed form of `EdgeFrame::moments` to
-    /// 1e-14 where that form is accurate (edges 1e-2..8/9 of their distance from x, whose foot on
-    /// the line lies within a few distances), on random edges at scales 1e-3..1e3.
-    #[test]
-    fn short_edge_a2_matches_the_closed_form() {
-        let mut state = 1825;
-        let mut worst = 0.0f64;
-        for _ in 0..2000 {
-            let mut c = || crate::kernels::test_rng::lcg(&mut state);
-            let scale = 10f64.powf(6.0 * c() - 3.0);
-            let dir = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize();
-            let off = dir.any_orthonormal_vector();
-            let h = scale;
-            let len = h * (8.0 / 9.0) * 10f64.powf(-2.0 * c());
-            let r_a = off * h + dir * (scale * (6.0 * c() - 3.0));
-            let e = dir * len;
-            let frame = EdgeFrame::new(r_a, e).unwrap();
-            assert!(9.0 * frame.len <= 8.0 * frame.h * (1.0 + 1e-12));
-            let closed = frame.moments(Order::Gradient).unwrap().a2;
-            let gauss = short_edge_a2(r_a, e, frame.len);
-            worst = worst.max((gauss - closed).abs() / closed);
-        }
-        assert!(worst <= 1e-14, "{worst:e}");
-    }
-
     #[test]
     fn far_field_bound_holds_for_each_rule() {
         let tri = [
