@@ -151,10 +151,12 @@ impl Dd3 {
     #[inline(always)]
     pub(crate) fn from_parts(hi: DVec3, lo: DVec3) -> Dd3 {
         // With hi = fl(hi + lo), two-sum returns hi itself (and zeros as hi + lo does) and lo up
-        // to the sign of a zero, which it always returns positive: `lo + 0.0`.
+        // to the sign of a zero, which it always returns positive: `lo + 0.0`, written as a select
+        // (the same bits) because the packed addition LLVM makes of `(h + l, l + 0.0)` zeroes a
+        // lane by a register-to-register `vmovq`, which valgrind 3.19 cannot run (FMA builds).
         let part = |h: f64, l: f64| Dd {
             hi: h + l,
-            lo: l + 0.0,
+            lo: if l == 0.0 { 0.0 } else { l },
         };
         Dd3 {
             x: part(hi.x, lo.x),

@@ -202,7 +202,7 @@ pub(crate) fn triangle_form_factor_in_range(
 }
 
 /// [`triangle_form_factor_in_range`] for a triangle [`is_very_thin_triangle`] accepts: the sliver
-/// rule's direct entry first (the same bits; `sliver::unclipped_sliver`), then `evaluate`. Only
+/// rule's direct entry first (the same bits; `sliver::direct_sliver`), then `evaluate`. Only
 /// for such triangles, as the direct entry's plane costs the others ~100 instructions for nothing.
 pub(crate) fn very_thin_triangle_form_factor_in_range(
     x: DVec3,
@@ -278,7 +278,7 @@ fn in_range(
     let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
     // A sliver seen from afar: the sliver rule without `evaluate`'s set-up (the same bits).
     if very_thin {
-        if let Some(d) = sliver::unclipped_sliver(&u, &r, &r_lo, n, order) {
+        if let Some(d) = sliver::direct_sliver(&u, &r, &r_lo, n, order) {
             return Some(Ok(d));
         }
     }
@@ -666,7 +666,9 @@ fn next(i: usize, count: usize) -> usize {
 }
 
 /// Sutherland-Hodgman clip by the half-space `n·r ≥ 0`, onto `out` (empty; filled in place, as
-/// returning the loop by value copies it). Returns whether any vertex was cut away.
+/// returning the loop by value copies it). Returns whether any vertex was cut away. Inlined, so
+/// that the clipped sliver's FMA build fuses its double-double products (`sliver::clipped`).
+#[inline(always)]
 fn clip(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mut ClipLoop) -> bool {
     let count = u.len();
     let (u, r_lo) = (&u[..count], &r_lo[..count]);
@@ -1212,6 +1214,7 @@ fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
 }
 
 /// The edge vector from `a` to `b` (see [`edge_frames`]).
+#[inline]
 fn edge_vector(a: &ClipVertex, b: &ClipVertex) -> DVec3 {
     if a.on_line || b.on_line {
         let (ra, rb) = (
@@ -1588,7 +1591,9 @@ pub(crate) fn cancellation_limit(plane: &Plane, near_plane_or_cut: bool) -> f64 
 /// takes `|h_P| / ‖n_t‖` from the plane of the triangle it forms with the loop's next vertex (`plane_n`, `h_p` only where that triangle is degenerate): a
 /// thin polygon's rounded vertices twist its plane by ~ε/aspect, which cost 5.3e-9 of the
 /// Hessian with the plane of the whole loop (a 6-vertex visible loop 1e-7 wide,
-/// `tests/kernels_b_polygon_slivers.rs`; 5.9e-15 with the edge's own plane).
+/// `tests/kernels_b_polygon_slivers.rs`; 5.9e-15 with the edge's own plane). Inlined, as
+/// [`clip`].
+#[inline(always)]
 fn clip_line_hessian(
     verts: &[ClipVertex],
     n: DVec3,
