@@ -205,8 +205,9 @@ pub(super) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) ->
 
 /// The signed form factor of a sliver cut by the receiver's tangent plane, from its visible part
 /// `verts` (the clipped loop, x origin of the `r`, the clip points exact in double-double): the
-/// sum of [`sliver_quadrature`] over the loop's fan triangles from its first vertex; `None` when
-/// the rule declines any piece (the caller then takes the robust path).
+/// sum of the rule over the loop's fan triangles from its first vertex
+/// ([`clipped::fan_triangle`]); `None` when the rule declines any piece (the caller then takes
+/// the robust path).
 ///
 /// The integrand's factor `n·r` vanishes on the clip line, so the derivatives of the clipped
 /// integral are the integrals of the derivatives over the fixed visible part, except for the
@@ -221,10 +222,35 @@ pub(super) fn clipped_sliver_quadrature(
     n: DVec3,
     order: Order,
 ) -> Option<Deriv3> {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2_fma() {
+        // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
+        return unsafe { clipped_sliver_quadrature_fma(verts, n, order) };
+    }
+    clipped_sliver_quadrature_with(verts, n, order)
+}
+
+/// [`clipped_sliver_quadrature`] compiled with AVX2 and FMA (as [`sliver_quadrature_fma`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn clipped_sliver_quadrature_fma(
+    verts: &[ClipVertex],
+    n: DVec3,
+    order: Order,
+) -> Option<Deriv3> {
+    clipped_sliver_quadrature_with(verts, n, order)
+}
+
+#[inline(always)]
+fn clipped_sliver_quadrature_with(
+    verts: &[ClipVertex],
+    n: DVec3,
+    order: Order,
+) -> Option<Deriv3> {
     let mut total = Deriv3::constant(0.0);
     for k in 1..verts.len().checked_sub(1)? {
         let piece = [verts[0], verts[k], verts[k + 1]];
-        super::accumulate(&mut total, sliver_quadrature(&piece, n, order)?);
+        super::accumulate(&mut total, clipped::fan_triangle(&piece, n, order)?);
     }
     Some(total)
 }

@@ -3,7 +3,9 @@
 use glam::DVec3;
 
 use super::super::{clip, clip_line_hessian, ClipLoop, ClipVertex, Plane};
-use super::{clipped_sliver_quadrature, visible_plane};
+use super::{
+    clipped_sliver_quadrature_with, rule_sums, rules, sliver_geometry, visible_plane, ThinPiece,
+};
 use crate::{Deriv3, Order};
 
 /// The form factor of a sliver triangle (`u`, `r`, `r_lo` as for
@@ -67,7 +69,7 @@ fn clipped_sliver_with(
         return Some(Deriv3::constant(0.0));
     }
     let mut d = crate::kernels::form_factor::oriented(
-        clipped_sliver_quadrature(verts, n, order)?,
+        clipped_sliver_quadrature_with(verts, n, order)?,
         h_p,
     )?;
     if order.hessian() {
@@ -81,4 +83,48 @@ fn clipped_sliver_with(
         }
     }
     Some(d)
+}
+
+/// The rule on one fan triangle `(a, b, c)` of a clipped sliver's visible part: as
+/// [`sliver_quadrature`](super::sliver_quadrature), split at the foot of the vertex opposite the
+/// longest edge, except where that foot lies within the vertex's height of an end of the edge.
+/// There the piece at that end is no longer than it is wide, but it would cost a whole rule, and
+/// the triangle is one thin piece from the other end instead (its short edge, the opposite one, at
+/// most √2 times the height). Every fan triangle touching the clip edge of a cut sliver is such a
+/// triangle: the clip edge is as short as the sliver is wide, and the foot of its far vertex on
+/// the long side lies at its end. A quadrilateral visible part takes three pieces instead of four.
+#[inline(always)]
+pub(super) fn fan_triangle(verts: &[ClipVertex; 3], n: DVec3, order: Order) -> Option<Deriv3> {
+    let len = |i: usize| (verts[(i + 1) % 3].u - verts[i].u).length_squared();
+    let i = (0..3).max_by(|&p, &q| len(p).total_cmp(&len(q)))?;
+    let (a, b, c) = (verts[i], verts[(i + 1) % 3], verts[(i + 2) % 3]);
+    let ab = b.u - a.u;
+    let ab2 = ab.length_squared();
+    let ac = c.u - a.u;
+    let share = (ac.dot(ab) / ab2).clamp(0.0, 1.0);
+    let height2 = ac.cross(ab).length_squared() / ab2;
+    let table = rules();
+    let mut pieces = [None, None];
+    if share * share * ab2 <= height2 {
+        pieces[0] = Some((ThinPiece::new(&b, &c, &a, table)?, 1.0));
+    } else if (1.0 - share) * (1.0 - share) * ab2 <= height2 {
+        pieces[0] = Some((ThinPiece::new(&a, &b, &c, table)?, 1.0));
+    } else {
+        let f = ClipVertex {
+            u: a.u + share * ab,
+            r: a.r + share * (b.r - a.r),
+            r_lo: DVec3::ZERO,
+            on_line: false,
+        };
+        pieces = [
+            Some((ThinPiece::new(&a, &f, &c, table)?, share)),
+            Some((ThinPiece::new(&b, &c, &f, table)?, 1.0 - share)),
+        ];
+    }
+    let sums = match order {
+        Order::Value => rule_sums::<false, false>(&pieces, n),
+        Order::Gradient => rule_sums::<true, false>(&pieces, n),
+        Order::Hessian => rule_sums::<true, true>(&pieces, n),
+    }?;
+    Some(sums.assemble(n, sliver_geometry(&a, &b, &c), order))
 }
