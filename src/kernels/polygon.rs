@@ -524,8 +524,16 @@ pub(crate) fn triangle_plane(u: &[DVec3; 3]) -> Option<Plane> {
 /// The decisions [`evaluate`] takes before its edge sum, for an unclipped polygon given relative to
 /// `x`: `None` when `x` is in or near the polygon's plane (where it recomputes the height exactly),
 /// otherwise the far-field rule if the quadrature applies and the signed height `h_P`.
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(Option<Rule>, f64)> {
+    let h_p = plane_height(r, plane)?;
+    Some((far_rule_of(r), h_p))
+}
+
+/// The first of [`fast_decisions`]: the signed height `h_P` of x over the plane as [`evaluate`]
+/// takes it, `None` when x is in or near the plane. (A clipped sliver needs no more.)
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+#[inline]
+pub(crate) fn plane_height(r: &[DVec3], plane: &Plane) -> Option<f64> {
     let nearest = r
         .iter()
         .min_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
@@ -541,6 +549,12 @@ pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(Option<Rule>
     if !(h_p.abs() >= NEAR_PLANE_HEIGHT * r_max) {
         return None;
     }
+    Some(h_p)
+}
+
+/// The second of [`fast_decisions`]: the far-field rule of the unclipped polygon, if any.
+#[inline]
+pub(crate) fn far_rule_of(r: &[DVec3]) -> Option<Rule> {
     let count = r.len() as f64;
     let centroid = r.iter().sum::<DVec3>() / count;
     let radius = r
@@ -548,7 +562,7 @@ pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(Option<Rule>
         .map(|v| (*v - centroid).length_squared())
         .fold(0.0, f64::max)
         .sqrt();
-    Some((far_field_rule(centroid.length(), radius), h_p))
+    far_field_rule(centroid.length(), radius)
 }
 
 impl Plane {
@@ -1742,19 +1756,23 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     // where the visible part is far-field: the far-field rule and the robust path's edge sum,
     // subdivision and near-plane split erred by up to 1.2e-4 there, the rule by ~3e-13
     // (`tests/kernels_b_clipped_slivers.rs`).
+    // The rule's fan geometry of a clipped sliver, for the clip line's Hessian term.
+    let mut fan_geometry_sums = None;
     let sliver = if (far.is_none() || cut)
         && plane.is_very_thin()
         && !(near_plane && foot_inside(verts, plane.normal, h_p))
     {
         if cut {
-            sliver::clipped_sliver_quadrature(verts, n, order)
+            sliver::clipped_sliver_quadrature(verts, n, order).map(|(d, geometry)| {
+                fan_geometry_sums = Some(geometry);
+                d
+            })
         } else {
             sliver::sliver_quadrature(verts, n, order)
         }
     } else {
         None
     };
-    let sliver_taken = sliver.is_some();
     let mut d = if let Some(q) = sliver {
         used_quadrature = true;
         q
@@ -1888,9 +1906,12 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     }
     if used_quadrature && cut && order.hessian() {
         // A sliver's clip edge spans its width and its Newell normal errs by ~ε/aspect: the
-        // clip line's term from the exact geometry (see `clip_line_hessian`), except near the
-        // plane where the robust path answered (its bits unchanged there).
-        let sliver_plane = if plane.is_very_thin() && (!near_plane || sliver_taken) {
+        // clip line's term from the exact geometry (see `clip_line_hessian`): the rule's own fan
+        // geometry where it answered, except near the plane where the robust path answered (its
+        // bits unchanged there).
+        let sliver_plane = if let Some(geometry) = fan_geometry_sums {
+            geometry.plane()
+        } else if plane.is_very_thin() && !near_plane {
             sliver::visible_plane(verts)
         } else {
             None

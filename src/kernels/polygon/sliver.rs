@@ -51,8 +51,8 @@ use glam::DVec3;
 use super::dd::two_sum;
 
 use super::{
-    fast_decisions, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3, gauss_legendre_4,
-    gauss_legendre_8, legendre_rule, triangle_plane, ClipVertex, RuleSums,
+    far_rule_of, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3, gauss_legendre_4,
+    gauss_legendre_8, legendre_rule, plane_height, triangle_plane, ClipVertex, RuleSums,
 };
 use crate::kernels::lanes::{Pair, V3};
 use crate::{Deriv3, Order};
@@ -166,7 +166,7 @@ pub(super) fn direct_sliver(
         return None;
     }
     // x not near the plane (so not in it either).
-    let (far, h_p) = fast_decisions(r, &plane)?;
+    let h_p = plane_height(r, &plane)?;
     // `clip` compares the exact heights n·(r + r_lo) with zero; the rounded n·r is within
     // ~4ε‖r‖ of them (‖n‖ = 1 + O(ε)), so a margin of 1e-13‖r‖ certifies every sign.
     let above = |v: &DVec3| {
@@ -178,7 +178,7 @@ pub(super) fn direct_sliver(
         return clipped::clipped_sliver(u, r, r_lo, n, order, &plane, h_p);
     }
     // Uncut, a far-field rule goes to `evaluate`.
-    if far.is_some() {
+    if far_rule_of(r).is_some() {
         return None;
     }
     let verts = [0, 1, 2].map(|k| ClipVertex {
@@ -221,7 +221,7 @@ pub(super) fn clipped_sliver_quadrature(
     verts: &[ClipVertex],
     n: DVec3,
     order: Order,
-) -> Option<Deriv3> {
+) -> Option<(Deriv3, FanGeometry)> {
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx2_fma() {
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
@@ -237,7 +237,7 @@ unsafe fn clipped_sliver_quadrature_fma(
     verts: &[ClipVertex],
     n: DVec3,
     order: Order,
-) -> Option<Deriv3> {
+) -> Option<(Deriv3, FanGeometry)> {
     clipped_sliver_quadrature_with(verts, n, order)
 }
 
@@ -246,13 +246,43 @@ fn clipped_sliver_quadrature_with(
     verts: &[ClipVertex],
     n: DVec3,
     order: Order,
-) -> Option<Deriv3> {
+) -> Option<(Deriv3, FanGeometry)> {
     let mut total = Deriv3::constant(0.0);
+    let mut geometry = FanGeometry::default();
     for k in 1..verts.len().checked_sub(1)? {
         let piece = [verts[0], verts[k], verts[k + 1]];
-        super::accumulate(&mut total, clipped::fan_triangle(&piece, n, order)?);
+        let (d, g) = clipped::fan_triangle(&piece, n, order)?;
+        super::accumulate(&mut total, d);
+        geometry.add(g);
     }
-    Some(total)
+    Some((total, geometry))
+}
+
+/// The sums over a loop's fan triangles of their [`sliver_geometry`] `(2·area·N̂, 2·area·N̂·r)`:
+/// the loop's plane ([`FanGeometry::plane`]).
+#[derive(Clone, Copy, Default)]
+pub(super) struct FanGeometry {
+    normal: DVec3,
+    volume: f64,
+}
+
+impl FanGeometry {
+    #[inline(always)]
+    fn add(&mut self, (normal, volume): (DVec3, f64)) {
+        self.normal += normal;
+        self.volume += volume;
+    }
+
+    /// The unit normal and `|h_P|` ([`visible_plane`]); `None` for zero area.
+    #[inline(always)]
+    pub(super) fn plane(&self) -> Option<(DVec3, f64)> {
+        let twice_area = self.normal.length();
+        #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+        if !(twice_area > 0.0) {
+            return None;
+        }
+        Some((self.normal / twice_area, self.volume.abs() / twice_area))
+    }
 }
 
 /// The unit normal of the loop `verts` (x origin of the `r`, the parts `r + r_lo` exact) and
@@ -263,19 +293,12 @@ fn clipped_sliver_quadrature_with(
 /// clipped sliver's FMA build fuses its exact products ([`clipped`]).
 #[inline(always)]
 pub(super) fn visible_plane(verts: &[ClipVertex]) -> Option<(DVec3, f64)> {
-    let (mut normal, mut volume) = (DVec3::ZERO, 0.0);
+    let mut geometry = FanGeometry::default();
     for k in 1..verts.len().checked_sub(1)? {
         // `N·r` is the same at every point of the plane: each piece's from its first vertex.
-        let (nk, ck) = sliver_geometry(&verts[0], &verts[k], &verts[k + 1]);
-        normal += nk;
-        volume += ck;
+        geometry.add(sliver_geometry(&verts[0], &verts[k], &verts[k + 1]));
     }
-    let twice_area = normal.length();
-    #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
-    if !(twice_area > 0.0) {
-        return None;
-    }
-    Some((normal / twice_area, volume.abs() / twice_area))
+    geometry.plane()
 }
 
 /// [`sliver_quadrature`] compiled with AVX2 and FMA: the geometry's exact products are fused

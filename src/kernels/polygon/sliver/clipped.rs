@@ -4,7 +4,7 @@ use glam::DVec3;
 
 use super::super::{clip, clip_line_hessian, ClipLoop, ClipVertex, Plane};
 use super::{
-    clipped_sliver_quadrature_with, rule_sums, rules, sliver_geometry, visible_plane, ThinPiece,
+    clipped_sliver_quadrature_with, rule_sums, rules, sliver_geometry, ThinPiece,
 };
 use crate::{Deriv3, Order};
 
@@ -68,14 +68,12 @@ fn clipped_sliver_with(
     if verts.len() < 3 {
         return Some(Deriv3::constant(0.0));
     }
-    let mut d = crate::kernels::form_factor::oriented(
-        clipped_sliver_quadrature_with(verts, n, order)?,
-        h_p,
-    )?;
+    let (q, geometry) = clipped_sliver_quadrature_with(verts, n, order)?;
+    let mut d = crate::kernels::form_factor::oriented(q, h_p)?;
     if order.hessian() {
         // `evaluate` adds the term after the sign and before the clamp, which touches the value
         // only: the same sum.
-        let sliver_plane = visible_plane(verts);
+        let sliver_plane = geometry.plane();
         let (plane_n, height) = sliver_plane.unwrap_or((plane.normal, h_p));
         d.hessian += clip_line_hessian(verts, n, plane_n, height, sliver_plane.is_some()).ok()?;
         if !d.is_finite() {
@@ -94,7 +92,11 @@ fn clipped_sliver_with(
 /// triangle: the clip edge is as short as the sliver is wide, and the foot of its far vertex on
 /// the long side lies at its end. A quadrilateral visible part takes three pieces instead of four.
 #[inline(always)]
-pub(super) fn fan_triangle(verts: &[ClipVertex; 3], n: DVec3, order: Order) -> Option<Deriv3> {
+pub(super) fn fan_triangle(
+    verts: &[ClipVertex; 3],
+    n: DVec3,
+    order: Order,
+) -> Option<(Deriv3, (DVec3, f64))> {
     let len = |i: usize| (verts[(i + 1) % 3].u - verts[i].u).length_squared();
     let i = (0..3).max_by(|&p, &q| len(p).total_cmp(&len(q)))?;
     let (a, b, c) = (verts[i], verts[(i + 1) % 3], verts[(i + 2) % 3]);
@@ -126,5 +128,6 @@ pub(super) fn fan_triangle(verts: &[ClipVertex; 3], n: DVec3, order: Order) -> O
         Order::Gradient => rule_sums::<true, false>(&pieces, n),
         Order::Hessian => rule_sums::<true, true>(&pieces, n),
     }?;
-    Some(sums.assemble(n, sliver_geometry(&a, &b, &c), order))
+    let geometry = sliver_geometry(&a, &b, &c);
+    Some((sums.assemble(n, geometry, order), geometry))
 }
