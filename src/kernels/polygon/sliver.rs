@@ -250,8 +250,7 @@ fn clipped_sliver_quadrature_with(
     let mut total = Deriv3::constant(0.0);
     let mut geometry = FanGeometry::default();
     for k in 1..verts.len().checked_sub(1)? {
-        let piece = [verts[0], verts[k], verts[k + 1]];
-        let (d, g) = clipped::fan_triangle(&piece, n, order)?;
+        let (d, g) = clipped::fan_triangle(&verts[0], &verts[k], &verts[k + 1], n, order)?;
         super::accumulate(&mut total, d);
         geometry.add(g);
     }

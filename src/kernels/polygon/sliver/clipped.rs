@@ -93,14 +93,25 @@ fn clipped_sliver_with(
 /// the long side lies at its end. A quadrilateral visible part takes three pieces instead of four.
 #[inline(always)]
 pub(super) fn fan_triangle(
-    verts: &[ClipVertex; 3],
+    v0: &ClipVertex,
+    v1: &ClipVertex,
+    v2: &ClipVertex,
     n: DVec3,
     order: Order,
 ) -> Option<(Deriv3, (DVec3, f64))> {
-    let len = |i: usize| (verts[(i + 1) % 3].u - verts[i].u).length_squared();
-    let i = (0..3).max_by(|&p, &q| len(p).total_cmp(&len(q)))?;
-    let (a, b, c) = (verts[i], verts[(i + 1) % 3], verts[(i + 2) % 3]);
-    let ab = b.u - a.u;
+    // The longest edge (the last of equals), by reference: choosing it with `%` and copying the
+    // vertices cost ~150 instructions per triangle.
+    let edges = [v1.u - v0.u, v2.u - v1.u, v0.u - v2.u];
+    let [l0, l1, l2] = edges.map(|e| e.length_squared());
+    let i = if l0 > l1 && l0 > l2 {
+        0
+    } else if l1 > l2 {
+        1
+    } else {
+        2
+    };
+    let (a, b, c) = [(v0, v1, v2), (v1, v2, v0), (v2, v0, v1)][i];
+    let ab = edges[i];
     let ab2 = ab.length_squared();
     let ac = c.u - a.u;
     let share = (ac.dot(ab) / ab2).clamp(0.0, 1.0);
@@ -108,9 +119,9 @@ pub(super) fn fan_triangle(
     let table = rules();
     let mut pieces = [None, None];
     if share * share * ab2 <= height2 {
-        pieces[0] = Some((ThinPiece::new(&b, &c, &a, table)?, 1.0));
+        pieces[0] = Some((ThinPiece::new(b, c, a, table)?, 1.0));
     } else if (1.0 - share) * (1.0 - share) * ab2 <= height2 {
-        pieces[0] = Some((ThinPiece::new(&a, &b, &c, table)?, 1.0));
+        pieces[0] = Some((ThinPiece::new(a, b, c, table)?, 1.0));
     } else {
         let f = ClipVertex {
             u: a.u + share * ab,
@@ -119,8 +130,8 @@ pub(super) fn fan_triangle(
             on_line: false,
         };
         pieces = [
-            Some((ThinPiece::new(&a, &f, &c, table)?, share)),
-            Some((ThinPiece::new(&b, &c, &f, table)?, 1.0 - share)),
+            Some((ThinPiece::new(a, &f, c, table)?, share)),
+            Some((ThinPiece::new(b, c, &f, table)?, 1.0 - share)),
         ];
     }
     let sums = match order {
@@ -128,6 +139,6 @@ pub(super) fn fan_triangle(
         Order::Gradient => rule_sums::<true, false>(&pieces, n),
         Order::Hessian => rule_sums::<true, true>(&pieces, n),
     }?;
-    let geometry = sliver_geometry(&a, &b, &c);
+    let geometry = sliver_geometry(a, b, c);
     Some((sums.assemble(n, geometry, order), geometry))
 }
