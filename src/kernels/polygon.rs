@@ -1601,12 +1601,14 @@ pub(crate) fn cancellation_limit(plane: &Plane, near_plane_or_cut: bool) -> f64 
 /// clip edge spans its width, so that error is ~ε/aspect of its length (2.5e-6 of the Hessian for
 /// apex 1e-9 of the length, `tests/kernels_b_clipped_slivers.rs`), and `∫ ds/‖r‖⁴` is the
 /// closed form's `A_2` ([`EdgeFrame::moments`], a few ulps also on such short edges seen from
-/// near their line's extension, where its series once cancelled to 3.8e-8); and each clip edge
-/// takes `|h_P| / ‖n_t‖` from the plane of the triangle it forms with the loop's next vertex (`plane_n`, `h_p` only where that triangle is degenerate): a
-/// thin polygon's rounded vertices twist its plane by ~ε/aspect, which cost 5.3e-9 of the
-/// Hessian with the plane of the whole loop (a 6-vertex visible loop 1e-7 wide,
-/// `tests/kernels_b_polygon_slivers.rs`; 5.9e-15 with the edge's own plane). Inlined, as
-/// [`clip`].
+/// near their line's extension, where its series once cancelled to 3.8e-8). With `local_planes`
+/// each clip edge takes `|h_P| / ‖n_t‖` from the plane of the triangle it forms with the loop's
+/// next vertex (`plane_n`, `h_p` only where that triangle is degenerate): a thin polygon's rounded
+/// vertices twist its plane by ~ε/aspect, which cost 5.3e-9 of the Hessian with the plane of the
+/// whole loop (a 6-vertex visible loop 1e-7 wide, `tests/kernels_b_polygon_slivers.rs`; 5.9e-15
+/// with the edge's own plane). A clipped triangle's loop is planar (its clip points lie on its
+/// edges to double-double): `plane_n`, `h_p` from its exact fan geometry serve every clip edge.
+/// Inlined, as [`clip`].
 #[inline(always)]
 fn clip_line_hessian(
     verts: &[ClipVertex],
@@ -1614,6 +1616,7 @@ fn clip_line_hessian(
     plane_n: DVec3,
     h_p: f64,
     exact_edges: bool,
+    local_planes: bool,
 ) -> Result<DMat3> {
     let n_t = n - n.dot(plane_n) * plane_n;
     let nt_len = n_t.length();
@@ -1636,6 +1639,10 @@ fn clip_line_hessian(
         let a2 = frame.moments(Order::Gradient)?.a2;
         if !exact_edges {
             integral += a2.copysign(e.dot(along));
+            continue;
+        }
+        if !local_planes {
+            integral += a2.copysign(e.dot(along)) * (h_p.abs() / nt_len);
             continue;
         }
         // The plane at the clip edge: the triangle of the edge and the loop's next vertex. A thin
@@ -1917,7 +1924,8 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
             None
         };
         let (plane_n, height) = sliver_plane.unwrap_or((plane.normal, h_p));
-        d.hessian += clip_line_hessian(verts, n, plane_n, height, sliver_plane.is_some())?;
+        let exact = sliver_plane.is_some();
+        d.hessian += clip_line_hessian(verts, n, plane_n, height, exact, exact && s.u.len() > 3)?;
     }
     // The clipped, visible part satisfies 0 ≤ F ≤ 1; rounding may step outside by an ulp.
     d.value = d.value.clamp(0.0, 1.0);

@@ -68,19 +68,25 @@ fn clipped_sliver_with(
     if verts.len() < 3 {
         return Some(Deriv3::constant(0.0));
     }
-    let (q, geometry) = clipped_sliver_quadrature_with(verts, n, order)?;
-    let mut d = crate::kernels::form_factor::oriented(q, h_p)?;
+    let (mut d, geometry) = clipped_sliver_quadrature_with(verts, n, order)?;
+    // As `evaluate` finishes: the sign (of every field, zeros included), the clip line's term,
+    // the clamp; only the fields the order computes can be non-finite.
+    if h_p < 0.0 {
+        d.value = -d.value;
+        d.gradient = -d.gradient;
+        d.hessian = -d.hessian;
+    }
     if order.hessian() {
-        // `evaluate` adds the term after the sign and before the clamp, which touches the value
-        // only: the same sum.
         let sliver_plane = geometry.plane();
         let (plane_n, height) = sliver_plane.unwrap_or((plane.normal, h_p));
-        d.hessian += clip_line_hessian(verts, n, plane_n, height, sliver_plane.is_some()).ok()?;
-        if !d.is_finite() {
-            return None;
-        }
+        let exact = sliver_plane.is_some();
+        d.hessian += clip_line_hessian(verts, n, plane_n, height, exact, false).ok()?;
     }
-    Some(d)
+    d.value = d.value.clamp(0.0, 1.0);
+    let finite = d.value.is_finite()
+        && (!order.gradient() || d.gradient.is_finite())
+        && (!order.hessian() || d.hessian.is_finite());
+    finite.then_some(d)
 }
 
 /// The rule on one fan triangle `(a, b, c)` of a clipped sliver's visible part: as
