@@ -669,6 +669,54 @@ struct ClipVertex {
 /// most `count` plus one per sign change of the heights.
 type ClipLoop = SmallVec<[ClipVertex; 10]>;
 
+/// Where [`clip`] puts the loop: a [`ClipLoop`], or a [`TriangleLoop`] for a triangle.
+trait ClipOut {
+    fn push(&mut self, v: ClipVertex);
+}
+
+impl ClipOut for ClipLoop {
+    #[inline(always)]
+    fn push(&mut self, v: ClipVertex) {
+        SmallVec::push(self, v);
+    }
+}
+
+/// A clipped triangle's loop (at most 4 vertices) in a plain array: the small vector's capacity
+/// checks cost a clipped sliver's direct entry ~2% of its instructions.
+struct TriangleLoop {
+    verts: [ClipVertex; 4],
+    len: usize,
+}
+
+impl TriangleLoop {
+    fn new() -> Self {
+        let zero = ClipVertex {
+            u: DVec3::ZERO,
+            r: DVec3::ZERO,
+            r_lo: DVec3::ZERO,
+            on_line: false,
+        };
+        TriangleLoop {
+            verts: [zero; 4],
+            len: 0,
+        }
+    }
+
+    fn as_slice(&self) -> &[ClipVertex] {
+        &self.verts[..self.len]
+    }
+}
+
+impl ClipOut for TriangleLoop {
+    /// Only for a triangle's clip (each vertex pushes itself and at most one clip point, and
+    /// at most two of the three edges change sign).
+    #[inline(always)]
+    fn push(&mut self, v: ClipVertex) {
+        self.verts[self.len] = v;
+        self.len += 1;
+    }
+}
+
 /// The index after `i` in a loop of `count` vertices (`(i + 1) % count` without the division).
 #[inline]
 fn next(i: usize, count: usize) -> usize {
@@ -683,7 +731,7 @@ fn next(i: usize, count: usize) -> usize {
 /// returning the loop by value copies it). Returns whether any vertex was cut away. Inlined, so
 /// that the clipped sliver's FMA build fuses its double-double products (`sliver::clipped`).
 #[inline(always)]
-fn clip(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mut ClipLoop) -> bool {
+fn clip<O: ClipOut>(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mut O) -> bool {
     let count = u.len();
     let (u, r_lo) = (&u[..count], &r_lo[..count]);
     let r = &r[..count];

@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use super::super::{clip, clip_line_hessian, ClipLoop, ClipVertex, Plane};
+use super::super::{clip, clip_line_hessian, ClipVertex, Plane, TriangleLoop};
 use super::{
     clipped_sliver_quadrature_with, rule_sums, rules, sliver_geometry, ThinPiece,
 };
@@ -60,11 +60,11 @@ fn clipped_sliver_with(
     plane: &Plane,
     h_p: f64,
 ) -> Option<Deriv3> {
-    let mut clipped = ClipLoop::new();
+    let mut clipped = TriangleLoop::new();
     if !clip(u, r, r_lo, n, &mut clipped) {
         return None;
     }
-    let verts: &[ClipVertex] = &clipped;
+    let verts = clipped.as_slice();
     if verts.len() < 3 {
         return Some(Deriv3::constant(0.0));
     }
