@@ -1471,6 +1471,7 @@ mod tests {
         assert!(counted.iter().all(|&n| n > 150), "{counted:?}");
         // The recurrences' `A_3` (foot near the edge, x within ~1e-2 of its distance of the
         // line) divides by `h²` twice: 4.8e-14 here, unchanged.
+        println!("moments, general / axial series: worst {worst:?}");
         let [general, series] = worst;
         assert!(series.iter().all(|&e| e <= 1e-14), "{worst:?}");
         assert!(general[0] <= 1e-14 && general[1] <= 1e-14, "{worst:?}");
