@@ -23,9 +23,7 @@ fn short_axial_edges_match_the_reference() {
         let distance = 10f64.powf(rng.range(-1.0, 1.0));
         let side = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
         let x = rng.vec(1.0);
-        let a = x
-            + dir * (side * distance)
-            + off * (distance * 10f64.powf(rng.range(-3.0, -1.0)));
+        let a = x + dir * (side * distance) + off * (distance * 10f64.powf(rng.range(-3.0, -1.0)));
         let b = a + dir * (side * distance * 10f64.powf(rng.range(-8.0, -3.0)));
         let n = rng.unit();
         let got = kernels::edge_form_factor(x, n, a, b, Order::Hessian).unwrap();
