@@ -5,7 +5,6 @@
 
 mod kernels_b_common;
 
-use glam::DVec3;
 use kernels_b_common::*;
 use raddiff::{kernels, Order};
 
