@@ -151,9 +151,25 @@ impl Dd3 {
     #[inline(always)]
     pub(crate) fn from_parts(hi: DVec3, lo: DVec3) -> Dd3 {
         // With hi = fl(hi + lo), two-sum returns hi itself (and zeros as hi + lo does) and lo up
-        // to the sign of a zero, which it always returns positive: `lo + 0.0`, written as a select
-        // (the same bits) because the packed addition LLVM makes of `(h + l, l + 0.0)` zeroes a
-        // lane by a register-to-register `vmovq`, which valgrind 3.19 cannot run (FMA builds).
+        // to the sign of a zero, which it always returns positive: `lo + 0.0`.
+        let part = |h: f64, l: f64| Dd {
+            hi: h + l,
+            lo: l + 0.0,
+        };
+        Dd3 {
+            x: part(hi.x, lo.x),
+            y: part(hi.y, lo.y),
+            z: part(hi.z, lo.z),
+        }
+    }
+
+    /// [`Dd3::from_parts`] (the same bits) with `lo + 0.0` written as a select: in an AVX2+FMA
+    /// build (the clipped sliver's `clip`) LLVM packs `(h + l, l + 0.0)` into one addition whose
+    /// zero lane it makes by a register-to-register `vmovq`, which valgrind 3.19 cannot run (the
+    /// CI runs the unit tests under memcheck). The select costs the portable paths a few
+    /// instructions, so only `clip` takes it.
+    #[inline(always)]
+    pub(crate) fn from_parts_unpacked(hi: DVec3, lo: DVec3) -> Dd3 {
         let part = |h: f64, l: f64| Dd {
             hi: h + l,
             lo: if l == 0.0 { 0.0 } else { l },

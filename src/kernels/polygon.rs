@@ -735,7 +735,7 @@ fn clip<O: ClipOut>(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mu
     let count = u.len();
     let (u, r_lo) = (&u[..count], &r_lo[..count]);
     let r = &r[..count];
-    let exact = |i: usize| dd::Dd3::from_parts(r[i], r_lo[i]);
+    let exact = |i: usize| dd::Dd3::from_parts_unpacked(r[i], r_lo[i]);
     // Heights over the tangent plane in double-double, so that the clip points (which land near
     // x whenever x is near the polygon's plane) are placed from exact data. A stack array for
     // the usual small polygons (a growable vector's pushes and indexing cost more than the
