@@ -163,6 +163,24 @@ impl Dd3 {
         }
     }
 
+    /// [`Dd3::from_parts`] (the same bits) with `lo + 0.0` written as a select: in an AVX2+FMA
+    /// build (the clipped sliver's `clip`) LLVM packs `(h + l, l + 0.0)` into one addition whose
+    /// zero lane it makes by a register-to-register `vmovq`, which valgrind 3.19 cannot run (the
+    /// CI runs the unit tests under memcheck). The select costs the portable paths a few
+    /// instructions, so only `clip` takes it.
+    #[inline(always)]
+    pub(crate) fn from_parts_unpacked(hi: DVec3, lo: DVec3) -> Dd3 {
+        let part = |h: f64, l: f64| Dd {
+            hi: h + l,
+            lo: if l == 0.0 { 0.0 } else { l },
+        };
+        Dd3 {
+            x: part(hi.x, lo.x),
+            y: part(hi.y, lo.y),
+            z: part(hi.z, lo.z),
+        }
+    }
+
     /// `a − b` exactly.
     #[inline(always)]
     pub(crate) fn diff(a: DVec3, b: DVec3) -> Dd3 {

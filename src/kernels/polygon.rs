@@ -202,7 +202,7 @@ pub(crate) fn triangle_form_factor_in_range(
 }
 
 /// [`triangle_form_factor_in_range`] for a triangle [`is_very_thin_triangle`] accepts: the sliver
-/// rule's direct entry first (the same bits; `sliver::unclipped_sliver`), then `evaluate`. Only
+/// rule's direct entry first (the same bits; `sliver::direct_sliver`), then `evaluate`. Only
 /// for such triangles, as the direct entry's plane costs the others ~100 instructions for nothing.
 pub(crate) fn very_thin_triangle_form_factor_in_range(
     x: DVec3,
@@ -278,7 +278,7 @@ fn in_range(
     let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
     // A sliver seen from afar: the sliver rule without `evaluate`'s set-up (the same bits).
     if very_thin {
-        if let Some(d) = sliver::unclipped_sliver(&u, &r, &r_lo, n, order) {
+        if let Some(d) = sliver::direct_sliver(&u, &r, &r_lo, n, order) {
             return Some(Ok(d));
         }
     }
@@ -542,8 +542,16 @@ pub(crate) fn triangle_plane(u: &[DVec3; 3]) -> Option<Plane> {
 /// The decisions [`evaluate`] takes before its edge sum, for an unclipped polygon given relative to
 /// `x`: `None` when `x` is in or near the polygon's plane (where it recomputes the height exactly),
 /// otherwise the far-field rule if the quadrature applies and the signed height `h_P`.
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(Option<Rule>, f64)> {
+    let h_p = plane_height(r, plane)?;
+    Some((far_rule_of(r), h_p))
+}
+
+/// The first of [`fast_decisions`]: the signed height `h_P` of x over the plane as [`evaluate`]
+/// takes it, `None` when x is in or near the plane. (A clipped sliver needs no more.)
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+#[inline]
+pub(crate) fn plane_height(r: &[DVec3], plane: &Plane) -> Option<f64> {
     let nearest = r
         .iter()
         .min_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
@@ -559,6 +567,12 @@ pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(Option<Rule>
     if !(h_p.abs() >= NEAR_PLANE_HEIGHT * r_max) {
         return None;
     }
+    Some(h_p)
+}
+
+/// The second of [`fast_decisions`]: the far-field rule of the unclipped polygon, if any.
+#[inline]
+pub(crate) fn far_rule_of(r: &[DVec3]) -> Option<Rule> {
     let count = r.len() as f64;
     let centroid = r.iter().sum::<DVec3>() / count;
     let radius = r
@@ -566,7 +580,7 @@ pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(Option<Rule>
         .map(|v| (*v - centroid).length_squared())
         .fold(0.0, f64::max)
         .sqrt();
-    Some((far_field_rule(centroid.length(), radius), h_p))
+    far_field_rule(centroid.length(), radius)
 }
 
 impl Plane {
@@ -673,6 +687,54 @@ struct ClipVertex {
 /// most `count` plus one per sign change of the heights.
 type ClipLoop = SmallVec<[ClipVertex; 10]>;
 
+/// Where [`clip`] puts the loop: a [`ClipLoop`], or a [`TriangleLoop`] for a triangle.
+trait ClipOut {
+    fn push(&mut self, v: ClipVertex);
+}
+
+impl ClipOut for ClipLoop {
+    #[inline(always)]
+    fn push(&mut self, v: ClipVertex) {
+        SmallVec::push(self, v);
+    }
+}
+
+/// A clipped triangle's loop (at most 4 vertices) in a plain array: the small vector's capacity
+/// checks cost a clipped sliver's direct entry ~2% of its instructions.
+struct TriangleLoop {
+    verts: [ClipVertex; 4],
+    len: usize,
+}
+
+impl TriangleLoop {
+    fn new() -> Self {
+        let zero = ClipVertex {
+            u: DVec3::ZERO,
+            r: DVec3::ZERO,
+            r_lo: DVec3::ZERO,
+            on_line: false,
+        };
+        TriangleLoop {
+            verts: [zero; 4],
+            len: 0,
+        }
+    }
+
+    fn as_slice(&self) -> &[ClipVertex] {
+        &self.verts[..self.len]
+    }
+}
+
+impl ClipOut for TriangleLoop {
+    /// Only for a triangle's clip (each vertex pushes itself and at most one clip point, and
+    /// at most two of the three edges change sign).
+    #[inline(always)]
+    fn push(&mut self, v: ClipVertex) {
+        self.verts[self.len] = v;
+        self.len += 1;
+    }
+}
+
 /// The index after `i` in a loop of `count` vertices (`(i + 1) % count` without the division).
 #[inline]
 fn next(i: usize, count: usize) -> usize {
@@ -684,12 +746,14 @@ fn next(i: usize, count: usize) -> usize {
 }
 
 /// Sutherland-Hodgman clip by the half-space `n·r ≥ 0`, onto `out` (empty; filled in place, as
-/// returning the loop by value copies it). Returns whether any vertex was cut away.
-fn clip(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mut ClipLoop) -> bool {
+/// returning the loop by value copies it). Returns whether any vertex was cut away. Inlined, so
+/// that the clipped sliver's FMA build fuses its double-double products (`sliver::clipped`).
+#[inline(always)]
+fn clip<O: ClipOut>(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mut O) -> bool {
     let count = u.len();
     let (u, r_lo) = (&u[..count], &r_lo[..count]);
     let r = &r[..count];
-    let exact = |i: usize| dd::Dd3::from_parts(r[i], r_lo[i]);
+    let exact = |i: usize| dd::Dd3::from_parts_unpacked(r[i], r_lo[i]);
     // Heights over the tangent plane in double-double, so that the clip points (which land near
     // x whenever x is near the polygon's plane) are placed from exact data. A stack array for
     // the usual small polygons (a growable vector's pushes and indexing cost more than the
@@ -1230,6 +1294,7 @@ fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
 }
 
 /// The edge vector from `a` to `b` (see [`edge_frames`]).
+#[inline]
 fn edge_vector(a: &ClipVertex, b: &ClipVertex) -> DVec3 {
     if a.on_line || b.on_line {
         let (ra, rb) = (
@@ -1600,18 +1665,24 @@ pub(crate) fn cancellation_limit(plane: &Plane, near_plane_or_cut: bool) -> f64 
 /// With `exact_edges` the clip edges come from the clip points' exact differences
 /// ([`edge_vector`]) instead of their rounded `u`, whose difference errs by ~ε·extent: a sliver's
 /// clip edge spans its width, so that error is ~ε/aspect of its length (2.5e-6 of the Hessian for
-/// apex 1e-9 of the length, `tests/kernels_b_clipped_slivers.rs`); short clip edges take
-/// [`short_edge_a2`]; and each clip edge takes `|h_P| / ‖n_t‖` from the plane of the triangle it
-/// forms with the loop's next vertex (`plane_n`, `h_p` only where that triangle is degenerate): a
-/// thin polygon's rounded vertices twist its plane by ~ε/aspect, which cost 5.3e-9 of the
-/// Hessian with the plane of the whole loop (a 6-vertex visible loop 1e-7 wide,
-/// `tests/kernels_b_polygon_slivers.rs`; 5.9e-15 with the edge's own plane).
+/// apex 1e-9 of the length, `tests/kernels_b_clipped_slivers.rs`), and `∫ ds/‖r‖⁴` is the
+/// closed form's `A_2` ([`EdgeFrame::moments`], a few ulps also on such short edges seen from
+/// near their line's extension, where its series once cancelled to 3.8e-8). With `local_planes`
+/// each clip edge takes `|h_P| / ‖n_t‖` from the plane of the triangle it forms with the loop's
+/// next vertex (`plane_n`, `h_p` only where that triangle is degenerate): a thin polygon's rounded
+/// vertices twist its plane by ~ε/aspect, which cost 5.3e-9 of the Hessian with the plane of the
+/// whole loop (a 6-vertex visible loop 1e-7 wide, `tests/kernels_b_polygon_slivers.rs`; 5.9e-15
+/// with the edge's own plane). A clipped triangle's loop is planar (its clip points lie on its
+/// edges to double-double): `plane_n`, `h_p` from its exact fan geometry serve every clip edge.
+/// Inlined, as [`clip`].
+#[inline(always)]
 fn clip_line_hessian(
     verts: &[ClipVertex],
     n: DVec3,
     plane_n: DVec3,
     h_p: f64,
     exact_edges: bool,
+    local_planes: bool,
 ) -> Result<DMat3> {
     let n_t = n - n.dot(plane_n) * plane_n;
     let nt_len = n_t.length();
@@ -1631,15 +1702,15 @@ fn clip_line_hessian(
         let Some(frame) = EdgeFrame::new(a.r, e) else {
             continue;
         };
+        let a2 = frame.moments(Order::Gradient)?.a2;
         if !exact_edges {
-            integral += frame.moments(Order::Gradient)?.a2.copysign(e.dot(along));
+            integral += a2.copysign(e.dot(along));
             continue;
         }
-        let a2 = if 9.0 * frame.len <= 8.0 * frame.h {
-            short_edge_a2(a.r, e, frame.len)
-        } else {
-            frame.moments(Order::Gradient)?.a2
-        };
+        if !local_planes {
+            integral += a2.copysign(e.dot(along)) * (h_p.abs() / nt_len);
+            continue;
+        }
         // The plane at the clip edge: the triangle of the edge and the loop's next vertex. A thin
         // polygon's rounded vertices twist its plane by ~ε/aspect radians (1e-9 for a width of
         // 1e-7 of the length), and `|h_P| / ‖n_t‖` follows the plane where the line moves.
@@ -1657,28 +1728,6 @@ fn clip_line_hessian(
         return Ok(outer_self(n) * (FRAC_1_PI * integral));
     }
     Ok(outer_self(n) * (h_p.abs() * FRAC_1_PI / nt_len * integral))
-}
-
-/// `∫ ds/‖r‖⁴` along the edge `r_a + t·e`, `t ∈ [0, 1]`, of length `len` at least 9/8 of its
-/// length from x (`9·len ≤ 8·h`, `h` the distance of x from its line), by the 16-point Gauss
-/// rule. On a sliver's clip edge (as short as the sliver is wide) the closed form
-/// ([`EdgeFrame::moments`]) erred by up to 3.8e-8 relative (from the rounded frame of so short an
-/// edge; not analysed further), 3.5e-8 of the Hessian against 320-bit references
-/// (`tests/kernels_b_clipped_slivers.rs`); the rule by ~1e-15. The integrand's
-/// poles (of order 2) lie at `h` from the line, at least `2h/len` half-lengths from the segment,
-/// so on a Bernstein ellipse of parameter `ρ ≥ 4h/len ≥ 4.5` (the ellipse's semi-minor axis
-/// `(ρ − 1/ρ)/2` is its largest distance from the segment), where the sliver rule's threshold for
-/// 16 points (set for poles of order 4) bounds the error by ~1.5e-15. Taken only with
-/// `exact_edges` (slivers), so that other polygons keep their bits.
-fn short_edge_a2(r_a: DVec3, e: DVec3, len: f64) -> f64 {
-    let sum: f64 = gauss_legendre_16()
-        .iter()
-        .map(|&(t, w)| {
-            let r2 = (r_a + t * e).length_squared();
-            w / (r2 * r2)
-        })
-        .sum();
-    sum * len
 }
 
 /// Below this `2·area / extent²` a polygon counts as thin (a sliver): its normal, computed from
@@ -1780,19 +1829,23 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     // where the visible part is far-field: the far-field rule and the robust path's edge sum,
     // subdivision and near-plane split erred by up to 1.2e-4 there, the rule by ~3e-13
     // (`tests/kernels_b_clipped_slivers.rs`).
+    // The rule's fan geometry of a clipped sliver, for the clip line's Hessian term.
+    let mut fan_geometry_sums = None;
     let sliver = if (far.is_none() || cut)
         && plane.is_very_thin()
         && !(near_plane && foot_inside(verts, plane.normal, h_p))
     {
         if cut {
-            sliver::clipped_sliver_quadrature(verts, n, order)
+            sliver::clipped_sliver_quadrature(verts, n, order).map(|(d, geometry)| {
+                fan_geometry_sums = Some(geometry);
+                d
+            })
         } else {
             sliver::sliver_quadrature(verts, n, order)
         }
     } else {
         None
     };
-    let sliver_taken = sliver.is_some();
     let mut d = if let Some(q) = sliver {
         used_quadrature = true;
         q
@@ -1926,15 +1979,19 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     }
     if used_quadrature && cut && order.hessian() {
         // A sliver's clip edge spans its width and its Newell normal errs by ~ε/aspect: the
-        // clip line's term from the exact geometry (see `clip_line_hessian`), except near the
-        // plane where the robust path answered (its bits unchanged there).
-        let sliver_plane = if plane.is_very_thin() && (!near_plane || sliver_taken) {
+        // clip line's term from the exact geometry (see `clip_line_hessian`): the rule's own fan
+        // geometry where it answered, except near the plane where the robust path answered (its
+        // bits unchanged there).
+        let sliver_plane = if let Some(geometry) = fan_geometry_sums {
+            geometry.plane()
+        } else if plane.is_very_thin() && !near_plane {
             sliver::visible_plane(verts)
         } else {
             None
         };
         let (plane_n, height) = sliver_plane.unwrap_or((plane.normal, h_p));
-        d.hessian += clip_line_hessian(verts, n, plane_n, height, sliver_plane.is_some())?;
+        let exact = sliver_plane.is_some();
+        d.hessian += clip_line_hessian(verts, n, plane_n, height, exact, exact && s.u.len() > 3)?;
     }
     // The clipped, visible part satisfies 0 ≤ F ≤ 1; rounding may step outside by an ulp.
     d.value = d.value.clamp(0.0, 1.0);
@@ -2178,31 +2235,6 @@ mod tests {
     /// The bound against the measured quadrature error of the value of a flat-on triangle (the
     /// exact form factor of a parallel receiver from the edge sum at a moderate distance where it
     /// does not cancel): the bound holds, and overestimates.
-    /// The Gauss rule of `short_edge_a2` agrees with the closed form of `EdgeFrame::moments` to
-    /// 1e-14 where that form is accurate (edges 1e-2..8/9 of their distance from x, whose foot on
-    /// the line lies within a few distances), on random edges at scales 1e-3..1e3.
-    #[test]
-    fn short_edge_a2_matches_the_closed_form() {
-        let mut state = 1825;
-        let mut worst = 0.0f64;
-        for _ in 0..2000 {
-            let mut c = || crate::kernels::test_rng::lcg(&mut state);
-            let scale = 10f64.powf(6.0 * c() - 3.0);
-            let dir = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize();
-            let off = dir.any_orthonormal_vector();
-            let h = scale;
-            let len = h * (8.0 / 9.0) * 10f64.powf(-2.0 * c());
-            let r_a = off * h + dir * (scale * (6.0 * c() - 3.0));
-            let e = dir * len;
-            let frame = EdgeFrame::new(r_a, e).unwrap();
-            assert!(9.0 * frame.len <= 8.0 * frame.h * (1.0 + 1e-12));
-            let closed = frame.moments(Order::Gradient).unwrap().a2;
-            let gauss = short_edge_a2(r_a, e, frame.len);
-            worst = worst.max((gauss - closed).abs() / closed);
-        }
-        assert!(worst <= 1e-14, "{worst:e}");
-    }
-
     #[test]
     fn far_field_bound_holds_for_each_rule() {
         let tri = [

@@ -12,7 +12,7 @@
 //! `(v_0, v_k, v_{k+1})` has the polygon's orientation, the fan partitions the polygon and its
 //! form factor is the sum of the triangles' (each a non-negative number: no cancellation in the
 //! value). The decisions of the sliver rule's direct entry
-//! ([`unclipped_sliver`](super::sliver::unclipped_sliver)) are taken once for the polygon (not
+//! ([`direct_sliver`](super::sliver::direct_sliver)) are taken once for the polygon (not
 //! near the plane, nothing clipped, no far-field rule), then each triangle is integrated by the
 //! rule ([`sliver_quadrature`], which declines when `x` is not far from the triangle compared
 //! with its width); as soon as one triangle is declined, so is the polygon (with `x` near its
