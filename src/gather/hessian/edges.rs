@@ -213,13 +213,18 @@ const AXIAL_T3: [f64; 22] = {
     t
 };
 
+/// `(P(y_f), (P(y_n) − P(y_f))/(y_n − y_f))` for the polynomial `P` of coefficients `c` (highest
+/// first): Horner's rule at `y_f` with its divided difference alongside, so that the difference of
+/// two axial tails is never formed by subtraction (it cancelled by ~distance/length on short edges;
+/// see `form_factor::axial_a2`).
 #[inline(always)]
-fn horner<const FMA: bool, const N: usize>(c: &[f64; N], y: f64) -> f64 {
-    let mut t = c[0];
+fn horner_divided<const FMA: bool, const N: usize>(c: &[f64; N], y_n: f64, y_f: f64) -> (f64, f64) {
+    let (mut p, mut slope) = (c[0], 0.0);
     for &ci in &c[1..] {
-        t = fmadd::<FMA>(t, y, ci);
+        slope = fmadd::<FMA>(slope, y_n, p);
+        p = fmadd::<FMA>(p, y_f, ci);
     }
-    t
+    (p, slope)
 }
 
 /// Evaluates every lane of the batch (see [`Batch`]): each edge from its nearer end (the term is
@@ -288,9 +293,16 @@ fn evaluate_lanes<const FMA: bool, const HESSIAN: bool, const AXIAL_LANES: bool>
         let half_ih2 = 0.5 * ih * ih;
         let (inv_near, inv_far) = (1.0 / near, 1.0 / far);
         let (y_near, y_far) = (h2 * inv_near * inv_near, h2 * inv_far * inv_far);
+        // Axial: A_m = T(y_n)/n^k − T(y_f)/f^k as (T(y_n) − T(y_f))/n^k + T(y_f)(1/n^k − 1/f^k),
+        // with y_n − y_f = y_n (1 + q) len/f and 1/n^k − 1/f^k = (1 + q + … + q^{k−1}) len/(n^k f),
+        // q = n/f: no subtraction of the two tails.
+        let q = near * inv_far;
+        let len_far = len * inv_far;
         let a2 = if AXIAL_LANES {
-            let e2 = |y: f64, inv: f64| horner::<FMA, 20>(&AXIAL_T2, y) * (inv * inv * inv);
-            e2(y_near, inv_near) - e2(y_far, inv_far)
+            let (t, slope) = horner_divided::<FMA, 20>(&AXIAL_T2, y_near, y_far);
+            let inv3 = inv_near * inv_near * inv_near;
+            let powers = 1.0 + q * (1.0 + q);
+            len_far * inv3 * fmadd::<FMA>(y_near * (1.0 + q), slope, t * powers)
         } else {
             fmadd::<FMA>(len * (h2 - sab), irab, a1) * half_ih2
         };
@@ -301,11 +313,12 @@ fn evaluate_lanes<const FMA: bool, const HESSIAN: bool, const AXIAL_LANES: bool>
             let irab2 = irab * irab;
             b3 = 0.25 * lsum * (ra2 + rb2) * irab2;
             a3 = if AXIAL_LANES {
-                let e3 = |y: f64, inv: f64| {
-                    let inv2 = inv * inv;
-                    horner::<FMA, 22>(&AXIAL_T3, y) * (inv2 * inv2 * inv)
-                };
-                e3(y_near, inv_near) - e3(y_far, inv_far)
+                let (t, slope) = horner_divided::<FMA, 22>(&AXIAL_T3, y_near, y_far);
+                let inv2 = inv_near * inv_near;
+                let powers = 1.0 + q * (1.0 + q * (1.0 + q * (1.0 + q)));
+                len_far
+                    * (inv2 * inv2 * inv_near)
+                    * fmadd::<FMA>(y_near * (1.0 + q), slope, t * powers)
             } else {
                 let bracket = h2 * h2
                     - 2.0 * sab * h2
@@ -1016,9 +1029,15 @@ mod tests {
                 for i in 0..BATCH {
                     let scale = 10f64.powi((round % 7) - 3);
                     let a = rng.vec(scale);
-                    let c = match i % 4 {
+                    let c = match i % 5 {
                         // far along nearly the same direction: the axial regime
                         0 => a * (1.0 + 1e3 * rng.next()) + rng.vec(scale * 0.05),
+                        // short edges (1e-7..1e-5 of their distance) in the axial regime, where
+                        // the difference of the two tails cancelled by distance/length
+                        4 => {
+                            let len = 10f64.powf(-7.0 + 2.0 * rng.next());
+                            a * (1.0 + len) + rng.vec(scale * len * 0.05)
+                        }
                         1 => rng.vec(scale * 1e3),
                         _ => rng.vec(scale),
                     };
