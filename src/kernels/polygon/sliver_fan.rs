@@ -40,7 +40,7 @@
 use glam::DVec3;
 
 use super::sliver::sliver_quadrature;
-use super::{dd, far_field_rule, ClipVertex, Plane, NEAR_PLANE_HEIGHT};
+use super::{dd, far_rule_of, ClipVertex, Plane, NEAR_PLANE_HEIGHT};
 use crate::kernels::form_factor::oriented;
 use crate::kernels::lambert;
 use crate::kernels::lambert_polygon::SLIVER_AREA2;
@@ -229,28 +229,19 @@ fn fan_rule(x: DVec3, n: DVec3, v: &[DVec3], thin: &ThinPolygon, order: Order) -
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn near_field_height(r: &[DVec3], r2: &[f64], plane: &Plane) -> Option<f64> {
-    let (mut nearest, mut r2_max, mut sum) = (0, 0.0f64, DVec3::ZERO);
+    let (mut nearest, mut r2_max) = (0, 0.0f64);
     for k in 0..r.len() {
         // `min_by` keeps the first of equal elements.
         if r2[k] < r2[nearest] {
             nearest = k;
         }
         r2_max = r2_max.max(r2[k]);
-        sum += r[k];
     }
     let h_p = plane.normal.dot(r[nearest]);
     if !(h_p.abs() >= NEAR_PLANE_HEIGHT * r2_max.sqrt()) {
         return None;
     }
-    let centroid = sum / r.len() as f64;
-    let radius = r
-        .iter()
-        .map(|v| (*v - centroid).length_squared())
-        .fold(0.0, f64::max)
-        .sqrt();
-    far_field_rule(centroid.length(), radius)
-        .is_none()
-        .then_some(h_p)
+    far_rule_of(r).is_none().then_some(h_p)
 }
 
 /// [`fan_of_triangles`] from the vertices alone (the unit tests' entry).
