@@ -175,29 +175,43 @@ fn derivs_or<const M: usize>(
 /// [`polygon_value`], or where the tangent plane cuts the polygon near its plane, Lambert's sum
 /// over the clipped loop ([`lambert_clipped_polygon::polygon_value`]): the value order's fast
 /// paths, sharing the unclipped test (a polygon that fails it for a vertex below the tangent
-/// plane is the clipped path's; slivers and other polygons that pass it are left alone).
+/// plane is the clipped path's; slivers and other polygons that pass it are left alone). Where
+/// the clipped loop declines (outside the polygon near its plane, where its sum cancels), the
+/// replay of the robust path's near-plane split
+/// ([`near_plane_polygon_value`](super::polygon::near_plane_polygon_value): the robust bits).
 pub(crate) fn polygon_value_or_clipped(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
+    use super::polygon::near_plane_polygon_value as route;
     use lambert_clipped_polygon::polygon_value as clipped;
     match v.len() {
         4 => {
             let v = v.try_into().ok()?;
-            value_or::<4>(x, n, v, || clipped::<4, 5>(x, n, v))
+            value_or::<4>(x, n, v, || {
+                clipped::<4, 5>(x, n, v).or_else(|| route::<4, 8>(x, n, v))
+            })
         }
         5 => {
             let v = v.try_into().ok()?;
-            value_or::<5>(x, n, v, || clipped::<5, 6>(x, n, v))
+            value_or::<5>(x, n, v, || {
+                clipped::<5, 6>(x, n, v).or_else(|| route::<5, 10>(x, n, v))
+            })
         }
         6 => {
             let v = v.try_into().ok()?;
-            value_or::<6>(x, n, v, || clipped::<6, 7>(x, n, v))
+            value_or::<6>(x, n, v, || {
+                clipped::<6, 7>(x, n, v).or_else(|| route::<6, 12>(x, n, v))
+            })
         }
         7 => {
             let v = v.try_into().ok()?;
-            value_or::<7>(x, n, v, || clipped::<7, 8>(x, n, v))
+            value_or::<7>(x, n, v, || {
+                clipped::<7, 8>(x, n, v).or_else(|| route::<7, 14>(x, n, v))
+            })
         }
         8 => {
             let v = v.try_into().ok()?;
-            value_or::<8>(x, n, v, || clipped::<8, 9>(x, n, v))
+            value_or::<8>(x, n, v, || {
+                clipped::<8, 9>(x, n, v).or_else(|| route::<8, 16>(x, n, v))
+            })
         }
         _ => None,
     }

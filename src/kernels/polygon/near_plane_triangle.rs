@@ -156,7 +156,7 @@ fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
     split_loop(x, v, s, &mut loop_, &mut [], &mut []).map(|(value, _)| value)
 }
 
-const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
+pub(super) const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
     u: DVec3::ZERO,
     r: DVec3::ZERO,
     r_lo: DVec3::ZERO,
@@ -361,7 +361,7 @@ fn clip_triangle(
 /// abscissae when x is near the edge's line), for its edge vector `e` (`edge_vector(a, b)`);
 /// `None` for a zero-length edge.
 #[inline(always)]
-fn in_plane_edge(a: &ClipVertex, b: &ClipVertex, e: DVec3) -> Option<InPlaneEdge> {
+pub(super) fn in_plane_edge(a: &ClipVertex, b: &ClipVertex, e: DVec3) -> Option<InPlaneEdge> {
     let len = e.length();
     if len == 0.0 {
         return None;
@@ -389,7 +389,7 @@ fn in_plane_edge(a: &ClipVertex, b: &ClipVertex, e: DVec3) -> Option<InPlaneEdge
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::kernels::polygon::form_factor;
     use crate::Order;
@@ -458,7 +458,7 @@ mod tests {
             if let (Ok(value), Ok(hessian)) = (entry(Order::Value), entry(Order::Hessian)) {
                 assert_eq!(value.value.to_bits(), hessian.value.to_bits(), "{k}: order");
             }
-            robust_split += usize::from(robust_takes_the_split(x, n, v));
+            robust_split += usize::from(robust_takes_the_split(x, n, &v));
         }
         // Every configuration where the robust path takes its split for the value, the route
         // takes too.
@@ -559,9 +559,14 @@ mod tests {
 
     /// Whether `evaluate` takes its near-plane split for the value of this configuration (its
     /// decisions, through the route's own steps but with the robust path's `clip` and frames).
-    fn robust_takes_the_split(x: DVec3, n: DVec3, v: [DVec3; 3]) -> bool {
+    /// Also the polygon route's reference (`near_plane_polygon`), hence over any vertex count.
+    pub(in crate::kernels::polygon) fn robust_takes_the_split(
+        x: DVec3,
+        n: DVec3,
+        v: &[DVec3],
+    ) -> bool {
         use super::super::{clip, edge_frames, exact_height, ClipLoop, Frames, Plane, Scaled};
-        let Ok(scaled) = Scaled::new(x, &v) else {
+        let Ok(scaled) = Scaled::new(x, v) else {
             return false;
         };
         let Ok(plane) = Plane::new(&scaled.u) else {
