@@ -67,6 +67,7 @@ use super::lambert_clipped::{
 };
 use super::lambert_clipped_derivs::loop_derivs;
 use super::lambert_polygon::convex_normal;
+use super::polygon::near_plane_polygon_value_and_height;
 use crate::{Deriv3, Order};
 
 const U: f64 = 0.5 * f64::EPSILON;
@@ -160,12 +161,17 @@ fn left_to_the_robust_path<const M: usize>(normal: DVec3, r: &[DVec3; M]) -> boo
 }
 
 /// The clipped loop of `cut` (`N ≥ M + 1`; the run of kept vertices, then the two clip points),
-/// its edge vectors, without angles or sum (NaN and 0), handed to `f` in place.
+/// its edge vectors, without angles or sum (NaN and 0), handed to `f` in place. `exact_clip`:
+/// the clip points' parameter `t` from the double-double heights (as the robust path's clip
+/// forms it) rather than from the f64 ones, which moves them from the exact crossing by ~u²
+/// instead of ~u of the size (for the routed derivatives, whose accept test on that
+/// displacement fails by a few times where the derivative sums cancel outside the polygon).
 #[inline(always)]
 fn with_loop<const M: usize, const N: usize, R>(
     x: DVec3,
     v: &[DVec3; M],
     cut: &Cut<M>,
+    exact_clip: bool,
     f: impl FnOnce(&mut ClippedLoop<N>) -> R,
 ) -> R {
     let Cut {
@@ -220,12 +226,25 @@ fn with_loop<const M: usize, const N: usize, R>(
             );
             let dt = 1.01 * ((gi * (1.0 - t) + gj * t) / (total.abs() - gi - gj) + 2.0 * U * t);
             let (ei, ej) = (exact(i), exact(j));
-            let point = ei.add(&ej.sub(&ei).scale(Dd { hi: t, lo: 0.0 }));
+            let (t, displacement) = if exact_clip {
+                // Each double-double operation errs by a few u² relative: the heights by
+                // `8u²(|n|·|r_k|)` (`U·height_error` is twice that), `t` (no cancellation: the
+                // heights have opposite signs) by their errors over `|total|` and a few u², the
+                // point by a few u² of its ends' size; bounded here with margins of 2x or more.
+                let (di, dj) = (ei.dot_f64(cut.n), ej.dot_f64(cut.n));
+                let t = di.div(di.add(dj.neg()));
+                let dt = 2.0 * U * (height_error[i] + height_error[j]) / total.abs() + 16.0 * U * U;
+                let size = 16.0 * U * U * (r[i].length() + r[j].length());
+                (t, dt * (v[j] - v[i]).length() + size)
+            } else {
+                (Dd { hi: t, lo: 0.0 }, dt * (v[j] - v[i]).length())
+            };
+            let point = ei.add(&ej.sub(&ei).scale(t));
             l.points[count] = LoopVertex {
                 exact: point,
                 hi: point.to_dvec3(),
                 vertex: None,
-                displacement: 1.01 * dt * (v[j] - v[i]).length(),
+                displacement: 1.01 * displacement,
             };
             count += 1;
         }
@@ -262,6 +281,7 @@ fn with_certified_loop<const M: usize, const N: usize, R>(
         x,
         v,
         &cut,
+        false,
         #[inline(always)]
         |l: &mut ClippedLoop<N>| {
             l.sum = certify(l)?;
@@ -309,6 +329,44 @@ pub(super) fn polygon_derivs<const M: usize, const N: usize>(
         let value = l.value();
         loop_derivs(l, value, order).ok_or(value)
     })
+}
+
+/// [`polygon_derivs`] where the certified loop is not built: outside the polygon near its
+/// plane, where Lambert's sum cancels and the value order takes the robust path's near-plane
+/// split ([`near_plane_polygon_value`](super::polygon::near_plane_polygon_value), the robust
+/// bits). With that route's value (so the value order's bits), the derivatives of the loop
+/// [`with_loop`] builds on the same cut as the certified path, its clip points placed from the
+/// double-double heights as the route places them (the loop's points on the polygon's edge
+/// lines with their displacement bounds; the derivatives' accuracy argument,
+/// `lambert_clipped_derivs`, needs only these, not the certified value), oriented by the sign of
+/// the route's exact height `h_P` as the robust edge sum is. `Some(Err(value))` where the
+/// derivatives decline (or no vertex is certainly below the tangent plane), `None` where the
+/// route declines. `N = M + 1` (the loop), `R = 2M` (the route's clipped loop).
+#[inline(never)]
+pub(super) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+    order: Order,
+) -> Option<Derivs> {
+    let (value, h_p) = near_plane_polygon_value_and_height::<M, R>(x, n, v)?;
+    let Some((n, r)) = differences(x, n, v) else {
+        return Some(Err(value));
+    };
+    let (Some(cut), false) = (cut(n, &r), h_p == 0.0) else {
+        return Some(Err(value));
+    };
+    Some(with_loop(
+        x,
+        v,
+        &cut,
+        true,
+        #[inline(always)]
+        |l: &mut ClippedLoop<N>| {
+            l.sum = h_p.signum();
+            loop_derivs(l, value, order).ok_or(value)
+        },
+    ))
 }
 
 /// The unit normal and the differences `r_k = v_k − x`, each in [`lambert::in_range`], as
@@ -547,6 +605,139 @@ mod tests {
                 let eg = (fd - d.gradient[i]).abs() / g_scale;
                 let eh = (col - d.hessian.col(i)).abs().max_element() / h_scale;
                 assert!(eg < 1e-7 && eh < 1e-7, "m = {m}, axis {i}: {eg:e} {eh:e}");
+            }
+        }
+    }
+
+    /// [`routed_polygon_derivs`] for 4 to 8 vertices (the tests' entry).
+    fn routed_of(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Derivs> {
+        fn at<const M: usize, const N: usize, const R: usize>(
+            x: DVec3,
+            n: DVec3,
+            v: &[DVec3],
+            order: Order,
+        ) -> Option<Derivs> {
+            routed_polygon_derivs::<M, N, R>(x, n, v.try_into().ok()?, order)
+        }
+        match v.len() {
+            4 => at::<4, 5, 8>(x, n, v, order),
+            5 => at::<5, 6, 10>(x, n, v, order),
+            6 => at::<6, 7, 12>(x, n, v, order),
+            8 => at::<8, 9, 16>(x, n, v, order),
+            _ => None,
+        }
+    }
+
+    /// Random clipped convex quads, pentagons, hexagons and octagons of sizes 1e-3 to 1e3, `x`
+    /// 1e-3 to 1e-9 sizes from the plane over a point 0.1-1 sizes beyond a vertex (outside):
+    /// wherever the routed loop's derivatives are accepted they agree with the robust path within
+    /// 1e-12 (gradient) and 1e-10 (Hessian) of its largest entry, their value is the value order's
+    /// bits, and the public kernel returns exactly them; they are accepted in at least half of the
+    /// configurations where the route answers.
+    #[test]
+    fn routed_derivatives_agree_with_the_robust_path() {
+        let mut state = 11;
+        let (mut routed, mut derived) = (0, 0);
+        let (mut worst_g, mut worst_h) = (0.0f64, 0.0f64);
+        for k in 0..6000 {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let m = [4, 5, 6, 8][(k / 3) % 4];
+            let (v, plane_n) = random_convex(&mut state, m, scale);
+            let centroid = v.iter().sum::<DVec3>() / m as f64;
+            let beyond = 1.1 + lcg(&mut state);
+            let foot = centroid + (v[(k / 12) % m] - centroid) * beyond;
+            let side = if lcg(&mut state) < 0.5 { 1.0 } else { -1.0 };
+            let height = scale * 10f64.powf(-3.0 - 6.0 * lcg(&mut state));
+            let x = foot + plane_n * (side * height);
+            let n = tilted(&mut state, plane_n * side);
+            let value = polygon_form_factor(x, n, &v, Order::Value).unwrap().value;
+            for order in [Order::Gradient, Order::Hessian] {
+                let Some(d) = routed_of(x, n, &v, order) else {
+                    continue;
+                };
+                routed += usize::from(order.hessian());
+                let public = polygon_form_factor(x, n, &v, order).unwrap();
+                assert_eq!(public.value.to_bits(), value.to_bits(), "{k} {order:?}");
+                match d {
+                    Ok(d) => {
+                        assert_eq!(public, d, "{k} {order:?}");
+                        let (g, h) = rel(&d, &robust(x, n, &v, order));
+                        let h = if order.hessian() { h } else { 0.0 };
+                        worst_g = worst_g.max(g);
+                        worst_h = worst_h.max(h);
+                        assert!(
+                            g < 1e-12 && h < 1e-10,
+                            "{k}: {g:e} {h:e} at {x:?} {n:?} {v:?}"
+                        );
+                        derived += usize::from(order.hessian());
+                    }
+                    Err(f) => assert_eq!(f.to_bits(), value.to_bits(), "{k}"),
+                }
+            }
+        }
+        println!(
+            "outside near the plane: route {routed}, derivatives {derived}; worst vs robust: \
+             gradient {worst_g:e}, Hessian {worst_h:e}"
+        );
+        assert!(routed > 1000, "{routed}");
+        assert!(derived * 2 >= routed, "{derived} of {routed}");
+    }
+
+    /// The quad and pentagon of `benches/kernels_regimes.rs` 1e-6 from the plane outside: the
+    /// routed derivatives are taken, agree with the robust path, and with central differences
+    /// (Richardson-extrapolated, steps 1e-3 and 5e-4 of the height) of the value order and of
+    /// their own gradient within 1e-6 of the largest entry.
+    #[test]
+    fn the_benchmarked_outside_cases_are_routed() {
+        let quad: Vec<DVec3> = [(-0.5, -0.4), (0.6, -0.5), (0.7, 0.6), (-0.4, 0.5)]
+            .map(|(x, y)| DVec3::new(x, y, 1.0 + 0.1 * x + 0.1 * y))
+            .to_vec();
+        let pentagon: Vec<DVec3> = (0..5)
+            .map(|i| {
+                let phi = std::f64::consts::TAU * i as f64 / 5.0;
+                DVec3::new(phi.cos(), phi.sin(), 1.2 + 0.3 * phi.sin())
+            })
+            .collect();
+        for (v, edge) in [(quad, 0), (pentagon, 1)] {
+            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            let centroid = v.iter().sum::<DVec3>() / v.len() as f64;
+            let mid = (v[edge] + v[(edge + 1) % v.len()]) * 0.5;
+            let height = 1e-6;
+            let x = mid + (mid - centroid) * 0.2 - plane_n * height;
+            let normal = DVec3::new(0.1, -0.2, 1.0).normalize();
+            let n = if (v[0] - x).dot(normal) > 0.0 {
+                normal
+            } else {
+                -normal
+            };
+            let d = routed_of(x, n, &v, Order::Hessian)
+                .unwrap()
+                .expect("declined");
+            let (g, h) = rel(&d, &robust(x, n, &v, Order::Hessian));
+            assert!(g < 1e-12 && h < 1e-10, "{g:e} {h:e}");
+            let f = |p: DVec3| polygon_form_factor(p, n, &v, Order::Value).unwrap().value;
+            let grad = |p: DVec3| routed_of(p, n, &v, Order::Gradient).unwrap().unwrap();
+            let central = |step: f64, i: usize| {
+                let dx = DVec3::AXES[i] * step;
+                let df = (f(x + dx) - f(x - dx)) / (2.0 * step);
+                let dg = (grad(x + dx).gradient - grad(x - dx).gradient) / (2.0 * step);
+                (df, dg)
+            };
+            let g_scale = d.gradient.abs().max_element();
+            let h_scale = d
+                .hessian
+                .to_cols_array()
+                .iter()
+                .fold(0.0f64, |s, e| s.max(e.abs()));
+            for i in 0..3 {
+                let (f1, g1) = central(1e-3 * height, i);
+                let (f2, g2) = central(5e-4 * height, i);
+                let eg = ((4.0 * f2 - f1) / 3.0 - d.gradient[i]).abs() / g_scale;
+                let eh = ((g2 * 4.0 - g1) / 3.0 - d.hessian.col(i))
+                    .abs()
+                    .max_element()
+                    / h_scale;
+                assert!(eg < 1e-6 && eh < 1e-6, "axis {i}: {eg:e} {eh:e}");
             }
         }
     }

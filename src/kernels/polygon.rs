@@ -21,7 +21,10 @@ mod near_plane_triangle;
 mod sliver;
 mod sliver_fan;
 use super::form_factor::{clip_edge_term, frame_term, outer_self, sym_outer, EdgeFrame, ExactEnds};
-pub(crate) use near_plane_polygon::polygon_value as near_plane_polygon_value;
+pub(crate) use near_plane_polygon::{
+    polygon_value as near_plane_polygon_value,
+    polygon_value_and_height as near_plane_polygon_value_and_height,
+};
 pub(crate) use near_plane_triangle::{
     clipped_triangle_value_and_loop as near_plane_clipped_triangle_value_and_loop,
     triangle_value as near_plane_triangle_value, RouteLoop,

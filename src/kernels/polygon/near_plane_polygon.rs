@@ -49,6 +49,19 @@ pub(crate) fn polygon_value<const M: usize, const N: usize>(
     n: DVec3,
     v: &[DVec3; M],
 ) -> Option<f64> {
+    polygon_value_and_height::<M, N>(x, n, v).map(|(value, _)| value)
+}
+
+/// [`polygon_value`] with the exact signed height `h_P` of `x` over the polygon's plane (along
+/// Newell's normal, positive when that normal points away from `x`; in the units of `v`), which
+/// orients the derivative orders' loop as the robust path's edge sum is oriented. Inlined into
+/// the callers (a portable copy: the split inside is compiled twice either way).
+#[inline(always)]
+pub(crate) fn polygon_value_and_height<const M: usize, const N: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+) -> Option<(f64, f64)> {
     debug_assert!(N >= 2 * M);
     let s = screen(x, n, v)?;
     #[cfg(target_arch = "x86_64")]
@@ -93,13 +106,23 @@ fn screen<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Screened
     {
         return None;
     }
-    convex_normal(v)?;
-    // `Plane::new`'s Newell sum and extent (the max of the roots is the root of the max), and
-    // its validation without the simplicity test, which `convex_normal` certifies.
+    // `Plane::new`'s Newell sum.
     let mut nn = DVec3::ZERO;
     for i in 0..M {
         nn += u[i].cross(u[next(i, M)]);
     }
+    // Far from the plane, declined before the validation: the height's decision below, on
+    // `r_0` for the nearest vertex and twice its limit, which covers the rounding of the unit
+    // normal and the polygon's tolerated non-planarity (2.5e-9 of its extent, `convex_normal`)
+    // by orders of magnitude. Squared, without roots (NaN passes, to be refused next).
+    let r_max2 = r.iter().map(|rk| rk.length_squared()).fold(0.0, f64::max);
+    let side = nn.dot(r[0]);
+    if side * side > 4.0 * NEAR_PLANE_HEIGHT * NEAR_PLANE_HEIGHT * nn.length_squared() * r_max2 {
+        return None;
+    }
+    convex_normal(v)?;
+    // `Plane::new`'s extent (the max of the roots is the root of the max), and its validation
+    // without the simplicity test, which `convex_normal` certifies.
     let extent = u
         .iter()
         .map(|uk| uk.length_squared())
@@ -117,11 +140,7 @@ fn screen<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Screened
         }
     }
     let h_rounded = plane.normal.dot(nearest);
-    let r_max = r
-        .iter()
-        .map(|rk| rk.length_squared())
-        .fold(0.0, f64::max)
-        .sqrt();
+    let r_max = r_max2.sqrt();
     if !(h_rounded.abs() > 4.0 * f64::EPSILON * r_max
         && h_rounded.abs() < NEAR_PLANE_HEIGHT * r_max)
     {
@@ -154,13 +173,18 @@ unsafe fn split_fma<const M: usize, const N: usize>(
     x: DVec3,
     v: &[DVec3; M],
     s: &Screened<M>,
-) -> Option<f64> {
+) -> Option<(f64, f64)> {
     split::<M, N>(x, v, s)
 }
 
-/// The exact height, the clip, the remaining decisions and the split itself.
+/// The exact height, the clip, the remaining decisions and the split itself: the value and the
+/// exact height.
 #[inline(always)]
-fn split<const M: usize, const N: usize>(x: DVec3, v: &[DVec3; M], s: &Screened<M>) -> Option<f64> {
+fn split<const M: usize, const N: usize>(
+    x: DVec3,
+    v: &[DVec3; M],
+    s: &Screened<M>,
+) -> Option<(f64, f64)> {
     let Screened { r, u, n, plane } = s;
     let n = *n;
     let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
@@ -203,7 +227,7 @@ fn split<const M: usize, const N: usize>(x: DVec3, v: &[DVec3; M], s: &Screened<
     // The edge sum's sign convention, then the clamp of the visible part's value.
     let value = if h_p < 0.0 { -value } else { value };
     let value = value.clamp(0.0, 1.0);
-    value.is_finite().then_some(value)
+    value.is_finite().then_some((value, h_p))
 }
 
 /// [`clip`](super::clip) on fixed arrays (the same operations, so the same vertices): the loop
@@ -320,13 +344,17 @@ mod tests {
             let got = polygon_value_of(x, n, &v);
             let portable = match m {
                 4 => screen::<4>(x, n, v[..].try_into().unwrap())
-                    .and_then(|s| split::<4, 8>(x, v[..].try_into().unwrap(), &s)),
+                    .and_then(|s| split::<4, 8>(x, v[..].try_into().unwrap(), &s))
+                    .map(|(f, _)| f),
                 5 => screen::<5>(x, n, v[..].try_into().unwrap())
-                    .and_then(|s| split::<5, 10>(x, v[..].try_into().unwrap(), &s)),
+                    .and_then(|s| split::<5, 10>(x, v[..].try_into().unwrap(), &s))
+                    .map(|(f, _)| f),
                 6 => screen::<6>(x, n, v[..].try_into().unwrap())
-                    .and_then(|s| split::<6, 12>(x, v[..].try_into().unwrap(), &s)),
+                    .and_then(|s| split::<6, 12>(x, v[..].try_into().unwrap(), &s))
+                    .map(|(f, _)| f),
                 _ => screen::<8>(x, n, v[..].try_into().unwrap())
-                    .and_then(|s| split::<8, 16>(x, v[..].try_into().unwrap(), &s)),
+                    .and_then(|s| split::<8, 16>(x, v[..].try_into().unwrap(), &s))
+                    .map(|(f, _)| f),
             };
             assert_eq!(
                 got.map(f64::to_bits),
