@@ -67,7 +67,7 @@ use super::lambert_clipped::{
 };
 use super::lambert_clipped_derivs::loop_derivs;
 use super::lambert_polygon::convex_normal;
-use super::polygon::near_plane_polygon_value_and_height;
+use super::polygon::{near_plane_clipped_polygon_value_and_loop, RouteLoop};
 use crate::{Deriv3, Order};
 
 const U: f64 = 0.5 * f64::EPSILON;
@@ -161,19 +161,22 @@ fn left_to_the_robust_path<const M: usize>(normal: DVec3, r: &[DVec3; M]) -> boo
 }
 
 /// The clipped loop of `cut` (`N ≥ M + 1`; the run of kept vertices, then the two clip points),
-/// its edge vectors, without angles or sum (NaN and 0), handed to `f` in place. `exact_clip`:
-/// the clip points' parameter `t` from the double-double heights (as the robust path's clip
-/// forms it) rather than from the f64 ones, which moves them from the exact crossing by ~u²
-/// instead of ~u of the size (for the routed derivatives, whose accept test on that
-/// displacement fails by a few times where the derivative sums cancel outside the polygon).
+/// its edge vectors, without sum (0), handed to `f` in place. With `route`, the near-plane
+/// route's loop of the same cut (the caller checks [`same_loop`]): its clip points, placed from
+/// the double-double heights (as the robust path's clip places them) rather than from the f64
+/// ones, which moves them from the exact crossing by ~u² instead of ~u of the size (the routed
+/// derivatives' accept test on that displacement fails by a few times with the f64 points where
+/// the derivative sums cancel outside the polygon), its edge vectors from a kept vertex to a
+/// clip point (or back; the same rounding of the same double-double difference) and its angles
+/// (those of the same edges, the same ends to their rounding); without, NaN angles.
 #[inline(always)]
-fn with_loop<const M: usize, const N: usize, R>(
+fn with_loop<const M: usize, const N: usize, const R: usize, T>(
     x: DVec3,
     v: &[DVec3; M],
     cut: &Cut<M>,
-    exact_clip: bool,
-    f: impl FnOnce(&mut ClippedLoop<N>) -> R,
-) -> R {
+    route: Option<&RouteLoop<R>>,
+    f: impl FnOnce(&mut ClippedLoop<N>) -> T,
+) -> T {
     let Cut {
         r,
         heights,
@@ -204,10 +207,14 @@ fn with_loop<const M: usize, const N: usize, R>(
             // between them); the others' edges are `v_j − v_i`.
             let next_to_clip = above[p] != above[i] || above[i] != above[j];
             l.points[count] = LoopVertex {
-                exact: if next_to_clip {
-                    exact(i)
-                } else {
-                    from_parts(r[i], DVec3::ZERO)
+                exact: match route {
+                    // The route's point is these parts.
+                    Some(route) => {
+                        let (hi, lo) = route.point(count);
+                        from_parts(hi, lo)
+                    }
+                    None if next_to_clip => exact(i),
+                    None => from_parts(r[i], DVec3::ZERO),
                 },
                 hi: r[i],
                 vertex: Some(i),
@@ -225,24 +232,28 @@ fn with_loop<const M: usize, const N: usize, R>(
                 HEIGHT_ERROR * height_error[j],
             );
             let dt = 1.01 * ((gi * (1.0 - t) + gj * t) / (total.abs() - gi - gj) + 2.0 * U * t);
-            let (ei, ej) = (exact(i), exact(j));
-            let (t, displacement) = if exact_clip {
-                // Each double-double operation errs by a few u² relative: the heights by
-                // `8u²(|n|·|r_k|)` (`U·height_error` is twice that), `t` (no cancellation: the
-                // heights have opposite signs) by their errors over `|total|` and a few u², the
-                // point by a few u² of its ends' size; bounded here with margins of 2x or more.
-                let (di, dj) = (ei.dot_f64(cut.n), ej.dot_f64(cut.n));
-                let t = di.div(di.add(dj.neg()));
-                let dt = 2.0 * U * (height_error[i] + height_error[j]) / total.abs() + 16.0 * U * U;
-                let size = 16.0 * U * U * (r[i].length() + r[j].length());
-                (t, dt * (v[j] - v[i]).length() + size)
-            } else {
-                (Dd { hi: t, lo: 0.0 }, dt * (v[j] - v[i]).length())
+            let (point, hi, displacement) = match route {
+                Some(route) => {
+                    // Each double-double operation errs by a few u² relative: the heights by
+                    // `8u²(|n|·|r_k|)` (`U·height_error` is twice that), `t` (no cancellation:
+                    // the heights have opposite signs) by their errors over `|total|` and a few
+                    // u², the point by a few u² of its ends' size; bounded here with margins of
+                    // 2x or more.
+                    let (hi, lo) = route.point(count);
+                    let dt =
+                        2.0 * U * (height_error[i] + height_error[j]) / total.abs() + 16.0 * U * U;
+                    let size = 16.0 * U * U * (r[i].length() + r[j].length());
+                    (from_parts(hi, lo), hi, dt * (v[j] - v[i]).length() + size)
+                }
+                None => {
+                    let (ei, ej) = (exact(i), exact(j));
+                    let point = ei.add(&ej.sub(&ei).scale(Dd { hi: t, lo: 0.0 }));
+                    (point, point.to_dvec3(), dt * (v[j] - v[i]).length())
+                }
             };
-            let point = ei.add(&ej.sub(&ei).scale(t));
             l.points[count] = LoopVertex {
                 exact: point,
-                hi: point.to_dvec3(),
+                hi,
                 vertex: None,
                 displacement: 1.01 * displacement,
             };
@@ -252,9 +263,25 @@ fn with_loop<const M: usize, const N: usize, R>(
     l.count = count;
     for k in 0..count {
         let next = if k + 1 == count { 0 } else { k + 1 };
-        l.edges[k] = edge_vector(v, &l.points[k], &l.points[next]);
+        let (a, b) = (&l.points[k], &l.points[next]);
+        l.edges[k] = match route {
+            Some(route) if a.vertex.is_some() != b.vertex.is_some() => route.edge(k),
+            _ => edge_vector(v, a, b),
+        };
+        if let Some(route) = route {
+            l.angles[k] = route.angle(k);
+        }
     }
     f(&mut l)
+}
+
+/// Whether the route's loop has the points of `l` (built on it by [`with_loop`]): the same
+/// count, clip points where `l` has them. The route clips on the signs of the double-double
+/// heights, which agree with the cut's certain f64 signs, so this holds but for a defect.
+#[inline(always)]
+fn same_loop<const N: usize, const R: usize>(l: &ClippedLoop<N>, route: &RouteLoop<R>) -> bool {
+    l.count == route.count()
+        && (0..l.count).all(|k| route.is_clip_point(k) == l.points[k].vertex.is_none())
 }
 
 /// `f` of the certified loop (its `sum` set), `None` where the path is not tried or the value is
@@ -281,7 +308,7 @@ fn with_certified_loop<const M: usize, const N: usize, R>(
         x,
         v,
         &cut,
-        false,
+        None::<&RouteLoop<0>>,
         #[inline(always)]
         |l: &mut ClippedLoop<N>| {
             l.sum = certify(l)?;
@@ -335,8 +362,8 @@ pub(super) fn polygon_derivs<const M: usize, const N: usize>(
 /// plane, where Lambert's sum cancels and the value order takes the robust path's near-plane
 /// split ([`near_plane_polygon_value`](super::polygon::near_plane_polygon_value), the robust
 /// bits). With that route's value (so the value order's bits), the derivatives of the loop
-/// [`with_loop`] builds on the same cut as the certified path, its clip points placed from the
-/// double-double heights as the route places them (the loop's points on the polygon's edge
+/// [`with_loop`] builds on the same cut as the certified path, with the route's double-double
+/// clip points, edge vectors and angles (the loop's points on the polygon's edge
 /// lines with their displacement bounds; the derivatives' accuracy argument,
 /// `lambert_clipped_derivs`, needs only these, not the certified value), oriented by the sign of
 /// the route's exact height `h_P` as the robust edge sum is. `Some(Err(value))` where the
@@ -349,7 +376,8 @@ pub(super) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usi
     v: &[DVec3; M],
     order: Order,
 ) -> Option<Derivs> {
-    let (value, h_p) = near_plane_polygon_value_and_height::<M, R>(x, n, v)?;
+    let mut route = RouteLoop::<R>::new();
+    let (value, h_p) = near_plane_clipped_polygon_value_and_loop::<M, R>(x, n, v, &mut route)?;
     let Some((n, r)) = differences(x, n, v) else {
         return Some(Err(value));
     };
@@ -360,9 +388,12 @@ pub(super) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usi
         x,
         v,
         &cut,
-        true,
+        Some(&route),
         #[inline(always)]
         |l: &mut ClippedLoop<N>| {
+            if !same_loop(l, &route) {
+                return Err(value);
+            }
             l.sum = h_p.signum();
             loop_derivs(l, value, order).ok_or(value)
         },

@@ -27,7 +27,7 @@
 
 use glam::DVec3;
 
-use super::near_plane_triangle::{in_plane_edge, CLIP_VERTEX_ZERO};
+use super::near_plane_triangle::{in_plane_edge, RouteLoop, CLIP_VERTEX_ZERO};
 use super::{
     edge_vector, exact_height_of, far_field_rule, foot_inside, near_plane_value, next, ClipVertex,
     Plane, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO, SPLIT_VALUE_LIMIT,
@@ -49,27 +49,51 @@ pub(crate) fn polygon_value<const M: usize, const N: usize>(
     n: DVec3,
     v: &[DVec3; M],
 ) -> Option<f64> {
-    polygon_value_and_height::<M, N>(x, n, v).map(|(value, _)| value)
-}
-
-/// [`polygon_value`] with the exact signed height `h_P` of `x` over the polygon's plane (along
-/// Newell's normal, positive when that normal points away from `x`; in the units of `v`), which
-/// orients the derivative orders' loop as the robust path's edge sum is oriented. Inlined into
-/// the callers (a portable copy: the split inside is compiled twice either way).
-#[inline(always)]
-pub(crate) fn polygon_value_and_height<const M: usize, const N: usize>(
-    x: DVec3,
-    n: DVec3,
-    v: &[DVec3; M],
-) -> Option<(f64, f64)> {
     debug_assert!(N >= 2 * M);
     let s = screen(x, n, v)?;
+    let mut points = [CLIP_VERTEX_ZERO; N];
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx2_fma() {
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
-        return unsafe { split_fma::<M, N>(x, v, &s) };
+        return unsafe { split_fma::<M, N>(x, v, &s, &mut points, &mut [], &mut []) }
+            .map(|(value, _, _)| value);
     }
-    split::<M, N>(x, v, &s)
+    split::<M, N>(x, v, &s, &mut points, &mut [], &mut []).map(|(value, _, _)| value)
+}
+
+/// [`polygon_value`] with the exact signed height `h_P` of `x` over the polygon's plane (along
+/// Newell's normal, positive when it points away from `x`; in the units of `v`), which orients
+/// the derivative orders' loop as the robust edge sum is oriented, and with the clipped loop it
+/// computed the value on, written to `out` (unspecified where it declines), for those orders, which take its points (the
+/// double-double clip points), the vectors of its edges from a kept vertex to a clip point (or
+/// back) and its well-conditioned edges' angles (see `near_plane_value`) instead of computing
+/// them a second time. The loop's points are, for `i` in `0..M`, vertex `i` when it is kept, then
+/// the crossing of edge `i → i + 1` when there is one (`clip`'s order).
+#[inline(always)]
+pub(crate) fn clipped_polygon_value_and_loop<const M: usize, const N: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+    out: &mut RouteLoop<N>,
+) -> Option<(f64, f64)> {
+    debug_assert!(N >= 2 * M);
+    let s = screen(x, n, v)?;
+    let RouteLoop {
+        points,
+        angles,
+        edges,
+        count,
+    } = out;
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2_fma() {
+        // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
+        let (value, h_p, k) = unsafe { split_fma::<M, N>(x, v, &s, points, angles, edges) }?;
+        *count = k;
+        return Some((value, h_p));
+    }
+    let (value, h_p, k) = split::<M, N>(x, v, &s, points, angles, edges)?;
+    *count = k;
+    Some((value, h_p))
 }
 
 /// What [`screen`] hands to [`split`].
@@ -173,27 +197,34 @@ unsafe fn split_fma<const M: usize, const N: usize>(
     x: DVec3,
     v: &[DVec3; M],
     s: &Screened<M>,
-) -> Option<(f64, f64)> {
-    split::<M, N>(x, v, s)
+    points: &mut [ClipVertex; N],
+    angles: &mut [f64],
+    edges: &mut [DVec3],
+) -> Option<(f64, f64, usize)> {
+    split::<M, N>(x, v, s, points, angles, edges)
 }
 
-/// The exact height, the clip, the remaining decisions and the split itself: the value and the
-/// exact height.
+/// The exact height, the clip (into `points`), the remaining decisions and the split itself:
+/// the value, the exact height and the loop's length; where `angles` and `edges` have entries,
+/// the loop's edges' angles (see `near_plane_value`) and the vectors of its edges off the
+/// tangent plane.
 #[inline(always)]
 fn split<const M: usize, const N: usize>(
     x: DVec3,
     v: &[DVec3; M],
     s: &Screened<M>,
-) -> Option<(f64, f64)> {
+    points: &mut [ClipVertex; N],
+    angles: &mut [f64],
+    edges: &mut [DVec3],
+) -> Option<(f64, f64, usize)> {
     let Screened { r, u, n, plane } = s;
     let n = *n;
     let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
     let r_lo: [DVec3; M] =
         std::array::from_fn(|k| DVec3::new(err(v[k].x, x.x), err(v[k].y, x.y), err(v[k].z, x.z)));
     let h_p = exact_height_of(r, &r_lo, plane.twice_area);
-    let mut loop_ = [CLIP_VERTEX_ZERO; N];
-    let count = clip_polygon(u, r, &r_lo, n, &mut loop_)?;
-    let verts = &loop_[..count];
+    let count = clip_polygon(u, r, &r_lo, n, points)?;
+    let verts = &points[..count];
     let centroid = verts.iter().map(|v| v.r).sum::<DVec3>() / count as f64;
     let radius = verts
         .iter()
@@ -211,7 +242,11 @@ fn split<const M: usize, const N: usize>(
     for (i, frame) in frames[..count].iter_mut().enumerate() {
         let (a, b) = (&verts[i], &verts[next(i, count)]);
         if !(a.on_line && b.on_line) {
-            *frame = in_plane_edge(a, b, edge_vector(a, b));
+            let e = edge_vector(a, b);
+            if let Some(edge) = edges.get_mut(i) {
+                *edge = e;
+            }
+            *frame = in_plane_edge(a, b, e);
         }
     }
     let value = near_plane_value(
@@ -221,13 +256,13 @@ fn split<const M: usize, const N: usize>(
         plane.normal,
         h_p,
         SPLIT_VALUE_LIMIT,
-        &mut [],
+        angles,
     )?
     .0;
     // The edge sum's sign convention, then the clamp of the visible part's value.
     let value = if h_p < 0.0 { -value } else { value };
     let value = value.clamp(0.0, 1.0);
-    value.is_finite().then_some((value, h_p))
+    value.is_finite().then_some((value, h_p, count))
 }
 
 /// [`clip`](super::clip) on fixed arrays (the same operations, so the same vertices): the loop
@@ -344,17 +379,57 @@ mod tests {
             let got = polygon_value_of(x, n, &v);
             let portable = match m {
                 4 => screen::<4>(x, n, v[..].try_into().unwrap())
-                    .and_then(|s| split::<4, 8>(x, v[..].try_into().unwrap(), &s))
-                    .map(|(f, _)| f),
+                    .and_then(|s| {
+                        let mut points = [CLIP_VERTEX_ZERO; 8];
+                        split::<4, 8>(
+                            x,
+                            v[..].try_into().unwrap(),
+                            &s,
+                            &mut points,
+                            &mut [],
+                            &mut [],
+                        )
+                    })
+                    .map(|(f, _, _)| f),
                 5 => screen::<5>(x, n, v[..].try_into().unwrap())
-                    .and_then(|s| split::<5, 10>(x, v[..].try_into().unwrap(), &s))
-                    .map(|(f, _)| f),
+                    .and_then(|s| {
+                        let mut points = [CLIP_VERTEX_ZERO; 10];
+                        split::<5, 10>(
+                            x,
+                            v[..].try_into().unwrap(),
+                            &s,
+                            &mut points,
+                            &mut [],
+                            &mut [],
+                        )
+                    })
+                    .map(|(f, _, _)| f),
                 6 => screen::<6>(x, n, v[..].try_into().unwrap())
-                    .and_then(|s| split::<6, 12>(x, v[..].try_into().unwrap(), &s))
-                    .map(|(f, _)| f),
+                    .and_then(|s| {
+                        let mut points = [CLIP_VERTEX_ZERO; 12];
+                        split::<6, 12>(
+                            x,
+                            v[..].try_into().unwrap(),
+                            &s,
+                            &mut points,
+                            &mut [],
+                            &mut [],
+                        )
+                    })
+                    .map(|(f, _, _)| f),
                 _ => screen::<8>(x, n, v[..].try_into().unwrap())
-                    .and_then(|s| split::<8, 16>(x, v[..].try_into().unwrap(), &s))
-                    .map(|(f, _)| f),
+                    .and_then(|s| {
+                        let mut points = [CLIP_VERTEX_ZERO; 16];
+                        split::<8, 16>(
+                            x,
+                            v[..].try_into().unwrap(),
+                            &s,
+                            &mut points,
+                            &mut [],
+                            &mut [],
+                        )
+                    })
+                    .map(|(f, _, _)| f),
             };
             assert_eq!(
                 got.map(f64::to_bits),

@@ -168,20 +168,22 @@ pub(super) const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
 /// [`count`](RouteLoop::count) points, for `i` in 0..3 vertex `i` when it is kept, then the
 /// crossing of edge `i → i + 1` when there is one. Filled in place by the caller's frame (a
 /// returned loop was copied, ~60 instructions).
-pub(crate) struct RouteLoop {
-    points: [ClipVertex; 4],
-    angles: [f64; 4],
-    edges: [DVec3; 4],
-    count: usize,
+/// `N`: the capacity, 4 for a triangle (`near_plane_polygon`'s loops use `2M` for `M` vertices,
+/// their points in the same order, for `i` in `0..M`).
+pub(crate) struct RouteLoop<const N: usize = 4> {
+    pub(super) points: [ClipVertex; N],
+    pub(super) angles: [f64; N],
+    pub(super) edges: [DVec3; N],
+    pub(super) count: usize,
 }
 
-impl RouteLoop {
+impl<const N: usize> RouteLoop<N> {
     #[inline(always)]
-    pub(crate) fn new() -> RouteLoop {
+    pub(crate) fn new() -> RouteLoop<N> {
         RouteLoop {
-            points: [CLIP_VERTEX_ZERO; 4],
-            angles: [f64::NAN; 4],
-            edges: [DVec3::ZERO; 4],
+            points: [CLIP_VERTEX_ZERO; N],
+            angles: [f64::NAN; N],
+            edges: [DVec3::ZERO; N],
             count: 0,
         }
     }
@@ -196,8 +198,14 @@ impl RouteLoop {
     /// The angle `β` the edge from point `k` to the next subtends at x where the split computed
     /// it (the edges off the tangent plane, see `near_plane_value`), NaN otherwise.
     #[inline(always)]
-    pub(crate) fn angles(&self) -> [f64; 4] {
+    pub(crate) fn angles(&self) -> [f64; N] {
         self.angles
+    }
+
+    /// The angle of [`angles`](RouteLoop::angles) of the edge from point `k` to the next.
+    #[inline(always)]
+    pub(crate) fn angle(&self, k: usize) -> f64 {
+        self.angles[k]
     }
 
     /// The number of points.
