@@ -49,8 +49,10 @@
 //! below 1e-3 of the size from the plane (`|N·r_0| < 1e-3‖N‖ max‖r_k‖`, `N` Newell's normal),
 //! not within a sine of 1e-3 of an edge's segment (`β > π/2`, where Lambert's bound grows like
 //! `1/sin β`), and not below 1e-4 of the size outside the polygon (the sum cancels: the robust
-//! path's near-plane split). It declines within ~1e-9 of the clip line and wherever the bound
-//! fails.
+//! path's near-plane split, which `polygon/near_plane_polygon.rs` replays for the value with the
+//! robust bits; the derivative orders there take that value and the derivatives of the route's
+//! loop, [`routed_polygon_derivs`]). It declines within ~1e-9 of the clip line and wherever
+//! the bound fails.
 //!
 //! **Derivatives**: those of the same loop, with the triangle's acceptance rules (every ordinary
 //! edge `sin β ≥ 1/32` with its error growth charged in the 100x cancellation test, the clip

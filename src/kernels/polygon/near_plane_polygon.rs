@@ -23,7 +23,12 @@
 //!
 //! Its f64 screen runs in the portable build; the exact height, the clip, the frames and the
 //! split are compiled a second time with AVX2 and FMA where the CPU has them, with the same bits
-//! (see `near_plane_triangle`'s `split_fma`).
+//! (see `near_plane_triangle`'s `split_fma`). The derivative orders run the same route through
+//! [`clipped_polygon_value_and_loop`], which also hands out its loop for the clipped loop's
+//! derivatives (`lambert_clipped_polygon::routed_polygon_derivs`). Measured by callgrind on
+//! `benches/kernels_regimes.rs`'s "1e-6 from the plane, outside" rows (value / gradient /
+//! Hessian, robust path → this route): quad 7765 / 10217 / 10813 → 5311 / 7519 / 8396, pentagon
+//! 9098 / 11654 / 12250 → 6046 / 8402 / 9274 instructions per call (docs/kernels.md).
 
 use glam::DVec3;
 
@@ -64,11 +69,12 @@ pub(crate) fn polygon_value<const M: usize, const N: usize>(
 /// [`polygon_value`] with the exact signed height `h_P` of `x` over the polygon's plane (along
 /// Newell's normal, positive when it points away from `x`; in the units of `v`), which orients
 /// the derivative orders' loop as the robust edge sum is oriented, and with the clipped loop it
-/// computed the value on, written to `out` (unspecified where it declines), for those orders, which take its points (the
-/// double-double clip points), the vectors of its edges from a kept vertex to a clip point (or
-/// back) and its well-conditioned edges' angles (see `near_plane_value`) instead of computing
-/// them a second time. The loop's points are, for `i` in `0..M`, vertex `i` when it is kept, then
-/// the crossing of edge `i → i + 1` when there is one (`clip`'s order).
+/// computed the value on, written to `out` (unspecified where it declines), for those orders,
+/// which take its points (the double-double clip points), the vectors of its edges from a kept
+/// vertex to a clip point (or back) and its well-conditioned edges' angles (see
+/// `near_plane_value`) instead of computing them a second time. The loop's points are, for `i`
+/// in `0..M`, vertex `i` when it is kept, then the crossing of edge `i → i + 1` when there is one
+/// (`clip`'s order).
 #[inline(always)]
 pub(crate) fn clipped_polygon_value_and_loop<const M: usize, const N: usize>(
     x: DVec3,
