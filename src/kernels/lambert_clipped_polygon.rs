@@ -49,8 +49,10 @@
 //! below 1e-3 of the size from the plane (`|N·r_0| < 1e-3‖N‖ max‖r_k‖`, `N` Newell's normal),
 //! not within a sine of 1e-3 of an edge's segment (`β > π/2`, where Lambert's bound grows like
 //! `1/sin β`), and not below 1e-4 of the size outside the polygon (the sum cancels: the robust
-//! path's near-plane split). It declines within ~1e-9 of the clip line and wherever the bound
-//! fails.
+//! path's near-plane split, which `polygon/near_plane_polygon.rs` replays for the value with the
+//! robust bits; the derivative orders there take that value and the derivatives of the route's
+//! loop, [`routed_polygon_derivs`]). It declines within ~1e-9 of the clip line and wherever
+//! the bound fails.
 //!
 //! **Derivatives**: those of the same loop, with the triangle's acceptance rules (every ordinary
 //! edge `sin β ≥ 1/32` with its error growth charged in the 100x cancellation test, the clip
@@ -67,6 +69,7 @@ use super::lambert_clipped::{
 };
 use super::lambert_clipped_derivs::loop_derivs;
 use super::lambert_polygon::convex_normal;
+use super::polygon::{near_plane_clipped_polygon_value_and_loop, RouteLoop};
 use crate::{Deriv3, Order};
 
 const U: f64 = 0.5 * f64::EPSILON;
@@ -160,14 +163,22 @@ fn left_to_the_robust_path<const M: usize>(normal: DVec3, r: &[DVec3; M]) -> boo
 }
 
 /// The clipped loop of `cut` (`N ≥ M + 1`; the run of kept vertices, then the two clip points),
-/// its edge vectors, without angles or sum (NaN and 0), handed to `f` in place.
+/// its edge vectors, without sum (0), handed to `f` in place. With `route`, the near-plane
+/// route's loop of the same cut (the caller checks [`same_loop`]): its clip points, placed from
+/// the double-double heights (as the robust path's clip places them) rather than from the f64
+/// ones, which moves them from the exact crossing by ~u² instead of ~u of the size (the routed
+/// derivatives' accept test on that displacement fails by a few times with the f64 points where
+/// the derivative sums cancel outside the polygon), its edge vectors from a kept vertex to a
+/// clip point (or back; the same rounding of the same double-double difference) and its angles
+/// (those of the same edges, the same ends to their rounding); without, NaN angles.
 #[inline(always)]
-fn with_loop<const M: usize, const N: usize, R>(
+fn with_loop<const M: usize, const N: usize, const R: usize, T>(
     x: DVec3,
     v: &[DVec3; M],
     cut: &Cut<M>,
-    f: impl FnOnce(&mut ClippedLoop<N>) -> R,
-) -> R {
+    route: Option<&RouteLoop<R>>,
+    f: impl FnOnce(&mut ClippedLoop<N>) -> T,
+) -> T {
     let Cut {
         r,
         heights,
@@ -198,10 +209,14 @@ fn with_loop<const M: usize, const N: usize, R>(
             // between them); the others' edges are `v_j − v_i`.
             let next_to_clip = above[p] != above[i] || above[i] != above[j];
             l.points[count] = LoopVertex {
-                exact: if next_to_clip {
-                    exact(i)
-                } else {
-                    from_parts(r[i], DVec3::ZERO)
+                exact: match route {
+                    // The route's point is these parts.
+                    Some(route) => {
+                        let (hi, lo) = route.point(count);
+                        from_parts(hi, lo)
+                    }
+                    None if next_to_clip => exact(i),
+                    None => from_parts(r[i], DVec3::ZERO),
                 },
                 hi: r[i],
                 vertex: Some(i),
@@ -219,13 +234,30 @@ fn with_loop<const M: usize, const N: usize, R>(
                 HEIGHT_ERROR * height_error[j],
             );
             let dt = 1.01 * ((gi * (1.0 - t) + gj * t) / (total.abs() - gi - gj) + 2.0 * U * t);
-            let (ei, ej) = (exact(i), exact(j));
-            let point = ei.add(&ej.sub(&ei).scale(Dd { hi: t, lo: 0.0 }));
+            let (point, hi, displacement) = match route {
+                Some(route) => {
+                    // Each double-double operation errs by a few u² relative: the heights by
+                    // `8u²(|n|·|r_k|)` (`U·height_error` is twice that), `t` (no cancellation:
+                    // the heights have opposite signs) by their errors over `|total|` and a few
+                    // u², the point by a few u² of its ends' size; bounded here with margins of
+                    // 2x or more.
+                    let (hi, lo) = route.point(count);
+                    let dt =
+                        2.0 * U * (height_error[i] + height_error[j]) / total.abs() + 16.0 * U * U;
+                    let size = 16.0 * U * U * (r[i].length() + r[j].length());
+                    (from_parts(hi, lo), hi, dt * (v[j] - v[i]).length() + size)
+                }
+                None => {
+                    let (ei, ej) = (exact(i), exact(j));
+                    let point = ei.add(&ej.sub(&ei).scale(Dd { hi: t, lo: 0.0 }));
+                    (point, point.to_dvec3(), dt * (v[j] - v[i]).length())
+                }
+            };
             l.points[count] = LoopVertex {
                 exact: point,
-                hi: point.to_dvec3(),
+                hi,
                 vertex: None,
-                displacement: 1.01 * dt * (v[j] - v[i]).length(),
+                displacement: 1.01 * displacement,
             };
             count += 1;
         }
@@ -233,9 +265,25 @@ fn with_loop<const M: usize, const N: usize, R>(
     l.count = count;
     for k in 0..count {
         let next = if k + 1 == count { 0 } else { k + 1 };
-        l.edges[k] = edge_vector(v, &l.points[k], &l.points[next]);
+        let (a, b) = (&l.points[k], &l.points[next]);
+        l.edges[k] = match route {
+            Some(route) if a.vertex.is_some() != b.vertex.is_some() => route.edge(k),
+            _ => edge_vector(v, a, b),
+        };
+        if let Some(route) = route {
+            l.angles[k] = route.angle(k);
+        }
     }
     f(&mut l)
+}
+
+/// Whether the route's loop has the points of `l` (built on it by [`with_loop`]): the same
+/// count, clip points where `l` has them. The route clips on the signs of the double-double
+/// heights, which agree with the cut's certain f64 signs, so this holds but for a defect.
+#[inline(always)]
+fn same_loop<const N: usize, const R: usize>(l: &ClippedLoop<N>, route: &RouteLoop<R>) -> bool {
+    l.count == route.count()
+        && (0..l.count).all(|k| route.is_clip_point(k) == l.points[k].vertex.is_none())
 }
 
 /// `f` of the certified loop (its `sum` set), `None` where the path is not tried or the value is
@@ -262,6 +310,7 @@ fn with_certified_loop<const M: usize, const N: usize, R>(
         x,
         v,
         &cut,
+        None::<&RouteLoop<0>>,
         #[inline(always)]
         |l: &mut ClippedLoop<N>| {
             l.sum = certify(l)?;
@@ -309,6 +358,48 @@ pub(super) fn polygon_derivs<const M: usize, const N: usize>(
         let value = l.value();
         loop_derivs(l, value, order).ok_or(value)
     })
+}
+
+/// [`polygon_derivs`] where the certified loop is not built: outside the polygon near its
+/// plane, where Lambert's sum cancels and the value order takes the robust path's near-plane
+/// split ([`near_plane_polygon_value`](super::polygon::near_plane_polygon_value), the robust
+/// bits). With that route's value (so the value order's bits), the derivatives of the loop
+/// [`with_loop`] builds on the same cut as the certified path, with the route's double-double
+/// clip points, edge vectors and angles (the loop's points on the polygon's edge
+/// lines with their displacement bounds; the derivatives' accuracy argument,
+/// `lambert_clipped_derivs`, needs only these, not the certified value), oriented by the sign of
+/// the route's exact height `h_P` as the robust edge sum is. `Some(Err(value))` where the
+/// derivatives decline (or no vertex is certainly below the tangent plane), `None` where the
+/// route declines. `N = M + 1` (the loop), `R = 2M` (the route's clipped loop).
+#[inline(never)]
+pub(super) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+    order: Order,
+) -> Option<Derivs> {
+    let mut route = RouteLoop::<R>::new();
+    let (value, h_p) = near_plane_clipped_polygon_value_and_loop::<M, R>(x, n, v, &mut route)?;
+    let Some((n, r)) = differences(x, n, v) else {
+        return Some(Err(value));
+    };
+    let (Some(cut), false) = (cut(n, &r), h_p == 0.0) else {
+        return Some(Err(value));
+    };
+    Some(with_loop(
+        x,
+        v,
+        &cut,
+        Some(&route),
+        #[inline(always)]
+        |l: &mut ClippedLoop<N>| {
+            if !same_loop(l, &route) {
+                return Err(value);
+            }
+            l.sum = h_p.signum();
+            loop_derivs(l, value, order).ok_or(value)
+        },
+    ))
 }
 
 /// The unit normal and the differences `r_k = v_k − x`, each in [`lambert::in_range`], as
@@ -547,6 +638,139 @@ mod tests {
                 let eg = (fd - d.gradient[i]).abs() / g_scale;
                 let eh = (col - d.hessian.col(i)).abs().max_element() / h_scale;
                 assert!(eg < 1e-7 && eh < 1e-7, "m = {m}, axis {i}: {eg:e} {eh:e}");
+            }
+        }
+    }
+
+    /// [`routed_polygon_derivs`] for 4 to 8 vertices (the tests' entry).
+    fn routed_of(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Derivs> {
+        fn at<const M: usize, const N: usize, const R: usize>(
+            x: DVec3,
+            n: DVec3,
+            v: &[DVec3],
+            order: Order,
+        ) -> Option<Derivs> {
+            routed_polygon_derivs::<M, N, R>(x, n, v.try_into().ok()?, order)
+        }
+        match v.len() {
+            4 => at::<4, 5, 8>(x, n, v, order),
+            5 => at::<5, 6, 10>(x, n, v, order),
+            6 => at::<6, 7, 12>(x, n, v, order),
+            8 => at::<8, 9, 16>(x, n, v, order),
+            _ => None,
+        }
+    }
+
+    /// Random clipped convex quads, pentagons, hexagons and octagons of sizes 1e-3 to 1e3, `x`
+    /// 1e-3 to 1e-9 sizes from the plane over a point 0.1-1 sizes beyond a vertex (outside):
+    /// wherever the routed loop's derivatives are accepted they agree with the robust path within
+    /// 1e-12 (gradient) and 1e-10 (Hessian) of its largest entry, their value is the value order's
+    /// bits, and the public kernel returns exactly them; they are accepted in at least half of the
+    /// configurations where the route answers.
+    #[test]
+    fn routed_derivatives_agree_with_the_robust_path() {
+        let mut state = 11;
+        let (mut routed, mut derived) = (0, 0);
+        let (mut worst_g, mut worst_h) = (0.0f64, 0.0f64);
+        for k in 0..6000 {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let m = [4, 5, 6, 8][(k / 3) % 4];
+            let (v, plane_n) = random_convex(&mut state, m, scale);
+            let centroid = v.iter().sum::<DVec3>() / m as f64;
+            let beyond = 1.1 + lcg(&mut state);
+            let foot = centroid + (v[(k / 12) % m] - centroid) * beyond;
+            let side = if lcg(&mut state) < 0.5 { 1.0 } else { -1.0 };
+            let height = scale * 10f64.powf(-3.0 - 6.0 * lcg(&mut state));
+            let x = foot + plane_n * (side * height);
+            let n = tilted(&mut state, plane_n * side);
+            let value = polygon_form_factor(x, n, &v, Order::Value).unwrap().value;
+            for order in [Order::Gradient, Order::Hessian] {
+                let Some(d) = routed_of(x, n, &v, order) else {
+                    continue;
+                };
+                routed += usize::from(order.hessian());
+                let public = polygon_form_factor(x, n, &v, order).unwrap();
+                assert_eq!(public.value.to_bits(), value.to_bits(), "{k} {order:?}");
+                match d {
+                    Ok(d) => {
+                        assert_eq!(public, d, "{k} {order:?}");
+                        let (g, h) = rel(&d, &robust(x, n, &v, order));
+                        let h = if order.hessian() { h } else { 0.0 };
+                        worst_g = worst_g.max(g);
+                        worst_h = worst_h.max(h);
+                        assert!(
+                            g < 1e-12 && h < 1e-10,
+                            "{k}: {g:e} {h:e} at {x:?} {n:?} {v:?}"
+                        );
+                        derived += usize::from(order.hessian());
+                    }
+                    Err(f) => assert_eq!(f.to_bits(), value.to_bits(), "{k}"),
+                }
+            }
+        }
+        println!(
+            "outside near the plane: route {routed}, derivatives {derived}; worst vs robust: \
+             gradient {worst_g:e}, Hessian {worst_h:e}"
+        );
+        assert!(routed > 1000, "{routed}");
+        assert!(derived * 2 >= routed, "{derived} of {routed}");
+    }
+
+    /// The quad and pentagon of `benches/kernels_regimes.rs` 1e-6 from the plane outside: the
+    /// routed derivatives are taken, agree with the robust path, and with central differences
+    /// (Richardson-extrapolated, steps 1e-3 and 5e-4 of the height) of the value order and of
+    /// their own gradient within 1e-6 of the largest entry.
+    #[test]
+    fn the_benchmarked_outside_cases_are_routed() {
+        let quad: Vec<DVec3> = [(-0.5, -0.4), (0.6, -0.5), (0.7, 0.6), (-0.4, 0.5)]
+            .map(|(x, y)| DVec3::new(x, y, 1.0 + 0.1 * x + 0.1 * y))
+            .to_vec();
+        let pentagon: Vec<DVec3> = (0..5)
+            .map(|i| {
+                let phi = std::f64::consts::TAU * i as f64 / 5.0;
+                DVec3::new(phi.cos(), phi.sin(), 1.2 + 0.3 * phi.sin())
+            })
+            .collect();
+        for (v, edge) in [(quad, 0), (pentagon, 1)] {
+            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            let centroid = v.iter().sum::<DVec3>() / v.len() as f64;
+            let mid = (v[edge] + v[(edge + 1) % v.len()]) * 0.5;
+            let height = 1e-6;
+            let x = mid + (mid - centroid) * 0.2 - plane_n * height;
+            let normal = DVec3::new(0.1, -0.2, 1.0).normalize();
+            let n = if (v[0] - x).dot(normal) > 0.0 {
+                normal
+            } else {
+                -normal
+            };
+            let d = routed_of(x, n, &v, Order::Hessian)
+                .unwrap()
+                .expect("declined");
+            let (g, h) = rel(&d, &robust(x, n, &v, Order::Hessian));
+            assert!(g < 1e-12 && h < 1e-10, "{g:e} {h:e}");
+            let f = |p: DVec3| polygon_form_factor(p, n, &v, Order::Value).unwrap().value;
+            let grad = |p: DVec3| routed_of(p, n, &v, Order::Gradient).unwrap().unwrap();
+            let central = |step: f64, i: usize| {
+                let dx = DVec3::AXES[i] * step;
+                let df = (f(x + dx) - f(x - dx)) / (2.0 * step);
+                let dg = (grad(x + dx).gradient - grad(x - dx).gradient) / (2.0 * step);
+                (df, dg)
+            };
+            let g_scale = d.gradient.abs().max_element();
+            let h_scale = d
+                .hessian
+                .to_cols_array()
+                .iter()
+                .fold(0.0f64, |s, e| s.max(e.abs()));
+            for i in 0..3 {
+                let (f1, g1) = central(1e-3 * height, i);
+                let (f2, g2) = central(5e-4 * height, i);
+                let eg = ((4.0 * f2 - f1) / 3.0 - d.gradient[i]).abs() / g_scale;
+                let eh = ((g2 * 4.0 - g1) / 3.0 - d.hessian.col(i))
+                    .abs()
+                    .max_element()
+                    / h_scale;
+                assert!(eg < 1e-6 && eh < 1e-6, "axis {i}: {eg:e} {eh:e}");
             }
         }
     }

@@ -175,36 +175,53 @@ fn derivs_or<const M: usize>(
 /// [`polygon_value`], or where the tangent plane cuts the polygon near its plane, Lambert's sum
 /// over the clipped loop ([`lambert_clipped_polygon::polygon_value`]): the value order's fast
 /// paths, sharing the unclipped test (a polygon that fails it for a vertex below the tangent
-/// plane is the clipped path's; slivers and other polygons that pass it are left alone).
+/// plane is the clipped path's; slivers and other polygons that pass it are left alone). Where
+/// the clipped loop declines (outside the polygon near its plane, where its sum cancels), the
+/// replay of the robust path's near-plane split
+/// ([`near_plane_polygon_value`](super::polygon::near_plane_polygon_value): the robust bits).
 pub(crate) fn polygon_value_or_clipped(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
+    use super::polygon::near_plane_polygon_value as route;
     use lambert_clipped_polygon::polygon_value as clipped;
     match v.len() {
         4 => {
             let v = v.try_into().ok()?;
-            value_or::<4>(x, n, v, || clipped::<4, 5>(x, n, v))
+            value_or::<4>(x, n, v, || {
+                clipped::<4, 5>(x, n, v).or_else(|| route::<4, 8>(x, n, v))
+            })
         }
         5 => {
             let v = v.try_into().ok()?;
-            value_or::<5>(x, n, v, || clipped::<5, 6>(x, n, v))
+            value_or::<5>(x, n, v, || {
+                clipped::<5, 6>(x, n, v).or_else(|| route::<5, 10>(x, n, v))
+            })
         }
         6 => {
             let v = v.try_into().ok()?;
-            value_or::<6>(x, n, v, || clipped::<6, 7>(x, n, v))
+            value_or::<6>(x, n, v, || {
+                clipped::<6, 7>(x, n, v).or_else(|| route::<6, 12>(x, n, v))
+            })
         }
         7 => {
             let v = v.try_into().ok()?;
-            value_or::<7>(x, n, v, || clipped::<7, 8>(x, n, v))
+            value_or::<7>(x, n, v, || {
+                clipped::<7, 8>(x, n, v).or_else(|| route::<7, 14>(x, n, v))
+            })
         }
         8 => {
             let v = v.try_into().ok()?;
-            value_or::<8>(x, n, v, || clipped::<8, 9>(x, n, v))
+            value_or::<8>(x, n, v, || {
+                clipped::<8, 9>(x, n, v).or_else(|| route::<8, 16>(x, n, v))
+            })
         }
         _ => None,
     }
 }
 
 /// `polygon_derivs`, or where the tangent plane cuts the polygon near its plane, the
-/// derivatives of the clipped loop ([`lambert_clipped_polygon::polygon_derivs`]); `None` where
+/// derivatives of the clipped loop ([`lambert_clipped_polygon::polygon_derivs`]), or where that
+/// loop is not certified (outside near the plane), those of the loop with the value of the
+/// robust path's near-plane split ([`lambert_clipped_polygon::routed_polygon_derivs`], the value
+/// order's bits there); `None` where
 /// neither accepts, with `*clipped_value` the clipped loop's certified value where that is
 /// (written there rather than returned: a wider result cost the unclipped path ~40
 /// instructions).
@@ -223,26 +240,47 @@ pub(crate) fn polygon_derivs_or_clipped(
         }
     };
     use lambert_clipped_polygon::polygon_derivs as derivs;
+    use lambert_clipped_polygon::routed_polygon_derivs as routed;
     match v.len() {
         4 => {
             let v = v.try_into().ok()?;
-            derivs_or::<4>(x, n, v, order, || clipped(derivs::<4, 5>(x, n, v, order)))
+            derivs_or::<4>(x, n, v, order, || {
+                clipped(
+                    derivs::<4, 5>(x, n, v, order).or_else(|| routed::<4, 5, 8>(x, n, v, order)),
+                )
+            })
         }
         5 => {
             let v = v.try_into().ok()?;
-            derivs_or::<5>(x, n, v, order, || clipped(derivs::<5, 6>(x, n, v, order)))
+            derivs_or::<5>(x, n, v, order, || {
+                clipped(
+                    derivs::<5, 6>(x, n, v, order).or_else(|| routed::<5, 6, 10>(x, n, v, order)),
+                )
+            })
         }
         6 => {
             let v = v.try_into().ok()?;
-            derivs_or::<6>(x, n, v, order, || clipped(derivs::<6, 7>(x, n, v, order)))
+            derivs_or::<6>(x, n, v, order, || {
+                clipped(
+                    derivs::<6, 7>(x, n, v, order).or_else(|| routed::<6, 7, 12>(x, n, v, order)),
+                )
+            })
         }
         7 => {
             let v = v.try_into().ok()?;
-            derivs_or::<7>(x, n, v, order, || clipped(derivs::<7, 8>(x, n, v, order)))
+            derivs_or::<7>(x, n, v, order, || {
+                clipped(
+                    derivs::<7, 8>(x, n, v, order).or_else(|| routed::<7, 8, 14>(x, n, v, order)),
+                )
+            })
         }
         8 => {
             let v = v.try_into().ok()?;
-            derivs_or::<8>(x, n, v, order, || clipped(derivs::<8, 9>(x, n, v, order)))
+            derivs_or::<8>(x, n, v, order, || {
+                clipped(
+                    derivs::<8, 9>(x, n, v, order).or_else(|| routed::<8, 9, 16>(x, n, v, order)),
+                )
+            })
         }
         _ => None,
     }

@@ -16,10 +16,15 @@ use crate::{Deriv3, Order};
 
 use super::dd;
 
+mod near_plane_polygon;
 mod near_plane_triangle;
 mod sliver;
 mod sliver_fan;
 use super::form_factor::{clip_edge_term, frame_term, outer_self, sym_outer, EdgeFrame, ExactEnds};
+pub(crate) use near_plane_polygon::{
+    clipped_polygon_value_and_loop as near_plane_clipped_polygon_value_and_loop,
+    polygon_value as near_plane_polygon_value,
+};
 pub(crate) use near_plane_triangle::{
     clipped_triangle_value_and_loop as near_plane_clipped_triangle_value_and_loop,
     triangle_value as near_plane_triangle_value, RouteLoop,

@@ -156,7 +156,7 @@ fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
     split_loop(x, v, s, &mut loop_, &mut [], &mut []).map(|(value, _)| value)
 }
 
-const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
+pub(super) const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
     u: DVec3::ZERO,
     r: DVec3::ZERO,
     r_lo: DVec3::ZERO,
@@ -168,20 +168,22 @@ const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
 /// [`count`](RouteLoop::count) points, for `i` in 0..3 vertex `i` when it is kept, then the
 /// crossing of edge `i → i + 1` when there is one. Filled in place by the caller's frame (a
 /// returned loop was copied, ~60 instructions).
-pub(crate) struct RouteLoop {
-    points: [ClipVertex; 4],
-    angles: [f64; 4],
-    edges: [DVec3; 4],
-    count: usize,
+/// `N`: the capacity, 4 for a triangle (`near_plane_polygon`'s loops use `2M` for `M` vertices,
+/// their points in the same order, for `i` in `0..M`).
+pub(crate) struct RouteLoop<const N: usize = 4> {
+    pub(super) points: [ClipVertex; N],
+    pub(super) angles: [f64; N],
+    pub(super) edges: [DVec3; N],
+    pub(super) count: usize,
 }
 
-impl RouteLoop {
+impl<const N: usize> RouteLoop<N> {
     #[inline(always)]
-    pub(crate) fn new() -> RouteLoop {
+    pub(crate) fn new() -> RouteLoop<N> {
         RouteLoop {
-            points: [CLIP_VERTEX_ZERO; 4],
-            angles: [f64::NAN; 4],
-            edges: [DVec3::ZERO; 4],
+            points: [CLIP_VERTEX_ZERO; N],
+            angles: [f64::NAN; N],
+            edges: [DVec3::ZERO; N],
             count: 0,
         }
     }
@@ -196,8 +198,14 @@ impl RouteLoop {
     /// The angle `β` the edge from point `k` to the next subtends at x where the split computed
     /// it (the edges off the tangent plane, see `near_plane_value`), NaN otherwise.
     #[inline(always)]
-    pub(crate) fn angles(&self) -> [f64; 4] {
+    pub(crate) fn angles(&self) -> [f64; N] {
         self.angles
+    }
+
+    /// The angle of [`angles`](RouteLoop::angles) of the edge from point `k` to the next.
+    #[inline(always)]
+    pub(crate) fn angle(&self, k: usize) -> f64 {
+        self.angles[k]
     }
 
     /// The number of points.
@@ -361,7 +369,7 @@ fn clip_triangle(
 /// abscissae when x is near the edge's line), for its edge vector `e` (`edge_vector(a, b)`);
 /// `None` for a zero-length edge.
 #[inline(always)]
-fn in_plane_edge(a: &ClipVertex, b: &ClipVertex, e: DVec3) -> Option<InPlaneEdge> {
+pub(super) fn in_plane_edge(a: &ClipVertex, b: &ClipVertex, e: DVec3) -> Option<InPlaneEdge> {
     let len = e.length();
     if len == 0.0 {
         return None;
@@ -389,7 +397,7 @@ fn in_plane_edge(a: &ClipVertex, b: &ClipVertex, e: DVec3) -> Option<InPlaneEdge
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::kernels::polygon::form_factor;
     use crate::Order;
@@ -458,7 +466,7 @@ mod tests {
             if let (Ok(value), Ok(hessian)) = (entry(Order::Value), entry(Order::Hessian)) {
                 assert_eq!(value.value.to_bits(), hessian.value.to_bits(), "{k}: order");
             }
-            robust_split += usize::from(robust_takes_the_split(x, n, v));
+            robust_split += usize::from(robust_takes_the_split(x, n, &v));
         }
         // Every configuration where the robust path takes its split for the value, the route
         // takes too.
@@ -559,9 +567,14 @@ mod tests {
 
     /// Whether `evaluate` takes its near-plane split for the value of this configuration (its
     /// decisions, through the route's own steps but with the robust path's `clip` and frames).
-    fn robust_takes_the_split(x: DVec3, n: DVec3, v: [DVec3; 3]) -> bool {
+    /// Also the polygon route's reference (`near_plane_polygon`), hence over any vertex count.
+    pub(in crate::kernels::polygon) fn robust_takes_the_split(
+        x: DVec3,
+        n: DVec3,
+        v: &[DVec3],
+    ) -> bool {
         use super::super::{clip, edge_frames, exact_height, ClipLoop, Frames, Plane, Scaled};
-        let Ok(scaled) = Scaled::new(x, &v) else {
+        let Ok(scaled) = Scaled::new(x, v) else {
             return false;
         };
         let Ok(plane) = Plane::new(&scaled.u) else {

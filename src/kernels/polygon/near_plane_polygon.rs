@@ -1,0 +1,495 @@
+//! The value of a strictly convex polygon's form factor (4 to 8 vertices) with `x` near its
+//! plane, outside the part the tangent plane leaves visible: the robust path's near-plane split
+//! ([`near_plane_value`]) without the rest of its set-up, as `near_plane_triangle` does for
+//! triangles (read its module documentation first).
+//!
+//! For `Order::Value` in this configuration [`evaluate`](super::evaluate) validates the polygon
+//! (Newell's plane, planarity, the O(m²) simplicity test), builds the generic machinery (growable
+//! vectors, the fan's far-field test, full edge frames) and then uses only the split. This route
+//! replays the decisions and operations of that evaluation which the split's result depends on,
+//! on fixed-size arrays, so that it returns the robust path's bits, and declines (`None`)
+//! wherever the robust path would not take the split for the value: `x` not near the plane,
+//! nothing clipped, the foot of `x` inside the clipped loop, the far field, a sliver, or the
+//! split itself declining.
+//!
+//! What differs from the triangle's replay: the plane is Newell's sum over every edge (as
+//! [`Plane::new`] forms it; for a triangle it reduces to one cross product), validated for
+//! planarity as the robust path does, and the clipped loop may have up to `2M` points (a plane
+//! cuts a convex polygon twice, but the double-double heights of a polygon planar only to its
+//! tolerance may change sign more often; the capacity is Sutherland-Hodgman's bound). Only
+//! polygons [`convex_normal`] accepts are taken: those the robust validation certainly accepts
+//! (simplicity included, so its O(m²) test is not replayed) and that are not slivers (neither
+//! the sliver fan path nor `evaluate`'s sliver rule takes them).
+//!
+//! Its f64 screen runs in the portable build; the exact height, the clip, the frames and the
+//! split are compiled a second time with AVX2 and FMA where the CPU has them, with the same bits
+//! (see `near_plane_triangle`'s `split_fma`). The derivative orders run the same route through
+//! [`clipped_polygon_value_and_loop`], which also hands out its loop for the clipped loop's
+//! derivatives (`lambert_clipped_polygon::routed_polygon_derivs`). Measured by callgrind on
+//! `benches/kernels_regimes.rs`'s "1e-6 from the plane, outside" rows (value / gradient /
+//! Hessian, robust path → this route): quad 7765 / 10217 / 10813 → 5311 / 7519 / 8396, pentagon
+//! 9098 / 11654 / 12250 → 6046 / 8402 / 9274 instructions per call (docs/kernels.md).
+
+use glam::DVec3;
+
+use super::near_plane_triangle::{in_plane_edge, RouteLoop, CLIP_VERTEX_ZERO};
+use super::{
+    edge_vector, exact_height_of, far_field_rule, foot_inside, near_plane_value, next, ClipVertex,
+    Plane, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO, SPLIT_VALUE_LIMIT,
+};
+use crate::kernels::dd::{self, Dd3};
+use crate::kernels::lambert;
+use crate::kernels::lambert_polygon::convex_normal;
+
+/// The value of [`polygon_form_factor`](crate::kernels::polygon_form_factor) for `Order::Value`
+/// (form factor, dimensionless, in `[0, 1]`) of the `M` vertices `v` (4 to 8) when the robust
+/// path would take it from its near-plane split, bit for bit; `None` when it would not (module
+/// documentation), for polygons [`convex_normal`] does not accept, for coordinate differences
+/// outside (1e-30, 1e30) and for invalid input, which the callers leave to the robust path.
+/// `N = 2M`, the clipped loop's capacity.
+// Not inlined: the callers that do not take it pay for the call's test only.
+#[inline(never)]
+pub(crate) fn polygon_value<const M: usize, const N: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+) -> Option<f64> {
+    debug_assert!(N >= 2 * M);
+    let s = screen(x, n, v)?;
+    let mut points = [CLIP_VERTEX_ZERO; N];
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2_fma() {
+        // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
+        return unsafe { split_fma::<M, N>(x, v, &s, &mut points, &mut [], &mut []) }
+            .map(|(value, _, _)| value);
+    }
+    split::<M, N>(x, v, &s, &mut points, &mut [], &mut []).map(|(value, _, _)| value)
+}
+
+/// [`polygon_value`] with the exact signed height `h_P` of `x` over the polygon's plane (along
+/// Newell's normal, positive when it points away from `x`; in the units of `v`), which orients
+/// the derivative orders' loop as the robust edge sum is oriented, and with the clipped loop it
+/// computed the value on, written to `out` (unspecified where it declines), for those orders,
+/// which take its points (the double-double clip points), the vectors of its edges from a kept
+/// vertex to a clip point (or back) and its well-conditioned edges' angles (see
+/// `near_plane_value`) instead of computing them a second time. The loop's points are, for `i`
+/// in `0..M`, vertex `i` when it is kept, then the crossing of edge `i → i + 1` when there is one
+/// (`clip`'s order).
+#[inline(always)]
+pub(crate) fn clipped_polygon_value_and_loop<const M: usize, const N: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+    out: &mut RouteLoop<N>,
+) -> Option<(f64, f64)> {
+    debug_assert!(N >= 2 * M);
+    let s = screen(x, n, v)?;
+    let RouteLoop {
+        points,
+        angles,
+        edges,
+        count,
+    } = out;
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2_fma() {
+        // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
+        let (value, h_p, k) = unsafe { split_fma::<M, N>(x, v, &s, points, angles, edges) }?;
+        *count = k;
+        return Some((value, h_p));
+    }
+    let (value, h_p, k) = split::<M, N>(x, v, &s, points, angles, edges)?;
+    *count = k;
+    Some((value, h_p))
+}
+
+/// What [`screen`] hands to [`split`].
+struct Screened<const M: usize> {
+    r: [DVec3; M],
+    u: [DVec3; M],
+    /// The unit receiver normal.
+    n: DVec3,
+    plane: Plane,
+}
+
+/// The robust path's decisions that need no double-double arithmetic, and a cheap f64 test of
+/// the split's edge-line limit; `None` where the route declines.
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN declines
+fn screen<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Screened<M>> {
+    if !(x.is_finite() && v.iter().all(|vk| vk.is_finite())) {
+        return None;
+    }
+    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
+    let u: [DVec3; M] = std::array::from_fn(|k| v[k] - v[0]);
+    let largest = r
+        .iter()
+        .chain(&u[1..])
+        .fold(0.0f64, |m, d| m.max(d.abs().max_element()));
+    if !(largest > 1e-30 && largest < 1e30) {
+        return None;
+    }
+    let n = lambert::unit(n)?;
+    // Nothing can be clipped when every rounded height over the tangent plane is positive beyond
+    // its rounding bound: the robust path would not take the split.
+    if r.iter()
+        .all(|rk| n.dot(*rk) > 8.0 * f64::EPSILON * n.abs().dot(rk.abs()))
+    {
+        return None;
+    }
+    // `Plane::new`'s Newell sum.
+    let mut nn = DVec3::ZERO;
+    for i in 0..M {
+        nn += u[i].cross(u[next(i, M)]);
+    }
+    // Far from the plane, declined before the validation: the height's decision below, on
+    // `r_0` for the nearest vertex and twice its limit, which covers the rounding of the unit
+    // normal and the polygon's tolerated non-planarity (2.5e-9 of its extent, `convex_normal`)
+    // by orders of magnitude. Squared, without roots (NaN passes, to be refused next).
+    let r_max2 = r.iter().map(|rk| rk.length_squared()).fold(0.0, f64::max);
+    let side = nn.dot(r[0]);
+    if side * side > 4.0 * NEAR_PLANE_HEIGHT * NEAR_PLANE_HEIGHT * nn.length_squared() * r_max2 {
+        return None;
+    }
+    convex_normal(v)?;
+    // `Plane::new`'s extent (the max of the roots is the root of the max), and its validation
+    // without the simplicity test, which `convex_normal` certifies.
+    let extent = u
+        .iter()
+        .map(|uk| uk.length_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
+    let plane = Plane::validated(&u, nn, extent, false).ok()?;
+    if plane.is_very_thin() {
+        return None;
+    }
+    // The first nearest vertex, as `evaluate`'s `min_by` picks it.
+    let mut nearest = r[0];
+    for rk in &r[1..] {
+        if rk.length_squared() < nearest.length_squared() {
+            nearest = *rk;
+        }
+    }
+    let h_rounded = plane.normal.dot(nearest);
+    let r_max = r_max2.sqrt();
+    if !(h_rounded.abs() > 4.0 * f64::EPSILON * r_max
+        && h_rounded.abs() < NEAR_PLANE_HEIGHT * r_max)
+    {
+        return None;
+    }
+    // The split declines when x's foot is within 10 |h_P| of the line of an edge of the clipped
+    // loop off the tangent plane: those lie on the lines of the polygon's edges that keep a
+    // vertex above it. Tested here in f64 before the double-double set-up; a decline only sends
+    // the call to the robust path, which takes the same decisions exactly.
+    for i in 0..M {
+        let j = next(i, M);
+        if n.dot(r[i]) < 0.0 && n.dot(r[j]) < 0.0 {
+            continue;
+        }
+        let e = u[j] - u[i];
+        if !(h_rounded.abs() * e.length()
+            < NEAR_PLANE_RATIO * plane.normal.dot(r[i].cross(e)).abs())
+        {
+            return None;
+        }
+    }
+    Some(Screened { r, u, n, plane })
+}
+
+/// [`split`] compiled with FMA: only the double-double products' exact error terms are fused
+/// (Rust does not contract `a * b + c`), so the bits are those of the portable build.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn split_fma<const M: usize, const N: usize>(
+    x: DVec3,
+    v: &[DVec3; M],
+    s: &Screened<M>,
+    points: &mut [ClipVertex; N],
+    angles: &mut [f64],
+    edges: &mut [DVec3],
+) -> Option<(f64, f64, usize)> {
+    split::<M, N>(x, v, s, points, angles, edges)
+}
+
+/// The exact height, the clip (into `points`), the remaining decisions and the split itself:
+/// the value, the exact height and the loop's length; where `angles` and `edges` have entries,
+/// the loop's edges' angles (see `near_plane_value`) and the vectors of its edges off the
+/// tangent plane.
+#[inline(always)]
+fn split<const M: usize, const N: usize>(
+    x: DVec3,
+    v: &[DVec3; M],
+    s: &Screened<M>,
+    points: &mut [ClipVertex; N],
+    angles: &mut [f64],
+    edges: &mut [DVec3],
+) -> Option<(f64, f64, usize)> {
+    let Screened { r, u, n, plane } = s;
+    let n = *n;
+    let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
+    let r_lo: [DVec3; M] =
+        std::array::from_fn(|k| DVec3::new(err(v[k].x, x.x), err(v[k].y, x.y), err(v[k].z, x.z)));
+    let h_p = exact_height_of(r, &r_lo, plane.twice_area);
+    let count = clip_polygon(u, r, &r_lo, n, points)?;
+    let verts = &points[..count];
+    let centroid = verts.iter().map(|v| v.r).sum::<DVec3>() / count as f64;
+    let radius = verts
+        .iter()
+        .map(|v| (v.r - centroid).length_squared())
+        .fold(0.0, f64::max)
+        .sqrt();
+    if far_field_rule(centroid.length(), radius).is_some() {
+        return None;
+    }
+    if foot_inside(verts, plane.normal, h_p) {
+        return None;
+    }
+    // `edge_frames` with something cut: none for the clip edges.
+    let mut frames = [None; N];
+    for (i, frame) in frames[..count].iter_mut().enumerate() {
+        let (a, b) = (&verts[i], &verts[next(i, count)]);
+        if !(a.on_line && b.on_line) {
+            let e = edge_vector(a, b);
+            if let Some(edge) = edges.get_mut(i) {
+                *edge = e;
+            }
+            *frame = in_plane_edge(a, b, e);
+        }
+    }
+    let value = near_plane_value(
+        verts,
+        &frames[..count],
+        n,
+        plane.normal,
+        h_p,
+        SPLIT_VALUE_LIMIT,
+        angles,
+    )?
+    .0;
+    // The edge sum's sign convention, then the clamp of the visible part's value.
+    let value = if h_p < 0.0 { -value } else { value };
+    let value = value.clamp(0.0, 1.0);
+    value.is_finite().then_some((value, h_p, count))
+}
+
+/// [`clip`](super::clip) on fixed arrays (the same operations, so the same vertices): the loop
+/// in `out` (capacity `N ≥ 2M`, Sutherland-Hodgman's bound) and its length, `None` when nothing
+/// is cut away or fewer than three vertices remain.
+#[inline(always)]
+fn clip_polygon<const M: usize, const N: usize>(
+    u: &[DVec3; M],
+    r: &[DVec3; M],
+    r_lo: &[DVec3; M],
+    n: DVec3,
+    out: &mut [ClipVertex; N],
+) -> Option<usize> {
+    let exact: [Dd3; M] = std::array::from_fn(|k| Dd3::from_parts(r[k], r_lo[k]));
+    let d: [dd::Dd; M] = std::array::from_fn(|k| exact[k].dot_f64(n));
+    let (mut count, mut cut) = (0, false);
+    for i in 0..M {
+        let j = next(i, M);
+        let (di, dj) = (d[i].hi, d[j].hi);
+        if di >= 0.0 {
+            out[count] = ClipVertex {
+                u: u[i],
+                r: r[i],
+                r_lo: r_lo[i],
+                on_line: di == 0.0,
+            };
+            count += 1;
+        } else {
+            cut = true;
+        }
+        if (di > 0.0 && dj < 0.0) || (di < 0.0 && dj > 0.0) {
+            let t = d[i].div(d[i].add(d[j].neg()));
+            let (ri, rj) = (exact[i], exact[j]);
+            let (rc, rc_lo) = ri.add(&rj.sub(&ri).scale(t)).split();
+            out[count] = ClipVertex {
+                u: u[i] + t.hi * (u[j] - u[i]),
+                r: rc,
+                r_lo: rc_lo,
+                on_line: true,
+            };
+            count += 1;
+        }
+    }
+    (cut && count >= 3).then_some(count)
+}
+
+/// [`polygon_value`] for 4 to 8 vertices from a slice (`None` for other counts): the tests' entry.
+#[cfg(test)]
+fn polygon_value_of(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
+    match v.len() {
+        4 => polygon_value::<4, 8>(x, n, v.try_into().ok()?),
+        5 => polygon_value::<5, 10>(x, n, v.try_into().ok()?),
+        6 => polygon_value::<6, 12>(x, n, v.try_into().ok()?),
+        7 => polygon_value::<7, 14>(x, n, v.try_into().ok()?),
+        8 => polygon_value::<8, 16>(x, n, v.try_into().ok()?),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernels::polygon::form_factor;
+    use crate::kernels::polygon::near_plane_triangle::tests::robust_takes_the_split;
+    use crate::kernels::test_rng::lcg;
+    use crate::Order;
+
+    /// A random strictly convex polygon of `m` vertices and size `scale` (jittered angles on an
+    /// ellipse with axes 0.5-1, in a random plane, offset from the origin), `x` 1e-9..1e-3 sizes
+    /// from its plane (either side) over a random in-plane point, mostly outside the polygon (up
+    /// to 2.5 sizes from its centre), and a receiver normal tilted 2-88 degrees from the plane's,
+    /// either way, so that the tangent plane usually cuts the polygon.
+    fn configuration(state: &mut u64, m: usize, scale: f64) -> (DVec3, DVec3, Vec<DVec3>) {
+        let mut c = || lcg(state);
+        let plane_n = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize();
+        let (a1, a2) = (plane_n.any_orthonormal_vector(), 0.5 + 0.5 * c());
+        let a1 = a1 * (0.5 + 0.5 * c());
+        let b1 = plane_n.cross(a1).normalize() * a2;
+        let centre = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5) * 10.0 * scale;
+        let v: Vec<DVec3> = (0..m)
+            .map(|k| {
+                let phi = std::f64::consts::TAU * (k as f64 + 0.6 * (c() - 0.5)) / m as f64;
+                centre + (a1 * phi.cos() + b1 * phi.sin()) * scale
+            })
+            .collect();
+        let mut c = || lcg(state);
+        let phi = std::f64::consts::TAU * c();
+        let foot = centre
+            + (a1.normalize() * phi.cos() + b1.normalize() * phi.sin()) * (2.5 * c()) * scale;
+        let side = if c() < 0.5 { -1.0 } else { 1.0 };
+        let x = foot + plane_n * side * scale * 10f64.powf(-3.0 - 6.0 * c());
+        let tilt = (2.0 + 86.0 * c()).to_radians();
+        let t = plane_n.any_orthonormal_vector();
+        let psi = 6.3 * c();
+        let t = t * psi.cos() + plane_n.cross(t) * psi.sin();
+        let n = (plane_n * tilt.cos() + t * tilt.sin()).normalize();
+        let n = if c() < 0.5 { n } else { -n };
+        (x, n, v)
+    }
+
+    /// Wherever the route answers it returns the robust evaluation's bits, with and without FMA,
+    /// only where that evaluation takes its near-plane split for the value, and for every such
+    /// configuration (quads, pentagons, hexagons, octagons at scales 1e-3..1e3); the entry
+    /// point's value is the same at every order.
+    #[test]
+    fn the_route_returns_the_robust_bits() {
+        let mut state = 7;
+        let (mut taken, mut robust_split) = (0, 0);
+        let total = 12000;
+        for k in 0..total {
+            let scale = [1e-3, 1.0, 1e3][k % 3];
+            let m = [4, 5, 6, 8][(k / 3) % 4];
+            let (x, n, v) = configuration(&mut state, m, scale);
+            let got = polygon_value_of(x, n, &v);
+            let portable = match m {
+                4 => screen::<4>(x, n, v[..].try_into().unwrap())
+                    .and_then(|s| {
+                        let mut points = [CLIP_VERTEX_ZERO; 8];
+                        split::<4, 8>(
+                            x,
+                            v[..].try_into().unwrap(),
+                            &s,
+                            &mut points,
+                            &mut [],
+                            &mut [],
+                        )
+                    })
+                    .map(|(f, _, _)| f),
+                5 => screen::<5>(x, n, v[..].try_into().unwrap())
+                    .and_then(|s| {
+                        let mut points = [CLIP_VERTEX_ZERO; 10];
+                        split::<5, 10>(
+                            x,
+                            v[..].try_into().unwrap(),
+                            &s,
+                            &mut points,
+                            &mut [],
+                            &mut [],
+                        )
+                    })
+                    .map(|(f, _, _)| f),
+                6 => screen::<6>(x, n, v[..].try_into().unwrap())
+                    .and_then(|s| {
+                        let mut points = [CLIP_VERTEX_ZERO; 12];
+                        split::<6, 12>(
+                            x,
+                            v[..].try_into().unwrap(),
+                            &s,
+                            &mut points,
+                            &mut [],
+                            &mut [],
+                        )
+                    })
+                    .map(|(f, _, _)| f),
+                _ => screen::<8>(x, n, v[..].try_into().unwrap())
+                    .and_then(|s| {
+                        let mut points = [CLIP_VERTEX_ZERO; 16];
+                        split::<8, 16>(
+                            x,
+                            v[..].try_into().unwrap(),
+                            &s,
+                            &mut points,
+                            &mut [],
+                            &mut [],
+                        )
+                    })
+                    .map(|(f, _, _)| f),
+            };
+            assert_eq!(
+                got.map(f64::to_bits),
+                portable.map(f64::to_bits),
+                "{k}: dispatch vs portable"
+            );
+            let robust_takes = robust_takes_the_split(x, n, &v);
+            robust_split += usize::from(robust_takes);
+            if let Some(f) = got {
+                taken += 1;
+                assert!(
+                    robust_takes,
+                    "{k}: the route answers where the robust path does not"
+                );
+                let want = form_factor(x, n, &v, Order::Value).unwrap();
+                assert_eq!(f.to_bits(), want.value.to_bits(), "{k}: {x:?} {n:?} {v:?}");
+            }
+            let entry = |order| crate::kernels::polygon_form_factor(x, n, &v, order);
+            if let (Ok(value), Ok(hessian)) = (entry(Order::Value), entry(Order::Hessian)) {
+                assert_eq!(value.value.to_bits(), hessian.value.to_bits(), "{k}: order");
+            }
+        }
+        println!("route taken in {taken} of {total} configurations, robust split {robust_split}");
+        assert_eq!(taken, robust_split);
+        assert!(taken > total / 10, "{taken}");
+    }
+
+    /// The benchmarked quad and pentagon 1e-6 from the plane outside (`benches/kernels_regimes.rs`,
+    /// the same construction) are taken, with the robust bits.
+    #[test]
+    fn the_benchmarked_cases_are_taken() {
+        let quad: Vec<DVec3> = [(-0.5, -0.4), (0.6, -0.5), (0.7, 0.6), (-0.4, 0.5)]
+            .map(|(x, y)| DVec3::new(x, y, 1.0 + 0.1 * x + 0.1 * y))
+            .to_vec();
+        let pentagon: Vec<DVec3> = (0..5)
+            .map(|i| {
+                let phi = std::f64::consts::TAU * i as f64 / 5.0;
+                DVec3::new(phi.cos(), phi.sin(), 1.2 + 0.3 * phi.sin())
+            })
+            .collect();
+        for (v, edge) in [(quad, 0), (pentagon, 1)] {
+            let plane_n = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+            let centroid = v.iter().sum::<DVec3>() / v.len() as f64;
+            let mid = (v[edge] + v[(edge + 1) % v.len()]) * 0.5;
+            let x = mid + (mid - centroid) * 0.2 - plane_n * 1e-6;
+            let normal = DVec3::new(0.1, -0.2, 1.0).normalize();
+            let n = if (v[0] - x).dot(normal) > 0.0 {
+                normal
+            } else {
+                -normal
+            };
+            let got = polygon_value_of(x, n, &v).expect("taken");
+            let want = form_factor(x, n, &v, Order::Value).unwrap().value;
+            assert_eq!(got.to_bits(), want.to_bits());
+        }
+    }
+}
