@@ -11,6 +11,9 @@
 //! For profilers, `RADDIFF_REGIMES_PROFILE="CASE ORDER CALLS"` runs one case only and exits (CASE
 //! is a prefix of a case name, ORDER is `value`, `gradient` or `hessian`), e.g.
 //! `RADDIFF_REGIMES_PROFILE="sliver,value,200000" valgrind --tool=callgrind <bench binary>`.
+//! `RADDIFF_REGIMES_MIX="ORDER,CALLS"` instead runs `polygon_form_factor` over a fixed mix of
+//! outside-near-plane configurations ([`outside_mix`]), one call each, for the average cost of the
+//! regime beyond the one configuration of the table.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -266,7 +269,60 @@ fn bench(c: &mut Criterion) {
     }
 }
 
+/// `CALLS` clipped convex quads and pentagons of unit circumradius (vertices at jittered even
+/// angles, in the plane z = 0), x 1e-6 from their plane (either side) at 1.05-3 radii from the
+/// centre, receiver normals uniform on the sphere, kept when the tangent plane cuts the polygon: a
+/// deterministic stand-in for the "1e-6 from the plane, outside" regime's spread of positions
+/// and tangent planes.
+fn outside_mix(calls: usize) -> Vec<Case> {
+    let mut state = 7u64;
+    let mut next = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut mix = Vec::with_capacity(calls);
+    while mix.len() < calls {
+        let m = 4 + (next() * 2.0) as usize;
+        let v: Vec<DVec3> = (0..m)
+            .map(|k| {
+                let a = (k as f64 + 0.3 * next()) / m as f64 * std::f64::consts::TAU;
+                DVec3::new(a.cos(), a.sin(), 0.0)
+            })
+            .collect();
+        let (angle, distance) = (next() * std::f64::consts::TAU, 1.05 + 2.0 * next());
+        let h = if next() < 0.5 { 1e-6 } else { -1e-6 };
+        let x = DVec3::new(distance * angle.cos(), distance * angle.sin(), h);
+        let n = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+        let above = v.iter().filter(|p| n.dot(**p - x) > 0.0).count();
+        if above > 0 && above < m {
+            mix.push(Case {
+                name: "outside mix",
+                v,
+                x,
+                n,
+            });
+        }
+    }
+    mix
+}
+
 fn main() {
+    if let Ok(spec) = std::env::var("RADDIFF_REGIMES_MIX") {
+        let (order, calls) = spec
+            .split_once(',')
+            .expect("RADDIFF_REGIMES_MIX must be ORDER,CALLS");
+        let order = ORDERS
+            .iter()
+            .find(|(name, _)| *name == order.trim())
+            .expect("ORDER is value, gradient or hessian")
+            .1;
+        for case in outside_mix(calls.trim().parse().expect("CALLS")) {
+            call(&case, order);
+        }
+        return;
+    }
     if let Ok(spec) = std::env::var("RADDIFF_REGIMES_PROFILE") {
         profile(&spec);
         return;
