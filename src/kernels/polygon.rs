@@ -775,7 +775,24 @@ fn clip<O: ClipOut>(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mu
     for (i, di) in d.iter_mut().enumerate() {
         *di = exact(i).dot_f64(n);
     }
-    let d = &*d;
+    clip_by_heights(u, r, r_lo, exact, d, out)
+}
+
+/// [`clip`]'s loop from the heights `d_k = n·R_k` (double-double) and the exact differences
+/// `exact(k) = R_k`: kept vertices and clip points pushed onto `out` in loop order; whether any
+/// vertex was cut away. Shared with the near-plane routes (`near_plane_triangle`,
+/// `near_plane_polygon`), which compute the heights on fixed arrays and must place the same
+/// points.
+#[inline(always)]
+fn clip_by_heights<O: ClipOut>(
+    u: &[DVec3],
+    r: &[DVec3],
+    r_lo: &[DVec3],
+    exact: impl Fn(usize) -> dd::Dd3,
+    d: &[dd::Dd],
+    out: &mut O,
+) -> bool {
+    let count = d.len();
     let mut cut = false;
     for i in 0..count {
         let j = next(i, count);
@@ -794,9 +811,8 @@ fn clip<O: ClipOut>(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mu
             let t = d[i].div(d[i].add(d[j].neg()));
             let (ri, rj) = (exact(i), exact(j));
             let (rc, rc_lo) = ri.add(&rj.sub(&ri).scale(t)).split();
-            let e = u[j] - u[i];
             out.push(ClipVertex {
-                u: u[i] + t.hi * e,
+                u: u[i] + t.hi * (u[j] - u[i]),
                 r: rc,
                 r_lo: rc_lo,
                 on_line: true,
@@ -804,6 +820,20 @@ fn clip<O: ClipOut>(u: &[DVec3], r: &[DVec3], r_lo: &[DVec3], n: DVec3, out: &mu
         }
     }
     cut
+}
+
+/// A near-plane route's fixed array as a [`ClipOut`]; `len` counts the pushed vertices.
+struct ArrayOut<'a> {
+    verts: &'a mut [ClipVertex],
+    len: usize,
+}
+
+impl ClipOut for ArrayOut<'_> {
+    #[inline(always)]
+    fn push(&mut self, v: ClipVertex) {
+        self.verts[self.len] = v;
+        self.len += 1;
+    }
 }
 
 /// Gauss-Legendre nodes and weights on [0, 1] (Newton on the Legendre polynomial).

@@ -333,34 +333,9 @@ fn clip_triangle(
         exact[1].dot_f64(n),
         exact[2].dot_f64(n),
     ];
-    let (mut count, mut cut) = (0, false);
-    for i in 0..3 {
-        let j = next(i, 3);
-        let (di, dj) = (d[i].hi, d[j].hi);
-        if di >= 0.0 {
-            out[count] = ClipVertex {
-                u: u[i],
-                r: r[i],
-                r_lo: r_lo[i],
-                on_line: di == 0.0,
-            };
-            count += 1;
-        } else {
-            cut = true;
-        }
-        if (di > 0.0 && dj < 0.0) || (di < 0.0 && dj > 0.0) {
-            let t = d[i].div(d[i].add(d[j].neg()));
-            let (ri, rj) = (exact[i], exact[j]);
-            let (rc, rc_lo) = ri.add(&rj.sub(&ri).scale(t)).split();
-            out[count] = ClipVertex {
-                u: u[i] + t.hi * (u[j] - u[i]),
-                r: rc,
-                r_lo: rc_lo,
-                on_line: true,
-            };
-            count += 1;
-        }
-    }
+    let mut loop_out = super::ArrayOut { verts: out, len: 0 };
+    let cut = super::clip_by_heights(u, r, r_lo, |k| exact[k], &d, &mut loop_out);
+    let count = loop_out.len;
     (cut && count >= 3).then_some(count)
 }
 
