@@ -163,7 +163,7 @@ fn triangle_config(rng: &mut Rng) -> Config {
     }
 }
 
-/// A non-convex polygon from [`shapes`] (exactly planar, scale 2^-10..2^10) with a foot point
+/// A polygon from [`shapes`] or [`convex_shapes`] (exactly planar, scale 2^-10..2^10) with a foot point
 /// outside it, at least 0.05 of its size from every edge line, and a line ℓ through the foot and
 /// a random interior point.
 fn polygon_config(rng: &mut Rng, shape: &[DVec2]) -> Config {
@@ -343,6 +343,23 @@ fn convex_polygons_over_the_interior_walk_to_the_plane() {
         &mut rng,
         "convex polygons over the interior",
     );
+    assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
+}
+
+/// Convex polygons with `x` outside them near their plane: the value by the replay of the near-plane
+/// split (`src/kernels/polygon/near_plane_polygon.rs`) and the derivatives on its loop
+/// (`lambert_clipped_polygon::routed_polygon_derivs`) where they accept, the robust path elsewhere.
+#[test]
+fn convex_polygons_outside_clipped_walk_to_the_plane() {
+    let mut big = Big::new();
+    let mut rng = Rng(1864);
+    let mut configs = Vec::new();
+    for shape in convex_shapes() {
+        for _ in 0..3 {
+            configs.push(polygon_config(&mut rng, &shape));
+        }
+    }
+    let worst = walk(&mut big, &configs, &mut rng, "convex polygons outside");
     assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
 }
 
