@@ -13,7 +13,8 @@
 //! `RADDIFF_REGIMES_PROFILE="sliver,value,200000" valgrind --tool=callgrind <bench binary>`.
 //! `RADDIFF_REGIMES_MIX="ORDER,CALLS"` instead runs `polygon_form_factor` over a fixed mix of
 //! outside-near-plane configurations ([`outside_mix`]), one call each, for the average cost of the
-//! regime beyond the one configuration of the table.
+//! regime beyond the one configuration of the table (`RADDIFF_REGIMES_MIX="ORDER,CALLS,generic"`:
+//! over [`generic_mix`], its baseline). A third table times both mixes in the same rounds.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -257,9 +258,42 @@ fn ratio_table(cases: &[Case]) {
     println!("minimum over {rounds} interleaved rounds of up to {max_calls} calls\n");
 }
 
+/// ns per call over the outside mix and over the generic mix of the same polygons (minimum over
+/// interleaved rounds of one pass over each), and their ratio: the regime's average cost against
+/// the generic configurations of the same shapes.
+fn mix_table() {
+    let (count, rounds) = (1000, 30);
+    let (outside, generic) = (outside_mix(count), generic_mix(count));
+    let mut best = [[f64::INFINITY; 3]; 2];
+    for _ in 0..rounds {
+        for (m, mix) in [&outside, &generic].into_iter().enumerate() {
+            for (o, (_, order)) in ORDERS.iter().enumerate() {
+                let start = Instant::now();
+                for case in mix {
+                    call(case, *order);
+                }
+                let ns = start.elapsed().as_secs_f64() * 1e9 / count as f64;
+                best[m][o] = best[m][o].min(ns);
+            }
+        }
+    }
+    println!("polygon form factor over {count} configurations: ns per call (ratio to the generic mix, same order)");
+    println!("| mix | value | gradient | Hessian |");
+    println!("|---|---|---|---|");
+    for (m, name) in ["outside near the plane (1e-6)", "generic (same polygons)"]
+        .into_iter()
+        .enumerate()
+    {
+        let cell = |o: usize| format!("{:.0} ns ({:.2}x)", best[m][o], best[m][o] / best[1][o]);
+        println!("| {name} | {} | {} | {} |", cell(0), cell(1), cell(2));
+    }
+    println!("minimum over {rounds} interleaved rounds of one pass over each mix\n");
+}
+
 fn bench(c: &mut Criterion) {
     let cases = cases();
     ratio_table(&cases);
+    mix_table();
     for case in &cases {
         let mut g = c.benchmark_group(format!("form_factor_regimes/{}", case.name));
         for (label, order) in ORDERS {
@@ -275,6 +309,19 @@ fn bench(c: &mut Criterion) {
 /// deterministic stand-in for the "1e-6 from the plane, outside" regime's spread of positions
 /// and tangent planes.
 fn outside_mix(calls: usize) -> Vec<Case> {
+    polygon_mix(calls, false)
+}
+
+/// Polygons from [`outside_mix`]'s generator, `x` instead over the polygon's interior
+/// (within 0.3 radii of the centre) 0.5-1.5 radii from its plane on either side, receiver normals
+/// uniform on the sphere, kept when every vertex is above the tangent plane (nothing clipped): the
+/// generic configurations of the same shapes, the outside mix's baseline.
+fn generic_mix(calls: usize) -> Vec<Case> {
+    polygon_mix(calls, true)
+}
+
+/// [`outside_mix`], or with `generic` [`generic_mix`].
+fn polygon_mix(calls: usize, generic: bool) -> Vec<Case> {
     let mut state = 7u64;
     let mut next = || {
         state = state
@@ -293,12 +340,26 @@ fn outside_mix(calls: usize) -> Vec<Case> {
             .collect();
         let (angle, distance) = (next() * std::f64::consts::TAU, 1.05 + 2.0 * next());
         let h = if next() < 0.5 { 1e-6 } else { -1e-6 };
-        let x = DVec3::new(distance * angle.cos(), distance * angle.sin(), h);
+        let x = if generic {
+            let side = if h > 0.0 { 1.0 } else { -1.0 };
+            DVec3::new(
+                0.3 * (distance - 1.05) / 2.0 * angle.cos(),
+                0.3 * (distance - 1.05) / 2.0 * angle.sin(),
+                side * (0.5 + next()),
+            )
+        } else {
+            DVec3::new(distance * angle.cos(), distance * angle.sin(), h)
+        };
         let n = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
         let above = v.iter().filter(|p| n.dot(**p - x) > 0.0).count();
-        if above > 0 && above < m {
+        let keep = if generic {
+            above == m
+        } else {
+            above > 0 && above < m
+        };
+        if keep {
             mix.push(Case {
-                name: "outside mix",
+                name: if generic { "generic mix" } else { "outside mix" },
                 v,
                 x,
                 n,
@@ -318,7 +379,17 @@ fn main() {
             .find(|(name, _)| *name == order.trim())
             .expect("ORDER is value, gradient or hessian")
             .1;
-        for case in outside_mix(calls.trim().parse().expect("CALLS")) {
+        let (calls, generic) = match calls.split_once(',') {
+            Some((calls, "generic")) => (calls, true),
+            _ => (calls, false),
+        };
+        let calls = calls.trim().parse().expect("CALLS");
+        let mix = if generic {
+            generic_mix(calls)
+        } else {
+            outside_mix(calls)
+        };
+        for case in mix {
             call(&case, order);
         }
         return;

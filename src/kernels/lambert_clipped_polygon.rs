@@ -663,7 +663,7 @@ mod tests {
     /// 1e-3 to 1e-9 sizes from the plane over a point 0.1-1 sizes beyond a vertex (outside):
     /// wherever the routed loop's derivatives are accepted they agree with the robust path within
     /// 1e-11 (gradient) and 1e-10 (Hessian) of its largest entry (the loop keeps a few `u` times its
-    /// sums' cancellation, up to `LOOP_CANCELLATION` = 1e4: ~1e-12), their value is the value order's
+    /// sums' cancellation, up to `LOOP_CANCELLATION` = 1e5: ~1e-11), their value is the value order's
     /// bits, and the public kernel returns exactly them; they are accepted in at least half of the
     /// configurations where the route answers.
     #[test]
