@@ -359,7 +359,11 @@ fn polygon_mix(calls: usize, generic: bool) -> Vec<Case> {
         };
         if keep {
             mix.push(Case {
-                name: if generic { "generic mix" } else { "outside mix" },
+                name: if generic {
+                    "generic mix"
+                } else {
+                    "outside mix"
+                },
                 v,
                 x,
                 n,

@@ -22,7 +22,7 @@ mod sliver;
 mod sliver_fan;
 use super::form_factor::{clip_edge_term, frame_term, outer_self, sym_outer, EdgeFrame, ExactEnds};
 pub(crate) use near_plane_polygon::{
-    clipped_polygon_value_and_loop as near_plane_clipped_polygon_value_and_loop,
+    clipped_polygon_value_and_loop as near_plane_clipped_polygon_value_and_loop, far_piece_derivs,
     polygon_value as near_plane_polygon_value,
 };
 pub(crate) use near_plane_triangle::{

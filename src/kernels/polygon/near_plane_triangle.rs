@@ -175,6 +175,18 @@ pub(crate) struct RouteLoop<const N: usize = 4> {
     pub(super) angles: [f64; N],
     pub(super) edges: [DVec3; N],
     pub(super) count: usize,
+    /// Set where the visible part is far-field against its size and the value came from the
+    /// robust path's far-field rule on the loop (polygons only, `near_plane_polygon`).
+    pub(super) far: Option<FarPiece>,
+}
+
+/// What the far-field rule on a route's loop needs for its derivatives: the rule, the unit
+/// receiver normal and the polygon's unit normal (both as the robust path has them).
+#[derive(Clone, Copy)]
+pub(crate) struct FarPiece {
+    pub(super) rule: super::Rule,
+    pub(super) n: DVec3,
+    pub(super) plane_normal: DVec3,
 }
 
 impl<const N: usize> RouteLoop<N> {
@@ -185,6 +197,7 @@ impl<const N: usize> RouteLoop<N> {
             angles: [f64::NAN; N],
             edges: [DVec3::ZERO; N],
             count: 0,
+            far: None,
         }
     }
 
@@ -220,6 +233,12 @@ impl<const N: usize> RouteLoop<N> {
     #[inline(always)]
     pub(crate) fn point(&self, k: usize) -> (DVec3, DVec3) {
         (self.points[k].r, self.points[k].r_lo)
+    }
+
+    /// Whether the value came from the far-field rule on the loop (`near_plane_polygon`).
+    #[inline(always)]
+    pub(crate) fn is_far(&self) -> bool {
+        self.far.is_some()
     }
 
     /// Whether point `k` is a clip point.
@@ -441,7 +460,7 @@ pub(super) mod tests {
             if let (Ok(value), Ok(hessian)) = (entry(Order::Value), entry(Order::Hessian)) {
                 assert_eq!(value.value.to_bits(), hessian.value.to_bits(), "{k}: order");
             }
-            robust_split += usize::from(robust_takes_the_split(x, n, &v));
+            robust_split += usize::from(robust_takes_the_split(x, n, &v, false));
         }
         // Every configuration where the robust path takes its split for the value, the route
         // takes too.
@@ -542,11 +561,14 @@ pub(super) mod tests {
 
     /// Whether `evaluate` takes its near-plane split for the value of this configuration (its
     /// decisions, through the route's own steps but with the robust path's `clip` and frames).
-    /// Also the polygon route's reference (`near_plane_polygon`), hence over any vertex count.
+    /// Also the polygon route's reference (`near_plane_polygon`), hence over any vertex count;
+    /// with `far_counts` also where it takes its far-field rule on the clipped loop instead (a
+    /// far-field visible part), which the polygon route replays.
     pub(in crate::kernels::polygon) fn robust_takes_the_split(
         x: DVec3,
         n: DVec3,
         v: &[DVec3],
+        far_counts: bool,
     ) -> bool {
         use super::super::{clip, edge_frames, exact_height, ClipLoop, Frames, Plane, Scaled};
         let Ok(scaled) = Scaled::new(x, v) else {
@@ -579,9 +601,10 @@ pub(super) mod tests {
             .iter()
             .map(|v| (v.r - centroid).length())
             .fold(0.0, f64::max);
-        if far_field_rule(centroid.length(), radius).is_some()
-            || foot_inside(&loop_, plane.normal, h_p)
-        {
+        if far_field_rule(centroid.length(), radius).is_some() {
+            return far_counts;
+        }
+        if foot_inside(&loop_, plane.normal, h_p) {
             return false;
         }
         let mut frames = Frames::new();
