@@ -568,20 +568,20 @@ fn small_corner_cut_off() {
 }
 
 /// A spread of outside-near-plane configurations (the kind `benches/kernels_regimes.rs` times with
-/// `RADDIFF_REGIMES_MIX`): convex quads to hexagons with jittered vertices on a circle (exactly
-/// planar: in a coordinate plane), scale 2^-10..2^10, `x` 1e-3..1e-10 of the radius from their
-/// plane (either side) at 1.05-3 radii from the centre, receiver normals uniform on the sphere,
-/// kept when the tangent plane cuts the polygon. Their derivative sums cancel by 1 to ~1e5 (the
-/// visible part small against its distance): the clipped loop's derivatives take them up to its
-/// cancellation limit, the robust path beyond.
-#[test]
-fn convex_polygons_outside_spread_of_tangent_planes() {
+/// `RADDIFF_REGIMES_MIX`): convex polygons with `vertices(rng)` vertices jittered on a circle
+/// (exactly planar: in a coordinate plane), scale 2^-10..2^10, `x` 1e-3..1e-10 of the radius from
+/// their plane (either side) at 1.05-3 radii from the centre, receiver normals uniform on the
+/// sphere, kept when the tangent plane cuts the polygon; `count` of them against the reference.
+/// Their derivative sums cancel by 1 to ~1e6 (the visible part small against its distance): the
+/// clipped loop's derivatives take them up to its cancellation limit, the far-field rule the
+/// far-field corners, the robust path the rest.
+fn outside_spread(seed: u64, count: usize, vertices: impl Fn(&mut Rng) -> usize) -> [f64; 3] {
     let mut big = Big::new();
-    let mut rng = Rng(1865);
+    let mut rng = Rng(seed);
     let mut worst = [0.0f64; 3];
-    let mut count = 0;
-    while count < 240 {
-        let m = 4 + (rng.uniform() * 3.0) as usize;
+    let mut taken = 0;
+    while taken < count {
+        let m = vertices(&mut rng);
         let scale = 2f64.powi(rng.range(-10.0, 10.0).round() as i32);
         let v: Vec<DVec3> = (0..m)
             .map(|k| {
@@ -602,10 +602,26 @@ fn convex_polygons_outside_spread_of_tangent_planes() {
             eprintln!("{m} vertices, h {h:.1e}: {e:?}");
         }
         max3(&mut worst, e);
-        count += 1;
+        taken += 1;
     }
+    worst
+}
+
+#[test]
+fn convex_polygons_outside_spread_of_tangent_planes() {
+    let worst = outside_spread(1865, 240, |rng| 4 + (rng.uniform() * 3.0) as usize);
     println!(
-        "outside spread, n={count}: worst value {:.1e} gradient {:.1e} Hessian {:.1e}",
+        "outside spread, 4-6 vertices: worst value {:.1e} gradient {:.1e} Hessian {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
+}
+
+#[test]
+fn triangles_outside_spread_of_tangent_planes() {
+    let worst = outside_spread(1866, 240, |_| 3);
+    println!(
+        "outside spread, triangles: worst value {:.1e} gradient {:.1e} Hessian {:.1e}",
         worst[0], worst[1], worst[2]
     );
     assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");

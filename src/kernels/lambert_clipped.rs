@@ -265,24 +265,35 @@ fn with_loop<R>(
         }
         if above[i] != above[j] {
             let total = heights[i] - heights[j];
-            let t = heights[i] / total;
-            // |t − t_exact| from the heights' errors (half of `height_error`), the subtraction
-            // and the division, with a 2x margin for the bound's own rounding.
-            let (gi, gj) = (0.5 * height_error[i], 0.5 * height_error[j]);
-            let dt = 2.0 * ((gi * (1.0 + t) + gj * t) / total.abs() + 2.0 * U * t);
-            let (point, hi) = match route {
-                Some(route) => from_route(route, count),
+            let edge = (v[j] - v[i]).length();
+            let (point, hi, displacement) = match route {
+                Some(route) => {
+                    // The route's clip point, from the double-double heights: within a few u²
+                    // of the exact crossing, bounded as `lambert_clipped_polygon`'s loop bounds
+                    // the same points (the heights by `U·height_error`, `t` by their errors over
+                    // `|total|` and a few u², the point by a few u² of its ends' size).
+                    let (point, hi) = from_route(route, count);
+                    let dt =
+                        2.0 * U * (height_error[i] + height_error[j]) / total.abs() + 16.0 * U * U;
+                    let size = 16.0 * U * U * (r[i].length() + r[j].length());
+                    (point, hi, dt * edge + size)
+                }
                 None => {
+                    let t = heights[i] / total;
+                    // |t − t_exact| from the heights' errors (half of `height_error`), the
+                    // subtraction and the division, with a 2x margin for the bound's own
+                    // rounding.
+                    let (gi, gj) = (0.5 * height_error[i], 0.5 * height_error[j]);
+                    let dt = 2.0 * ((gi * (1.0 + t) + gj * t) / total.abs() + 2.0 * U * t);
                     let p = exact[i].add(&exact[j].sub(&exact[i]).scale(Dd { hi: t, lo: 0.0 }));
-                    (p, p.to_dvec3())
+                    (p, p.to_dvec3(), dt * edge)
                 }
             };
-            let edge = (v[j] - v[i]).length();
             l.points[count] = LoopVertex {
                 exact: point,
                 hi,
                 vertex: None,
-                displacement: 1.01 * dt * edge,
+                displacement: 1.01 * displacement,
             };
             count += 1;
         }
@@ -743,7 +754,8 @@ mod tests {
     /// Outside the triangle near its plane (the route's case, 1e-3 to 1e-12 sizes from the
     /// plane): wherever the value order's route answers, its loop lists the points the cut's
     /// own loop lists, in the same order (kept vertices to the bit), each route clip point is
-    /// within the displacement bound the loop carries of the loop's own f64-`t` one, the route's
+    /// within the displacement bound the loop carries of the loop's own f64-`t` one (and carries a
+    /// tighter bound of its own, from the double-double heights), the route's
     /// vertex-to-clip-point edge vectors are the loop's own rounding of its points' difference,
     /// and its angles are the angles between the edges' ends to a few ulps; the gradient and
     /// Hessian orders return the value order's value bit for bit, with the derivatives of the
@@ -791,8 +803,11 @@ mod tests {
             let count = own.count;
             for i in 0..count {
                 let (a, b) = (&own.points[i], &shared.points[i]);
-                assert_eq!((a.vertex, a.displacement), (b.vertex, b.displacement));
+                assert_eq!(a.vertex, b.vertex);
+                // The route's clip points (from double-double heights) have the tighter bound.
+                assert!(b.displacement <= a.displacement, "{k}: point {i}");
                 if a.vertex.is_some() {
+                    assert_eq!(a.displacement, b.displacement);
                     assert_eq!(a.hi, b.hi, "{k}: vertex {i}");
                 } else {
                     let apart = (a.hi - b.hi).length();
