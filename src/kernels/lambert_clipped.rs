@@ -406,7 +406,8 @@ pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clip
     }
     let mut route = RouteLoop::new();
     let routed = screen.left_to_the_robust_path()
-        && polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route).is_some();
+        && polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route).is_some()
+        && !route.is_far();
     Some(with_loop(x, &v, &cut, routed.then_some(&route), |l| {
         l.sum = screen.side.signum();
         l.clone()
@@ -454,12 +455,14 @@ pub(super) fn with_derivative_loop<R>(
     f: impl FnOnce(&ClippedLoop, bool) -> R,
 ) -> Option<R> {
     let fma = cfg!(target_arch = "x86_64") && crate::simd::avx2_fma();
-    with_valued_derivative_loop(x, n, v, fma, |l, value| f(l, value == LoopValue::Certified))
+    with_valued_derivative_loop(x, n, v, fma, |l, value| {
+        f(l, matches!(value, LoopValue::Certified))
+    })
 }
 
 /// Where the derivative orders' loop ([`with_valued_derivative_loop`]) takes its value from.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum LoopValue {
+#[derive(Clone, Copy)]
+pub(super) enum LoopValue<'a> {
     /// The certified loop: [`ClippedLoop::value`].
     Certified,
     /// The uncertified loop on the clip points of the value order's near-plane route
@@ -469,6 +472,10 @@ pub(super) enum LoopValue {
     /// The uncertified loop, its value to be taken from the value order's paths; `route_tried`
     /// when the near-plane route was tried here and declined (the caller need not try it again).
     Elsewhere { route_tried: bool },
+    /// The near-plane route took the robust path's far-field rule on its loop (a far-field
+    /// visible part): its value, and the route for that rule's derivatives
+    /// ([`polygon::far_piece_derivs`]) rather than the loop's.
+    Far(f64, &'a RouteLoop),
 }
 
 /// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
@@ -493,7 +500,7 @@ pub(super) fn with_valued_derivative_loop<R>(
     n: DVec3,
     v: [DVec3; 3],
     fma: bool,
-    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+    f: impl FnOnce(&ClippedLoop, LoopValue<'_>) -> R,
 ) -> Option<R> {
     let cut = cut(x, n, &v)?;
     let screen = screen(&v, &cut.r);
@@ -546,7 +553,7 @@ fn routed_loop_body<R>(
     v: [DVec3; 3],
     cut: &Cut,
     side: f64,
-    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+    f: impl FnOnce(&ClippedLoop, LoopValue<'_>) -> R,
 ) -> R {
     let mut route = RouteLoop::new();
     let value = polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route);
@@ -554,11 +561,13 @@ fn routed_loop_body<R>(
         x,
         &v,
         cut,
-        value.is_some().then_some(&route),
+        // A far-field route computed neither edge vectors nor angles: the loop's own then.
+        (value.is_some() && !route.is_far()).then_some(&route),
         #[inline(always)]
         |l| {
             l.sum = side;
             let value = match value {
+                Some(value) if route.is_far() => LoopValue::Far(value, &route),
                 Some(value) => LoopValue::Route(value),
                 None => LoopValue::Elsewhere { route_tried: true },
             };
@@ -573,7 +582,7 @@ fn routed_loop<R>(
     v: [DVec3; 3],
     cut: &Cut,
     side: f64,
-    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+    f: impl FnOnce(&ClippedLoop, LoopValue<'_>) -> R,
 ) -> R {
     routed_loop_body(x, v, cut, side, f)
 }
@@ -586,7 +595,7 @@ unsafe fn routed_loop_fma<R>(
     v: [DVec3; 3],
     cut: &Cut,
     side: f64,
-    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+    f: impl FnOnce(&ClippedLoop, LoopValue<'_>) -> R,
 ) -> R {
     routed_loop_body(x, v, cut, side, f)
 }
@@ -791,6 +800,11 @@ mod tests {
             else {
                 continue;
             };
+            // A far-field visible part: the route's value is its far-field rule's, and the
+            // derivative orders take that rule, not this loop.
+            if route.is_far() {
+                continue;
+            }
             routed += 1;
             assert_eq!(
                 Some(value.to_bits()),

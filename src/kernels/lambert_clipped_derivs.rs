@@ -490,6 +490,19 @@ mod tests {
             if !is_outside || lambert_clipped::certified_loop(x, n, v).is_some() {
                 continue;
             }
+            // A far-field visible part takes the far-field rule on the route's loop instead.
+            let mut route = crate::kernels::polygon::RouteLoop::new();
+            if crate::kernels::polygon::near_plane_clipped_triangle_value_and_loop(
+                x,
+                lambert::unit(n).unwrap(),
+                v,
+                &mut route,
+            )
+            .is_some()
+                && route.is_far()
+            {
+                continue;
+            }
             let call = |order| crate::kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order);
             let value = call(Order::Value).unwrap().value;
             for order in [Order::Gradient, Order::Hessian] {

@@ -13,7 +13,7 @@
 //! declining. Where the visible part is far-field against its size (a small corner cut off,
 //! seen from afar), the robust path integrates it by its far-field rule instead of the split:
 //! so does the route, on its loop, and the derivative orders take the same rule's derivatives
-//! ([`far_piece_derivs`]).
+//! ([`far_piece_derivs`](super::far_piece_derivs)).
 //!
 //! What differs from the triangle's replay: the plane is Newell's sum over every edge (as
 //! [`Plane::new`] forms it; for a triangle it reduces to one cross product), validated for
@@ -37,14 +37,12 @@ use glam::DVec3;
 
 use super::near_plane_triangle::{in_plane_edge, FarPiece, RouteLoop, CLIP_VERTEX_ZERO};
 use super::{
-    clip_line_hessian, edge_vector, exact_height_of, far_field, far_field_rule, foot_inside,
-    near_plane_value, next, ClipVertex, Plane, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO,
-    SPLIT_VALUE_LIMIT,
+    edge_vector, exact_height_of, far_field_rule, foot_inside, near_plane_value, next, ClipVertex,
+    Plane, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO, SPLIT_VALUE_LIMIT,
 };
 use crate::kernels::dd::{self, Dd3};
 use crate::kernels::lambert;
 use crate::kernels::lambert_polygon::convex_normal;
-use crate::{Deriv3, Order};
 
 /// The value of [`polygon_form_factor`](crate::kernels::polygon_form_factor) for `Order::Value`
 /// (form factor, dimensionless, in `[0, 1]`) of the `M` vertices `v` (4 to 8) when the robust
@@ -221,7 +219,7 @@ unsafe fn split_fma<const M: usize, const N: usize>(
 /// the value, the exact height and the loop's length; where `angles` and `edges` have entries,
 /// the loop's edges' angles (see `near_plane_value`) and the vectors of its edges off the
 /// tangent plane. Where the visible part is far-field, the far-field rule's value instead, and
-/// `far` set for [`far_piece_derivs`].
+/// `far` set for [`far_piece_derivs`](super::far_piece_derivs).
 #[inline(always)]
 fn split<const M: usize, const N: usize>(
     x: DVec3,
@@ -247,16 +245,8 @@ fn split<const M: usize, const N: usize>(
         .fold(0.0, f64::max)
         .sqrt();
     if let Some(rule) = far_field_rule(centroid.length(), radius) {
-        // `evaluate`'s far-field branch (its `exact` is set near the plane), before the split.
-        let value = far_field(verts, n, Order::Value, true, rule).value;
-        *far = Some(FarPiece {
-            rule,
-            n,
-            plane_normal: plane.normal,
-        });
-        let value = if h_p < 0.0 { -value } else { value };
-        let value = value.clamp(0.0, 1.0);
-        return value.is_finite().then_some((value, h_p, count));
+        let value = super::far_field_value(verts, n, plane.normal, h_p, rule, far)?;
+        return Some((value, h_p, count));
     }
     if foot_inside(verts, plane.normal, h_p) {
         return None;
@@ -287,31 +277,6 @@ fn split<const M: usize, const N: usize>(
     let value = if h_p < 0.0 { -value } else { value };
     let value = value.clamp(0.0, 1.0);
     value.is_finite().then_some((value, h_p, count))
-}
-
-/// Gradient and (at [`Order::Hessian`]) Hessian of the far-field rule on a route's loop where
-/// [`clipped_polygon_value_and_loop`] took it for the value (`route.far` set; `h_p` its exact
-/// height), as `evaluate` has them (the clip line's Hessian term included), with `value` as the
-/// value; `None` where `route.far` is not set or they overflow. Per unit length (per squared
-/// length), in the units of the vertices.
-pub(crate) fn far_piece_derivs<const N: usize>(
-    route: &RouteLoop<N>,
-    value: f64,
-    h_p: f64,
-    order: Order,
-) -> Option<Deriv3> {
-    let far = route.far?;
-    let verts = &route.points[..route.count];
-    let mut d = far_field(verts, far.n, order, true, far.rule);
-    if h_p < 0.0 {
-        d.gradient = -d.gradient;
-        d.hessian = -d.hessian;
-    }
-    if order.hessian() {
-        d.hessian += clip_line_hessian(verts, far.n, far.plane_normal, h_p, false, false).ok()?;
-    }
-    d.value = value;
-    d.is_finite().then_some(d)
 }
 
 /// [`clip`](super::clip) on fixed arrays (the same operations, so the same vertices): the loop
