@@ -12,9 +12,10 @@
 //! is a prefix of a case name, ORDER is `value`, `gradient` or `hessian`), e.g.
 //! `RADDIFF_REGIMES_PROFILE="sliver,value,200000" valgrind --tool=callgrind <bench binary>`.
 //! `RADDIFF_REGIMES_MIX="ORDER,CALLS"` instead runs `polygon_form_factor` over a fixed mix of
-//! outside-near-plane configurations ([`outside_mix`]), one call each, for the average cost of the
+//! outside-near-plane configurations ([`polygon_mix`]), one call each, for the average cost of the
 //! regime beyond the one configuration of the table (`RADDIFF_REGIMES_MIX="ORDER,CALLS,generic"`:
-//! over [`generic_mix`], its baseline). A third table times both mixes in the same rounds.
+//! over its baseline of generic configurations; `...,triangles` for triangles through
+//! `triangle_form_factor`). Two more tables time each mix against its baseline in the same rounds.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -258,36 +259,41 @@ fn ratio_table(cases: &[Case]) {
     println!("minimum over {rounds} interleaved rounds of up to {max_calls} calls\n");
 }
 
-/// ns per call over the outside mix and over the generic mix of the same polygons (minimum over
+/// ns per call over the outside mix and over the generic mix of the same shapes (minimum over
 /// interleaved rounds of one pass over each), and their ratio: the regime's average cost against
-/// the generic configurations of the same shapes.
+/// the generic configurations of the same shapes, for quads and pentagons, then for triangles.
 fn mix_table() {
     let (count, rounds) = (1000, 30);
-    let (outside, generic) = (outside_mix(count), generic_mix(count));
-    let mut best = [[f64::INFINITY; 3]; 2];
-    for _ in 0..rounds {
-        for (m, mix) in [&outside, &generic].into_iter().enumerate() {
-            for (o, (_, order)) in ORDERS.iter().enumerate() {
-                let start = Instant::now();
-                for case in mix {
-                    call(case, *order);
+    for (shapes, triangles) in [("quads and pentagons", false), ("triangles", true)] {
+        let outside = polygon_mix(count, false, triangles);
+        let generic = polygon_mix(count, true, triangles);
+        let mut best = [[f64::INFINITY; 3]; 2];
+        for _ in 0..rounds {
+            for (m, mix) in [&outside, &generic].into_iter().enumerate() {
+                for (o, (_, order)) in ORDERS.iter().enumerate() {
+                    let start = Instant::now();
+                    for case in mix {
+                        call(case, *order);
+                    }
+                    let ns = start.elapsed().as_secs_f64() * 1e9 / count as f64;
+                    best[m][o] = best[m][o].min(ns);
                 }
-                let ns = start.elapsed().as_secs_f64() * 1e9 / count as f64;
-                best[m][o] = best[m][o].min(ns);
             }
         }
+        println!(
+            "form factor of {count} {shapes}: ns per call (ratio to the generic mix, same order)"
+        );
+        println!("| mix | value | gradient | Hessian |");
+        println!("|---|---|---|---|");
+        for (m, name) in ["outside near the plane (1e-6)", "generic (same shapes)"]
+            .into_iter()
+            .enumerate()
+        {
+            let cell = |o: usize| format!("{:.0} ns ({:.2}x)", best[m][o], best[m][o] / best[1][o]);
+            println!("| {name} | {} | {} | {} |", cell(0), cell(1), cell(2));
+        }
+        println!("minimum over {rounds} interleaved rounds of one pass over each mix\n");
     }
-    println!("polygon form factor over {count} configurations: ns per call (ratio to the generic mix, same order)");
-    println!("| mix | value | gradient | Hessian |");
-    println!("|---|---|---|---|");
-    for (m, name) in ["outside near the plane (1e-6)", "generic (same polygons)"]
-        .into_iter()
-        .enumerate()
-    {
-        let cell = |o: usize| format!("{:.0} ns ({:.2}x)", best[m][o], best[m][o] / best[1][o]);
-        println!("| {name} | {} | {} | {} |", cell(0), cell(1), cell(2));
-    }
-    println!("minimum over {rounds} interleaved rounds of one pass over each mix\n");
 }
 
 fn bench(c: &mut Criterion) {
@@ -303,25 +309,15 @@ fn bench(c: &mut Criterion) {
     }
 }
 
-/// `CALLS` clipped convex quads and pentagons of unit circumradius (vertices at jittered even
-/// angles, in the plane z = 0), x 1e-6 from their plane (either side) at 1.05-3 radii from the
-/// centre, receiver normals uniform on the sphere, kept when the tangent plane cuts the polygon: a
-/// deterministic stand-in for the "1e-6 from the plane, outside" regime's spread of positions
-/// and tangent planes.
-fn outside_mix(calls: usize) -> Vec<Case> {
-    polygon_mix(calls, false)
-}
-
-/// Polygons from [`outside_mix`]'s generator, `x` instead over the polygon's interior
-/// (within 0.3 radii of the centre) 0.5-1.5 radii from its plane on either side, receiver normals
-/// uniform on the sphere, kept when every vertex is above the tangent plane (nothing clipped): the
-/// generic configurations of the same shapes, the outside mix's baseline.
-fn generic_mix(calls: usize) -> Vec<Case> {
-    polygon_mix(calls, true)
-}
-
-/// [`outside_mix`], or with `generic` [`generic_mix`].
-fn polygon_mix(calls: usize, generic: bool) -> Vec<Case> {
+/// `calls` clipped convex quads and pentagons of unit circumradius (vertices at jittered even
+/// angles, in the plane z = 0; with `triangles`, triangles so jittered), x 1e-6 from their plane
+/// (either side) at 1.05-3 radii from the centre, receiver normals uniform on the sphere, kept when
+/// the tangent plane cuts the polygon: a deterministic stand-in for the "1e-6 from the plane,
+/// outside" regime's spread of positions and tangent planes. With `generic`, its baseline: shapes
+/// from the same generator, `x` instead over the interior (within 0.3 radii of the centre)
+/// 0.5-1.5 radii from the plane on either side, kept when every vertex is above the tangent plane
+/// (nothing clipped).
+fn polygon_mix(calls: usize, generic: bool, triangles: bool) -> Vec<Case> {
     let mut state = 7u64;
     let mut next = || {
         state = state
@@ -331,7 +327,11 @@ fn polygon_mix(calls: usize, generic: bool) -> Vec<Case> {
     };
     let mut mix = Vec::with_capacity(calls);
     while mix.len() < calls {
-        let m = 4 + (next() * 2.0) as usize;
+        let m = if triangles {
+            3
+        } else {
+            4 + (next() * 2.0) as usize
+        };
         let v: Vec<DVec3> = (0..m)
             .map(|k| {
                 let a = (k as f64 + 0.3 * next()) / m as f64 * std::f64::consts::TAU;
@@ -383,16 +383,14 @@ fn main() {
             .find(|(name, _)| *name == order.trim())
             .expect("ORDER is value, gradient or hessian")
             .1;
-        let (calls, generic) = match calls.split_once(',') {
-            Some((calls, "generic")) => (calls, true),
-            _ => (calls, false),
-        };
-        let calls = calls.trim().parse().expect("CALLS");
-        let mix = if generic {
-            generic_mix(calls)
-        } else {
-            outside_mix(calls)
-        };
+        let mut fields = calls.split(',');
+        let calls = fields.next().unwrap().trim().parse().expect("CALLS");
+        let flags: Vec<&str> = fields.map(str::trim).collect();
+        let mix = polygon_mix(
+            calls,
+            flags.contains(&"generic"),
+            flags.contains(&"triangles"),
+        );
         for case in mix {
             call(&case, order);
         }
