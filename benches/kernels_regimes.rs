@@ -12,8 +12,10 @@
 //! is a prefix of a case name, ORDER is `value`, `gradient` or `hessian`), e.g.
 //! `RADDIFF_REGIMES_PROFILE="sliver,value,200000" valgrind --tool=callgrind <bench binary>`.
 //! `RADDIFF_REGIMES_MIX="ORDER,CALLS"` instead runs `polygon_form_factor` over a fixed mix of
-//! outside-near-plane configurations ([`outside_mix`]), one call each, for the average cost of the
-//! regime beyond the one configuration of the table.
+//! outside-near-plane configurations ([`polygon_mix`]), one call each, for the average cost of the
+//! regime beyond the one configuration of the table (`RADDIFF_REGIMES_MIX="ORDER,CALLS,generic"`:
+//! over its baseline of generic configurations; `...,triangles` for triangles through
+//! `triangle_form_factor`). Two more tables time each mix against its baseline in the same rounds.
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -257,9 +259,47 @@ fn ratio_table(cases: &[Case]) {
     println!("minimum over {rounds} interleaved rounds of up to {max_calls} calls\n");
 }
 
+/// ns per call over the outside mix and over the generic mix of the same shapes (minimum over
+/// interleaved rounds of one pass over each), and their ratio: the regime's average cost against
+/// the generic configurations of the same shapes, for quads and pentagons, then for triangles.
+fn mix_table() {
+    let (count, rounds) = (1000, 30);
+    for (shapes, triangles) in [("quads and pentagons", false), ("triangles", true)] {
+        let outside = polygon_mix(count, false, triangles);
+        let generic = polygon_mix(count, true, triangles);
+        let mut best = [[f64::INFINITY; 3]; 2];
+        for _ in 0..rounds {
+            for (m, mix) in [&outside, &generic].into_iter().enumerate() {
+                for (o, (_, order)) in ORDERS.iter().enumerate() {
+                    let start = Instant::now();
+                    for case in mix {
+                        call(case, *order);
+                    }
+                    let ns = start.elapsed().as_secs_f64() * 1e9 / count as f64;
+                    best[m][o] = best[m][o].min(ns);
+                }
+            }
+        }
+        println!(
+            "form factor of {count} {shapes}: ns per call (ratio to the generic mix, same order)"
+        );
+        println!("| mix | value | gradient | Hessian |");
+        println!("|---|---|---|---|");
+        for (m, name) in ["outside near the plane (1e-6)", "generic (same shapes)"]
+            .into_iter()
+            .enumerate()
+        {
+            let cell = |o: usize| format!("{:.0} ns ({:.2}x)", best[m][o], best[m][o] / best[1][o]);
+            println!("| {name} | {} | {} | {} |", cell(0), cell(1), cell(2));
+        }
+        println!("minimum over {rounds} interleaved rounds of one pass over each mix\n");
+    }
+}
+
 fn bench(c: &mut Criterion) {
     let cases = cases();
     ratio_table(&cases);
+    mix_table();
     for case in &cases {
         let mut g = c.benchmark_group(format!("form_factor_regimes/{}", case.name));
         for (label, order) in ORDERS {
@@ -269,12 +309,15 @@ fn bench(c: &mut Criterion) {
     }
 }
 
-/// `CALLS` clipped convex quads and pentagons of unit circumradius (vertices at jittered even
-/// angles, in the plane z = 0), x 1e-6 from their plane (either side) at 1.05-3 radii from the
-/// centre, receiver normals uniform on the sphere, kept when the tangent plane cuts the polygon: a
-/// deterministic stand-in for the "1e-6 from the plane, outside" regime's spread of positions
-/// and tangent planes.
-fn outside_mix(calls: usize) -> Vec<Case> {
+/// `calls` clipped convex quads and pentagons of unit circumradius (vertices at jittered even
+/// angles, in the plane z = 0; with `triangles`, triangles so jittered), x 1e-6 from their plane
+/// (either side) at 1.05-3 radii from the centre, receiver normals uniform on the sphere, kept when
+/// the tangent plane cuts the polygon: a deterministic stand-in for the "1e-6 from the plane,
+/// outside" regime's spread of positions and tangent planes. With `generic`, its baseline: shapes
+/// from the same generator, `x` instead over the interior (within 0.3 radii of the centre)
+/// 0.5-1.5 radii from the plane on either side, kept when every vertex is above the tangent plane
+/// (nothing clipped).
+fn polygon_mix(calls: usize, generic: bool, triangles: bool) -> Vec<Case> {
     let mut state = 7u64;
     let mut next = || {
         state = state
@@ -284,7 +327,11 @@ fn outside_mix(calls: usize) -> Vec<Case> {
     };
     let mut mix = Vec::with_capacity(calls);
     while mix.len() < calls {
-        let m = 4 + (next() * 2.0) as usize;
+        let m = if triangles {
+            3
+        } else {
+            4 + (next() * 2.0) as usize
+        };
         let v: Vec<DVec3> = (0..m)
             .map(|k| {
                 let a = (k as f64 + 0.3 * next()) / m as f64 * std::f64::consts::TAU;
@@ -293,12 +340,30 @@ fn outside_mix(calls: usize) -> Vec<Case> {
             .collect();
         let (angle, distance) = (next() * std::f64::consts::TAU, 1.05 + 2.0 * next());
         let h = if next() < 0.5 { 1e-6 } else { -1e-6 };
-        let x = DVec3::new(distance * angle.cos(), distance * angle.sin(), h);
+        let x = if generic {
+            let side = if h > 0.0 { 1.0 } else { -1.0 };
+            DVec3::new(
+                0.3 * (distance - 1.05) / 2.0 * angle.cos(),
+                0.3 * (distance - 1.05) / 2.0 * angle.sin(),
+                side * (0.5 + next()),
+            )
+        } else {
+            DVec3::new(distance * angle.cos(), distance * angle.sin(), h)
+        };
         let n = DVec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
         let above = v.iter().filter(|p| n.dot(**p - x) > 0.0).count();
-        if above > 0 && above < m {
+        let keep = if generic {
+            above == m
+        } else {
+            above > 0 && above < m
+        };
+        if keep {
             mix.push(Case {
-                name: "outside mix",
+                name: if generic {
+                    "generic mix"
+                } else {
+                    "outside mix"
+                },
                 v,
                 x,
                 n,
@@ -318,7 +383,15 @@ fn main() {
             .find(|(name, _)| *name == order.trim())
             .expect("ORDER is value, gradient or hessian")
             .1;
-        for case in outside_mix(calls.trim().parse().expect("CALLS")) {
+        let mut fields = calls.split(',');
+        let calls = fields.next().unwrap().trim().parse().expect("CALLS");
+        let flags: Vec<&str> = fields.map(str::trim).collect();
+        let mix = polygon_mix(
+            calls,
+            flags.contains(&"generic"),
+            flags.contains(&"triangles"),
+        );
+        for case in mix {
             call(&case, order);
         }
         return;

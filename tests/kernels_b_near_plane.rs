@@ -566,3 +566,63 @@ fn small_corner_cut_off() {
     assert!(count > 50, "only {count} configurations");
     assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
 }
+
+/// A spread of outside-near-plane configurations (the kind `benches/kernels_regimes.rs` times with
+/// `RADDIFF_REGIMES_MIX`): convex polygons with `vertices(rng)` vertices jittered on a circle
+/// (exactly planar: in a coordinate plane), scale 2^-10..2^10, `x` 1e-3..1e-10 of the radius from
+/// their plane (either side) at 1.05-3 radii from the centre, receiver normals uniform on the
+/// sphere, kept when the tangent plane cuts the polygon; `count` of them against the reference.
+/// Their derivative sums cancel by 1 to ~1e6 (the visible part small against its distance): the
+/// clipped loop's derivatives take them up to its cancellation limit, the far-field rule the
+/// far-field corners, the robust path the rest.
+fn outside_spread(seed: u64, count: usize, vertices: impl Fn(&mut Rng) -> usize) -> [f64; 3] {
+    let mut big = Big::new();
+    let mut rng = Rng(seed);
+    let mut worst = [0.0f64; 3];
+    let mut taken = 0;
+    while taken < count {
+        let m = vertices(&mut rng);
+        let scale = 2f64.powi(rng.range(-10.0, 10.0).round() as i32);
+        let v: Vec<DVec3> = (0..m)
+            .map(|k| {
+                let a = (k as f64 + 0.3 * rng.uniform()) / m as f64 * std::f64::consts::TAU;
+                DVec3::new(a.cos(), a.sin(), 0.0) * scale
+            })
+            .collect();
+        let (angle, distance) = (rng.range(0.0, std::f64::consts::TAU), rng.range(1.05, 3.0));
+        let h = 10f64.powf(rng.range(-10.0, -3.0)) * if rng.uniform() < 0.5 { 1.0 } else { -1.0 };
+        let x = DVec3::new(distance * angle.cos(), distance * angle.sin(), h) * scale;
+        let n = rng.unit();
+        let above = v.iter().filter(|p| n.dot(**p - x) > 0.0).count();
+        if above == 0 || above == m {
+            continue;
+        }
+        let e = check(&mut big, x, n, &v);
+        if std::env::var_os("KB_VERBOSE").is_some() {
+            eprintln!("{m} vertices, h {h:.1e}: {e:?}");
+        }
+        max3(&mut worst, e);
+        taken += 1;
+    }
+    worst
+}
+
+#[test]
+fn convex_polygons_outside_spread_of_tangent_planes() {
+    let worst = outside_spread(1865, 240, |rng| 4 + (rng.uniform() * 3.0) as usize);
+    println!(
+        "outside spread, 4-6 vertices: worst value {:.1e} gradient {:.1e} Hessian {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
+}
+
+#[test]
+fn triangles_outside_spread_of_tangent_planes() {
+    let worst = outside_spread(1866, 240, |_| 3);
+    println!(
+        "outside spread, triangles: worst value {:.1e} gradient {:.1e} Hessian {:.1e}",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
+}

@@ -261,6 +261,10 @@ fn clipped_derivs_with(
                 Some(d) => ClippedDerivs::Done(d),
                 None => ClippedDerivs::Declined(None),
             },
+            LoopValue::Far(value, route) => match polygon::far_piece_derivs(route, value, order) {
+                Some(d) => ClippedDerivs::Done(d),
+                None => ClippedDerivs::Declined(None),
+            },
             LoopValue::Elsewhere { route_tried } => {
                 match lambert_clipped_derivs::loop_derivs(l, 0.0, order) {
                     Some(d) => ClippedDerivs::ValueElsewhere(d, route_tried),

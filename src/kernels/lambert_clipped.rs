@@ -265,24 +265,35 @@ fn with_loop<R>(
         }
         if above[i] != above[j] {
             let total = heights[i] - heights[j];
-            let t = heights[i] / total;
-            // |t − t_exact| from the heights' errors (half of `height_error`), the subtraction
-            // and the division, with a 2x margin for the bound's own rounding.
-            let (gi, gj) = (0.5 * height_error[i], 0.5 * height_error[j]);
-            let dt = 2.0 * ((gi * (1.0 + t) + gj * t) / total.abs() + 2.0 * U * t);
-            let (point, hi) = match route {
-                Some(route) => from_route(route, count),
+            let edge = (v[j] - v[i]).length();
+            let (point, hi, displacement) = match route {
+                Some(route) => {
+                    // The route's clip point, from the double-double heights: within a few u²
+                    // of the exact crossing, bounded as `lambert_clipped_polygon`'s loop bounds
+                    // the same points (the heights by `U·height_error`, `t` by their errors over
+                    // `|total|` and a few u², the point by a few u² of its ends' size).
+                    let (point, hi) = from_route(route, count);
+                    let dt =
+                        2.0 * U * (height_error[i] + height_error[j]) / total.abs() + 16.0 * U * U;
+                    let size = 16.0 * U * U * (r[i].length() + r[j].length());
+                    (point, hi, dt * edge + size)
+                }
                 None => {
+                    let t = heights[i] / total;
+                    // |t − t_exact| from the heights' errors (half of `height_error`), the
+                    // subtraction and the division, with a 2x margin for the bound's own
+                    // rounding.
+                    let (gi, gj) = (0.5 * height_error[i], 0.5 * height_error[j]);
+                    let dt = 2.0 * ((gi * (1.0 + t) + gj * t) / total.abs() + 2.0 * U * t);
                     let p = exact[i].add(&exact[j].sub(&exact[i]).scale(Dd { hi: t, lo: 0.0 }));
-                    (p, p.to_dvec3())
+                    (p, p.to_dvec3(), dt * edge)
                 }
             };
-            let edge = (v[j] - v[i]).length();
             l.points[count] = LoopVertex {
                 exact: point,
                 hi,
                 vertex: None,
-                displacement: 1.01 * dt * edge,
+                displacement: 1.01 * displacement,
             };
             count += 1;
         }
@@ -395,7 +406,8 @@ pub(super) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<Clip
     }
     let mut route = RouteLoop::new();
     let routed = screen.left_to_the_robust_path()
-        && polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route).is_some();
+        && polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route).is_some()
+        && !route.is_far();
     Some(with_loop(x, &v, &cut, routed.then_some(&route), |l| {
         l.sum = screen.side.signum();
         l.clone()
@@ -443,12 +455,14 @@ pub(super) fn with_derivative_loop<R>(
     f: impl FnOnce(&ClippedLoop, bool) -> R,
 ) -> Option<R> {
     let fma = cfg!(target_arch = "x86_64") && crate::simd::avx2_fma();
-    with_valued_derivative_loop(x, n, v, fma, |l, value| f(l, value == LoopValue::Certified))
+    with_valued_derivative_loop(x, n, v, fma, |l, value| {
+        f(l, matches!(value, LoopValue::Certified))
+    })
 }
 
 /// Where the derivative orders' loop ([`with_valued_derivative_loop`]) takes its value from.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum LoopValue {
+#[derive(Clone, Copy)]
+pub(super) enum LoopValue<'a> {
     /// The certified loop: [`ClippedLoop::value`].
     Certified,
     /// The uncertified loop on the clip points of the value order's near-plane route
@@ -458,6 +472,10 @@ pub(super) enum LoopValue {
     /// The uncertified loop, its value to be taken from the value order's paths; `route_tried`
     /// when the near-plane route was tried here and declined (the caller need not try it again).
     Elsewhere { route_tried: bool },
+    /// The near-plane route took the robust path's far-field rule on its loop (a far-field
+    /// visible part): its value, and the route for that rule's derivatives
+    /// ([`polygon::far_piece_derivs`]) rather than the loop's.
+    Far(f64, &'a RouteLoop),
 }
 
 /// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
@@ -482,7 +500,7 @@ pub(super) fn with_valued_derivative_loop<R>(
     n: DVec3,
     v: [DVec3; 3],
     fma: bool,
-    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+    f: impl FnOnce(&ClippedLoop, LoopValue<'_>) -> R,
 ) -> Option<R> {
     let cut = cut(x, n, &v)?;
     let screen = screen(&v, &cut.r);
@@ -535,7 +553,7 @@ fn routed_loop_body<R>(
     v: [DVec3; 3],
     cut: &Cut,
     side: f64,
-    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+    f: impl FnOnce(&ClippedLoop, LoopValue<'_>) -> R,
 ) -> R {
     let mut route = RouteLoop::new();
     let value = polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route);
@@ -543,11 +561,13 @@ fn routed_loop_body<R>(
         x,
         &v,
         cut,
-        value.is_some().then_some(&route),
+        // A far-field route computed neither edge vectors nor angles: the loop's own then.
+        (value.is_some() && !route.is_far()).then_some(&route),
         #[inline(always)]
         |l| {
             l.sum = side;
             let value = match value {
+                Some(value) if route.is_far() => LoopValue::Far(value, &route),
                 Some(value) => LoopValue::Route(value),
                 None => LoopValue::Elsewhere { route_tried: true },
             };
@@ -562,7 +582,7 @@ fn routed_loop<R>(
     v: [DVec3; 3],
     cut: &Cut,
     side: f64,
-    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+    f: impl FnOnce(&ClippedLoop, LoopValue<'_>) -> R,
 ) -> R {
     routed_loop_body(x, v, cut, side, f)
 }
@@ -575,7 +595,7 @@ unsafe fn routed_loop_fma<R>(
     v: [DVec3; 3],
     cut: &Cut,
     side: f64,
-    f: impl FnOnce(&ClippedLoop, LoopValue) -> R,
+    f: impl FnOnce(&ClippedLoop, LoopValue<'_>) -> R,
 ) -> R {
     routed_loop_body(x, v, cut, side, f)
 }
@@ -743,7 +763,8 @@ mod tests {
     /// Outside the triangle near its plane (the route's case, 1e-3 to 1e-12 sizes from the
     /// plane): wherever the value order's route answers, its loop lists the points the cut's
     /// own loop lists, in the same order (kept vertices to the bit), each route clip point is
-    /// within the displacement bound the loop carries of the loop's own f64-`t` one, the route's
+    /// within the displacement bound the loop carries of the loop's own f64-`t` one (and carries a
+    /// tighter bound of its own, from the double-double heights), the route's
     /// vertex-to-clip-point edge vectors are the loop's own rounding of its points' difference,
     /// and its angles are the angles between the edges' ends to a few ulps; the gradient and
     /// Hessian orders return the value order's value bit for bit, with the derivatives of the
@@ -779,6 +800,11 @@ mod tests {
             else {
                 continue;
             };
+            // A far-field visible part: the route's value is its far-field rule's, and the
+            // derivative orders take that rule, not this loop.
+            if route.is_far() {
+                continue;
+            }
             routed += 1;
             assert_eq!(
                 Some(value.to_bits()),
@@ -791,8 +817,11 @@ mod tests {
             let count = own.count;
             for i in 0..count {
                 let (a, b) = (&own.points[i], &shared.points[i]);
-                assert_eq!((a.vertex, a.displacement), (b.vertex, b.displacement));
+                assert_eq!(a.vertex, b.vertex);
+                // The route's clip points (from double-double heights) have the tighter bound.
+                assert!(b.displacement <= a.displacement, "{k}: point {i}");
                 if a.vertex.is_some() {
+                    assert_eq!(a.displacement, b.displacement);
                     assert_eq!(a.hi, b.hi, "{k}: vertex {i}");
                 } else {
                     let apart = (a.hi - b.hi).length();

@@ -11,11 +11,12 @@
 //! fixed-end Hessian; [`clip_edge_derivs`] has the sum in closed form for an edge lying in the
 //! tangent plane, with no division by `x`'s distance `ρ` to the clip line. The other edges of the
 //! loop (triangle edges, possibly shortened to a clip point) are ordinary edges: Lambert's analytic
-//! terms ([`lambert::edge_derivatives`]) with [`lambert::triangle_derivs`]' acceptance rules:
-//! neither derivative sum cancelling by more than [`lambert::CANCELLATION`], and `sin β ≥ 1/4` per
-//! edge, relaxed to `1/32` for edges whose error growth below 1/4 is paid for in the cancellation
-//! test ([`MIN_SINE`]). Their error is then a few ulps of the largest (weighted) term, at most
-//! 100x the result's size.
+//! terms ([`lambert::edge_derivatives`]) down to `sin β = 1/32` ([`MIN_SINE`]; below 1/4 with
+//! their error growth paid for in the cancellation test), the robust path's moments below
+//! ([`robust_edge_term`]: a short edge far away, or `x` near an edge's line). Neither derivative
+//! sum may cancel by more than [`LOOP_CANCELLATION`] (1e5, against Lambert's unclipped 100: this
+//! loop serves the near-plane regime, whose contract is the hard regimes'). Their error is then a
+//! few ulps of the largest (weighted) term, at most 1e5 times the result's size.
 //!
 //! **Rounded clip points.** The loop's clip points are the f64 roundings of points on the
 //! triangle's edges within `δ` (a few `u‖E‖`) of the exact clip points. The line through them
@@ -47,16 +48,19 @@
 
 use glam::{DMat3, DVec3};
 
-use super::form_factor::{clip_edge_derivs, EdgeFrame};
-use super::lambert::{self, CANCELLATION, INV_2PI};
+use super::form_factor::{clip_edge_derivs, frame_term, EdgeFrame, ExactEnds};
+use super::lambert::{self, INV_2PI};
 use super::lambert_clipped::{ClippedLoop, LoopVertex};
 use crate::{Deriv3, Order};
 
 const U: f64 = 0.5 * f64::EPSILON;
 
 /// Largest accepted error, relative to the largest entry of the gradient (Hessian), from the
-/// clip points' displacement (module documentation): half the generic gradient contract.
-const MOVED_TOLERANCE: f64 = 5e-13;
+/// clip points' displacement (module documentation): 1/100 of the near-plane regime's gradient
+/// contract (1e-9), and of the order of what [`LOOP_CANCELLATION`] accepts from the terms' own
+/// rounding (the displacement of a route's clip point is its rounding to f64, `u` relative, so
+/// this test is that one for the clip point's edges).
+const MOVED_TOLERANCE: f64 = 1e-11;
 
 /// Smallest `sin β` of an ordinary edge of the loop at which the path is taken. Lambert's
 /// derivative path takes edges down to `sin β = 1/4` ([`lambert::triangle_derivs`]); the clipped
@@ -66,6 +70,20 @@ const MOVED_TOLERANCE: f64 = 5e-13;
 /// for the gradient and `1/sin³β` for the Hessian (see [`lambert::edge_derivatives`]'s terms): the
 /// same accepted error as Lambert's rule, with this floor.
 const MIN_SINE: f64 = 1.0 / 32.0;
+
+/// Largest ratio of the summed (weighted) magnitudes of the edge terms' gradient (Hessian) to the
+/// largest entry of their sum. Each term errs by a few ulps of its weighted size, so the sum keeps
+/// a few `u` times this ratio, ~1e-11 relative to its largest entry: 100x under the gradient and
+/// Hessian contract of the near-plane regime this loop serves (`|h_P|` below 1e-3 of the size:
+/// 1e-9 / 1e-8, the hard regimes'). Seen from outside, near the plane, the sums cancel by the
+/// visible part's smallness against its distance: over a spread of such configurations
+/// (`benches/kernels_regimes.rs`, `RADDIFF_REGIMES_MIX`) by 25x at the median, 860x at the 90th
+/// percentile and 4.7e4 at the 99th. Lambert's unclipped limit ([`lambert::CANCELLATION`], 100,
+/// set for the generic 1e-12 contract) sent a quarter of them to the robust path, which takes the
+/// same edge sums at any cancellation there while its near-plane split cancels by less than 1e3,
+/// and integrates by quadrature beyond (~55000 instructions). Measured against the 320-bit
+/// reference over that spread (`tests/kernels_b_near_plane.rs`): worst 1.1e-12 / 4.4e-14.
+const LOOP_CANCELLATION: f64 = 1e5;
 
 /// Value, gradient (and Hessian at [`Order::Hessian`]) of
 /// [`triangle_form_factor`](super::triangle_form_factor) over the clipped loop of
@@ -133,10 +151,12 @@ fn derivs_at<const N: usize>(clipped: &ClippedLoop<N>, order: Order) -> Option<D
         } else {
             let (g, h, sin2) =
                 lambert::edge_derivatives(n, a.hi, b.hi, e, clipped.angles[k], order);
-            if !(sin2 >= MIN_SINE * MIN_SINE) {
-                return None;
+            if sin2 >= MIN_SINE * MIN_SINE {
+                (g, h, (1.0 / (16.0 * sin2)).max(1.0))
+            } else {
+                let (g, h) = robust_edge_term(n, a, b, e, order)?;
+                (g, h, 1.0)
             }
-            (g, h, (1.0 / (16.0 * sin2)).max(1.0))
         };
         gradient += g;
         let g_size = g.abs().max_element();
@@ -155,12 +175,12 @@ fn derivs_at<const N: usize>(clipped: &ClippedLoop<N>, order: Order) -> Option<D
     // moves by about its degree plus one times its size per unit relative displacement of an
     // end: 4 covers both with a margin.
     let g_total = gradient.abs().max_element();
-    if !(g_mag <= CANCELLATION * g_total && 4.0 * moved <= MOVED_TOLERANCE * g_total) {
+    if !(g_mag <= LOOP_CANCELLATION * g_total && 4.0 * moved <= MOVED_TOLERANCE * g_total) {
         return None;
     }
     let h_total = max6(&hessian);
     if order.hessian()
-        && !(h_mag <= CANCELLATION * h_total && 4.0 * h_moved <= MOVED_TOLERANCE * h_total)
+        && !(h_mag <= LOOP_CANCELLATION * h_total && 4.0 * h_moved <= MOVED_TOLERANCE * h_total)
     {
         return None;
     }
@@ -181,6 +201,39 @@ fn derivs_at<const N: usize>(clipped: &ClippedLoop<N>, order: Order) -> Option<D
             DVec3::new(h[4], h[5], h[2]),
         ),
     })
+}
+
+/// `2π` times an ordinary edge's gradient and Hessian (six entries) as the robust path has them
+/// ([`frame_term`]: its moments keep a few ulps of the term at any `β`, by series where the edge
+/// is short against its distance and from the ends' exact differences where `x` is near its
+/// line), for the edges below [`MIN_SINE`], where Lambert's analytic terms lose `1/sin²β`
+/// (`1/sin³β`); `None` where the moments fail (the derivatives decline). Out of line: a few edges
+/// in a hundred take it.
+#[inline(never)]
+fn robust_edge_term(
+    n: DVec3,
+    a: &LoopVertex,
+    b: &LoopVertex,
+    e: DVec3,
+    order: Order,
+) -> Option<(DVec3, [f64; 6])> {
+    let (a_parts, b_parts) = (a.exact.split(), b.exact.split());
+    let ends = ExactEnds {
+        a: [a_parts.0, a_parts.1],
+        b: [b_parts.0, b_parts.1],
+    };
+    let Some(frame) = EdgeFrame::with_exact_ends(a.hi, e, Some(&ends)) else {
+        // A zero-length edge adds nothing.
+        return Some((DVec3::ZERO, [0.0; 6]));
+    };
+    let t = frame_term(&frame, n, order).ok()?;
+    let h = t.hessian * std::f64::consts::TAU;
+    Some((
+        t.gradient * std::f64::consts::TAU,
+        [
+            h.x_axis.x, h.y_axis.y, h.z_axis.z, h.y_axis.x, h.z_axis.x, h.z_axis.y,
+        ],
+    ))
 }
 
 /// `2π` times the clip edge's gradient and Hessian (six entries), clip-line motion included, from
@@ -435,6 +488,19 @@ mod tests {
                 continue;
             };
             if !is_outside || lambert_clipped::certified_loop(x, n, v).is_some() {
+                continue;
+            }
+            // A far-field visible part takes the far-field rule on the route's loop instead.
+            let mut route = crate::kernels::polygon::RouteLoop::new();
+            if crate::kernels::polygon::near_plane_clipped_triangle_value_and_loop(
+                x,
+                lambert::unit(n).unwrap(),
+                v,
+                &mut route,
+            )
+            .is_some()
+                && route.is_far()
+            {
                 continue;
             }
             let call = |order| crate::kernels::triangle_form_factor(x, n, v[0], v[1], v[2], order);

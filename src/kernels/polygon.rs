@@ -1579,6 +1579,55 @@ fn far_field(verts: &[ClipVertex], n: DVec3, order: Order, exact: bool, rule: Ru
     out
 }
 
+/// The near-plane routes' value where the visible part `verts` (their clipped loop) is far-field
+/// against its size: `evaluate`'s far-field branch (its `exact` set near the plane), before the
+/// split, signed by the exact height `h_p` and clamped as `evaluate` does; sets `far` for
+/// [`far_piece_derivs`]. `None` for a non-finite value.
+fn far_field_value(
+    verts: &[ClipVertex],
+    n: DVec3,
+    plane_normal: DVec3,
+    h_p: f64,
+    rule: Rule,
+    far: &mut Option<near_plane_triangle::FarPiece>,
+) -> Option<f64> {
+    let value = far_field(verts, n, Order::Value, true, rule).value;
+    *far = Some(near_plane_triangle::FarPiece {
+        rule,
+        n,
+        plane_normal,
+        h_p,
+    });
+    let value = if h_p < 0.0 { -value } else { value };
+    let value = value.clamp(0.0, 1.0);
+    value.is_finite().then_some(value)
+}
+
+/// Gradient and (at [`Order::Hessian`]) Hessian of the far-field rule on a near-plane route's
+/// loop where the route took it for the value (`route.far` set, see [`far_field_value`]), as
+/// `evaluate` has them (the clip line's Hessian term included), with `value` as the value; `None`
+/// where `route.far` is not set or they overflow. Per unit length (per squared length), in the
+/// units of the vertices.
+pub(crate) fn far_piece_derivs<const N: usize>(
+    route: &RouteLoop<N>,
+    value: f64,
+    order: Order,
+) -> Option<Deriv3> {
+    let far = route.far?;
+    let verts = &route.points[..route.count];
+    let mut d = far_field(verts, far.n, order, true, far.rule);
+    if far.h_p < 0.0 {
+        d.gradient = -d.gradient;
+        d.hessian = -d.hessian;
+    }
+    if order.hessian() {
+        d.hessian +=
+            clip_line_hessian(verts, far.n, far.plane_normal, far.h_p, false, false).ok()?;
+    }
+    d.value = value;
+    d.is_finite().then_some(d)
+}
+
 /// A triangle awaiting quadrature, with its [`fan_geometry`].
 type Piece = ([ClipVertex; 3], (DVec3, f64));
 

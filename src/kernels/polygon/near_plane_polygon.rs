@@ -9,8 +9,11 @@
 //! replays the decisions and operations of that evaluation which the split's result depends on,
 //! on fixed-size arrays, so that it returns the robust path's bits, and declines (`None`)
 //! wherever the robust path would not take the split for the value: `x` not near the plane,
-//! nothing clipped, the foot of `x` inside the clipped loop, the far field, a sliver, or the
-//! split itself declining.
+//! nothing clipped, the foot of `x` inside the clipped loop, a sliver, or the split itself
+//! declining. Where the visible part is far-field against its size (a small corner cut off,
+//! seen from afar), the robust path integrates it by its far-field rule instead of the split:
+//! so does the route, on its loop, and the derivative orders take the same rule's derivatives
+//! ([`far_piece_derivs`](super::far_piece_derivs)).
 //!
 //! What differs from the triangle's replay: the plane is Newell's sum over every edge (as
 //! [`Plane::new`] forms it; for a triangle it reduces to one cross product), validated for
@@ -32,7 +35,7 @@
 
 use glam::DVec3;
 
-use super::near_plane_triangle::{in_plane_edge, RouteLoop, CLIP_VERTEX_ZERO};
+use super::near_plane_triangle::{in_plane_edge, FarPiece, RouteLoop, CLIP_VERTEX_ZERO};
 use super::{
     edge_vector, exact_height_of, far_field_rule, foot_inside, near_plane_value, next, ClipVertex,
     Plane, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO, SPLIT_VALUE_LIMIT,
@@ -60,10 +63,10 @@ pub(crate) fn polygon_value<const M: usize, const N: usize>(
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx2_fma() {
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
-        return unsafe { split_fma::<M, N>(x, v, &s, &mut points, &mut [], &mut []) }
+        return unsafe { split_fma::<M, N>(x, v, &s, &mut points, &mut [], &mut [], &mut None) }
             .map(|(value, _, _)| value);
     }
-    split::<M, N>(x, v, &s, &mut points, &mut [], &mut []).map(|(value, _, _)| value)
+    split::<M, N>(x, v, &s, &mut points, &mut [], &mut [], &mut None).map(|(value, _, _)| value)
 }
 
 /// [`polygon_value`] with the exact signed height `h_P` of `x` over the polygon's plane (along
@@ -89,15 +92,16 @@ pub(crate) fn clipped_polygon_value_and_loop<const M: usize, const N: usize>(
         angles,
         edges,
         count,
+        far,
     } = out;
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx2_fma() {
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
-        let (value, h_p, k) = unsafe { split_fma::<M, N>(x, v, &s, points, angles, edges) }?;
+        let (value, h_p, k) = unsafe { split_fma::<M, N>(x, v, &s, points, angles, edges, far) }?;
         *count = k;
         return Some((value, h_p));
     }
-    let (value, h_p, k) = split::<M, N>(x, v, &s, points, angles, edges)?;
+    let (value, h_p, k) = split::<M, N>(x, v, &s, points, angles, edges, far)?;
     *count = k;
     Some((value, h_p))
 }
@@ -206,14 +210,16 @@ unsafe fn split_fma<const M: usize, const N: usize>(
     points: &mut [ClipVertex; N],
     angles: &mut [f64],
     edges: &mut [DVec3],
+    far: &mut Option<FarPiece>,
 ) -> Option<(f64, f64, usize)> {
-    split::<M, N>(x, v, s, points, angles, edges)
+    split::<M, N>(x, v, s, points, angles, edges, far)
 }
 
 /// The exact height, the clip (into `points`), the remaining decisions and the split itself:
 /// the value, the exact height and the loop's length; where `angles` and `edges` have entries,
 /// the loop's edges' angles (see `near_plane_value`) and the vectors of its edges off the
-/// tangent plane.
+/// tangent plane. Where the visible part is far-field, the far-field rule's value instead, and
+/// `far` set for [`far_piece_derivs`](super::far_piece_derivs).
 #[inline(always)]
 fn split<const M: usize, const N: usize>(
     x: DVec3,
@@ -222,6 +228,7 @@ fn split<const M: usize, const N: usize>(
     points: &mut [ClipVertex; N],
     angles: &mut [f64],
     edges: &mut [DVec3],
+    far: &mut Option<FarPiece>,
 ) -> Option<(f64, f64, usize)> {
     let Screened { r, u, n, plane } = s;
     let n = *n;
@@ -237,8 +244,9 @@ fn split<const M: usize, const N: usize>(
         .map(|v| (v.r - centroid).length_squared())
         .fold(0.0, f64::max)
         .sqrt();
-    if far_field_rule(centroid.length(), radius).is_some() {
-        return None;
+    if let Some(rule) = far_field_rule(centroid.length(), radius) {
+        let value = super::far_field_value(verts, n, plane.normal, h_p, rule, far)?;
+        return Some((value, h_p, count));
     }
     if foot_inside(verts, plane.normal, h_p) {
         return None;
@@ -369,6 +377,7 @@ mod tests {
                             &mut points,
                             &mut [],
                             &mut [],
+                            &mut None,
                         )
                     })
                     .map(|(f, _, _)| f),
@@ -382,6 +391,7 @@ mod tests {
                             &mut points,
                             &mut [],
                             &mut [],
+                            &mut None,
                         )
                     })
                     .map(|(f, _, _)| f),
@@ -395,6 +405,7 @@ mod tests {
                             &mut points,
                             &mut [],
                             &mut [],
+                            &mut None,
                         )
                     })
                     .map(|(f, _, _)| f),
@@ -408,6 +419,7 @@ mod tests {
                             &mut points,
                             &mut [],
                             &mut [],
+                            &mut None,
                         )
                     })
                     .map(|(f, _, _)| f),
@@ -417,7 +429,7 @@ mod tests {
                 portable.map(f64::to_bits),
                 "{k}: dispatch vs portable"
             );
-            let robust_takes = robust_takes_the_split(x, n, &v);
+            let robust_takes = robust_takes_the_split(x, n, &v, true);
             robust_split += usize::from(robust_takes);
             if let Some(f) = got {
                 taken += 1;
