@@ -1,38 +1,44 @@
-//! The sliver rule's sums, two nodes at a time.
+//! The sliver rule's sums, four nodes at a time.
 //!
 //! Why: the sliver rule evaluates its integrand at 50-60 nodes (13 or 14 along each piece of a
 //! sliver seen from about its length, 2 across), and the scalar loop body spent ~100 instructions
-//! per node on one `r` and its fifteen running sums. Two nodes with the same `t` and neighbouring
-//! `s` in the two lanes of a [`Pair`] take one packed instruction per operation for both. Each
-//! lane rounds as the scalar `f64` code would (no fused multiply-add), and the order of the
-//! operations does not depend on `GRADIENT` or `HESSIAN`, so the value is the same for every
-//! order, bit for bit, on every target.
+//! per node on one `r` and its fifteen running sums. Four nodes with the same `t` and consecutive
+//! `s` in the four lanes of a [`Quad`] take one packed instruction per operation in the AVX2
+//! build (two in the portable one). Each lane rounds as the scalar `f64` code would (no fused
+//! multiply-add), lane `l` sums the nodes `4k + l` of the rule along in the same order in both
+//! builds, and [`Quad::total`] adds the lanes in one tree: the builds give the same bits. The order
+//! of the operations does not depend on `GRADIENT` or `HESSIAN`, so the value is the same for
+//! every order, bit for bit, on every target.
 
 use glam::DVec3;
 
 use super::super::RuleSums;
-use crate::kernels::lanes::{Pair, V3};
+use super::quad::Quad;
+use crate::kernels::lanes::V3;
 
-/// The running sums of [`RuleSums`] per lane (lane 0 and lane 1 hold different nodes' terms).
+/// The running sums of [`RuleSums`] per lane (each lane holds different nodes' terms).
 #[derive(Clone, Copy)]
-pub(super) struct LaneSums {
-    q0: Pair,
-    s4: Pair,
-    u6: V3<Pair>,
-    v6: V3<Pair>,
-    s6: Pair,
-    second: [Pair; 6],
+pub(super) struct LaneSums<L> {
+    q0: L,
+    s4: L,
+    u6: V3<L>,
+    v6: V3<L>,
+    s6: L,
+    second: [L; 6],
 }
 
-/// A Gauss rule `(s, w)` on [0, 1] as [`LaneSums::add`] takes it: its nodes two at a time,
-/// `[s_a, s_b, w_a, w_b]`, an odd rule's last node paired with itself at weight zero (it adds
-/// zeros). Built once per rule: packing the pairs cost a few instructions per pair of nodes.
-pub(super) fn paired(rule: &[(f64, f64)]) -> Vec<[f64; 4]> {
-    rule.chunks(2)
+/// A Gauss rule `(s, w)` on [0, 1] as [`LaneSums::add`] takes it: its nodes four at a time,
+/// `[[s_a, s_b, s_c, s_d], [w_a, w_b, w_c, w_d]]`, the last group padded with copies of its first
+/// node at weight zero (they add zeros). Built once per rule.
+pub(super) fn quads(rule: &[(f64, f64)]) -> Vec<[[f64; 4]; 2]> {
+    rule.chunks(4)
         .map(|nodes| {
-            let (sa, wa) = nodes[0];
-            let (sb, wb) = nodes.get(1).copied().unwrap_or((sa, 0.0));
-            [sa, sb, wa, wb]
+            let mut group = [[nodes[0].0; 4], [0.0; 4]];
+            for (l, &(s, w)) in nodes.iter().enumerate() {
+                group[0][l] = s;
+                group[1][l] = w;
+            }
+            group
         })
         .collect()
 }
@@ -47,10 +53,10 @@ pub(super) struct PieceFrame {
     pub(super) part: f64,
 }
 
-impl LaneSums {
+impl<L: Quad> LaneSums<L> {
     #[inline(always)]
     pub(super) fn new() -> Self {
-        let zero = Pair::splat(0.0);
+        let zero = L::splat(0.0);
         let zero3 = V3::splat(DVec3::ZERO);
         LaneSums {
             q0: zero,
@@ -62,17 +68,17 @@ impl LaneSums {
         }
     }
 
-    /// Adds the tensor rule with `s_rule` along `s ∈ [s0, s1]` (as [`paired`] gives it) and
+    /// Adds the tensor rule with `s_rule` along `s ∈ [s0, s1]` (as [`quads`] gives it) and
     /// `t_rule` across (both on [0, 1]) on `piece`, for the receiver normal `n`: the sums
     /// `Σ w (n·r)/‖r‖⁴` and, with `GRADIENT`, `HESSIAN`, those of the derivatives (see
     /// [`RuleSums`]), each weight `w` being the node's `w_s·w_t·span·s·part` (`s` is the Duffy
-    /// map's Jacobian). Pairs of `s` nodes share a register.
+    /// map's Jacobian). Groups of four `s` nodes share a register.
     #[inline(always)]
     pub(super) fn add<const GRADIENT: bool, const HESSIAN: bool>(
         &mut self,
         piece: &PieceFrame,
-        n: &V3<Pair>,
-        (s0, s1, s_rule): (f64, f64, &[[f64; 4]]),
+        n: &V3<L>,
+        (s0, s1, s_rule): (f64, f64, &[[[f64; 4]; 2]]),
         t_rule: &[(f64, f64)],
     ) {
         let span = s1 - s0;
@@ -82,28 +88,28 @@ impl LaneSums {
             V3::splat(piece.ab),
             V3::splat(piece.bc),
         );
-        let (s0, span, scale) = (Pair::splat(s0), Pair::splat(span), Pair::splat(scale));
-        for &[sa, sb, wa, wb] in s_rule {
+        let (s0, span, scale) = (L::splat(s0), L::splat(span), L::splat(scale));
+        for [s_nodes, w_nodes] in s_rule {
             // Lane by lane the scalar `s0 + span·s_a` and `(w_a·scale)·s`.
-            let s = s0 + span * Pair::new(sa, sb);
-            let ws = Pair::new(wa, wb) * scale * s;
+            let s = s0 + span * L::from_array(s_nodes);
+            let ws = L::from_array(w_nodes) * scale * s;
             let base = r_p + ab.scale(s);
             for &(t, wt) in t_rule {
-                let r = base + bc.scale(s * Pair::splat(t));
-                self.node::<GRADIENT, HESSIAN>(r, n, ws * Pair::splat(wt));
+                let r = base + bc.scale(s * L::splat(t));
+                self.node::<GRADIENT, HESSIAN>(r, n, ws * L::splat(wt));
             }
         }
     }
 
-    /// One pair of nodes at `r` (relative to x) with weights `weight`.
+    /// Four nodes at `r` (relative to x) with weights `weight`.
     #[inline(always)]
     fn node<const GRADIENT: bool, const HESSIAN: bool>(
         &mut self,
-        r: V3<Pair>,
-        n: &V3<Pair>,
-        weight: Pair,
+        r: V3<L>,
+        n: &V3<L>,
+        weight: L,
     ) {
-        let inv2 = Pair::splat(1.0).div(r.dot(r));
+        let inv2 = L::splat(1.0).div(r.dot(r));
         let nr = n.dot(r);
         let w4 = weight * (inv2 * inv2);
         self.q0 = self.q0 + w4 * nr;
@@ -128,11 +134,11 @@ impl LaneSums {
         }
     }
 
-    /// The sums over both lanes.
+    /// The sums over the four lanes ([`Quad::total`]).
     #[inline(always)]
     pub(super) fn total(&self) -> RuleSums {
-        let sum = |p: Pair| p.get(0) + p.get(1);
-        let sum3 = |v: V3<Pair>| DVec3::new(sum(v.x), sum(v.y), sum(v.z));
+        let sum = |p: L| p.total();
+        let sum3 = |v: V3<L>| DVec3::new(sum(v.x), sum(v.y), sum(v.z));
         RuleSums {
             q0: sum(self.q0),
             s4: sum(self.s4),
@@ -147,6 +153,7 @@ impl LaneSums {
 #[cfg(test)]
 mod tests {
     use super::super::super::tensor_rule;
+    use super::super::quad::TwoPairs;
     use super::super::rules;
     use super::*;
     use crate::kernels::test_rng::lcg;
@@ -157,10 +164,10 @@ mod tests {
         n: DVec3,
         order: Order,
         geometry: (DVec3, f64),
-        along: (f64, f64, &[[f64; 4]]),
+        along: (f64, f64, &[[[f64; 4]; 2]]),
         t_rule: &[(f64, f64)],
     ) -> Deriv3 {
-        let mut sums = LaneSums::new();
+        let mut sums = LaneSums::<TwoPairs>::new();
         let n2 = V3::splat(n);
         match order {
             Order::Value => sums.add::<false, false>(piece, &n2, along, t_rule),
@@ -170,9 +177,9 @@ mod tests {
         sums.total().assemble(n, geometry, order)
     }
 
-    /// The paired sums agree with the scalar tensor rule (`polygon::tensor_rule`, one node at a
+    /// The grouped sums agree with the scalar tensor rule (`polygon::tensor_rule`, one node at a
     /// time, the piece's share on its geometry instead of its weights) to rounding, for every
-    /// rule along (odd ones pair their last node with a zero weight) and across, on sub-intervals,
+    /// rule along (padded with zero weights to a multiple of four) and across, on sub-intervals,
     /// at every order; and the value is the same, bit for bit, at every order.
     #[test]
     fn paired_sums_match_the_scalar_tensor_rule() {
@@ -194,7 +201,7 @@ mod tests {
                 (p.min(q), p.max(q))
             };
             let s_rule = rules().by_points[8 + k % 9];
-            let s_paired = rules().paired[8 + k % 9];
+            let s_paired = rules().quads[8 + k % 9];
             let t_rule = rules().by_points[[2, 3, 4, 8][k % 4]];
             let frame = PieceFrame { r_p, ab, bc, part };
             let mut value = None;
