@@ -210,7 +210,8 @@ mod tests {
                     portable.as_ref().map(|(d, _)| bits(d)),
                     fused.as_ref().map(|(d, _)| bits(d))
                 );
-                let portable = clipped_sliver_with::<TwoPairs>(&u, &r, &r_lo, n, order, &plane, h_p);
+                let portable =
+                    clipped_sliver_with::<TwoPairs>(&u, &r, &r_lo, n, order, &plane, h_p);
                 // SAFETY: as above.
                 let fused = unsafe { clipped_sliver_fma(&u, &r, &r_lo, n, order, &plane, h_p) };
                 assert_eq!(portable.as_ref().map(bits), fused.as_ref().map(bits));

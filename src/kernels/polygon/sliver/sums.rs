@@ -103,12 +103,7 @@ impl<L: Quad> LaneSums<L> {
 
     /// Four nodes at `r` (relative to x) with weights `weight`.
     #[inline(always)]
-    fn node<const GRADIENT: bool, const HESSIAN: bool>(
-        &mut self,
-        r: V3<L>,
-        n: &V3<L>,
-        weight: L,
-    ) {
+    fn node<const GRADIENT: bool, const HESSIAN: bool>(&mut self, r: V3<L>, n: &V3<L>, weight: L) {
         let inv2 = L::splat(1.0).div(r.dot(r));
         let nr = n.dot(r);
         let w4 = weight * (inv2 * inv2);
@@ -149,7 +144,14 @@ impl<L: Quad> LaneSums<L> {
             // closure called the AVX intrinsics as functions (~300 instructions per sliver).
             second: {
                 let q = &self.second;
-                [sum(q[0]), sum(q[1]), sum(q[2]), sum(q[3]), sum(q[4]), sum(q[5])]
+                [
+                    sum(q[0]),
+                    sum(q[1]),
+                    sum(q[2]),
+                    sum(q[3]),
+                    sum(q[4]),
+                    sum(q[5]),
+                ]
             },
         }
     }
