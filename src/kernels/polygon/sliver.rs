@@ -67,9 +67,8 @@ mod quad;
 mod sums;
 
 #[cfg(target_arch = "x86_64")]
-use quad::Wide;
-use quad::{Quad, TwoPairs};
-use sums::{LaneSums, PieceFrame};
+use sums::AvxSums;
+use sums::{GroupSums, PieceFrame, PortableSums};
 
 /// Most intervals along one piece before the sliver rule gives up (x too close to the sliver
 /// compared with its length; the isotropic subdivision takes over).
@@ -226,7 +225,7 @@ pub(super) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) ->
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
         return unsafe { sliver_quadrature_fma(verts, n, order) };
     }
-    sliver_quadrature_with::<TwoPairs>(verts, n, order)
+    sliver_quadrature_with::<PortableSums>(verts, n, order)
 }
 
 /// The signed form factor of a sliver cut by the receiver's tangent plane, from its visible part
@@ -253,7 +252,7 @@ pub(super) fn clipped_sliver_quadrature(
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
         return unsafe { clipped_sliver_quadrature_fma(verts, n, order) };
     }
-    clipped_sliver_quadrature_with::<TwoPairs>(verts, n, order)
+    clipped_sliver_quadrature_with::<PortableSums>(verts, n, order)
 }
 
 /// [`clipped_sliver_quadrature`] compiled with AVX2 and FMA (as [`sliver_quadrature_fma`]).
@@ -264,11 +263,11 @@ unsafe fn clipped_sliver_quadrature_fma(
     n: DVec3,
     order: Order,
 ) -> Option<(Deriv3, FanGeometry)> {
-    clipped_sliver_quadrature_with::<Wide>(verts, n, order)
+    clipped_sliver_quadrature_with::<AvxSums>(verts, n, order)
 }
 
 #[inline(always)]
-fn clipped_sliver_quadrature_with<L: Quad>(
+fn clipped_sliver_quadrature_with<S: GroupSums>(
     verts: &[ClipVertex],
     n: DVec3,
     order: Order,
@@ -276,7 +275,7 @@ fn clipped_sliver_quadrature_with<L: Quad>(
     let mut total = Deriv3::constant(0.0);
     let mut geometry = FanGeometry::default();
     for k in 1..verts.len().checked_sub(1)? {
-        let (d, g) = clipped::fan_triangle::<L>(&verts[0], &verts[k], &verts[k + 1], n, order)?;
+        let (d, g) = clipped::fan_triangle::<S>(&verts[0], &verts[k], &verts[k + 1], n, order)?;
         super::accumulate(&mut total, d);
         geometry.add(g);
     }
@@ -327,18 +326,22 @@ pub(super) fn visible_plane(verts: &[ClipVertex]) -> Option<(DVec3, f64)> {
 }
 
 /// [`sliver_quadrature`] compiled with AVX2 and FMA: the geometry's exact products are fused
-/// instead of calls to `fma`, and the sums take four nodes per AVX register ([`Wide`]) instead
-/// of two SSE2 registers. The same bits: the fused product is correctly rounded either way, the
-/// lanes round as the portable ones and are added in the same tree, and Rust fuses nothing else
-/// (unit-tested).
+/// instead of calls to `fma`, and the sums take four nodes per AVX register ([`AvxSums`])
+/// instead of two SSE2 registers. The same bits: the fused product is correctly rounded either way, the
+/// lanes round as the portable ones and are added in the same tree ([`sums`]), and Rust fuses
+/// nothing else (unit-tested).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn sliver_quadrature_fma(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {
-    sliver_quadrature_with::<Wide>(verts, n, order)
+    sliver_quadrature_with::<AvxSums>(verts, n, order)
 }
 
 #[inline(always)]
-fn sliver_quadrature_with<L: Quad>(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {
+fn sliver_quadrature_with<S: GroupSums>(
+    verts: &[ClipVertex],
+    n: DVec3,
+    order: Order,
+) -> Option<Deriv3> {
     if verts.len() != 3 {
         return None;
     }
@@ -367,9 +370,9 @@ fn sliver_quadrature_with<L: Quad>(verts: &[ClipVertex], n: DVec3, order: Order)
         }
     }
     let sums = match order {
-        Order::Value => rule_sums::<L, false, false>(&pieces, n),
-        Order::Gradient => rule_sums::<L, true, false>(&pieces, n),
-        Order::Hessian => rule_sums::<L, true, true>(&pieces, n),
+        Order::Value => rule_sums::<S, false, false>(&pieces, n),
+        Order::Gradient => rule_sums::<S, true, false>(&pieces, n),
+        Order::Hessian => rule_sums::<S, true, true>(&pieces, n),
     }?;
     Some(sums.assemble(n, sliver_geometry(a, b, c), order))
 }
@@ -378,14 +381,14 @@ fn sliver_quadrature_with<L: Quad>(verts: &[ClipVertex], n: DVec3, order: Order)
 /// that one assembly serves both), with the derivatives' sums as asked. `None` when a piece needs
 /// more than [`MAX_INTERVALS`] intervals.
 #[inline(always)]
-fn rule_sums<L: Quad, const GRADIENT: bool, const HESSIAN: bool>(
+fn rule_sums<S: GroupSums, const GRADIENT: bool, const HESSIAN: bool>(
     pieces: &[Option<(ThinPiece, f64)>; 2],
     n: DVec3,
 ) -> Option<RuleSums> {
-    let n = V3::<L>::splat(n);
-    let mut sums = LaneSums::<L>::new();
+    let n = V3::<S::Lane>::splat(n);
+    let mut sums = S::new();
     for (piece, part) in pieces.iter().flatten() {
-        piece.integrate::<L, GRADIENT, HESSIAN>(&mut sums, &n, *part)?;
+        piece.integrate::<S, GRADIENT, HESSIAN>(&mut sums, &n, *part)?;
     }
     Some(sums.total())
 }
@@ -515,11 +518,11 @@ impl ThinPiece {
 
     /// Adds the tensor rule on `s ∈ [s0, s1]` with `points` along to `sums`.
     #[inline(always)]
-    fn interval<L: Quad, const GRADIENT: bool, const HESSIAN: bool>(
+    fn interval<S: GroupSums, const GRADIENT: bool, const HESSIAN: bool>(
         &self,
-        sums: &mut LaneSums<L>,
+        sums: &mut S,
         frame: &PieceFrame,
-        n: &V3<L>,
+        n: &V3<S::Lane>,
         (s0, s1): (f64, f64),
         points: usize,
     ) {
@@ -535,10 +538,10 @@ impl ThinPiece {
     /// needs more than [`MAX_INTERVALS`] intervals. Intervals are bisected until a rule applies
     /// (depth first, right half first).
     #[inline(always)]
-    fn integrate<L: Quad, const GRADIENT: bool, const HESSIAN: bool>(
+    fn integrate<S: GroupSums, const GRADIENT: bool, const HESSIAN: bool>(
         &self,
-        sums: &mut LaneSums<L>,
-        n: &V3<L>,
+        sums: &mut S,
+        n: &V3<S::Lane>,
         part: f64,
     ) -> Option<()> {
         let frame = PieceFrame {
@@ -549,7 +552,7 @@ impl ThinPiece {
         };
         // x far compared with the length (the usual case): one interval, no stack to set up.
         if let Some(points) = self.along_points(0.0, 1.0) {
-            self.interval::<L, GRADIENT, HESSIAN>(sums, &frame, n, (0.0, 1.0), points);
+            self.interval::<S, GRADIENT, HESSIAN>(sums, &frame, n, (0.0, 1.0), points);
             return Some(());
         }
         let mut stack: [(f64, f64); MAX_INTERVALS] = [(0.0, 0.0); MAX_INTERVALS];
@@ -560,7 +563,7 @@ impl ThinPiece {
             top -= 1;
             let (s0, s1) = stack[top];
             if let Some(points) = self.along_points(s0, s1) {
-                self.interval::<L, GRADIENT, HESSIAN>(sums, &frame, n, (s0, s1), points);
+                self.interval::<S, GRADIENT, HESSIAN>(sums, &frame, n, (s0, s1), points);
                 used += 1;
                 continue;
             }
@@ -888,7 +891,7 @@ mod tests {
                 used[points] = true;
             }
             for order in [Order::Value, Order::Gradient, Order::Hessian] {
-                let portable = sliver_quadrature_with::<TwoPairs>(&t, n, order);
+                let portable = sliver_quadrature_with::<PortableSums>(&t, n, order);
                 // SAFETY: checked above that the CPU has AVX2 and FMA.
                 let fused = unsafe { sliver_quadrature_fma(&t, n, order) };
                 let bits = |d: &Deriv3| {

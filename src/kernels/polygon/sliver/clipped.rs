@@ -4,9 +4,10 @@ use glam::DVec3;
 
 use super::super::{clip, clip_line_hessian, ClipVertex, Plane, TriangleLoop};
 #[cfg(target_arch = "x86_64")]
-use super::Wide;
+use super::AvxSums;
 use super::{
-    clipped_sliver_quadrature_with, rule_sums, rules, sliver_geometry, Quad, ThinPiece, TwoPairs,
+    clipped_sliver_quadrature_with, rule_sums, rules, sliver_geometry, GroupSums, PortableSums,
+    ThinPiece,
 };
 use crate::{Deriv3, Order};
 
@@ -31,7 +32,7 @@ pub(super) fn clipped_sliver(
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
         return unsafe { clipped_sliver_fma(u, r, r_lo, n, order, plane, h_p) };
     }
-    clipped_sliver_with::<TwoPairs>(u, r, r_lo, n, order, plane, h_p)
+    clipped_sliver_with::<PortableSums>(u, r, r_lo, n, order, plane, h_p)
 }
 
 /// [`clipped_sliver`] compiled with AVX2 and FMA: the clip's double-double heights and points and
@@ -50,11 +51,11 @@ unsafe fn clipped_sliver_fma(
     plane: &Plane,
     h_p: f64,
 ) -> Option<Deriv3> {
-    clipped_sliver_with::<Wide>(u, r, r_lo, n, order, plane, h_p)
+    clipped_sliver_with::<AvxSums>(u, r, r_lo, n, order, plane, h_p)
 }
 
 #[inline(always)]
-fn clipped_sliver_with<L: Quad>(
+fn clipped_sliver_with<S: GroupSums>(
     u: &[DVec3; 3],
     r: &[DVec3; 3],
     r_lo: &[DVec3; 3],
@@ -71,7 +72,7 @@ fn clipped_sliver_with<L: Quad>(
     if verts.len() < 3 {
         return Some(Deriv3::constant(0.0));
     }
-    let (mut d, geometry) = clipped_sliver_quadrature_with::<L>(verts, n, order)?;
+    let (mut d, geometry) = clipped_sliver_quadrature_with::<S>(verts, n, order)?;
     // As `evaluate` finishes: the sign (of every field, zeros included), the clip line's term,
     // the clamp; only the fields the order computes can be non-finite.
     if h_p < 0.0 {
@@ -101,7 +102,7 @@ fn clipped_sliver_with<L: Quad>(
 /// triangle: the clip edge is as short as the sliver is wide, and the foot of its far vertex on
 /// the long side lies at its end. A quadrilateral visible part takes three pieces instead of four.
 #[inline(always)]
-pub(super) fn fan_triangle<L: Quad>(
+pub(super) fn fan_triangle<S: GroupSums>(
     v0: &ClipVertex,
     v1: &ClipVertex,
     v2: &ClipVertex,
@@ -144,9 +145,9 @@ pub(super) fn fan_triangle<L: Quad>(
         ];
     }
     let sums = match order {
-        Order::Value => rule_sums::<L, false, false>(&pieces, n),
-        Order::Gradient => rule_sums::<L, true, false>(&pieces, n),
-        Order::Hessian => rule_sums::<L, true, true>(&pieces, n),
+        Order::Value => rule_sums::<S, false, false>(&pieces, n),
+        Order::Gradient => rule_sums::<S, true, false>(&pieces, n),
+        Order::Hessian => rule_sums::<S, true, true>(&pieces, n),
     }?;
     let geometry = sliver_geometry(a, b, c);
     Some((sums.assemble(n, geometry, order), geometry))
@@ -203,7 +204,7 @@ mod tests {
             let h_p = plane.normal.dot(r[0]);
             for order in [Order::Value, Order::Gradient, Order::Hessian] {
                 let loop_ = clipped.as_slice();
-                let portable = clipped_sliver_quadrature_with::<TwoPairs>(loop_, n, order);
+                let portable = clipped_sliver_quadrature_with::<PortableSums>(loop_, n, order);
                 // SAFETY: checked above that the CPU has AVX2 and FMA.
                 let fused = unsafe { super::super::clipped_sliver_quadrature_fma(loop_, n, order) };
                 assert_eq!(
@@ -211,7 +212,7 @@ mod tests {
                     fused.as_ref().map(|(d, _)| bits(d))
                 );
                 let portable =
-                    clipped_sliver_with::<TwoPairs>(&u, &r, &r_lo, n, order, &plane, h_p);
+                    clipped_sliver_with::<PortableSums>(&u, &r, &r_lo, n, order, &plane, h_p);
                 // SAFETY: as above.
                 let fused = unsafe { clipped_sliver_fma(&u, &r, &r_lo, n, order, &plane, h_p) };
                 assert_eq!(portable.as_ref().map(bits), fused.as_ref().map(bits));

@@ -1,98 +1,31 @@
-//! Four lanes for the sliver rule's sums ([`sums`](super::sums)): two SSE2 registers in the
-//! portable build ([`TwoPairs`]), one AVX register in the AVX2+FMA build ([`Wide`]).
+//! Lanes for the sliver rule's sums ([`sums`](super::sums)): the four nodes of a group in one AVX
+//! register in the AVX2+FMA build ([`Wide`]), in two SSE2 registers in the portable build
+//! ([`Pair`], the group's halves summed one after the other).
 //!
 //! Why: the sums' node loop is about 40% of a sliver's instructions. In the AVX2 build one
 //! 256-bit instruction does what two 128-bit ones did, and one `vdivpd` serves four nodes. Both
-//! types round each lane as the scalar `f64` code would (no fused multiply-add), and
-//! [`Quad::total`] adds the four lanes in one tree for both, so the two builds give the same bits.
-
-use std::ops::{Add, Mul, Neg, Sub};
+//! round each lane as the scalar `f64` code would (no fused multiply-add), and the lanes are added
+//! in one tree, `(l0 + l1) + (l2 + l3)`, in both builds ([`Lanes::total`], then the halves' sums
+//! added in [`sums`](super::sums)), so the two builds give the same bits.
 
 use crate::kernels::lanes::{Lane, Pair};
 
-/// Four `f64` lanes operated on lane by lane.
-pub(super) trait Quad: Lane {
-    /// The lanes `[l0, l1, l2, l3]`.
-    fn from_array(lanes: &[f64; 4]) -> Self;
-    /// `(l0 + l1) + (l2 + l3)`, the same tree in every build.
+/// A few `f64` lanes operated on lane by lane, loaded from a group of four nodes.
+pub(super) trait Lanes: Lane {
+    /// The lanes `group[first..]` (two or four of them).
+    fn load(group: &[f64; 4], first: usize) -> Self;
+    /// The sum of the lanes: `l0 + l1`, or `(l0 + l1) + (l2 + l3)`.
     fn total(self) -> f64;
 }
 
-/// Two [`Pair`]s: lanes 0 and 1 in `lo`, 2 and 3 in `hi`.
-#[derive(Clone, Copy)]
-pub(super) struct TwoPairs {
-    lo: Pair,
-    hi: Pair,
-}
-
-impl Quad for TwoPairs {
+impl Lanes for Pair {
     #[inline(always)]
-    fn from_array(l: &[f64; 4]) -> Self {
-        TwoPairs {
-            lo: Pair::new(l[0], l[1]),
-            hi: Pair::new(l[2], l[3]),
-        }
+    fn load(group: &[f64; 4], first: usize) -> Self {
+        Pair::new(group[first], group[first + 1])
     }
     #[inline(always)]
     fn total(self) -> f64 {
-        (self.lo.get(0) + self.lo.get(1)) + (self.hi.get(0) + self.hi.get(1))
-    }
-}
-
-impl Lane for TwoPairs {
-    #[inline(always)]
-    fn splat(x: f64) -> Self {
-        TwoPairs {
-            lo: Pair::splat(x),
-            hi: Pair::splat(x),
-        }
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        TwoPairs {
-            lo: self.lo.abs(),
-            hi: self.hi.abs(),
-        }
-    }
-    #[inline(always)]
-    fn recip(self) -> Self {
-        Self::splat(1.0).div(self)
-    }
-    #[inline(always)]
-    fn div(self, d: Self) -> Self {
-        TwoPairs {
-            lo: self.lo.div(d.lo),
-            hi: self.hi.div(d.hi),
-        }
-    }
-}
-
-macro_rules! two_pairs_op {
-    ($trait:ident, $f:ident) => {
-        impl $trait for TwoPairs {
-            type Output = TwoPairs;
-            #[inline(always)]
-            fn $f(self, o: TwoPairs) -> TwoPairs {
-                TwoPairs {
-                    lo: self.lo.$f(o.lo),
-                    hi: self.hi.$f(o.hi),
-                }
-            }
-        }
-    };
-}
-two_pairs_op!(Add, add);
-two_pairs_op!(Sub, sub);
-two_pairs_op!(Mul, mul);
-
-impl Neg for TwoPairs {
-    type Output = TwoPairs;
-    #[inline(always)]
-    fn neg(self) -> TwoPairs {
-        TwoPairs {
-            lo: -self.lo,
-            hi: -self.hi,
-        }
+        self.get(0) + self.get(1)
     }
 }
 
@@ -107,7 +40,7 @@ mod wide {
     use std::arch::x86_64::*;
     use std::ops::{Add, Mul, Neg, Sub};
 
-    use super::Quad;
+    use super::Lanes;
     use crate::kernels::lanes::Lane;
 
     /// An AVX intrinsic call. SAFETY: `Wide` is used only inside functions compiled with AVX2 and
@@ -121,10 +54,10 @@ mod wide {
     #[derive(Clone, Copy)]
     pub(in super::super) struct Wide(__m256d);
 
-    impl Quad for Wide {
+    impl Lanes for Wide {
         #[inline(always)]
-        fn from_array(l: &[f64; 4]) -> Self {
-            Wide(avx!(_mm256_loadu_pd(l.as_ptr())))
+        fn load(group: &[f64; 4], _first: usize) -> Self {
+            Wide(avx!(_mm256_loadu_pd(group.as_ptr())))
         }
         #[inline(always)]
         fn total(self) -> f64 {
@@ -193,22 +126,29 @@ mod tests {
     use super::*;
     use crate::kernels::test_rng::lcg;
 
-    /// Every operation of [`TwoPairs`] rounds each lane as the scalar `f64` code does, and
-    /// [`Quad::total`] adds the lanes as `(l0 + l1) + (l2 + l3)`: checked bit for bit against
-    /// scalar arithmetic on random operands of mixed signs and magnitudes 1e-150..1e150, and the
-    /// AVX build ([`Wide`], where the CPU has AVX2 and FMA) against the same scalars.
+    /// Every operation of [`Pair`] (both halves of a group) and of [`Wide`] (where the CPU has AVX2
+    /// and FMA) rounds each lane as the scalar `f64` code does, and the lanes are added as
+    /// `(l0 + l1) + (l2 + l3)`: checked bit for bit against scalar arithmetic on random operands
+    /// of mixed signs and magnitudes 1e-150..1e150.
     #[test]
     fn lanes_round_as_scalar_code() {
-        fn ops<L: Quad>(a: &[f64; 4], b: &[f64; 4]) -> [f64; 7] {
-            let (x, y) = (L::from_array(a), L::from_array(b));
+        // The group's lanes as the sums add them: one register (`firsts` = [0]), or two halves
+        // summed apart ([0, 2]).
+        fn ops<L: Lanes>(a: &[f64; 4], b: &[f64; 4], firsts: &[usize]) -> [f64; 7] {
+            let each = |f: &dyn Fn(L, L) -> L| {
+                let part = |first| f(L::load(a, first), L::load(b, first)).total();
+                firsts[1..]
+                    .iter()
+                    .fold(part(firsts[0]), |sum, &first| sum + part(first))
+            };
             [
-                (x + y).total(),
-                (x - y).total(),
-                (x * y).total(),
-                x.div(y).total(),
-                y.recip().total(),
-                (-x).abs().total(),
-                L::splat(a[0]).total(),
+                each(&|x, y| x + y),
+                each(&|x, y| x - y),
+                each(&|x, y| x * y),
+                each(&|x, y| x.div(y)),
+                each(&|_, y| y.recip()),
+                each(&|x, _| (-x).abs()),
+                each(&|_, _| L::splat(a[0])),
             ]
         }
         fn scalar(a: &[f64; 4], b: &[f64; 4]) -> [f64; 7] {
@@ -226,7 +166,7 @@ mod tests {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2,fma")]
         unsafe fn wide_ops(a: &[f64; 4], b: &[f64; 4]) -> [f64; 7] {
-            ops::<Wide>(a, b)
+            ops::<Wide>(a, b, &[0])
         }
         let mut state = 1829;
         for _ in 0..2000 {
@@ -237,7 +177,7 @@ mod tests {
             let a = [c(), c(), c(), c()];
             let b = [c(), c(), c(), c()];
             let expected = scalar(&a, &b).map(f64::to_bits);
-            assert_eq!(ops::<TwoPairs>(&a, &b).map(f64::to_bits), expected);
+            assert_eq!(ops::<Pair>(&a, &b, &[0, 2]).map(f64::to_bits), expected);
             #[cfg(target_arch = "x86_64")]
             if crate::simd::avx2_fma() {
                 // SAFETY: checked just above that the CPU has AVX2 and FMA.

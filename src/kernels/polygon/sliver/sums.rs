@@ -3,18 +3,120 @@
 //! Why: the sliver rule evaluates its integrand at 50-60 nodes (13 or 14 along each piece of a
 //! sliver seen from about its length, 2 across), and the scalar loop body spent ~100 instructions
 //! per node on one `r` and its fifteen running sums. Four nodes with the same `t` and consecutive
-//! `s` in the four lanes of a [`Quad`] take one packed instruction per operation in the AVX2
-//! build (two in the portable one). Each lane rounds as the scalar `f64` code would (no fused
-//! multiply-add), lane `l` sums the nodes `4k + l` of the rule along in the same order in both
-//! builds, and [`Quad::total`] adds the lanes in one tree: the builds give the same bits. The order
-//! of the operations does not depend on `GRADIENT` or `HESSIAN`, so the value is the same for
-//! every order, bit for bit, on every target.
+//! `s` (a group) in the four lanes of an AVX register ([`Wide`]) take one packed instruction per
+//! operation in the AVX2 build ([`AvxSums`]). The portable build ([`PortableSums`]) takes each
+//! group's halves in two SSE2 [`Pair`]s with their own running sums, one half after the other
+//! (fifteen sums live at a time, as many as two lanes had, where four lanes side by side spilled
+//! twice as many), and skips a last half that is all padding. Each lane rounds as the scalar `f64`
+//! code would (no fused multiply-add), lane `l` sums the nodes `4k + l` of the rule along in the
+//! same order in both builds (a skipped padding node would have added an exact zero, which
+//! changes no sum: the sums start at +0 and a sum of finite terms is never −0), and the lanes are
+//! added in one tree, `(l0 + l1) + (l2 + l3)`: the builds give the same bits. The order of the
+//! operations does not depend on `GRADIENT` or `HESSIAN`, so the value is the same for every
+//! order, bit for bit, on every target.
 
 use glam::DVec3;
 
 use super::super::RuleSums;
-use super::quad::Quad;
-use crate::kernels::lanes::V3;
+use super::quad::Lanes;
+#[cfg(target_arch = "x86_64")]
+use super::quad::Wide;
+use crate::kernels::lanes::{Pair, V3};
+
+/// The sums of a rule over groups of four nodes, as one build takes them.
+pub(super) trait GroupSums {
+    /// One register's lanes.
+    type Lane: Lanes;
+    fn new() -> Self;
+    /// As [`LaneSums::add`], for all four lanes of every group.
+    fn add<const GRADIENT: bool, const HESSIAN: bool>(
+        &mut self,
+        piece: &PieceFrame,
+        n: &V3<Self::Lane>,
+        along: (f64, f64, &[[[f64; 4]; 2]]),
+        t_rule: &[(f64, f64)],
+    );
+    /// The sums over the lanes, `(l0 + l1) + (l2 + l3)`.
+    fn total(&self) -> RuleSums;
+}
+
+/// The AVX2 build's sums: four lanes per register.
+#[cfg(target_arch = "x86_64")]
+pub(super) type AvxSums = LaneSums<Wide>;
+
+#[cfg(target_arch = "x86_64")]
+impl GroupSums for LaneSums<Wide> {
+    type Lane = Wide;
+    #[inline(always)]
+    fn new() -> Self {
+        LaneSums::zero()
+    }
+    #[inline(always)]
+    fn add<const GRADIENT: bool, const HESSIAN: bool>(
+        &mut self,
+        piece: &PieceFrame,
+        n: &V3<Wide>,
+        along: (f64, f64, &[[[f64; 4]; 2]]),
+        t_rule: &[(f64, f64)],
+    ) {
+        self.add_lanes::<GRADIENT, HESSIAN>(piece, n, along, t_rule, 0);
+    }
+    #[inline(always)]
+    fn total(&self) -> RuleSums {
+        self.lane_totals()
+    }
+}
+
+/// The portable build's sums: lanes 0 and 1 of each group in `lo`, 2 and 3 in `hi`.
+#[derive(Clone, Copy)]
+pub(super) struct PortableSums {
+    lo: LaneSums<Pair>,
+    hi: LaneSums<Pair>,
+}
+
+impl GroupSums for PortableSums {
+    type Lane = Pair;
+    #[inline(always)]
+    fn new() -> Self {
+        PortableSums {
+            lo: LaneSums::zero(),
+            hi: LaneSums::zero(),
+        }
+    }
+    #[inline(always)]
+    fn add<const GRADIENT: bool, const HESSIAN: bool>(
+        &mut self,
+        piece: &PieceFrame,
+        n: &V3<Pair>,
+        along: (f64, f64, &[[[f64; 4]; 2]]),
+        t_rule: &[(f64, f64)],
+    ) {
+        self.lo
+            .add_lanes::<GRADIENT, HESSIAN>(piece, n, along, t_rule, 0);
+        self.hi
+            .add_lanes::<GRADIENT, HESSIAN>(piece, n, along, t_rule, 2);
+    }
+    #[inline(always)]
+    fn total(&self) -> RuleSums {
+        let (lo, hi) = (self.lo.lane_totals(), self.hi.lane_totals());
+        let second = |k: usize| lo.second[k] + hi.second[k];
+        RuleSums {
+            q0: lo.q0 + hi.q0,
+            s4: lo.s4 + hi.s4,
+            u6: lo.u6 + hi.u6,
+            v6: lo.v6 + hi.v6,
+            s6: lo.s6 + hi.s6,
+            second: [
+                second(0),
+                second(1),
+                second(2),
+                second(3),
+                second(4),
+                second(5),
+            ],
+        }
+    }
+}
 
 /// The running sums of [`RuleSums`] per lane (each lane holds different nodes' terms).
 #[derive(Clone, Copy)]
@@ -53,9 +155,9 @@ pub(super) struct PieceFrame {
     pub(super) part: f64,
 }
 
-impl<L: Quad> LaneSums<L> {
+impl<L: Lanes> LaneSums<L> {
     #[inline(always)]
-    pub(super) fn new() -> Self {
+    fn zero() -> Self {
         let zero = L::splat(0.0);
         let zero3 = V3::splat(DVec3::ZERO);
         LaneSums {
@@ -72,14 +174,17 @@ impl<L: Quad> LaneSums<L> {
     /// `t_rule` across (both on [0, 1]) on `piece`, for the receiver normal `n`: the sums
     /// `Σ w (n·r)/‖r‖⁴` and, with `GRADIENT`, `HESSIAN`, those of the derivatives (see
     /// [`RuleSums`]), each weight `w` being the node's `w_s·w_t·span·s·part` (`s` is the Duffy
-    /// map's Jacobian). Groups of four `s` nodes share a register.
+    /// map's Jacobian). The lanes `first..first + L::WIDTH` of each group of four `s` nodes share
+    /// a register; a half (`first` = 2) whose first node is padding is skipped (module
+    /// documentation).
     #[inline(always)]
-    pub(super) fn add<const GRADIENT: bool, const HESSIAN: bool>(
+    fn add_lanes<const GRADIENT: bool, const HESSIAN: bool>(
         &mut self,
         piece: &PieceFrame,
         n: &V3<L>,
         (s0, s1, s_rule): (f64, f64, &[[[f64; 4]; 2]]),
         t_rule: &[(f64, f64)],
+        first: usize,
     ) {
         let span = s1 - s0;
         let scale = span * piece.part;
@@ -90,9 +195,13 @@ impl<L: Quad> LaneSums<L> {
         );
         let (s0, span, scale) = (L::splat(s0), L::splat(span), L::splat(scale));
         for [s_nodes, w_nodes] in s_rule {
+            // Padding comes last in a group, and only in the last group.
+            if first > 0 && w_nodes[first] == 0.0 {
+                break;
+            }
             // Lane by lane the scalar `s0 + span·s_a` and `(w_a·scale)·s`.
-            let s = s0 + span * L::from_array(s_nodes);
-            let ws = L::from_array(w_nodes) * scale * s;
+            let s = s0 + span * L::load(s_nodes, first);
+            let ws = L::load(w_nodes, first) * scale * s;
             let base = r_p + ab.scale(s);
             for &(t, wt) in t_rule {
                 let r = base + bc.scale(s * L::splat(t));
@@ -101,7 +210,7 @@ impl<L: Quad> LaneSums<L> {
         }
     }
 
-    /// Four nodes at `r` (relative to x) with weights `weight`.
+    /// A register's nodes at `r` (relative to x) with weights `weight`.
     #[inline(always)]
     fn node<const GRADIENT: bool, const HESSIAN: bool>(&mut self, r: V3<L>, n: &V3<L>, weight: L) {
         let inv2 = L::splat(1.0).div(r.dot(r));
@@ -129,9 +238,9 @@ impl<L: Quad> LaneSums<L> {
         }
     }
 
-    /// The sums over the four lanes ([`Quad::total`]).
+    /// The sums over the lanes ([`Lanes::total`]).
     #[inline(always)]
-    pub(super) fn total(&self) -> RuleSums {
+    fn lane_totals(&self) -> RuleSums {
         let sum = |p: L| p.total();
         let sum3 = |v: V3<L>| DVec3::new(sum(v.x), sum(v.y), sum(v.z));
         RuleSums {
@@ -160,7 +269,6 @@ impl<L: Quad> LaneSums<L> {
 #[cfg(test)]
 mod tests {
     use super::super::super::tensor_rule;
-    use super::super::quad::TwoPairs;
     use super::super::rules;
     use super::*;
     use crate::kernels::test_rng::lcg;
@@ -174,7 +282,7 @@ mod tests {
         along: (f64, f64, &[[[f64; 4]; 2]]),
         t_rule: &[(f64, f64)],
     ) -> Deriv3 {
-        let mut sums = LaneSums::<TwoPairs>::new();
+        let mut sums = PortableSums::new();
         let n2 = V3::splat(n);
         match order {
             Order::Value => sums.add::<false, false>(piece, &n2, along, t_rule),
