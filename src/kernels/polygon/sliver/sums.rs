@@ -10,7 +10,8 @@
 //! twice as many), and skips a last half that is all padding. Each lane rounds as the scalar `f64`
 //! code would (no fused multiply-add), lane `l` sums the nodes `4k + l` of the rule along in the
 //! same order in both builds (a skipped padding node would have added an exact zero, which
-//! changes no sum: the sums start at +0 and a sum of finite terms is never −0), and the lanes are
+//! changes no sum: the sums start at +0, and a sum rounded to nearest is −0 only when both of
+//! its terms are), and the lanes are
 //! added in one tree, `(l0 + l1) + (l2 + l3)`: the builds give the same bits. The order of the
 //! operations does not depend on `GRADIENT` or `HESSIAN`, so the value is the same for every
 //! order, bit for bit, on every target.
@@ -28,7 +29,7 @@ pub(super) trait GroupSums {
     /// One register's lanes.
     type Lane: Lanes;
     fn new() -> Self;
-    /// As [`LaneSums::add`], for all four lanes of every group.
+    /// As [`LaneSums::add_lanes`], for all four lanes of every group.
     fn add<const GRADIENT: bool, const HESSIAN: bool>(
         &mut self,
         piece: &PieceFrame,
