@@ -1448,7 +1448,7 @@ pub(crate) fn triangle_rule(
 /// [`triangle_rule`] restricted to `s ∈ [s0, s1]` (the part of the triangle between two lines
 /// parallel to `bc`), with Gauss rules `s_rule` along `s` and `t_rule` along `t`. With `[0, 1]`
 /// the nodes and weights are exactly those of `s_rule`, so [`triangle_rule`] is unchanged bit for
-/// bit. (The sliver rule sums the same integrand two nodes at a time, in `sliver::sums`.)
+/// bit. (The sliver rule sums the same integrand four nodes at a time, in `sliver::sums`.)
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn tensor_rule(

@@ -12,7 +12,7 @@
 //! `q₁q₂` the short edge `fc`. Their `(2·area·N̂, 2·area·N̂·r)` are the shares `t_f` and `1 − t_f`
 //! (`f = a + t_f·ab`) of the whole triangle's, taken from the exact differences; the shares go
 //! into the pieces' weights, so that both pieces add to one set of sums, assembled once. The sums
-//! run two nodes at a time ([`sums`]).
+//! run four nodes at a time ([`sums`]).
 //!
 //! Error bound (per direction; the tensor rule's error is at most their sum). The integrands
 //! `(n·r)/‖r‖⁴ … (n·r) r rᵀ/‖r‖⁸` are analytic along any line except at the two complex zeros of
@@ -33,8 +33,9 @@
 //! from the segment of length `≤ w`. Every rule between 8 and 24 points is used: a seen-from-afar
 //! piece (ρ ≈ 6 for x a length away) takes 13 or 14 points instead of 16, and a piece seen from
 //! about its own length (ρ 2.84..4.5) one rule of 18 to 24 points instead of two halves of 12 to
-//! 16 (the rules above 16 are even: the sums take nodes two at a time, so an odd rule costs as
-//! much as the next even one). Each threshold is tested as its ellipse ([`semi_axes`]), which
+//! 16 (the rules above 16 are even; the sums take nodes four at a time, so 13 to 16 points cost
+//! the same four groups, and the smaller rules are kept for their thresholds' sake: the table is
+//! the error bound's, unchanged). Each threshold is tested as its ellipse ([`semi_axes`]), which
 //! needs no square root.
 //!
 //! One rule for every order. The value's poles have order 2, so the value alone could use lower
@@ -58,13 +59,16 @@ use super::{
     far_rule_of, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3, gauss_legendre_4,
     gauss_legendre_8, legendre_rule, plane_height, triangle_plane, ClipVertex, RuleSums,
 };
-use crate::kernels::lanes::{Pair, V3};
+use crate::kernels::lanes::V3;
 use crate::{Deriv3, Order};
 
 mod clipped;
+mod quad;
 mod sums;
 
-use sums::{LaneSums, PieceFrame};
+#[cfg(target_arch = "x86_64")]
+use sums::AvxSums;
+use sums::{GroupSums, PieceFrame, PortableSums};
 
 /// Most intervals along one piece before the sliver rule gives up (x too close to the sliver
 /// compared with its length; the isotropic subdivision takes over).
@@ -124,8 +128,8 @@ fn rule(points: usize) -> &'static [(f64, f64)] {
 struct Rules {
     /// The rules by their number of points (empty elsewhere).
     by_points: [&'static [(f64, f64)]; 25],
-    /// The rules along by their number of points, as the sums take them ([`sums::paired`]).
-    paired: [&'static [[f64; 4]]; 25],
+    /// The rules along by their number of points, as the sums take them ([`sums::quads`]).
+    quads: [&'static [[[f64; 4]; 2]]; 25],
     /// [`ALONG`] as `(1/a², 1/b², points)` with `a`, `b` the semi-axes of the threshold's
     /// ellipse ([`semi_axes`]).
     along: [(f64, f64, usize); ALONG.len()],
@@ -140,14 +144,14 @@ fn rules() -> &'static Rules {
         for &(_, points) in ALONG.iter().chain(&ACROSS) {
             by_points[points] = rule(points);
         }
-        let mut paired: [&'static [[f64; 4]]; 25] = [&[]; 25];
+        let mut quads: [&'static [[[f64; 4]; 2]]; 25] = [&[]; 25];
         for &(_, points) in &ALONG {
             // Built once per process and kept for it.
-            paired[points] = Box::leak(sums::paired(by_points[points]).into_boxed_slice());
+            quads[points] = Box::leak(sums::quads(by_points[points]).into_boxed_slice());
         }
         Rules {
             by_points,
-            paired,
+            quads,
             along: ALONG.map(|(rho, points)| {
                 let (a, b) = semi_axes(rho);
                 (1.0 / (a * a), 1.0 / (b * b), points)
@@ -221,7 +225,7 @@ pub(super) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) ->
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
         return unsafe { sliver_quadrature_fma(verts, n, order) };
     }
-    sliver_quadrature_with(verts, n, order)
+    sliver_quadrature_with::<PortableSums>(verts, n, order)
 }
 
 /// The signed form factor of a sliver cut by the receiver's tangent plane, from its visible part
@@ -248,7 +252,7 @@ pub(super) fn clipped_sliver_quadrature(
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
         return unsafe { clipped_sliver_quadrature_fma(verts, n, order) };
     }
-    clipped_sliver_quadrature_with(verts, n, order)
+    clipped_sliver_quadrature_with::<PortableSums>(verts, n, order)
 }
 
 /// [`clipped_sliver_quadrature`] compiled with AVX2 and FMA (as [`sliver_quadrature_fma`]).
@@ -259,11 +263,11 @@ unsafe fn clipped_sliver_quadrature_fma(
     n: DVec3,
     order: Order,
 ) -> Option<(Deriv3, FanGeometry)> {
-    clipped_sliver_quadrature_with(verts, n, order)
+    clipped_sliver_quadrature_with::<AvxSums>(verts, n, order)
 }
 
 #[inline(always)]
-fn clipped_sliver_quadrature_with(
+fn clipped_sliver_quadrature_with<S: GroupSums>(
     verts: &[ClipVertex],
     n: DVec3,
     order: Order,
@@ -271,7 +275,7 @@ fn clipped_sliver_quadrature_with(
     let mut total = Deriv3::constant(0.0);
     let mut geometry = FanGeometry::default();
     for k in 1..verts.len().checked_sub(1)? {
-        let (d, g) = clipped::fan_triangle(&verts[0], &verts[k], &verts[k + 1], n, order)?;
+        let (d, g) = clipped::fan_triangle::<S>(&verts[0], &verts[k], &verts[k + 1], n, order)?;
         super::accumulate(&mut total, d);
         geometry.add(g);
     }
@@ -322,17 +326,22 @@ pub(super) fn visible_plane(verts: &[ClipVertex]) -> Option<(DVec3, f64)> {
 }
 
 /// [`sliver_quadrature`] compiled with AVX2 and FMA: the geometry's exact products are fused
-/// instead of calls to `fma`, and the paired sums take three-operand instructions instead of
-/// register copies. The same bits: the fused product is correctly rounded either way, and Rust
-/// fuses nothing else (unit-tested).
+/// instead of calls to `fma`, and the sums take four nodes per AVX register ([`AvxSums`])
+/// instead of two SSE2 registers. The same bits: the fused product is correctly rounded either way, the
+/// lanes round as the portable ones and are added in the same tree ([`sums`]), and Rust fuses
+/// nothing else (unit-tested).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn sliver_quadrature_fma(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {
-    sliver_quadrature_with(verts, n, order)
+    sliver_quadrature_with::<AvxSums>(verts, n, order)
 }
 
 #[inline(always)]
-fn sliver_quadrature_with(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {
+fn sliver_quadrature_with<S: GroupSums>(
+    verts: &[ClipVertex],
+    n: DVec3,
+    order: Order,
+) -> Option<Deriv3> {
     if verts.len() != 3 {
         return None;
     }
@@ -361,9 +370,9 @@ fn sliver_quadrature_with(verts: &[ClipVertex], n: DVec3, order: Order) -> Optio
         }
     }
     let sums = match order {
-        Order::Value => rule_sums::<false, false>(&pieces, n),
-        Order::Gradient => rule_sums::<true, false>(&pieces, n),
-        Order::Hessian => rule_sums::<true, true>(&pieces, n),
+        Order::Value => rule_sums::<S, false, false>(&pieces, n),
+        Order::Gradient => rule_sums::<S, true, false>(&pieces, n),
+        Order::Hessian => rule_sums::<S, true, true>(&pieces, n),
     }?;
     Some(sums.assemble(n, sliver_geometry(a, b, c), order))
 }
@@ -372,14 +381,14 @@ fn sliver_quadrature_with(verts: &[ClipVertex], n: DVec3, order: Order) -> Optio
 /// that one assembly serves both), with the derivatives' sums as asked. `None` when a piece needs
 /// more than [`MAX_INTERVALS`] intervals.
 #[inline(always)]
-fn rule_sums<const GRADIENT: bool, const HESSIAN: bool>(
+fn rule_sums<S: GroupSums, const GRADIENT: bool, const HESSIAN: bool>(
     pieces: &[Option<(ThinPiece, f64)>; 2],
     n: DVec3,
 ) -> Option<RuleSums> {
-    let n = V3::<Pair>::splat(n);
-    let mut sums = LaneSums::new();
+    let n = V3::<S::Lane>::splat(n);
+    let mut sums = S::new();
     for (piece, part) in pieces.iter().flatten() {
-        piece.integrate::<GRADIENT, HESSIAN>(&mut sums, &n, *part)?;
+        piece.integrate::<S, GRADIENT, HESSIAN>(&mut sums, &n, *part)?;
     }
     Some(sums.total())
 }
@@ -509,15 +518,15 @@ impl ThinPiece {
 
     /// Adds the tensor rule on `s ∈ [s0, s1]` with `points` along to `sums`.
     #[inline(always)]
-    fn interval<const GRADIENT: bool, const HESSIAN: bool>(
+    fn interval<S: GroupSums, const GRADIENT: bool, const HESSIAN: bool>(
         &self,
-        sums: &mut LaneSums,
+        sums: &mut S,
         frame: &PieceFrame,
-        n: &V3<Pair>,
+        n: &V3<S::Lane>,
         (s0, s1): (f64, f64),
         points: usize,
     ) {
-        let along = (s0, s1, self.rules.paired[points]);
+        let along = (s0, s1, self.rules.quads[points]);
         // A fixed-length rule across lets the inlined loop unroll it (the same operations).
         match self.t_rule {
             &[t0, t1] => sums.add::<GRADIENT, HESSIAN>(frame, n, along, &[t0, t1]),
@@ -529,10 +538,10 @@ impl ThinPiece {
     /// needs more than [`MAX_INTERVALS`] intervals. Intervals are bisected until a rule applies
     /// (depth first, right half first).
     #[inline(always)]
-    fn integrate<const GRADIENT: bool, const HESSIAN: bool>(
+    fn integrate<S: GroupSums, const GRADIENT: bool, const HESSIAN: bool>(
         &self,
-        sums: &mut LaneSums,
-        n: &V3<Pair>,
+        sums: &mut S,
+        n: &V3<S::Lane>,
         part: f64,
     ) -> Option<()> {
         let frame = PieceFrame {
@@ -543,7 +552,7 @@ impl ThinPiece {
         };
         // x far compared with the length (the usual case): one interval, no stack to set up.
         if let Some(points) = self.along_points(0.0, 1.0) {
-            self.interval::<GRADIENT, HESSIAN>(sums, &frame, n, (0.0, 1.0), points);
+            self.interval::<S, GRADIENT, HESSIAN>(sums, &frame, n, (0.0, 1.0), points);
             return Some(());
         }
         let mut stack: [(f64, f64); MAX_INTERVALS] = [(0.0, 0.0); MAX_INTERVALS];
@@ -554,7 +563,7 @@ impl ThinPiece {
             top -= 1;
             let (s0, s1) = stack[top];
             if let Some(points) = self.along_points(s0, s1) {
-                self.interval::<GRADIENT, HESSIAN>(sums, &frame, n, (s0, s1), points);
+                self.interval::<S, GRADIENT, HESSIAN>(sums, &frame, n, (s0, s1), points);
                 used += 1;
                 continue;
             }
@@ -882,7 +891,7 @@ mod tests {
                 used[points] = true;
             }
             for order in [Order::Value, Order::Gradient, Order::Hessian] {
-                let portable = sliver_quadrature_with(&t, n, order);
+                let portable = sliver_quadrature_with::<PortableSums>(&t, n, order);
                 // SAFETY: checked above that the CPU has AVX2 and FMA.
                 let fused = unsafe { sliver_quadrature_fma(&t, n, order) };
                 let bits = |d: &Deriv3| {

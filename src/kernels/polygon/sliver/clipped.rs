@@ -3,7 +3,12 @@
 use glam::DVec3;
 
 use super::super::{clip, clip_line_hessian, ClipVertex, Plane, TriangleLoop};
-use super::{clipped_sliver_quadrature_with, rule_sums, rules, sliver_geometry, ThinPiece};
+#[cfg(target_arch = "x86_64")]
+use super::AvxSums;
+use super::{
+    clipped_sliver_quadrature_with, rule_sums, rules, sliver_geometry, GroupSums, PortableSums,
+    ThinPiece,
+};
 use crate::{Deriv3, Order};
 
 /// The form factor of a sliver triangle (`u`, `r`, `r_lo` as for
@@ -27,13 +32,14 @@ pub(super) fn clipped_sliver(
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
         return unsafe { clipped_sliver_fma(u, r, r_lo, n, order, plane, h_p) };
     }
-    clipped_sliver_with(u, r, r_lo, n, order, plane, h_p)
+    clipped_sliver_with::<PortableSums>(u, r, r_lo, n, order, plane, h_p)
 }
 
 /// [`clipped_sliver`] compiled with AVX2 and FMA: the clip's double-double heights and points and
 /// the visible plane's exact products take fused instructions instead of calls to `fma` (a fifth
-/// of the clipped value's instructions). The same bits: the fused product is correctly rounded
-/// either way, and Rust fuses nothing else (unit-tested).
+/// of the clipped value's instructions), and the sums take four nodes per AVX register. The same
+/// bits: the fused product is correctly rounded either way, the sums' lanes round as the portable
+/// ones and are added in the same tree, and Rust fuses nothing else (unit-tested).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn clipped_sliver_fma(
@@ -45,11 +51,11 @@ unsafe fn clipped_sliver_fma(
     plane: &Plane,
     h_p: f64,
 ) -> Option<Deriv3> {
-    clipped_sliver_with(u, r, r_lo, n, order, plane, h_p)
+    clipped_sliver_with::<AvxSums>(u, r, r_lo, n, order, plane, h_p)
 }
 
 #[inline(always)]
-fn clipped_sliver_with(
+fn clipped_sliver_with<S: GroupSums>(
     u: &[DVec3; 3],
     r: &[DVec3; 3],
     r_lo: &[DVec3; 3],
@@ -66,7 +72,7 @@ fn clipped_sliver_with(
     if verts.len() < 3 {
         return Some(Deriv3::constant(0.0));
     }
-    let (mut d, geometry) = clipped_sliver_quadrature_with(verts, n, order)?;
+    let (mut d, geometry) = clipped_sliver_quadrature_with::<S>(verts, n, order)?;
     // As `evaluate` finishes: the sign (of every field, zeros included), the clip line's term,
     // the clamp; only the fields the order computes can be non-finite.
     if h_p < 0.0 {
@@ -96,7 +102,7 @@ fn clipped_sliver_with(
 /// triangle: the clip edge is as short as the sliver is wide, and the foot of its far vertex on
 /// the long side lies at its end. A quadrilateral visible part takes three pieces instead of four.
 #[inline(always)]
-pub(super) fn fan_triangle(
+pub(super) fn fan_triangle<S: GroupSums>(
     v0: &ClipVertex,
     v1: &ClipVertex,
     v2: &ClipVertex,
@@ -139,9 +145,9 @@ pub(super) fn fan_triangle(
         ];
     }
     let sums = match order {
-        Order::Value => rule_sums::<false, false>(&pieces, n),
-        Order::Gradient => rule_sums::<true, false>(&pieces, n),
-        Order::Hessian => rule_sums::<true, true>(&pieces, n),
+        Order::Value => rule_sums::<S, false, false>(&pieces, n),
+        Order::Gradient => rule_sums::<S, true, false>(&pieces, n),
+        Order::Hessian => rule_sums::<S, true, true>(&pieces, n),
     }?;
     let geometry = sliver_geometry(a, b, c);
     Some((sums.assemble(n, geometry, order), geometry))
@@ -198,14 +204,15 @@ mod tests {
             let h_p = plane.normal.dot(r[0]);
             for order in [Order::Value, Order::Gradient, Order::Hessian] {
                 let loop_ = clipped.as_slice();
-                let portable = clipped_sliver_quadrature_with(loop_, n, order);
+                let portable = clipped_sliver_quadrature_with::<PortableSums>(loop_, n, order);
                 // SAFETY: checked above that the CPU has AVX2 and FMA.
                 let fused = unsafe { super::super::clipped_sliver_quadrature_fma(loop_, n, order) };
                 assert_eq!(
                     portable.as_ref().map(|(d, _)| bits(d)),
                     fused.as_ref().map(|(d, _)| bits(d))
                 );
-                let portable = clipped_sliver_with(&u, &r, &r_lo, n, order, &plane, h_p);
+                let portable =
+                    clipped_sliver_with::<PortableSums>(&u, &r, &r_lo, n, order, &plane, h_p);
                 // SAFETY: as above.
                 let fused = unsafe { clipped_sliver_fma(&u, &r, &r_lo, n, order, &plane, h_p) };
                 assert_eq!(portable.as_ref().map(bits), fused.as_ref().map(bits));

@@ -1,38 +1,147 @@
-//! The sliver rule's sums, two nodes at a time.
+//! The sliver rule's sums, four nodes at a time.
 //!
 //! Why: the sliver rule evaluates its integrand at 50-60 nodes (13 or 14 along each piece of a
 //! sliver seen from about its length, 2 across), and the scalar loop body spent ~100 instructions
-//! per node on one `r` and its fifteen running sums. Two nodes with the same `t` and neighbouring
-//! `s` in the two lanes of a [`Pair`] take one packed instruction per operation for both. Each
-//! lane rounds as the scalar `f64` code would (no fused multiply-add), and the order of the
+//! per node on one `r` and its fifteen running sums. Four nodes with the same `t` and consecutive
+//! `s` (a group) in the four lanes of an AVX register ([`Wide`]) take one packed instruction per
+//! operation in the AVX2 build ([`AvxSums`]). The portable build ([`PortableSums`]) takes each
+//! group's halves in two SSE2 [`Pair`]s with their own running sums, one half after the other
+//! (fifteen sums live at a time, as many as two lanes had, where four lanes side by side spilled
+//! twice as many), and skips a last half that is all padding. Each lane rounds as the scalar `f64`
+//! code would (no fused multiply-add), lane `l` sums the nodes `4k + l` of the rule along in the
+//! same order in both builds (a skipped padding node would have added an exact zero, which
+//! changes no sum: the sums start at +0, and a sum rounded to nearest is −0 only when both of
+//! its terms are), and the lanes are
+//! added in one tree, `(l0 + l1) + (l2 + l3)`: the builds give the same bits. The order of the
 //! operations does not depend on `GRADIENT` or `HESSIAN`, so the value is the same for every
 //! order, bit for bit, on every target.
 
 use glam::DVec3;
 
 use super::super::RuleSums;
+use super::quad::Lanes;
+#[cfg(target_arch = "x86_64")]
+use super::quad::Wide;
 use crate::kernels::lanes::{Pair, V3};
 
-/// The running sums of [`RuleSums`] per lane (lane 0 and lane 1 hold different nodes' terms).
-#[derive(Clone, Copy)]
-pub(super) struct LaneSums {
-    q0: Pair,
-    s4: Pair,
-    u6: V3<Pair>,
-    v6: V3<Pair>,
-    s6: Pair,
-    second: [Pair; 6],
+/// The sums of a rule over groups of four nodes, as one build takes them.
+pub(super) trait GroupSums {
+    /// One register's lanes.
+    type Lane: Lanes;
+    fn new() -> Self;
+    /// As [`LaneSums::add_lanes`], for all four lanes of every group.
+    fn add<const GRADIENT: bool, const HESSIAN: bool>(
+        &mut self,
+        piece: &PieceFrame,
+        n: &V3<Self::Lane>,
+        along: (f64, f64, &[[[f64; 4]; 2]]),
+        t_rule: &[(f64, f64)],
+    );
+    /// The sums over the lanes, `(l0 + l1) + (l2 + l3)`.
+    fn total(&self) -> RuleSums;
 }
 
-/// A Gauss rule `(s, w)` on [0, 1] as [`LaneSums::add`] takes it: its nodes two at a time,
-/// `[s_a, s_b, w_a, w_b]`, an odd rule's last node paired with itself at weight zero (it adds
-/// zeros). Built once per rule: packing the pairs cost a few instructions per pair of nodes.
-pub(super) fn paired(rule: &[(f64, f64)]) -> Vec<[f64; 4]> {
-    rule.chunks(2)
+/// The AVX2 build's sums: four lanes per register.
+#[cfg(target_arch = "x86_64")]
+pub(super) type AvxSums = LaneSums<Wide>;
+
+#[cfg(target_arch = "x86_64")]
+impl GroupSums for LaneSums<Wide> {
+    type Lane = Wide;
+    #[inline(always)]
+    fn new() -> Self {
+        LaneSums::zero()
+    }
+    #[inline(always)]
+    fn add<const GRADIENT: bool, const HESSIAN: bool>(
+        &mut self,
+        piece: &PieceFrame,
+        n: &V3<Wide>,
+        along: (f64, f64, &[[[f64; 4]; 2]]),
+        t_rule: &[(f64, f64)],
+    ) {
+        self.add_lanes::<GRADIENT, HESSIAN>(piece, n, along, t_rule, 0);
+    }
+    #[inline(always)]
+    fn total(&self) -> RuleSums {
+        self.lane_totals()
+    }
+}
+
+/// The portable build's sums: lanes 0 and 1 of each group in `lo`, 2 and 3 in `hi`.
+#[derive(Clone, Copy)]
+pub(super) struct PortableSums {
+    lo: LaneSums<Pair>,
+    hi: LaneSums<Pair>,
+}
+
+impl GroupSums for PortableSums {
+    type Lane = Pair;
+    #[inline(always)]
+    fn new() -> Self {
+        PortableSums {
+            lo: LaneSums::zero(),
+            hi: LaneSums::zero(),
+        }
+    }
+    #[inline(always)]
+    fn add<const GRADIENT: bool, const HESSIAN: bool>(
+        &mut self,
+        piece: &PieceFrame,
+        n: &V3<Pair>,
+        along: (f64, f64, &[[[f64; 4]; 2]]),
+        t_rule: &[(f64, f64)],
+    ) {
+        self.lo
+            .add_lanes::<GRADIENT, HESSIAN>(piece, n, along, t_rule, 0);
+        self.hi
+            .add_lanes::<GRADIENT, HESSIAN>(piece, n, along, t_rule, 2);
+    }
+    #[inline(always)]
+    fn total(&self) -> RuleSums {
+        let (lo, hi) = (self.lo.lane_totals(), self.hi.lane_totals());
+        let second = |k: usize| lo.second[k] + hi.second[k];
+        RuleSums {
+            q0: lo.q0 + hi.q0,
+            s4: lo.s4 + hi.s4,
+            u6: lo.u6 + hi.u6,
+            v6: lo.v6 + hi.v6,
+            s6: lo.s6 + hi.s6,
+            second: [
+                second(0),
+                second(1),
+                second(2),
+                second(3),
+                second(4),
+                second(5),
+            ],
+        }
+    }
+}
+
+/// The running sums of [`RuleSums`] per lane (each lane holds different nodes' terms).
+#[derive(Clone, Copy)]
+pub(super) struct LaneSums<L> {
+    q0: L,
+    s4: L,
+    u6: V3<L>,
+    v6: V3<L>,
+    s6: L,
+    second: [L; 6],
+}
+
+/// A Gauss rule `(s, w)` on [0, 1] as [`LaneSums::add`] takes it: its nodes four at a time,
+/// `[[s_a, s_b, s_c, s_d], [w_a, w_b, w_c, w_d]]`, the last group padded with copies of its first
+/// node at weight zero (they add zeros). Built once per rule.
+pub(super) fn quads(rule: &[(f64, f64)]) -> Vec<[[f64; 4]; 2]> {
+    rule.chunks(4)
         .map(|nodes| {
-            let (sa, wa) = nodes[0];
-            let (sb, wb) = nodes.get(1).copied().unwrap_or((sa, 0.0));
-            [sa, sb, wa, wb]
+            let mut group = [[nodes[0].0; 4], [0.0; 4]];
+            for (l, &(s, w)) in nodes.iter().enumerate() {
+                group[0][l] = s;
+                group[1][l] = w;
+            }
+            group
         })
         .collect()
 }
@@ -47,10 +156,10 @@ pub(super) struct PieceFrame {
     pub(super) part: f64,
 }
 
-impl LaneSums {
+impl<L: Lanes> LaneSums<L> {
     #[inline(always)]
-    pub(super) fn new() -> Self {
-        let zero = Pair::splat(0.0);
+    fn zero() -> Self {
+        let zero = L::splat(0.0);
         let zero3 = V3::splat(DVec3::ZERO);
         LaneSums {
             q0: zero,
@@ -62,18 +171,21 @@ impl LaneSums {
         }
     }
 
-    /// Adds the tensor rule with `s_rule` along `s ∈ [s0, s1]` (as [`paired`] gives it) and
+    /// Adds the tensor rule with `s_rule` along `s ∈ [s0, s1]` (as [`quads`] gives it) and
     /// `t_rule` across (both on [0, 1]) on `piece`, for the receiver normal `n`: the sums
     /// `Σ w (n·r)/‖r‖⁴` and, with `GRADIENT`, `HESSIAN`, those of the derivatives (see
     /// [`RuleSums`]), each weight `w` being the node's `w_s·w_t·span·s·part` (`s` is the Duffy
-    /// map's Jacobian). Pairs of `s` nodes share a register.
+    /// map's Jacobian). The lanes `first..first + L::WIDTH` of each group of four `s` nodes share
+    /// a register; a half (`first` = 2) whose first node is padding is skipped (module
+    /// documentation).
     #[inline(always)]
-    pub(super) fn add<const GRADIENT: bool, const HESSIAN: bool>(
+    fn add_lanes<const GRADIENT: bool, const HESSIAN: bool>(
         &mut self,
         piece: &PieceFrame,
-        n: &V3<Pair>,
-        (s0, s1, s_rule): (f64, f64, &[[f64; 4]]),
+        n: &V3<L>,
+        (s0, s1, s_rule): (f64, f64, &[[[f64; 4]; 2]]),
         t_rule: &[(f64, f64)],
+        first: usize,
     ) {
         let span = s1 - s0;
         let scale = span * piece.part;
@@ -82,28 +194,27 @@ impl LaneSums {
             V3::splat(piece.ab),
             V3::splat(piece.bc),
         );
-        let (s0, span, scale) = (Pair::splat(s0), Pair::splat(span), Pair::splat(scale));
-        for &[sa, sb, wa, wb] in s_rule {
+        let (s0, span, scale) = (L::splat(s0), L::splat(span), L::splat(scale));
+        for [s_nodes, w_nodes] in s_rule {
+            // Padding comes last in a group, and only in the last group.
+            if first > 0 && w_nodes[first] == 0.0 {
+                break;
+            }
             // Lane by lane the scalar `s0 + span·s_a` and `(w_a·scale)·s`.
-            let s = s0 + span * Pair::new(sa, sb);
-            let ws = Pair::new(wa, wb) * scale * s;
+            let s = s0 + span * L::load(s_nodes, first);
+            let ws = L::load(w_nodes, first) * scale * s;
             let base = r_p + ab.scale(s);
             for &(t, wt) in t_rule {
-                let r = base + bc.scale(s * Pair::splat(t));
-                self.node::<GRADIENT, HESSIAN>(r, n, ws * Pair::splat(wt));
+                let r = base + bc.scale(s * L::splat(t));
+                self.node::<GRADIENT, HESSIAN>(r, n, ws * L::splat(wt));
             }
         }
     }
 
-    /// One pair of nodes at `r` (relative to x) with weights `weight`.
+    /// A register's nodes at `r` (relative to x) with weights `weight`.
     #[inline(always)]
-    fn node<const GRADIENT: bool, const HESSIAN: bool>(
-        &mut self,
-        r: V3<Pair>,
-        n: &V3<Pair>,
-        weight: Pair,
-    ) {
-        let inv2 = Pair::splat(1.0).div(r.dot(r));
+    fn node<const GRADIENT: bool, const HESSIAN: bool>(&mut self, r: V3<L>, n: &V3<L>, weight: L) {
+        let inv2 = L::splat(1.0).div(r.dot(r));
         let nr = n.dot(r);
         let w4 = weight * (inv2 * inv2);
         self.q0 = self.q0 + w4 * nr;
@@ -128,18 +239,30 @@ impl LaneSums {
         }
     }
 
-    /// The sums over both lanes.
+    /// The sums over the lanes ([`Lanes::total`]).
     #[inline(always)]
-    pub(super) fn total(&self) -> RuleSums {
-        let sum = |p: Pair| p.get(0) + p.get(1);
-        let sum3 = |v: V3<Pair>| DVec3::new(sum(v.x), sum(v.y), sum(v.z));
+    fn lane_totals(&self) -> RuleSums {
+        let sum = |p: L| p.total();
+        let sum3 = |v: V3<L>| DVec3::new(sum(v.x), sum(v.y), sum(v.z));
         RuleSums {
             q0: sum(self.q0),
             s4: sum(self.s4),
             u6: sum3(self.u6),
             v6: sum3(self.v6),
             s6: sum(self.s6),
-            second: self.second.map(sum),
+            // Written out: `array::map` is not always inlined, and outside the AVX2 twins its
+            // closure called the AVX intrinsics as functions (~300 instructions per sliver).
+            second: {
+                let q = &self.second;
+                [
+                    sum(q[0]),
+                    sum(q[1]),
+                    sum(q[2]),
+                    sum(q[3]),
+                    sum(q[4]),
+                    sum(q[5]),
+                ]
+            },
         }
     }
 }
@@ -157,10 +280,10 @@ mod tests {
         n: DVec3,
         order: Order,
         geometry: (DVec3, f64),
-        along: (f64, f64, &[[f64; 4]]),
+        along: (f64, f64, &[[[f64; 4]; 2]]),
         t_rule: &[(f64, f64)],
     ) -> Deriv3 {
-        let mut sums = LaneSums::new();
+        let mut sums = PortableSums::new();
         let n2 = V3::splat(n);
         match order {
             Order::Value => sums.add::<false, false>(piece, &n2, along, t_rule),
@@ -170,9 +293,9 @@ mod tests {
         sums.total().assemble(n, geometry, order)
     }
 
-    /// The paired sums agree with the scalar tensor rule (`polygon::tensor_rule`, one node at a
+    /// The grouped sums agree with the scalar tensor rule (`polygon::tensor_rule`, one node at a
     /// time, the piece's share on its geometry instead of its weights) to rounding, for every
-    /// rule along (odd ones pair their last node with a zero weight) and across, on sub-intervals,
+    /// rule along (padded with zero weights to a multiple of four) and across, on sub-intervals,
     /// at every order; and the value is the same, bit for bit, at every order.
     #[test]
     fn paired_sums_match_the_scalar_tensor_rule() {
@@ -194,7 +317,7 @@ mod tests {
                 (p.min(q), p.max(q))
             };
             let s_rule = rules().by_points[8 + k % 9];
-            let s_paired = rules().paired[8 + k % 9];
+            let s_paired = rules().quads[8 + k % 9];
             let t_rule = rules().by_points[[2, 3, 4, 8][k % 4]];
             let frame = PieceFrame { r_p, ab, bc, part };
             let mut value = None;
