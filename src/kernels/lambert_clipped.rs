@@ -214,7 +214,11 @@ fn with_loop<R>(
         above,
         ..
     } = cut;
-    let route = route.filter(|route| same_loop(route, cut));
+    // Not `Option::filter`: left out of line (~50 instructions a call).
+    let route = match route {
+        Some(route) if same_loop(route, cut) => Some(route),
+        _ => None,
+    };
     // The route's points are these differences' double-double parts already.
     let exact: [Dd3; 3] = match route {
         Some(_) => [from_parts(DVec3::ZERO, DVec3::ZERO); 3],
@@ -473,9 +477,10 @@ pub(super) enum LoopValue<'a> {
     /// when the near-plane route was tried here and declined (the caller need not try it again).
     Elsewhere { route_tried: bool },
     /// The near-plane route took the robust path's far-field rule on its loop (a far-field
-    /// visible part): its value, and the route for that rule's derivatives
-    /// ([`polygon::far_piece_derivs`]) rather than the loop's.
-    Far(f64, &'a RouteLoop),
+    /// visible part) and left its value to the derivatives, the same rule's
+    /// ([`polygon::deferred_far_piece`]), which the loop's do not replace; where that value is
+    /// not finite the route declined, as `Elsewhere { route_tried: true }`.
+    Far(&'a RouteLoop),
 }
 
 /// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
@@ -556,6 +561,8 @@ fn routed_loop_body<R>(
     f: impl FnOnce(&ClippedLoop, LoopValue<'_>) -> R,
 ) -> R {
     let mut route = RouteLoop::new();
+    // The far-field rule's value is summed with its derivatives (`LoopValue::Far`).
+    route.defer_far = true;
     let value = polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route);
     with_loop(
         x,
@@ -567,7 +574,7 @@ fn routed_loop_body<R>(
         |l| {
             l.sum = side;
             let value = match value {
-                Some(value) if route.is_far() => LoopValue::Far(value, &route),
+                Some(_) if route.is_far() => LoopValue::Far(&route),
                 Some(value) => LoopValue::Route(value),
                 None => LoopValue::Elsewhere { route_tried: true },
             };

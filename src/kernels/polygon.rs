@@ -1615,7 +1615,41 @@ pub(crate) fn far_piece_derivs<const N: usize>(
 ) -> Option<Deriv3> {
     let far = route.far?;
     let verts = &route.points[..route.count];
-    let mut d = far_field(verts, far.n, order, true, far.rule);
+    let d = far_field(verts, far.n, order, true, far.rule);
+    far_piece_finish(verts, far, d, value, order)
+}
+
+/// [`far_piece_derivs`] where the route deferred the far-field rule's value
+/// ([`RouteLoop::defer_far`](near_plane_triangle::RouteLoop)): the rule summed once, for the
+/// value and the derivatives. Its value is [`far_field_value`]'s bits: `triangle_rule` sums the
+/// value's `q0` and `RuleSums::assemble` forms it by the same operations at every order, and it is
+/// signed and clamped here as there. `None` where that value is not finite (where
+/// [`far_field_value`] declines, and the route with it) or `route.far` is not set; `Some(None)`
+/// where the derivatives are declined.
+pub(crate) fn deferred_far_piece<const N: usize>(
+    route: &RouteLoop<N>,
+    order: Order,
+) -> Option<Option<Deriv3>> {
+    let far = route.far?;
+    let verts = &route.points[..route.count];
+    let d = far_field(verts, far.n, order, true, far.rule);
+    let value = if far.h_p < 0.0 { -d.value } else { d.value };
+    let value = value.clamp(0.0, 1.0);
+    if !value.is_finite() {
+        return None;
+    }
+    Some(far_piece_finish(verts, far, d, value, order))
+}
+
+/// The far-field rule's derivatives `d` on a route's loop `verts`, signed by the exact height,
+/// with the clip line's Hessian term and `value` as the value; `None` where they overflow.
+fn far_piece_finish(
+    verts: &[ClipVertex],
+    far: near_plane_triangle::FarPiece,
+    mut d: Deriv3,
+    value: f64,
+    order: Order,
+) -> Option<Deriv3> {
     if far.h_p < 0.0 {
         d.gradient = -d.gradient;
         d.hessian = -d.hessian;

@@ -93,6 +93,8 @@ pub(crate) fn clipped_polygon_value_and_loop<const M: usize, const N: usize>(
         edges,
         count,
         far,
+        // Triangles only (`split_loop`): polygons' routes always sum their far-field value.
+        defer_far: _,
     } = out;
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx2_fma() {

@@ -153,7 +153,7 @@ unsafe fn split_fma(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
 #[inline(always)]
 fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
     let mut loop_ = [CLIP_VERTEX_ZERO; 4];
-    split_loop(x, v, s, &mut loop_, &mut [], &mut [], &mut None).map(|(value, _)| value)
+    split_loop(x, v, s, &mut loop_, &mut [], &mut [], &mut None, false).map(|(value, _)| value)
 }
 
 pub(super) const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
@@ -178,6 +178,10 @@ pub(crate) struct RouteLoop<const N: usize = 4> {
     /// Set where the visible part is far-field against its size and the value came from the
     /// robust path's far-field rule on the loop.
     pub(super) far: Option<FarPiece>,
+    /// Set by the caller before the route runs: where the far-field rule is taken, leave its
+    /// value to [`deferred_far_piece`](super::deferred_far_piece), which sums it with the
+    /// derivatives (one pass over the rule's nodes instead of two). Triangles only.
+    pub(crate) defer_far: bool,
 }
 
 /// What the far-field rule on a route's loop needs for its derivatives: the rule, the unit
@@ -200,6 +204,7 @@ impl<const N: usize> RouteLoop<N> {
             edges: [DVec3::ZERO; N],
             count: 0,
             far: None,
+            defer_far: false,
         }
     }
 
@@ -274,6 +279,7 @@ pub(crate) fn clipped_triangle_value_and_loop(
         &mut out.angles,
         &mut out.edges,
         &mut out.far,
+        out.defer_far,
     )?;
     out.count = count;
     Some(value)
@@ -283,8 +289,10 @@ pub(crate) fn clipped_triangle_value_and_loop(
 /// `edges` have entries, its edges' angles (see `near_plane_value`) and the vectors of its edges
 /// off the tangent plane. Where the visible part is far-field against its size, the robust path's
 /// far-field rule on the loop instead of the split, with `far` set
-/// ([`far_piece_derivs`](super::far_piece_derivs)).
+/// ([`far_piece_derivs`](super::far_piece_derivs)); with `defer_far` that rule's value is left
+/// to [`deferred_far_piece`](super::deferred_far_piece) and the value returned is NaN.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn split_loop(
     x: DVec3,
     v: [DVec3; 3],
@@ -293,6 +301,7 @@ fn split_loop(
     angles: &mut [f64],
     edges: &mut [DVec3],
     far: &mut Option<FarPiece>,
+    defer_far: bool,
 ) -> Option<(f64, usize)> {
     let Screened { r, u, n, plane } = s;
     let (r, u, n) = (*r, *u, *n);
@@ -311,6 +320,15 @@ fn split_loop(
         .fold(0.0, f64::max)
         .sqrt();
     if let Some(rule) = far_field_rule(centroid.length(), radius) {
+        if defer_far {
+            *far = Some(FarPiece {
+                rule,
+                n,
+                plane_normal: plane.normal,
+                h_p,
+            });
+            return Some((f64::NAN, count));
+        }
         let value = super::far_field_value(verts, n, plane.normal, h_p, rule, far)?;
         return Some((value, count));
     }
