@@ -307,9 +307,9 @@ fn with_loop<R>(
         let next = if k + 1 == count { 0 } else { k + 1 };
         let (a, b) = (&l.points[k], &l.points[next]);
         l.edges[k] = match route {
-            // The route's vector of an edge from a vertex to a clip point (or back) is this
-            // one's: the same rounding of the same double-double difference.
-            Some(route) if a.vertex.is_some() != b.vertex.is_some() => route.edge(k),
+            // The route's vector of an edge with a clip point at an end is this one's: the
+            // same rounding of the same double-double difference.
+            Some(route) if a.vertex.is_none() || b.vertex.is_none() => route.edge(k),
             _ => edge_vector(v, a, b),
         };
     }

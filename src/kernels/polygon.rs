@@ -1088,7 +1088,12 @@ impl From<EdgeFrame> for InPlaneEdge {
 /// `u(‖r_a‖ + L)/‖r_b‖` (133 ulps measured with an end at `L/73`): at most ~9u here. And the
 /// derivatives' bracket `c/P − β/s` amplifies a difference between this `β` and `atan2(s, c)`
 /// of their rounded inputs by ~`1.5/tan²β`: at most 24 at `sin β = 1/4`.
+///
+/// `edges[i]`, where `edges` has an entry `i`, receives the vector of edge `i` when it lies in
+/// the tangent plane ([`edge_vector`]'s: the ends' double-double difference rounded once), for
+/// the same loop's derivatives.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     verts: &[ClipVertex],
     frames: &[Option<E>],
@@ -1097,6 +1102,7 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     h_p: f64,
     max_cancellation: f64,
     angles: &mut [f64],
+    edges: &mut [DVec3],
 ) -> Option<(f64, f64)> {
     let count = verts.len();
     let h2 = h_p * h_p;
@@ -1138,6 +1144,9 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
         if a.on_line && b.on_line {
             // The clip edge's whole term minus its share n_N Δψ_c of the parallel part.
             let e = edge_vector(a, b);
+            if let Some(edge) = edges.get_mut(i) {
+                *edge = e;
+            }
             let len = e.length();
             if len == 0.0 {
                 continue;
@@ -2003,6 +2012,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                 h_p,
                 SPLIT_VALUE_LIMIT,
                 &mut [],
+                &mut [],
             )
         } else {
             None
@@ -2077,6 +2087,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                                 plane.normal,
                                 h_p,
                                 f64::INFINITY,
+                                &mut [],
                                 &mut [],
                             );
                         }

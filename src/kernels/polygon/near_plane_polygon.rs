@@ -273,6 +273,7 @@ fn split<const M: usize, const N: usize>(
         h_p,
         SPLIT_VALUE_LIMIT,
         angles,
+        &mut [],
     )?
     .0;
     // The edge sum's sign convention, then the clamp of the visible part's value.

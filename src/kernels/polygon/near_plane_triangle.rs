@@ -209,7 +209,8 @@ impl<const N: usize> RouteLoop<N> {
     }
 
     /// The vector of the edge from point `k` to the next where one of its ends is a clip point
-    /// and the other not: one rounding of the exact difference of the ends (double-double).
+    /// and the other not, and (a triangle's route) of the clip edge, where both are: one
+    /// rounding of the exact difference of the ends (double-double).
     #[inline(always)]
     pub(crate) fn edge(&self, k: usize) -> DVec3 {
         self.edges[k]
@@ -286,8 +287,8 @@ pub(crate) fn clipped_triangle_value_and_loop(
 }
 
 /// [`split`] with the loop it clipped (in `loop_`) and its length, and, where `angles` and
-/// `edges` have entries, its edges' angles (see `near_plane_value`) and the vectors of its edges
-/// off the tangent plane. Where the visible part is far-field against its size, the robust path's
+/// `edges` have entries, its edges' angles (see `near_plane_value`) and vectors (the clip
+/// edge's from `near_plane_value`). Where the visible part is far-field against its size, the robust path's
 /// far-field rule on the loop instead of the split, with `far` set
 /// ([`far_piece_derivs`](super::far_piece_derivs)); with `defer_far` that rule's value is left
 /// to [`deferred_far_piece`](super::deferred_far_piece) and the value returned is NaN.
@@ -354,6 +355,7 @@ fn split_loop(
         h_p,
         SPLIT_VALUE_LIMIT,
         angles,
+        edges,
     )?
     .0;
     // The edge sum's sign convention, then the clamp of the visible part's value.
@@ -659,6 +661,7 @@ pub(super) mod tests {
             plane.normal,
             h_p,
             SPLIT_VALUE_LIMIT,
+            &mut [],
             &mut [],
         )
         .is_some()
