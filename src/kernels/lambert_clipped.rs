@@ -62,6 +62,18 @@ pub(super) struct LoopVertex {
     pub(super) displacement: f64,
 }
 
+/// A placeholder for the unused entries of a loop's points.
+const LOOP_VERTEX_ZERO: LoopVertex = LoopVertex {
+    exact: Dd3 {
+        x: Dd { hi: 0.0, lo: 0.0 },
+        y: Dd { hi: 0.0, lo: 0.0 },
+        z: Dd { hi: 0.0, lo: 0.0 },
+    },
+    hi: DVec3::ZERO,
+    vertex: None,
+    displacement: 0.0,
+};
+
 /// The clipped loop of a certified [`triangle_value`], for the derivative path
 /// ([`lambert_clipped_derivs`](super::lambert_clipped_derivs)): the unit normal, the loop's
 /// vertices (`count` of them), its edge vectors (`edges[k]` from vertex `k` to the next, each one
@@ -237,12 +249,9 @@ fn with_loop<R>(
     // was copied (~60 instructions).
     let mut l = ClippedLoop {
         n: cut.n,
-        points: [LoopVertex {
-            exact: exact[0],
-            hi: r[0],
-            vertex: Some(0),
-            displacement: 0.0,
-        }; 4],
+        // Overwritten up to `count`, never read beyond: zeros (stored by vector registers) rather
+        // than copies of a point (~50 instructions).
+        points: [LOOP_VERTEX_ZERO; 4],
         edges: [DVec3::ZERO; 4],
         // The route's angles are those of the same edges (the same ends, to their rounding).
         angles: match route {
