@@ -262,8 +262,8 @@ fn clipped_derivs_with(
                 None => ClippedDerivs::Declined(None),
             },
             LoopValue::Far(route) => match polygon::deferred_far_piece(route, order) {
-                Some(Some(d)) => ClippedDerivs::Done(d),
-                Some(None) => ClippedDerivs::Declined(None),
+                Some(Ok(d)) => ClippedDerivs::Done(d),
+                Some(Err(_)) => ClippedDerivs::Declined(None),
                 // The route's value was not finite: it declined (the loop is the loop's own).
                 None => match lambert_clipped_derivs::loop_derivs(l, 0.0, order) {
                     Some(d) => ClippedDerivs::ValueElsewhere(d, true),

@@ -1590,8 +1590,9 @@ fn far_field(verts: &[ClipVertex], n: DVec3, order: Order, exact: bool, rule: Ru
 
 /// The near-plane routes' value where the visible part `verts` (their clipped loop) is far-field
 /// against its size: `evaluate`'s far-field branch (its `exact` set near the plane), before the
-/// split, signed by the exact height `h_p` and clamped as `evaluate` does; sets `far` for
-/// [`far_piece_derivs`]. `None` for a non-finite value.
+/// split, signed by the exact height `h_p` and clamped as `evaluate` does; sets `far` (the
+/// derivative orders defer the value instead: [`deferred_far_piece`]). `None` for a non-finite
+/// value.
 fn far_field_value(
     verts: &[ClipVertex],
     n: DVec3,
@@ -1612,63 +1613,39 @@ fn far_field_value(
     value.is_finite().then_some(value)
 }
 
-/// Gradient and (at [`Order::Hessian`]) Hessian of the far-field rule on a near-plane route's
-/// loop where the route took it for the value (`route.far` set, see [`far_field_value`]), as
-/// `evaluate` has them (the clip line's Hessian term included), with `value` as the value; `None`
-/// where `route.far` is not set or they overflow. Per unit length (per squared length), in the
-/// units of the vertices.
-pub(crate) fn far_piece_derivs<const N: usize>(
-    route: &RouteLoop<N>,
-    value: f64,
-    order: Order,
-) -> Option<Deriv3> {
-    let far = route.far?;
-    let verts = &route.points[..route.count];
-    let d = far_field(verts, far.n, order, true, far.rule);
-    far_piece_finish(verts, far, d, value, order)
-}
-
-/// [`far_piece_derivs`] where the route deferred the far-field rule's value
-/// ([`RouteLoop::defer_far`](near_plane_triangle::RouteLoop)): the rule summed once, for the
-/// value and the derivatives. Its value is [`far_field_value`]'s bits: `triangle_rule` sums the
-/// value's `q0` and `RuleSums::assemble` forms it by the same operations at every order, and it is
-/// signed and clamped here as there. `None` where that value is not finite (where
-/// [`far_field_value`] declines, and the route with it) or `route.far` is not set; `Some(None)`
-/// where the derivatives are declined.
+/// Value, gradient and (at [`Order::Hessian`]) Hessian of the far-field rule on a near-plane
+/// route's loop where the route took it and left its value to the derivative order
+/// ([`RouteLoop::defer_far`](near_plane_triangle::RouteLoop)): the rule summed once, for the value
+/// and the derivatives, the derivatives as `evaluate` has them (the clip line's Hessian term
+/// included). The value is [`far_field_value`]'s bits: `triangle_rule` sums the value's `q0` and
+/// `RuleSums::assemble` forms it by the same operations at every order, and it is signed and
+/// clamped here as there. `None` where that value is not finite (where [`far_field_value`]
+/// declines, and the route with it) or `route.far` is not set; `Err(value)` where the derivatives
+/// overflow. Per unit length (per squared length), in the units of the vertices.
 pub(crate) fn deferred_far_piece<const N: usize>(
     route: &RouteLoop<N>,
     order: Order,
-) -> Option<Option<Deriv3>> {
+) -> Option<std::result::Result<Deriv3, f64>> {
     let far = route.far?;
     let verts = &route.points[..route.count];
-    let d = far_field(verts, far.n, order, true, far.rule);
+    let mut d = far_field(verts, far.n, order, true, far.rule);
     let value = if far.h_p < 0.0 { -d.value } else { d.value };
     let value = value.clamp(0.0, 1.0);
     if !value.is_finite() {
         return None;
     }
-    Some(far_piece_finish(verts, far, d, value, order))
-}
-
-/// The far-field rule's derivatives `d` on a route's loop `verts`, signed by the exact height,
-/// with the clip line's Hessian term and `value` as the value; `None` where they overflow.
-fn far_piece_finish(
-    verts: &[ClipVertex],
-    far: near_plane_triangle::FarPiece,
-    mut d: Deriv3,
-    value: f64,
-    order: Order,
-) -> Option<Deriv3> {
     if far.h_p < 0.0 {
         d.gradient = -d.gradient;
         d.hessian = -d.hessian;
     }
     if order.hessian() {
-        d.hessian +=
-            clip_line_hessian(verts, far.n, far.plane_normal, far.h_p, false, false).ok()?;
+        match clip_line_hessian(verts, far.n, far.plane_normal, far.h_p, false, false) {
+            Ok(h) => d.hessian += h,
+            Err(_) => return Some(Err(value)),
+        }
     }
     d.value = value;
-    d.is_finite().then_some(d)
+    Some(d.is_finite().then_some(d).ok_or(value))
 }
 
 /// A triangle awaiting quadrature, with its [`fan_geometry`].

@@ -180,7 +180,7 @@ pub(crate) struct RouteLoop<const N: usize = 4> {
     pub(super) far: Option<FarPiece>,
     /// Set by the caller before the route runs: where the far-field rule is taken, leave its
     /// value to [`deferred_far_piece`](super::deferred_far_piece), which sums it with the
-    /// derivatives (one pass over the rule's nodes instead of two). Triangles only.
+    /// derivatives (one pass over the rule's nodes instead of two).
     pub(crate) defer_far: bool,
 }
 
@@ -288,10 +288,10 @@ pub(crate) fn clipped_triangle_value_and_loop(
 
 /// [`split`] with the loop it clipped (in `loop_`) and its length, and, where `angles` and
 /// `edges` have entries, its edges' angles (see `near_plane_value`) and vectors (the clip
-/// edge's from `near_plane_value`). Where the visible part is far-field against its size, the robust path's
-/// far-field rule on the loop instead of the split, with `far` set
-/// ([`far_piece_derivs`](super::far_piece_derivs)); with `defer_far` that rule's value is left
-/// to [`deferred_far_piece`](super::deferred_far_piece) and the value returned is NaN.
+/// edge's from `near_plane_value`). Where the visible part is far-field against its size, the
+/// robust path's far-field rule on the loop instead of the split, with `far` set; with
+/// `defer_far` that rule's value is left to [`deferred_far_piece`](super::deferred_far_piece)
+/// (the derivative orders) and the value returned is NaN.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn split_loop(
