@@ -261,9 +261,14 @@ fn clipped_derivs_with(
                 Some(d) => ClippedDerivs::Done(d),
                 None => ClippedDerivs::Declined(None),
             },
-            LoopValue::Far(value, route) => match polygon::far_piece_derivs(route, value, order) {
-                Some(d) => ClippedDerivs::Done(d),
-                None => ClippedDerivs::Declined(None),
+            LoopValue::Far(route) => match polygon::deferred_far_piece(route, order) {
+                Some(Ok(d)) => ClippedDerivs::Done(d),
+                Some(Err(_)) => ClippedDerivs::Declined(None),
+                // The route's value was not finite: it declined (the loop is the loop's own).
+                None => match lambert_clipped_derivs::loop_derivs(l, 0.0, order) {
+                    Some(d) => ClippedDerivs::ValueElsewhere(d, true),
+                    None => ClippedDerivs::Declined(None),
+                },
             },
             LoopValue::Elsewhere { route_tried } => {
                 match lambert_clipped_derivs::loop_derivs(l, 0.0, order) {

@@ -62,6 +62,18 @@ pub(super) struct LoopVertex {
     pub(super) displacement: f64,
 }
 
+/// A placeholder for the unused entries of a loop's points.
+const LOOP_VERTEX_ZERO: LoopVertex = LoopVertex {
+    exact: Dd3 {
+        x: Dd { hi: 0.0, lo: 0.0 },
+        y: Dd { hi: 0.0, lo: 0.0 },
+        z: Dd { hi: 0.0, lo: 0.0 },
+    },
+    hi: DVec3::ZERO,
+    vertex: None,
+    displacement: 0.0,
+};
+
 /// The clipped loop of a certified [`triangle_value`], for the derivative path
 /// ([`lambert_clipped_derivs`](super::lambert_clipped_derivs)): the unit normal, the loop's
 /// vertices (`count` of them), its edge vectors (`edges[k]` from vertex `k` to the next, each one
@@ -214,7 +226,11 @@ fn with_loop<R>(
         above,
         ..
     } = cut;
-    let route = route.filter(|route| same_loop(route, cut));
+    // Not `Option::filter`: left out of line (~50 instructions a call).
+    let route = match route {
+        Some(route) if same_loop(route, cut) => Some(route),
+        _ => None,
+    };
     // The route's points are these differences' double-double parts already.
     let exact: [Dd3; 3] = match route {
         Some(_) => [from_parts(DVec3::ZERO, DVec3::ZERO); 3],
@@ -233,12 +249,9 @@ fn with_loop<R>(
     // was copied (~60 instructions).
     let mut l = ClippedLoop {
         n: cut.n,
-        points: [LoopVertex {
-            exact: exact[0],
-            hi: r[0],
-            vertex: Some(0),
-            displacement: 0.0,
-        }; 4],
+        // Overwritten up to `count`, never read beyond: zeros (stored by vector registers) rather
+        // than copies of a point (~50 instructions).
+        points: [LOOP_VERTEX_ZERO; 4],
         edges: [DVec3::ZERO; 4],
         // The route's angles are those of the same edges (the same ends, to their rounding).
         angles: match route {
@@ -303,9 +316,9 @@ fn with_loop<R>(
         let next = if k + 1 == count { 0 } else { k + 1 };
         let (a, b) = (&l.points[k], &l.points[next]);
         l.edges[k] = match route {
-            // The route's vector of an edge from a vertex to a clip point (or back) is this
-            // one's: the same rounding of the same double-double difference.
-            Some(route) if a.vertex.is_some() != b.vertex.is_some() => route.edge(k),
+            // The route's vector of an edge with a clip point at an end is this one's: the
+            // same rounding of the same double-double difference.
+            Some(route) if a.vertex.is_none() || b.vertex.is_none() => route.edge(k),
             _ => edge_vector(v, a, b),
         };
     }
@@ -473,9 +486,10 @@ pub(super) enum LoopValue<'a> {
     /// when the near-plane route was tried here and declined (the caller need not try it again).
     Elsewhere { route_tried: bool },
     /// The near-plane route took the robust path's far-field rule on its loop (a far-field
-    /// visible part): its value, and the route for that rule's derivatives
-    /// ([`polygon::far_piece_derivs`]) rather than the loop's.
-    Far(f64, &'a RouteLoop),
+    /// visible part) and left its value to the derivatives, the same rule's
+    /// ([`polygon::deferred_far_piece`]), which the loop's do not replace; where that value is
+    /// not finite the route declined, as `Elsewhere { route_tried: true }`.
+    Far(&'a RouteLoop),
 }
 
 /// The loop of the derivative orders, handed to `f` in place (no copy of the loop): the
@@ -556,6 +570,8 @@ fn routed_loop_body<R>(
     f: impl FnOnce(&ClippedLoop, LoopValue<'_>) -> R,
 ) -> R {
     let mut route = RouteLoop::new();
+    // The far-field rule's value is summed with its derivatives (`LoopValue::Far`).
+    route.defer_far = true;
     let value = polygon::near_plane_clipped_triangle_value_and_loop(x, cut.n, v, &mut route);
     with_loop(
         x,
@@ -567,7 +583,7 @@ fn routed_loop_body<R>(
         |l| {
             l.sum = side;
             let value = match value {
-                Some(value) if route.is_far() => LoopValue::Far(value, &route),
+                Some(_) if route.is_far() => LoopValue::Far(&route),
                 Some(value) => LoopValue::Route(value),
                 None => LoopValue::Elsewhere { route_tried: true },
             };

@@ -134,16 +134,22 @@ fn derivs_at<const N: usize>(clipped: &ClippedLoop<N>, order: Order) -> Option<D
         // The displacement along the triangle's edge and the rounding of the point.
         None => (p.displacement + 2.0 * U * p.hi.length()) / p.hi.length(),
     };
+    // Once per point (one square root and division, not three): read by the test below and by
+    // both of the point's edges.
+    let mut shifts = [0.0; N];
+    for (s, p) in shifts.iter_mut().zip(&clipped.points[..clipped.count]) {
+        *s = shift(p);
+    }
     // A clip point that close to x (relative to its displacement) fails the displacement test
     // below unless its edges' terms are tiny: declined before the edge terms.
-    if !(0..clipped.count).all(|k| shift(&clipped.points[k]) <= MOVED_TOLERANCE) {
+    if !shifts.iter().all(|&s| s <= MOVED_TOLERANCE) {
         return None;
     }
     for k in 0..clipped.count {
         let next = if k + 1 == clipped.count { 0 } else { k + 1 };
         let (a, b) = (&clipped.points[k], &clipped.points[next]);
         let e = clipped.edges[k];
-        let shifted = shift(a) + shift(b);
+        let shifted = shifts[k] + shifts[next];
         // The growth of an edge's rounding errors below sin β = 1/4, relative to there.
         let (g, h, growth) = if a.vertex.is_none() && b.vertex.is_none() {
             let (g, h) = clip_term(n, a.hi, b.hi, e, order);

@@ -69,7 +69,7 @@ use super::lambert_clipped::{
 };
 use super::lambert_clipped_derivs::loop_derivs;
 use super::lambert_polygon::convex_normal;
-use super::polygon::{far_piece_derivs, near_plane_clipped_polygon_value_and_loop, RouteLoop};
+use super::polygon::{deferred_far_piece, near_plane_clipped_polygon_value_and_loop, RouteLoop};
 use crate::{Deriv3, Order};
 
 const U: f64 = 0.5 * f64::EPSILON;
@@ -377,9 +377,12 @@ pub(super) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usi
     order: Order,
 ) -> Option<Derivs> {
     let mut route = RouteLoop::<R>::new();
+    // The far-field rule's value is summed with its derivatives (`deferred_far_piece`; where
+    // that value is not finite the route declined before, and does here).
+    route.defer_far = true;
     let (value, h_p) = near_plane_clipped_polygon_value_and_loop::<M, R>(x, n, v, &mut route)?;
     if route.is_far() {
-        return Some(far_piece_derivs(&route, value, order).ok_or(value));
+        return deferred_far_piece(&route, order);
     }
     let Some((n, r)) = differences(x, n, v) else {
         return Some(Err(value));

@@ -1088,7 +1088,12 @@ impl From<EdgeFrame> for InPlaneEdge {
 /// `u(‖r_a‖ + L)/‖r_b‖` (133 ulps measured with an end at `L/73`): at most ~9u here. And the
 /// derivatives' bracket `c/P − β/s` amplifies a difference between this `β` and `atan2(s, c)`
 /// of their rounded inputs by ~`1.5/tan²β`: at most 24 at `sin β = 1/4`.
+///
+/// `edges[i]`, where `edges` has an entry `i`, receives the vector of edge `i` when it lies in
+/// the tangent plane ([`edge_vector`]'s: the ends' double-double difference rounded once), for
+/// the same loop's derivatives.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     verts: &[ClipVertex],
     frames: &[Option<E>],
@@ -1097,6 +1102,7 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     h_p: f64,
     max_cancellation: f64,
     angles: &mut [f64],
+    edges: &mut [DVec3],
 ) -> Option<(f64, f64)> {
     let count = verts.len();
     let h2 = h_p * h_p;
@@ -1138,6 +1144,9 @@ fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
         if a.on_line && b.on_line {
             // The clip edge's whole term minus its share n_N Δψ_c of the parallel part.
             let e = edge_vector(a, b);
+            if let Some(edge) = edges.get_mut(i) {
+                *edge = e;
+            }
             let len = e.length();
             if len == 0.0 {
                 continue;
@@ -1581,8 +1590,9 @@ fn far_field(verts: &[ClipVertex], n: DVec3, order: Order, exact: bool, rule: Ru
 
 /// The near-plane routes' value where the visible part `verts` (their clipped loop) is far-field
 /// against its size: `evaluate`'s far-field branch (its `exact` set near the plane), before the
-/// split, signed by the exact height `h_p` and clamped as `evaluate` does; sets `far` for
-/// [`far_piece_derivs`]. `None` for a non-finite value.
+/// split, signed by the exact height `h_p` and clamped as `evaluate` does; sets `far` (the
+/// derivative orders defer the value instead: [`deferred_far_piece`]). `None` for a non-finite
+/// value.
 fn far_field_value(
     verts: &[ClipVertex],
     n: DVec3,
@@ -1603,29 +1613,39 @@ fn far_field_value(
     value.is_finite().then_some(value)
 }
 
-/// Gradient and (at [`Order::Hessian`]) Hessian of the far-field rule on a near-plane route's
-/// loop where the route took it for the value (`route.far` set, see [`far_field_value`]), as
-/// `evaluate` has them (the clip line's Hessian term included), with `value` as the value; `None`
-/// where `route.far` is not set or they overflow. Per unit length (per squared length), in the
-/// units of the vertices.
-pub(crate) fn far_piece_derivs<const N: usize>(
+/// Value, gradient and (at [`Order::Hessian`]) Hessian of the far-field rule on a near-plane
+/// route's loop where the route took it and left its value to the derivative order
+/// ([`RouteLoop::defer_far`](near_plane_triangle::RouteLoop)): the rule summed once, for the value
+/// and the derivatives, the derivatives as `evaluate` has them (the clip line's Hessian term
+/// included). The value is [`far_field_value`]'s bits: `triangle_rule` sums the value's `q0` and
+/// `RuleSums::assemble` forms it by the same operations at every order, and it is signed and
+/// clamped here as there. `None` where that value is not finite (where [`far_field_value`]
+/// declines, and the route with it) or `route.far` is not set; `Err(value)` where the derivatives
+/// overflow. Per unit length (per squared length), in the units of the vertices.
+pub(crate) fn deferred_far_piece<const N: usize>(
     route: &RouteLoop<N>,
-    value: f64,
     order: Order,
-) -> Option<Deriv3> {
+) -> Option<std::result::Result<Deriv3, f64>> {
     let far = route.far?;
     let verts = &route.points[..route.count];
     let mut d = far_field(verts, far.n, order, true, far.rule);
+    let value = if far.h_p < 0.0 { -d.value } else { d.value };
+    let value = value.clamp(0.0, 1.0);
+    if !value.is_finite() {
+        return None;
+    }
     if far.h_p < 0.0 {
         d.gradient = -d.gradient;
         d.hessian = -d.hessian;
     }
     if order.hessian() {
-        d.hessian +=
-            clip_line_hessian(verts, far.n, far.plane_normal, far.h_p, false, false).ok()?;
+        match clip_line_hessian(verts, far.n, far.plane_normal, far.h_p, false, false) {
+            Ok(h) => d.hessian += h,
+            Err(_) => return Some(Err(value)),
+        }
     }
     d.value = value;
-    d.is_finite().then_some(d)
+    Some(d.is_finite().then_some(d).ok_or(value))
 }
 
 /// A triangle awaiting quadrature, with its [`fan_geometry`].
@@ -1969,6 +1989,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                 h_p,
                 SPLIT_VALUE_LIMIT,
                 &mut [],
+                &mut [],
             )
         } else {
             None
@@ -2043,6 +2064,7 @@ fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
                                 plane.normal,
                                 h_p,
                                 f64::INFINITY,
+                                &mut [],
                                 &mut [],
                             );
                         }

@@ -13,7 +13,7 @@
 //! declining. Where the visible part is far-field against its size (a small corner cut off,
 //! seen from afar), the robust path integrates it by its far-field rule instead of the split:
 //! so does the route, on its loop, and the derivative orders take the same rule's derivatives
-//! ([`far_piece_derivs`](super::far_piece_derivs)).
+//! ([`deferred_far_piece`](super::deferred_far_piece)).
 //!
 //! What differs from the triangle's replay: the plane is Newell's sum over every edge (as
 //! [`Plane::new`] forms it; for a triangle it reduces to one cross product), validated for
@@ -63,10 +63,13 @@ pub(crate) fn polygon_value<const M: usize, const N: usize>(
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx2_fma() {
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
-        return unsafe { split_fma::<M, N>(x, v, &s, &mut points, &mut [], &mut [], &mut None) }
-            .map(|(value, _, _)| value);
+        return unsafe {
+            split_fma::<M, N>(x, v, &s, &mut points, &mut [], &mut [], &mut None, false)
+        }
+        .map(|(value, _, _)| value);
     }
-    split::<M, N>(x, v, &s, &mut points, &mut [], &mut [], &mut None).map(|(value, _, _)| value)
+    split::<M, N>(x, v, &s, &mut points, &mut [], &mut [], &mut None, false)
+        .map(|(value, _, _)| value)
 }
 
 /// [`polygon_value`] with the exact signed height `h_P` of `x` over the polygon's plane (along
@@ -93,15 +96,18 @@ pub(crate) fn clipped_polygon_value_and_loop<const M: usize, const N: usize>(
         edges,
         count,
         far,
+        defer_far,
     } = out;
+    let defer_far = *defer_far;
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx2_fma() {
         // SAFETY: `simd::avx2_fma` checked that the CPU has AVX2 and FMA.
-        let (value, h_p, k) = unsafe { split_fma::<M, N>(x, v, &s, points, angles, edges, far) }?;
+        let (value, h_p, k) =
+            unsafe { split_fma::<M, N>(x, v, &s, points, angles, edges, far, defer_far) }?;
         *count = k;
         return Some((value, h_p));
     }
-    let (value, h_p, k) = split::<M, N>(x, v, &s, points, angles, edges, far)?;
+    let (value, h_p, k) = split::<M, N>(x, v, &s, points, angles, edges, far, defer_far)?;
     *count = k;
     Some((value, h_p))
 }
@@ -203,6 +209,7 @@ fn screen<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Screened
 /// (Rust does not contract `a * b + c`), so the bits are those of the portable build.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
+#[allow(clippy::too_many_arguments)]
 unsafe fn split_fma<const M: usize, const N: usize>(
     x: DVec3,
     v: &[DVec3; M],
@@ -211,16 +218,20 @@ unsafe fn split_fma<const M: usize, const N: usize>(
     angles: &mut [f64],
     edges: &mut [DVec3],
     far: &mut Option<FarPiece>,
+    defer_far: bool,
 ) -> Option<(f64, f64, usize)> {
-    split::<M, N>(x, v, s, points, angles, edges, far)
+    split::<M, N>(x, v, s, points, angles, edges, far, defer_far)
 }
 
 /// The exact height, the clip (into `points`), the remaining decisions and the split itself:
 /// the value, the exact height and the loop's length; where `angles` and `edges` have entries,
 /// the loop's edges' angles (see `near_plane_value`) and the vectors of its edges off the
 /// tangent plane. Where the visible part is far-field, the far-field rule's value instead, and
-/// `far` set for [`far_piece_derivs`](super::far_piece_derivs).
+/// `far` set; with `defer_far` that rule's value is left to
+/// [`deferred_far_piece`](super::deferred_far_piece) (the derivative orders) and the value
+/// returned is NaN.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn split<const M: usize, const N: usize>(
     x: DVec3,
     v: &[DVec3; M],
@@ -229,6 +240,7 @@ fn split<const M: usize, const N: usize>(
     angles: &mut [f64],
     edges: &mut [DVec3],
     far: &mut Option<FarPiece>,
+    defer_far: bool,
 ) -> Option<(f64, f64, usize)> {
     let Screened { r, u, n, plane } = s;
     let n = *n;
@@ -245,6 +257,15 @@ fn split<const M: usize, const N: usize>(
         .fold(0.0, f64::max)
         .sqrt();
     if let Some(rule) = far_field_rule(centroid.length(), radius) {
+        if defer_far {
+            *far = Some(FarPiece {
+                rule,
+                n,
+                plane_normal: plane.normal,
+                h_p,
+            });
+            return Some((f64::NAN, h_p, count));
+        }
         let value = super::far_field_value(verts, n, plane.normal, h_p, rule, far)?;
         return Some((value, h_p, count));
     }
@@ -271,6 +292,7 @@ fn split<const M: usize, const N: usize>(
         h_p,
         SPLIT_VALUE_LIMIT,
         angles,
+        &mut [],
     )?
     .0;
     // The edge sum's sign convention, then the clamp of the visible part's value.
@@ -378,6 +400,7 @@ mod tests {
                             &mut [],
                             &mut [],
                             &mut None,
+                            false,
                         )
                     })
                     .map(|(f, _, _)| f),
@@ -392,6 +415,7 @@ mod tests {
                             &mut [],
                             &mut [],
                             &mut None,
+                            false,
                         )
                     })
                     .map(|(f, _, _)| f),
@@ -406,6 +430,7 @@ mod tests {
                             &mut [],
                             &mut [],
                             &mut None,
+                            false,
                         )
                     })
                     .map(|(f, _, _)| f),
@@ -420,6 +445,7 @@ mod tests {
                             &mut [],
                             &mut [],
                             &mut None,
+                            false,
                         )
                     })
                     .map(|(f, _, _)| f),

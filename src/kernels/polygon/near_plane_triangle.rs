@@ -153,7 +153,7 @@ unsafe fn split_fma(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
 #[inline(always)]
 fn split(x: DVec3, v: [DVec3; 3], s: &Screened) -> Option<f64> {
     let mut loop_ = [CLIP_VERTEX_ZERO; 4];
-    split_loop(x, v, s, &mut loop_, &mut [], &mut [], &mut None).map(|(value, _)| value)
+    split_loop(x, v, s, &mut loop_, &mut [], &mut [], &mut None, false).map(|(value, _)| value)
 }
 
 pub(super) const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
@@ -178,6 +178,10 @@ pub(crate) struct RouteLoop<const N: usize = 4> {
     /// Set where the visible part is far-field against its size and the value came from the
     /// robust path's far-field rule on the loop.
     pub(super) far: Option<FarPiece>,
+    /// Set by the caller before the route runs: where the far-field rule is taken, leave its
+    /// value to [`deferred_far_piece`](super::deferred_far_piece), which sums it with the
+    /// derivatives (one pass over the rule's nodes instead of two).
+    pub(crate) defer_far: bool,
 }
 
 /// What the far-field rule on a route's loop needs for its derivatives: the rule, the unit
@@ -200,11 +204,13 @@ impl<const N: usize> RouteLoop<N> {
             edges: [DVec3::ZERO; N],
             count: 0,
             far: None,
+            defer_far: false,
         }
     }
 
     /// The vector of the edge from point `k` to the next where one of its ends is a clip point
-    /// and the other not: one rounding of the exact difference of the ends (double-double).
+    /// and the other not, and (a triangle's route) of the clip edge, where both are: one
+    /// rounding of the exact difference of the ends (double-double).
     #[inline(always)]
     pub(crate) fn edge(&self, k: usize) -> DVec3 {
         self.edges[k]
@@ -274,17 +280,20 @@ pub(crate) fn clipped_triangle_value_and_loop(
         &mut out.angles,
         &mut out.edges,
         &mut out.far,
+        out.defer_far,
     )?;
     out.count = count;
     Some(value)
 }
 
 /// [`split`] with the loop it clipped (in `loop_`) and its length, and, where `angles` and
-/// `edges` have entries, its edges' angles (see `near_plane_value`) and the vectors of its edges
-/// off the tangent plane. Where the visible part is far-field against its size, the robust path's
-/// far-field rule on the loop instead of the split, with `far` set
-/// ([`far_piece_derivs`](super::far_piece_derivs)).
+/// `edges` have entries, its edges' angles (see `near_plane_value`) and vectors (the clip
+/// edge's from `near_plane_value`). Where the visible part is far-field against its size, the
+/// robust path's far-field rule on the loop instead of the split, with `far` set; with
+/// `defer_far` that rule's value is left to [`deferred_far_piece`](super::deferred_far_piece)
+/// (the derivative orders) and the value returned is NaN.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn split_loop(
     x: DVec3,
     v: [DVec3; 3],
@@ -293,6 +302,7 @@ fn split_loop(
     angles: &mut [f64],
     edges: &mut [DVec3],
     far: &mut Option<FarPiece>,
+    defer_far: bool,
 ) -> Option<(f64, usize)> {
     let Screened { r, u, n, plane } = s;
     let (r, u, n) = (*r, *u, *n);
@@ -311,6 +321,15 @@ fn split_loop(
         .fold(0.0, f64::max)
         .sqrt();
     if let Some(rule) = far_field_rule(centroid.length(), radius) {
+        if defer_far {
+            *far = Some(FarPiece {
+                rule,
+                n,
+                plane_normal: plane.normal,
+                h_p,
+            });
+            return Some((f64::NAN, count));
+        }
         let value = super::far_field_value(verts, n, plane.normal, h_p, rule, far)?;
         return Some((value, count));
     }
@@ -336,6 +355,7 @@ fn split_loop(
         h_p,
         SPLIT_VALUE_LIMIT,
         angles,
+        edges,
     )?
     .0;
     // The edge sum's sign convention, then the clamp of the visible part's value.
@@ -641,6 +661,7 @@ pub(super) mod tests {
             plane.normal,
             h_p,
             SPLIT_VALUE_LIMIT,
+            &mut [],
             &mut [],
         )
         .is_some()
