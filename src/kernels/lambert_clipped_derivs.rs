@@ -233,13 +233,16 @@ fn robust_edge_term(
         return Some((DVec3::ZERO, [0.0; 6]));
     };
     let t = frame_term(&frame, n, order).ok()?;
-    let h = t.hessian * std::f64::consts::TAU;
-    Some((
-        t.gradient * std::f64::consts::TAU,
-        [
-            h.x_axis.x, h.y_axis.y, h.z_axis.z, h.y_axis.x, h.z_axis.x, h.z_axis.y,
-        ],
-    ))
+    let tau = std::f64::consts::TAU;
+    Some((t.gradient * tau, six_entries(t.hessian * tau)))
+}
+
+/// The six distinct entries `[xx, yy, zz, xy, xz, yz]` of a symmetric matrix, the loop's layout.
+#[inline(always)]
+fn six_entries(h: DMat3) -> [f64; 6] {
+    [
+        h.x_axis.x, h.y_axis.y, h.z_axis.z, h.y_axis.x, h.z_axis.x, h.z_axis.y,
+    ]
 }
 
 /// `2π` times the clip edge's gradient and Hessian (six entries), clip-line motion included, from
@@ -262,12 +265,7 @@ fn clip_term(n: DVec3, ra: DVec3, rb: DVec3, e: DVec3, order: Order) -> (DVec3, 
         sb: rb.dot(e_hat),
     };
     let (g, h) = clip_edge_derivs(&frame, n, order.hessian());
-    (
-        g,
-        [
-            h.x_axis.x, h.y_axis.y, h.z_axis.z, h.y_axis.x, h.z_axis.x, h.z_axis.y,
-        ],
-    )
+    (g, six_entries(h))
 }
 
 #[cfg(test)]

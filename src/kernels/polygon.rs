@@ -1588,26 +1588,39 @@ fn far_field(verts: &[ClipVertex], n: DVec3, order: Order, exact: bool, rule: Ru
     out
 }
 
-/// The near-plane routes' value where the visible part `verts` (their clipped loop) is far-field
-/// against its size: `evaluate`'s far-field branch (its `exact` set near the plane), before the
-/// split, signed by the exact height `h_p` and clamped as `evaluate` does; sets `far` (the
-/// derivative orders defer the value instead: [`deferred_far_piece`]). `None` for a non-finite
-/// value.
-fn far_field_value(
+/// The near-plane routes' branch where the visible part `verts` (their clipped loop) is
+/// far-field against its size: `evaluate`'s far-field branch (its `exact` set near the plane),
+/// which it takes before the split. Records the rule in `far`; returns its value as
+/// [`visible_value`] makes it from the exact height `h_p`, or with `defer` NaN, the value being
+/// left to [`deferred_far_piece`] (which sums the rule once for the value and the derivatives).
+/// `None` for a non-finite value.
+fn far_piece_value(
     verts: &[ClipVertex],
     n: DVec3,
     plane_normal: DVec3,
     h_p: f64,
     rule: Rule,
     far: &mut Option<near_plane_triangle::FarPiece>,
+    defer: bool,
 ) -> Option<f64> {
-    let value = far_field(verts, n, Order::Value, true, rule).value;
     *far = Some(near_plane_triangle::FarPiece {
         rule,
         n,
         plane_normal,
         h_p,
     });
+    if defer {
+        return Some(f64::NAN);
+    }
+    visible_value(far_field(verts, n, Order::Value, true, rule).value, h_p)
+}
+
+/// The form factor of the visible part from the signed sum `value` over its loop: the edge sum's
+/// sign convention (positive when the polygon's right-hand normal points away from x, whose exact
+/// height over the plane is `h_p`), then the clamp to `[0, 1]` that rounding may step outside;
+/// `None` when not finite. Shared by the near-plane routes' split and far-field branch, whose
+/// values at the value and derivative orders must have the same bits.
+fn visible_value(value: f64, h_p: f64) -> Option<f64> {
     let value = if h_p < 0.0 { -value } else { value };
     let value = value.clamp(0.0, 1.0);
     value.is_finite().then_some(value)
@@ -1617,9 +1630,9 @@ fn far_field_value(
 /// route's loop where the route took it and left its value to the derivative order
 /// ([`RouteLoop::defer_far`](near_plane_triangle::RouteLoop)): the rule summed once, for the value
 /// and the derivatives, the derivatives as `evaluate` has them (the clip line's Hessian term
-/// included). The value is [`far_field_value`]'s bits: `triangle_rule` sums the value's `q0` and
+/// included). The value is [`far_piece_value`]'s bits: `triangle_rule` sums the value's `q0` and
 /// `RuleSums::assemble` forms it by the same operations at every order, and it is signed and
-/// clamped here as there. `None` where that value is not finite (where [`far_field_value`]
+/// clamped here as there ([`visible_value`]). `None` where that value is not finite (where [`far_piece_value`]
 /// declines, and the route with it) or `route.far` is not set; `Err(value)` where the derivatives
 /// overflow. Per unit length (per squared length), in the units of the vertices.
 pub(crate) fn deferred_far_piece<const N: usize>(
@@ -1629,11 +1642,7 @@ pub(crate) fn deferred_far_piece<const N: usize>(
     let far = route.far?;
     let verts = &route.points[..route.count];
     let mut d = far_field(verts, far.n, order, true, far.rule);
-    let value = if far.h_p < 0.0 { -d.value } else { d.value };
-    let value = value.clamp(0.0, 1.0);
-    if !value.is_finite() {
-        return None;
-    }
+    let value = visible_value(d.value, far.h_p)?;
     if far.h_p < 0.0 {
         d.gradient = -d.gradient;
         d.hessian = -d.hessian;

@@ -257,16 +257,7 @@ fn split<const M: usize, const N: usize>(
         .fold(0.0, f64::max)
         .sqrt();
     if let Some(rule) = far_field_rule(centroid.length(), radius) {
-        if defer_far {
-            *far = Some(FarPiece {
-                rule,
-                n,
-                plane_normal: plane.normal,
-                h_p,
-            });
-            return Some((f64::NAN, h_p, count));
-        }
-        let value = super::far_field_value(verts, n, plane.normal, h_p, rule, far)?;
+        let value = super::far_piece_value(verts, n, plane.normal, h_p, rule, far, defer_far)?;
         return Some((value, h_p, count));
     }
     if foot_inside(verts, plane.normal, h_p) {
@@ -295,10 +286,7 @@ fn split<const M: usize, const N: usize>(
         &mut [],
     )?
     .0;
-    // The edge sum's sign convention, then the clamp of the visible part's value.
-    let value = if h_p < 0.0 { -value } else { value };
-    let value = value.clamp(0.0, 1.0);
-    value.is_finite().then_some((value, h_p, count))
+    super::visible_value(value, h_p).map(|value| (value, h_p, count))
 }
 
 /// [`clip`](super::clip) on fixed arrays (the same operations, so the same vertices): the loop

@@ -321,16 +321,7 @@ fn split_loop(
         .fold(0.0, f64::max)
         .sqrt();
     if let Some(rule) = far_field_rule(centroid.length(), radius) {
-        if defer_far {
-            *far = Some(FarPiece {
-                rule,
-                n,
-                plane_normal: plane.normal,
-                h_p,
-            });
-            return Some((f64::NAN, count));
-        }
-        let value = super::far_field_value(verts, n, plane.normal, h_p, rule, far)?;
+        let value = super::far_piece_value(verts, n, plane.normal, h_p, rule, far, defer_far)?;
         return Some((value, count));
     }
     if foot_inside(verts, plane.normal, h_p) {
@@ -358,10 +349,7 @@ fn split_loop(
         edges,
     )?
     .0;
-    // The edge sum's sign convention, then the clamp of the visible part's value.
-    let value = if h_p < 0.0 { -value } else { value };
-    let value = value.clamp(0.0, 1.0);
-    value.is_finite().then_some((value, count))
+    super::visible_value(value, h_p).map(|value| (value, count))
 }
 
 /// [`clip`](super::clip) for a triangle, on a fixed array (the same operations, so the same
