@@ -62,7 +62,8 @@ pub(super) struct LoopVertex {
     pub(super) displacement: f64,
 }
 
-/// A placeholder for the unused entries of a loop's points.
+/// The value a loop's unused point entries hold (nothing reads past `count`): a constant, not a
+/// copy of point 0.
 const LOOP_VERTEX_ZERO: LoopVertex = LoopVertex {
     exact: Dd3 {
         x: Dd { hi: 0.0, lo: 0.0 },

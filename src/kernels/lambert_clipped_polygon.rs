@@ -54,10 +54,12 @@
 //! loop, [`routed_polygon_derivs`]). It declines within ~1e-9 of the clip line and wherever
 //! the bound fails.
 //!
-//! **Derivatives**: those of the same loop, with the triangle's acceptance rules (every ordinary
-//! edge `sin β ≥ 1/32` with its error growth charged in the 100x cancellation test, the clip
-//! points' displacement within 5e-13 of the result): `lambert_clipped_derivs`' argument is per
-//! edge and holds for any number of them. The value of a derivative order is the certified value,
+//! **Derivatives**: those of the same loop, with the triangle's acceptance rules (Lambert's terms
+//! down to `sin β = 1/32` with their error growth charged in the cancellation test, the robust
+//! path's moments below, the sums cancelling by at most 1e5, the clip points' displacement within
+//! 1e-11 of the result): `lambert_clipped_derivs`' argument is per edge and holds for any number
+//! of them. Where the route found the visible part far-field, the derivative orders take its
+//! far-field rule instead ([`deferred_far_piece`](super::polygon::deferred_far_piece)). The value of a derivative order is the certified value,
 //! bit for bit (the same loop and sum).
 
 use glam::DVec3;
