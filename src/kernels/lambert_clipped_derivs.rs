@@ -81,7 +81,7 @@ const MIN_SINE: f64 = 1.0 / 32.0;
 /// percentile and 4.7e4 at the 99th. Lambert's unclipped limit ([`lambert::CANCELLATION`], 100,
 /// set for the generic 1e-12 contract) sent a quarter of them to the robust path, which takes the
 /// same edge sums at any cancellation there while its near-plane split cancels by less than 1e3,
-/// and integrates by quadrature beyond (~55000 instructions). Measured against the 320-bit
+/// and integrates by quadrature beyond (~30000 instructions on average over that spread). Measured against the 320-bit
 /// reference over that spread (`tests/kernels_b_near_plane.rs`): worst 1.1e-12 / 4.4e-14.
 const LOOP_CANCELLATION: f64 = 1e5;
 

@@ -57,7 +57,8 @@ use super::dd::two_sum;
 
 use super::{
     far_rule_of, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3, gauss_legendre_4,
-    gauss_legendre_8, legendre_rule, plane_height, triangle_plane, ClipVertex, RuleSums,
+    gauss_legendre_5, gauss_legendre_6, gauss_legendre_8, legendre_rule, plane_height,
+    triangle_plane, ClipVertex, Rule, RuleSums,
 };
 use crate::kernels::lanes::V3;
 use crate::{Deriv3, Order};
@@ -67,8 +68,9 @@ mod quad;
 mod sums;
 
 #[cfg(target_arch = "x86_64")]
-use sums::AvxSums;
-use sums::{GroupSums, PieceFrame, PortableSums};
+pub(super) use sums::AvxSums;
+use sums::PieceFrame;
+pub(super) use sums::{GroupSums, PortableSums};
 
 /// Most intervals along one piece before the sliver rule gives up (x too close to the sliver
 /// compared with its length; the isotropic subdivision takes over).
@@ -159,6 +161,53 @@ fn rules() -> &'static Rules {
             across: ACROSS.map(|(rho, points)| (semi_axes(rho).1, points)),
         }
     })
+}
+
+/// The far-field rules ([`FAR_FIELD_RULES`](super::FAR_FIELD_RULES): 3, 4, 5, 6 and 8 points)
+/// as the sums take them ([`sums::quads`]), by their number of points, built once.
+fn far_quads(points: usize) -> &'static [[[f64; 4]; 2]] {
+    static QUADS: OnceLock<[&'static [[[f64; 4]; 2]]; 9]> = OnceLock::new();
+    QUADS.get_or_init(|| {
+        let mut quads: [&'static [[[f64; 4]; 2]]; 9] = [&[]; 9];
+        for rule in [
+            gauss_legendre_3(),
+            gauss_legendre_4(),
+            gauss_legendre_5(),
+            gauss_legendre_6(),
+            gauss_legendre_8(),
+        ] {
+            // Built once per process and kept for it.
+            quads[rule.len()] = Box::leak(sums::quads(rule).into_boxed_slice());
+        }
+        quads
+    })[points]
+}
+
+/// The sums of the far-field `rule` (`n`x`n` Gauss-Legendre points, Duffy-mapped) over the
+/// triangle `(a, b, c)` (relative to x, as [`triangle_rule`](super::triangle_rule) parametrizes
+/// it: `r_a + s·(u_b − u_a) + s·t·(u_c − u_b)`), four nodes at a time: the subdivided
+/// quadrature's pieces, whose node loop is most of the robust path's cost where it integrates
+/// (x near a polygon's plane with a small or thin visible part). The same rule and integrand as
+/// `triangle_rule`, summed lane by lane (so rounded in another order); the order of the
+/// operations does not depend on `GRADIENT` or `HESSIAN`, nor on the build (module
+/// documentation of [`sums`]).
+#[inline(always)]
+pub(super) fn rule_piece_sums<S: GroupSums, const GRADIENT: bool, const HESSIAN: bool>(
+    a: &ClipVertex,
+    b: &ClipVertex,
+    c: &ClipVertex,
+    n: &V3<S::Lane>,
+    rule: Rule,
+) -> RuleSums {
+    let frame = PieceFrame {
+        r_p: a.r,
+        ab: b.u - a.u,
+        bc: c.u - b.u,
+        part: 1.0,
+    };
+    let mut sums = S::new();
+    sums.add::<GRADIENT, HESSIAN>(&frame, n, (0.0, 1.0, far_quads(rule.0.len())), rule.0);
+    sums.total()
 }
 
 /// The semi-axes `(a, b) = ((ρ + 1/ρ)/2, (ρ − 1/ρ)/2)` of the Bernstein ellipse of parameter

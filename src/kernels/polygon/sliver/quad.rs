@@ -11,7 +11,7 @@
 use crate::kernels::lanes::{Lane, Pair};
 
 /// A few `f64` lanes operated on lane by lane, loaded from a group of four nodes.
-pub(super) trait Lanes: Lane {
+pub(in crate::kernels::polygon) trait Lanes: Lane {
     /// The lanes `group[first..]` (two or four of them).
     fn load(group: &[f64; 4], first: usize) -> Self;
     /// The sum of the lanes: `l0 + l1`, or `(l0 + l1) + (l2 + l3)`.
@@ -30,7 +30,7 @@ impl Lanes for Pair {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(super) use wide::Wide;
+pub(in crate::kernels::polygon) use wide::Wide;
 
 /// One AVX register. Only for code compiled with AVX2 and FMA enabled, after
 /// [`avx2_fma`](crate::simd::avx2_fma) checked the CPU: the `_fma` twins of the sliver rule are
@@ -52,7 +52,7 @@ mod wide {
     }
 
     #[derive(Clone, Copy)]
-    pub(in super::super) struct Wide(__m256d);
+    pub(in crate::kernels::polygon) struct Wide(__m256d);
 
     impl Lanes for Wide {
         #[inline(always)]

@@ -25,7 +25,7 @@ use super::quad::Wide;
 use crate::kernels::lanes::{Pair, V3};
 
 /// The sums of a rule over groups of four nodes, as one build takes them.
-pub(super) trait GroupSums {
+pub(in crate::kernels::polygon) trait GroupSums {
     /// One register's lanes.
     type Lane: Lanes;
     fn new() -> Self;
@@ -43,7 +43,7 @@ pub(super) trait GroupSums {
 
 /// The AVX2 build's sums: four lanes per register.
 #[cfg(target_arch = "x86_64")]
-pub(super) type AvxSums = LaneSums<Wide>;
+pub(in crate::kernels::polygon) type AvxSums = LaneSums<Wide>;
 
 #[cfg(target_arch = "x86_64")]
 impl GroupSums for LaneSums<Wide> {
@@ -70,7 +70,7 @@ impl GroupSums for LaneSums<Wide> {
 
 /// The portable build's sums: lanes 0 and 1 of each group in `lo`, 2 and 3 in `hi`.
 #[derive(Clone, Copy)]
-pub(super) struct PortableSums {
+pub(in crate::kernels::polygon) struct PortableSums {
     lo: LaneSums<Pair>,
     hi: LaneSums<Pair>,
 }
@@ -121,7 +121,7 @@ impl GroupSums for PortableSums {
 
 /// The running sums of [`RuleSums`] per lane (each lane holds different nodes' terms).
 #[derive(Clone, Copy)]
-pub(super) struct LaneSums<L> {
+pub(in crate::kernels::polygon) struct LaneSums<L> {
     q0: L,
     s4: L,
     u6: V3<L>,
@@ -149,7 +149,7 @@ pub(super) fn quads(rule: &[(f64, f64)]) -> Vec<[[f64; 4]; 2]> {
 /// A piece `r_p + s·ab + s·t·bc` relative to x, with the share `part` of the whole triangle's
 /// geometry that it takes (folded into the weights, so that both pieces add to the same sums).
 #[derive(Clone, Copy)]
-pub(super) struct PieceFrame {
+pub(in crate::kernels::polygon) struct PieceFrame {
     pub(super) r_p: DVec3,
     pub(super) ab: DVec3,
     pub(super) bc: DVec3,
