@@ -312,6 +312,17 @@ fn with_certified_loop<const M: usize, const N: usize, R>(
     if left_to_the_robust_path(newell(v), &r) {
         return None;
     }
+    with_tried_loop(x, n, v, f)
+}
+
+/// [`with_certified_loop`] past the decision where to try.
+#[inline(always)]
+fn with_tried_loop<const M: usize, const N: usize, R>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+    f: impl FnOnce(&ClippedLoop<N>) -> R,
+) -> Option<R> {
     let (n, r) = differences(x, n, v)?;
     let cut = cut(n, &r)?;
     convex_normal(v)?;
@@ -356,14 +367,32 @@ pub(crate) type Derivs = Result<Deriv3, f64>;
 /// `Some(Err(value))` where the value is certified but the derivatives decline (an ordinary edge
 /// of the loop below `sin β = 1/32`, a cancelling derivative sum, a clip point too close to `x`
 /// for its displacement), `None` where [`polygon_value`] declines. Arguments as there.
-#[inline(never)]
+// The decision where to try inlined into the caller: outside near the plane (the routed
+// derivatives' regime) it declines without the call (~30 instructions).
+#[inline(always)]
 pub(super) fn polygon_derivs<const M: usize, const N: usize>(
     x: DVec3,
     n: DVec3,
     v: &[DVec3; M],
     order: Order,
 ) -> Option<Derivs> {
-    with_certified_loop::<M, N, _>(x, n, v, |l| {
+    debug_assert!(N > M);
+    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
+    if left_to_the_robust_path(newell(v), &r) {
+        return None;
+    }
+    tried_polygon_derivs::<M, N>(x, n, v, order)
+}
+
+/// [`polygon_derivs`] past the decision where to try.
+#[inline(never)]
+fn tried_polygon_derivs<const M: usize, const N: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+    order: Order,
+) -> Option<Derivs> {
+    with_tried_loop::<M, N, _>(x, n, v, |l| {
         let value = l.value();
         loop_derivs(l, value, order).ok_or(value)
     })
