@@ -102,10 +102,10 @@ struct Cut<const M: usize> {
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn cut<const M: usize>(n: DVec3, r: &[DVec3; M]) -> Option<Cut<M>> {
-    let heights: [f64; M] = std::array::from_fn(|k| n.dot(r[k]));
+    let heights: [f64; M] = crate::kernels::array_from(|k| n.dot(r[k]));
     // The computed heights err by less than a quarter of this (module documentation).
     let height_error: [f64; M] =
-        std::array::from_fn(|k| 8.0 * f64::EPSILON * n.abs().dot(r[k].abs()));
+        crate::kernels::array_from(|k| 8.0 * f64::EPSILON * n.abs().dot(r[k].abs()));
     let mut above = [false; M];
     for k in 0..M {
         if heights[k] > height_error[k] {
@@ -145,7 +145,7 @@ fn newell<const M: usize>(v: &[DVec3; M]) -> DVec3 {
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that a NaN side counts as outside
 fn left_to_the_robust_path<const M: usize>(normal: DVec3, r: &[DVec3; M]) -> bool {
-    let length2: [f64; M] = std::array::from_fn(|k| r[k].length_squared());
+    let length2: [f64; M] = crate::kernels::array_from(|k| r[k].length_squared());
     let r_max2 = length2.iter().fold(0.0f64, |m, &l| m.max(l));
     let height = normal.dot(r[0]);
     let height2 = height * height;
@@ -308,7 +308,7 @@ fn with_certified_loop<const M: usize, const N: usize, R>(
     // The cheap decisions first: outside near the plane (the robust path's near-plane split)
     // they decline before the range checks, the cut and the validation (~50, ~150 and ~300
     // instructions for a quad).
-    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
+    let r: [DVec3; M] = crate::kernels::array_from(|k| v[k] - x);
     if left_to_the_robust_path(newell(v), &r) {
         return None;
     }
@@ -377,11 +377,26 @@ pub(super) fn polygon_derivs<const M: usize, const N: usize>(
     order: Order,
 ) -> Option<Derivs> {
     debug_assert!(N > M);
-    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
+    let r: [DVec3; M] = crate::kernels::array_from(|k| v[k] - x);
     if left_to_the_robust_path(newell(v), &r) {
         return None;
     }
     tried_polygon_derivs::<M, N>(x, n, v, order)
+}
+
+/// [`polygon_derivs`], or where it is not tried or its value declines,
+/// [`routed_polygon_derivs`]: the derivative orders' clipped paths, in their order. Out of line,
+/// so that the caller's unclipped path keeps its own frame (with the decision inlined there the
+/// generic mix cost ~25 instructions more per call, callgrind).
+#[inline(never)]
+pub(super) fn clipped_polygon_derivs<const M: usize, const N: usize, const R: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+    order: Order,
+) -> Option<Derivs> {
+    polygon_derivs::<M, N>(x, n, v, order)
+        .or_else(|| routed_polygon_derivs::<M, N, R>(x, n, v, order))
 }
 
 /// [`polygon_derivs`] past the decision where to try.
@@ -456,7 +471,7 @@ pub(super) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usi
 /// [`lambert::unclipped`] checks them; `None` otherwise.
 #[inline(always)]
 fn differences<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<(DVec3, [DVec3; M])> {
-    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
+    let r: [DVec3; M] = crate::kernels::array_from(|k| v[k] - x);
     if !r.iter().all(|rk| lambert::in_range(*rk)) {
         return None;
     }

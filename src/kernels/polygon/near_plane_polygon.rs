@@ -130,12 +130,17 @@ fn screen<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Screened
     if !(x.is_finite() && v.iter().all(|vk| vk.is_finite())) {
         return None;
     }
-    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
-    let u: [DVec3; M] = std::array::from_fn(|k| v[k] - v[0]);
-    let largest = r
-        .iter()
-        .chain(&u[1..])
-        .fold(0.0f64, |m, d| m.max(d.abs().max_element()));
+    let r: [DVec3; M] = crate::kernels::array_from(|k| v[k] - x);
+    let u: [DVec3; M] = crate::kernels::array_from(|k| v[k] - v[0]);
+    // Two loops, in the chain's order: the chained iterator's fold was an out-of-line call
+    // (~190 instructions).
+    let mut largest = 0.0f64;
+    for d in &r {
+        largest = largest.max(d.abs().max_element());
+    }
+    for d in &u[1..] {
+        largest = largest.max(d.abs().max_element());
+    }
     if !(largest > 1e-30 && largest < 1e30) {
         return None;
     }
@@ -156,7 +161,7 @@ fn screen<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Screened
     // `r_0` for the nearest vertex and twice its limit, which covers the rounding of the unit
     // normal and the polygon's tolerated non-planarity (2.5e-9 of its extent, `convex_normal`)
     // by orders of magnitude. Squared, without roots (NaN passes, to be refused next).
-    let length2: [f64; M] = std::array::from_fn(|k| r[k].length_squared());
+    let length2: [f64; M] = crate::kernels::array_from(|k| r[k].length_squared());
     let r_max2 = length2.iter().fold(0.0, |m: f64, &l| m.max(l));
     let side = nn.dot(r[0]);
     if side * side > 4.0 * NEAR_PLANE_HEIGHT * NEAR_PLANE_HEIGHT * nn.length_squared() * r_max2 {
