@@ -102,10 +102,10 @@ struct Cut<const M: usize> {
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn cut<const M: usize>(n: DVec3, r: &[DVec3; M]) -> Option<Cut<M>> {
-    let heights: [f64; M] = crate::kernels::array_from(|k| n.dot(r[k]));
+    let heights: [f64; M] = std::array::from_fn(|k| n.dot(r[k]));
     // The computed heights err by less than a quarter of this (module documentation).
     let height_error: [f64; M] =
-        crate::kernels::array_from(|k| 8.0 * f64::EPSILON * n.abs().dot(r[k].abs()));
+        std::array::from_fn(|k| 8.0 * f64::EPSILON * n.abs().dot(r[k].abs()));
     let mut above = [false; M];
     for k in 0..M {
         if heights[k] > height_error[k] {
@@ -145,7 +145,7 @@ fn newell<const M: usize>(v: &[DVec3; M]) -> DVec3 {
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that a NaN side counts as outside
 fn left_to_the_robust_path<const M: usize>(normal: DVec3, r: &[DVec3; M]) -> bool {
-    let length2: [f64; M] = crate::kernels::array_from(|k| r[k].length_squared());
+    let length2: [f64; M] = std::array::from_fn(|k| r[k].length_squared());
     let r_max2 = length2.iter().fold(0.0f64, |m, &l| m.max(l));
     let height = normal.dot(r[0]);
     let height2 = height * height;
@@ -308,21 +308,10 @@ fn with_certified_loop<const M: usize, const N: usize, R>(
     // The cheap decisions first: outside near the plane (the robust path's near-plane split)
     // they decline before the range checks, the cut and the validation (~50, ~150 and ~300
     // instructions for a quad).
-    let r: [DVec3; M] = crate::kernels::array_from(|k| v[k] - x);
+    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
     if left_to_the_robust_path(newell(v), &r) {
         return None;
     }
-    with_tried_loop(x, n, v, f)
-}
-
-/// [`with_certified_loop`] past the decision where to try.
-#[inline(always)]
-fn with_tried_loop<const M: usize, const N: usize, R>(
-    x: DVec3,
-    n: DVec3,
-    v: &[DVec3; M],
-    f: impl FnOnce(&ClippedLoop<N>) -> R,
-) -> Option<R> {
     let (n, r) = differences(x, n, v)?;
     let cut = cut(n, &r)?;
     convex_normal(v)?;
@@ -367,8 +356,9 @@ pub(crate) type Derivs = Result<Deriv3, f64>;
 /// `Some(Err(value))` where the value is certified but the derivatives decline (an ordinary edge
 /// of the loop below `sin β = 1/32`, a cancelling derivative sum, a clip point too close to `x`
 /// for its displacement), `None` where [`polygon_value`] declines. Arguments as there.
-// The decision where to try inlined into the caller: outside near the plane (the routed
-// derivatives' regime) it declines without the call (~30 instructions).
+// Inlined into `clipped_polygon_derivs`, out of line, whose frame holds the loop: outside near
+// the plane (the routed derivatives' regime) the decision where to try declines without a call
+// of its own (~30 instructions).
 #[inline(always)]
 pub(super) fn polygon_derivs<const M: usize, const N: usize>(
     x: DVec3,
@@ -376,18 +366,16 @@ pub(super) fn polygon_derivs<const M: usize, const N: usize>(
     v: &[DVec3; M],
     order: Order,
 ) -> Option<Derivs> {
-    debug_assert!(N > M);
-    let r: [DVec3; M] = crate::kernels::array_from(|k| v[k] - x);
-    if left_to_the_robust_path(newell(v), &r) {
-        return None;
-    }
-    tried_polygon_derivs::<M, N>(x, n, v, order)
+    with_certified_loop::<M, N, _>(x, n, v, |l| {
+        let value = l.value();
+        loop_derivs(l, value, order).ok_or(value)
+    })
 }
 
 /// [`polygon_derivs`], or where it is not tried or its value declines,
 /// [`routed_polygon_derivs`]: the derivative orders' clipped paths, in their order. Out of line,
-/// so that the caller's unclipped path keeps its own frame (with the decision inlined there the
-/// generic mix cost ~25 instructions more per call, callgrind).
+/// so that the caller's unclipped path keeps its own frame (with the certified loop's decision
+/// inlined there the generic mix cost ~25 instructions more per call, callgrind).
 #[inline(never)]
 pub(super) fn clipped_polygon_derivs<const M: usize, const N: usize, const R: usize>(
     x: DVec3,
@@ -397,20 +385,6 @@ pub(super) fn clipped_polygon_derivs<const M: usize, const N: usize, const R: us
 ) -> Option<Derivs> {
     polygon_derivs::<M, N>(x, n, v, order)
         .or_else(|| routed_polygon_derivs::<M, N, R>(x, n, v, order))
-}
-
-/// [`polygon_derivs`] past the decision where to try.
-#[inline(never)]
-fn tried_polygon_derivs<const M: usize, const N: usize>(
-    x: DVec3,
-    n: DVec3,
-    v: &[DVec3; M],
-    order: Order,
-) -> Option<Derivs> {
-    with_tried_loop::<M, N, _>(x, n, v, |l| {
-        let value = l.value();
-        loop_derivs(l, value, order).ok_or(value)
-    })
 }
 
 /// [`polygon_derivs`] where the certified loop is not built: outside the polygon near its
@@ -471,7 +445,7 @@ pub(super) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usi
 /// [`lambert::unclipped`] checks them; `None` otherwise.
 #[inline(always)]
 fn differences<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<(DVec3, [DVec3; M])> {
-    let r: [DVec3; M] = crate::kernels::array_from(|k| v[k] - x);
+    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
     if !r.iter().all(|rk| lambert::in_range(*rk)) {
         return None;
     }
