@@ -8,8 +8,8 @@
 //! exact clip, near-plane split, edge sum) costs 4.5-5.5x the unclipped polygon's Lambert sum;
 //! the clipped loop needs only the loop and Lambert's per-edge terms. Measured by callgrind on
 //! `benches/kernels_regimes.rs` (instructions per call, value / gradient / Hessian, robust path
-//! → this path): quad 1e-6 above the plane 7783 / 10271 / 10867 → 3458 / 4432 / 5320, pentagon
-//! 9099 / 9759 / 10355 → 3666 / 4646 / 5533 (docs/kernels.md, "Hard regimes").
+//! → this path): quad 1e-6 above the plane 7783 / 10271 / 10867 → 3433 / 4425 / 5235, pentagon
+//! 9099 / 9759 / 10355 → 3611 / 4618 / 5429 (docs/kernels.md, "Hard regimes").
 //!
 //! **What is certified.** The polygon must be one that
 //! [`lambert_polygon`](super::lambert_polygon) would take unclipped (strictly convex, planar to a

@@ -30,8 +30,9 @@
 //! [`clipped_polygon_value_and_loop`], which also hands out its loop for the clipped loop's
 //! derivatives (`lambert_clipped_polygon::routed_polygon_derivs`). Measured by callgrind on
 //! `benches/kernels_regimes.rs`'s "1e-6 from the plane, outside" rows (value / gradient /
-//! Hessian, robust path → this route): quad 7765 / 10217 / 10813 → 5311 / 7519 / 8396, pentagon
-//! 9098 / 11654 / 12250 → 6046 / 8402 / 9274 instructions per call (docs/kernels.md).
+//! Hessian, robust path → this route): quad 7765 / 10217 / 10813 → 5099 / 7036 / 7832, pentagon
+//! 9098 / 11654 / 12250 → 5802 / 7810 / 8607 instructions per call (docs/kernels.md); over the
+//! benchmark's outside mix (`RADDIFF_REGIMES_MIX`) 5665 / 8044 / 9080.
 
 use glam::DVec3;
 
