@@ -29,7 +29,10 @@
 //! by `O(δ/‖r‖)` relatively, which is the displacement test: the sum over edges of each term's size
 //! times the relative displacement `δ/‖r‖` of its clip-point ends, times 4 (the terms are
 //! homogeneous of degree −1 and −2 in the distances), must stay within [`MOVED_TOLERANCE`] of the
-//! result. Measured against the 320-bit reference (`tests/kernels_b_clipped_derivs.rs`, `h_P` down
+//! result. A clip point's rounding to f64 (within `u‖r‖`) counts as displacement too: at twice
+//! its bound for the triangle ([`loop_derivs`]), whose derivatives keep the generic 1e-12 outside
+//! near the plane, at its bound for the polygon route ([`loop_derivs_charging`] from
+//! `lambert_clipped_polygon::routed_polygon_derivs`), whose contract is the regime's 1e-9. Measured against the 320-bit reference (`tests/kernels_b_clipped_derivs.rs`, `h_P` down
 //! to 1e-12 of the size): worst 2e-15 (gradient) and 4e-15 (Hessian) over the interior, 1.1e-14
 //! and 3.7e-15 outside; 1.8e-12 and 4.2e-12 with `x` near a vertex.
 //!
@@ -59,7 +62,8 @@ const U: f64 = 0.5 * f64::EPSILON;
 /// clip points' displacement (module documentation): 1/100 of the near-plane regime's gradient
 /// contract (1e-9), and of the order of what [`LOOP_CANCELLATION`] accepts from the terms' own
 /// rounding (the displacement of a route's clip point is its rounding to f64, `u` relative, so
-/// this test is that one for the clip point's edges).
+/// this test is that one for the clip point's edges, charged at `2u` for the triangle, `u` for
+/// the polygon route: module documentation).
 const MOVED_TOLERANCE: f64 = 1e-11;
 
 /// Smallest `sin β` of an ordinary edge of the loop at which the path is taken. Lambert's
@@ -106,11 +110,29 @@ pub(super) fn loop_derivs<const N: usize>(
     value: f64,
     order: Order,
 ) -> Option<Deriv3> {
+    loop_derivs_charging(clipped, value, order, CLIP_ROUNDING)
+}
+
+/// The clip points' rounding to f64 charged by the displacement test (relative to the point):
+/// twice its bound `u`, the margin the triangle's derivatives keep for their generic 1e-12
+/// accuracy outside near the plane (`tests/kernels_b_clipped_derivs.rs`).
+const CLIP_ROUNDING: f64 = 2.0 * U;
+
+/// [`loop_derivs`] with the clip points' rounding charged at `rounding` (relative to the point,
+/// at least its bound `u`) in the displacement test (module documentation, "Rounded clip
+/// points").
+pub(super) fn loop_derivs_charging<const N: usize>(
+    clipped: &ClippedLoop<N>,
+    value: f64,
+    order: Order,
+    rounding: f64,
+) -> Option<Deriv3> {
+    debug_assert!(rounding >= U);
     // One copy per order, so that the order tests fold away in the inlined edge terms.
     let d = match order {
         Order::Value => None,
-        Order::Gradient => derivs_at(clipped, Order::Gradient),
-        Order::Hessian => derivs_at(clipped, Order::Hessian),
+        Order::Gradient => derivs_at(clipped, Order::Gradient, rounding),
+        Order::Hessian => derivs_at(clipped, Order::Hessian, rounding),
     };
     d.map(|d| Deriv3 { value, ..d })
 }
@@ -123,7 +145,11 @@ fn max6(h: &[f64; 6]) -> f64 {
 
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
-fn derivs_at<const N: usize>(clipped: &ClippedLoop<N>, order: Order) -> Option<Deriv3> {
+fn derivs_at<const N: usize>(
+    clipped: &ClippedLoop<N>,
+    order: Order,
+    rounding: f64,
+) -> Option<Deriv3> {
     let n = clipped.n;
     let (mut gradient, mut hessian) = (DVec3::ZERO, [0.0; 6]);
     let (mut g_mag, mut h_mag) = (0.0, 0.0);
@@ -132,7 +158,7 @@ fn derivs_at<const N: usize>(clipped: &ClippedLoop<N>, order: Order) -> Option<D
     let shift = |p: &LoopVertex| match p.vertex {
         Some(_) => 0.0,
         // The displacement along the triangle's edge and the rounding of the point.
-        None => (p.displacement + 2.0 * U * p.hi.length()) / p.hi.length(),
+        None => (p.displacement + rounding * p.hi.length()) / p.hi.length(),
     };
     // Once per point (one square root and division, not three): read by the test below and by
     // both of the point's edges.

@@ -8,8 +8,8 @@
 //! exact clip, near-plane split, edge sum) costs 4.5-5.5x the unclipped polygon's Lambert sum;
 //! the clipped loop needs only the loop and Lambert's per-edge terms. Measured by callgrind on
 //! `benches/kernels_regimes.rs` (instructions per call, value / gradient / Hessian, robust path
-//! → this path): quad 1e-6 above the plane 7783 / 10271 / 10867 → 3458 / 4432 / 5320, pentagon
-//! 9099 / 9759 / 10355 → 3666 / 4646 / 5533 (docs/kernels.md, "Hard regimes").
+//! → this path): quad 1e-6 above the plane 7783 / 10271 / 10867 → 3433 / 4425 / 5235, pentagon
+//! 9099 / 9759 / 10355 → 3611 / 4618 / 5429 (docs/kernels.md, "Hard regimes").
 //!
 //! **What is certified.** The polygon must be one that
 //! [`lambert_polygon`](super::lambert_polygon) would take unclipped (strictly convex, planar to a
@@ -58,7 +58,12 @@
 //! down to `sin β = 1/32` with their error growth charged in the cancellation test, the robust
 //! path's moments below, the sums cancelling by at most 1e5, the clip points' displacement within
 //! 1e-11 of the result): `lambert_clipped_derivs`' argument is per edge and holds for any number
-//! of them. Where the route found the visible part far-field, the derivative orders take its
+//! of them. The route's clip points are the exact crossings to ~u², so their displacement is their
+//! rounding to f64, charged at its bound `u` (the triangle charges `2u` for its 1e-12): over the
+//! benchmark's outside mix (`RADDIFF_REGIMES_MIX`) that takes 20 of the 29 configurations the
+//! `2u` charge sent to the robust path (~60000 instructions each; 9 more cancel beyond 1e5),
+//! whose derivatives then agree with the 320-bit reference within 3.0e-12 (gradient), against
+//! the regime's 1e-9 (the worst over the mix before was the robust path's 2.8e-12). Where the route found the visible part far-field, the derivative orders take its
 //! far-field rule instead ([`deferred_far_piece`](super::polygon::deferred_far_piece)). The value of a derivative order is the certified value,
 //! bit for bit (the same loop and sum).
 
@@ -69,7 +74,7 @@ use super::lambert;
 use super::lambert_clipped::{
     certify, difference_error, edge_vector, from_parts, ClippedLoop, LoopVertex,
 };
-use super::lambert_clipped_derivs::loop_derivs;
+use super::lambert_clipped_derivs::{loop_derivs, loop_derivs_charging};
 use super::lambert_polygon::convex_normal;
 use super::polygon::{deferred_far_piece, near_plane_clipped_polygon_value_and_loop, RouteLoop};
 use crate::{Deriv3, Order};
@@ -171,7 +176,8 @@ fn left_to_the_robust_path<const M: usize>(normal: DVec3, r: &[DVec3; M]) -> boo
 /// ones, which moves them from the exact crossing by ~u² instead of ~u of the size (the routed
 /// derivatives' accept test on that displacement fails by a few times with the f64 points where
 /// the derivative sums cancel outside the polygon), its edge vectors from a kept vertex to a
-/// clip point (or back; the same rounding of the same double-double difference) and its angles
+/// clip point (or back) and of the clip edge (the same rounding of the same double-double
+/// difference) and its angles
 /// (those of the same edges, the same ends to their rounding); without, NaN angles.
 #[inline(always)]
 fn with_loop<const M: usize, const N: usize, const R: usize, T>(
@@ -266,8 +272,11 @@ fn with_loop<const M: usize, const N: usize, const R: usize, T>(
     for k in 0..count {
         let next = if k + 1 == count { 0 } else { k + 1 };
         let (a, b) = (&l.points[k], &l.points[next]);
-        l.edges[k] = match route {
-            Some(route) if a.vertex.is_some() != b.vertex.is_some() => route.edge(k),
+        l.edges[k] = match (route, a.vertex, b.vertex) {
+            // Written out: the call (`edge_vector`'s first case) cost ~40 instructions per edge.
+            (_, Some(i), Some(j)) => v[j] - v[i],
+            // The route's double-double difference of the same ends, rounded once.
+            (Some(route), ..) => route.edge(k),
             _ => edge_vector(v, a, b),
         };
         if let Some(route) = route {
@@ -347,7 +356,10 @@ pub(crate) type Derivs = Result<Deriv3, f64>;
 /// `Some(Err(value))` where the value is certified but the derivatives decline (an ordinary edge
 /// of the loop below `sin β = 1/32`, a cancelling derivative sum, a clip point too close to `x`
 /// for its displacement), `None` where [`polygon_value`] declines. Arguments as there.
-#[inline(never)]
+// Inlined into `clipped_polygon_derivs`, out of line, whose frame holds the loop: outside near
+// the plane (the routed derivatives' regime) the decision where to try declines without a call
+// of its own (~30 instructions).
+#[inline(always)]
 pub(super) fn polygon_derivs<const M: usize, const N: usize>(
     x: DVec3,
     n: DVec3,
@@ -358,6 +370,21 @@ pub(super) fn polygon_derivs<const M: usize, const N: usize>(
         let value = l.value();
         loop_derivs(l, value, order).ok_or(value)
     })
+}
+
+/// [`polygon_derivs`], or where it is not tried or its value declines,
+/// [`routed_polygon_derivs`]: the derivative orders' clipped paths, in their order. Out of line,
+/// so that the caller's unclipped path keeps its own frame (with the certified loop's decision
+/// inlined there the generic mix cost ~25 instructions more per call, callgrind).
+#[inline(never)]
+pub(super) fn clipped_polygon_derivs<const M: usize, const N: usize, const R: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+    order: Order,
+) -> Option<Derivs> {
+    polygon_derivs::<M, N>(x, n, v, order)
+        .or_else(|| routed_polygon_derivs::<M, N, R>(x, n, v, order))
 }
 
 /// [`polygon_derivs`] where the certified loop is not built: outside the polygon near its
@@ -382,13 +409,16 @@ pub(super) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usi
     // The far-field rule's value is summed with its derivatives (`deferred_far_piece`; where
     // that value is not finite the route declined before, and does here).
     route.defer_far = true;
-    let (value, h_p) = near_plane_clipped_polygon_value_and_loop::<M, R>(x, n, v, &mut route)?;
+    let (value, h_p, n, r) =
+        near_plane_clipped_polygon_value_and_loop::<M, R>(x, n, v, &mut route)?;
     if route.is_far() {
         return deferred_far_piece(&route, order);
     }
-    let Some((n, r)) = differences(x, n, v) else {
+    // The route's unit normal and differences are those `differences` forms; their range is
+    // checked as there.
+    if !r.iter().all(|rk| lambert::in_range(*rk)) {
         return Some(Err(value));
-    };
+    }
     let (Some(cut), false) = (cut(n, &r), h_p == 0.0) else {
         return Some(Err(value));
     };
@@ -403,7 +433,10 @@ pub(super) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usi
                 return Err(value);
             }
             l.sum = h_p.signum();
-            loop_derivs(l, value, order).ok_or(value)
+            // The route's clip points are the exact crossings to ~u²: their displacement is
+            // their rounding to f64, charged at its bound `u` (module documentation,
+            // "Derivatives").
+            loop_derivs_charging(l, value, order, U).ok_or(value)
         },
     ))
 }
@@ -832,15 +865,17 @@ mod tests {
                             n,
                             v[..].try_into().unwrap(),
                             &mut route,
-                        ),
+                        )
+                        .map(|(value, ..)| value),
                         _ => near_plane_clipped_polygon_value_and_loop::<5, 10>(
                             x,
                             n,
                             v[..].try_into().unwrap(),
                             &mut route,
-                        ),
+                        )
+                        .map(|(value, ..)| value),
                     };
-                    value.filter(|_| route.is_far()).map(|(value, _)| value)
+                    value.filter(|_| route.is_far())
                 }
             };
             let Some(value) = value else {

@@ -239,47 +239,36 @@ pub(crate) fn polygon_derivs_or_clipped(
             None
         }
     };
-    use lambert_clipped_polygon::polygon_derivs as derivs;
-    use lambert_clipped_polygon::routed_polygon_derivs as routed;
+    use lambert_clipped_polygon::clipped_polygon_derivs as derivs;
     match v.len() {
         4 => {
             let v = v.try_into().ok()?;
             derivs_or::<4>(x, n, v, order, || {
-                clipped(
-                    derivs::<4, 5>(x, n, v, order).or_else(|| routed::<4, 5, 8>(x, n, v, order)),
-                )
+                clipped(derivs::<4, 5, 8>(x, n, v, order))
             })
         }
         5 => {
             let v = v.try_into().ok()?;
             derivs_or::<5>(x, n, v, order, || {
-                clipped(
-                    derivs::<5, 6>(x, n, v, order).or_else(|| routed::<5, 6, 10>(x, n, v, order)),
-                )
+                clipped(derivs::<5, 6, 10>(x, n, v, order))
             })
         }
         6 => {
             let v = v.try_into().ok()?;
             derivs_or::<6>(x, n, v, order, || {
-                clipped(
-                    derivs::<6, 7>(x, n, v, order).or_else(|| routed::<6, 7, 12>(x, n, v, order)),
-                )
+                clipped(derivs::<6, 7, 12>(x, n, v, order))
             })
         }
         7 => {
             let v = v.try_into().ok()?;
             derivs_or::<7>(x, n, v, order, || {
-                clipped(
-                    derivs::<7, 8>(x, n, v, order).or_else(|| routed::<7, 8, 14>(x, n, v, order)),
-                )
+                clipped(derivs::<7, 8, 14>(x, n, v, order))
             })
         }
         8 => {
             let v = v.try_into().ok()?;
             derivs_or::<8>(x, n, v, order, || {
-                clipped(
-                    derivs::<8, 9>(x, n, v, order).or_else(|| routed::<8, 9, 16>(x, n, v, order)),
-                )
+                clipped(derivs::<8, 9, 16>(x, n, v, order))
             })
         }
         _ => None,

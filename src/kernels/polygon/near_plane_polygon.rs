@@ -30,8 +30,9 @@
 //! [`clipped_polygon_value_and_loop`], which also hands out its loop for the clipped loop's
 //! derivatives (`lambert_clipped_polygon::routed_polygon_derivs`). Measured by callgrind on
 //! `benches/kernels_regimes.rs`'s "1e-6 from the plane, outside" rows (value / gradient /
-//! Hessian, robust path → this route): quad 7765 / 10217 / 10813 → 5311 / 7519 / 8396, pentagon
-//! 9098 / 11654 / 12250 → 6046 / 8402 / 9274 instructions per call (docs/kernels.md).
+//! Hessian, robust path → this route): quad 7765 / 10217 / 10813 → 5099 / 7036 / 7832, pentagon
+//! 9098 / 11654 / 12250 → 5802 / 7810 / 8607 instructions per call (docs/kernels.md); over the
+//! benchmark's outside mix (`RADDIFF_REGIMES_MIX`) 5665 / 8044 / 9080.
 
 use glam::DVec3;
 
@@ -80,14 +81,15 @@ pub(crate) fn polygon_value<const M: usize, const N: usize>(
 /// vertex to a clip point (or back) and its well-conditioned edges' angles (see
 /// `near_plane_value`) instead of computing them a second time. The loop's points are, for `i`
 /// in `0..M`, vertex `i` when it is kept, then the crossing of edge `i → i + 1` when there is one
-/// (`clip`'s order).
+/// (`clip`'s order). Also returned: the unit normal ([`lambert::unit`]) and `r_k = v_k − x`,
+/// which the derivative orders' loop takes rather than forming them again.
 #[inline(always)]
 pub(crate) fn clipped_polygon_value_and_loop<const M: usize, const N: usize>(
     x: DVec3,
     n: DVec3,
     v: &[DVec3; M],
     out: &mut RouteLoop<N>,
-) -> Option<(f64, f64)> {
+) -> Option<(f64, f64, DVec3, [DVec3; M])> {
     debug_assert!(N >= 2 * M);
     let s = screen(x, n, v)?;
     let RouteLoop {
@@ -105,11 +107,11 @@ pub(crate) fn clipped_polygon_value_and_loop<const M: usize, const N: usize>(
         let (value, h_p, k) =
             unsafe { split_fma::<M, N>(x, v, &s, points, angles, edges, far, defer_far) }?;
         *count = k;
-        return Some((value, h_p));
+        return Some((value, h_p, s.n, s.r));
     }
     let (value, h_p, k) = split::<M, N>(x, v, &s, points, angles, edges, far, defer_far)?;
     *count = k;
-    Some((value, h_p))
+    Some((value, h_p, s.n, s.r))
 }
 
 /// What [`screen`] hands to [`split`].
@@ -129,12 +131,17 @@ fn screen<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Screened
     if !(x.is_finite() && v.iter().all(|vk| vk.is_finite())) {
         return None;
     }
-    let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
-    let u: [DVec3; M] = std::array::from_fn(|k| v[k] - v[0]);
-    let largest = r
-        .iter()
-        .chain(&u[1..])
-        .fold(0.0f64, |m, d| m.max(d.abs().max_element()));
+    let r: [DVec3; M] = crate::kernels::array_from(|k| v[k] - x);
+    let u: [DVec3; M] = crate::kernels::array_from(|k| v[k] - v[0]);
+    // Two loops, in the chain's order: the chained iterator's fold was an out-of-line call
+    // (~190 instructions).
+    let mut largest = 0.0f64;
+    for d in &r {
+        largest = largest.max(d.abs().max_element());
+    }
+    for d in &u[1..] {
+        largest = largest.max(d.abs().max_element());
+    }
     if !(largest > 1e-30 && largest < 1e30) {
         return None;
     }
@@ -155,7 +162,8 @@ fn screen<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Screened
     // `r_0` for the nearest vertex and twice its limit, which covers the rounding of the unit
     // normal and the polygon's tolerated non-planarity (2.5e-9 of its extent, `convex_normal`)
     // by orders of magnitude. Squared, without roots (NaN passes, to be refused next).
-    let r_max2 = r.iter().map(|rk| rk.length_squared()).fold(0.0, f64::max);
+    let length2: [f64; M] = crate::kernels::array_from(|k| r[k].length_squared());
+    let r_max2 = length2.iter().fold(0.0, |m: f64, &l| m.max(l));
     let side = nn.dot(r[0]);
     if side * side > 4.0 * NEAR_PLANE_HEIGHT * NEAR_PLANE_HEIGHT * nn.length_squared() * r_max2 {
         return None;
@@ -173,12 +181,13 @@ fn screen<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Screened
         return None;
     }
     // The first nearest vertex, as `evaluate`'s `min_by` picks it.
-    let mut nearest = r[0];
-    for rk in &r[1..] {
-        if rk.length_squared() < nearest.length_squared() {
-            nearest = *rk;
+    let mut nearest = 0;
+    for k in 1..M {
+        if length2[k] < length2[nearest] {
+            nearest = k;
         }
     }
+    let nearest = r[nearest];
     let h_rounded = plane.normal.dot(nearest);
     let r_max = r_max2.sqrt();
     if !(h_rounded.abs() > 4.0 * f64::EPSILON * r_max
@@ -225,8 +234,8 @@ unsafe fn split_fma<const M: usize, const N: usize>(
 
 /// The exact height, the clip (into `points`), the remaining decisions and the split itself:
 /// the value, the exact height and the loop's length; where `angles` and `edges` have entries,
-/// the loop's edges' angles (see `near_plane_value`) and the vectors of its edges off the
-/// tangent plane. Where the visible part is far-field, the far-field rule's value instead, and
+/// the loop's edges' angles (see `near_plane_value`) and the vectors of its edges (the clip
+/// edge's from `near_plane_value`). Where the visible part is far-field, the far-field rule's value instead, and
 /// `far` set; with `defer_far` that rule's value is left to
 /// [`deferred_far_piece`](super::deferred_far_piece) (the derivative orders) and the value
 /// returned is NaN.
@@ -283,7 +292,7 @@ fn split<const M: usize, const N: usize>(
         h_p,
         SPLIT_VALUE_LIMIT,
         angles,
-        &mut [],
+        edges,
     )?
     .0;
     super::visible_value(value, h_p).map(|value| (value, h_p, count))

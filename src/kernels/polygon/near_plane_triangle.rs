@@ -209,8 +209,8 @@ impl<const N: usize> RouteLoop<N> {
     }
 
     /// The vector of the edge from point `k` to the next where one of its ends is a clip point
-    /// and the other not, and (a triangle's route) of the clip edge, where both are: one
-    /// rounding of the exact difference of the ends (double-double).
+    /// and the other not, and of the clip edge, where both are: one rounding of the exact
+    /// difference of the ends (double-double).
     #[inline(always)]
     pub(crate) fn edge(&self, k: usize) -> DVec3 {
         self.edges[k]
