@@ -1659,9 +1659,9 @@ fn visible_value(value: f64, h_p: f64) -> Option<f64> {
 /// and the derivatives, the derivatives as `evaluate` has them (the clip line's Hessian term
 /// included). The value is [`far_piece_value`]'s bits: `triangle_rule` sums the value's `q0` and
 /// `RuleSums::assemble` forms it by the same operations at every order, and it is signed and
-/// clamped here as there ([`visible_value`]). `None` where that value is not finite (where [`far_piece_value`]
-/// declines, and the route with it) or `route.far` is not set; `Err(value)` where the derivatives
-/// overflow. Per unit length (per squared length), in the units of the vertices.
+/// clamped here as there ([`visible_value`]). `None` where that value is not finite (where
+/// [`far_piece_value`] declines, and the route with it) or `route.far` is not set; `Err(value)`
+/// where the derivatives overflow. Per unit length (per squared length), in the units of the vertices.
 pub(crate) fn deferred_far_piece<const N: usize>(
     route: &RouteLoop<N>,
     order: Order,
@@ -1712,15 +1712,15 @@ const MAX_PIECES: usize = 256;
 /// outside the visible part, when [`near_plane_value`] declines: x also within `10 h_P` of an edge
 /// line, or the split's own parts cancelling (a small corner cut off). There the edge sum's O(1)
 /// terms sum to the O(h_P) value, and graded refinement towards x takes up to ~1500 pieces at
-/// h_P = 1e-6. Elsewhere in this configuration the split
-/// takes the value in closed form (the cancellation is not intrinsic: see [`near_plane_value`]).
+/// h_P = 1e-6. Elsewhere in this configuration the split takes the value in closed form (the
+/// cancellation is not intrinsic: see [`near_plane_value`]).
 const MAX_PIECES_NEAR_PLANE: usize = 4096;
 
 /// The fan triangles of the loop, bisected along their longest edge until each is far from x
 /// (centroid distance ≥ [`FAR_FIELD_RATIO`] × radius), then integrated by [`triangle_rule`]'s
-/// rule, four nodes at a time ([`sliver::rule_piece_sums`]: the node loop was ~85% of the
-/// quadrature, which now takes ~2.6x fewer instructions in the AVX2 build; the portable build
-/// gives the same bits). For polygons whose edge sum cancels (slivers, x near the plane) while x
+/// rule, four nodes at a time ([`sliver::rule_piece_sums`]: the node loop is most of the
+/// quadrature's cost, and in the AVX2 build takes ~2.6x fewer instructions so than one node at a
+/// time; the portable build gives the same bits). For polygons whose edge sum cancels (slivers, x near the plane) while x
 /// is not close to them. `None` if that would take more than `max_pieces` triangles.
 fn subdivided_quadrature(
     verts: &[ClipVertex],
@@ -2285,6 +2285,7 @@ pub fn vector_form_factor_jacobian(x: DVec3, vertices: &[DVec3]) -> Result<DMat3
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernels::test_rng::lcg;
 
     /// The switch ratios of [`FAR_FIELD_RULES`] above 16 satisfy the documented tolerances of
     /// [`far_field_error_bound`] (1e-14 value and gradient, 1e-12 Hessian) at the switch, and so
@@ -2325,7 +2326,7 @@ mod tests {
     /// 1e-2..1e2 (some of them slivers), `x` 1.05-3 sizes from its centre and 1e-8..1 sizes
     /// from its plane, so that the bisection takes from one piece to hundreds.
     fn quadrature_loop(state: &mut u64) -> (Vec<ClipVertex>, DVec3) {
-        let mut c = || crate::kernels::test_rng::lcg(state);
+        let mut c = || lcg(state);
         let scale = 10f64.powf(4.0 * c() - 2.0);
         let m = 3 + usize::from(c() < 0.5);
         let thin = if c() < 0.2 { 1e-3 } else { 1.0 };
@@ -2407,7 +2408,7 @@ mod tests {
         let mut state = 1867;
         let mut worst = 0.0f64;
         for k in 0..600 {
-            let mut c = || crate::kernels::test_rng::lcg(&mut state);
+            let mut c = || lcg(&mut state);
             let p = |c: &mut dyn FnMut() -> f64| DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5);
             let centre = p(&mut c).normalize() * 10f64.powf(1.2 + 3.0 * c());
             let t: Vec<ClipVertex> = (0..3)

@@ -235,8 +235,8 @@ unsafe fn split_fma<const M: usize, const N: usize>(
 /// The exact height, the clip (into `points`), the remaining decisions and the split itself:
 /// the value, the exact height and the loop's length; where `angles` and `edges` have entries,
 /// the loop's edges' angles (see `near_plane_value`) and the vectors of its edges (the clip
-/// edge's from `near_plane_value`). Where the visible part is far-field, the far-field rule's value instead, and
-/// `far` set; with `defer_far` that rule's value is left to
+/// edge's from `near_plane_value`). Where the visible part is far-field, the far-field rule's
+/// value instead, and `far` set; with `defer_far` that rule's value is left to
 /// [`deferred_far_piece`](super::deferred_far_piece) (the derivative orders) and the value
 /// returned is NaN.
 #[inline(always)]
