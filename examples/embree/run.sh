@@ -16,6 +16,7 @@ missing=()
 command -v cmake >/dev/null || missing+=(cmake)
 command -v c++ >/dev/null || missing+=(g++)
 [ -f /usr/include/embree3/rtcore.h ] || missing+=(libembree-dev)
+[ -f /usr/include/png.h ] || missing+=(libpng-dev)
 if [ ${#missing[@]} -gt 0 ]; then
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
     apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"

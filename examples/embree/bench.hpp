@@ -1,0 +1,50 @@
+// The real-scene benchmark: every metric's cache, tuned to equal records and swept over
+// thresholds, against a converged reference, with the error split into the gathers' own noise and
+// interpolation, and path tracing at equal CPU time. Writes CSV files, images and PFMs under a
+// prefix; examples/embree/report.py turns several runs into the report.
+#pragma once
+
+#include "camera.hpp"
+#include "metrics.hpp"
+#include "reference.hpp"
+
+#include <string>
+#include <vector>
+
+namespace rd {
+
+// Record radius bounds: world bounds (L) and pixel bounds (times the footprint of the record's
+// pixel); the tighter of each pair applies.
+struct RadiusBounds {
+  double min_world = 0, max_world = INFINITY;
+  double min_pixels = 0, max_pixels = INFINITY;
+  double clamp(double r, double footprint) const {
+    const double lo = std::max(min_world, min_pixels * footprint);
+    const double hi = std::max(lo, std::min(max_world, max_pixels * footprint));
+    return std::clamp(std::isfinite(r) ? r : hi, lo, hi);
+  }
+};
+
+struct BenchSettings {
+  std::vector<Metric> metrics = all_metrics();
+  size_t target_records = 0;  // 0: one record per 32 pixels
+  int thresholds = 4;         // fills per metric along its error-against-time curve (>= 1)
+  uint32_t gather_m = 32, gather_n = 128;
+  HitRadianceSettings radiance;
+  ReferenceSettings reference;
+  RadiusBounds bounds;
+  double gradient_limit = RADDIFF_GRADIENT_LIMIT_DEFAULT;
+  double max_normal_deviation = 0.2;  // radians
+  uint32_t floor_records = 200;       // records per metric whose gathers are checked against a reference
+  uint32_t floor_rays = 1u << 16;     // rays of the reference at each of those records
+  uint32_t path_trace_max_spp = 4096;
+  bool path_trace = true;
+  std::string out = "bench";          // file prefix
+  unsigned threads = 2;
+};
+
+// Runs the benchmark on one view; returns 0 when every fill covered the image with finite,
+// non-negative values.
+int run_bench(const Scene &scene, const View &view, const std::string &scene_key, const BenchSettings &settings);
+
+}  // namespace rd
