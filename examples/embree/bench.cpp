@@ -556,10 +556,13 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
           << "width," << view.width << "\nheight," << view.height << "\ntriangles," << scene.triangle_count()
           << "\nscene_size," << scene.size() << "\ngather," << settings.gather_m << "x" << settings.gather_n
           << "\nhit_radiance," << settings.radiance.describe() << "\ntarget_records," << target
-          << "\nmeasured_pixels," << ref.pixels.size() << "\nreference_rays," << settings.reference.rays
+          << "\nmeasured_pixels," << ref.pixels.size() << "\nreference_grid," << settings.reference.grid << "\nreference_rays," << settings.reference.rays
           << "\nreference_relative_noise," << ref.relative_noise() << "\nreference_mean," << ref_mean
           << "\ngathers_computed," << bench.store().computed() << "\nmax_rss_mib," << max_rss_mib()
-          << "\nprocess_cpu_s," << process_cpu_seconds() - wall0 << "\nexposure," << exposure << "\n";
+          << "\nprocess_cpu_s," << process_cpu_seconds() - wall0 << "\nexposure," << exposure << "\nreference_cpu_s," << ref.seconds
+          << "\nreference_loaded," << ref.loaded << "\ngradient_limit," << settings.gradient_limit
+          << "\nradius_bounds," << settings.bounds.min_world << " " << settings.bounds.max_world << " "
+          << settings.bounds.min_pixels << " " << settings.bounds.max_pixels << "\n";
   std::printf("bench: %zu gathers computed, max RSS %ld MiB, %.0f CPU s\n", bench.store().computed(), max_rss_mib(),
               process_cpu_seconds() - wall0);
   std::printf("%s\n", ok ? "OK" : "FAILED");
