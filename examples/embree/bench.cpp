@@ -189,8 +189,8 @@ class Bench {
           rec.position = to_c(info.p);
           rec.normal = to_c(info.n);
           rec.value = value;
-          rec.gradient = gradient;
-          rec.rotation_gradient = rotation;
+          rec.gradient = settings_.record_gradients ? gradient : nullptr;
+          rec.rotation_gradient = settings_.record_gradients ? rotation : nullptr;
           rec.radii[0] = info.radii[0];
           rec.radii[1] = info.radii[1];
           rec.radii[2] = std::min(info.radii[0], info.radii[1]);
@@ -343,9 +343,11 @@ class FloorReferences {
                 s.floor_rays);
     std::fflush(stdout);
     std::vector<ReferencePixel> found(missing.size());
+    HitRadianceSettings single = s.radiance;
+    single.paths = 1;
     parallel_for(missing.size(), s.threads, [&](size_t k) {
       const Primary &px = primary[missing[k]];
-      found[k] = converged_irradiance(scene, s.radiance, px.p, px.n, s.floor_rays, mix(missing[k] ^ 0xf100ull));
+      found[k] = converged_irradiance(scene, single, px.p, px.n, s.floor_rays, mix(missing[k] ^ 0xf100ull));
       found[k].pixel = missing[k];
     });
     std::ofstream out(file_, std::ios::binary | std::ios::app);

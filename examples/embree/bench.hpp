@@ -39,6 +39,7 @@ struct BenchSettings {
   uint32_t floor_rays = 1u << 16;     // rays of the reference at each of those records
   uint32_t path_trace_max_spp = 4096;
   bool path_trace = true;
+  bool record_gradients = true;       // false: records without gradients (to measure what they add)
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
 };

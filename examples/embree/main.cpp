@@ -36,13 +36,13 @@ const char *kUsage =
     "                      [--eye x,y,z] [--target x,y,z] [--fov degrees]\n"
     "                      [--radius min,max (world; default 0 and 0.25 x scene size)]\n"
     "                      [--radius-px min,max (times the pixel's footprint; default 1,inf)]\n"
-    "                      [--hit-radiance production[:N] | one-shadow-ray (default production:4)]\n"
+    "                      [--hit-radiance production[:N][xK] | one-shadow-ray[xK] (default production:4)]\n"
     "                      [--gradient-limit c (inf: off)]\n"
     "  render mode:        [--accuracy a | --hessian relative_error] [--records N] [--neighbour-clamp]\n"
     "                      [--check pixels (default 96)]\n"
     "  --bench:            [--records N (default pixels/32)] [--metrics name,name,...] [--thresholds N]\n"
-    "                      [--reference-rays N] [--reference-grid G] [--cache-dir DIR] [--floor-records N]\n"
-    "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace]\n";
+    "                      [--reference-rays N (65536)] [--reference-grid G (64)] [--cache-dir DIR] [--floor-records N]\n"
+    "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n";
 
 }  // namespace
 
@@ -103,6 +103,7 @@ int main(int argc, char **argv) {
       else if (a == "--floor-rays") bench.floor_rays = static_cast<uint32_t>(std::stoul(next()));
       else if (a == "--pt-max-spp") bench.path_trace_max_spp = static_cast<uint32_t>(std::stoul(next()));
       else if (a == "--no-path-trace") bench.path_trace = false;
+      else if (a == "--no-record-gradients") bench.record_gradients = false;
       else {
         std::printf("%s", kUsage);
         return a == "--help" || a == "-h" ? 0 : 2;

@@ -1,5 +1,6 @@
 #include "radiance.hpp"
 
+#include <cctype>
 #include <cstdio>
 
 namespace rd {
@@ -118,8 +119,15 @@ V3 one_shadow_ray(const Scene &scene, V3 origin, V3 direction, const Hit &hit, u
 
 }  // namespace
 
-HitRadianceSettings HitRadianceSettings::parse(const std::string &text) {
+HitRadianceSettings HitRadianceSettings::parse(const std::string &spec) {
   HitRadianceSettings s;
+  std::string text = spec;
+  const size_t x = text.rfind('x');
+  if (x != std::string::npos && x + 1 < text.size() && std::isdigit(static_cast<unsigned char>(text[x + 1]))) {
+    s.paths = std::stoi(text.substr(x + 1));
+    if (s.paths < 1) throw std::runtime_error("--hit-radiance ...xK needs K >= 1");
+    text = text.substr(0, x);
+  }
   if (text == "one-shadow-ray") {
     s.mode = Mode::OneShadowRay;
   } else if (text == "production") {
@@ -135,26 +143,37 @@ HitRadianceSettings HitRadianceSettings::parse(const std::string &text) {
 }
 
 std::string HitRadianceSettings::describe() const {
-  if (mode == Mode::OneShadowRay) return "one shadow ray per emitter triangle, direct light only";
+  const std::string averaged = paths > 1 ? ", " + std::to_string(paths) + " estimates averaged per ray" : "";
+  if (mode == Mode::OneShadowRay) return "one shadow ray per emitter triangle, direct light only" + averaged;
   char buf[160];
   std::snprintf(buf, sizeof buf,
                 "production: %d stratified light samples + MIS at the hit, path continuation with "
                 "Russian roulette (1 light sample per further vertex)",
                 light_samples);
-  return buf;
+  return buf + averaged;
 }
 
 std::string HitRadianceSettings::key() const {
-  if (mode == Mode::OneShadowRay) return "osr";
-  return "prod" + std::to_string(light_samples) + "b" + std::to_string(max_bounces);
+  const std::string averaged = paths > 1 ? "x" + std::to_string(paths) : "";
+  if (mode == Mode::OneShadowRay) return "osr" + averaged;
+  return "prod" + std::to_string(light_samples) + "b" + std::to_string(max_bounces) + averaged;
+}
+
+std::string HitRadianceSettings::converged_key() const {
+  return mode == Mode::OneShadowRay ? "direct" : "paths-b" + std::to_string(max_bounces);
 }
 
 V3 hit_radiance(const Scene &scene, const HitRadianceSettings &settings, V3 origin, V3 direction, const Hit &hit,
                 uint64_t seed) {
   if (!hit.found()) return {};
-  if (settings.mode == HitRadianceSettings::Mode::OneShadowRay)
-    return one_shadow_ray(scene, origin, direction, hit, seed);
-  return production(scene, settings, origin, direction, hit, seed);
+  V3 sum;
+  for (int k = 0; k < settings.paths; ++k) {
+    const uint64_t s = k == 0 ? seed : mix(seed + 0x9E3779B97F4A7C15ull * k);
+    sum += settings.mode == HitRadianceSettings::Mode::OneShadowRay
+               ? one_shadow_ray(scene, origin, direction, hit, s)
+               : production(scene, settings, origin, direction, hit, s);
+  }
+  return settings.paths == 1 ? sum : sum * (1.0 / settings.paths);
 }
 
 uint64_t &hit_radiance_rays() { return rays_traced; }

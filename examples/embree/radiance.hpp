@@ -27,12 +27,17 @@ struct HitRadianceSettings {
   enum class Mode { Production, OneShadowRay } mode = Mode::Production;
   int light_samples = 4;  // at the gather hit (production): a square number stratifies best
   int max_bounces = 32;   // a hard stop far beyond where Russian roulette ends paths
+  int paths = 1;          // independent estimates averaged per gather ray (> 1: less noisy gathers)
 
-  // "production", "production:N" (N light samples), "one-shadow-ray".
+  // "production", "production:N" (N light samples), "one-shadow-ray"; any of them followed by
+  // "xK" averages K independent estimates per ray ("production:4x8").
   static HitRadianceSettings parse(const std::string &text);
   std::string describe() const;
-  // A short stable string that changes with every setting (for cache file names).
+  // A short stable string that changes with every setting.
   std::string key() const;
+  // A short stable string naming the quantity the estimator converges to: the estimator is
+  // unbiased, so its sample counts do not change it (the reference's cache key).
+  std::string converged_key() const;
 };
 
 // Radiance (RGB) leaving the hit `hit` of the ray from `origin` along the unit `direction`,

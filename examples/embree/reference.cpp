@@ -10,7 +10,7 @@
 namespace rd {
 namespace {
 
-constexpr uint32_t kFormat = 1;  // bump when the file layout or the estimator's meaning changes
+constexpr uint32_t kFormat = 2;  // bump when the file layout or the estimator's meaning changes
 
 uint64_t fnv(uint64_t h, const void *data, size_t n) {
   const auto *p = static_cast<const unsigned char *>(data);
@@ -97,7 +97,9 @@ Reference reference(const Scene &scene, const std::vector<Primary> &primary, con
     key = fnv_value(key, v);
   key = fnv_value(key, view.width);
   key = fnv_value(key, view.height);
-  const std::string rk = radiance.key();
+  // The converged quantity, not the estimator's sample counts: references are shared by every
+  // estimator of the same light.
+  const std::string rk = radiance.converged_key();
   key = fnv(key, rk.data(), rk.size());
   key = fnv_value(key, settings.grid);
   key = fnv_value(key, settings.rays);
@@ -133,8 +135,10 @@ Reference reference(const Scene &scene, const std::vector<Primary> &primary, con
     }
   }
 
+  HitRadianceSettings single = radiance;
+  single.paths = 1;  // the rays are many already: one estimate each
   std::printf("reference: %zu pixels x %u rays (%s), computing...\n", pixels.size(), settings.rays,
-              radiance.describe().c_str());
+              single.describe().c_str());
   std::fflush(stdout);
   ref.pixels.resize(pixels.size());
   std::atomic<size_t> done{0};
@@ -142,7 +146,7 @@ Reference reference(const Scene &scene, const std::vector<Primary> &primary, con
   parallel_for(pixels.size(), threads, [&](size_t k) {
     const double t0 = thread_cpu_seconds();
     const Primary &px = primary[pixels[k]];
-    ref.pixels[k] = converged_irradiance(scene, radiance, px.p, px.n, settings.rays, mix(pixels[k] ^ 0xfeedull));
+    ref.pixels[k] = converged_irradiance(scene, single, px.p, px.n, settings.rays, mix(pixels[k] ^ 0xfeedull));
     ref.pixels[k].pixel = pixels[k];
     double c = cpu.load();
     while (!cpu.compare_exchange_weak(c, c + thread_cpu_seconds() - t0)) {
