@@ -40,6 +40,21 @@ class GatherStore {
       s.trace_seconds = thread_cpu_seconds() - t0;
       s.rays = g.rays;
       s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_));
+      if (settings_.oracle_derivative_paths > 0 && s.evaluated->valid) {
+        // Derivatives from the same directions with radiance averaged over K independent paths:
+        // what the records would be with less noisy derivatives (an experiment; not timed).
+        HitRadianceSettings averaged = settings_.radiance;
+        averaged.paths = settings_.oracle_derivative_paths;
+        const TracedGather q = trace_gather(scene_, averaged, px.p, px.n, settings_.gather_m, settings_.gather_n,
+                                            mix(1 + pixel) ^ 0x0facull);
+        const Evaluated o = evaluate_gather(q, needs_);
+        if (o.valid) {
+          Evaluated &e = *s.evaluated;
+          std::copy(std::begin(o.gradient), std::end(o.gradient), std::begin(e.gradient));
+          std::copy(std::begin(o.rotation), std::end(o.rotation), std::begin(e.rotation));
+          for (int h = 0; h < 3; ++h) std::copy(std::begin(o.hessian[h]), std::end(o.hessian[h]), std::begin(e.hessian[h]));
+        }
+      }
       ++computed_;
     });
     return s;

@@ -40,6 +40,9 @@ struct BenchSettings {
   uint32_t path_trace_max_spp = 4096;
   bool path_trace = true;
   bool record_gradients = true;       // false: records without gradients (to measure what they add)
+  // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
+  // over this many paths, their values from the usual gather: what derivative noise costs.
+  int oracle_derivative_paths = 0;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
 };

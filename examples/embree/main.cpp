@@ -42,7 +42,8 @@ const char *kUsage =
     "                      [--check pixels (default 96)]\n"
     "  --bench:            [--records N (default pixels/32)] [--metrics name,name,...] [--thresholds N]\n"
     "                      [--reference-rays N (65536)] [--reference-grid G (64)] [--cache-dir DIR] [--floor-records N]\n"
-    "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n";
+    "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n"
+    "                      [--oracle-derivatives K]\n";
 
 }  // namespace
 
@@ -104,6 +105,7 @@ int main(int argc, char **argv) {
       else if (a == "--pt-max-spp") bench.path_trace_max_spp = static_cast<uint32_t>(std::stoul(next()));
       else if (a == "--no-path-trace") bench.path_trace = false;
       else if (a == "--no-record-gradients") bench.record_gradients = false;
+      else if (a == "--oracle-derivatives") bench.oracle_derivative_paths = std::stoi(next());
       else {
         std::printf("%s", kUsage);
         return a == "--help" || a == "-h" ? 0 : 2;
