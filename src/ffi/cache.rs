@@ -105,6 +105,7 @@ fn config_from_c(c: &raddiff_cache_config) -> Result<CacheConfig, FfiError> {
         } else {
             f64::INFINITY
         },
+        leak_guard: crate::cache::LeakGuard::OFF,
     })
 }
 
