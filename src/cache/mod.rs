@@ -119,6 +119,7 @@ mod clamp;
 mod cursor;
 mod index;
 pub mod interp;
+pub mod irradiance;
 mod leak_guard;
 pub mod metric;
 mod persist;
@@ -883,7 +884,7 @@ impl<V: CacheValue> Cache<V> {
 }
 
 /// `InvalidArgument` unless `c` is a valid [`CacheConfig::gradient_limit`] (> 0 or +∞).
-fn check_gradient_limit(c: f64) -> Result<()> {
+pub(crate) fn check_gradient_limit(c: f64) -> Result<()> {
     if c > 0.0 {
         Ok(())
     } else {
