@@ -55,10 +55,10 @@ impl Default for LeakGuard {
 }
 
 impl LeakGuard {
-    /// The guard switched off (infinite tolerance): every record passes.
+    /// The guard switched off (infinite relative tolerance): every record passes.
     pub const OFF: LeakGuard = LeakGuard {
         relative: f64::INFINITY,
-        absolute: f64::INFINITY,
+        absolute: 0.0,
     };
 
     /// A guard whose tolerance is `relative` times the record's radius along its normal.
@@ -69,7 +69,8 @@ impl LeakGuard {
         }
     }
 
-    /// Whether the guard rejects anything (its tolerance is finite).
+    /// Whether the guard rejects anything: both tolerances finite (an absolute tolerance alone
+    /// needs `relative` 0).
     pub fn is_on(&self) -> bool {
         (self.relative + self.absolute).is_finite()
     }

@@ -146,7 +146,7 @@ pub use value::CacheValue;
 
 use crate::error::{ensure_finite3, Error, Result};
 use interp::Kernel;
-pub(crate) use record::RecordInput;
+pub(crate) use record::{channel_major, RecordInput};
 use record::{Channel, Head};
 
 /// Largest channel count per record.

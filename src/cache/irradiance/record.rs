@@ -109,20 +109,37 @@ impl IrradianceSettings {
             radii: extent.radii.map(|r| r.max(floor)),
             axes: extent.axes,
         };
-        let narrow = |v: &[f64]| -> Vec<f32> { v.iter().map(|&x| x as f32).collect() };
+        evaluation.record(extent)
+    }
+}
+
+impl GatherEvaluation {
+    /// The record of this gather with `extent` as given (no metric, no bounds): position and
+    /// normal, the irradiance and both gradients rounded to `f32` (axis-major, as [`Record`]
+    /// holds them). For renderers that choose radii their own way. `InvalidArgument` when `V`
+    /// has another channel count.
+    pub fn record<V: CacheValue>(&self, extent: Extent) -> Result<Record<V>> {
+        let channels = self.irradiance.len();
+        if V::FIXED_CHANNELS.is_some_and(|n| n != channels) {
+            return Err(Error::InvalidArgument(format!(
+                "the evaluation has {channels} channels, the value type {:?}",
+                V::FIXED_CHANNELS
+            )));
+        }
+        let narrow = |v: &mut dyn Iterator<Item = f64>| -> V {
+            V::from_channels(&v.map(|x| x as f32).collect::<Vec<f32>>())
+        };
         let axis_major = |g: &[DVec3]| -> [V; 3] {
-            std::array::from_fn(|k| {
-                V::from_channels(&narrow(&g.iter().map(|v| v[k]).collect::<Vec<_>>()))
-            })
+            std::array::from_fn(|k| narrow(&mut g.iter().map(|v| v[k])))
         };
         let mut record = Record::new(
-            evaluation.position,
-            evaluation.normal,
-            V::from_channels(&narrow(&evaluation.irradiance)),
+            self.position,
+            self.normal,
+            narrow(&mut self.irradiance.iter().copied()),
             extent,
         );
-        record.gradient = Some(axis_major(&evaluation.gradient));
-        record.rotation_gradient = Some(axis_major(&evaluation.rotation_gradient));
+        record.gradient = Some(axis_major(&self.gradient));
+        record.rotation_gradient = Some(axis_major(&self.rotation_gradient));
         Ok(record)
     }
 }
