@@ -3,8 +3,10 @@
  *
  * - Failures become exceptions: every call whose C function returns a status other than RADDIFF_OK
  *   throws raddiff::Error, carrying that status and the message of raddiff_last_error().
- * - Handles (cache, cache cursor, refractive mesh) are move-only owners that free them on
- *   destruction.
+ * - Handles (cache, cache cursor, gather evaluation, refractive mesh) are move-only owners that
+ *   free them on destruction; IrradianceCache owns a cache and the settings it fills it with.
+ * - Callbacks are any C++ callable: an exception thrown by one never crosses the C boundary (it is
+ *   caught, the C call returns, and the exception is rethrown to the caller).
  * - Arrays are passed as raddiff::Span (pointer and size); where raddiff.h documents the length a
  *   function needs, the wrapper checks it before the call and throws raddiff::Error with
  *   RADDIFF_ERROR_INVALID_ARGUMENT otherwise. Outputs are returned by value.

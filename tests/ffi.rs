@@ -142,10 +142,19 @@ fn integration_guide_programs_are_tested() {
         let start = fence + guide[fence..].find('\n').unwrap() + 1;
         let end = start + guide[start..].find("```").unwrap();
         let program = std::fs::read_to_string(root().join(name)).unwrap();
-        assert_eq!(&guide[start..end], program, "docs/integrate.md shows another {name}");
+        assert_eq!(
+            &guide[start..end],
+            program,
+            "docs/integrate.md shows another {name}"
+        );
         shown.push(name.to_string());
     }
-    let expected = ["integrate_high.c", "integrate_high.cpp", "integrate_low.c", "integrate_low.cpp"];
+    let expected = [
+        "integrate_high.c",
+        "integrate_high.cpp",
+        "integrate_low.c",
+        "integrate_low.cpp",
+    ];
     for file in expected {
         assert!(
             shown.iter().any(|s| s.ends_with(file)),

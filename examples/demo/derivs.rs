@@ -168,6 +168,22 @@ impl Gatherer {
         }
     }
 
+    /// raddiff's irradiance, Ward-Heckbert gradients (with the media terms in a medium), luminance
+    /// and distance of a traced gather, no Hessian yet.
+    pub fn evaluate(&self, t: &Traced) -> Result<GatherEvaluation, raddiff::Error> {
+        GatherEvaluation::new(&self.traced(t), &LUMINANCE_WEIGHTS, Hessians::NONE)
+    }
+
+    /// Adds raddiff's Hessian `kind` of the luminance to `evaluation` (of the gather `t`).
+    pub fn add_hessian(
+        &self,
+        t: &Traced,
+        evaluation: &mut GatherEvaluation,
+        kind: HessianKind,
+    ) -> Result<(), raddiff::Error> {
+        evaluation.add_hessian(&self.traced(t), kind)
+    }
+
     /// Traces and evaluates the gather at (position, normal), timing each part on this thread.
     /// A Hessian no metric asks for is neither computed nor timed (its seconds stay 0); the
     /// occlusion-unaware ones are not defined in a medium.
@@ -182,9 +198,7 @@ impl Gatherer {
         let start = ThreadTimer::start();
         let traced = self.trace(scene, lightmap, position, normal, seed)?;
         let trace_seconds = start.seconds();
-        let gather = self.traced(&traced);
-        let (mut evaluation, gradient_seconds) =
-            timed(|| GatherEvaluation::new(&gather, &LUMINANCE_WEIGHTS, Hessians::NONE))?;
+        let (mut evaluation, gradient_seconds) = timed(|| self.evaluate(&traced))?;
         let mut seconds = [0.0; 3];
         let kinds = [
             HessianKind::OcclusionAware,
@@ -194,7 +208,7 @@ impl Gatherer {
         for (kind, seconds) in kinds.into_iter().zip(&mut seconds) {
             let defined = kind == HessianKind::OcclusionAware || traced.sigma_t == 0.0;
             if self.hessians.contains(kind) && defined {
-                *seconds = timed(|| evaluation.add_hessian(&gather, kind))?.1;
+                *seconds = timed(|| self.add_hessian(&traced, &mut evaluation, kind))?.1;
             }
         }
         Ok(Gathered {

@@ -39,7 +39,8 @@ impl<V: CacheValue> Cache<V> {
     /// same gather and insert its record once.
     ///
     /// Errors: `InvalidArgument` for non-finite `x` or `n`, a zero `n`, a footprint that is
-    /// negative or not finite, settings that are invalid or disagree with the cache
+    /// negative or not finite, and, on a miss (a covered point needs none of the settings),
+    /// settings that are invalid or disagree with the cache
     /// ([`IrradianceSettings::check_cache`]), no finite maximum radius, a metric that needs hit
     /// normals (the occlusion-unaware Hessians: use [`GatherEvaluation`] and
     /// [`IrradianceSettings::record`]), or traced values the gather refuses (a non-positive or
