@@ -35,24 +35,26 @@ class GatherStore {
     std::call_once(s.once, [&] {
       const Primary &px = primary_[pixel];
       const double t0 = thread_cpu_seconds();
-      const TracedGather g =
-          trace_gather(scene_, settings_.radiance, px.p, px.n, settings_.gather_m, settings_.gather_n, 1 + pixel);
+      const raddiff_irradiance_settings &irr = settings_.irradiance;
+      const TracedGather g = trace_gather(scene_, settings_.radiance, px.p, px.n, irr.gather_m, irr.gather_n, 1 + pixel);
       s.trace_seconds = thread_cpu_seconds() - t0;
       s.rays = g.rays;
-      s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_));
+      s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_, irr));
       if (settings_.oracle_derivative_paths > 0 && s.evaluated->valid) {
         // Derivatives from the same directions with radiance averaged over K independent paths:
         // what the records would be with less noisy derivatives (an experiment; not timed).
         HitRadianceSettings averaged = settings_.radiance;
         averaged.paths = settings_.oracle_derivative_paths;
-        const TracedGather q = trace_gather(scene_, averaged, px.p, px.n, settings_.gather_m, settings_.gather_n,
+        const TracedGather q = trace_gather(scene_, averaged, px.p, px.n, irr.gather_m, irr.gather_n,
                                             mix(1 + pixel) ^ 0x0facull);
-        const Evaluated o = evaluate_gather(q, needs_);
+        Evaluated o = evaluate_gather(q, needs_, irr);
         if (o.valid) {
-          Evaluated &e = *s.evaluated;
-          std::copy(std::begin(o.gradient), std::end(o.gradient), std::begin(e.gradient));
-          std::copy(std::begin(o.rotation), std::end(o.rotation), std::begin(e.rotation));
-          for (int h = 0; h < 3; ++h) std::copy(std::begin(o.hessian[h]), std::end(o.hessian[h]), std::begin(e.hessian[h]));
+          // The records' radii and derivatives from the averaged radiance, their values (and the
+          // CPU times) from the usual gather.
+          std::copy(std::begin(s.evaluated->value), std::end(s.evaluated->value), std::begin(o.value));
+          o.luminance = s.evaluated->luminance;
+          std::copy(std::begin(s.evaluated->seconds), std::end(s.evaluated->seconds), std::begin(o.seconds));
+          *s.evaluated = std::move(o);
         }
       }
       ++computed_;
@@ -142,12 +144,14 @@ class Bench {
     Fill out;
     out.metric = m;
     out.parameter = p;
-    const uint32_t weights = uses_hessian(m) ? RADDIFF_INTERP_TENT : RADDIFF_INTERP_WARD;
-    const raddiff_cache_config config{3, RADDIFF_DOMAIN_SURFACE, weights | RADDIFF_INTERP_NON_NEGATIVE,
-                                      settings_.max_normal_deviation};
-    std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)> cache(raddiff_cache_new(&config), raddiff_cache_free);
-    if (!cache) throw std::runtime_error(std::string("raddiff_cache_new: ") + raddiff_last_error());
-    check(raddiff_cache_set_gradient_limit(cache.get(), settings_.gradient_limit), "raddiff_cache_set_gradient_limit");
+    raddiff_irradiance_settings irr = settings_.irradiance;
+    irr.metric = c_metric(m);
+    irr.accuracy = p;
+    // The cache this metric wants: Ward or tent weights, extrapolation clamped at zero, the
+    // gradient limit and the leak guard of the settings.
+    std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)> cache(raddiff_irradiance_cache_new(&irr),
+                                                                    raddiff_cache_free);
+    if (!cache) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
     auto covered = [&](size_t i) {
@@ -187,30 +191,14 @@ class Bench {
           out.trace_seconds += slot.trace_seconds;  // a miss traces the gather: its cost counts
           out.raddiff_seconds += raddiff_seconds(m, e);
           if (!e.valid) continue;
-          RecordInfo info{i, primary_[i].p, primary_[i].n, {0, 0}, {}};
           t0 = thread_cpu_seconds();
-          const bool defined = metric_extent(m, p, e, primary_[i].n, info.radii, info.axes);
+          raddiff_cache_record rec{};
+          const bool defined = metric_record(m, p, e, irr, primary_[i].footprint, rec);
           out.raddiff_seconds += thread_cpu_seconds() - t0;
           if (!defined) continue;
+          if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
+          RecordInfo info{i, primary_[i].p, primary_[i].n, {rec.radii[0], rec.radii[1]}, {rec.axes[0], rec.axes[1]}};
           t0 = thread_cpu_seconds();
-          for (double &r : info.radii) r = settings_.bounds.clamp(r, primary_[i].footprint);
-          float value[3], gradient[9], rotation[9];
-          for (int c = 0; c < 3; ++c) value[c] = static_cast<float>(e.irradiance[c]);
-          for (int k = 0; k < 9; ++k) {
-            gradient[k] = static_cast<float>(e.gradient[k]);
-            rotation[k] = static_cast<float>(e.rotation[k]);
-          }
-          raddiff_cache_record rec{};
-          rec.position = to_c(info.p);
-          rec.normal = to_c(info.n);
-          rec.value = value;
-          rec.gradient = settings_.record_gradients ? gradient : nullptr;
-          rec.rotation_gradient = settings_.record_gradients ? rotation : nullptr;
-          rec.radii[0] = info.radii[0];
-          rec.radii[1] = info.radii[1];
-          rec.radii[2] = std::min(info.radii[0], info.radii[1]);
-          rec.axes[0] = info.axes[0];
-          rec.axes[1] = info.axes[1];
           check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
           cache_cpu.add(thread_cpu_seconds() - t0);
           out.records.push_back(info);
@@ -399,7 +387,7 @@ double gather_floor(const std::vector<size_t> &pixels, GatherStore &store, const
   double e2 = 0, n2 = 0, r2 = 0;
   for (size_t p : pixels) {
     const ReferencePixel &r = refs.at(p);
-    const double e = store.get(p).evaluated->luminance() - luminance(r.value());
+    const double e = store.get(p).evaluated->luminance - luminance(r.value());
     const double noise = 0.5 * (luminance(r.half[0]) - luminance(r.half[1]));
     e2 += e * e;
     n2 += noise * noise;
@@ -571,15 +559,17 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
   std::ofstream summary(settings.out + "-summary.csv");
   summary << "key,value\n"
           << "width," << view.width << "\nheight," << view.height << "\ntriangles," << scene.triangle_count()
-          << "\nscene_size," << scene.size() << "\ngather," << settings.gather_m << "x" << settings.gather_n
+          << "\nscene_size," << scene.size() << "\ngather," << settings.irradiance.gather_m << "x"
+          << settings.irradiance.gather_n
           << "\nhit_radiance," << settings.radiance.describe() << "\ntarget_records," << target
           << "\nmeasured_pixels," << ref.pixels.size() << "\nreference_grid," << settings.reference.grid << "\nreference_rays," << settings.reference.rays
           << "\nreference_relative_noise," << ref.relative_noise() << "\nreference_mean," << ref_mean
           << "\ngathers_computed," << bench.store().computed() << "\nmax_rss_mib," << max_rss_mib()
           << "\nprocess_cpu_s," << process_cpu_seconds() - wall0 << "\nexposure," << exposure << "\nreference_cpu_s," << ref.seconds
-          << "\nreference_loaded," << ref.loaded << "\ngradient_limit," << settings.gradient_limit
-          << "\nradius_bounds," << settings.bounds.min_world << " " << settings.bounds.max_world << " "
-          << settings.bounds.min_pixels << " " << settings.bounds.max_pixels << "\n";
+          << "\nreference_loaded," << ref.loaded << "\ngradient_limit," << settings.irradiance.gradient_limit
+          << "\nleak_guard," << settings.irradiance.leak_guard_relative << " " << settings.irradiance.leak_guard_absolute
+          << "\nradius_bounds," << settings.irradiance.world_radius_min << " " << settings.irradiance.world_radius_max
+          << " " << settings.irradiance.pixel_radius_min << " " << settings.irradiance.pixel_radius_max << "\n";
   std::printf("bench: %zu gathers computed, max RSS %ld MiB, %.0f CPU s\n", bench.store().computed(), max_rss_mib(),
               process_cpu_seconds() - wall0);
   std::printf("%s\n", ok ? "OK" : "FAILED");

@@ -13,28 +13,15 @@
 
 namespace rd {
 
-// Record radius bounds: world bounds (L) and pixel bounds (times the footprint of the record's
-// pixel); the tighter of each pair applies.
-struct RadiusBounds {
-  double min_world = 0, max_world = INFINITY;
-  double min_pixels = 0, max_pixels = INFINITY;
-  double clamp(double r, double footprint) const {
-    const double lo = std::max(min_world, min_pixels * footprint);
-    const double hi = std::max(lo, std::min(max_world, max_pixels * footprint));
-    return std::clamp(std::isfinite(r) ? r : hi, lo, hi);
-  }
-};
-
 struct BenchSettings {
   std::vector<Metric> metrics = all_metrics();
   size_t target_records = 0;  // 0: one record per 32 pixels
   int thresholds = 4;         // fills per metric along its error-against-time curve (>= 1)
-  uint32_t gather_m = 32, gather_n = 128;
+  // raddiff's settings of every record: gather size, radius bounds (world and pixels), gradient
+  // limit, leak guard, anisotropy, curvature floor (metric and threshold are set per fill).
+  raddiff_irradiance_settings irradiance = raddiff_irradiance_settings_default();
   HitRadianceSettings radiance;
   ReferenceSettings reference;
-  RadiusBounds bounds;
-  double gradient_limit = RADDIFF_GRADIENT_LIMIT_DEFAULT;
-  double max_normal_deviation = 0.2;  // radians
   uint32_t floor_records = 200;       // records per metric whose gathers are checked against a reference
   uint32_t floor_rays = 1u << 16;     // rays of the reference at each of those records
   uint32_t path_trace_max_spp = 4096;

@@ -37,7 +37,7 @@ const char *kUsage =
     "                      [--radius min,max (world; default 0 and 0.25 x scene size)]\n"
     "                      [--radius-px min,max (times the pixel's footprint; default 1,inf)]\n"
     "                      [--hit-radiance production[:N][xK] | one-shadow-ray[xK] (default production:4)]\n"
-    "                      [--gradient-limit c (inf: off)]\n"
+    "                      [--gradient-limit c (default 2, inf: off)] [--leak-guard relative,absolute]\n"
     "  render mode:        [--accuracy a | --hessian relative_error] [--records N] [--neighbour-clamp]\n"
     "                      [--check pixels (default 96)]\n"
     "  --bench:            [--records N (default pixels/32)] [--metrics name,name,...] [--thresholds N]\n"
@@ -52,7 +52,9 @@ int main(int argc, char **argv) {
   View view;
   RenderSettings render;
   BenchSettings bench;
-  bool bench_mode = false, radius_given = false, radius_px_given = false;
+  render.irradiance.gather_m = 16;  // the render mode's quick default; the benchmark's is 32 x 128
+  render.irradiance.gather_n = 48;
+  bool bench_mode = false, radius_given = false, radius_px_given = false, gather_given = false;
   unsigned threads = 0;
   try {
     for (int i = 1; i < argc; ++i) {
@@ -68,8 +70,9 @@ int main(int argc, char **argv) {
         const std::string g = next();
         uint32_t m, n;
         if (std::sscanf(g.c_str(), "%ux%u", &m, &n) != 2) throw std::runtime_error("--gather MxN");
-        render.gather_m = bench.gather_m = m;
-        render.gather_n = bench.gather_n = n;
+        render.irradiance.gather_m = m;
+        render.irradiance.gather_n = n;
+        gather_given = true;
       } else if (a == "--accuracy") render.accuracy = std::stod(next());
       else if (a == "--hessian") render.hessian_error = std::stod(next());
       else if (a == "--threads") threads = static_cast<unsigned>(std::stoul(next()));
@@ -77,17 +80,19 @@ int main(int argc, char **argv) {
       else if (a == "--target") view.target = parse_v3(next());
       else if (a == "--fov") view.fov = std::stod(next());
       else if (a == "--radius") {
-        parse_pair(next(), render.bounds.min_world, render.bounds.max_world, "--radius");
+        parse_pair(next(), render.irradiance.world_radius_min, render.irradiance.world_radius_max, "--radius");
         radius_given = true;
       } else if (a == "--radius-px") {
-        parse_pair(next(), render.bounds.min_pixels, render.bounds.max_pixels, "--radius-px");
+        parse_pair(next(), render.irradiance.pixel_radius_min, render.irradiance.pixel_radius_max, "--radius-px");
         radius_px_given = true;
       } else if (a == "--records") {
         const long n = std::stol(next());
         if (n < 1) throw std::runtime_error("--records N needs N >= 1");
         render.target_records = bench.target_records = static_cast<size_t>(n);
       } else if (a == "--neighbour-clamp") render.neighbour_clamp = true;
-      else if (a == "--gradient-limit") render.gradient_limit = bench.gradient_limit = std::stod(next());
+      else if (a == "--gradient-limit") render.irradiance.gradient_limit = std::stod(next());
+      else if (a == "--leak-guard") parse_pair(next(), render.irradiance.leak_guard_relative,
+                                               render.irradiance.leak_guard_absolute, "--leak-guard");
       else if (a == "--check") render.check_pixels = std::stoi(next());
       else if (a == "--hit-radiance") render.radiance = bench.radiance = HitRadianceSettings::parse(next());
       else if (a == "--bench") bench_mode = true;
@@ -111,7 +116,7 @@ int main(int argc, char **argv) {
         return a == "--help" || a == "-h" ? 0 : 2;
       }
     }
-    if (view.width < 1 || view.height < 1 || render.gather_m < 1 || render.gather_n < 1)
+    if (view.width < 1 || view.height < 1 || render.irradiance.gather_m < 1 || render.irradiance.gather_n < 1)
       throw std::runtime_error("sizes must be positive");
     threads = threads ? threads : std::max(1u, std::thread::hardware_concurrency());
     render.threads = bench.threads = threads;
@@ -123,16 +128,21 @@ int main(int argc, char **argv) {
                 scene.emitter_count(), scene.size());
     if (scene.emitter_count() == 0) throw std::runtime_error("the scene has no emitter (Ke > 0)");
     std::printf("hit radiance: %s\n", render.radiance.describe().c_str());
-    // Radius bounds follow the scene's size and the image's pixels unless given.
+    // Radius bounds follow the scene's size and the image's pixels unless given: at most a quarter
+    // of the scene, at least one pixel.
     if (!radius_given) {
-      render.bounds.min_world = 0;
-      render.bounds.max_world = 0.25 * scene.size();
+      render.irradiance.world_radius_min = 0;
+      render.irradiance.world_radius_max = 0.25 * scene.size();
     }
     if (!radius_px_given) {
-      render.bounds.min_pixels = 1;
-      render.bounds.max_pixels = INFINITY;
+      render.irradiance.pixel_radius_min = 1;
+      render.irradiance.pixel_radius_max = INFINITY;
     }
-    bench.bounds = render.bounds;
+    bench.irradiance = render.irradiance;
+    if (!gather_given) {
+      bench.irradiance.gather_m = 32;
+      bench.irradiance.gather_n = 128;
+    }
     if (!bench_mode) return run_render(scene, view, render);
     std::string key;
     for (const std::string &f : scene.files()) key += std::to_string(file_hash(f)) + ";";

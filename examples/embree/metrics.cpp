@@ -1,6 +1,23 @@
 #include "metrics.hpp"
 
 namespace rd {
+namespace {
+
+// Which evaluation (see HessianNeeds) metric m's records come from.
+int evaluation_of(Metric m) {
+  switch (m) {
+    case Metric::HessianIsotropic:
+    case Metric::HessianAnisotropic: return 1;
+    case Metric::HessianUnaware: return 2;
+    case Metric::HessianGeometric: return 3;
+    default: return 0;
+  }
+}
+
+constexpr uint32_t kHessianBits[4] = {0, RADDIFF_HESSIAN_OCCLUSION_AWARE, RADDIFF_HESSIAN_UNAWARE,
+                                      RADDIFF_HESSIAN_GEOMETRIC};
+
+}  // namespace
 
 const std::vector<Metric> &all_metrics() {
   static const std::vector<Metric> all = {Metric::SplitSphere,      Metric::BoundedSplitSphere, Metric::Gradient,
@@ -28,97 +45,82 @@ Metric parse_metric(const std::string &name) {
   throw std::runtime_error("unknown metric " + name);
 }
 
-bool uses_hessian(Metric m) {
-  return m == Metric::HessianUnaware || m == Metric::HessianGeometric || m == Metric::HessianIsotropic ||
-         m == Metric::HessianAnisotropic;
+uint32_t c_metric(Metric m) {
+  switch (m) {
+    case Metric::SplitSphere: return RADDIFF_METRIC_SPLIT_SPHERE;
+    case Metric::BoundedSplitSphere: return RADDIFF_METRIC_BOUNDED_SPLIT_SPHERE;
+    case Metric::Gradient: return RADDIFF_METRIC_GRADIENT;
+    case Metric::HessianUnaware: return RADDIFF_METRIC_HESSIAN_UNAWARE;
+    case Metric::HessianGeometric: return RADDIFF_METRIC_HESSIAN_GEOMETRIC;
+    case Metric::HessianIsotropic: return RADDIFF_METRIC_HESSIAN_ISOTROPIC;
+    case Metric::HessianAnisotropic: return RADDIFF_METRIC_HESSIAN_ANISOTROPIC;
+  }
+  return RADDIFF_METRIC_SPLIT_SPHERE;
 }
 
+bool uses_hessian(Metric m) { return evaluation_of(m) != 0; }
 double radius_exponent(Metric m) { return uses_hessian(m) ? 0.25 : 1.0; }
 double initial_parameter(Metric m) { return uses_hessian(m) ? 1e-3 : 0.2; }
 
 HessianNeeds hessian_needs(const std::vector<Metric> &metrics) {
   HessianNeeds n;
-  for (Metric m : metrics) {
-    n.aware |= m == Metric::HessianIsotropic || m == Metric::HessianAnisotropic;
-    n.unaware |= m == Metric::HessianUnaware;
-    n.geometric |= m == Metric::HessianGeometric;
-  }
+  for (Metric m : metrics) n.kind[evaluation_of(m)] = true;
   return n;
 }
 
-Evaluated evaluate_gather(const TracedGather &g, const HessianNeeds &needs) {
+Evaluated evaluate_gather(const TracedGather &g, const HessianNeeds &needs,
+                          const raddiff_irradiance_settings &settings) {
   Evaluated e;
   raddiff_gather_input input{};
   input.directions = g.directions.data();
   input.distance = g.distance.data();
   input.radiance = g.radiance.data();
   input.channels = 3;
-  raddiff_gather_output out{};
-  out.irradiance = e.irradiance;
-  out.gradient = e.gradient;
-  out.rotation_gradient = e.rotation;
-  double t0 = thread_cpu_seconds();
-  const raddiff_status st = raddiff_gather_evaluate(&g.layout, &g.frame, &input, &out);
-  e.evaluate_seconds = thread_cpu_seconds() - t0;
-  if (st == RADDIFF_ERROR_DEGENERATE) return e;
-  check(st, "raddiff_gather_evaluate");
-  e.harmonic_mean_distance = out.harmonic_mean_distance;
-  e.valid = true;
-  if (needs.aware) {
-    raddiff_gather_output h{};
-    h.hessian = e.hessian[0];
-    t0 = thread_cpu_seconds();
-    check(raddiff_gather_evaluate(&g.layout, &g.frame, &input, &h), "raddiff_gather_evaluate (Hessian)");
-    e.hessian_seconds[0] = thread_cpu_seconds() - t0;
+  for (int k = 0; k < 4; ++k) {
+    if (!needs.kind[k]) continue;
+    const double t0 = thread_cpu_seconds();
+    raddiff_gather_evaluation *ev = raddiff_gather_evaluation_new(&settings, &g.layout, &g.frame, &input,
+                                                                   g.hit_normals.data(), kHessianBits[k]);
+    e.seconds[k] = thread_cpu_seconds() - t0;
+    if (!ev) {
+      // Every ray missed (or every hit was behind): raddiff finds nothing to build a record from.
+      if (std::string(raddiff_last_error()).find("degenerate") != std::string::npos ||
+          std::all_of(g.distance.begin(), g.distance.end(), [](double d) { return !std::isfinite(d); }))
+        return Evaluated{};
+      throw std::runtime_error(std::string("raddiff_gather_evaluation_new: ") + raddiff_last_error());
+    }
+    e.evaluation[k].reset(ev);
   }
-  if (needs.unaware || needs.geometric)
-    throw std::runtime_error("the radiometric and geometric Hessians are not in this build's C ABI yet");
+  raddiff_gather_summary summary{};
+  const int first = needs.kind[0] ? 0 : needs.kind[1] ? 1 : needs.kind[2] ? 2 : 3;
+  check(raddiff_gather_evaluation_summary(e.evaluation[first].get(), &summary), "raddiff_gather_evaluation_summary");
+  e.luminance = summary.scalar;
+  // The irradiance itself, as the records store it: from any record of this evaluation.
+  raddiff_irradiance_settings any = settings;
+  any.metric = RADDIFF_METRIC_SPLIT_SPHERE;
+  raddiff_cache_record r{};
+  if (std::isfinite(summary.harmonic_mean_distance) &&
+      raddiff_irradiance_record(&any, e.evaluation[first].get(), 0.0, &r) == RADDIFF_OK) {
+    std::copy(r.value, r.value + 3, e.value);
+  } else {
+    // Every ray missed: the irradiance is the environment's, which this renderer leaves black.
+    std::fill(e.value, e.value + 3, 0.0f);
+  }
+  e.valid = true;
   return e;
 }
 
-double raddiff_seconds(Metric m, const Evaluated &e) {
-  double s = e.evaluate_seconds;
-  if (m == Metric::HessianIsotropic || m == Metric::HessianAnisotropic) s += e.hessian_seconds[0];
-  if (m == Metric::HessianUnaware) s += e.hessian_seconds[1];
-  if (m == Metric::HessianGeometric) s += e.hessian_seconds[2];
-  return s;
-}
+double raddiff_seconds(Metric m, const Evaluated &e) { return e.seconds[evaluation_of(m)]; }
 
-bool metric_extent(Metric m, double p, const Evaluated &e, V3 normal, double radii[2], raddiff_vec3 axes[2]) {
-  const double lum = std::max(e.luminance(), 1e-12);
-  const V3 grad{0.2126 * e.gradient[0] + 0.7152 * e.gradient[3] + 0.0722 * e.gradient[6],
-                0.2126 * e.gradient[1] + 0.7152 * e.gradient[4] + 0.0722 * e.gradient[7],
-                0.2126 * e.gradient[2] + 0.7152 * e.gradient[5] + 0.0722 * e.gradient[8]};
-  const double g = length(grad);
-  const double hmd = e.harmonic_mean_distance;
-  axes[0] = axes[1] = raddiff_vec3{0, 0, 0};
-  switch (m) {
-    case Metric::SplitSphere:
-      if (!std::isfinite(hmd)) return false;
-      radii[0] = radii[1] = p * hmd;
-      return true;
-    case Metric::BoundedSplitSphere:
-      if (!std::isfinite(hmd)) return false;
-      radii[0] = radii[1] = p * (g > 0 ? std::min(hmd, lum / g) : hmd);
-      return true;
-    case Metric::Gradient:
-      radii[0] = radii[1] = g > 0 ? p * lum / g : INFINITY;
-      return true;
-    default: break;
-  }
-  const int which = m == Metric::HessianUnaware ? 1 : m == Metric::HessianGeometric ? 2 : 0;
-  double h[9];
-  for (int k = 0; k < 9; ++k)
-    h[k] = 0.2126 * e.hessian[which][k] + 0.7152 * e.hessian[which][9 + k] + 0.0722 * e.hessian[which][18 + k];
-  const double anisotropy = m == Metric::HessianIsotropic ? 1.0 : 2.0;
-  if (std::isfinite(hmd) && hmd > 0) {
-    check(raddiff_surface_radii_floored(h, to_c(normal), e.luminance(), p, RADDIFF_ERROR_RELATIVE, anisotropy, hmd,
-                                        RADDIFF_CURVATURE_FLOOR_WEIGHT, radii, axes),
-          "raddiff_surface_radii_floored");
-  } else {
-    check(raddiff_surface_radii(h, to_c(normal), lum, p, RADDIFF_ERROR_RELATIVE, anisotropy, radii, axes),
-          "raddiff_surface_radii");
-  }
+bool metric_record(Metric m, double p, const Evaluated &e, raddiff_irradiance_settings settings, double footprint,
+                   raddiff_cache_record &record) {
+  settings.metric = c_metric(m);
+  settings.accuracy = p;
+  const raddiff_status st = raddiff_irradiance_record(&settings, e.evaluation[evaluation_of(m)].get(), footprint,
+                                                      &record);
+  if (st == RADDIFF_ERROR_DEGENERATE) return false;
+  check(st, "raddiff_irradiance_record");
+  record.value = e.value;
   return true;
 }
 

@@ -1,8 +1,15 @@
-// The error metrics compared, and what each needs of a gather.
+// The error metrics compared, and a gather evaluated once for all of them.
+//
+// raddiff does the work: raddiff_gather_evaluation_new evaluates a traced gather (irradiance,
+// gradients and the Hessian a metric needs), raddiff_irradiance_record builds a metric's record
+// from it under the settings (threshold, radius bounds at the pixel's footprint, anisotropy,
+// curvature floor). One evaluation per kind of Hessian, so that each metric is charged for the
+// raddiff work it needs and nothing else.
 #pragma once
 
 #include "trace.hpp"
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -21,36 +28,43 @@ enum class Metric {
 const std::vector<Metric> &all_metrics();
 const char *metric_name(Metric m);
 Metric parse_metric(const std::string &name);
+uint32_t c_metric(Metric m);  // RADDIFF_METRIC_*
 bool uses_hessian(Metric m);
 // How a record's radius scales with the metric's parameter (1 for the split-sphere family, 1/4
 // for the Hessians, whose radii bound an error integrated over the record's disc).
 double radius_exponent(Metric m);
 double initial_parameter(Metric m);
 
-// Which Hessians a set of metrics needs.
+// The evaluations a set of metrics needs: index 0 without a Hessian, then one per Hessian kind
+// (occlusion-aware, unaware, geometric).
 struct HessianNeeds {
-  bool aware = false, unaware = false, geometric = false;
+  bool kind[4] = {true, false, false, false};
 };
 HessianNeeds hessian_needs(const std::vector<Metric> &metrics);
 
-// A gather evaluated once, with the CPU time of each part, shared by every metric.
-struct Evaluated {
-  bool valid = false;  // false: raddiff found the gather degenerate (no record)
-  double irradiance[3] = {}, gradient[9] = {}, rotation[9] = {};
-  double hessian[3][27] = {};  // aware, unaware, geometric (channel-major, row-major 3x3 each)
-  double harmonic_mean_distance = INFINITY;
-  double evaluate_seconds = 0;           // irradiance and Ward-Heckbert gradients
-  double hessian_seconds[3] = {0, 0, 0};  // each Hessian
-  double luminance() const { return rd::luminance(irradiance); }
+struct EvaluationDeleter {
+  void operator()(raddiff_gather_evaluation *e) const { raddiff_gather_evaluation_free(e); }
 };
 
-Evaluated evaluate_gather(const TracedGather &gather, const HessianNeeds &needs);
+// A gather evaluated once, with the CPU time of each evaluation, shared by every metric.
+struct Evaluated {
+  bool valid = false;  // false: raddiff found the gather degenerate (no record)
+  std::unique_ptr<raddiff_gather_evaluation, EvaluationDeleter> evaluation[4];
+  double seconds[4] = {0, 0, 0, 0};
+  double luminance = 0;     // the evaluation's scalar
+  float value[3] = {0, 0, 0};  // irradiance the records store (the gather's own)
+};
 
-// Seconds of raddiff work the metric's records cost from this evaluation.
+// `settings` gives the channels and their weights.
+Evaluated evaluate_gather(const TracedGather &gather, const HessianNeeds &needs,
+                          const raddiff_irradiance_settings &settings);
+
+// Seconds of raddiff evaluation that metric m's records cost.
 double raddiff_seconds(Metric m, const Evaluated &e);
 
-// The record extent of metric m with parameter p, before any clamp: radii along axes (tangent
-// plane). Returns false when the metric is undefined for this gather (no record then).
-bool metric_extent(Metric m, double p, const Evaluated &e, V3 normal, double radii[2], raddiff_vec3 axes[2]);
+// Metric m's record from the evaluation (settings.metric and .accuracy are set from m and p),
+// its value the gather's own irradiance. False when raddiff finds the metric undefined there.
+bool metric_record(Metric m, double p, const Evaluated &e, raddiff_irradiance_settings settings, double footprint,
+                   raddiff_cache_record &record);
 
 }  // namespace rd

@@ -1,8 +1,8 @@
 #include "render.hpp"
 
 #include "image.hpp"
+#include "metrics.hpp"
 
-#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -10,69 +10,38 @@
 namespace rd {
 namespace {
 
-struct Stats {
+// What raddiff_cache_irradiance's callback needs: the scene and how radiance is estimated.
+struct TraceContext {
+  const Scene *scene;
+  const HitRadianceSettings *radiance;
   std::atomic<uint64_t> rays{0};
 };
 
-// Traces the gather of a record at (p, n), evaluates it with raddiff and builds the record.
-// Returns false when raddiff finds it degenerate (e.g. every ray missed): no record then.
-bool make_record(const Scene &scene, const RenderSettings &cfg, V3 p, V3 n, double footprint, uint64_t seed,
-                 Stats &stats, std::array<float, 3> &value, std::array<float, 9> &gradient,
-                 std::array<float, 9> &rotation, raddiff_cache_record &record, uint32_t m, uint32_t nn) {
-  const TracedGather g = trace_gather(scene, cfg.radiance, p, n, m, nn, seed);
-  stats.rays += g.rays;
-  raddiff_gather_input input{};
-  input.directions = g.directions.data();
-  input.distance = g.distance.data();
-  input.radiance = g.radiance.data();
-  input.channels = 3;
-  double irradiance[3], grad[9], rot[9], hessian[27];
-  raddiff_gather_output output{};
-  output.irradiance = irradiance;
-  output.gradient = grad;
-  output.rotation_gradient = rot;
-  output.hessian = cfg.hessian_error > 0 ? hessian : nullptr;  // NULL: not computed
-  const raddiff_status st = raddiff_gather_evaluate(&g.layout, &g.frame, &input, &output);
-  if (st == RADDIFF_ERROR_DEGENERATE) return false;
-  check(st, "raddiff_gather_evaluate");
+// raddiff_trace_fn: traces the whole gather with Embree. The hit radiance's samples are seeded
+// from the origin, so that a gather is the same whichever thread asks for it.
+int trace_callback(void *user, raddiff_vec3 origin, const raddiff_vec3 *directions, size_t count, double *distance,
+                   float *radiance) {
+  auto *ctx = static_cast<TraceContext *>(user);
+  try {
+    uint64_t seed = 0, rays = 0;
+    for (double c : {origin.x, origin.y, origin.z}) {
+      uint64_t bits;
+      std::memcpy(&bits, &c, sizeof bits);
+      seed = mix(seed ^ bits);
+    }
+    trace_directions(*ctx->scene, *ctx->radiance, from_c(origin), directions, count, seed, distance, radiance, rays);
+    ctx->rays += rays;
+    return 0;
+  } catch (...) {
+    return 1;  // no exception crosses raddiff's C boundary: the call reports RADDIFF_ERROR_CALLBACK
+  }
+}
 
-  for (int c = 0; c < 3; ++c) value[c] = static_cast<float>(irradiance[c]);
-  for (int k = 0; k < 9; ++k) {
-    gradient[k] = static_cast<float>(grad[k]);
-    rotation[k] = static_cast<float>(rot[k]);
-  }
-  record = raddiff_cache_record{};
-  record.position = to_c(p);
-  record.normal = to_c(n);
-  record.value = value.data();
-  record.gradient = gradient.data();
-  record.rotation_gradient = rotation.data();
-  if (cfg.hessian_error > 0) {
-    double h[9];
-    for (int k = 0; k < 9; ++k) h[k] = 0.2126 * hessian[k] + 0.7152 * hessian[9 + k] + 0.0722 * hessian[18 + k];
-    double radii[2];
-    raddiff_vec3 axes[2];
-    const double d = output.harmonic_mean_distance;
-    if (std::isfinite(d) && d > 0) {
-      check(raddiff_surface_radii_floored(h, to_c(n), luminance(value.data()), cfg.hessian_error,
-                                          RADDIFF_ERROR_RELATIVE, 2.0, d, RADDIFF_CURVATURE_FLOOR_WEIGHT, radii,
-                                          axes),
-            "raddiff_surface_radii_floored");
-    } else {
-      check(raddiff_surface_radii(h, to_c(n), luminance(value.data()), cfg.hessian_error, RADDIFF_ERROR_RELATIVE,
-                                  2.0, radii, axes),
-            "raddiff_surface_radii");
-    }
-    for (int k = 0; k < 2; ++k) {
-      record.radii[k] = cfg.bounds.clamp(radii[k], footprint);
-      record.axes[k] = axes[k];
-    }
-    record.radii[2] = std::min(record.radii[0], record.radii[1]);
-  } else {
-    const double r = cfg.bounds.clamp(cfg.accuracy * output.harmonic_mean_distance, footprint);
-    record.radii[0] = record.radii[1] = record.radii[2] = r;
-  }
-  return true;
+raddiff_irradiance_settings settings_of(const RenderSettings &cfg) {
+  raddiff_irradiance_settings s = cfg.irradiance;
+  s.metric = cfg.hessian_error > 0 ? RADDIFF_METRIC_HESSIAN_ANISOTROPIC : RADDIFF_METRIC_SPLIT_SPHERE;
+  s.accuracy = cfg.hessian_error > 0 ? cfg.hessian_error : cfg.accuracy;
+  return s;
 }
 
 std::vector<size_t> level_pixels(int w, int h, int step) {
@@ -94,34 +63,58 @@ struct Fill {
 
 constexpr int kClampRounds = 3;
 
+// The miss path by hand, for neighbour clamping (which needs the record before its insert): trace,
+// evaluate, build the record, clamp it to its neighbours, insert.
+void insert_clamped(raddiff_cache *cache, const raddiff_irradiance_settings &s, const Scene &scene,
+                    TraceContext &ctx, const Primary &px, uint64_t seed) {
+  const TracedGather g = trace_gather(scene, *ctx.radiance, px.p, px.n, s.gather_m, s.gather_n, seed);
+  ctx.rays += g.rays;
+  HessianNeeds needs;
+  needs.kind[0] = s.metric != RADDIFF_METRIC_HESSIAN_ANISOTROPIC;
+  needs.kind[1] = !needs.kind[0];
+  const Evaluated e = evaluate_gather(g, needs, s);
+  if (!e.valid) return;
+  raddiff_cache_record record{};
+  if (!metric_record(s.metric == RADDIFF_METRIC_HESSIAN_ANISOTROPIC ? Metric::HessianAnisotropic : Metric::SplitSphere,
+                     s.accuracy, e, s, px.footprint, record))
+    return;
+  check(raddiff_cache_clamp_record(cache, &record), "raddiff_cache_clamp_record");
+  check(raddiff_cache_insert(cache, &record), "raddiff_cache_insert");
+}
+
+// Fills a fresh cache coarse to fine (pixel steps 16, 8, ..., 1); all threads look up and insert
+// concurrently, one raddiff_cache_irradiance call per pixel. With neighbour clamping the two-sided
+// pass (raddiff_cache_clamp_neighbours, single-threaded) runs after each level; it can uncover
+// pixels, so the finest level is repeated until a round inserts nothing, the last allowed round
+// filling only.
 Fill fill_cache(const Scene &scene, const RenderSettings &cfg, const View &view, const std::vector<Primary> &primary) {
   using clock = std::chrono::steady_clock;
-  const uint32_t weights = cfg.hessian_error > 0 ? RADDIFF_INTERP_TENT : RADDIFF_INTERP_WARD;
-  const raddiff_cache_config config{3, RADDIFF_DOMAIN_SURFACE, weights | RADDIFF_INTERP_NON_NEGATIVE, 0.2};
+  const raddiff_irradiance_settings s = settings_of(cfg);
   Fill out;
-  out.cache = raddiff_cache_new(&config);
-  if (!out.cache) throw std::runtime_error(std::string("raddiff_cache_new: ") + raddiff_last_error());
+  out.cache = raddiff_irradiance_cache_new(&s);
+  if (!out.cache) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
   raddiff_cache *cache = out.cache;
   try {
-    check(raddiff_cache_set_gradient_limit(cache, cfg.gradient_limit), "raddiff_cache_set_gradient_limit");
-    Stats stats;
+    TraceContext ctx{&scene, &cfg.radiance};
     std::atomic<size_t> inserted{0};
-    auto ensure_covered = [&](size_t i) {
+    auto shade = [&](size_t i) {
       const Primary &px = primary[i];
       if (!px.hit) return;
-      float v[3];
-      const raddiff_status st = raddiff_cache_lookup(cache, to_c(px.p), to_c(px.n), v, nullptr);
-      if (st == RADDIFF_OK) return;
-      if (st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
-      std::array<float, 3> value;
-      std::array<float, 9> gradient, rotation;
-      raddiff_cache_record record;
-      if (!make_record(scene, cfg, px.p, px.n, px.footprint, 1 + i, stats, value, gradient, rotation, record,
-                       cfg.gather_m, cfg.gather_n))
+      const size_t before = cfg.neighbour_clamp ? 0 : raddiff_cache_len(cache);
+      if (cfg.neighbour_clamp) {
+        float v[3];
+        const raddiff_status st = raddiff_cache_lookup(cache, to_c(px.p), to_c(px.n), v, nullptr);
+        if (st == RADDIFF_OK) return;
+        if (st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
+        insert_clamped(cache, s, scene, ctx, px, 1 + i);
+        ++inserted;
         return;
-      if (cfg.neighbour_clamp) check(raddiff_cache_clamp_record(cache, &record), "raddiff_cache_clamp_record");
-      check(raddiff_cache_insert(cache, &record), "raddiff_cache_insert");
-      ++inserted;
+      }
+      float e[3];
+      const raddiff_status st =
+          raddiff_cache_irradiance(cache, &s, to_c(px.p), to_c(px.n), px.footprint, trace_callback, &ctx, e);
+      if (st != RADDIFF_ERROR_DEGENERATE) check(st, "raddiff_cache_irradiance");  // degenerate: every ray missed
+      if (raddiff_cache_len(cache) > before) ++inserted;
     };
     const int w = view.width, h = view.height;
     std::vector<size_t> all(primary.size());
@@ -131,7 +124,7 @@ Fill fill_cache(const Scene &scene, const RenderSettings &cfg, const View &view,
     for (;;) {
       const std::vector<size_t> level = out.finest_rounds == 0 ? level_pixels(w, h, step) : all;
       inserted = 0;
-      parallel_for(level.size(), cfg.threads, [&](size_t k) { ensure_covered(level[k]); });
+      parallel_for(level.size(), cfg.threads, [&](size_t k) { shade(level[k]); });
       const bool last_round = step == 1 && out.finest_rounds == kClampRounds;
       if (cfg.neighbour_clamp && !last_round) {
         size_t shrunk = 0;
@@ -147,7 +140,7 @@ Fill fill_cache(const Scene &scene, const RenderSettings &cfg, const View &view,
     }
     out.seconds = std::chrono::duration<double>(clock::now() - t0).count();
     out.records = raddiff_cache_len(cache);
-    out.rays = stats.rays.load();
+    out.rays = ctx.rays.load();
   } catch (...) {
     raddiff_cache_free(cache);
     throw;
@@ -212,8 +205,8 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
                                                   : fill_cache(scene, used, view, primary);
   raddiff_cache *cache = filled.cache;
   std::printf("placement: %s = %.5g, gradient limit %g, neighbour clamp %s\n",
-              used.hessian_error > 0 ? "hessian e" : "split sphere a", tuned_parameter(used), used.gradient_limit,
-              used.neighbour_clamp ? "on" : "off");
+              used.hessian_error > 0 ? "hessian e" : "split sphere a", tuned_parameter(used),
+              used.irradiance.gradient_limit, used.neighbour_clamp ? "on" : "off");
   if (settings.neighbour_clamp)
     std::printf("neighbour clamp: %zu records shrunk by the two-sided passes, %d finest-level rounds\n",
                 filled.shrunk, filled.finest_rounds);
@@ -265,31 +258,34 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
   std::printf("pass 2 (reloaded %s, plain lookups): %zu records, images %s\n", file.c_str(),
               raddiff_cache_len(loaded), same ? "identical" : "DIFFER");
 
-  // Accuracy, for information: the cache against fresh gathers with 4x the rays per axis at some
-  // pixels. Those gathers carry their own noise, so this is not a pass/fail figure; the real-scene
-  // benchmark (--bench) measures against a converged reference.
+  // Accuracy, for information: the cache against fresh gathers with 4x the strata per axis at
+  // some pixels. Those gathers carry their own noise, so this is not a pass/fail figure; the
+  // real-scene benchmark (--bench) measures against a converged reference.
+  const uint32_t m = 4 * settings.irradiance.gather_m, n = 4 * settings.irradiance.gather_n;
   double err2 = 0, ref2 = 0;
   int checked = 0;
-  Stats scratch;
   for (int k = 0; k < settings.check_pixels; ++k) {
     const size_t i = mix(0xC0FFEE + k) % primary.size();
     if (!primary[i].hit) continue;
-    std::array<float, 3> value;
-    std::array<float, 9> g, r;
-    raddiff_cache_record rec;
-    RenderSettings fine = settings;
-    fine.hessian_error = 0;
-    if (!make_record(scene, fine, primary[i].p, primary[i].n, primary[i].footprint, 7 + i, scratch, value, g, r, rec,
-                     4 * settings.gather_m, 4 * settings.gather_n))
-      continue;
-    const double e = luminance(second.at(i)) - luminance(value.data());
+    const TracedGather g = trace_gather(scene, settings.radiance, primary[i].p, primary[i].n, m, n, 7 + i);
+    raddiff_gather_input input{};
+    input.directions = g.directions.data();
+    input.distance = g.distance.data();
+    input.radiance = g.radiance.data();
+    input.channels = 3;
+    double irradiance[3];
+    raddiff_gather_output output{};
+    output.irradiance = irradiance;
+    const raddiff_status st = raddiff_gather_evaluate(&g.layout, &g.frame, &input, &output);
+    if (st == RADDIFF_ERROR_DEGENERATE) continue;
+    check(st, "raddiff_gather_evaluate");
+    const double e = luminance(second.at(i)) - luminance(irradiance);
     err2 += e * e;
-    ref2 += luminance(value.data()) * luminance(value.data());
+    ref2 += luminance(irradiance) * luminance(irradiance);
     ++checked;
   }
   const double rel_rms = checked ? std::sqrt(err2 / std::max(ref2, 1e-300)) : 0.0;
-  std::printf("check: relative RMS error of the cache against %d fresh %ux%u gathers: %.4f\n", checked,
-              4 * settings.gather_m, 4 * settings.gather_n, rel_rms);
+  std::printf("check: relative RMS error of the cache against %d fresh %ux%u gathers: %.4f\n", checked, m, n, rel_rms);
   raddiff_cache_free(loaded);
 
   size_t non_finite = 0, negative = 0;
@@ -298,6 +294,8 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
     negative += v < 0;
   }
   std::printf("values: %zu non-finite, %zu negative of %zu\n", non_finite, negative, first.rgb.size());
+  // Correctness, on any scene: records exist, every pixel is covered, the values are finite and
+  // non-negative, the reloaded cache renders the identical image. Quality is the benchmark's.
   const bool ok = same && misses1 == 0 && records > 0 && (settings.check_pixels == 0 || checked > 0) &&
                   non_finite == 0 && negative == 0;
   std::printf("%s\n", ok ? "OK" : "FAILED");

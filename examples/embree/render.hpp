@@ -8,12 +8,12 @@ namespace rd {
 
 struct RenderSettings {
   std::string out = "embree-out";
-  uint32_t gather_m = 16, gather_n = 48;
+  // raddiff's settings: gather size, radius bounds, gradient limit, leak guard, ...; the metric and
+  // its threshold come from the two fields below.
+  raddiff_irradiance_settings irradiance = raddiff_irradiance_settings_default();
   double accuracy = 0.25;      // split-sphere a
-  double hessian_error = 0.0;  // > 0: occlusion-aware Hessian radii with this relative error
-  RadiusBounds bounds;
+  double hessian_error = 0.0;  // > 0: anisotropic occlusion-aware Hessian records with this error
   int check_pixels = 96;
-  double gradient_limit = RADDIFF_GRADIENT_LIMIT_DEFAULT;
   bool neighbour_clamp = false;
   size_t target_records = 0;  // > 0: tune the metric's parameter to about this many records
   HitRadianceSettings radiance;

@@ -22,12 +22,14 @@ uint32_t sobol_second(uint32_t i) {
 }  // namespace
 
 void trace_directions(const Scene &scene, const HitRadianceSettings &radiance, V3 x, const raddiff_vec3 *directions,
-                      size_t count, uint64_t seed, double *distance, float *radiance_out, uint64_t &rays) {
+                      size_t count, uint64_t seed, double *distance, float *radiance_out, uint64_t &rays,
+                      raddiff_vec3 *hit_normals) {
   hit_radiance_rays() = 0;
   for (size_t i = 0; i < count; ++i) {
     const V3 d = from_c(directions[i]);
     const Hit hit = scene.intersect(x, d);
     distance[i] = hit.distance;
+    if (hit_normals) hit_normals[i] = hit.found() ? to_c(hit.normal) : raddiff_vec3{0, 0, 0};
     const V3 l = hit_radiance(scene, radiance, x, d, hit, mix(seed + i));
     radiance_out[3 * i] = static_cast<float>(l.x);
     radiance_out[3 * i + 1] = static_cast<float>(l.y);
@@ -46,8 +48,9 @@ TracedGather trace_gather(const Scene &scene, const HitRadianceSettings &radianc
   check(raddiff_gather_directions(&g.layout, &g.frame, g.directions.data()), "raddiff_gather_directions");
   g.distance.resize(count);
   g.radiance.resize(3 * count);
+  g.hit_normals.resize(count);
   trace_directions(scene, radiance, x, g.directions.data(), count, seed, g.distance.data(), g.radiance.data(),
-                   g.rays);
+                   g.rays, g.hit_normals.data());
   return g;
 }
 

@@ -16,6 +16,7 @@ struct TracedGather {
   std::vector<raddiff_vec3> directions;
   std::vector<double> distance;  // INFINITY for a miss
   std::vector<float> radiance;   // 3 per direction
+  std::vector<raddiff_vec3> hit_normals;  // unit, facing x (zero for a miss)
   uint64_t rays = 0;             // every ray traced for it (gather, shadow and continuation rays)
 };
 
@@ -27,7 +28,8 @@ TracedGather trace_gather(const Scene &scene, const HitRadianceSettings &radianc
 // The same trace into caller-provided arrays (the high-level call's callback): `count` directions
 // from x, their distances and radiance written.
 void trace_directions(const Scene &scene, const HitRadianceSettings &radiance, V3 x, const raddiff_vec3 *directions,
-                      size_t count, uint64_t seed, double *distance, float *radiance_out, uint64_t &rays);
+                      size_t count, uint64_t seed, double *distance, float *radiance_out, uint64_t &rays,
+                      raddiff_vec3 *hit_normals = nullptr);
 
 // Sum of the radiance arriving at (x, n) over `count` cosine-distributed directions from the
 // (0,2)-sequence points [first, first + count) of a scrambled Sobol pair: pi * sum / N is an
