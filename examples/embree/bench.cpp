@@ -151,6 +151,13 @@ class Bench {
     // gradient limit and the leak guard of the settings.
     std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)> cache(raddiff_irradiance_cache_new(&irr),
                                                                     raddiff_cache_free);
+    if (settings_.interpolation >= 0) {
+      const raddiff_cache_config config{3, RADDIFF_DOMAIN_SURFACE,
+                                        static_cast<uint32_t>(settings_.interpolation) | RADDIFF_INTERP_NON_NEGATIVE,
+                                        0.2};
+      cache.reset(raddiff_cache_new(&config));
+      if (cache) check(raddiff_cache_set_gradient_limit(cache.get(), irr.gradient_limit), "gradient limit");
+    }
     if (!cache) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
@@ -197,6 +204,11 @@ class Bench {
           out.raddiff_seconds += thread_cpu_seconds() - t0;
           if (!defined) continue;
           if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
+          if (settings_.hessian_distance_bound > 0 && uses_hessian(m)) {
+            const double bound = std::max(settings_.hessian_distance_bound * e.harmonic_mean_distance,
+                                          irr.pixel_radius_min * primary_[i].footprint);
+            for (double &r : rec.radii) r = std::min(r, bound);
+          }
           RecordInfo info{i, primary_[i].p, primary_[i].n, {rec.radii[0], rec.radii[1]}, {rec.axes[0], rec.axes[1]}};
           t0 = thread_cpu_seconds();
           check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");

@@ -30,6 +30,11 @@ struct BenchSettings {
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.
   int oracle_derivative_paths = 0;
+  // > 0: Hessian records' radii at most this times the gather's harmonic-mean distance (experiment).
+  double hessian_distance_bound = 0;
+  // >= 0: every cache interpolates with this RADDIFF_INTERP_* kernel instead of its metric's
+  // (experiment; -1: the metric's own).
+  int interpolation = -1;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
 };

@@ -34,8 +34,8 @@ void parse_pair(const std::string &s, double &a, double &b, const char *what) {
 const char *kUsage =
     "usage: raddiff_embree [--obj scene.obj] [--out prefix] [--size N] [--gather MxN] [--threads N]\n"
     "                      [--eye x,y,z] [--target x,y,z] [--fov degrees]\n"
-    "                      [--radius min,max (world; default 0 and 0.25 x scene size)]\n"
-    "                      [--radius-px min,max (times the pixel's footprint; default 1,inf)]\n"
+    "                      [--radius min,max (world; default 0,inf)]\n"
+    "                      [--radius-px min,max (times the pixel's footprint; default 1,150)]\n"
     "                      [--hit-radiance production[:N][xK] | one-shadow-ray[xK] (default production:4)]\n"
     "                      [--gradient-limit c (default 2, inf: off)] [--leak-guard relative,absolute]\n"
     "  render mode:        [--accuracy a | --hessian relative_error] [--records N] [--neighbour-clamp]\n"
@@ -54,7 +54,7 @@ int main(int argc, char **argv) {
   BenchSettings bench;
   render.irradiance.gather_m = 16;  // the render mode's quick default; the benchmark's is 32 x 128
   render.irradiance.gather_n = 48;
-  bool bench_mode = false, radius_given = false, radius_px_given = false, gather_given = false;
+  bool bench_mode = false, gather_given = false;
   unsigned threads = 0;
   try {
     for (int i = 1; i < argc; ++i) {
@@ -81,10 +81,8 @@ int main(int argc, char **argv) {
       else if (a == "--fov") view.fov = std::stod(next());
       else if (a == "--radius") {
         parse_pair(next(), render.irradiance.world_radius_min, render.irradiance.world_radius_max, "--radius");
-        radius_given = true;
       } else if (a == "--radius-px") {
         parse_pair(next(), render.irradiance.pixel_radius_min, render.irradiance.pixel_radius_max, "--radius-px");
-        radius_px_given = true;
       } else if (a == "--records") {
         const long n = std::stol(next());
         if (n < 1) throw std::runtime_error("--records N needs N >= 1");
@@ -111,6 +109,12 @@ int main(int argc, char **argv) {
       else if (a == "--no-path-trace") bench.path_trace = false;
       else if (a == "--no-record-gradients") bench.record_gradients = false;
       else if (a == "--oracle-derivatives") bench.oracle_derivative_paths = std::stoi(next());
+      else if (a == "--hessian-distance-bound") bench.hessian_distance_bound = std::stod(next());
+      else if (a == "--interpolation") {
+        const std::string k = next();
+        bench.interpolation = k == "ward" ? RADDIFF_INTERP_WARD : k == "tent" ? RADDIFF_INTERP_TENT
+                              : k == "cubic" ? RADDIFF_INTERP_CUBIC : throw std::runtime_error("--interpolation ward|tent|cubic");
+      }
       else {
         std::printf("%s", kUsage);
         return a == "--help" || a == "-h" ? 0 : 2;
@@ -128,16 +132,8 @@ int main(int argc, char **argv) {
                 scene.emitter_count(), scene.size());
     if (scene.emitter_count() == 0) throw std::runtime_error("the scene has no emitter (Ke > 0)");
     std::printf("hit radiance: %s\n", render.radiance.describe().c_str());
-    // Radius bounds follow the scene's size and the image's pixels unless given: at most a quarter
-    // of the scene, at least one pixel.
-    if (!radius_given) {
-      render.irradiance.world_radius_min = 0;
-      render.irradiance.world_radius_max = 0.25 * scene.size();
-    }
-    if (!radius_px_given) {
-      render.irradiance.pixel_radius_min = 1;
-      render.irradiance.pixel_radius_max = INFINITY;
-    }
+    // Radius bounds: raddiff's defaults (one to 150 pixels of the query's footprint) unless given;
+    // they follow the image's pixels whatever the scene's size.
     bench.irradiance = render.irradiance;
     if (!gather_given) {
       bench.irradiance.gather_m = 32;

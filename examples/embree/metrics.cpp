@@ -95,6 +95,7 @@ Evaluated evaluate_gather(const TracedGather &g, const HessianNeeds &needs,
   const int first = needs.kind[0] ? 0 : needs.kind[1] ? 1 : needs.kind[2] ? 2 : 3;
   check(raddiff_gather_evaluation_summary(e.evaluation[first].get(), &summary), "raddiff_gather_evaluation_summary");
   e.luminance = summary.scalar;
+  e.harmonic_mean_distance = summary.harmonic_mean_distance;
   // The irradiance itself, as the records store it: from any record of this evaluation.
   raddiff_irradiance_settings any = settings;
   any.metric = RADDIFF_METRIC_SPLIT_SPHERE;

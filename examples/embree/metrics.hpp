@@ -52,6 +52,7 @@ struct Evaluated {
   std::unique_ptr<raddiff_gather_evaluation, EvaluationDeleter> evaluation[4];
   double seconds[4] = {0, 0, 0, 0};
   double luminance = 0;     // the evaluation's scalar
+  double harmonic_mean_distance = INFINITY;
   float value[3] = {0, 0, 0};  // irradiance the records store (the gather's own)
 };
 
