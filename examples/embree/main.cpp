@@ -38,6 +38,7 @@ const char *kUsage =
     "                      [--radius-px min,max (times the pixel's footprint; default 1,150)]\n"
     "                      [--hit-radiance production[:N][xK] | one-shadow-ray[xK] (default production:4)]\n"
     "                      [--gradient-limit c (default 2, inf: off)] [--leak-guard relative,absolute]\n"
+    "                      [--max-anisotropy r (default 2)] [--curvature-floor kappa (default 0.04)]\n"
     "  render mode:        [--accuracy a | --hessian relative_error] [--records N] [--neighbour-clamp]\n"
     "                      [--check pixels (default 96)]\n"
     "  --bench:            [--records N (default pixels/32)] [--metrics name,name,...] [--thresholds N]\n"
@@ -89,6 +90,8 @@ int main(int argc, char **argv) {
         render.target_records = bench.target_records = static_cast<size_t>(n);
       } else if (a == "--neighbour-clamp") render.neighbour_clamp = true;
       else if (a == "--gradient-limit") render.irradiance.gradient_limit = std::stod(next());
+      else if (a == "--max-anisotropy") render.irradiance.max_anisotropy = std::stod(next());
+      else if (a == "--curvature-floor") render.irradiance.curvature_floor = std::stod(next());
       else if (a == "--leak-guard") parse_pair(next(), render.irradiance.leak_guard_relative,
                                                render.irradiance.leak_guard_absolute, "--leak-guard");
       else if (a == "--check") render.check_pixels = std::stoi(next());

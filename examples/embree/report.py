@@ -117,6 +117,27 @@ def interpolate_loglog(points, x):
     return None
 
 
+def time_to_reach(points, target):
+    """The first time a (time, error) curve reaches `target` error (log-log between its points),
+    or None when it never does."""
+    pts = sorted(points)
+    if pts and pts[0][1] <= target:
+        return pts[0][0]
+    for (x0, y0), (x1, y1) in zip(pts, pts[1:]):
+        if y0 > target >= y1:
+            t = (math.log(target) - math.log(y0)) / (math.log(y1) - math.log(y0))
+            return math.exp(math.log(x0) + t * (math.log(x1) - math.log(x0)))
+    return None
+
+
+def trimmed_error(run, metric):
+    """Relative RMS error without the worst 1% of the measured pixels (the bulk of the image)."""
+    pixels = rows(run.path(f"-{metric}-pixels.csv"))
+    sq = sorted((float(r["error"]) ** 2 for r in pixels), reverse=True)
+    ref2 = sum(float(r["reference"]) ** 2 for r in pixels)
+    return math.sqrt(sum(sq[len(sq) // 100:]) / ref2) if ref2 > 0 else 0.0
+
+
 def mosaic(run, values):
     """Each measured pixel's value over its stratum (the grid of the stratified selection)."""
     g = int(run.summary["reference_grid"])
@@ -129,7 +150,7 @@ def mosaic(run, values):
 
 
 def tonemap(lum, exposure):
-    v = np.clip(np.nan_to_num(lum) * exposure, 0, 1)
+    v = np.clip(lum * exposure, 0, 1)
     return np.where(v <= 0.0031308, 12.92 * v, 1.055 * np.power(v, 1 / 2.4) - 0.055)
 
 
@@ -223,8 +244,10 @@ def plot_radii(run):
 def plot_reference(run):
     ref = [float(r["reference"]) for r in run.measured]
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.6))
-    axes[0].imshow(tonemap(mosaic(run, ref), float(run.summary["exposure"])), cmap="gray", vmin=0, vmax=1,
-                   interpolation="nearest")
+    reference = np.ma.masked_invalid(tonemap(mosaic(run, ref), float(run.summary["exposure"])))
+    grey = matplotlib.colormaps["gray"].copy()
+    grey.set_bad("tab:blue")  # strata with no measured pixel (sky, emitters, black surfaces)
+    axes[0].imshow(reference, cmap=grey, vmin=0, vmax=1, interpolation="nearest")
     axes[0].set_title(f"converged reference at {len(ref)} stratified pixels", fontsize=9)
     if run.pt:
         best = max(run.pt, key=lambda p: p["spp"])
@@ -235,6 +258,41 @@ def plot_reference(run):
         a.axis("off")
     fig.tight_layout()
     fig.savefig(run.path("-reference.png"), dpi=90)
+    plt.close(fig)
+
+
+def plot_panel(run, metrics, scale):
+    """One figure for the guides: per metric its cache image, error map and records."""
+    metrics = [m for m in metrics if m in run.metrics]
+    if not metrics:
+        return
+    exposure = float(run.summary["exposure"])
+    cmap = matplotlib.colormaps["inferno"].copy()
+    cmap.set_bad("0.5")
+    fig, axes = plt.subplots(len(metrics), 3, figsize=(12, 4 * len(metrics)), squeeze=False)
+    for row, m in zip(axes, metrics):
+        image = read_pfm(run.path(f"-{m}.pfm")) @ LUMA
+        f = run.equal(m)
+        row[0].imshow(tonemap(image, exposure), cmap="gray", vmin=0, vmax=1)
+        row[0].set_title(f"{m}: {int(f['records'])} records, error {f['rel_rms']:.4f}", fontsize=9)
+        err = [abs(float(r["error"])) / scale for r in rows(run.path(f"-{m}-pixels.csv"))]
+        im = row[1].imshow(mosaic(run, err), cmap=cmap, vmin=0, vmax=0.25, interpolation="nearest")
+        row[1].set_title("|error| / mean reference at the measured pixels", fontsize=9)
+        fig.colorbar(im, ax=row[1], fraction=0.046, pad=0.04)
+        row[2].imshow(0.6 * tonemap(image, exposure), cmap="gray", vmin=0, vmax=1)
+        for r in rows(run.path(f"-{m}-records.csv")):
+            u = np.array([float(r["ux"]), float(r["uy"])])
+            v = np.array([float(r["vx"]), float(r["vy"])])
+            t = np.linspace(0, 2 * np.pi, 25)
+            pts = np.array([float(r["px"]), float(r["py"])])[:, None] + np.outer(u, np.cos(t)) + np.outer(v, np.sin(t))
+            row[2].plot(pts[0], pts[1], color="orange", linewidth=0.25, alpha=0.6)
+        row[2].set_xlim(0, run.width)
+        row[2].set_ylim(run.height, 0)
+        row[2].set_title("records (centres and extents)", fontsize=9)
+        for a in row:
+            a.axis("off")
+    fig.tight_layout()
+    fig.savefig(run.path("-panel.png"), dpi=60)
     plt.close(fig)
 
 
@@ -251,6 +309,7 @@ def report_run(run, md, table):
     for m in run.metrics:
         plot_error_map(run, m, scale)
         plot_records(run, m)
+    plot_panel(run, ["split-sphere", "bounded-split-sphere", "hessian-anisotropic"], scale)
 
     md.append(f"## {run.name}\n")
     md.append(
@@ -264,8 +323,9 @@ def report_run(run, md, table):
     split = run.equal("split-sphere")
     anis = run.equal("hessian-anisotropic")
     md.append("| metric | records | CPU s (trace / raddiff / cache) | raddiff share | error | vs split sphere "
-              "| gathers' floor | interpolation | worst 1% share | radius px (min / 5% / median) |")
-    md.append("|---|---|---|---|---|---|---|---|---|---|")
+              "| gathers' floor | interpolation | worst 1% share | without the worst 1% "
+              "| CPU s to the Hessian's error | radius px (min / 5% / median) |")
+    md.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
     errors = []
     for m in run.metrics:
         f = run.equal(m)
@@ -276,26 +336,32 @@ def report_run(run, md, table):
         ratio = f["rel_rms"] / split["rel_rms"] if split else None
         share = f["raddiff_s"] / f["total_s"] if f["total_s"] > 0 else 0
         errors.append(f["rel_rms"])
+        trimmed = trimmed_error(run, m)
+        reach = time_to_reach([(g["total_s"], g["rel_rms"]) for g in run.curve(m)], anis["rel_rms"]) if anis else None
+        reach_text = "not reached" if reach is None else f"{reach:.1f}"
         md.append(
             f"| {m} | {int(f['records'])} | {f['total_s']:.1f} ({f['trace_s']:.1f} / {f['raddiff_s']:.2f} / "
             f"{f['cache_s']:.2f}) | {100 * share:.1f}% | {fmt(f['rel_rms'])} | {fmt(ratio, 2)} | {fmt(floor)} | "
-            f"{fmt(interp)} | {f['worst1_share']:.2f} | {f['radius_px_min']:.1f} / {f['radius_px_p5']:.1f} / "
-            f"{f['radius_px_median']:.1f} |")
+            f"{fmt(interp)} | {f['worst1_share']:.2f} | {fmt(trimmed)} | {reach_text} | "
+            f"{f['radius_px_min']:.1f} / {f['radius_px_p5']:.1f} / {f['radius_px_median']:.1f} |")
         table.append([run.name, m, f["parameter"], int(f["records"]), f["trace_s"], f["raddiff_s"], f["cache_s"],
-                      f["total_s"], f["rel_rms"], floor, f["worst1_share"], 1])
+                      f["total_s"], f["rel_rms"], floor, f["worst1_share"], trimmed, 1])
         for g in run.curve(m):
             if int(g["equal_records"]) == 0:
                 table.append([run.name, m, g["parameter"], int(g["records"]), g["trace_s"], g["raddiff_s"],
-                              g["cache_s"], g["total_s"], g["rel_rms"], "", g["worst1_share"], 0])
+                              g["cache_s"], g["total_s"], g["rel_rms"], "", g["worst1_share"], "", 0])
     for kind, pts in (("path-tracing", run.pt), ("path-tracing+oidn", run.oidn)):
         for p in pts:
-            table.append([run.name, kind, p["spp"], "", "", "", "", p["cpu_s"], p["rel_rms"], "", p["worst1_share"], 0])
+            table.append([run.name, kind, p["spp"], "", "", "", "", p["cpu_s"], p["rel_rms"], "", p["worst1_share"],
+                          "", 0])
         if anis and pts:
             e = interpolate_loglog([(p["cpu_s"], p["rel_rms"]) for p in pts], anis["total_s"])
+            reach = time_to_reach([(p["cpu_s"], p["rel_rms"]) for p in pts], anis["rel_rms"])
+            reach_text = "not reached" if reach is None else f"{reach:.1f}"
             if e is not None:
                 errors.append(e)
                 md.append(f"| {kind} at the anisotropic Hessian's {anis['total_s']:.1f} CPU s | | | | {fmt(e)} | "
-                          f"{fmt(e / split['rel_rms'] if split else None, 2)} | | | | |")
+                          f"{fmt(e / split['rel_rms'] if split else None, 2)} | | | | | {reach_text} | |")
     md.append("")
     noise = float(s["reference_relative_noise"])
     smallest = min(errors) if errors else 0
@@ -322,7 +388,7 @@ def main():
           "Relative RMS error of the indirect irradiance's luminance at the measured pixels against the "
           "converged reference; CPU seconds summed over threads. Written by examples/embree/report.py.\n"]
     table = [["run", "metric", "parameter", "records", "trace_s", "raddiff_s", "cache_s", "total_s", "rel_rms",
-              "gather_floor", "worst1_share", "equal_records"]]
+              "gather_floor", "worst1_share", "rel_rms_without_worst1", "equal_records"]]
     for name in runs:
         report_run(Run(folder, name), md, table)
     with open(os.path.join(folder, "report.md"), "w") as f:
