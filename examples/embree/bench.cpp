@@ -496,7 +496,10 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
     std::printf("%s: tuning to %zu records\n", metric_name(m), target);
     std::fflush(stdout);
     const double p = bench.tune(m, target);
-    for (int k = -1; k <= settings.thresholds - 2; ++k) {
+    // Thresholds spaced so that radii change by 2^0.75 per step: one below the tuned one (more
+    // records), the tuned one, then above it.
+    const int first = settings.thresholds >= 2 ? -1 : 0;
+    for (int k = first; k < first + settings.thresholds; ++k) {
       const double pk = p * std::pow(2.0, 0.75 * k / radius_exponent(m));
       Fill f = bench.fill(m, pk, true);
       const Measured err = measure(f.image, ref);

@@ -99,9 +99,10 @@ Evaluated evaluate_gather(const TracedGather &g, const HessianNeeds &needs,
   // The irradiance itself, as the records store it: from any record of this evaluation.
   raddiff_irradiance_settings any = settings;
   any.metric = RADDIFF_METRIC_SPLIT_SPHERE;
+  any.world_radius_max = 1.0;  // any finite bound: only the record's value is read
   raddiff_cache_record r{};
-  if (std::isfinite(summary.harmonic_mean_distance) &&
-      raddiff_irradiance_record(&any, e.evaluation[first].get(), 0.0, &r) == RADDIFF_OK) {
+  if (std::isfinite(summary.harmonic_mean_distance)) {
+    check(raddiff_irradiance_record(&any, e.evaluation[first].get(), 0.0, &r), "raddiff_irradiance_record");
     std::copy(r.value, r.value + 3, e.value);
   } else {
     // Every ray missed: the irradiance is the environment's, which this renderer leaves black.
