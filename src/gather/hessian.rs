@@ -70,7 +70,7 @@ pub use super::layout::LayoutKind;
 use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 use crate::kernels;
 use crate::kernels::form_factor;
-use crate::kernels::solid_angle::pow2_scale;
+use crate::kernels::numeric::pow2::pow2_scale;
 use crate::{Deriv3, Order};
 
 /// Misses are placed at this multiple of the largest finite hit distance (2^20: the occlusion

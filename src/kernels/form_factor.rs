@@ -29,11 +29,11 @@ use glam::{DMat3, DVec3};
 use crate::error::{ensure_finite3, Error, Result};
 use crate::{Deriv3, Order};
 
-use super::dd;
 use super::lambert;
 use super::lambert_clipped::{self, LoopValue};
 use super::lambert_clipped_derivs;
 use super::lambert_polygon;
+use super::numeric::dd;
 use super::polygon;
 
 const INV_2PI: f64 = 0.5 * std::f64::consts::FRAC_1_PI;
@@ -1047,7 +1047,7 @@ mod tests {
             return;
         }
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut unit = move || crate::kernels::test_rng::lcg(&mut state);
+        let mut unit = move || crate::test_rng::lcg(&mut state);
         let bits = |d: &ClippedDerivs| -> Vec<u64> {
             let (tag, d) = match d {
                 ClippedDerivs::Done(d) => (0, *d),
@@ -1466,7 +1466,7 @@ mod tests {
         let mut worst = [[0.0f64; 3]; 2];
         let mut counted = [0; 2];
         for i in 0..1200 {
-            let mut c = || crate::kernels::test_rng::lcg(&mut state);
+            let mut c = || crate::test_rng::lcg(&mut state);
             let scale = 10f64.powf(4.0 * c() - 2.0);
             let dir = DVec3::new(c() - 0.5, c() - 0.5, c() - 0.5).normalize();
             let off = dir.any_orthonormal_vector();

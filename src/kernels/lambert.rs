@@ -26,7 +26,7 @@
 use glam::{DMat3, DVec3};
 
 use super::lambert_far::{self, Far};
-use super::lanes::{Lane, Pair, V3};
+use super::numeric::lanes::{Lane, Pair, V3};
 use super::polygon;
 use crate::{Deriv3, Order};
 
@@ -556,6 +556,7 @@ pub(super) const CANCELLATION: f64 = 1e2;
 mod tests {
     use super::*;
     use crate::kernels::{edge_form_factor, polygon_form_factor};
+    use crate::test_rng::lcg;
     use glam::DMat3;
 
     const TRI: [DVec3; 3] = [
@@ -664,14 +665,6 @@ mod tests {
         // cancel: certified all the way (1e8 sizes).
         let (ok, off) = walk(n(), |t| c - n() * t, 2.0, 1e8);
         assert!(ok == 1e8 && off.is_nan(), "{ok:e} {off:e}");
-    }
-
-    /// A small deterministic generator for the walks below.
-    fn lcg(state: &mut u64) -> f64 {
-        *state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (*state >> 11) as f64 / (1u64 << 53) as f64
     }
 
     /// Lambert's sum alone (the certificate before the far form existed), for comparison.

@@ -45,8 +45,8 @@
 
 use glam::DVec3;
 
-use super::dd::{two_sum, Dd, Dd3};
 use super::lambert::{self, FAST_TOLERANCE, INV_2PI};
+use super::numeric::dd::{two_sum, Dd, Dd3};
 use super::polygon::{self, RouteLoop};
 
 const U: f64 = 0.5 * f64::EPSILON;
@@ -711,7 +711,7 @@ mod tests {
     use crate::kernels::polygon;
     use crate::Order;
 
-    use crate::kernels::test_rng::lcg;
+    use crate::test_rng::lcg;
 
     fn robust(x: DVec3, n: DVec3, v: [DVec3; 3]) -> f64 {
         polygon::form_factor(x, n, &v, Order::Value).unwrap().value

@@ -301,7 +301,7 @@ mod tests {
     use super::*;
     use crate::kernels::{lambert_clipped, polygon};
 
-    use crate::kernels::test_rng::lcg;
+    use crate::test_rng::lcg;
 
     /// A random triangle of size `scale`, `x` at `scale·10^(d₀ − d₁·U)` from its plane (either
     /// side) over the foot `v₀ + a(v₁ − v₀) + b(v₂ − v₀)` (inside the triangle when `inside`,

@@ -70,13 +70,13 @@
 
 use glam::DVec3;
 
-use super::dd::Dd;
 use super::lambert;
 use super::lambert_clipped::{
     certify, difference_error, edge_vector, from_parts, ClippedLoop, LoopVertex,
 };
 use super::lambert_clipped_derivs::{loop_derivs, loop_derivs_charging};
 use super::lambert_polygon::convex_normal;
+use super::numeric::dd::Dd;
 use super::polygon::{deferred_far_piece, near_plane_clipped_polygon_value_and_loop, RouteLoop};
 use crate::{Deriv3, Order};
 
@@ -493,8 +493,8 @@ fn derivs_of(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Derivs> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kernels::test_rng::lcg;
     use crate::kernels::{polygon, polygon_form_factor};
+    use crate::test_rng::lcg;
     use glam::DMat3;
 
     /// A random strictly convex polygon of `m` vertices and size `scale`: jittered angles on an

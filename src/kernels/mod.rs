@@ -2,7 +2,6 @@
 //! to an evaluation point `x`. Each takes an [`Order`](crate::Order) and does no work above it.
 
 pub mod batch;
-mod dd;
 pub mod form_factor;
 mod lambert;
 mod lambert_clipped;
@@ -10,13 +9,11 @@ mod lambert_clipped_derivs;
 mod lambert_clipped_polygon;
 mod lambert_far;
 mod lambert_polygon;
-mod lanes;
 pub mod marched;
+pub(crate) mod numeric;
 pub mod polygon;
 pub mod segment;
 pub mod solid_angle;
-#[cfg(test)]
-mod test_rng;
 pub mod transmittance;
 
 pub use batch::*;

@@ -14,7 +14,8 @@ use smallvec::SmallVec;
 use crate::error::{ensure_finite3, Error, Result};
 use crate::{Deriv3, Order};
 
-use super::dd;
+use super::numeric::dd;
+use super::numeric::pow2::{exponent, pow2};
 
 mod near_plane_polygon;
 mod near_plane_triangle;
@@ -72,17 +73,6 @@ pub(crate) fn unit_normal(n: DVec3) -> Result<DVec3> {
         )));
     }
     Ok(n / len)
-}
-
-/// `2^k` for `k` in the normal exponent range.
-fn pow2(k: i32) -> f64 {
-    let k = k.clamp(-1022, 1023);
-    f64::from_bits(((k + 1023) as u64) << 52)
-}
-
-/// Binary exponent of a positive finite `v` (clamped to the normal range).
-fn exponent(v: f64) -> i32 {
-    (((v.to_bits() >> 52) & 0x7ff) as i32 - 1023).max(-1022)
 }
 
 /// Positions relative to the first vertex (`u`) and to `x` (`r`), rescaled by an exact power of two
@@ -300,7 +290,7 @@ fn in_range(
 mod in_range_tests {
     use super::*;
 
-    use crate::kernels::test_rng::lcg;
+    use crate::test_rng::lcg;
 
     /// Bit for bit the rescaled evaluation, in every regime `evaluate` distinguishes (clipped, near
     /// the plane, near an edge line, slivers, far field, cancelling sums) and at every order.
@@ -1781,7 +1771,7 @@ fn subdivide<S: sliver::GroupSums, const GRADIENT: bool, const HESSIAN: bool>(
         (true, false) => Order::Gradient,
         (true, true) => Order::Hessian,
     };
-    let n_lanes = crate::kernels::lanes::V3::<S::Lane>::splat(n);
+    let n_lanes = crate::kernels::numeric::lanes::V3::<S::Lane>::splat(n);
     // Each piece carries its (2·area·N̂, 2·area·N̂·r_a): bisection halves both exactly, so the
     // pieces inherit the accuracy of the fan triangles' geometry.
     let mut stack: SmallVec<[Piece; 16]> = SmallVec::new();
@@ -2285,7 +2275,7 @@ pub fn vector_form_factor_jacobian(x: DVec3, vertices: &[DVec3]) -> Result<DMat3
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kernels::test_rng::lcg;
+    use crate::test_rng::lcg;
 
     /// The switch ratios of [`FAR_FIELD_RULES`] above 16 satisfy the documented tolerances of
     /// [`far_field_error_bound`] (1e-14 value and gradient, 1e-12 Hessian) at the switch, and so
@@ -2432,7 +2422,7 @@ mod tests {
                 6 => gauss_legendre_6(),
                 _ => gauss_legendre_8(),
             });
-            let n_lanes = crate::kernels::lanes::V3::splat(n);
+            let n_lanes = crate::kernels::numeric::lanes::V3::splat(n);
             for order in [Order::Value, Order::Gradient, Order::Hessian] {
                 let want = rule_on(&t[0], &t[1], &t[2], n, order, geometry, rule);
                 let sums = match order {

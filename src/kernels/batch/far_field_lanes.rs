@@ -28,8 +28,8 @@ use super::super::form_factor::{fast_setup, maybe_far, oriented};
 use super::super::lambert;
 use super::super::polygon::{self, Rule, RuleSums};
 use super::form_factor_lanes;
-use super::solid_angle_lanes::Isa;
 use crate::error::Result;
+use crate::simd::Isa;
 use crate::{Deriv3, Order};
 
 /// Lanes per evaluation (a multiple of the widest vector, 8 f64).
@@ -390,9 +390,10 @@ pub(super) fn run_on(
 
 #[cfg(test)]
 mod tests {
-    use super::super::solid_angle_lanes::tests::{isas, Lcg};
+    use super::super::solid_angle_lanes::tests::isas;
     use super::super::{add, form_factor, form_factors, TriangleMesh, VertexData};
     use super::*;
+    use crate::test_rng::Lcg;
     use std::cell::Cell;
 
     fn bits(d: &Deriv3) -> Vec<u64> {

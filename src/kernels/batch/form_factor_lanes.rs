@@ -20,8 +20,8 @@ use glam::DVec3;
 
 use super::super::lambert::{self, FAST_TOLERANCE, INV_2PI};
 use super::super::lambert_far::{psi, FAR_RATIO2};
-use super::solid_angle_lanes::Isa;
 use crate::error::Result;
+use crate::simd::Isa;
 use crate::Deriv3;
 
 /// Lanes per batch (a multiple of the widest vector, 8 f64).
@@ -281,8 +281,9 @@ pub(super) fn lambert_values(
 
 #[cfg(test)]
 mod tests {
-    use super::super::solid_angle_lanes::tests::{isas, Lcg};
+    use super::super::solid_angle_lanes::tests::isas;
     use super::*;
+    use crate::test_rng::Lcg;
     use crate::Order;
 
     #[test]

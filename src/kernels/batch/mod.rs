@@ -137,7 +137,7 @@ pub fn mesh_form_factor(x: DVec3, n: DVec3, mesh: &TriangleMesh, order: Order) -
     let mut sum = Deriv3::constant(0.0);
     let ln = form_factor_lanes::lane_normal(n);
     form_factors(
-        solid_angle_lanes::best_isa(),
+        crate::simd::best_isa(),
         mesh.len(),
         |t| (x, n, ln, mesh.triangle(t)),
         order,
@@ -161,7 +161,7 @@ pub fn mesh_form_factor_each(
     check_len(out.len(), mesh.len(), "out", "triangles")?;
     let ln = form_factor_lanes::lane_normal(n);
     form_factors(
-        solid_angle_lanes::best_isa(),
+        crate::simd::best_isa(),
         mesh.len(),
         |t| (x, n, ln, mesh.triangle(t)),
         order,
@@ -193,7 +193,7 @@ pub fn points_form_factor(
     ensure_finite3(b, "b")?;
     ensure_finite3(c, "c")?;
     form_factors(
-        solid_angle_lanes::best_isa(),
+        crate::simd::best_isa(),
         points.len(),
         |i| {
             let n = normals[i];
@@ -211,7 +211,7 @@ pub fn points_form_factor(
 /// value comes from the far form's lanes, the gradient and Hessian from the far-field rule's lanes,
 /// the rest from the single call (whose error, labelled `what i`, stops the run).
 fn form_factors(
-    isa: solid_angle_lanes::Isa,
+    isa: crate::simd::Isa,
     count: usize,
     get: impl Fn(usize) -> (DVec3, DVec3, DVec3, [DVec3; 3]),
     order: Order,

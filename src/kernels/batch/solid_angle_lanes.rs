@@ -26,7 +26,9 @@
 
 use glam::DVec3;
 
-use crate::gather::hessian::edges::atan2_upper;
+use crate::kernels::numeric::atan2::atan2_upper;
+use crate::kernels::numeric::fma::fmadd;
+use crate::simd::{best_isa, Isa};
 use crate::{Deriv3, Order};
 
 /// Lanes per batch (a multiple of the widest vector, 8 f64).
@@ -68,15 +70,6 @@ impl Lanes {
                 self.e[k][axis][i] = e[k][axis];
             }
         }
-    }
-}
-
-#[inline(always)]
-fn fmadd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
-    if FMA {
-        a.mul_add(b, c)
-    } else {
-        a * b + c
     }
 }
 
@@ -251,29 +244,6 @@ fn evaluate<const FMA: bool, const GRADIENT: bool, const HESSIAN: bool>(l: &mut 
     }
 }
 
-/// The instruction sets the lane code is compiled for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Isa {
-    Portable,
-    #[cfg(target_arch = "x86_64")]
-    Avx2,
-    #[cfg(all(target_arch = "x86_64", raddiff_avx512))]
-    Avx512,
-}
-
-/// The best [`Isa`] this CPU runs and `RADDIFF_SIMD` allows.
-pub(super) fn best_isa() -> Isa {
-    #[cfg(all(target_arch = "x86_64", raddiff_avx512))]
-    if crate::simd::avx512() {
-        return Isa::Avx512;
-    }
-    #[cfg(target_arch = "x86_64")]
-    if crate::simd::avx2_fma() {
-        return Isa::Avx2;
-    }
-    Isa::Portable
-}
-
 #[inline(always)]
 fn evaluate_order<const FMA: bool>(l: &mut Lanes, order: Order) {
     match order {
@@ -385,24 +355,6 @@ pub(super) fn run_on(
 pub(super) mod tests {
     use super::*;
 
-    /// The lane tests' deterministic generator.
-    pub(crate) struct Lcg(pub(crate) u64);
-
-    impl Lcg {
-        pub(crate) fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-
-        /// A point in the cube of side `s` centred at the origin.
-        pub(crate) fn point(&mut self, s: f64) -> DVec3 {
-            DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * s
-        }
-    }
-
     /// Every ISA this machine runs (the portable one always).
     pub(crate) fn isas() -> Vec<Isa> {
         #[allow(unused_mut)]
@@ -506,12 +458,7 @@ pub(super) mod tests {
         // What RADDIFF_SIMD=portable selects, against every vector copy, lane by lane (the FMA
         // contractions are the only difference).
         let mut state = 17u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut next = || crate::test_rng::lcg(&mut state) - 0.5;
         let elems: Vec<(DVec3, [DVec3; 3])> = (0..200)
             .map(|_| {
                 let x = DVec3::new(next(), next(), next()) * 4.0;

@@ -41,9 +41,9 @@ use super::{
     edge_vector, exact_height_of, far_field_rule, foot_inside, near_plane_value, next, ClipVertex,
     Plane, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO, SPLIT_VALUE_LIMIT,
 };
-use crate::kernels::dd::{self, Dd3};
 use crate::kernels::lambert;
 use crate::kernels::lambert_polygon::convex_normal;
+use crate::kernels::numeric::dd::{self, Dd3};
 
 /// The value of [`polygon_form_factor`](crate::kernels::polygon_form_factor) for `Order::Value`
 /// (form factor, dimensionless, in `[0, 1]`) of the `M` vertices `v` (4 to 8) when the robust
@@ -335,7 +335,7 @@ mod tests {
     use super::*;
     use crate::kernels::polygon::form_factor;
     use crate::kernels::polygon::near_plane_triangle::tests::robust_takes_the_split;
-    use crate::kernels::test_rng::lcg;
+    use crate::test_rng::lcg;
     use crate::Order;
 
     /// A random strictly convex polygon of `m` vertices and size `scale` (jittered angles on an

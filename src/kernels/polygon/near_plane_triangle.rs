@@ -31,9 +31,9 @@ use super::{
     triangle_plane, ClipVertex, InPlaneEdge, Plane, NEAR_PLANE_HEIGHT, NEAR_PLANE_RATIO,
     SPLIT_VALUE_LIMIT,
 };
-use crate::kernels::dd::{self, Dd3};
 use crate::kernels::form_factor::NEAR_LINE_SINE;
 use crate::kernels::lambert;
+use crate::kernels::numeric::dd::{self, Dd3};
 
 /// The value of [`triangle_form_factor`](crate::kernels::triangle_form_factor) for
 /// `Order::Value` (form factor, dimensionless, in `[0, 1]`) when the robust path would take it from
@@ -418,7 +418,7 @@ pub(super) mod tests {
     use crate::kernels::polygon::form_factor;
     use crate::Order;
 
-    use crate::kernels::test_rng::lcg;
+    use crate::test_rng::lcg;
 
     /// A random configuration near the triangle's plane: a triangle of size `scale` (offset from
     /// the origin), `x` at a random in-plane point (inside or outside, near edges and vertices

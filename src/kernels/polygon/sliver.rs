@@ -53,18 +53,17 @@ use std::sync::OnceLock;
 
 use glam::DVec3;
 
-use super::dd::two_sum;
+use crate::kernels::numeric::dd::two_sum;
 
 use super::{
     far_rule_of, gauss_legendre_16, gauss_legendre_2, gauss_legendre_3, gauss_legendre_4,
     gauss_legendre_5, gauss_legendre_6, gauss_legendre_8, legendre_rule, plane_height,
     triangle_plane, ClipVertex, Rule, RuleSums,
 };
-use crate::kernels::lanes::V3;
+use crate::kernels::numeric::lanes::V3;
 use crate::{Deriv3, Order};
 
 mod clipped;
-mod quad;
 mod sums;
 
 #[cfg(target_arch = "x86_64")]
@@ -804,7 +803,7 @@ mod tests {
                 + normal * (scale * 10f64.powf(-6.0 + 8.0 * c()));
             let exact = |v: DVec3| {
                 let r = v - x;
-                let err = |p: f64, q: f64| super::super::dd::two_sum(p, -q).1;
+                let err = |p: f64, q: f64| crate::kernels::numeric::dd::two_sum(p, -q).1;
                 ClipVertex {
                     u: v - a,
                     r,
@@ -826,7 +825,7 @@ mod tests {
         }
     }
 
-    use crate::kernels::test_rng::lcg;
+    use crate::test_rng::lcg;
 
     /// A sliver of length `scale` (1e-3..1e3) with its apex 1e-5..1e-12 of the length off the
     /// long edge, from `c`'s uniform draws: `(scale, [a, b, apex])`.
@@ -874,7 +873,7 @@ mod tests {
             };
             let r = v.map(|vk| vk - x);
             let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
-            let err = |p: f64, q: f64| super::super::dd::two_sum(p, -q).1;
+            let err = |p: f64, q: f64| crate::kernels::numeric::dd::two_sum(p, -q).1;
             let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
             let scaled = super::super::Scaled {
                 u: super::super::Points::from_slice(&u),

@@ -304,7 +304,7 @@ fn fan_of_triangles(
 mod tests {
     use super::*;
     use crate::kernels::polygon::form_factor;
-    use crate::kernels::test_rng::lcg;
+    use crate::test_rng::lcg;
 
     /// A convex sliver in a random plane: `m` points along a flat arc of length `len` and height
     /// `width` (the first two at the ends of the long side), shifted by `origin`.

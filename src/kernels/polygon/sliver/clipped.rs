@@ -157,7 +157,7 @@ pub(super) fn fan_triangle<S: GroupSums>(
 mod tests {
     use super::super::super::triangle_plane;
     use super::*;
-    use crate::kernels::test_rng::lcg;
+    use crate::test_rng::lcg;
 
     /// The AVX2+FMA builds of the clipped entry and of the visible part's rule give the portable
     /// builds' bits, on slivers (apex 1e-5..1e-12 of the length, sizes 1e-3..1e3) cut by random
@@ -191,7 +191,7 @@ mod tests {
             let v = [a, b, apex];
             let r = v.map(|vk| vk - x);
             let u = [DVec3::ZERO, b - a, apex - a];
-            let err = |p: f64, q: f64| crate::kernels::dd::two_sum(p, -q).1;
+            let err = |p: f64, q: f64| crate::kernels::numeric::dd::two_sum(p, -q).1;
             let r_lo = v.map(|vk| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z)));
             let Some(plane) = triangle_plane(&u) else {
                 continue;

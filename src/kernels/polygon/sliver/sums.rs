@@ -19,10 +19,10 @@
 use glam::DVec3;
 
 use super::super::RuleSums;
-use super::quad::Lanes;
+use crate::kernels::numeric::lanes::Lanes;
 #[cfg(target_arch = "x86_64")]
-use super::quad::Wide;
-use crate::kernels::lanes::{Pair, V3};
+use crate::kernels::numeric::lanes::Wide;
+use crate::kernels::numeric::lanes::{Pair, V3};
 
 /// The sums of a rule over groups of four nodes, as one build takes them.
 pub(in crate::kernels::polygon) trait GroupSums {
@@ -272,7 +272,7 @@ mod tests {
     use super::super::super::tensor_rule;
     use super::super::rules;
     use super::*;
-    use crate::kernels::test_rng::lcg;
+    use crate::test_rng::lcg;
     use crate::{Deriv3, Order};
 
     fn paired_sums(

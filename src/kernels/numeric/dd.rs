@@ -288,9 +288,7 @@ mod tests {
     fn products_with_an_f64_match_the_general_ones_bit_for_bit() {
         let mut state = 0x2545_f491_4f6c_dd1d_u64;
         let mut next = || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
+            let state = crate::test_rng::step(&mut state);
             // Mantissa from the high bits, exponent spread over ±40 binades, random sign.
             let m = (state >> 11) as f64 / (1u64 << 53) as f64 + 0.5;
             let e = ((state >> 3) % 81) as i32 - 40;
@@ -324,9 +322,7 @@ mod tests {
     fn from_parts_matches_new_on_two_sum_outputs() {
         let mut state = 0x853c_49e6_748f_ea9b_u64;
         let mut next = || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
+            let state = crate::test_rng::step(&mut state);
             let m = (state >> 11) as f64 / (1u64 << 53) as f64 + 0.5;
             let e = ((state >> 3) % 61) as i32 - 30;
             let s = if state & 1 == 0 { 1.0 } else { -1.0 };
