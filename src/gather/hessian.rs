@@ -69,7 +69,7 @@ use super::hessian_mesh::{NONE, POLE, REVERSED};
 pub use super::layout::LayoutKind;
 use crate::error::{ensure_finite, ensure_finite3, Error, Result};
 use crate::kernels;
-use crate::kernels::form_factor;
+use crate::kernels::form_factor::edge;
 use crate::kernels::numeric::pow2::pow2_scale;
 use crate::{Deriv3, Order};
 
@@ -368,9 +368,9 @@ fn farthest_vertices(topo: &Topology, distance: &[f64], farthest: &mut Vec<u32>)
 #[inline]
 fn edge_term(n: DVec3, a: DVec3, b: DVec3, order: Order) -> Result<Deriv3> {
     if a.length_squared() <= b.length_squared() {
-        form_factor::edge_term(a, b - a, n, order)
+        edge::edge_term(a, b - a, n, order)
     } else {
-        let f = form_factor::edge_term(b, a - b, n, order)?;
+        let f = edge::edge_term(b, a - b, n, order)?;
         Ok(Deriv3 {
             value: -f.value,
             gradient: -f.gradient,

@@ -901,7 +901,7 @@ fn add_scaled(acc: &mut Deriv3, d: &Deriv3, w: f64, order: Order) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kernels::form_factor;
+    use crate::kernels::form_factor::edge::EdgeFrame;
 
     /// A small deterministic generator (xorshift) for test inputs.
     struct Rng(u64);
@@ -1018,7 +1018,7 @@ mod tests {
                     } else {
                         (c, a - c)
                     };
-                    let frame = form_factor::EdgeFrame::new(r, e).unwrap();
+                    let frame = EdgeFrame::new(r, e).unwrap();
                     let m = frame.moments(Order::Hessian).unwrap();
                     let (h, p) = (frame.h, frame.p.length());
                     let g = p * m.a2 + m.b2;

@@ -3,8 +3,8 @@
 //!
 //! Far from `x` (vertex centroid at least 16 radii away), `triangle_form_factor` takes its
 //! derivatives from `form_factor::triangle_far_field_fast`: an `n`x`n` Gauss-Legendre rule on the
-//! Duffy-mapped triangle (`polygon::triangle_rule`), `n` picked by distance over radius
-//! (`polygon::far_field_rule`), with the value replaced by Lambert's where that is certified. Here
+//! Duffy-mapped triangle (`triangle_rule`), `n` picked by distance over radius
+//! (`far_field_rule`), with the value replaced by Lambert's where that is certified. Here
 //! each element first replays, in scalar code and with the kernel's own functions, every decision
 //! the single call takes before the rule (not a sliver, `maybe_far`, `fast_setup`, not thin, a rule
 //! picked); the accepted elements are grouped by rule, and each group's quadrature sums run in lanes
@@ -14,7 +14,7 @@
 //! the sums are then assembled by a replay of the rule's closing formulas (glam's operations, in
 //! its order), oriented and checked by the kernel's own `oriented`, and given Lambert's value from
 //! the value lanes (`form_factor_lanes`) or its scalar call. The loop body and the assembly are
-//! copies of `polygon::tensor_rule`'s: a change there must be made here too, and the bit-equality
+//! copies of `tensor_rule`'s: a change there must be made here too, and the bit-equality
 //! tests fail until it is. An accepted element is therefore the single call's result **bit for bit** (the tests assert
 //! equality); a non-finite result, and every element the replay declines (near, clipped, thin, near
 //! the plane, invalid), goes to the single kernel.
@@ -24,11 +24,14 @@
 
 use glam::DVec3;
 
-use super::super::form_factor::{fast_setup, maybe_far, oriented};
-use super::super::lambert;
-use super::super::polygon::{self, Rule, RuleSums};
 use super::form_factor_lanes;
 use crate::error::Result;
+use crate::kernels::form_factor::lambert::sum as lambert;
+use crate::kernels::form_factor::orient::oriented;
+use crate::kernels::form_factor::plane::{is_very_thin_triangle, triangle_plane};
+use crate::kernels::form_factor::quadrature::rules::Rule;
+use crate::kernels::form_factor::quadrature::tensor::RuleSums;
+use crate::kernels::form_factor::replay::{fast_setup, maybe_far};
 use crate::simd::Isa;
 use crate::{Deriv3, Order};
 
@@ -39,10 +42,10 @@ const BATCH: usize = 32;
 /// filled groups flushed at its end cost little.
 const CHUNK: usize = 256;
 
-/// The far-field rules by point count (`polygon::FAR_FIELD_RULES`: 3, 4, 5, 6 and 8).
+/// The far-field rules by point count (`FAR_FIELD_RULES`: 3, 4, 5, 6 and 8).
 const RULES: usize = 5;
 
-/// The quadrature's running sums, in `polygon::tensor_rule`'s names: `q0`, `s4`, `u6` (3), `v6`
+/// The quadrature's running sums, in `tensor_rule`'s names: `q0`, `s4`, `u6` (3), `v6`
 /// (3), `s6`, then `xx, yy, zz, xy, xz, yz`.
 const SUMS: usize = 15;
 
@@ -214,10 +217,10 @@ struct Accepted {
 /// `triangle_rule`'s inputs where it would integrate by that rule, `None` where it would not.
 #[inline]
 fn classify(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<(Rule, [DVec3; 4], Accepted)> {
-    if polygon::is_very_thin_triangle(v) || !maybe_far(&v, x) {
+    if is_very_thin_triangle(v) || !maybe_far(&v, x) {
         return None;
     }
-    let setup = fast_setup(x, n, v, polygon::triangle_plane)?;
+    let setup = fast_setup(x, n, v, triangle_plane)?;
     if setup.plane.is_thin() {
         return None;
     }
@@ -572,8 +575,8 @@ mod tests {
             });
             match classify(x, DVec3::Z, y) {
                 Some((rule, ..)) => per_rule[rule_index(rule)] += 1,
-                None if polygon::is_very_thin_triangle(y)
-                    || fast_setup(x, DVec3::Z, y, polygon::triangle_plane)
+                None if is_very_thin_triangle(y)
+                    || fast_setup(x, DVec3::Z, y, triangle_plane)
                         .is_some_and(|s| s.plane.is_thin()) =>
                 {
                     thin += 1

@@ -18,9 +18,11 @@
 
 use glam::DVec3;
 
-use super::super::lambert::{self, FAST_TOLERANCE, INV_2PI};
-use super::super::lambert_far::{psi, FAR_RATIO2};
 use crate::error::Result;
+use crate::kernels::form_factor::edge::INV_2PI;
+use crate::kernels::form_factor::lambert::far::{psi, FAR_RATIO2};
+use crate::kernels::form_factor::tolerance::FAST_TOLERANCE;
+use crate::kernels::form_factor::validate::unit;
 use crate::simd::Isa;
 use crate::Deriv3;
 
@@ -201,7 +203,7 @@ fn evaluate_on(isa: Isa, l: &mut Lanes) {
 /// rejects it.
 #[inline]
 pub(super) fn lane_normal(n: DVec3) -> DVec3 {
-    lambert::unit(n).unwrap_or(DVec3::NAN)
+    unit(n).unwrap_or(DVec3::NAN)
 }
 
 /// Runs the lanes over `count` elements, element `i` being receiver, normal (from [`lane_normal`])
@@ -309,7 +311,7 @@ mod tests {
             let mut accepted = 0;
             let single = |i: usize| {
                 let (x, n, [a, b, c]) = elems[i];
-                super::super::super::triangle_form_factor(x, n, a, b, c, Order::Value)
+                crate::kernels::form_factor::triangle_form_factor(x, n, a, b, c, Order::Value)
             };
             // The fallback marks its results with a unit gradient (value orders have none).
             let mut got = vec![(0.0, false); elems.len()];

@@ -26,6 +26,7 @@
 
 use glam::DVec3;
 
+use super::element_error::label;
 use crate::kernels::numeric::atan2::atan2_upper;
 use crate::kernels::numeric::fma::fmadd;
 use crate::simd::{best_isa, Isa};
@@ -341,8 +342,8 @@ pub(super) fn run_on(
                 lane_result(&lanes, i, order)
             } else {
                 let (x, y) = get(start + i);
-                super::super::triangle_solid_angle(x, y[0], y[1], y[2], order)
-                    .map_err(|e| super::label(e, what, start + i))?
+                crate::kernels::solid_angle::triangle_solid_angle(x, y[0], y[1], y[2], order)
+                    .map_err(|e| label(e, what, start + i))?
             };
             sink(start + i, d);
         }

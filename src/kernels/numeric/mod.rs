@@ -3,6 +3,7 @@
 //! ([`fma`]), a branch-free `atan2` for vectorized loops ([`atan2`]) and exact power-of-two
 //! scaling ([`pow2`]). Nothing here imports from the rest of the crate.
 
+pub(crate) mod array;
 pub(crate) mod atan2;
 pub(crate) mod dd;
 pub(crate) mod fma;
