@@ -55,6 +55,7 @@ use crate::{Deriv3, Order};
 ///   or coordinates near the limits of `f64`), [`Error::Degenerate`].
 ///
 /// Non-finite input gives [`Error::InvalidArgument`].
+#[inline]
 pub fn triangle_solid_angle(
     x: DVec3,
     a: DVec3,
@@ -76,6 +77,7 @@ pub fn triangle_solid_angle(
 /// derivatives). Inside the triangle on its plane the value jumps between −2π and 2π:
 /// [`Error::Degenerate`]. On an edge or at a vertex: [`Error::Degenerate`]. Zero-area triangles:
 /// 0 with zero derivatives. Overflowing derivatives: [`Error::Degenerate`].
+#[inline]
 pub fn triangle_solid_angle_signed(
     x: DVec3,
     a: DVec3,
@@ -86,10 +88,57 @@ pub fn triangle_solid_angle_signed(
     solid_angle(x, [a, b, c], order, true)
 }
 
+/// The certified fast path, else the robust path: for the value order [`solid_angle_value`], for
+/// the others one call out of line.
+#[inline(always)]
 fn solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<Deriv3> {
-    if let Some(out) = solid_angle_fast(x, y, order, signed) {
-        return Ok(out);
+    if !order.gradient() {
+        return solid_angle_value(x, y, signed).map(Deriv3::constant);
     }
+    solid_angle_derivs(x, y, order, signed)
+}
+
+/// The value of [`triangle_solid_angle`] (`signed == false`) or
+/// [`triangle_solid_angle_signed`]: the certified fast path's angle, inlined into the caller down
+/// to its two calls (`atan2`, and the robust path where the certificate fails), so that a caller
+/// that wants the value alone pays for no derivative plumbing (the C ABI's value order).
+#[inline(always)]
+pub(crate) fn solid_angle_value(x: DVec3, y: [DVec3; 3], signed: bool) -> Result<f64> {
+    match certified_parts(x, y, signed).and_then(|parts| certified_value(&parts)) {
+        Some(value) => Ok(value),
+        None => robust_solid_angle(x, y, Order::Value, signed).map(|d| d.value),
+    }
+}
+
+/// [`solid_angle`] for the gradient and Hessian orders: the certified fast path, else the robust
+/// path.
+#[inline(always)]
+fn solid_angle_derivs(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<Deriv3> {
+    solid_angle_to(x, y, order, signed, |d| *d)
+}
+
+/// `emit` of [`solid_angle`]'s result (for any order; the value order's derivatives are zero):
+/// the fast path's and the robust path's results each handed to `emit` where they are, so that a
+/// caller storing them elsewhere (the C ABI's row-major output) copies them once.
+#[inline(always)]
+pub(crate) fn solid_angle_to<R>(
+    x: DVec3,
+    y: [DVec3; 3],
+    order: Order,
+    signed: bool,
+    emit: impl FnOnce(&Deriv3) -> R,
+) -> Result<R> {
+    if let Some(out) = solid_angle_fast(x, y, order, signed) {
+        return Ok(emit(&out));
+    }
+    robust_solid_angle(x, y, order, signed).map(|d| emit(&d))
+}
+
+/// The robust path, with the overflow check of its result. Cold: its call's argument copies are
+/// then made on its branch only.
+#[cold]
+#[inline(never)]
+fn robust_solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<Deriv3> {
     let out = solid_angle_unchecked(x, y, order, signed)?;
     if !out.is_finite() {
         return Err(Error::Degenerate(
@@ -355,27 +404,85 @@ fn hessian_of_parts(
 ) -> DMat3 {
     let Parts { r, s, inv_s, p, c } = parts;
     let s_sum = s[0] + s[1] + s[2];
-    let u = [r[0] * inv_s[0], r[1] * inv_s[1], r[2] * inv_s[2]];
-    let u_sum = u[0] + u[1] + u[2];
-    // Scalars multiply u uᵀ after the outer product so that every term is exactly symmetric.
-    let mut hess_d =
-        DMat3::from_diagonal(DVec3::splat(c[0] + c[1] + c[2])) + outer(u_sum, u_sum) * s_sum;
-    for k in 0..3 {
-        hess_d -= outer(u[k], u[k]) * (s_sum + p[k] * inv_s[k]);
-    }
+    // Written out: array maps and closures were left out of line.
+    let u = [
+        (r[0] * inv_s[0]).to_array(),
+        (r[1] * inv_s[1]).to_array(),
+        (r[2] * inv_s[2]).to_array(),
+    ];
+    let u_sum = (r[0] * inv_s[0] + r[1] * inv_s[1] + r[2] * inv_s[2]).to_array();
+    let weight = [
+        s_sum + p[0] * inv_s[0],
+        s_sum + p[1] * inv_s[1],
+        s_sum + p[2] * inv_s[2],
+    ];
+    let c_sum = c[0] + c[1] + c[2];
     let inv_g2 = inv_g * inv_g;
     let q = 2.0 * d_den * a_num * inv_g2;
     let m = (d_den * d_den - a_num * a_num) * inv_g2;
-    let ad = outer(grad_a, grad_d);
-    (hess_d * (-a_num * inv_g)
-        - (outer(grad_a, grad_a) - outer(grad_d, grad_d)) * q
-        - (ad + ad.transpose()) * m)
-        * 2.0
+    let (ga, gd) = (grad_a.to_array(), grad_d.to_array());
+    // Symmetric to the bit (`HessianTerms::entry`): the upper triangle gives the matrix.
+    let h = HessianTerms {
+        u,
+        u_sum,
+        weight,
+        c_sum,
+        s_sum,
+        a_over_g: -a_num * inv_g,
+        q,
+        m,
+        ga,
+        gd,
+    };
+    let entry = |i: usize, j: usize| h.entry(i, j);
+    let (xx, yy, zz) = (entry(0, 0), entry(1, 1), entry(2, 2));
+    let (xy, xz, yz) = (entry(0, 1), entry(0, 2), entry(1, 2));
+    DMat3::from_cols(
+        DVec3::new(xx, xy, xz),
+        DVec3::new(xy, yy, yz),
+        DVec3::new(xz, yz, zz),
+    )
 }
 
-#[inline]
-fn outer(u: DVec3, v: DVec3) -> DMat3 {
-    DMat3::from_cols(u * v.x, u * v.y, u * v.z)
+/// The scalars of [`hessian_of_parts`]' entries.
+struct HessianTerms {
+    u: [[f64; 3]; 3],
+    u_sum: [f64; 3],
+    weight: [f64; 3],
+    c_sum: f64,
+    s_sum: f64,
+    /// `−A/g`.
+    a_over_g: f64,
+    q: f64,
+    m: f64,
+    ga: [f64; 3],
+    gd: [f64; 3],
+}
+
+impl HessianTerms {
+    /// Entry (i, j) of `2[−(A/g) HD − (aaᵀ − ddᵀ) q − (adᵀ + daᵀ) m]`, `HD = (Σc) 𝟙 + S U Uᵀ −
+    /// Σ_k w_k u_k u_kᵀ`. Every term is symmetric in (i, j) to the bit (products of two factors,
+    /// scalars applied after them, `adᵀ + daᵀ` a sum of the two orders).
+    #[inline(always)]
+    fn entry(&self, i: usize, j: usize) -> f64 {
+        let Self {
+            u,
+            u_sum,
+            weight,
+            ga,
+            gd,
+            ..
+        } = self;
+        let diagonal = if i == j { self.c_sum } else { 0.0 };
+        let mut hd = diagonal + u_sum[i] * u_sum[j] * self.s_sum;
+        for k in 0..3 {
+            hd -= u[k][i] * u[k][j] * weight[k];
+        }
+        (hd * self.a_over_g
+            - (ga[i] * ga[j] - gd[i] * gd[j]) * self.q
+            - (ga[i] * gd[j] + ga[j] * gd[i]) * self.m)
+            * 2.0
+    }
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -433,40 +540,86 @@ fn l1(v: DVec3) -> f64 {
 ///   `atan2(A, D)` and the relative perturbation of `√g`), the value's error is at most
 ///   `2(|D||δA| + |A||δD|)/g` plus the last-bit error of `atan2`; the gradient `2(cos θ ∇A − sin θ ∇D)/√g`
 ///   and the Hessian are bounded term by term the same way (see the code).
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+#[inline(always)]
 pub(crate) fn solid_angle_fast(
     x: DVec3,
     y: [DVec3; 3],
     order: Order,
     signed: bool,
 ) -> Option<Deriv3> {
+    let parts = certified_parts(x, y, signed)?;
+    if !order.gradient() {
+        return Some(Deriv3::constant(certified_value(&parts)?));
+    }
+    // The derivatives first and the value's `atan2` last: every xmm register is the callee's in a
+    // call, so what the derivatives need would otherwise be kept on the stack across it.
+    let mut out = certified_derivs(&parts, order)?;
+    out.value = certified_value(&parts)?;
+    Some(out)
+}
+
+/// What the certified fast path computes for every order before `atan2`: the parts of
+/// `Ω = 2 atan2(A, D)` and their error bounds, which the value and the derivatives use.
+struct CertifiedParts {
+    r: [DVec3; 3],
+    s: [f64; 3],
+    normal: DVec3,
+    a_num: f64,
+    d_den: f64,
+    /// `r_0·r_1`, `r_1·r_2`, `r_2·r_0`.
+    dots: [f64; 3],
+    /// `A² + D²`.
+    g: f64,
+    err_a: f64,
+    err_n: f64,
+    err_d: f64,
+}
+
+/// The parts of [`solid_angle_fast`] every order computes; `None` where the inputs are out of its
+/// range or `A`'s sign is uncertain. Written on components, with glam's operation order (`dot` is
+/// `(x·x' + y·y') + z·z'`, `cross` glam's, `length` the square root of `dot`), so that every
+/// quantity has the bits glam's expressions give; the range tests compare the components' moduli
+/// directly (for finite input the same decisions as glam's `max_element` and `f64::min`; NaN fails
+/// them, and non-finite input goes to the robust path either way).
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+fn certified_parts(x: DVec3, y: [DVec3; 3], signed: bool) -> Option<CertifiedParts> {
     let r = [y[0] - x, y[1] - x, y[2] - x];
-    let extent = r[0].abs().max(r[1].abs()).max(r[2].abs()).max_element();
+    let mut extent = 0.0f64;
+    for rk in &r {
+        for c in [rk.x.abs(), rk.y.abs(), rk.z.abs()] {
+            if c > extent {
+                extent = c;
+            }
+        }
+    }
     // NaN and infinities fail this too.
     if !(extent > 1e-30 && extent < 1e30) {
         return None;
     }
-    let s = r.map(|v| v.length());
-    if !(s[0].min(s[1]).min(s[2]) > 1e-30) {
+    let dot = |a: DVec3, b: DVec3| a.x * b.x + a.y * b.y + a.z * b.z;
+    let s = [
+        dot(r[0], r[0]).sqrt(),
+        dot(r[1], r[1]).sqrt(),
+        dot(r[2], r[2]).sqrt(),
+    ];
+    if !(s[0] > 1e-30 && s[1] > 1e-30 && s[2] > 1e-30) {
         return None;
     }
     let e1 = y[1] - y[0];
     let e2 = y[2] - y[0];
-    let mut normal = e1.cross(e2);
+    let mut normal = DVec3::new(
+        e1.y * e2.z - e2.y * e1.z,
+        e1.z * e2.x - e2.z * e1.x,
+        e1.x * e2.y - e2.x * e1.y,
+    );
     let perm_n = abs_cross(e1.abs(), e2.abs());
-    let perm_a = r[0].abs().dot(perm_n);
-    let mut a_num = r[0].dot(normal);
+    let perm_a = dot(r[0].abs(), perm_n);
+    let mut a_num = dot(r[0], normal);
     let mut err_a = 9.0 * U * perm_a + TINY;
     let mut err_n = 4.0 * U * (perm_n.x + perm_n.y + perm_n.z) + TINY;
     if !(err_a <= FAST_A_TOL * a_num.abs()) {
-        // Near the plane or a sliver: the exact differences, in double-double (no rescaling needed
-        // in this range).
-        let ra = Dd3::diff(y[0], x);
-        let n = Dd3::diff(y[1], y[0]).cross(&Dd3::diff(y[2], y[0]));
-        a_num = ra.dot(&n).to_f64();
-        normal = n.to_dvec3();
-        err_a = 2.0 * U * a_num.abs() + 64.0 * U * U * perm_a + TINY;
-        err_n = 2.0 * U * l1(normal) + 64.0 * U * U * (perm_n.x + perm_n.y + perm_n.z) + TINY;
+        (a_num, normal, err_a, err_n) = exact_triple_product(x, y, perm_a, perm_n);
     }
     // On the plane (or a sign that rounding could flip): the robust path's limits apply.
     if !(err_a < 0.5 * a_num.abs()) {
@@ -477,25 +630,87 @@ pub(crate) fn solid_angle_fast(
         normal = -normal;
     }
 
-    let d01 = r[0].dot(r[1]);
-    let d12 = r[1].dot(r[2]);
-    let d20 = r[2].dot(r[0]);
+    let d01 = dot(r[0], r[1]);
+    let d12 = dot(r[1], r[2]);
+    let d20 = dot(r[2], r[0]);
     let s012 = s[0] * s[1] * s[2];
     let d_den = s012 + d01 * s[2] + d12 * s[0] + d20 * s[1];
     let err_d = 64.0 * U * s012;
-    let theta = a_num.atan2(d_den);
     let g = a_num * a_num + d_den * d_den;
+    Some(CertifiedParts {
+        r,
+        s,
+        normal,
+        a_num,
+        d_den,
+        dots: [d01, d12, d20],
+        g,
+        err_a,
+        err_n,
+        err_d,
+    })
+}
+
+/// `Ω = 2θ`, `θ = atan2(A, D)`, when its error bound is within [`FAST_TOL`]; `None` otherwise.
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+fn certified_value(parts: &CertifiedParts) -> Option<f64> {
+    let &CertifiedParts {
+        a_num,
+        d_den,
+        g,
+        err_a,
+        err_d,
+        ..
+    } = parts;
+    let theta = a_num.atan2(d_den);
     // |δθ| ≤ (|D||δA| + |A||δD|)/g (+ 2u|θ| for atan2 and the rounding of g).
     if !(d_den.abs() * err_a + a_num.abs() * err_d
         <= (0.5 * FAST_TOL[0] - 4.0 * U) * theta.abs() * g)
     {
         return None;
     }
-    let mut out = Deriv3::constant(2.0 * theta);
-    if !order.gradient() {
-        return Some(out);
-    }
+    Some(2.0 * theta)
+}
 
+/// `A` and `N` of [`certified_angle`] from the exact differences in double-double (no rescaling
+/// needed in its range), with their error bounds: x near the plane, or a sliver. Out of line: rare,
+/// and its registers would crowd the common path.
+#[cold]
+#[inline(never)]
+fn exact_triple_product(
+    x: DVec3,
+    y: [DVec3; 3],
+    perm_a: f64,
+    perm_n: DVec3,
+) -> (f64, DVec3, f64, f64) {
+    let ra = Dd3::diff(y[0], x);
+    let n = Dd3::diff(y[1], y[0]).cross(&Dd3::diff(y[2], y[0]));
+    let a_num = ra.dot(&n).to_f64();
+    let normal = n.to_dvec3();
+    let err_a = 2.0 * U * a_num.abs() + 64.0 * U * U * perm_a + TINY;
+    let err_n = 2.0 * U * l1(normal) + 64.0 * U * U * (perm_n.x + perm_n.y + perm_n.z) + TINY;
+    (a_num, normal, err_a, err_n)
+}
+
+/// The gradient and Hessian part of [`solid_angle_fast`], with their error bounds (the value is
+/// left at 0); `None` where a bound fails.
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
+fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
+    let &CertifiedParts {
+        r,
+        s,
+        normal,
+        a_num,
+        d_den,
+        dots: [d01, d12, d20],
+        g,
+        err_a,
+        err_n,
+        err_d,
+    } = parts;
+    let mut out = Deriv3::constant(0.0);
     let inv_s = s.map(|v| 1.0 / v);
     let p = [s[1] * s[2] + d12, s[2] * s[0] + d20, s[0] * s[1] + d01];
     let c = [
@@ -551,22 +766,95 @@ pub(crate) fn solid_angle_fast(
             * inv_g;
         let rounding = 32.0 * U * (aa * hd_mag + sin2 * sq + cos2 * cross2) * inv_g;
         let hess_bound = 2.0 * (term1 + term2 + rounding);
-        let h_max = out
-            .hessian
-            .abs()
-            .to_cols_array()
-            .iter()
-            .fold(0.0f64, |m, e| m.max(*e));
+        // The Hessian is symmetric to the bit (`hessian_of_parts`): its upper triangle has every
+        // entry. `if e > m` skips a NaN as `f64::max` does (the finiteness test below rejects it).
+        let h = &out.hessian;
+        let mut h_max = 0.0f64;
+        for e in [
+            h.x_axis.x, h.y_axis.y, h.z_axis.z, h.y_axis.x, h.z_axis.x, h.z_axis.y,
+        ] {
+            if e.abs() > h_max {
+                h_max = e.abs();
+            }
+        }
         if !(hess_bound <= FAST_TOL[2] * h_max) {
             return None;
         }
     }
-    out.is_finite().then_some(out)
+    symmetric_finite(&out).then_some(out)
+}
+
+/// [`Deriv3::is_finite`] for a Hessian symmetric to the bit, from its upper triangle, without
+/// branches.
+#[inline(always)]
+fn symmetric_finite(d: &Deriv3) -> bool {
+    let (g, h) = (d.gradient, &d.hessian);
+    d.value.is_finite()
+        & g.x.is_finite()
+        & g.y.is_finite()
+        & g.z.is_finite()
+        & h.x_axis.x.is_finite()
+        & h.y_axis.y.is_finite()
+        & h.z_axis.z.is_finite()
+        & h.y_axis.x.is_finite()
+        & h.z_axis.x.is_finite()
+        & h.z_axis.y.is_finite()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The Hessian's six entries are those of the 3x3 matrix expression they were written from
+    /// (`2[−(A/g) HD − (aaᵀ − ddᵀ) q − (adᵀ + daᵀ) m]` with glam's operations), bit for bit, on
+    /// random parts of mixed magnitudes.
+    #[test]
+    fn hessian_entries_are_the_matrix_expression_bit_for_bit() {
+        fn outer(u: DVec3, v: DVec3) -> DMat3 {
+            DMat3::from_cols(u * v.x, u * v.y, u * v.z)
+        }
+        let mut state = 77;
+        let mut next = || {
+            (crate::test_rng::lcg(&mut state) - 0.5)
+                * 10f64.powi((crate::test_rng::lcg(&mut state) * 6.0) as i32 - 3)
+        };
+        for _ in 0..2000 {
+            let mut v = || DVec3::new(next(), next(), next());
+            let r = [v(), v(), v()];
+            let (grad_a, grad_d) = (v(), v());
+            let s = r.map(|r| r.length());
+            let inv_s = s.map(|s| 1.0 / s);
+            let p = [next(), next(), next()];
+            let c = [next(), next(), next()];
+            let (a_num, d_den, inv_g) = (next(), next(), next().abs());
+            let got = hessian_of_parts(
+                &Parts { r, s, inv_s, p, c },
+                a_num,
+                d_den,
+                inv_g,
+                grad_a,
+                grad_d,
+            );
+            let s_sum = s[0] + s[1] + s[2];
+            let u = [r[0] * inv_s[0], r[1] * inv_s[1], r[2] * inv_s[2]];
+            let u_sum = u[0] + u[1] + u[2];
+            let mut hess_d = DMat3::from_diagonal(DVec3::splat(c[0] + c[1] + c[2]))
+                + outer(u_sum, u_sum) * s_sum;
+            for k in 0..3 {
+                hess_d -= outer(u[k], u[k]) * (s_sum + p[k] * inv_s[k]);
+            }
+            let inv_g2 = inv_g * inv_g;
+            let q = 2.0 * d_den * a_num * inv_g2;
+            let m = (d_den * d_den - a_num * a_num) * inv_g2;
+            let ad = outer(grad_a, grad_d);
+            let want = (hess_d * (-a_num * inv_g)
+                - (outer(grad_a, grad_a) - outer(grad_d, grad_d)) * q
+                - (ad + ad.transpose()) * m)
+                * 2.0;
+            let bits = |m: DMat3| m.to_cols_array().map(f64::to_bits);
+            assert_eq!(bits(got), bits(want));
+        }
+    }
     use std::f64::consts::PI;
 
     #[test]

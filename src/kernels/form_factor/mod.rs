@@ -143,21 +143,13 @@ pub fn triangle_form_factor(
     c: DVec3,
     order: Order,
 ) -> Result<Deriv3> {
-    // Lambert's sum and the replay would cancel and be declined: straight to the sliver rule
-    // (`polygon_form_factor` has no fast path for three vertices).
     if is_very_thin_triangle([a, b, c]) {
-        return match very_thin_triangle_form_factor_in_range(x, n, [a, b, c], order) {
-            Some(d) => d,
-            None => polygon_form_factor(x, n, &[a, b, c], order),
-        };
+        return very_thin_triangle(x, n, [a, b, c], order);
+    }
+    if order == Order::Value {
+        return triangle_value(x, n, [a, b, c]);
     }
     let lambert_value = || triangle_lambert_value(x, n, [a, b, c]);
-    if order == Order::Value {
-        return match triangle_lambert_value(x, n, [a, b, c]) {
-            Some(f) => Ok(Deriv3::constant(f)),
-            None => value_past_lambert(x, n, [a, b, c]),
-        };
-    }
     // Far away Lambert's derivatives would be computed only to be declined (their sums
     // cancel): the far-field quadrature first. Its value is replaced by Lambert's where that is
     // certified (its cancellation-free far form reaches any distance), so that the value is
@@ -190,6 +182,52 @@ pub fn triangle_form_factor(
     Ok(with_lambert_value(d, order, || {
         lambert::sum::triangle_value(x, n, [a, b, c]).or(certified_value)
     }))
+}
+
+/// The value of [`triangle_form_factor`] alone, inlined into the caller down to the paths' calls
+/// (the C ABI's value order: no derivative plumbing). The same bits as the value of every order.
+#[inline]
+pub(crate) fn triangle_form_factor_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Result<f64> {
+    if is_very_thin_triangle(v) {
+        return very_thin_triangle(x, n, v, Order::Value).map(|d| d.value);
+    }
+    // The ladder of `triangle_value`, with Lambert's unclipped sum inlined and the rest cold and
+    // out of line: the arguments then stay in registers (as loaded from the C caller's memory)
+    // on the common path, rather than go through copies made for calls.
+    match lambert::sum::triangle_value_inlined(x, n, v) {
+        Some(f) => Ok(f),
+        None => value_past_unclipped_lambert(x, n, v),
+    }
+}
+
+/// [`triangle_form_factor_value`] where Lambert's unclipped sum declines: the clipped sum, else
+/// the paths past Lambert.
+#[cold]
+#[inline(never)]
+fn value_past_unclipped_lambert(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Result<f64> {
+    match lambert::clipped::triangle_value(x, n, v) {
+        Some(f) => Ok(f),
+        None => value_past_lambert(x, n, v).map(|d| d.value),
+    }
+}
+
+/// A triangle thin enough that Lambert's sum and the replay would cancel and be declined:
+/// straight to the sliver rule (`polygon_form_factor` has no fast path for three vertices).
+fn very_thin_triangle(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Result<Deriv3> {
+    match very_thin_triangle_form_factor_in_range(x, n, v, order) {
+        Some(d) => d,
+        None => polygon_form_factor(x, n, &v, order),
+    }
+}
+
+/// [`triangle_form_factor`]'s value order past the thinness test: Lambert's certified sum, else
+/// the paths past it.
+#[inline(always)]
+fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Result<Deriv3> {
+    match triangle_lambert_value(x, n, v) {
+        Some(f) => Ok(Deriv3::constant(f)),
+        None => value_past_lambert(x, n, v),
+    }
 }
 
 /// Lambert's sum, over the clipped triangle when the tangent plane cuts it (inlined: a closure

@@ -149,8 +149,15 @@ pub(crate) fn certified_sum<const M: usize>(
 /// far-field form) when every vertex is certainly above the tangent plane (nothing clipped) and
 /// the running error bound is within [`FAST_TOLERANCE`] of the result; `None` otherwise or for
 /// invalid input.
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
+    triangle_value_inlined(x, n, v)
+}
+
+/// [`triangle_value`] inlined into its caller (the C ABI's value order, whose arguments should
+/// not go through memory between two calls).
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+pub(crate) fn triangle_value_inlined(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     let (n, r, r2) = unclipped_triangle(x, n, v)?;
     let e0 = v[1] - v[0];
     let sum = if FAR_RATIO2 * e0.length_squared() <= r2[1] {
