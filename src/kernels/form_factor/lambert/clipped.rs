@@ -408,36 +408,6 @@ impl Screen {
     }
 }
 
-/// The clipped loop without the value's certificate, for the derivatives where the value comes
-/// from elsewhere (`x` near the plane outside the triangle, where Lambert's sum cancels). Its
-/// `sum` is only the orientation, `±1`: the sign of the certified sum, `sign(N·r_0)` for the
-/// triangle's normal `N = (v_1 − v_0) × (v_2 − v_0)`; `None` when that sign is uncertain (`x`
-/// within rounding of the triangle's plane) or where [`triangle_value`]'s loop is not built.
-/// Where the certified loop is not tried its clip points are the value order's route's when that
-/// answers, as in [`with_valued_derivative_loop`].
-#[cfg(test)]
-pub(crate) fn uncertified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
-    let cut = cut(x, n, &v)?;
-    let screen = screen(&v, &cut.r);
-    if !screen.uncertified() {
-        return None;
-    }
-    let mut route = RouteLoop::new();
-    let routed = screen.left_to_the_robust_path()
-        && near_plane::triangle::clipped_triangle_value_and_loop(x, cut.n, v, &mut route).is_some()
-        && !route.is_far();
-    Some(with_loop(x, &v, &cut, routed.then_some(&route), |l| {
-        l.sum = screen.side.signum();
-        l.clone()
-    }))
-}
-
-/// [`triangle_value`]'s loop and signed sum (times `2π`) when it certifies the value.
-#[cfg(test)]
-pub(crate) fn certified_loop(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<ClippedLoop> {
-    with_certified_loop(x, n, v, ClippedLoop::clone)
-}
-
 /// `f` of [`triangle_value`]'s loop and signed sum (times `2π`) when it certifies the value, in
 /// place (`certified_loop` for the tests).
 #[inline(always)]
@@ -462,20 +432,6 @@ fn with_certified_loop<R>(
             Some(f(l))
         },
     )
-}
-
-/// [`with_valued_derivative_loop`] telling `f` only whether the loop is certified.
-#[cfg(test)]
-pub(crate) fn with_derivative_loop<R>(
-    x: DVec3,
-    n: DVec3,
-    v: [DVec3; 3],
-    f: impl FnOnce(&ClippedLoop, bool) -> R,
-) -> Option<R> {
-    let fma = cfg!(target_arch = "x86_64") && crate::simd::avx2_fma();
-    with_valued_derivative_loop(x, n, v, fma, |l, value| {
-        f(l, matches!(value, LoopValue::Certified))
-    })
 }
 
 /// Where the derivative orders' loop ([`with_valued_derivative_loop`]) takes its value from.
@@ -716,4 +672,4 @@ pub(crate) fn clip_edge(
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

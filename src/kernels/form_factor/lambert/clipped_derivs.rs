@@ -55,8 +55,6 @@ use glam::{DMat3, DVec3};
 use crate::kernels::form_factor::edge::{
     clip_edge_derivs, frame_term, EdgeFrame, ExactEnds, INV_2PI,
 };
-#[cfg(test)]
-use crate::kernels::form_factor::lambert::clipped::certified_loop;
 use crate::kernels::form_factor::lambert::clipped::{ClippedLoop, LoopVertex};
 use crate::kernels::form_factor::lambert::sum::edge_derivatives;
 use crate::{Deriv3, Order};
@@ -94,19 +92,6 @@ const MIN_SINE: f64 = 1.0 / 32.0;
 /// Measured against the 320-bit reference over that spread (`tests/kernels_b_near_plane.rs`):
 /// worst 1.1e-12 / 4.4e-14.
 const LOOP_CANCELLATION: f64 = 1e5;
-
-/// Value, gradient (and Hessian at [`Order::Hessian`]) of
-/// [`triangle_form_factor`](super::triangle_form_factor) over the clipped loop of
-/// [`certified_loop`](super::lambert_clipped::certified_loop) (module documentation), for `order`
-/// above [`Order::Value`]; `None` where that loop is not certified or the derivatives are not
-/// accepted.
-/// Derivatives per unit length (gradient) and per squared length (Hessian). The kernel calls
-/// [`loop_derivs`] on the loop it keeps for the value; this is the tests' entry.
-#[cfg(test)]
-pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Deriv3> {
-    let clipped = certified_loop(x, n, v)?;
-    loop_derivs(&clipped, clipped.value(), order)
-}
 
 /// The derivatives of `triangle_derivs` from a loop (certified, or
 /// [`uncertified_loop`](super::lambert_clipped::uncertified_loop): the

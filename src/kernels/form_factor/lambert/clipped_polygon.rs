@@ -459,42 +459,5 @@ pub(crate) fn differences<const M: usize>(
     Some((unit(n)?, r))
 }
 
-/// [`polygon_value`] for 4 to 8 vertices from `x`, `n` and the vertices (the tests' entry).
-#[cfg(test)]
-fn value_of(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
-    fn at<const M: usize, const N: usize>(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
-        polygon_value::<M, N>(x, n, v.try_into().ok()?)
-    }
-    match v.len() {
-        4 => at::<4, 5>(x, n, v),
-        5 => at::<5, 6>(x, n, v),
-        6 => at::<6, 7>(x, n, v),
-        7 => at::<7, 8>(x, n, v),
-        8 => at::<8, 9>(x, n, v),
-        _ => None,
-    }
-}
-
-/// [`polygon_derivs`] for 4 to 8 vertices (the tests' entry).
-#[cfg(test)]
-fn derivs_of(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Derivs> {
-    fn at<const M: usize, const N: usize>(
-        x: DVec3,
-        n: DVec3,
-        v: &[DVec3],
-        order: Order,
-    ) -> Option<Derivs> {
-        polygon_derivs::<M, N>(x, n, v.try_into().ok()?, order)
-    }
-    match v.len() {
-        4 => at::<4, 5>(x, n, v, order),
-        5 => at::<5, 6>(x, n, v, order),
-        6 => at::<6, 7>(x, n, v, order),
-        7 => at::<7, 8>(x, n, v, order),
-        8 => at::<8, 9>(x, n, v, order),
-        _ => None,
-    }
-}
-
 #[cfg(test)]
 mod tests;

@@ -323,18 +323,5 @@ fn clip_polygon<const M: usize, const N: usize>(
     (cut && count >= 3).then_some(count)
 }
 
-/// [`polygon_value`] for 4 to 8 vertices from a slice (`None` for other counts): the tests' entry.
-#[cfg(test)]
-fn polygon_value_of(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
-    match v.len() {
-        4 => polygon_value::<4, 8>(x, n, v.try_into().ok()?),
-        5 => polygon_value::<5, 10>(x, n, v.try_into().ok()?),
-        6 => polygon_value::<6, 12>(x, n, v.try_into().ok()?),
-        7 => polygon_value::<7, 14>(x, n, v.try_into().ok()?),
-        8 => polygon_value::<8, 16>(x, n, v.try_into().ok()?),
-        _ => None,
-    }
-}
-
 #[cfg(test)]
 mod tests;

@@ -167,18 +167,6 @@ pub(crate) fn validated(
     plane.is_very_thin().then_some(ThinPolygon { u, plane })
 }
 
-/// [`thin_differences`] then [`validated`] (the unit tests' entry).
-#[cfg(test)]
-fn thin_polygon(x: DVec3, v: &[DVec3]) -> Option<ThinPolygon> {
-    validated(v.len(), thin_differences(x, v)?)
-}
-
-/// [`fan_rule`] from the vertices alone (the unit tests' entry).
-#[cfg(test)]
-pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Deriv3> {
-    fan_rule(x, n, v, &thin_polygon(x, v)?, order)
-}
-
 /// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of a valid polygon of 4 to 8
 /// vertices that is very thin (`2·area < 1e-5·extent²`) with a consistently oriented fan from
 /// `v_0` ([`ThinPolygon`]), as the sum of the fan triangles' sliver rules; `None` when any
@@ -250,19 +238,6 @@ fn near_field_height(r: &[DVec3], r2: &[f64], plane: &Plane) -> Option<f64> {
         return None;
     }
     far_rule_of(r).is_none().then_some(h_p)
-}
-
-/// [`fan_of_triangles`] from the vertices alone (the unit tests' entry).
-#[cfg(test)]
-pub(crate) fn very_thin_polygon_by_triangles(
-    x: DVec3,
-    n: DVec3,
-    v: &[DVec3],
-    order: Order,
-) -> Option<Deriv3> {
-    let triangle =
-        |a, b, c| crate::kernels::form_factor::triangle_form_factor(x, n, a, b, c, order);
-    fan_of_triangles(x, v, &thin_polygon(x, v)?, triangle)
 }
 
 /// [`polygon_form_factor`](crate::kernels::polygon_form_factor) of the polygons

@@ -1,13 +1,26 @@
 use super::*;
-use crate::kernels::form_factor::lambert::clipped::{
-    certified_loop, uncertified_loop, with_derivative_loop, ClippedLoop,
+use crate::kernels::form_factor::lambert::clipped::tests::{
+    certified_loop, uncertified_loop, with_derivative_loop,
 };
+use crate::kernels::form_factor::lambert::clipped::ClippedLoop;
 use crate::kernels::form_factor::lambert::sum::edge_derivatives;
 use crate::kernels::form_factor::near_plane::route_loop::RouteLoop;
 use crate::kernels::form_factor::robust::form_factor;
 use crate::kernels::form_factor::validate::unit;
 use crate::kernels::form_factor::{lambert, near_plane};
 use crate::test_rng::lcg;
+
+/// Value, gradient (and Hessian at [`Order::Hessian`]) of
+/// [`triangle_form_factor`](super::triangle_form_factor) over the clipped loop of
+/// [`certified_loop`](super::lambert_clipped::certified_loop) (module documentation), for `order`
+/// above [`Order::Value`]; `None` where that loop is not certified or the derivatives are not
+/// accepted.
+/// Derivatives per unit length (gradient) and per squared length (Hessian). The kernel calls
+/// [`loop_derivs`] on the loop it keeps for the value; this is the tests' entry.
+pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Deriv3> {
+    let clipped = certified_loop(x, n, v)?;
+    loop_derivs(&clipped, clipped.value(), order)
+}
 
 /// A random triangle of size `scale`, `x` at `scale·10^(d₀ − d₁·U)` from its plane (either
 /// side) over the foot `v₀ + a(v₁ − v₀) + b(v₂ − v₀)` (inside the triangle when `inside`,

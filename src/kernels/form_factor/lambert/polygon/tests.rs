@@ -3,6 +3,34 @@ use crate::kernels::form_factor::polygon_form_factor;
 use crate::kernels::form_factor::robust::form_factor;
 use crate::{Error, Order};
 
+#[inline(always)]
+pub(crate) fn derivs<const M: usize>(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3; M],
+    order: Order,
+) -> Option<Deriv3> {
+    derivs_or(x, n, v, order, || None)
+}
+
+/// Value, gradient (and Hessian at [`Order::Hessian`]) of
+/// [`polygon_form_factor`](super::polygon_form_factor) for `order` above [`Order::Value`], by the
+/// analytic derivatives of Lambert's sum, for the polygons [`polygon_value`] takes (strictly convex,
+/// 4 to 8 vertices, every vertex certainly above the tangent plane) when the value is certified,
+/// no edge's line passes near `x` (`sin β ≥ 1/4` per edge) and neither the gradient nor the Hessian
+/// sum cancels by more than 100x; `None` otherwise. The value is [`polygon_value`]'s, bit for bit.
+/// The tests' entry (the kernel calls [`polygon_derivs_or_clipped`]).
+pub(crate) fn polygon_derivs(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Deriv3> {
+    match v.len() {
+        4 => derivs::<4>(x, n, v.try_into().ok()?, order),
+        5 => derivs::<5>(x, n, v.try_into().ok()?, order),
+        6 => derivs::<6>(x, n, v.try_into().ok()?, order),
+        7 => derivs::<7>(x, n, v.try_into().ok()?, order),
+        8 => derivs::<8>(x, n, v.try_into().ok()?, order),
+        _ => None,
+    }
+}
+
 fn pentagon(z: f64) -> Vec<DVec3> {
     (0..5)
         .map(|i| {

@@ -5,6 +5,18 @@ use crate::kernels::form_factor::robust::form_factor;
 use crate::test_rng::lcg;
 use crate::Order;
 
+/// [`polygon_value`] for 4 to 8 vertices from a slice (`None` for other counts): the tests' entry.
+fn polygon_value_of(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
+    match v.len() {
+        4 => polygon_value::<4, 8>(x, n, v.try_into().ok()?),
+        5 => polygon_value::<5, 10>(x, n, v.try_into().ok()?),
+        6 => polygon_value::<6, 12>(x, n, v.try_into().ok()?),
+        7 => polygon_value::<7, 14>(x, n, v.try_into().ok()?),
+        8 => polygon_value::<8, 16>(x, n, v.try_into().ok()?),
+        _ => None,
+    }
+}
+
 /// A random strictly convex polygon of `m` vertices and size `scale` (jittered angles on an
 /// ellipse with axes 0.5-1, in a random plane, offset from the origin), `x` 1e-9..1e-3 sizes
 /// from its plane (either side) over a random in-plane point, mostly outside the polygon (up

@@ -4,6 +4,63 @@ use crate::kernels::form_factor::quadrature::tensor::far_field;
 use crate::kernels::form_factor::robust::form_factor;
 use crate::Order;
 
+/// A-priori bound on the relative quadrature error of [`triangle_rule`] with `points`x`points`
+/// Gauss-Legendre points, for a triangle within `rho` (radius over distance, `ρ < 1`) of x, as
+/// `[value, gradient, Hessian]` (the value relative to itself, the derivatives relative to their
+/// natural scale, which their largest entry reaches within a factor ~2).
+///
+/// Derivation. The Duffy-mapped tensor rule integrates polynomials of total degree
+/// `D = 2·points − 2` over the triangle exactly (a degree-`k` polynomial maps to degree `k + 1` in
+/// `s`, `k` in `t`). The integrands are `L·g` and `g'`, with `L = n·r ≥ 0` on the visible part
+/// (linear) and `g`, `g'` of the form `P_p(r)/(r·r)^j` (`p ≤ 2`). Along any real line
+/// `c + τ û` through the centroid `c`, `r·r = (τ − τ₁)(τ − τ₂)` with `|τ₁| = |τ₂| = d`, so `g` is
+/// analytic for `|τ| < d` and, on the circle `|τ| = σd`, `|g| ≤ (1 + σ)^p d^p / ((1 − σ) d)^{2j}`.
+/// Cauchy's estimate bounds the Taylor remainder beyond degree `m` for `|τ| ≤ R` by that maximum
+/// times `(ρ/σ)^{m+1} / (1 − ρ/σ)`. The rule is exact on `L·P_{D−1}g` (positive weights, summing to
+/// the area, and `Q(L) = ∫L`), so `|Q(Lg) − ∫Lg| ≤ 2 ∫L · max|g − P_{D−1}g|`; likewise
+/// `|Q(g') − ∫g'| ≤ 2·area·max|g' − P_D g'|`. With `∫L ≤ area·d(1 + ρ)` and the integrands at least
+/// their values at distance `d(1 + ρ)`:
+///
+/// ```text
+/// value:    2 (1+ρ)⁴ (1−σ)⁻⁴ (ρ/σ)^D / (1 − ρ/σ)
+/// gradient: √3 (1+ρ)⁴ [8 (1+ρ)(1+σ)(1−σ)⁻⁶ (ρ/σ)^D + 2 (1−σ)⁻⁴ (ρ/σ)^{D+1}] / (1 − ρ/σ)
+/// Hessian:  (1+ρ)⁵ [48 (1+ρ)(1+σ)²(1−σ)⁻⁸ (ρ/σ)^D + 16 (1+σ)(1−σ)⁻⁶ (ρ/σ)^{D+1}
+///                   + 8 (1+ρ)(1−σ)⁻⁶ (ρ/σ)^D] / (1 − ρ/σ)
+/// ```
+///
+/// minimized over `σ ∈ (ρ, 1)` (the gradient's scale is `|4(n·r̂) r̂ − n| ≥ 1`, its largest entry
+/// `≥ 1/√3` of it; the Hessian's `24 (n·r̂) r̂r̂ᵀ − 4(n r̂ᵀ + r̂ nᵀ) − 4 (n·r̂) 𝟙` has an entry of at
+/// least 1). Fan triangles of a non-convex polygon can overlap with opposite signs, which
+/// multiplies the bound by `Σ|area_k| / area`.
+/// Only the unit tests evaluate it (to check [`FAR_FIELD_RULES`]); the kernel uses the ratios.
+pub(crate) fn far_field_error_bound(points: usize, rho: f64) -> [f64; 3] {
+    let d = (2 * points - 2) as i32;
+    let mut best = [f64::INFINITY; 3];
+    for k in 1..1000 {
+        let s = k as f64 / 1000.0;
+        if s <= rho {
+            continue;
+        }
+        let q = rho / s;
+        let (qd, qd1, tail) = (q.powi(d), q.powi(d + 1), 1.0 / (1.0 - q));
+        let (p, m) = (1.0 + rho, 1.0 - s);
+        let value = 2.0 * p.powi(4) * m.powi(-4) * qd * tail;
+        let gradient = 3f64.sqrt()
+            * p.powi(4)
+            * (8.0 * p * (1.0 + s) * m.powi(-6) * qd + 2.0 * m.powi(-4) * qd1)
+            * tail;
+        let hessian = p.powi(5)
+            * (48.0 * p * (1.0 + s).powi(2) * m.powi(-8) * qd
+                + 16.0 * (1.0 + s) * m.powi(-6) * qd1
+                + 8.0 * p * m.powi(-6) * qd)
+            * tail;
+        for (b, e) in best.iter_mut().zip([value, gradient, hessian]) {
+            *b = b.min(e);
+        }
+    }
+    best
+}
+
 /// The switch ratios of [`FAR_FIELD_RULES`] above 16 satisfy the documented tolerances of
 /// [`far_field_error_bound`] (1e-14 value and gradient, 1e-12 Hessian) at the switch, and so
 /// beyond it (the bound grows with ρ); the next cheaper rule would not (each ratio is within

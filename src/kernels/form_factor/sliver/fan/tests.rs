@@ -3,6 +3,28 @@ use crate::kernels::form_factor::replay::fast_decisions;
 use crate::kernels::form_factor::robust::form_factor;
 use crate::test_rng::lcg;
 
+/// [`thin_differences`] then [`validated`] (the unit tests' entry).
+fn thin_polygon(x: DVec3, v: &[DVec3]) -> Option<ThinPolygon> {
+    validated(v.len(), thin_differences(x, v)?)
+}
+
+/// [`fan_rule`] from the vertices alone (the unit tests' entry).
+pub(crate) fn very_thin_polygon(x: DVec3, n: DVec3, v: &[DVec3], order: Order) -> Option<Deriv3> {
+    fan_rule(x, n, v, &thin_polygon(x, v)?, order)
+}
+
+/// [`fan_of_triangles`] from the vertices alone (the unit tests' entry).
+pub(crate) fn very_thin_polygon_by_triangles(
+    x: DVec3,
+    n: DVec3,
+    v: &[DVec3],
+    order: Order,
+) -> Option<Deriv3> {
+    let triangle =
+        |a, b, c| crate::kernels::form_factor::triangle_form_factor(x, n, a, b, c, order);
+    fan_of_triangles(x, v, &thin_polygon(x, v)?, triangle)
+}
+
 /// A convex sliver in a random plane: `m` points along a flat arc of length `len` and height
 /// `width` (the first two at the ends of the long side), shifted by `origin`.
 fn sliver(seed: &mut u64, m: usize, len: f64, width: f64, origin: DVec3) -> Vec<DVec3> {
