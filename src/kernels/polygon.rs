@@ -1,13 +1,11 @@
 //! The vector form factor of a polygon: Arvo's irradiance Jacobian, an independent formulation
 //! kept to cross-check the form factor's gradient.
 
-use std::f64::consts::FRAC_1_PI;
-
 use glam::{DMat3, DVec3};
 use smallvec::SmallVec;
 
 use crate::error::{ensure_finite3, Error, Result};
-use crate::kernels::form_factor::edge::outer_self;
+use crate::kernels::form_factor::edge::{outer_self, INV_2PI};
 
 /// Arvo's irradiance Jacobian (Arvo 1994; Schwarzhaupt thesis §5.1, eq. 5.19) of the *vector form
 /// factor* of an unoccluded, unclipped polygon:
@@ -70,7 +68,7 @@ pub fn vector_form_factor_jacobian(x: DVec3, vertices: &[DVec3]) -> Result<DMat3
             ww * (1.0 / ab) + (DMat3::IDENTITY - ww) * (ab.clamp(-1.0, 1.0).acos() / w2.sqrt());
         jac += edge * (skew(a) * jb - skew(b) * ja);
     }
-    let jac = jac * (0.5 * FRAC_1_PI);
+    let jac = jac * INV_2PI;
     if jac.is_finite() {
         Ok(jac)
     } else {

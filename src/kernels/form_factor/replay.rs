@@ -9,7 +9,7 @@ use crate::kernels::form_factor::plane::{plane_height, triangle_plane, Plane};
 use crate::kernels::form_factor::quadrature::rules::{far_rule_of, Rule};
 use crate::kernels::form_factor::quadrature::tensor::triangle_rule;
 use crate::kernels::form_factor::tolerance::cancellation_limit;
-use crate::kernels::form_factor::validate::{in_fast_range, NORMAL_TOLERANCE};
+use crate::kernels::form_factor::validate::{in_fast_range, unit};
 use crate::{Deriv3, Order};
 
 /// The edge's frame as the robust path builds it, `None` when the robust path would recompute the
@@ -41,11 +41,7 @@ pub(crate) fn edge_form_factor_fast(
 ) -> Option<Deriv3> {
     let (r_a, e) = (a - x, b - a);
     in_fast_range(&[r_a, b - x, e])?;
-    let len = n.length();
-    if !((len - 1.0).abs() <= NORMAL_TOLERANCE) {
-        return None;
-    }
-    let d = frame_term(&fast_frame(r_a, e)?, n / len, order).ok()?;
+    let d = frame_term(&fast_frame(r_a, e)?, unit(n)?, order).ok()?;
     d.is_finite().then_some(d)
 }
 
@@ -233,11 +229,7 @@ pub(crate) fn fast_setup<const M: usize>(
     let r = v.map(|vk| vk - x);
     let u: [DVec3; M] = std::array::from_fn(|k| if k == 0 { DVec3::ZERO } else { v[k] - v[0] });
     in_fast_range(r.iter().chain(&u[1..]))?;
-    let len = n.length();
-    if !((len - 1.0).abs() <= NORMAL_TOLERANCE) {
-        return None;
-    }
-    let n = n / len;
+    let n = unit(n)?;
     // Heights over the tangent plane: the f64 dot product errs by less than 4u·(|n|·|r|) (one
     // rounding in r, three in the dot product), so above 8u·(|n|·|r|) the exact height is positive
     // and the robust clip keeps every vertex without cutting.

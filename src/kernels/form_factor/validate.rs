@@ -12,13 +12,12 @@ pub(crate) const NORMAL_TOLERANCE: f64 = 1e-6;
 /// Validates a receiver normal: finite, unit within [`NORMAL_TOLERANCE`]; returns it renormalized.
 pub(crate) fn unit_normal(n: DVec3) -> Result<DVec3> {
     ensure_finite3(n, "n")?;
-    let len = n.length();
-    if (len - 1.0).abs() > NORMAL_TOLERANCE || len.is_nan() {
-        return Err(Error::InvalidArgument(format!(
-            "n must be a unit vector (|n| = {len}, tolerance {NORMAL_TOLERANCE:e})"
-        )));
-    }
-    Ok(n / len)
+    unit(n).ok_or_else(|| {
+        Error::InvalidArgument(format!(
+            "n must be a unit vector (|n| = {}, tolerance {NORMAL_TOLERANCE:e})",
+            n.length()
+        ))
+    })
 }
 
 /// `r` with every component's magnitude at most in (1e-30, 1e30) — products of up to four such

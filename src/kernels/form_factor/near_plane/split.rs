@@ -2,13 +2,11 @@
 //! small, non-cancelling parts (exact winding number, per-edge deficits, the clip edges in closed
 //! form).
 
-use std::f64::consts::FRAC_1_PI;
-
 use glam::{DVec2, DVec3};
 use smallvec::SmallVec;
 
 use crate::kernels::form_factor::clip::{edge_vector, next, ClipVertex};
-use crate::kernels::form_factor::edge::{EdgeFrame, ExactEnds};
+use crate::kernels::form_factor::edge::{EdgeFrame, ExactEnds, INV_2PI};
 use crate::kernels::numeric::dd;
 
 /// Above this ratio of `Σ|edge term|` to `|Σ edge term|` (the sum has lost a bit or more), the
@@ -235,7 +233,7 @@ pub(crate) fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
     if !(magnitude <= max_cancellation * total.abs()) {
         return None;
     }
-    Some((0.5 * FRAC_1_PI * total, magnitude / total.abs()))
+    Some((INV_2PI * total, magnitude / total.abs()))
 }
 
 /// Below this `‖n_t‖²` (a receiver within ~0.1 rad of facing the polygon's plane head-on)
