@@ -4,7 +4,7 @@
 //! by `scripts/bench-c-abi.sh`): "spread", 256 generic configurations (well-shaped triangles seen
 //! from 0.5 to 3 sizes away, off their plane by more than 5% of the distance, the receiver's tangent
 //! plane clear of the triangle), and "fixed", the one generic configuration of
-//! `benches/kernels_a.rs` (solid angle) and `benches/kernels_b.rs` (form factor).
+//! `benches/solid_angle_transmittance.rs` (solid angle) and `benches/form_factor.rs` (form factor).
 //!
 //! Before the criterion groups, a table gives ns per call, the minimum over interleaved rounds of
 //! per-thread CPU time, and the ratio to the textbook value of the same kernel on the same set in

@@ -9,13 +9,13 @@
 //! numbers on the textbook formula, and prints each time with its ratio to the textbook value next
 //! to the relative errors (max-norm, normalized by the largest reference entry) against an
 //! independent 320-bit evaluation (astro-float, central differences with a step far below every
-//! length scale). `cargo bench --bench kernels_a` / `kernels_b` has the criterion measurements.
+//! length scale). `cargo bench --bench solid_angle_transmittance` / `form_factor` has the criterion measurements.
 
 #[path = "../benches/baselines/mod.rs"]
 mod baselines;
-#[path = "../tests/kernels_a_ref/mod.rs"]
+#[path = "../tests/kernel_reference/mod.rs"]
 mod reference_a;
-#[path = "../tests/kernels_b_common/mod.rs"]
+#[path = "../tests/form_factor_support/mod.rs"]
 mod reference_b;
 
 use std::hint::black_box;

@@ -8,7 +8,7 @@
 #       RADDIFF_REGIMES_PROFILE 'generic,hessian,{calls}' [N]
 #
 # The bench binaries' profile variables: RADDIFF_REGIMES_PROFILE and RADDIFF_REGIMES_MIX
-# (benches/kernels_regimes.rs), RADDIFF_KERNELS_B_PROFILE (benches/kernels_b.rs),
+# (benches/kernels_regimes.rs), RADDIFF_FORM_FACTOR_PROFILE (benches/form_factor.rs),
 # RADDIFF_C_ABI_PROFILE (benches/c_abi.rs).
 set -euo pipefail
 if [ $# -lt 3 ]; then

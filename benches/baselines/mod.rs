@@ -1,4 +1,4 @@
-//! Baselines the kernel benches (`benches/kernels_a.rs`) and the `kernels` example time raddiff
+//! Baselines the kernel benches (`benches/solid_angle_transmittance.rs`) and the `kernels` example time raddiff
 //! against, written as a user would: central finite differences, num-dual second-order dual
 //! numbers, and the textbook Van Oosterom-Strackee solid angle (generic over `f64` and duals).
 

@@ -4,7 +4,7 @@
    the rounds. Two sets of configurations: "spread", 256 generic configurations (well-shaped
    triangles seen from 0.5 to 3 sizes away, off their plane by more than 5% of the distance, the
    receiver's tangent plane clear of the triangle), and "fixed", the one generic configuration of
-   benches/kernels_a.rs (solid angle) and benches/kernels_b.rs (form factor). Ratios are to the
+   benches/solid_angle_transmittance.rs (solid angle) and benches/form_factor.rs (form factor). Ratios are to the
    textbook value of the same kernel on the same set, measured in the same rounds. Times are
    per-thread CPU time, so that other processes on the machine distort them less.
 
@@ -29,7 +29,7 @@ typedef struct {
 } config;
 
 static config configs[CONFIGS];
-/* The fixed configurations: the solid angle's (kernels_a) and the form factor's (kernels_b). */
+/* The fixed configurations: the solid angle's (benches/solid_angle_transmittance.rs) and the form factor's (benches/form_factor.rs). */
 static config fixed[2];
 
 /* SplitMix64: the same configurations on every run and platform. */

@@ -8,7 +8,7 @@
 //! * `D = s_0 s_1 s_2 + (r_0·r_1) s_2 + (r_1·r_2) s_0 + (r_2·r_0) s_1`,
 //!
 //! the signed solid angle is `Ω = 2 atan2(A, D)`. Derivatives (derived here, cross-checked against
-//! 256-bit finite differences in `tests/kernels_a_accuracy.rs`; Marco et al. 2018 App. C was only a
+//! 256-bit finite differences in `tests/solid_angle_accuracy.rs`; Marco et al. 2018 App. C was only a
 //! guide): `∇A = −N` and `HA = 0`; with `p_k = s_i s_j + r_i·r_j`, `c_k = p_k/s_k + s_i + s_j`
 //! (`{i, j}` the other two indices), `S = Σ s_k`, `u_k = r_k/s_k`, `U = Σ u_k`:
 //!

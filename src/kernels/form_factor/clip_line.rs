@@ -18,13 +18,13 @@ use crate::Order;
 /// With `exact_edges` the clip edges come from the clip points' exact differences
 /// ([`edge_vector`]) instead of their rounded `u`, whose difference errs by ~ε·extent: a sliver's
 /// clip edge spans its width, so that error is ~ε/aspect of its length (2.5e-6 of the Hessian for
-/// apex 1e-9 of the length, `tests/kernels_b_clipped_slivers.rs`), and `∫ ds/‖r‖⁴` is the
+/// apex 1e-9 of the length, `tests/form_factor_clipped_slivers.rs`), and `∫ ds/‖r‖⁴` is the
 /// closed form's `A_2` ([`EdgeFrame::moments`], a few ulps also on such short edges seen from
 /// near their line's extension, where its series once cancelled to 3.8e-8). With `local_planes`
 /// each clip edge takes `|h_P| / ‖n_t‖` from the plane of the triangle it forms with the loop's
 /// next vertex (`plane_n`, `h_p` only where that triangle is degenerate): a thin polygon's rounded
 /// vertices twist its plane by ~ε/aspect, which cost 5.3e-9 of the Hessian with the plane of the
-/// whole loop (a 6-vertex visible loop 1e-7 wide, `tests/kernels_b_polygon_slivers.rs`; 5.9e-15
+/// whole loop (a 6-vertex visible loop 1e-7 wide, `tests/form_factor_polygon_slivers.rs`; 5.9e-15
 /// with the edge's own plane). A clipped triangle's loop is planar (its clip points lie on its
 /// edges to double-double): `plane_n`, `h_p` from its exact fan geometry serve every clip edge.
 /// Inlined, as [`clip`].

@@ -457,7 +457,7 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
     // A sliver: the fan triangles' sliver rules instead of the robust path's isotropic
     // subdivision (~30x fewer instructions), or, declined with x near the sliver's plane, the
     // fan triangles through the triangle kernel's sliver handling
-    // (`tests/kernels_b_polygon_slivers.rs`). Lambert's paths decline every polygon these take
+    // (`tests/form_factor_polygon_slivers.rs`). Lambert's paths decline every polygon these take
     // (`lambert_polygon::SLIVER_AREA2`): their value is the value order's as it is.
     let fan_triangle = |a, b, c| triangle_form_factor(x, n, a, b, c, order);
     if let Some(d) = very_thin_polygon_form_factor(x, n, vertices, order, fan_triangle) {

@@ -185,7 +185,7 @@ pub(crate) fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
     // Clipped, the visible part's fan triangles take the rule (`clipped_sliver_quadrature`), also
     // where the visible part is far-field: the far-field rule and the robust path's edge sum,
     // subdivision and near-plane split erred by up to 1.2e-4 there, the rule by ~3e-13
-    // (`tests/kernels_b_clipped_slivers.rs`).
+    // (`tests/form_factor_clipped_slivers.rs`).
     // The rule's fan geometry of a clipped sliver, for the clip line's Hessian term.
     let mut fan_geometry_sums = None;
     let sliver = if (far.is_none() || cut)
@@ -221,7 +221,7 @@ pub(crate) fn evaluate(s: &Scaled, n: DVec3, order: Order) -> Result<Deriv3> {
         // edge sum: its terms are not large against
         // the derivatives (∂F/∂h_P is O(1) while F is O(h_P); `clip_edge_term` removes the clip
         // line's 1/h_P and 1/h_P² parts analytically, clip-line motion included), which
-        // `tests/kernels_b_near_plane.rs` measures against the 320-bit reference.
+        // `tests/form_factor_near_plane.rs` measures against the 320-bit reference.
         // A grazing receiver (`‖n_t‖² < GRAZING_NT2`) whose tangent plane passes beside the
         // polygon: the split too, for the value only. The quadrature's `n·r` loses
         // `u‖r‖/|n·r|` there (1.1e-10 of the value at 2.5e-7 rad, 2.6e-11 sizes from the plane),

@@ -14,7 +14,7 @@ pub(crate) const CANCELLATION_LIMIT: f64 = 1e2;
 /// [`CANCELLATION_LIMIT`] for slivers (`2·area < 1e-2·extent²`) with x neither near their plane
 /// nor clipping them, whose edge sum cancels by about the inverse aspect ratio: each edge term is
 /// accurate to a few ulps, so the sum's relative error is a few ulps times the cancellation ratio
-/// (measured on the slivers of `tests/kernels_b_accuracy.rs` with the limit lifted: value errors
+/// (measured on the slivers of `tests/form_factor_accuracy.rs` with the limit lifted: value errors
 /// 0.1-5.1 ε·ratio, gradient and Hessian (relative to their largest entry) within 10 ε·ratio over
 /// ratios 1e3-4e7). Slivers are a hard regime (contract 1e-10 / 1e-9 / 1e-8): at 1e4 the edge sum
 /// is within ~6e-12, and [`subdivided_quadrature`], 100x slower, is only needed beyond (aspect

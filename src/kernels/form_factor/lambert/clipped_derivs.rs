@@ -33,7 +33,7 @@
 //! its bound for the triangle ([`loop_derivs`]), whose derivatives keep the generic 1e-12 outside
 //! near the plane, at its bound for the polygon route ([`loop_derivs_charging`] from
 //! `lambert_clipped_polygon::routed_polygon_derivs`), whose contract is the regime's 1e-9.
-//! Measured against the 320-bit reference (`tests/kernels_b_clipped_derivs.rs`, `h_P` down
+//! Measured against the 320-bit reference (`tests/form_factor_clipped_derivs.rs`, `h_P` down
 //! to 1e-12 of the size): worst 2e-15 (gradient) and 4e-15 (Hessian) over the interior, 1.1e-14
 //! and 3.7e-15 outside; 1.8e-12 and 4.2e-12 with `x` near a vertex.
 //!
@@ -89,7 +89,7 @@ const MIN_SINE: f64 = 1.0 / 32.0;
 /// set for the generic 1e-12 contract) sent a quarter of them to the robust path, which takes the
 /// same edge sums at any cancellation there while its near-plane split cancels by less than 1e3,
 /// and integrates by quadrature beyond (~30000 instructions on average over that spread).
-/// Measured against the 320-bit reference over that spread (`tests/kernels_b_near_plane.rs`):
+/// Measured against the 320-bit reference over that spread (`tests/form_factor_near_plane.rs`):
 /// worst 1.1e-12 / 4.4e-14.
 const LOOP_CANCELLATION: f64 = 1e5;
 
@@ -106,7 +106,7 @@ pub(crate) fn loop_derivs<const N: usize>(
 
 /// The clip points' rounding to f64 charged by the displacement test (relative to the point):
 /// twice its bound `u`, the margin the triangle's derivatives keep for their generic 1e-12
-/// accuracy outside near the plane (`tests/kernels_b_clipped_derivs.rs`).
+/// accuracy outside near the plane (`tests/form_factor_clipped_derivs.rs`).
 const CLIP_ROUNDING: f64 = 2.0 * U;
 
 /// [`loop_derivs`] with the clip points' rounding charged at `rounding` (relative to the point,

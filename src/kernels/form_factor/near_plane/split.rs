@@ -24,7 +24,7 @@ pub(crate) const NEAR_PLANE_RATIO: f64 = 0.1;
 /// O(h_P) parts then cancel too, which happens when the visible part is small against its distance
 /// from x (the clip line cuts a small corner off the polygon), where the edge sum's derivatives
 /// cancel as well and the quadrature takes over. Measured: the walks of
-/// `tests/kernels_b_near_plane.rs` cancel by 25 to ~150; the accuracy test's worst case (a corner
+/// `tests/form_factor_near_plane.rs` cancel by 25 to ~150; the accuracy test's worst case (a corner
 /// of 1e-12 relative value) by far more.
 pub(crate) const SPLIT_CANCELLATION_LIMIT: f64 = 1e3;
 
@@ -99,7 +99,7 @@ impl From<EdgeFrame> for InPlaneEdge {
 /// two O(h_P) parts combine into `sign(n·w) (β(D) − |n_N| β(|n_N| D))`, which [`tangent_excess`]
 /// evaluates with its factor `1 − |n_N|` explicit (a receiver facing the plane head-on would
 /// otherwise lose `1/‖n_t‖²`). The O(h_P) parts of different edges still cancel by a geometric
-/// factor (25-150 in `tests/kernels_b_near_plane.rs`; far more when the clip line cuts a small
+/// factor (25-150 in `tests/form_factor_near_plane.rs`; far more when the clip line cuts a small
 /// corner off, which `max_cancellation` refuses). Non-convex polygons can be clipped into
 /// several clip edges, including bridges that run along ℓ in both directions; each is its own
 /// closed form and the bridges' terms cancel between themselves, O(h_P) each.
@@ -247,7 +247,7 @@ pub(crate) const GRAZING_NT2: f64 = 1e-2;
 /// the plane and clipping it) [`evaluate`] takes the derivatives from the quadrature even where the
 /// split does not cancel beyond [`SPLIT_CANCELLATION_LIMIT`]: the edge sum's terms are O(1/size)
 /// while the derivatives are O(F/h_P), which vanish with `h_P` for a head-on receiver
-/// (`tests/kernels_b_grazing.rs`: gradient errors up to 6.3e-6 from the edge sum, 3.9e-7 from the
+/// (`tests/form_factor_grazing.rs`: gradient errors up to 6.3e-6 from the edge sum, 3.9e-7 from the
 /// quadrature; above 1e-4 rad the edge sum's were within 5e-11).
 pub(crate) const FACING_NT2: f64 = 1e-8;
 
@@ -418,7 +418,7 @@ fn atan_small(z: f64) -> f64 {
 /// the vectors `(D² + P, DL)` and `(c²D² + P, cDL)`, an `atan2` of their cross product (the same
 /// numerator, factor `1 − c` explicit) and their dot product (positive, no cancellation).
 /// Subtracting the angles as they are lost `~u β/(1 − c)` relative: 8.7e-6 of the value for a
-/// receiver 1.9e-6 rad from head-on (`tests/kernels_b_grazing.rs`). Returned with `β(cD)` itself,
+/// receiver 1.9e-6 rad from head-on (`tests/form_factor_grazing.rs`). Returned with `β(cD)` itself,
 /// which gives the edge's in-plane angle for the winding number.
 fn tangent_excess(d: f64, len: f64, p: f64, c: f64, nt2: f64) -> (f64, f64) {
     let one_minus_c = nt2 / (1.0 + c);

@@ -6,7 +6,7 @@ use std::sync::OnceLock;
 use glam::DVec3;
 
 /// Distance (from the vertex centroid) over radius above which the form factor is integrated by
-/// quadrature instead of the edge sum. Chosen by measurement (see `tests/kernels_b_accuracy.rs`): at
+/// quadrature instead of the edge sum. Chosen by measurement (see `tests/form_factor_accuracy.rs`): at
 /// 16 the edge sum has lost ~16 ulps to cancellation and the 8x8 Gauss rule is at its rounding floor.
 pub(crate) const FAR_FIELD_RATIO: f64 = 16.0;
 

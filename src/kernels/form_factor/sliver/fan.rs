@@ -21,7 +21,7 @@
 //! the order of the additions. The derivatives are sums too: a triangle's gradient and Hessian are
 //! within its own accuracy relative to its largest entry, and the pieces' derivatives can only
 //! partly cancel (all pieces are seen under the same small width, from the same side), which
-//! `tests/kernels_b_polygon_slivers.rs` measures against 320-bit references.
+//! `tests/form_factor_polygon_slivers.rs` measures against 320-bit references.
 //!
 //! Validation once ([`validated`]): the thinness test's Newell normal and extent are the
 //! robust path's own (term for term), so `Plane::validated` runs its area and planarity tests on
@@ -253,7 +253,7 @@ fn near_field_height(r: &[DVec3], r2: &[f64], plane: &Plane) -> Option<f64> {
 /// own value: the sum is within that accuracy of its value. The derivatives' pieces can partly
 /// cancel: each is within its accuracy of its own largest entry, so the sum's error relative to
 /// its largest entry is bounded by that accuracy times `Σ|piece| / |sum|` (per entry);
-/// `tests/kernels_b_polygon_slivers.rs` measures that ratio.
+/// `tests/form_factor_polygon_slivers.rs` measures that ratio.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn fan_of_triangles(
     x: DVec3,

@@ -325,7 +325,7 @@ fn edge_derivatives_agree_with_finite_differences_and_the_robust_path() {
 
 #[test]
 fn the_benchmarked_generic_edge_is_certified() {
-    // benches/kernels_b.rs "edge term": the first edge of its generic triangle.
+    // benches/form_factor.rs "edge term": the first edge of its generic triangle.
     let x = DVec3::new(0.1, -0.2, 0.05);
     let f = edge_value(x, n(), TRI[0], TRI[1]).expect("declined");
     let d = edge_derivs_checked(x, n(), TRI[0], TRI[1], Order::Hessian).expect("declined");

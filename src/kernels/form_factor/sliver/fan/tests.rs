@@ -41,7 +41,7 @@ fn sliver(seed: &mut u64, m: usize, len: f64, width: f64, origin: DVec3) -> Vec<
 
 /// Agreement with [`fan_reference`]: the same triangles' sums up to the order of the additions.
 /// (Not with the robust path on the whole polygon: its subdivided quadrature and edge sum are
-/// the inaccurate side here, off by up to 4e-8 where `tests/kernels_b_polygon_slivers.rs`
+/// the inaccurate side here, off by up to 4e-8 where `tests/form_factor_polygon_slivers.rs`
 /// measures the fan path within 1e-15 of 320-bit references.)
 const TOL: [f64; 3] = [1e-14, 1e-14, 1e-14];
 

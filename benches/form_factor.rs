@@ -4,14 +4,14 @@
 //! clipped), (b) central finite differences of that textbook value (19 value calls for value +
 //! gradient + Hessian) and (c) a num-dual hyper-dual Hessian of the same formula (6 hyper-dual
 //! evaluations, one per Hessian entry). Before timing, a table gives time (ratio to the textbook
-//! value, same interleaved rounds) and error against 320-bit references (`tests/kernels_b_common`)
+//! value, same interleaved rounds) and error against 320-bit references (`tests/form_factor_support`)
 //! side by side.
 //!
-//! `cargo bench --bench kernels_b -- --warm-up-time 1 --measurement-time 3`; append a filter that
+//! `cargo bench --bench form_factor -- --warm-up-time 1 --measurement-time 3`; append a filter that
 //! matches nothing (`nomatch`) for the table alone.
-//! For profilers, `RADDIFF_KERNELS_B_PROFILE="CASE,ORDER,CALLS"` runs one case only and exits (CASE
+//! For profilers, `RADDIFF_FORM_FACTOR_PROFILE="CASE,ORDER,CALLS"` runs one case only and exits (CASE
 //! is a case name of the table, ORDER is `value`, `gradient` or `hessian`), e.g.
-//! `RADDIFF_KERNELS_B_PROFILE="quad,hessian,20000" valgrind --tool=callgrind <bench binary>`.
+//! `RADDIFF_FORM_FACTOR_PROFILE="quad,hessian,20000" valgrind --tool=callgrind <bench binary>`.
 
 use std::hint::black_box;
 
@@ -20,7 +20,7 @@ use glam::{DMat3, DVec3};
 use num_dual::{DualNum, HyperDual64};
 use raddiff::{kernels, Deriv3, Order};
 
-#[path = "../tests/kernels_b_common/mod.rs"]
+#[path = "../tests/form_factor_support/mod.rs"]
 mod reference;
 
 /// Lambert's per-edge term as a user writes it: `β n·(r_a×r_b)/‖r_a×r_b‖ / 2π`,
@@ -364,11 +364,11 @@ fn call(case: &Case, order: Order) -> Deriv3 {
     .unwrap()
 }
 
-/// `RADDIFF_KERNELS_B_PROFILE="CASE,ORDER,CALLS"`: the calls of one case, nothing else.
+/// `RADDIFF_FORM_FACTOR_PROFILE="CASE,ORDER,CALLS"`: the calls of one case, nothing else.
 fn profile(spec: &str) {
     let parts: Vec<&str> = spec.split(',').map(str::trim).collect();
     let [case, order, calls] = parts[..] else {
-        panic!("RADDIFF_KERNELS_B_PROFILE must be CASE,ORDER,CALLS");
+        panic!("RADDIFF_FORM_FACTOR_PROFILE must be CASE,ORDER,CALLS");
     };
     let mut all = cases();
     all.push(edge_case(&all[0]));
@@ -427,7 +427,7 @@ fn bench(c: &mut Criterion) {
 }
 
 fn main() {
-    if let Ok(spec) = std::env::var("RADDIFF_KERNELS_B_PROFILE") {
+    if let Ok(spec) = std::env::var("RADDIFF_FORM_FACTOR_PROFILE") {
         profile(&spec);
         return;
     }

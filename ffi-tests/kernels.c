@@ -205,5 +205,5 @@ int main(void) {
   solid_angle();
   segment();
   marched();
-  CHECK_DONE("kernels_a.c");
+  CHECK_DONE("kernels.c");
 }

@@ -133,5 +133,5 @@ int main(void) {
     CHECK(d.value == 0.0 && d.gradient[2] == 0.0 && d.hessian[8] == 0.0);
   }
 
-  CHECK_DONE("kernels_b.c");
+  CHECK_DONE("form_factor.c");
 }

@@ -1,11 +1,11 @@
 //! The form factor's rule switches in the far field (issue 18): on both sides of every switch of
 //! the far-field quadrature, the triangle and polygon entry points against the 320-bit astro-float
-//! reference of `kernels_b_common`, at the generic accuracy contract, and continuity across each
+//! reference of `form_factor_support`, at the generic accuracy contract, and continuity across each
 //! switch. Run with `--nocapture` to see the worst errors per switch.
 
-mod kernels_b_common;
+mod form_factor_support;
 
-use kernels_b_common::*;
+use form_factor_support::*;
 use raddiff::{kernels, Deriv3, Order};
 
 /// The distance-over-radius ratios at which the far-field rule changes (`FAR_FIELD_RULES` in

@@ -4,7 +4,7 @@
 //! never a panic, NaN or Inf.
 //!
 //! ~1e5 calls by default; `RADDIFF_STRESS_CALLS=N` runs N calls (use millions in CI/nightly):
-//! `RADDIFF_STRESS_CALLS=5000000 cargo test --release --test kernels_b_stress`.
+//! `RADDIFF_STRESS_CALLS=5000000 cargo test --release --test c_abi_form_factor_stress`.
 
 use raddiff::ffi::*;
 

@@ -3,7 +3,7 @@
 //! or over the interior, scales 1e-3..1e3. The tangent plane of `x` then meets the triangle's
 //! plane `h_P/tilt` from the foot: across the triangle, at its edge or far beyond it, as the
 //! height and the tilt walk. Value, gradient and Hessian against the 320-bit astro-float reference
-//! of `kernels_b_common`; run with `--nocapture` for the worst errors per tilt and height.
+//! of `form_factor_support`; run with `--nocapture` for the worst errors per tilt and height.
 //!
 //! The value and the Hessian meet the hard-regime contract everywhere (measured worst 8.8e-11 and
 //! 2.8e-10; the value's worst is a normal `n` one ulp off unit length, whose normalization tilts
@@ -14,10 +14,10 @@
 //! at 2.6e-8 rad, 3.9e-7 at 2.1e-9 rad), and the test asserts `max(1e-9, 16 u/tilt)` there as a
 //! guard, not as the contract.
 
-mod kernels_b_common;
+mod form_factor_support;
 
+use form_factor_support::*;
 use glam::DVec3;
-use kernels_b_common::*;
 use raddiff::{kernels, Order};
 
 fn f3(e: [f64; 3]) -> String {

@@ -3,9 +3,9 @@
 //! ~distance/length (`EdgeFrame::moments`), which the gradient and Hessian of the edge term
 //! inherited.
 
-mod kernels_b_common;
+mod form_factor_support;
 
-use kernels_b_common::*;
+use form_factor_support::*;
 use raddiff::{kernels, Order};
 
 /// Edges 1e-8..1e-3 of their distance long, x within 1e-3..1e-1 of its distance of the edge's

@@ -1,13 +1,13 @@
-//! Criterion benches for the kernels-a kernels (triangle solid angle, flatland segment form factor,
-//! homogeneous and marched transmittance) at each order, against the baselines a user would
+//! Criterion benches of the triangle solid angle, the flatland segment form factor and the
+//! homogeneous and marched transmittance at each order, against the baselines a user would
 //! otherwise write: (a) the textbook value formula (Van Oosterom-Strackee for the solid angle), (b)
 //! central finite differences of that textbook value (gradient: 6 evaluations, 4 in 2D; Hessian:
 //! 19, 9 in 2D) and (c) a num-dual second-order dual-number (Dual2Vec) Hessian of the same textbook
 //! formula. Before timing, the errors of raddiff and of every baseline against 320-bit references
-//! (astro-float, `tests/kernels_a_ref`) are printed side by side, and an interleaved timing table gives
-//! every time as a ratio to the textbook value measured in the same rounds.
+//! (astro-float, `tests/kernel_reference`) are printed side by side, and an interleaved timing
+//! table gives every time as a ratio to the textbook value measured in the same rounds.
 //!
-//! `cargo bench --bench kernels_a -- --warm-up-time 1 --measurement-time 3`
+//! `cargo bench --bench solid_angle_transmittance -- --warm-up-time 1 --measurement-time 3`
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the finite-difference stencils
 
@@ -19,7 +19,7 @@ use raddiff::{kernels, Order};
 use std::hint::black_box;
 
 mod baselines;
-#[path = "../tests/kernels_a_ref/mod.rs"]
+#[path = "../tests/kernel_reference/mod.rs"]
 mod reference;
 
 use baselines::{dual_hessian3, fd_hessian3, textbook_solid_angle, D3};

@@ -1,5 +1,5 @@
-//! Stress test of the kernels-a C functions, called through the C ABI (`extern "C"`) from Rust:
-//! random and adversarial inputs (exact singular configurations, coincident and collinear points,
+//! Stress test of the C functions of `src/ffi/kernels.rs` (solid angle, segment, transmittance),
+//! called through the C ABI (`extern "C"`) from Rust: random and adversarial inputs (exact singular configurations, coincident and collinear points,
 //! huge, tiny and subnormal coordinates, non-finite values, bad orders and sizes).
 //!
 //! Every call must return `RADDIFF_OK` with finite outputs in the documented range, or a
@@ -8,7 +8,7 @@
 //! must leave the output untouched on failure.
 //!
 //! Default: ~1e5 calls (a few seconds). `RADDIFF_STRESS_CALLS=N` sets the number of calls, e.g.
-//! `RADDIFF_STRESS_CALLS=5000000 cargo test --release --test kernels_a_stress -- --nocapture`.
+//! `RADDIFF_STRESS_CALLS=5000000 cargo test --release --test c_abi_kernels_stress -- --nocapture`.
 
 use raddiff::ffi::*;
 use std::f64::consts::PI;
@@ -173,7 +173,7 @@ fn calls() -> usize {
 }
 
 #[test]
-fn kernels_a_survive_random_and_adversarial_inputs_through_the_c_abi() {
+fn kernels_survive_random_and_adversarial_inputs_through_the_c_abi() {
     let mut rng = Rng(0x5eed);
     let mut solid = Tally::default();
     let mut segment = Tally::default();

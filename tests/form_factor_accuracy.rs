@@ -2,10 +2,10 @@
 //! 320-bit astro-float evaluation of the value formula (clip included) with central differences,
 //! per regime. Run with `--nocapture` to see the worst errors per kernel, order and regime.
 
-mod kernels_b_common;
+mod form_factor_support;
 
+use form_factor_support::*;
 use glam::DVec3;
-use kernels_b_common::*;
 use raddiff::{kernels, Order};
 
 #[derive(Default, Clone, Copy)]
@@ -230,7 +230,7 @@ fn hard_far_away_and_switch() {
             check_polygon(&mut big, x, n, &t, &mut far);
         } else {
             // just either side of the far-field switch
-            let ratio = kernels_b_far_field_ratio() * (1.0 + rng.range(-0.02, 0.02));
+            let ratio = form_factor_far_field_ratio() * (1.0 + rng.range(-0.02, 0.02));
             let x = c + dir * ratio * radius;
             let n = facing_normal(&mut rng, x, &t);
             check_polygon(&mut big, x, n, &t, &mut switch);
@@ -241,7 +241,7 @@ fn hard_far_away_and_switch() {
     assert!(ok, "errors exceed the targets");
 }
 
-fn kernels_b_far_field_ratio() -> f64 {
+fn form_factor_far_field_ratio() -> f64 {
     16.0
 }
 

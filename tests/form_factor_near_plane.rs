@@ -2,16 +2,16 @@
 //! cutting the polygon (the clip line passes within ~`h_P` of `x`). The kernel takes the value from
 //! the near-plane split with the clip edges in closed form and the derivatives from the edge sum
 //! (see `near_plane_value` in `src/kernels/polygon.rs`); these tests hold both against the 320-bit
-//! astro-float reference of `kernels_b_common` while the height walks from 1e-2 to 1e-12 of the
+//! astro-float reference of `form_factor_support` while the height walks from 1e-2 to 1e-12 of the
 //! size, on both sides of the plane, for several tilts of the receiver, triangles and non-convex
 //! polygons, scales 1e-3..1e3, across the switches around that path, and with `x` also near an
 //! edge line (where the split declines and the quadrature takes over). Run with `--nocapture` to
 //! see the worst errors per height.
 
-mod kernels_b_common;
+mod form_factor_support;
 
+use form_factor_support::*;
 use glam::{DVec2, DVec3};
-use kernels_b_common::*;
 use raddiff::{kernels, Order};
 
 /// A planar polygon given in plane coordinates `(p, q)` and the map into 3D, exact in f64: the

@@ -1,12 +1,12 @@
 //! Value accuracy of the form factors where the certified fast paths now reach: small triangles
 //! and convex polygons seen from 3 to 1e4 sizes away (mesh lights, occluders), against the
-//! 320-bit reference (`kernels_b_common`), through the public entry points (whichever path they
+//! 320-bit reference (`form_factor_support`), through the public entry points (whichever path they
 //! take; `src/kernels/lambert*.rs` unit tests check which one). The generic contract is 1e-12.
 
-mod kernels_b_common;
+mod form_factor_support;
 
+use form_factor_support::*;
 use glam::DVec3;
-use kernels_b_common::*;
 use raddiff::{kernels, Order};
 
 /// A random convex polygon with `m` vertices: points on an ellipse at sorted random angles, in a

@@ -2,10 +2,10 @@
 //! `polygon_form_factor` sums its fan triangles' sliver rules: accuracy against 320-bit
 //! references, at every order, from a fifth of a length to 30 lengths away.
 
-mod kernels_b_common;
+mod form_factor_support;
 
+use form_factor_support::*;
 use glam::DVec3;
-use kernels_b_common::*;
 use raddiff::{kernels, Order};
 
 fn check(big: &mut Big, x: DVec3, n: DVec3, v: &[DVec3], worst: &mut [f64; 3]) -> [f64; 3] {

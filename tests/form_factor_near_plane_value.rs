@@ -8,13 +8,13 @@
 //! at 100, 20, 10.5, 9.5 and 2 `h_P` from the edge point. That takes the foot's distance from the
 //! edge's line across the split's limit (`10 h_P`; the route answers beyond it, and below it the
 //! robust path's quadrature takes over). Each value against the 320-bit reference of
-//! `kernels_b_common` at the hard-regime contract (1e-10 relative), and equal bit for bit to the
+//! `form_factor_support` at the hard-regime contract (1e-10 relative), and equal bit for bit to the
 //! Hessian order's value. Run with `--nocapture` for the worst errors per height.
 
-mod kernels_b_common;
+mod form_factor_support;
 
+use form_factor_support::*;
 use glam::DVec3;
-use kernels_b_common::*;
 use raddiff::{kernels, Order};
 
 /// The value part of the hard-regime contract of issue 18.

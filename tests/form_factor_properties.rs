@@ -159,7 +159,7 @@ proptest! {
         // The reference is this plain sum, whose rounding errors are relative to its terms: where
         // they cancel (the triangle small or far, seen edge-on) it is the inaccurate side, so the
         // tolerance is relative to the terms' magnitudes (the kernel's own accuracy is asserted
-        // against the 320-bit reference in `kernels_b_accuracy`).
+        // against the 320-bit reference in `form_factor_accuracy`).
         prop_assert!(close_above(&d, &sum, 1e-11, magnitudes), "{d:?} vs {sum:?}");
     }
 

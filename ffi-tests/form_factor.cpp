@@ -88,5 +88,5 @@ int main() {
   CHECK(out.value == -1.0);
   CHECK(std::strlen(raddiff_last_error()) > 0);
 
-  CHECK_DONE("kernels_b.cpp");
+  CHECK_DONE("form_factor.cpp");
 }

@@ -1,4 +1,4 @@
-// C++17 use of the kernels-a C functions: identities over closed shapes (solid angles of a closed
+// C++17 use of the C functions of src/ffi/kernels.rs: identities over closed shapes (solid angles of a closed
 // mesh sum to 4π inside, flatland form factors of a closed polygon sum to 1, with vanishing
 // derivative sums), the far-field limit, and the same error conventions as in C.
 #include "raddiff.h"
@@ -121,5 +121,5 @@ int main() {
   far_field();
   polygon_flatland();
   marched_errors();
-  CHECK_DONE("kernels_a.cpp");
+  CHECK_DONE("kernels.cpp");
 }

@@ -1,6 +1,7 @@
-//! Independent high-precision references for the kernels-a tests: each value formula evaluated in
-//! astro-float at 320 bits from the exact f64 inputs, and its derivatives by central differences at
-//! that precision with a tiny step (truncation ~ (h/ρ)², rounding ~ 2^-320/h²: both far below f64).
+//! Independent high-precision references for the tests of the solid angle, the segment and the
+//! transmittance: each value formula evaluated in astro-float at 320 bits from the exact f64
+//! inputs, and its derivatives by central differences at that precision with a tiny step
+//! (truncation ~ (h/ρ)², rounding ~ 2^-320/h²: both far below f64).
 #![allow(dead_code, clippy::needless_range_loop)]
 
 use astro_float::{BigFloat, Consts, RoundingMode};
@@ -346,4 +347,17 @@ impl Worst {
             "{name}: worst errors {self:?} exceed targets value {tv:e} gradient {tg:e} hessian {th:e}"
         );
     }
+}
+
+/// The accuracy target of generic inputs: value, gradient, Hessian (relative to the largest entry).
+pub const GENERIC: (f64, f64, f64) = (1e-12, 1e-12, 1e-10);
+/// The accuracy target of hard inputs (near the singular sets, extreme scales).
+pub const HARD: (f64, f64, f64) = (1e-10, 1e-9, 1e-8);
+
+/// Random configurations per accuracy test (`RADDIFF_ACCURACY_SAMPLES`, default 200).
+pub fn samples() -> usize {
+    std::env::var("RADDIFF_ACCURACY_SAMPLES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(200)
 }

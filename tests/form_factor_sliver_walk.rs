@@ -2,7 +2,7 @@
 //! to 1e-12 of the length, caps and needles, sizes 1e-3..1e3, x from 1e-4 lengths (where the
 //! sliver rule declines and the robust path answers) to 3 lengths away, through
 //! `triangle_form_factor` at every order, against the 320-bit astro-float reference of
-//! `kernels_b_common` at the hard-regime contract (relative 1e-10 value, 1e-9 gradient, 1e-8
+//! `form_factor_support` at the hard-regime contract (relative 1e-10 value, 1e-9 gradient, 1e-8
 //! Hessian, each normalized by its largest entry). Run with `--nocapture` for the worst errors per
 //! distance.
 //!
@@ -15,9 +15,9 @@
 //! rounding of a triangle's normal against `PLANARITY_TOLERANCE`); triangles now skip that check,
 //! and the walk asserts that none is refused.
 
-mod kernels_b_common;
+mod form_factor_support;
 
-use kernels_b_common::*;
+use form_factor_support::*;
 use raddiff::{kernels, Order};
 
 /// One walk: for each distance (in lengths) 4 slivers (caps and needles) with apex heights

@@ -6,12 +6,12 @@
 //! (`clipped_sliver_quadrature` in `src/kernels/polygon/sliver.rs`) with the clip line's Hessian
 //! term from exact geometry.
 //! `triangle_form_factor` at every order against the 320-bit astro-float reference of
-//! `kernels_b_common`, at the hard-regime contract (relative 1e-10 value, 1e-9 gradient, 1e-8
+//! `form_factor_support`, at the hard-regime contract (relative 1e-10 value, 1e-9 gradient, 1e-8
 //! Hessian, each normalized by its largest entry). Run with `--nocapture` for the worst errors.
 
-mod kernels_b_common;
+mod form_factor_support;
 
-use kernels_b_common::*;
+use form_factor_support::*;
 use raddiff::{kernels, Order};
 
 /// Worst errors `[one vertex below, two below]` (each `[value, gradient, Hessian]`) over `cases`

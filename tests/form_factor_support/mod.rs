@@ -1,4 +1,4 @@
-//! Shared helpers for the kernels-b tests: an arbitrary-precision (astro-float, 320 bits) reference
+//! Shared helpers for the form factor's tests: an arbitrary-precision (astro-float, 320 bits) reference
 //! for the point-to-polygon form factor and its edge terms, with derivatives by central differences,
 //! and error metrics.
 #![allow(dead_code)]
