@@ -96,10 +96,9 @@ impl raddiff_vec3 {
     ///
     /// A C caller passes `raddiff_vec3` arguments in memory, written with its own store widths. A
     /// wider load that spans two of those stores cannot take its data from them (store-to-load
-    /// forwarding) and waits until they reach the cache, about a dozen cycles each; the compiler's
-    /// 16-byte loads of `(y, z)` pairs cost `raddiff_triangle_solid_angle` about 6 ns per call that
-    /// way (`benches/c`). Volatile reads keep every load at the width of one component, which every
-    /// caller's stores cover.
+    /// forwarding) and waits until they reach the cache, about a dozen cycles each, which the
+    /// compiler's 16-byte loads of `(y, z)` pairs did on every call (seen in `benches/c`). Volatile
+    /// reads keep every load at the width of one component, which every caller's stores cover.
     #[inline(always)]
     pub(crate) fn read(&self) -> DVec3 {
         // SAFETY: `self` is a reference to an initialized value.

@@ -48,7 +48,7 @@ pub(crate) fn convex_normal<const M: usize>(v: &[DVec3; M]) -> Option<DVec3> {
         .map(|dk| dk.length_squared())
         .fold(0.0, f64::max);
     // Slivers first (the zero-area limit included), then edge lengths: declined before the
-    // planarity and turn tests, which they would pass only to fail later (~150 instructions).
+    // planarity and turn tests, which they would pass only to fail later.
     if !(nn >= SLIVER_AREA2 * extent2 * extent2) {
         return None;
     }

@@ -162,12 +162,11 @@ pub fn triangle_form_factor(
     if let Some(d) = lambert::sum::triangle_derivs(x, n, [a, b, c], order) {
         return Ok(d);
     }
-    // Near the plane with the tangent plane cutting the triangle: the derivatives of the
-    // certified clipped loop, whose value is `lambert_value`'s, or outside the triangle (the sum
-    // cancels) or on the clip line those of the uncertified loop, with the value order's value
-    // (no Lambert value there: clipped, uncertified). One cut and one loop for both, used in
-    // place; a certified value is kept for the robust path below (computing it twice cost ~400
-    // instructions where the derivatives decline).
+    // Near the plane with the tangent plane cutting the triangle: the derivatives of the certified
+    // clipped loop, whose value is `lambert_value`'s, or outside the triangle (the sum cancels) or
+    // on the clip line those of the uncertified loop, with the value order's value (no Lambert
+    // value there: clipped, uncertified). One cut and one loop for both, used in place; a certified
+    // value is kept for the robust path below.
     let clipped = clipped_derivs(x, n, [a, b, c], order);
     let certified_value = match clipped {
         Some(ClippedDerivs::Done(d)) => return Ok(d),
@@ -230,8 +229,7 @@ fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Result<Deriv3> {
     }
 }
 
-/// Lambert's sum, over the clipped triangle when the tangent plane cuts it (inlined: a closure
-/// here was left out of line, ~40 instructions on the value order's every call).
+/// Lambert's sum, over the clipped triangle when the tangent plane cuts it.
 #[inline(always)]
 fn triangle_lambert_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     lambert::sum::triangle_value(x, n, v).or_else(|| lambert::clipped::triangle_value(x, n, v))
@@ -454,11 +452,11 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
             return Ok(d);
         }
     }
-    // A sliver: the fan triangles' sliver rules instead of the robust path's isotropic
-    // subdivision (~30x fewer instructions), or, declined with x near the sliver's plane, the
-    // fan triangles through the triangle kernel's sliver handling
-    // (`tests/form_factor_polygon_slivers.rs`). Lambert's paths decline every polygon these take
-    // (`lambert_polygon::SLIVER_AREA2`): their value is the value order's as it is.
+    // A sliver: the fan triangles' sliver rules instead of the robust path's isotropic subdivision,
+    // or, declined with x near the sliver's plane, the fan triangles through the triangle kernel's
+    // sliver handling (`tests/form_factor_polygon_slivers.rs`). Lambert's paths decline every
+    // polygon these take (`lambert_polygon::SLIVER_AREA2`): their value is the value order's as it
+    // is.
     let fan_triangle = |a, b, c| triangle_form_factor(x, n, a, b, c, order);
     if let Some(d) = very_thin_polygon_form_factor(x, n, vertices, order, fan_triangle) {
         return Ok(d);
@@ -526,14 +524,12 @@ pub(crate) fn polygon_value_or_clipped(x: DVec3, n: DVec3, v: &[DVec3]) -> Optio
     }
 }
 
-/// `polygon_derivs`, or where the tangent plane cuts the polygon near its plane, the
-/// derivatives of the clipped loop ([`lambert_clipped_polygon::polygon_derivs`]), or where that
-/// loop is not certified (outside near the plane), those of the loop with the value of the
-/// robust path's near-plane split ([`lambert_clipped_polygon::routed_polygon_derivs`], the value
-/// order's bits there); `None` where
-/// neither accepts, with `*clipped_value` the clipped loop's certified value where that is
-/// (written there rather than returned: a wider result cost the unclipped path ~40
-/// instructions).
+/// `polygon_derivs`, or where the tangent plane cuts the polygon near its plane, the derivatives of
+/// the clipped loop ([`lambert_clipped_polygon::polygon_derivs`]), or where that loop is not
+/// certified (outside near the plane), those of the loop with the value of the robust path's
+/// near-plane split ([`lambert_clipped_polygon::routed_polygon_derivs`], the value order's bits
+/// there); `None` where neither accepts, with `*clipped_value` the clipped loop's certified value
+/// where that is.
 pub(crate) fn polygon_derivs_or_clipped(
     x: DVec3,
     n: DVec3,

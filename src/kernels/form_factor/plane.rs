@@ -38,8 +38,8 @@ impl Plane {
     /// [`Plane::new`] from the Newell sum `nn` and the `extent` the caller computed as `new` does
     /// (the same bits: the polygon sliver path has them already). `check_simplicity: false` skips
     /// the O(count²) simplicity test, for callers that have certified it otherwise (a fan from
-    /// `u[0]` sorted by angle within a half-turn, `sliver_fan`). Inlined: as a call it cost
-    /// `Plane::new` ~50 instructions.
+    /// `u[0]` sorted by angle within a half-turn, `sliver_fan`). Inlined into `Plane::new`, its
+    /// one caller on the hot path.
     #[inline(always)]
     pub(crate) fn validated(
         u: &[DVec3],
@@ -188,8 +188,8 @@ fn dominant_projection(normal: DVec3) -> impl Fn(DVec3) -> DVec2 {
 /// Rejects polygons where two non-adjacent edges touch (projected on the dominant plane).
 fn check_simple(u: &[DVec3], normal: DVec3) -> Result<()> {
     let project = dominant_projection(normal);
-    // Up to 8 vertices in a fixed array: collecting into the small vector cost more than the
-    // tests for a quad (~200 instructions; the same points and tests either way).
+    // Up to 8 vertices in a fixed array: collecting into the small vector cost more than the tests
+    // for a quad.
     let mut fixed = [DVec2::ZERO; 8];
     let many: SmallVec<[DVec2; 8]>;
     let p: &[DVec2] = if u.len() <= fixed.len() {

@@ -1,8 +1,7 @@
 //! Filling a fixed-size array by a loop.
 
-/// `std::array::from_fn(f)` as a loop filling an initialized array: in the near-plane routes'
-/// large functions LLVM left `from_fn` out of line (`core::array::try_from_fn`, ~35 instructions
-/// a call, callgrind).
+/// `std::array::from_fn(f)` as a loop filling an initialized array: in the near-plane routes' large
+/// functions LLVM left `from_fn` out of line.
 #[inline(always)]
 pub(crate) fn array_from<T: Copy + Default, const M: usize>(f: impl Fn(usize) -> T) -> [T; M] {
     let mut a = [T::default(); M];

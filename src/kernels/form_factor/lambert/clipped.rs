@@ -3,21 +3,22 @@
 //!
 //! The robust path clips in exact arithmetic and evaluates every edge with its derivative machinery;
 //! near the triangle's plane (`x` within 1e-3 of the size), where it also recomputes the height and
-//! the clip points exactly, that is ~800 ns, and the value alone needs only the clipped loop and
-//! Lambert's per-edge terms. Further from the plane the robust value is cheap enough that the path
+//! the clip points exactly, that costs several unclipped Lambert sums, and the value alone needs
+//! only the clipped loop and Lambert's per-edge terms. Further from the plane the robust value is cheap enough that the path
 //! is not tried (gradient and Hessian orders replace their value by this one and would pay twice).
 //!
 //! **The loop.** Each vertex must be certainly above or below the tangent plane: `|n·r_k|` beyond
 //! `16u(|n|·|r_k|)`, as in the unclipped path, twice the bound `γ_k = 8u(|n|·|r_k|)` used here for
-//! the error of the computed height (which is below `4u(|n|·|r_k|)`); otherwise the path declines. Where an edge `i → j` crosses the plane, `t = d_i/(d_i − d_j)`
-//! (`d = n·r`, f64) errs by at most `δt ≤ (γ_i(1 + t) + γ_j t)/|d_i − d_j| + 2ut` (the heights have
-//! opposite signs: no cancellation), and the clip point is formed as `R_i + t(R_j − R_i)` in
-//! double-double from the exact differences `R_k = r_k + r_lo_k = v_k − x`: a point exactly on the
-//! triangle's edge line (to ~u²), displaced from the exact clip point by `δ ≤ δt‖E‖` along the edge
-//! `E`. The loop's vertices are the f64 roundings of these points (`r_k` for triangle vertices)
-//! and its edge vectors one rounding of the exact differences of their ends (`v_j − v_i` for
-//! triangle edges): the input model of Lambert's bound (`lambert.rs`), in which every input is
-//! rounded once from exact, consistent data.
+//! the error of the computed height (which is below `4u(|n|·|r_k|)`); otherwise the path declines.
+//! Where an edge `i → j` crosses the plane, `t = d_i/(d_i − d_j)` (`d = n·r`, f64) errs by at most
+//! `δt ≤ (γ_i(1 + t) + γ_j t)/|d_i − d_j| + 2ut` (the heights have opposite signs: no
+//! cancellation), and the clip point is formed as `R_i + t(R_j − R_i)` in double-double from the
+//! exact differences `R_k = r_k + r_lo_k = v_k − x`: a point exactly on the triangle's edge line
+//! (to ~u²), displaced from the exact clip point by `δ ≤ δt‖E‖` along the edge `E`. The loop's
+//! vertices are the f64 roundings of these points (`r_k` for triangle vertices) and its edge
+//! vectors one rounding of the exact differences of their ends (`v_j − v_i` for triangle edges):
+//! the input model of Lambert's bound (`lambert.rs`), in which every input is rounded once from
+//! exact, consistent data.
 //!
 //! **The clip edge** lies in the tangent plane, so its plane through `x` is the tangent plane and
 //! `n·ŵ = ±1` exactly: its term is `±β`, `β = atan2(s, c)` (`s = ‖r_a × e‖`, `c = r_a·r_b`), with no
@@ -123,8 +124,8 @@ pub(crate) fn difference_error(v: DVec3, x: DVec3) -> DVec3 {
 /// clipped triangle when its tangent plane certainly cuts it and the error bound (module
 /// documentation) is within [`FAST_TOLERANCE`] of the result; `None` otherwise, including when
 /// nothing is clipped (the unclipped path's case) and for invalid input.
-// Out of line, with the loop built in place inside: inlined into the kernel, the loop's frame cost
-// the value order's other paths ~40 instructions; returned by value, its copy ~60.
+// Out of line, with the loop built in place inside: inlined into the kernel, the loop's frame
+// would weigh on the value order's other paths; returned by value, it would be copied.
 #[inline(never)]
 pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     with_certified_loop(x, n, v, ClippedLoop::value)
@@ -152,7 +153,7 @@ struct Cut {
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn cut(x: DVec3, n: DVec3, v: &[DVec3; 3]) -> Option<Cut> {
-    // Written out (here and below): array maps were left out of line (~30 instructions each).
+    // Written out (here and below): array maps were left out of line.
     let r = [v[0] - x, v[1] - x, v[2] - x];
     if !r.iter().all(|rk| in_range(*rk)) {
         return None;
@@ -214,8 +215,7 @@ fn same_loop(route: &RouteLoop, cut: &Cut) -> bool {
 /// (NaN and 0). With `route` (the value order's route's loop for the same configuration, see
 /// [`with_valued_derivative_loop`]) the points are the route's (the clip points in
 /// double-double) instead of this loop's own; their displacement bounds stay those of this
-/// loop's f64 `t`. Handed to `f` in place: the loop is ~560 bytes, whose copies cost ~60-90
-/// instructions each (a returned loop was copied).
+/// loop's f64 `t`. Handed to `f` in place: the loop is ~560 bytes, and a returned loop is copied.
 #[inline(always)]
 fn with_loop<R>(
     x: DVec3,
@@ -231,7 +231,7 @@ fn with_loop<R>(
         above,
         ..
     } = cut;
-    // Not `Option::filter`: left out of line (~50 instructions a call).
+    // Not `Option::filter`: left out of line.
     let route = match route {
         Some(route) if same_loop(route, cut) => Some(route),
         _ => None,
@@ -239,7 +239,7 @@ fn with_loop<R>(
     // The route's points are these differences' double-double parts already.
     let exact: [Dd3; 3] = match route {
         Some(_) => [from_parts(DVec3::ZERO, DVec3::ZERO); 3],
-        // Written out: `from_fn` was left out of line (~70 instructions).
+        // Written out: `from_fn` was left out of line.
         None => {
             let exact = |k: usize| from_parts(r[k], difference_error(v[k], x));
             [exact(0), exact(1), exact(2)]
@@ -250,12 +250,12 @@ fn with_loop<R>(
         // Already normalized: `hi` is the rounding of `hi + lo`.
         (from_parts(hi, lo), hi)
     };
-    // Filled in place (returned into the caller's frame): a local array moved into the loop
-    // was copied (~60 instructions).
+    // Filled in place (returned into the caller's frame): a local array moved into the loop was
+    // copied.
     let mut l = ClippedLoop {
         n: cut.n,
         // Overwritten up to `count`, never read beyond: zeros (stored by vector registers) rather
-        // than copies of a point (~50 instructions).
+        // than copies of a point.
         points: [LOOP_VERTEX_ZERO; 4],
         edges: [DVec3::ZERO; 4],
         // The route's angles are those of the same edges (the same ends, to their rounding).
@@ -521,7 +521,7 @@ pub(crate) fn with_valued_derivative_loop<R>(
 /// then the loop on its clip points (or on the loop's own where it declines), oriented by
 /// `side`. Out of line, in a portable and an FMA build (the route's double-double products; the
 /// same bits, see [`polygon::near_plane_triangle_value`]): inlined, its frame and registers
-/// cost the certified loop's callers ~90 instructions.
+/// would weigh on the certified loop's other callers.
 #[inline(always)]
 fn routed_loop_body<R>(
     x: DVec3,

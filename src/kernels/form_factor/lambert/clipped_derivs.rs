@@ -81,16 +81,15 @@ const MIN_SINE: f64 = 1.0 / 32.0;
 /// Largest ratio of the summed (weighted) magnitudes of the edge terms' gradient (Hessian) to the
 /// largest entry of their sum. Each term errs by a few ulps of its weighted size, so the sum keeps
 /// a few `u` times this ratio, ~1e-11 relative to its largest entry: 100x under the gradient and
-/// Hessian contract of the near-plane regime this loop serves (`|h_P|` below 1e-3 of the size:
-/// 1e-9 / 1e-8, the hard regimes'). Seen from outside, near the plane, the sums cancel by the
-/// visible part's smallness against its distance: over a spread of such configurations
+/// Hessian contract of the near-plane regime this loop serves (`|h_P|` below 1e-3 of the size: 1e-9
+/// / 1e-8, the hard regimes'). Seen from outside, near the plane, the sums cancel by the visible
+/// part's smallness against its distance: over a spread of such configurations
 /// (`benches/kernels_regimes.rs`, `RADDIFF_REGIMES_MIX`) by 25x at the median, 860x at the 90th
-/// percentile and 4.7e4 at the 99th. Lambert's unclipped limit ([`lambert::CANCELLATION`], 100,
-/// set for the generic 1e-12 contract) sent a quarter of them to the robust path, which takes the
-/// same edge sums at any cancellation there while its near-plane split cancels by less than 1e3,
-/// and integrates by quadrature beyond (~30000 instructions on average over that spread).
-/// Measured against the 320-bit reference over that spread (`tests/form_factor_near_plane.rs`):
-/// worst 1.1e-12 / 4.4e-14.
+/// percentile and 4.7e4 at the 99th. Lambert's unclipped limit ([`lambert::CANCELLATION`], 100, set
+/// for the generic 1e-12 contract) sent a quarter of them to the robust path, which takes the same
+/// edge sums at any cancellation there while its near-plane split cancels by less than 1e3, and
+/// integrates by quadrature beyond. Measured against the 320-bit reference over that spread
+/// (`tests/form_factor_near_plane.rs`): worst 1.1e-12 / 4.4e-14.
 const LOOP_CANCELLATION: f64 = 1e5;
 
 /// The derivatives of `triangle_derivs` from a loop (certified, or

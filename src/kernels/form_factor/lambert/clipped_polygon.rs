@@ -6,10 +6,8 @@
 //!
 //! Near the plane (`x` within 1e-3 of the size) the robust path's exact geometry (validation,
 //! exact clip, near-plane split, edge sum) costs 4.5-5.5x the unclipped polygon's Lambert sum;
-//! the clipped loop needs only the loop and Lambert's per-edge terms. Measured by callgrind on
-//! `benches/kernels_regimes.rs` (instructions per call, value / gradient / Hessian, robust path
-//! → this path): quad 1e-6 above the plane 7783 / 10271 / 10867 → 3433 / 4425 / 5235, pentagon
-//! 9099 / 9759 / 10355 → 3611 / 4618 / 5429 (docs/kernels.md, "Hard regimes").
+//! the clipped loop needs only the loop and Lambert's per-edge terms (the costs are in
+//! docs/kernels.md, "Hard regimes").
 //!
 //! **What is certified.** The polygon must be one that
 //! [`lambert_polygon`](super::lambert_polygon) would take unclipped (strictly convex, planar to a
@@ -276,7 +274,7 @@ fn with_loop<const M: usize, const N: usize, const R: usize, T>(
         let next = if k + 1 == count { 0 } else { k + 1 };
         let (a, b) = (&l.points[k], &l.points[next]);
         l.edges[k] = match (route, a.vertex, b.vertex) {
-            // Written out: the call (`edge_vector`'s first case) cost ~40 instructions per edge.
+            // `edge_vector`'s first case, written out: both ends are vertices.
             (_, Some(i), Some(j)) => v[j] - v[i],
             // The route's double-double difference of the same ends, rounded once.
             (Some(route), ..) => route.edge(k),
@@ -308,9 +306,8 @@ fn with_certified_loop<const M: usize, const N: usize, R>(
     f: impl FnOnce(&ClippedLoop<N>) -> R,
 ) -> Option<R> {
     debug_assert!(N > M);
-    // The cheap decisions first: outside near the plane (the robust path's near-plane split)
-    // they decline before the range checks, the cut and the validation (~50, ~150 and ~300
-    // instructions for a quad).
+    // The cheap decisions first: outside near the plane (the robust path's near-plane split) they
+    // decline before the range checks, the cut and the validation.
     let r: [DVec3; M] = std::array::from_fn(|k| v[k] - x);
     if left_to_the_robust_path(newell(v), &r) {
         return None;
@@ -359,9 +356,9 @@ pub(crate) type Derivs = Result<Deriv3, f64>;
 /// `Some(Err(value))` where the value is certified but the derivatives decline (an ordinary edge
 /// of the loop below `sin β = 1/32`, a cancelling derivative sum, a clip point too close to `x`
 /// for its displacement), `None` where [`polygon_value`] declines. Arguments as there.
-// Inlined into `clipped_polygon_derivs`, out of line, whose frame holds the loop: outside near
-// the plane (the routed derivatives' regime) the decision where to try declines without a call
-// of its own (~30 instructions).
+// Inlined into `clipped_polygon_derivs`, out of line, whose frame holds the loop: outside near the
+// plane (the routed derivatives' regime) the decision where to try declines without a call of its
+// own.
 #[inline(always)]
 pub(crate) fn polygon_derivs<const M: usize, const N: usize>(
     x: DVec3,
@@ -375,10 +372,9 @@ pub(crate) fn polygon_derivs<const M: usize, const N: usize>(
     })
 }
 
-/// [`polygon_derivs`], or where it is not tried or its value declines,
-/// [`routed_polygon_derivs`]: the derivative orders' clipped paths, in their order. Out of line,
-/// so that the caller's unclipped path keeps its own frame (with the certified loop's decision
-/// inlined there the generic mix cost ~25 instructions more per call, callgrind).
+/// [`polygon_derivs`], or where it is not tried or its value declines, [`routed_polygon_derivs`]:
+/// the derivative orders' clipped paths, in their order. Out of line, so that the caller's
+/// unclipped path keeps its own frame.
 #[inline(never)]
 pub(crate) fn clipped_polygon_derivs<const M: usize, const N: usize, const R: usize>(
     x: DVec3,

@@ -102,7 +102,7 @@ pub(crate) fn unclipped<const M: usize>(
             return None;
         }
     }
-    // from_fn, not map: the map was an out-of-line call (callgrind).
+    // from_fn, not map: the map did not inline here.
     Some((n, r, std::array::from_fn(|k| r[k].length_squared())))
 }
 
@@ -125,7 +125,7 @@ pub(crate) fn certified_sum<const M: usize>(
     r2: &[f64; M],
 ) -> Option<f64> {
     // The far form only when the first edge is already small against its distance: one test
-    // keeps Lambert's cost for nearby polygons (measured: the full far test first cost ~15 ns).
+    // keeps Lambert's cost for nearby polygons (the full far test first would not).
     if FAR_RATIO2 * (v[1] - v[0]).length_squared() <= r2[1] {
         match far_sum(n, v, r, r2) {
             Far::Certified(total) => return Some(total),
@@ -163,8 +163,8 @@ pub(crate) fn triangle_value_inlined(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Optio
     let sum = if FAR_RATIO2 * e0.length_squared() <= r2[1] {
         certified_sum(n, &v, &r, &r2)?
     } else {
-        // Lambert's sum written out (certified_sum's near branch, same bits): the generic loop
-        // measured ~10 ns slower on the benchmarked triangle.
+        // Lambert's sum written out (certified_sum's near branch, same bits): the generic loop is
+        // slower on a triangle (docs/kernels.md).
         let (f0, e0) = edge(n, r[0], r[1], e0, r2[0]);
         let (f1, e1) = edge(n, r[1], r[2], v[2] - v[1], r2[1]);
         let (f2, e2) = edge(n, r[2], r[0], v[0] - v[2], r2[2]);
@@ -347,8 +347,7 @@ struct Terms {
 
 impl Terms {
     /// Whether every entry is finite (then so is the result [`Terms::scaled`] gives with a finite
-    /// scale of at most 1). Inline, on products by zero (NaN exactly for a NaN or infinite entry):
-    /// `Deriv3::is_finite` was an out-of-line call of ~30 instructions.
+    /// scale of at most 1). Inline, on products by zero (NaN exactly for a NaN or infinite entry).
     #[inline(always)]
     fn is_finite(&self) -> bool {
         let h = &self.hessian;

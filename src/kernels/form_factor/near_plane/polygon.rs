@@ -28,11 +28,8 @@
 //! split are compiled a second time with AVX2 and FMA where the CPU has them, with the same bits
 //! (see `near_plane_triangle`'s `split_fma`). The derivative orders run the same route through
 //! [`clipped_polygon_value_and_loop`], which also hands out its loop for the clipped loop's
-//! derivatives (`lambert_clipped_polygon::routed_polygon_derivs`). Measured by callgrind on
-//! `benches/kernels_regimes.rs`'s "1e-6 from the plane, outside" rows (value / gradient /
-//! Hessian, robust path → this route): quad 7765 / 10217 / 10813 → 5099 / 7036 / 7832, pentagon
-//! 9098 / 11654 / 12250 → 5802 / 7810 / 8607 instructions per call (docs/kernels.md); over the
-//! benchmark's outside mix (`RADDIFF_REGIMES_MIX`) 5665 / 8044 / 9080.
+//! derivatives (`lambert::clipped_polygon::routed_polygon_derivs`). Its cost against the robust path is in
+//! docs/kernels.md, "Hard regimes".
 
 use glam::DVec3;
 
@@ -139,8 +136,7 @@ fn screen<const M: usize>(x: DVec3, n: DVec3, v: &[DVec3; M]) -> Option<Screened
     }
     let r: [DVec3; M] = crate::kernels::numeric::array::array_from(|k| v[k] - x);
     let u: [DVec3; M] = crate::kernels::numeric::array::array_from(|k| v[k] - v[0]);
-    // Two loops, in the chain's order: the chained iterator's fold was an out-of-line call
-    // (~190 instructions).
+    // Two loops, in the chain's order: the chained iterator's fold was an out-of-line call.
     let mut largest = 0.0f64;
     for d in &r {
         largest = largest.max(d.abs().max_element());

@@ -19,10 +19,9 @@ pub(crate) const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
 /// The clipped loop [`clipped_triangle_value_and_loop`] computed its value on, for the derivative
 /// orders, which use the same clip points instead of clipping a second time: the first
 /// [`count`](RouteLoop::count) points, for `i` in 0..3 vertex `i` when it is kept, then the
-/// crossing of edge `i → i + 1` when there is one. Filled in place by the caller's frame (a
-/// returned loop was copied, ~60 instructions).
-/// `N`: the capacity, 4 for a triangle (`near_plane_polygon`'s loops use `2M` for `M` vertices,
-/// their points in the same order, for `i` in `0..M`).
+/// crossing of edge `i → i + 1` when there is one. Filled in place by the caller's frame. `N`: the
+/// capacity, 4 for a triangle (`near_plane_polygon`'s loops use `2M` for `M` vertices, their points
+/// in the same order, for `i` in `0..M`).
 pub(crate) struct RouteLoop<const N: usize = 4> {
     pub(crate) points: [ClipVertex; N],
     pub(crate) angles: [f64; N],

@@ -351,8 +351,7 @@ pub(crate) type Frames = SmallVec<[Option<EdgeFrame>; 10]>;
 /// (see [`evaluate`]), so a foot on or next to the boundary may go either way.
 #[inline]
 pub(crate) fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
-    // `dominant_projection`'s choice made once, each case with its own loop (the choice per
-    // point cost ~10 instructions per edge).
+    // `dominant_projection`'s choice made once, each case with its own loop.
     let a = plane_n.abs();
     let foot = plane_n * h_p;
     if a.x >= a.y && a.x >= a.z {

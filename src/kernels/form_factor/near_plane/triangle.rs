@@ -13,10 +13,8 @@
 //!
 //! Its f64 screen runs in the portable build; what follows (the exact height and clip points in
 //! double-double, the frames and the split) is compiled a second time with AVX2 and FMA where the
-//! CPU has them (`RADDIFF_SIMD` caps it, see `simd`), with the same bits. Measured by callgrind on
-//! `benches/kernels_regimes.rs`'s "1e-6 from the plane, outside" value: 6704 instructions per call
-//! through the robust path, 5490 by this route portable, 4571 with FMA (docs/kernels.md, "Hard
-//! regimes").
+//! CPU has them (`RADDIFF_SIMD` caps it, see `simd`), with the same bits. Its cost against the
+//! robust path is in docs/kernels.md, "Hard regimes".
 //!
 //! The gradient and Hessian orders run the same route through
 //! [`clipped_triangle_value_and_loop`], which also hands out what the clipped loop's derivatives
@@ -89,7 +87,7 @@ fn screen_with(x: DVec3, n: DVec3, v: [DVec3; 3], clipped: bool) -> Option<Scree
     }
     let r = v.map(|vk| vk - x);
     let u = [DVec3::ZERO, v[1] - v[0], v[2] - v[0]];
-    // Spelled out: the iterator chain of `triangle_form_factor_in_range` cost ~100 instructions.
+    // Spelled out rather than an iterator chain, which did not inline on this hot path.
     let largest = (r[0].abs().max(r[1].abs()))
         .max(r[2].abs().max(u[1].abs().max(u[2].abs())))
         .max_element();
@@ -276,8 +274,7 @@ fn split_loop(
     let (r, u, n) = (*r, *u, *n);
     let err = |a: f64, b: f64| dd::two_sum(a, -b).1;
     let r_lo_of = |vk: DVec3| DVec3::new(err(vk.x, x.x), err(vk.y, x.y), err(vk.z, x.z));
-    // Written out: `v.map` was left out of line in the derivative orders' build (~70
-    // instructions).
+    // Written out: `v.map` was left out of line in the derivative orders' build.
     let r_lo = [r_lo_of(v[0]), r_lo_of(v[1]), r_lo_of(v[2])];
     let h_p = exact_height_of(&r, &r_lo, plane.twice_area);
     let count = clip_triangle(&u, &r, &r_lo, n, loop_)?;
@@ -336,7 +333,7 @@ fn clip_triangle(
         Dd3::from_parts(r[1], r_lo[1]),
         Dd3::from_parts(r[2], r_lo[2]),
     ];
-    // Written out: `[0, 1, 2].map` of the products did not inline (~450 instructions).
+    // Written out: `[0, 1, 2].map` of the products did not inline.
     let d = [
         exact[0].dot_f64(n),
         exact[1].dot_f64(n),

@@ -1,8 +1,8 @@
 //! The sliver rule's sums, four nodes at a time.
 //!
 //! Why: the sliver rule evaluates its integrand at 50-60 nodes (13 or 14 along each piece of a
-//! sliver seen from about its length, 2 across), and the scalar loop body spent ~100 instructions
-//! per node on one `r` and its fifteen running sums. Four nodes with the same `t` and consecutive
+//! sliver seen from about its length, 2 across), and the scalar loop body updates one `r` and
+//! its fifteen running sums per node. Four nodes with the same `t` and consecutive
 //! `s` (a group) in the four lanes of an AVX register ([`Wide`]) take one packed instruction per
 //! operation in the AVX2 build ([`AvxSums`]). The portable build ([`PortableSums`]) takes each
 //! group's halves in two SSE2 [`Pair`]s with their own running sums, one half after the other
@@ -256,7 +256,7 @@ impl<L: Lanes> LaneSums<L> {
             v6: sum3(self.v6),
             s6: sum(self.s6),
             // Written out: `array::map` is not always inlined, and outside the AVX2 twins its
-            // closure called the AVX intrinsics as functions (~300 instructions per sliver).
+            // closure called the AVX intrinsics as functions.
             second: {
                 let q = &self.second;
                 [

@@ -26,11 +26,9 @@ pub(crate) const MAX_PIECES: usize = 256;
 pub(crate) const MAX_PIECES_NEAR_PLANE: usize = 4096;
 
 /// The fan triangles of the loop, bisected along their longest edge until each is far from x
-/// (centroid distance ≥ [`FAR_FIELD_RATIO`] × radius), then integrated by [`triangle_rule`]'s
-/// rule, four nodes at a time ([`sliver::rule_piece_sums`]: the node loop is most of the
-/// quadrature's cost, and in the AVX2 build takes ~2.6x fewer instructions so than one node at a
-/// time; the portable build gives the same bits). For polygons whose edge sum cancels (slivers, x near the plane) while x
-/// is not close to them. `None` if that would take more than `max_pieces` triangles.
+/// (centroid distance ≥ [`FAR_FIELD_RATIO`] × radius), then integrated by [`triangle_rule`]'s rule,
+/// four nodes at a time. For polygons whose edge sum cancels (slivers, x near the plane) while x is
+/// not close to them. `None` if that would take more than `max_pieces` triangles.
 pub(crate) fn subdivided_quadrature(
     verts: &[ClipVertex],
     n: DVec3,

@@ -38,8 +38,8 @@ pub(crate) fn clipped_sliver(
 }
 
 /// [`clipped_sliver`] compiled with AVX2 and FMA: the clip's double-double heights and points and
-/// the visible plane's exact products take fused instructions instead of calls to `fma` (a fifth
-/// of the clipped value's instructions), and the sums take four nodes per AVX register. The same
+/// the visible plane's exact products take fused instructions instead of calls to `fma` (a large
+/// share of the clipped value's work), and the sums take four nodes per AVX register. The same
 /// bits: the fused product is correctly rounded either way, the sums' lanes round as the portable
 /// ones and are added in the same tree, and Rust fuses nothing else (unit-tested).
 #[cfg(target_arch = "x86_64")]
@@ -111,8 +111,7 @@ pub(crate) fn fan_triangle<S: GroupSums>(
     n: DVec3,
     order: Order,
 ) -> Option<(Deriv3, (DVec3, f64))> {
-    // The longest edge (the last of equals), by reference: choosing it with `%` and copying the
-    // vertices cost ~150 instructions per triangle.
+    // The longest edge (the last of equals), by reference: no `%` and no copy of the vertices.
     let edges = [v1.u - v0.u, v2.u - v1.u, v0.u - v2.u];
     let [l0, l1, l2] = edges.map(|e| e.length_squared());
     let i = if l0 > l1 && l0 > l2 {

@@ -4,8 +4,8 @@
 //! The sliver rule ([`sliver`](super::sliver)) takes triangles only. A polygon thinner than
 //! `2·area < 1e-5·extent²` has an edge sum that cancels beyond
 //! [`THIN_CANCELLATION_LIMIT`](super::THIN_CANCELLATION_LIMIT), and `evaluate` then bisects it
-//! isotropically into up to 256 pieces: ~230 000 instructions for a quad 1e-6 wide seen from a
-//! length away, against ~1 700 for a generic quad.
+//! isotropically into up to 256 pieces: two orders of magnitude the cost of a generic quad for a
+//! quad 1e-6 wide seen from a length away (docs/kernels.md, "Hard regimes").
 //!
 //! The clipped form factor is the integral over the polygon of a pointwise integrand (the clip
 //! is a pointwise factor), so it is additive over a partition. When every fan triangle
@@ -76,7 +76,7 @@ pub(crate) fn very_thin_polygon_form_factor(
 }
 
 /// [`very_thin_polygon_form_factor`] past the thinness test. Out of line: inlined, its frame
-/// cost the polygons that are not thin ~40 instructions per call.
+/// would weigh on the polygons that are not thin.
 #[inline(never)]
 fn thin_polygon_form_factor(
     x: DVec3,

@@ -314,7 +314,7 @@ impl ThinPiece {
         // The first rule whose ellipse leaves the pole outside. A linear search: its branches
         // are predicted and speculated past, where the branch-free bisection of
         // `partition_point` (half the tests) put its chain of loads and compares on the set-up's
-        // latency (+10% time on a triangle sliver, callgrind -2%).
+        // latency (slower on a triangle sliver despite fewer tests).
         self.rules
             .along
             .iter()
