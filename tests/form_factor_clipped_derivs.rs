@@ -1,10 +1,11 @@
 //! Issue 18: `x` near the triangle's plane over its interior with the tangent plane cutting the
 //! triangle, where the derivatives come from the clipped loop's fast path
-//! (`src/kernels/lambert_clipped_derivs.rs`) when it accepts and from the robust path otherwise.
-//! Held against the 320-bit astro-float reference of `form_factor_support` while `h_P` walks from 1e-2
-//! to 1e-12 of the size on both sides of the plane, for tilts of the receiver from 10° to 80°,
-//! random triangles at scales 1e-3..1e3, with `x` near an edge line or a vertex, and across the
-//! path's switch at `h_P` = 1e-3 of the size. Run with `--nocapture` for the worst errors.
+//! (`src/kernels/form_factor/lambert/clipped_derivs.rs`) when it accepts and from the robust path
+//! otherwise. Held against the 320-bit astro-float reference of `form_factor_support` while `h_P`
+//! walks from 1e-2 to 1e-12 of the size on both sides of the plane, for tilts of the receiver from
+//! 10° to 80°, random triangles at scales 1e-3..1e3, with `x` near an edge line or a vertex, and
+//! across the path's switch at `h_P` = 1e-3 of the size. Run with `--nocapture` for the worst
+//! errors.
 
 mod form_factor_support;
 

@@ -1,13 +1,13 @@
-//! Slivers cut by the receiver's tangent plane (issue 18): thin triangles (apex 1e-5..1e-10 of
-//! the length, caps and needles, sizes 1e-2..1e2) seen from 0.02 to 1 length away, x at least
-//! 2e-3 of its largest vertex distance from the sliver's plane (beyond the kernel's near-plane
-//! switch at 1e-3) or 1e-6..5e-4 of it beside the sliver, with receiver normals whose tangent
-//! plane leaves one or two vertices below. The kernel takes the sliver rule on the visible part
-//! (`clipped_sliver_quadrature` in `src/kernels/polygon/sliver.rs`) with the clip line's Hessian
-//! term from exact geometry.
-//! `triangle_form_factor` at every order against the 320-bit astro-float reference of
-//! `form_factor_support`, at the hard-regime contract (relative 1e-10 value, 1e-9 gradient, 1e-8
-//! Hessian, each normalized by its largest entry). Run with `--nocapture` for the worst errors.
+//! Slivers cut by the receiver's tangent plane (issue 18): thin triangles (apex 1e-5..1e-10 of the
+//! length, caps and needles, sizes 1e-2..1e2) seen from 0.02 to 1 length away, x at least 2e-3 of
+//! its largest vertex distance from the sliver's plane (beyond the kernel's near-plane switch at
+//! 1e-3) or 1e-6..5e-4 of it beside the sliver, with receiver normals whose tangent plane leaves
+//! one or two vertices below. The kernel takes the sliver rule on the visible part
+//! (`clipped_sliver_quadrature` in `src/kernels/form_factor/sliver/clipped.rs`) with the clip
+//! line's Hessian term from exact geometry. `triangle_form_factor` at every order against the
+//! 320-bit astro-float reference of `form_factor_support`, at the hard-regime contract (relative
+//! 1e-10 value, 1e-9 gradient, 1e-8 Hessian, each normalized by its largest entry). Run with
+//! `--nocapture` for the worst errors.
 
 mod form_factor_support;
 

@@ -1,12 +1,12 @@
 //! Issue 18: `x` near the polygon's plane, outside the polygon, with the tangent plane of `x`
 //! cutting the polygon (the clip line passes within ~`h_P` of `x`). The kernel takes the value from
 //! the near-plane split with the clip edges in closed form and the derivatives from the edge sum
-//! (see `near_plane_value` in `src/kernels/polygon.rs`); these tests hold both against the 320-bit
-//! astro-float reference of `form_factor_support` while the height walks from 1e-2 to 1e-12 of the
-//! size, on both sides of the plane, for several tilts of the receiver, triangles and non-convex
-//! polygons, scales 1e-3..1e3, across the switches around that path, and with `x` also near an
-//! edge line (where the split declines and the quadrature takes over). Run with `--nocapture` to
-//! see the worst errors per height.
+//! (see `near_plane_value` in `src/kernels/form_factor/near_plane/split.rs`); these tests hold both
+//! against the 320-bit astro-float reference of `form_factor_support` while the height walks from
+//! 1e-2 to 1e-12 of the size, on both sides of the plane, for several tilts of the receiver,
+//! triangles and non-convex polygons, scales 1e-3..1e3, across the switches around that path, and
+//! with `x` also near an edge line (where the split declines and the quadrature takes over). Run
+//! with `--nocapture` to see the worst errors per height.
 
 mod form_factor_support;
 
@@ -325,8 +325,8 @@ fn convex_config(rng: &mut Rng, shape: &[DVec2]) -> Config {
 }
 
 /// Convex polygons with `x` over their interior (the clipped-loop fast path's regime,
-/// `src/kernels/lambert_clipped_polygon.rs`, below 1e-3 of the size; the robust path above it,
-/// on the clip line and wherever the path declines).
+/// `src/kernels/form_factor/lambert/clipped_polygon.rs`, below 1e-3 of the size; the robust path
+/// above it, on the clip line and wherever the path declines).
 #[test]
 fn convex_polygons_over_the_interior_walk_to_the_plane() {
     let mut big = Big::new();
@@ -346,9 +346,10 @@ fn convex_polygons_over_the_interior_walk_to_the_plane() {
     assert!(within(worst, HARD), "{worst:?} exceeds {HARD:?}");
 }
 
-/// Convex polygons with `x` outside them near their plane: the value by the replay of the near-plane
-/// split (`src/kernels/polygon/near_plane_polygon.rs`) and the derivatives on its loop
-/// (`lambert_clipped_polygon::routed_polygon_derivs`) where they accept, the robust path elsewhere.
+/// Convex polygons with `x` outside them near their plane: the value by the replay of the
+/// near-plane split (`src/kernels/form_factor/near_plane/polygon.rs`) and the derivatives on its
+/// loop (`lambert::clipped_polygon::routed_polygon_derivs`) where they accept, the robust path
+/// elsewhere.
 #[test]
 fn convex_polygons_outside_clipped_walk_to_the_plane() {
     let mut big = Big::new();

@@ -1,6 +1,6 @@
 //! Issue 18: the value of `triangle_form_factor` with `x` near the triangle's plane, outside the
 //! part its tangent plane leaves visible, where `Order::Value` takes the near-plane route
-//! (`polygon::near_plane_triangle`, a replay of the robust path's near-plane split). Walks of the
+//! (`near_plane::triangle`, a replay of the robust path's near-plane split). Walks of the
 //! height `h_P` from 1e-2 to 1e-12 of the size, on both sides of the plane, for several tilts of
 //! the receiver and scales 1e-3..1e3, with `x`'s foot near a clip vertex: on the extension of a
 //! line through a point of an edge into the triangle, the tangent plane tilted about that line (so

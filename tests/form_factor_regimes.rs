@@ -9,7 +9,8 @@ use form_factor_support::*;
 use raddiff::{kernels, Deriv3, Order};
 
 /// The distance-over-radius ratios at which the far-field rule changes (`FAR_FIELD_RULES` in
-/// `src/kernels/polygon.rs`; 16 is the switch from the edge sum to quadrature).
+/// `src/kernels/form_factor/quadrature/rules.rs`; 16 is the switch from the edge sum to
+/// quadrature).
 const SWITCHES: [f64; 5] = [16.0, 100.0, 280.0, 1.5e3, 3.6e4];
 
 const GENERIC: [f64; 3] = [1e-12, 1e-12, 1e-10];
@@ -137,7 +138,7 @@ fn slivers_across_the_edge_sum_limit_against_the_reference() {
 /// (a flat obtuse triangle, the apex over the middle of the long edge) and needles (two long edges
 /// and a short base, the apex at the end), seen from 0.05..3 lengths away, through both entry
 /// points and every order, against the reference at the hard-regime contract. These take the
-/// anisotropic sliver rule (`src/kernels/polygon/sliver.rs`).
+/// anisotropic sliver rule (`src/kernels/form_factor/sliver/rule.rs`).
 #[test]
 fn thin_slivers_caps_and_needles_against_the_reference() {
     let mut big = Big::new();

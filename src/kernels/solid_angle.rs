@@ -673,7 +673,7 @@ fn certified_value(parts: &CertifiedParts) -> Option<f64> {
     Some(2.0 * theta)
 }
 
-/// `A` and `N` of [`certified_angle`] from the exact differences in double-double (no rescaling
+/// `A` and `N` of [`certified_parts`] from the exact differences in double-double (no rescaling
 /// needed in its range), with their error bounds: x near the plane, or a sliver. Out of line: rare,
 /// and its registers would crowd the common path.
 #[cold]

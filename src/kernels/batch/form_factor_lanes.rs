@@ -1,10 +1,11 @@
 //! The triangle form factor's value in SIMD lanes: the cancellation-free far form of Lambert's sum
-//! (`kernels::lambert_far`) with its per-lane certificate, and the single kernel as the fallback.
+//! (`form_factor::lambert::far`) with its per-lane certificate, and the single kernel as the
+//! fallback.
 //!
 //! Each lane evaluates exactly what the single kernel's value path evaluates when it takes the far
-//! form (`lambert::triangle_value` → `lambert_far::far_sum`): the same operations in the same order,
-//! with no FMA contraction (Rust never contracts, and the lane code uses plain products and sums)
-//! and correctly rounded `sqrt` and division in every instruction set. An accepted lane is
+//! form (`lambert::sum::triangle_value` → `lambert::far::far_sum`): the same operations in the same
+//! order, with no FMA contraction (Rust never contracts, and the lane code uses plain products and
+//! sums) and correctly rounded `sqrt` and division in every instruction set. An accepted lane is
 //! therefore the single call's value **bit for bit**, a stronger statement than the 1e-14 relative
 //! the batch contract asks for (the tests assert equality). The batch is structure-of-arrays and
 //! the lane code has no branches (the certificate is a product of comparisons), so the compiler

@@ -117,8 +117,8 @@ pub(crate) fn clip<O: ClipOut>(
 
 /// [`clip`]'s loop from the heights `d_k = n·R_k` (double-double) and the exact differences
 /// `exact(k) = R_k`: kept vertices and clip points pushed onto `out` in loop order; whether any
-/// vertex was cut away. Shared with the near-plane routes (`near_plane_triangle`,
-/// `near_plane_polygon`), which compute the heights on fixed arrays and must place the same
+/// vertex was cut away. Shared with the near-plane routes (`near_plane::triangle`,
+/// `near_plane::polygon`), which compute the heights on fixed arrays and must place the same
 /// points.
 #[inline(always)]
 pub(crate) fn clip_by_heights<O: ClipOut>(
@@ -173,8 +173,9 @@ impl ClipOut for ArrayOut<'_> {
     }
 }
 
-/// The edge vector from `a` to `b` (see [`edge_frames`]). Inlined: the near-plane routes call it
-/// once per edge, and its common case is one subtraction.
+/// The edge vector from `a` to `b` (see
+/// [`edge_frames`](crate::kernels::form_factor::near_plane::split::edge_frames)). Inlined: the
+/// near-plane routes call it once per edge, and its common case is one subtraction.
 #[inline(always)]
 pub(crate) fn edge_vector(a: &ClipVertex, b: &ClipVertex) -> DVec3 {
     if a.on_line || b.on_line {

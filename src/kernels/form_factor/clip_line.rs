@@ -27,7 +27,7 @@ use crate::Order;
 /// whole loop (a 6-vertex visible loop 1e-7 wide, `tests/form_factor_polygon_slivers.rs`; 5.9e-15
 /// with the edge's own plane). A clipped triangle's loop is planar (its clip points lie on its
 /// edges to double-double): `plane_n`, `h_p` from its exact fan geometry serve every clip edge.
-/// Inlined, as [`clip`].
+/// Inlined, as [`clip`](crate::kernels::form_factor::clip::clip).
 #[inline(always)]
 pub(crate) fn clip_line_hessian(
     verts: &[ClipVertex],

@@ -7,10 +7,10 @@ use glam::DVec3;
 const PLANARITY: f64 = 0.25e-8;
 /// `(2·area / extent²)²` below which a polygon is a sliver: these fast paths decline it (far above
 /// the robust path's zero-area limit, `2·area ≤ 1e-13 extent²`) and
-/// [`very_thin_polygon`](super::polygon::very_thin_polygon) may take it, on the same rounded
-/// Newell normal and extent, so that the two never both accept (the sliver path's result needs no
-/// Lambert value). `1.01e-10`: the robust path's sliver threshold (`2·area < 1e-5 extent²`),
-/// squared, with a margin for the rounding of the normal.
+/// [`very_thin_polygon_form_factor`](crate::kernels::form_factor::sliver::fan::very_thin_polygon_form_factor)
+/// may take it, on the same rounded Newell normal and extent, so that the two never both accept
+/// (the sliver path's result needs no Lambert value). `1.01e-10`: the robust path's sliver
+/// threshold (`2·area < 1e-5 extent²`), squared, with a margin for the rounding of the normal.
 pub(crate) const SLIVER_AREA2: f64 = 1.01e-10;
 /// Smallest edge length and turn sine, relative (see the module documentation).
 const MARGIN: f64 = 1e-3;

@@ -61,12 +61,13 @@ pub(crate) mod validate;
 /// wedge, also below the tangent plane.
 ///
 /// * `n` must be unit length within a relative 1e-6 (it is renormalized); otherwise
-///   [`Error::InvalidArgument`]. `x`, `a`, `b` must be finite.
+///   [`Error::InvalidArgument`](crate::Error::InvalidArgument). `x`, `a`, `b` must be finite.
 /// * Units: dimensionless value, gradient per L, Hessian per L².
 /// * Limits: `a == b` gives 0 with zero derivatives. For `x` on the edge's line but outside the
 ///   segment the term and its derivatives are finite (their continuous limit; `β = 0`). For `x` on
-///   the closed segment `[a, b]` the term is undefined: [`Error::Degenerate`]. If derivatives would
-///   overflow (for example `x` within ~1e-100 of the segment) [`Error::Degenerate`].
+///   the closed segment `[a, b]` the term is undefined:
+///   [`Error::Degenerate`](crate::Error::Degenerate). If derivatives would overflow (for example
+///   `x` within ~1e-100 of the segment) [`Error::Degenerate`](crate::Error::Degenerate).
 ///
 /// ```
 /// use glam::DVec3;
@@ -247,7 +248,7 @@ fn clipped_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Cli
     clipped_derivs_with(x, n, v, order, false)
 }
 
-/// [`clipped_derivs`] compiled with FMA, as `polygon::near_plane_triangle` does for the value:
+/// [`clipped_derivs`] compiled with FMA, as `near_plane::triangle` does for the value:
 /// the loop's double-double clip points and edge vectors use fused products instead of calls to
 /// `fma`, with the same bits (the fused product is correctly rounded either way and Rust fuses
 /// nothing else).
@@ -263,7 +264,7 @@ unsafe fn clipped_derivs_fma(
 }
 
 /// [`clipped_derivs`]' body; `fma` when the CPU has AVX2 and FMA, for the parts compiled out of
-/// line twice (see `lambert_clipped::with_valued_derivative_loop`).
+/// line twice (see `lambert::clipped::with_valued_derivative_loop`).
 #[inline(always)]
 fn clipped_derivs_with(
     x: DVec3,
@@ -406,13 +407,15 @@ fn robust_triangle(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Result<De
 ///   extent: negligible unless the polygon is a sliver, ~1e-4 for a quad 1e-10 wide), so that thin
 ///   planar polygons are accepted (4 or more vertices: a triangle is planar however thin);
 ///   simple (no two non-adjacent edges touch; checked in O(count²) for count > 3). Violations give
-///   [`Error::InvalidArgument`].
+///   [`Error::InvalidArgument`](crate::Error::InvalidArgument).
 /// * **Limits.** A polygon with (numerically) zero area (`2·area ≤ 1e-13 extent²`, the extent being
-///   the largest distance from the first vertex) gives [`Error::Degenerate`]. For `x` in the polygon's plane (within 4 ulps of the coordinates) the
-///   value is 0 (the polygon is seen edge-on) and the gradient is undefined (the two-sided form
-///   factor has a crease there): orders above [`Order::Value`] give [`Error::Degenerate`]. A polygon
-///   entirely below the tangent plane gives 0 with zero derivatives. Derivatives that overflow `f64`
-///   give [`Error::Degenerate`]; NaN or Inf never come out.
+///   the largest distance from the first vertex) gives
+///   [`Error::Degenerate`](crate::Error::Degenerate). For `x` in the polygon's plane (within 4 ulps
+///   of the coordinates) the value is 0 (the polygon is seen edge-on) and the gradient is undefined
+///   (the two-sided form factor has a crease there): orders above [`Order::Value`] give
+///   [`Error::Degenerate`](crate::Error::Degenerate). A polygon entirely below the tangent plane
+///   gives 0 with zero derivatives. Derivatives that overflow `f64` give
+///   [`Error::Degenerate`](crate::Error::Degenerate); NaN or Inf never come out.
 /// * **Head-on receivers near the plane.** With `n` within ~1e-6 rad of the polygon's normal and
 ///   `x` near the plane, the value keeps the hard-regime accuracy but the gradient's relative error
 ///   grows like `6u/tilt` (`u` the unit roundoff: 4e-9 at 2.5e-7 rad, 4e-7 at 2e-9 rad); the value
@@ -455,7 +458,7 @@ pub fn polygon_form_factor(x: DVec3, n: DVec3, vertices: &[DVec3], order: Order)
     // A sliver: the fan triangles' sliver rules instead of the robust path's isotropic subdivision,
     // or, declined with x near the sliver's plane, the fan triangles through the triangle kernel's
     // sliver handling (`tests/form_factor_polygon_slivers.rs`). Lambert's paths decline every
-    // polygon these take (`lambert_polygon::SLIVER_AREA2`): their value is the value order's as it
+    // polygon these take (`convex::SLIVER_AREA2`): their value is the value order's as it
     // is.
     let fan_triangle = |a, b, c| triangle_form_factor(x, n, a, b, c, order);
     if let Some(d) = very_thin_polygon_form_factor(x, n, vertices, order, fan_triangle) {
@@ -479,13 +482,14 @@ fn polygon_lambert_value(x: DVec3, n: DVec3, vertices: &[DVec3]) -> Option<f64> 
     polygon_value_or_clipped(x, n, vertices)
 }
 
-/// [`polygon_value`], or where the tangent plane cuts the polygon near its plane, Lambert's sum
-/// over the clipped loop ([`lambert_clipped_polygon::polygon_value`]): the value order's fast
-/// paths, sharing the unclipped test (a polygon that fails it for a vertex below the tangent
-/// plane is the clipped path's; slivers and other polygons that pass it are left alone). Where
-/// the clipped loop declines (outside the polygon near its plane, where its sum cancels), the
+/// [`lambert::polygon::polygon_value`], or where the tangent plane cuts the polygon near its plane,
+/// Lambert's sum over the clipped loop ([`lambert::clipped_polygon::polygon_value`]): the value
+/// order's fast paths, sharing the unclipped test (a polygon that fails it for a vertex below the
+/// tangent plane is the clipped path's; slivers and other polygons that pass it are left alone).
+/// Where the clipped loop declines (outside the polygon near its plane, where its sum cancels), the
 /// replay of the robust path's near-plane split
-/// ([`near_plane_polygon_value`](super::polygon::near_plane_polygon_value): the robust bits).
+/// ([`near_plane::polygon::polygon_value`]:
+/// the robust bits).
 pub(crate) fn polygon_value_or_clipped(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
     use lambert::clipped_polygon::polygon_value as clipped;
     use near_plane::polygon::polygon_value as route;
@@ -525,9 +529,9 @@ pub(crate) fn polygon_value_or_clipped(x: DVec3, n: DVec3, v: &[DVec3]) -> Optio
 }
 
 /// `polygon_derivs`, or where the tangent plane cuts the polygon near its plane, the derivatives of
-/// the clipped loop ([`lambert_clipped_polygon::polygon_derivs`]), or where that loop is not
+/// the clipped loop ([`lambert::clipped_polygon::polygon_derivs`]), or where that loop is not
 /// certified (outside near the plane), those of the loop with the value of the robust path's
-/// near-plane split ([`lambert_clipped_polygon::routed_polygon_derivs`], the value order's bits
+/// near-plane split ([`lambert::clipped_polygon::routed_polygon_derivs`], the value order's bits
 /// there); `None` where neither accepts, with `*clipped_value` the clipped loop's certified value
 /// where that is.
 pub(crate) fn polygon_derivs_or_clipped(

@@ -38,7 +38,7 @@ impl Plane {
     /// [`Plane::new`] from the Newell sum `nn` and the `extent` the caller computed as `new` does
     /// (the same bits: the polygon sliver path has them already). `check_simplicity: false` skips
     /// the O(count²) simplicity test, for callers that have certified it otherwise (a fan from
-    /// `u[0]` sorted by angle within a half-turn, `sliver_fan`). Inlined into `Plane::new`, its
+    /// `u[0]` sorted by angle within a half-turn, `sliver::fan`). Inlined into `Plane::new`, its
     /// one caller on the hot path.
     #[inline(always)]
     pub(crate) fn validated(
@@ -107,7 +107,8 @@ pub(crate) fn triangle_plane(u: &[DVec3; 3]) -> Option<Plane> {
     })
 }
 
-/// The first of [`fast_decisions`]: the signed height `h_P` of x over the plane as [`evaluate`]
+/// The first of [`fast_decisions`](crate::kernels::form_factor::replay::fast_decisions): the signed
+/// height `h_P` of x over the plane as [`evaluate`](crate::kernels::form_factor::robust::evaluate)
 /// takes it, `None` when x is in or near the plane. (A clipped sliver needs no more.)
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 #[inline]
@@ -131,14 +132,16 @@ pub(crate) fn plane_height(r: &[DVec3], plane: &Plane) -> Option<f64> {
 }
 
 impl Plane {
-    /// Whether [`evaluate`] takes the fan triangles' geometry from exact differences for this
-    /// polygon even when x is not near its plane (a sliver: `2·area < 1e-2·extent²`).
+    /// Whether [`evaluate`](crate::kernels::form_factor::robust::evaluate) takes the fan triangles'
+    /// geometry from exact differences for this polygon even when x is not near its plane (a
+    /// sliver: `2·area < 1e-2·extent²`).
     pub(crate) fn is_thin(&self) -> bool {
         self.twice_area < THIN_POLYGON * self.extent * self.extent
     }
 
     /// Whether the polygon is a sliver whose edge sum would cancel far beyond
-    /// [`THIN_CANCELLATION_LIMIT`] (it cancels by about the inverse of `2·area / extent²`).
+    /// [`THIN_CANCELLATION_LIMIT`](crate::kernels::form_factor::tolerance::THIN_CANCELLATION_LIMIT)
+    /// (it cancels by about the inverse of `2·area / extent²`).
     pub(crate) fn is_very_thin(&self) -> bool {
         self.twice_area < VERY_THIN_POLYGON * self.extent * self.extent
     }
@@ -222,12 +225,15 @@ fn check_simple(u: &[DVec3], normal: DVec3) -> Result<()> {
 const THIN_POLYGON: f64 = 1e-2;
 
 /// Below this `2·area / extent²` a sliver's edge sum cancels by ~1e5, beyond
-/// [`THIN_CANCELLATION_LIMIT`]: [`evaluate`] tries the sliver rule without computing the edge sum.
+/// [`THIN_CANCELLATION_LIMIT`](crate::kernels::form_factor::tolerance::THIN_CANCELLATION_LIMIT):
+/// [`evaluate`](crate::kernels::form_factor::robust::evaluate) tries the sliver rule without
+/// computing the edge sum.
 const VERY_THIN_POLYGON: f64 = 1e-5;
 
 /// Whether the triangle is a sliver by [`VERY_THIN_POLYGON`] (from its rounded edge vectors,
 /// accurate to ~1e-11 relative at that threshold; non-finite input gives `false`): its form factor
-/// goes to [`evaluate`] directly, where the sliver rule applies unless x is near it.
+/// goes to [`evaluate`](crate::kernels::form_factor::robust::evaluate) directly, where the sliver
+/// rule applies unless x is near it.
 #[inline]
 pub(crate) fn is_very_thin_triangle([a, b, c]: [DVec3; 3]) -> bool {
     let (ab, ac) = (b - a, c - a);
@@ -246,8 +252,8 @@ pub(crate) fn exact_height(s: &Scaled, twice_area: f64) -> f64 {
     exact_height_of(&s.r, &s.r_lo, twice_area)
 }
 
-/// [`exact_height`] from the parts `hi + lo` of the differences `v_i − x` (inlined into the callers,
-/// which may be compiled with FMA: see `near_plane_triangle`).
+/// [`exact_height`] from the parts `hi + lo` of the differences `v_i − x` (inlined into the
+/// callers, which may be compiled with FMA: see `near_plane::triangle`).
 #[inline(always)]
 pub(crate) fn exact_height_of(hi: &[DVec3], lo: &[DVec3], twice_area: f64) -> f64 {
     let lo = &lo[..hi.len()];

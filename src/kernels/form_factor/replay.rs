@@ -26,11 +26,13 @@ fn fast_frame(r_a: DVec3, e: DVec3) -> Option<EdgeFrame> {
     Some(f)
 }
 
-/// The fast evaluation of [`edge_form_factor`]: `None` when the inputs are invalid or out of
-/// [`FAST_RANGE`], or `x` is near the edge's line (where the robust path switches to double-double
-/// cross products). Elsewhere the robust path evaluates exactly these f64 operations on inputs
-/// rescaled by a power of two, which changes no rounding: the result is bit-for-bit the robust one,
-/// so it carries the robust path's accuracy, without its rescaling and exact-difference setup.
+/// The fast evaluation of [`edge_form_factor`](crate::kernels::form_factor::edge_form_factor):
+/// `None` when the inputs are invalid or out of
+/// [`FAST_RANGE`](crate::kernels::form_factor::validate::FAST_RANGE), or `x` is near the edge's
+/// line (where the robust path switches to double-double cross products). Elsewhere the robust path
+/// evaluates exactly these f64 operations on inputs rescaled by a power of two, which changes no
+/// rounding: the result is bit-for-bit the robust one, so it carries the robust path's accuracy,
+/// without its rescaling and exact-difference setup.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn edge_form_factor_fast(
     x: DVec3,
@@ -46,10 +48,11 @@ pub(crate) fn edge_form_factor_fast(
 }
 
 /// A cheap necessary condition for the robust path's far-field decision (vertex centroid at least
-/// [`polygon::FAR_FIELD_RATIO`] radii `R` from x): then `‖v_0 − x‖ ≥ 15 R` and every vertex is
-/// within `2R` of `v_0`, so `‖v_0 − x‖_∞ ≥ ‖v_0 − x‖/√3 ≥ 4.3 max_k ‖v_k − v_0‖_∞`; 4 leaves room
-/// for rounding. Max-norms keep it to a few instructions on the generic path. It only decides
-/// whether [`far_field_fast`] is tried first, which replays the exact decision.
+/// [`FAR_FIELD_RATIO`](crate::kernels::form_factor::quadrature::rules::FAR_FIELD_RATIO) radii `R`
+/// from x): then `‖v_0 − x‖ ≥ 15 R` and every vertex is within `2R` of `v_0`, so `‖v_0 − x‖_∞ ≥
+/// ‖v_0 − x‖/√3 ≥ 4.3 max_k ‖v_k − v_0‖_∞`; 4 leaves room for rounding. Max-norms keep it to a few
+/// instructions on the generic path. It only decides whether [`far_field_fast`] is tried first,
+/// which replays the exact decision.
 #[inline(always)]
 pub(crate) fn maybe_far<const M: usize>(v: &[DVec3; M], x: DVec3) -> bool {
     let mut edges = (v[1] - v[0]).abs();
@@ -59,13 +62,16 @@ pub(crate) fn maybe_far<const M: usize>(v: &[DVec3; M], x: DVec3) -> bool {
     (v[0] - x).abs().max_element() >= 4.0 * edges.max_element()
 }
 
-/// The far-field evaluation of [`triangle_form_factor`] when the robust path's decisions are
-/// certain: inputs valid and in [`FAST_RANGE`], every vertex above the tangent plane by more than
-/// the rounding bound of its height (nothing clipped), not near the plane, not a sliver (whose fan
-/// geometry the robust path takes from exact differences), and in the far field. Then the robust
-/// path integrates the one fan triangle with the rule [`polygon::fast_decisions`] picks, on the same
-/// f64 differences up to its exact power-of-two rescaling: the result is bit-for-bit the robust
-/// one. Returned with the smallest ratio (distance over radius) of the rule's range; `None`
+/// The far-field evaluation of
+/// [`triangle_form_factor`](crate::kernels::form_factor::triangle_form_factor) when the robust
+/// path's decisions are certain: inputs valid and in
+/// [`FAST_RANGE`](crate::kernels::form_factor::validate::FAST_RANGE), every vertex above the
+/// tangent plane by more than the rounding bound of its height (nothing clipped), not near the
+/// plane, not a sliver (whose fan geometry the robust path takes from exact differences), and in
+/// the far field. Then the robust path integrates the one fan triangle with the rule
+/// [`replay::fast_decisions`](crate::kernels::form_factor::replay::fast_decisions) picks, on the
+/// same f64 differences up to its exact power-of-two rescaling: the result is bit-for-bit the
+/// robust one. Returned with the smallest ratio (distance over radius) of the rule's range; `None`
 /// otherwise.
 // Not inlined: the generic path only pays the call's test, not this function's frame.
 #[inline(never)]
@@ -79,9 +85,10 @@ pub(crate) fn triangle_far_field_fast(
 }
 
 /// [`triangle_far_field_fast`] for a polygon of 4 to 8 vertices (`None` for other counts): the
-/// robust path's validation ([`polygon::Plane::new`], so invalid polygons are declined and left to
-/// the robust path's errors) and decisions, then its far-field rule on the fan triangles from
-/// `v_0`, on the same f64 differences: bit-for-bit the robust result.
+/// robust path's validation ([`Plane::new`](crate::kernels::form_factor::plane::Plane::new), so
+/// invalid polygons are declined and left to the robust path's errors) and decisions, then its
+/// far-field rule on the fan triangles from `v_0`, on the same f64 differences: bit-for-bit the
+/// robust result.
 // Inlined up to the distance test, which declines every nearby polygon: a declined call then pays
 // neither the rule's frame nor a copy of the vertices.
 #[inline(always)]
@@ -156,13 +163,14 @@ fn far_field_fast<const M: usize>(
     Some((oriented(sum, h_p)?, rule.min_ratio()))
 }
 
-/// The fast evaluation of [`triangle_form_factor`] when the robust path's decisions are certain:
-/// every vertex strictly above the tangent plane by more than the rounding bound of its height
-/// (so nothing is clipped), not near the plane, no edge line near `x`, the triangle not in the far
-/// field and the edge sum not cancelling beyond [`polygon::cancellation_limit`] (where the robust
-/// path integrates by quadrature instead).
-/// `None` otherwise, or for invalid or out-of-range inputs. Accepted results are bit-for-bit those
-/// of the robust path (same f64 operations; its power-of-two rescaling changes no rounding).
+/// The fast evaluation of
+/// [`triangle_form_factor`](crate::kernels::form_factor::triangle_form_factor) when the robust
+/// path's decisions are certain: every vertex strictly above the tangent plane by more than the
+/// rounding bound of its height (so nothing is clipped), not near the plane, no edge line near `x`,
+/// the triangle not in the far field and the edge sum not cancelling beyond [`cancellation_limit`]
+/// (where the robust path integrates by quadrature instead). `None` otherwise, or for invalid or
+/// out-of-range inputs. Accepted results are bit-for-bit those of the robust path (same f64
+/// operations; its power-of-two rescaling changes no rounding).
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(crate) fn triangle_form_factor_fast(
     x: DVec3,
@@ -250,9 +258,10 @@ pub(crate) fn fast_setup<const M: usize>(
     })
 }
 
-/// The decisions [`evaluate`] takes before its edge sum, for an unclipped polygon given relative to
-/// `x`: `None` when `x` is in or near the polygon's plane (where it recomputes the height exactly),
-/// otherwise the far-field rule if the quadrature applies and the signed height `h_P`.
+/// The decisions [`evaluate`](crate::kernels::form_factor::robust::evaluate) takes before its edge
+/// sum, for an unclipped polygon given relative to `x`: `None` when `x` is in or near the polygon's
+/// plane (where it recomputes the height exactly), otherwise the far-field rule if the quadrature
+/// applies and the signed height `h_P`.
 pub(crate) fn fast_decisions(r: &[DVec3], plane: &Plane) -> Option<(Option<Rule>, f64)> {
     let h_p = plane_height(r, plane)?;
     Some((far_rule_of(r), h_p))

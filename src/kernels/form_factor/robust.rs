@@ -43,9 +43,10 @@ pub(crate) fn triangle_form_factor_in_range(
     without_rescaling(x, n, v, order, false)
 }
 
-/// [`triangle_form_factor_in_range`] for a triangle [`is_very_thin_triangle`] accepts: the sliver
-/// rule's direct entry first (the same bits; `sliver::direct_sliver`), then `evaluate`. Only
-/// for such triangles: for the others the direct entry's plane would be work thrown away.
+/// [`triangle_form_factor_in_range`] for a triangle
+/// [`is_very_thin_triangle`](crate::kernels::form_factor::plane::is_very_thin_triangle) accepts:
+/// the sliver rule's direct entry first (the same bits; `sliver::direct_sliver`), then `evaluate`.
+/// Only for such triangles: for the others the direct entry's plane would be work thrown away.
 pub(crate) fn very_thin_triangle_form_factor_in_range(
     x: DVec3,
     n: DVec3,

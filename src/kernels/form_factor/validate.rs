@@ -44,7 +44,7 @@ pub(crate) fn unit(n: DVec3) -> Option<DVec3> {
 
 /// Coordinate differences the fast paths accept (outside, the robust path's exact power-of-two
 /// rescaling is needed to keep intermediate products in range).
-const FAST_RANGE: (f64, f64) = (1e-30, 1e30);
+pub(crate) const FAST_RANGE: (f64, f64) = (1e-30, 1e30);
 
 /// `‖v‖_∞` of the differences, `None` outside [`FAST_RANGE`] (NaN and infinities included).
 #[inline]

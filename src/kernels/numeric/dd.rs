@@ -1,9 +1,9 @@
 //! Double-double arithmetic (`hi + lo`, ~106 significant bits) from the error-free transformations
-//! two-sum and two-product (fused multiply-add). The kernels use it only for the few quantities that
-//! are near-singular in their inputs (heights over a plane or an edge line, exact coordinate
+//! two-sum and two-product (fused multiply-add). The kernels use it only for the few quantities
+//! that are near-singular in their inputs (heights over a plane or an edge line, exact coordinate
 //! differences), so the generic paths keep plain `f64` speed. Every operation is forced inline:
-//! callers compiled with FMA enabled (see `polygon::near_plane_triangle`) then get the fused
-//! multiply-add as one instruction instead of a call per product.
+//! callers compiled with FMA enabled (see `near_plane::triangle`) then get the fused multiply-add
+//! as one instruction instead of a call per product.
 
 use glam::DVec3;
 

@@ -17,7 +17,7 @@
 //! (to ~u²), displaced from the exact clip point by `δ ≤ δt‖E‖` along the edge `E`. The loop's
 //! vertices are the f64 roundings of these points (`r_k` for triangle vertices) and its edge
 //! vectors one rounding of the exact differences of their ends (`v_j − v_i` for triangle edges):
-//! the input model of Lambert's bound (`lambert.rs`), in which every input is rounded once from
+//! the input model of Lambert's bound (`lambert/sum.rs`), in which every input is rounded once from
 //! exact, consistent data.
 //!
 //! **The clip edge** lies in the tangent plane, so its plane through `x` is the tangent plane and
@@ -81,12 +81,12 @@ const LOOP_VERTEX_ZERO: LoopVertex = LoopVertex {
 };
 
 /// The clipped loop of a certified [`triangle_value`], for the derivative path
-/// ([`lambert_clipped_derivs`](super::lambert_clipped_derivs)): the unit normal, the loop's
-/// vertices (`count` of them), its edge vectors (`edges[k]` from vertex `k` to the next, each one
-/// rounding of the exact difference), the ordinary edges' angles `β` where the value computed
-/// them (NaN otherwise) and `2π` times the signed certified sum. `N` is the capacity: 4 for a
-/// triangle, `M + 1` for a convex polygon of `M` vertices
-/// ([`lambert_clipped_polygon`](super::lambert_clipped_polygon)).
+/// ([`lambert::clipped_derivs`](crate::kernels::form_factor::lambert::clipped_derivs)): the unit
+/// normal, the loop's vertices (`count` of them), its edge vectors (`edges[k]` from vertex `k` to
+/// the next, each one rounding of the exact difference), the ordinary edges' angles `β` where the
+/// value computed them (NaN otherwise) and `2π` times the signed certified sum. `N` is the
+/// capacity: 4 for a triangle, `M + 1` for a convex polygon of `M` vertices
+/// ([`lambert::clipped_polygon`](crate::kernels::form_factor::lambert::clipped_polygon)).
 #[derive(Clone)]
 pub(crate) struct ClippedLoop<const N: usize = 4> {
     pub(crate) n: DVec3,
@@ -120,10 +120,10 @@ pub(crate) fn difference_error(v: DVec3, x: DVec3) -> DVec3 {
     )
 }
 
-/// The value of [`triangle_form_factor`](super::triangle_form_factor) by Lambert's sum over the
-/// clipped triangle when its tangent plane certainly cuts it and the error bound (module
-/// documentation) is within [`FAST_TOLERANCE`] of the result; `None` otherwise, including when
-/// nothing is clipped (the unclipped path's case) and for invalid input.
+/// The value of [`triangle_form_factor`](crate::kernels::form_factor::triangle_form_factor) by
+/// Lambert's sum over the clipped triangle when its tangent plane certainly cuts it and the error
+/// bound (module documentation) is within [`FAST_TOLERANCE`] of the result; `None` otherwise,
+/// including when nothing is clipped (the unclipped path's case) and for invalid input.
 // Out of line, with the loop built in place inside: inlined into the kernel, the loop's frame
 // would weigh on the value order's other paths; returned by value, it would be copied.
 #[inline(never)]
@@ -287,7 +287,7 @@ fn with_loop<R>(
             let (point, hi, displacement) = match route {
                 Some(route) => {
                     // The route's clip point, from the double-double heights: within a few u²
-                    // of the exact crossing, bounded as `lambert_clipped_polygon`'s loop bounds
+                    // of the exact crossing, bounded as `lambert::clipped_polygon`'s loop bounds
                     // the same points (the heights by `U·height_error`, `t` by their errors over
                     // `|total|` and a few u², the point by a few u² of its ends' size).
                     let (point, hi) = from_route(route, count);
@@ -347,8 +347,8 @@ struct Screen {
     scale: f64,
     r_max: f64,
     r0_length: f64,
-    /// `x` within a sine of 1e-3 of a triangle edge's segment, as [`left_to_the_robust_path`]
-    /// tests it (`s < 1e-3‖r_i‖‖r_j‖`) and as [`uncertified_loop`] does (squared): the two
+    /// `x` within a sine of 1e-3 of a triangle edge's segment, as [`left_to_the_robust_path`] tests
+    /// it (`s < 1e-3‖r_i‖‖r_j‖`) and as [`with_valued_derivative_loop`] does (squared): the two
     /// roundings may differ at the threshold, and each decision keeps its own.
     near_edge: bool,
     near_edge_squared: bool,
@@ -393,10 +393,10 @@ impl Screen {
             || (height < 1e-4 * self.scale * self.r_max && !self.inside)
     }
 
-    /// Whether [`uncertified_loop`] builds its loop. The rounded normal and `r_0` are within 4u
-    /// and u of exact relatively: 8u with a margin. Taken only near the plane (below 1e-3 of the
-    /// size, as [`left_to_the_robust_path`]), where the robust path's exact geometry makes its
-    /// derivatives several times dearer. Within a sine of 1e-3 of a triangle edge's segment the
+    /// Whether [`with_valued_derivative_loop`] builds its loop. The rounded normal and `r_0` are
+    /// within 4u and u of exact relatively: 8u with a margin. Taken only near the plane (below 1e-3
+    /// of the size, as [`left_to_the_robust_path`]), where the robust path's exact geometry makes
+    /// its derivatives several times dearer. Within a sine of 1e-3 of a triangle edge's segment the
     /// clip point on it is within ~1e-3 of the size from x, where the derivatives decline on its
     /// displacement: without the loop.
     #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
@@ -440,16 +440,17 @@ pub(crate) enum LoopValue<'a> {
     /// The certified loop: [`ClippedLoop::value`].
     Certified,
     /// The uncertified loop on the clip points of the value order's near-plane route
-    /// ([`polygon::near_plane_clipped_triangle_value_and_loop`]), with that route's value: the value
-    /// order's bits.
+    /// ([`near_plane::triangle::clipped_triangle_value_and_loop`]), with that route's value: the
+    /// value order's bits.
     Route(f64),
     /// The uncertified loop, its value to be taken from the value order's paths; `route_tried`
     /// when the near-plane route was tried here and declined (the caller need not try it again).
     Elsewhere { route_tried: bool },
-    /// The near-plane route took the robust path's far-field rule on its loop (a far-field
-    /// visible part) and left its value to the derivatives, the same rule's
-    /// ([`polygon::deferred_far_piece`]), which the loop's do not replace; where that value is
-    /// not finite the route declined, as `Elsewhere { route_tried: true }`.
+    /// The near-plane route took the robust path's far-field rule on its loop (a far-field visible
+    /// part) and left its value to the derivatives, the same rule's
+    /// ([`deferred_far_piece`](crate::kernels::form_factor::near_plane::far_piece::deferred_far_piece)),
+    /// which the loop's do not replace; where that value is not finite the route declined, as
+    /// `Elsewhere { route_tried: true }`.
     Far(&'a RouteLoop),
 }
 
@@ -460,15 +461,16 @@ pub(crate) enum LoopValue<'a> {
 /// where neither is built. `fma`: the CPU has AVX2 and FMA (checked by the caller), for the
 /// route's FMA build.
 ///
-/// Outside the triangle near its plane (the certificate is not tried: Lambert's sum cancels)
-/// the value is the value order's near-plane route's, which clips the triangle in double-double
-/// too: the route runs first and the loop takes its clip points (`f(loop, Route(value))`)
-/// instead of clipping a second time. Its points are on the triangle's edge lines and at the
-/// exact crossings to ~u² (double-double `t` and point), so within the displacement bound each
-/// point carries (that of this loop's own f64 `t`, kept so that the derivatives' accept and
-/// decline tests are computed the same way); [`lambert_clipped_derivs`](super::lambert_clipped_derivs)'
-/// accuracy argument needs only that bound and the points on the edge lines to O(u). Where the
-/// route declines, the loop's own points (`f(loop, Elsewhere { route_tried: true })`).
+/// Outside the triangle near its plane (the certificate is not tried: Lambert's sum cancels) the
+/// value is the value order's near-plane route's, which clips the triangle in double-double too:
+/// the route runs first and the loop takes its clip points (`f(loop, Route(value))`) instead of
+/// clipping a second time. Its points are on the triangle's edge lines and at the exact crossings
+/// to ~u² (double-double `t` and point), so within the displacement bound each point carries (that
+/// of this loop's own f64 `t`, kept so that the derivatives' accept and decline tests are computed
+/// the same way);
+/// [`lambert::clipped_derivs`](crate::kernels::form_factor::lambert::clipped_derivs)' accuracy
+/// argument needs only that bound and the points on the edge lines to O(u). Where the route
+/// declines, the loop's own points (`f(loop, Elsewhere { route_tried: true })`).
 #[inline(always)]
 pub(crate) fn with_valued_derivative_loop<R>(
     x: DVec3,
@@ -520,7 +522,7 @@ pub(crate) fn with_valued_derivative_loop<R>(
 /// [`with_valued_derivative_loop`] outside the triangle: the value order's near-plane route,
 /// then the loop on its clip points (or on the loop's own where it declines), oriented by
 /// `side`. Out of line, in a portable and an FMA build (the route's double-double products; the
-/// same bits, see [`polygon::near_plane_triangle_value`]): inlined, its frame and registers
+/// same bits, see [`near_plane::triangle::triangle_value`]): inlined, its frame and registers
 /// would weigh on the certified loop's other callers.
 #[inline(always)]
 fn routed_loop_body<R>(

@@ -1,22 +1,23 @@
-//! Derivative fast path of the point-to-triangle form factor when the receiver's tangent plane
-//! cuts the triangle near its plane: the gradient and Hessian of Lambert's sum over the clipped
-//! loop that [`lambert_clipped`](super::lambert_clipped) builds for the value.
+//! Derivative fast path of the point-to-triangle form factor when the receiver's tangent plane cuts
+//! the triangle near its plane: the gradient and Hessian of Lambert's sum over the clipped loop
+//! that [`lambert::clipped`](crate::kernels::form_factor::lambert::clipped) builds for the value.
 //!
 //! **The derivatives of a clipped form factor.** `F(x) = ∫_{T(x)} K(x, y) dA_y` over the part
-//! `T(x)` of the triangle above the tangent plane, with `K ∝ (n·(y − x))(N·(x − y))/‖y − x‖⁴`.
-//! `K` vanishes on the clip line, so moving the line adds nothing to the gradient: `∇F` is the
-//! gradient of Lambert's sum over the loop with its vertices held fixed, edge by edge. The
-//! Hessian gains the line's motion, `n nᵀ |h_P| ∫ dl/(π‖n_t‖‖y − x‖⁴)` along the clip edge
-//! (`∂K/∂x = −n (N·(x − y))/(π‖y − x‖⁴)` there), which cancels the `1/h_P²` part of the clip edge's
-//! fixed-end Hessian; [`clip_edge_derivs`] has the sum in closed form for an edge lying in the
-//! tangent plane, with no division by `x`'s distance `ρ` to the clip line. The other edges of the
-//! loop (triangle edges, possibly shortened to a clip point) are ordinary edges: Lambert's analytic
-//! terms ([`lambert::edge_derivatives`]) down to `sin β = 1/32` ([`MIN_SINE`]; below 1/4 with
-//! their error growth paid for in the cancellation test), the robust path's moments below
-//! ([`robust_edge_term`]: a short edge far away, or `x` near an edge's line). Neither derivative
-//! sum may cancel by more than [`LOOP_CANCELLATION`] (1e5, against Lambert's unclipped 100: this
-//! loop serves the near-plane regime, whose contract is the hard regimes'). Their error is then a
-//! few ulps of the largest (weighted) term, at most 1e5 times the result's size.
+//! `T(x)` of the triangle above the tangent plane, with `K ∝ (n·(y − x))(N·(x − y))/‖y − x‖⁴`. `K`
+//! vanishes on the clip line, so moving the line adds nothing to the gradient: `∇F` is the gradient
+//! of Lambert's sum over the loop with its vertices held fixed, edge by edge. The Hessian gains the
+//! line's motion, `n nᵀ |h_P| ∫ dl/(π‖n_t‖‖y − x‖⁴)` along the clip edge (`∂K/∂x = −n (N·(x −
+//! y))/(π‖y − x‖⁴)` there), which cancels the `1/h_P²` part of the clip edge's fixed-end Hessian;
+//! [`clip_edge_derivs`] has the sum in closed form for an edge lying in the tangent plane, with no
+//! division by `x`'s distance `ρ` to the clip line. The other edges of the loop (triangle edges,
+//! possibly shortened to a clip point) are ordinary edges: Lambert's analytic terms
+//! ([`lambert::sum::edge_derivatives`](crate::kernels::form_factor::lambert::sum::edge_derivatives))
+//! down to `sin β = 1/32` ([`MIN_SINE`]; below 1/4 with their error growth paid for in the
+//! cancellation test), the robust path's moments below ([`robust_edge_term`]: a short edge far
+//! away, or `x` near an edge's line). Neither derivative sum may cancel by more than
+//! [`LOOP_CANCELLATION`] (1e5, against Lambert's unclipped 100: this loop serves the near-plane
+//! regime, whose contract is the hard regimes'). Their error is then a few ulps of the largest
+//! (weighted) term, at most 1e5 times the result's size.
 //!
 //! **Rounded clip points.** The loop's clip points are the f64 roundings of points on the
 //! triangle's edges within `δ` (a few `u‖E‖`) of the exact clip points. The line through them
@@ -32,23 +33,23 @@
 //! result. A clip point's rounding to f64 (within `u‖r‖`) counts as displacement too: at twice
 //! its bound for the triangle ([`loop_derivs`]), whose derivatives keep the generic 1e-12 outside
 //! near the plane, at its bound for the polygon route ([`loop_derivs_charging`] from
-//! `lambert_clipped_polygon::routed_polygon_derivs`), whose contract is the regime's 1e-9.
+//! `lambert::clipped_polygon::routed_polygon_derivs`), whose contract is the regime's 1e-9.
 //! Measured against the 320-bit reference (`tests/form_factor_clipped_derivs.rs`, `h_P` down
 //! to 1e-12 of the size): worst 2e-15 (gradient) and 4e-15 (Hessian) over the interior, 1.1e-14
 //! and 3.7e-15 outside; 1.8e-12 and 4.2e-12 with `x` near a vertex.
 //!
-//! The value does not depend on the order. Where [`lambert_clipped`](super::lambert_clipped)
-//! certifies it (near the plane,
-//! `|h_P|` below 1e-3 of the size, over the clipped triangle's interior, not within ~1e-9 of the
-//! clip line nor near a triangle edge's line) the value is that one, bit for bit, from the same
+//! The value does not depend on the order. Where
+//! [`lambert::clipped`](crate::kernels::form_factor::lambert::clipped) certifies it (near the
+//! plane, `|h_P|` below 1e-3 of the size, over the clipped triangle's interior, not within ~1e-9 of
+//! the clip line nor near a triangle edge's line) the value is that one, bit for bit, from the same
 //! loop. Elsewhere below 1e-3 of the size (outside the triangle, where Lambert's sum cancels, and
 //! next to the clip line) the loop is built without the certificate
-//! ([`uncertified_loop`](super::lambert_clipped::uncertified_loop)), and the value is the value
-//! order's own. Outside the triangle that is the near-plane route's
-//! (`polygon::near_plane_triangle`), which runs first: the loop takes its double-double clip
-//! points (closer to the exact ones than the loop's own, within the same displacement bounds),
-//! its vertex-to-clip-point edge vectors (the same rounding of the same difference) and, where
-//! well conditioned, its edges' angles, instead of a second clip and an `atan2` per edge.
+//! ([`with_valued_derivative_loop`](crate::kernels::form_factor::lambert::clipped::with_valued_derivative_loop)),
+//! and the value is the value order's own. Outside the triangle that is the near-plane route's
+//! (`near_plane::triangle`), which runs first: the loop takes its double-double clip points (closer
+//! to the exact ones than the loop's own, within the same displacement bounds), its
+//! vertex-to-clip-point edge vectors (the same rounding of the same difference) and, where well
+//! conditioned, its edges' angles, instead of a second clip and an `atan2` per edge.
 
 use glam::{DMat3, DVec3};
 
@@ -70,12 +71,14 @@ const U: f64 = 0.5 * f64::EPSILON;
 const MOVED_TOLERANCE: f64 = 1e-11;
 
 /// Smallest `sin β` of an ordinary edge of the loop at which the path is taken. Lambert's
-/// derivative path takes edges down to `sin β = 1/4` ([`lambert::triangle_derivs`]); the clipped
-/// loop's edges shortened to a clip point near a vertex are often below (the benchmarked "1e-6
-/// above the plane" has one at 0.076), so here an edge below 1/4 is taken with its magnitude in the
-/// cancellation tests multiplied by the growth of its rounding errors relative to 1/4, `1/sin²β`
-/// for the gradient and `1/sin³β` for the Hessian (see [`lambert::edge_derivatives`]'s terms): the
-/// same accepted error as Lambert's rule, with this floor.
+/// derivative path takes edges down to `sin β = 1/4`
+/// ([`lambert::sum::triangle_derivs`](crate::kernels::form_factor::lambert::sum::triangle_derivs));
+/// the clipped loop's edges shortened to a clip point near a vertex are often below (the
+/// benchmarked "1e-6 above the plane" has one at 0.076), so here an edge below 1/4 is taken with
+/// its magnitude in the cancellation tests multiplied by the growth of its rounding errors relative
+/// to 1/4, `1/sin²β` for the gradient and `1/sin³β` for the Hessian (see
+/// [`lambert::sum::edge_derivatives`](crate::kernels::form_factor::lambert::sum::edge_derivatives)'s
+/// terms): the same accepted error as Lambert's rule, with this floor.
 const MIN_SINE: f64 = 1.0 / 32.0;
 
 /// Largest ratio of the summed (weighted) magnitudes of the edge terms' gradient (Hessian) to the
@@ -85,16 +88,17 @@ const MIN_SINE: f64 = 1.0 / 32.0;
 /// / 1e-8, the hard regimes'). Seen from outside, near the plane, the sums cancel by the visible
 /// part's smallness against its distance: over a spread of such configurations
 /// (`benches/kernels_regimes.rs`, `RADDIFF_REGIMES_MIX`) by 25x at the median, 860x at the 90th
-/// percentile and 4.7e4 at the 99th. Lambert's unclipped limit ([`lambert::CANCELLATION`], 100, set
-/// for the generic 1e-12 contract) sent a quarter of them to the robust path, which takes the same
-/// edge sums at any cancellation there while its near-plane split cancels by less than 1e3, and
-/// integrates by quadrature beyond. Measured against the 320-bit reference over that spread
+/// percentile and 4.7e4 at the 99th. Lambert's unclipped limit
+/// ([`lambert::sum::CANCELLATION`](crate::kernels::form_factor::lambert::sum::CANCELLATION), 100,
+/// set for the generic 1e-12 contract) sent a quarter of them to the robust path, which takes the
+/// same edge sums at any cancellation there while its near-plane split cancels by less than 1e3,
+/// and integrates by quadrature beyond. Measured against the 320-bit reference over that spread
 /// (`tests/form_factor_near_plane.rs`): worst 1.1e-12 / 4.4e-14.
 const LOOP_CANCELLATION: f64 = 1e5;
 
-/// The derivatives of `triangle_derivs` from a loop (certified, or
-/// [`uncertified_loop`](super::lambert_clipped::uncertified_loop): the
-/// derivatives need only its orientation), with `value` as the value.
+/// The derivatives of `triangle_derivs` from a loop (certified, or uncertified from
+/// [`with_valued_derivative_loop`](crate::kernels::form_factor::lambert::clipped::with_valued_derivative_loop):
+/// the derivatives need only its orientation), with `value` as the value.
 pub(crate) fn loop_derivs<const N: usize>(
     clipped: &ClippedLoop<N>,
     value: f64,

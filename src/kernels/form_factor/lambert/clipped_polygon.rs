@@ -1,8 +1,9 @@
-//! Certified fast path of [`polygon_form_factor`](super::polygon_form_factor) when the receiver's
-//! tangent plane cuts a strictly convex polygon of 4 to 8 vertices and `x` is near the polygon's
-//! plane: Lambert's sum over the clipped loop with [`lambert_clipped`](super::lambert_clipped)'s
-//! running error bound, and the derivatives of that loop
-//! ([`lambert_clipped_derivs`](super::lambert_clipped_derivs)).
+//! Certified fast path of [`polygon_form_factor`](crate::kernels::form_factor::polygon_form_factor)
+//! when the receiver's tangent plane cuts a strictly convex polygon of 4 to 8 vertices and `x` is
+//! near the polygon's plane: Lambert's sum over the clipped loop with
+//! [`lambert::clipped`](crate::kernels::form_factor::lambert::clipped)'s running error bound, and
+//! the derivatives of that loop
+//! ([`lambert::clipped_derivs`](crate::kernels::form_factor::lambert::clipped_derivs)).
 //!
 //! Near the plane (`x` within 1e-3 of the size) the robust path's exact geometry (validation,
 //! exact clip, near-plane split, edge sum) costs 4.5-5.5x the unclipped polygon's Lambert sum;
@@ -10,44 +11,45 @@
 //! docs/kernels.md, "Hard regimes").
 //!
 //! **What is certified.** The polygon must be one that
-//! [`lambert_polygon`](super::lambert_polygon) would take unclipped (strictly convex, planar to a
-//! quarter of the robust tolerance, not a sliver, every edge and turn with a 1e-3 margin:
-//! `convex_normal`), so that the robust path accepts it and its visible part is one convex loop.
-//! Every vertex must be certainly above or below the tangent plane (`|n·r_k|` beyond
-//! `16u(|n|·|r_k|)`, as for the triangle) and the vertices above must be one run (exactly two
-//! sign changes around the polygon; a planar convex polygon has at most two, so more means the
-//! polygon's slight non-planarity decides, and the path declines). The loop is then the run of
-//! kept vertices, the crossing of the edge leaving the run, the crossing of the edge entering it
-//! and the clip edge between the two: at most `M + 1` points.
+//! [`lambert::polygon`](crate::kernels::form_factor::lambert::polygon) would take unclipped
+//! (strictly convex, planar to a quarter of the robust tolerance, not a sliver, every edge and turn
+//! with a 1e-3 margin: `convex_normal`), so that the robust path accepts it and its visible part is
+//! one convex loop. Every vertex must be certainly above or below the tangent plane (`|n·r_k|`
+//! beyond `16u(|n|·|r_k|)`, as for the triangle) and the vertices above must be one run (exactly
+//! two sign changes around the polygon; a planar convex polygon has at most two, so more means the
+//! polygon's slight non-planarity decides, and the path declines). The loop is then the run of kept
+//! vertices, the crossing of the edge leaving the run, the crossing of the edge entering it and the
+//! clip edge between the two: at most `M + 1` points.
 //!
-//! **The error bound for `M` edges** is the triangle's argument (`lambert_clipped`'s module
-//! documentation), which uses nothing of the triangle but these facts, all true here:
-//! (i) each loop vertex is the f64 rounding of a point exactly on a polygon edge's line (a vertex
-//! `r_k`, or a clip point `R_i + t(R_j − R_i)` formed in double-double from the exact differences
-//! `R_k = v_k − x` to ~u²), displaced along that edge by at most `δ ≤ δt‖E‖` from the exact clip
-//! point, with `δt` bounded from the heights' error bounds as for the triangle; (ii) each loop edge
-//! vector is one rounding of the exact difference of its ends (`v_j − v_i` between two polygon
-//! vertices, the double-double difference where an end is a clip point): Lambert's input model,
-//! so every ordinary edge's term errs by at most `u(36β + 20|r_a·e|g)` (`lambert.rs`); (iii)
-//! exactly two clip points, adjacent in the loop, so there is one clip edge, whose term `±β` and
-//! bound `u(6‖e‖/‖r_b‖ + 7 + 2β)` are those of a segment in the tangent plane, and the region the
-//! loop bounds differs from the exact visible part by the same two thin triangles along the clip
-//! line (`2π|ΔF| ≤ 8δ²/ρ²`) plus the clip edge's tilt (`βθ²/2`, `θ ≤ 2δ/ρ`). Summing the
-//! `m ≤ M + 1` terms adds `(m − 1)u Σ|f_k|`, renormalizing `n` and the final scaling `3u Σ|f_k|`:
-//! the bound is `u(Σ err_k + (m + 2)Σ|f_k|)` plus the two second-order terms, the triangle's
-//! formula with `m` the loop's length, accepted within [`FAST_TOLERANCE`](super::lambert::FAST_TOLERANCE)
-//! of the result. The polygon's planarity within `2.5e-9` of its extent does not enter: the loop's
+//! **The error bound for `M` edges** is the triangle's argument (`lambert::clipped`'s module
+//! documentation), which uses nothing of the triangle but these facts, all true here: (i) each loop
+//! vertex is the f64 rounding of a point exactly on a polygon edge's line (a vertex `r_k`, or a
+//! clip point `R_i + t(R_j − R_i)` formed in double-double from the exact differences `R_k = v_k −
+//! x` to ~u²), displaced along that edge by at most `δ ≤ δt‖E‖` from the exact clip point, with
+//! `δt` bounded from the heights' error bounds as for the triangle; (ii) each loop edge vector is
+//! one rounding of the exact difference of its ends (`v_j − v_i` between two polygon vertices, the
+//! double-double difference where an end is a clip point): Lambert's input model, so every ordinary
+//! edge's term errs by at most `u(36β + 20|r_a·e|g)` (`lambert/sum.rs`); (iii) exactly two clip
+//! points, adjacent in the loop, so there is one clip edge, whose term `±β` and bound
+//! `u(6‖e‖/‖r_b‖ + 7 + 2β)` are those of a segment in the tangent plane, and the region the loop
+//! bounds differs from the exact visible part by the same two thin triangles along the clip line
+//! (`2π|ΔF| ≤ 8δ²/ρ²`) plus the clip edge's tilt (`βθ²/2`, `θ ≤ 2δ/ρ`). Summing the `m ≤ M + 1`
+//! terms adds `(m − 1)u Σ|f_k|`, renormalizing `n` and the final scaling `3u Σ|f_k|`: the bound is
+//! `u(Σ err_k + (m + 2)Σ|f_k|)` plus the two second-order terms, the triangle's formula with `m`
+//! the loop's length,
+//! accepted within [`FAST_TOLERANCE`](crate::kernels::form_factor::tolerance::FAST_TOLERANCE) of
+//! the result. The polygon's planarity within `2.5e-9` of its extent does not enter: the loop's
 //! edges are the polygon's edges (or parts of them, on their lines) and the clip edge, as the
-//! robust path clips them; only the clip line's Hessian term uses a plane, and that of a
-//! polygon planar to 2.5e-9 moves it by that relatively at most (far below `δ/ρ`'s effect, and
-//! the derivatives' tolerance is 1e-12 relative to their largest entry against the robust
-//! path's 1e-8 planarity).
+//! robust path clips them; only the clip line's Hessian term uses a plane, and that of a polygon
+//! planar to 2.5e-9 moves it by that relatively at most (far below `δ/ρ`'s effect, and the
+//! derivatives' tolerance is 1e-12 relative to their largest entry against the robust path's 1e-8
+//! planarity).
 //!
-//! **Where it is tried**: as for the triangle (`lambert_clipped::left_to_the_robust_path`), only
+//! **Where it is tried**: as for the triangle (`lambert::clipped::left_to_the_robust_path`), only
 //! below 1e-3 of the size from the plane (`|N·r_0| < 1e-3‖N‖ max‖r_k‖`, `N` Newell's normal),
 //! not within a sine of 1e-3 of an edge's segment (`β > π/2`, where Lambert's bound grows like
 //! `1/sin β`), and not below 1e-4 of the size outside the polygon (the sum cancels: the robust
-//! path's near-plane split, which `polygon/near_plane_polygon.rs` replays for the value with the
+//! path's near-plane split, which `near_plane/polygon.rs` replays for the value with the
 //! robust bits; the derivative orders there take that value and the derivatives of the route's
 //! loop, [`routed_polygon_derivs`]). It declines within ~1e-9 of the clip line and wherever
 //! the bound fails.
@@ -55,7 +57,7 @@
 //! **Derivatives**: those of the same loop, with the triangle's acceptance rules (Lambert's terms
 //! down to `sin β = 1/32` with their error growth charged in the cancellation test, the robust
 //! path's moments below, the sums cancelling by at most 1e5, the clip points' displacement within
-//! 1e-11 of the result): `lambert_clipped_derivs`' argument is per edge and holds for any number
+//! 1e-11 of the result): `lambert::clipped_derivs`' argument is per edge and holds for any number
 //! of them. The route's clip points are the exact crossings to ~u², so their displacement is their
 //! rounding to f64, charged at its bound `u` (the triangle charges `2u` for its 1e-12): over the
 //! benchmark's outside mix (`RADDIFF_REGIMES_MIX`, 3000 calls) the robust path then runs for 16
@@ -63,7 +65,7 @@
 //! and the derivatives agree with the 320-bit reference within 3.0e-12 (gradient; measured
 //! over the mix by a temporary test), against the regime's 1e-9 (the worst before was the robust
 //! path's 2.8e-12). Where the route found the visible part far-field, the derivative orders take
-//! its far-field rule instead ([`deferred_far_piece`](super::polygon::deferred_far_piece)). The
+//! its far-field rule instead ([`deferred_far_piece`]). The
 //! value of a derivative order is the certified value, bit for bit (the same loop and sum).
 
 use glam::DVec3;
@@ -215,7 +217,7 @@ fn with_loop<const M: usize, const N: usize, const R: usize, T>(
         if above[i] {
             // Every vertex keeps its exact difference: a vertex next to a clip point for the edge
             // vector between them, every one for the robust terms of edges below `MIN_SINE`
-            // (`lambert_clipped_derivs::robust_edge_term`), exact near the edge's line.
+            // (`lambert::clipped_derivs::robust_edge_term`), exact near the edge's line.
             l.points[count] = LoopVertex {
                 exact: match route {
                     // The route's point is these parts.
@@ -328,14 +330,15 @@ fn with_certified_loop<const M: usize, const N: usize, R>(
     )
 }
 
-/// The value of [`polygon_form_factor`](super::polygon_form_factor) by Lambert's sum over the
-/// clipped loop (module documentation) when the tangent plane certainly cuts a strictly convex
-/// polygon of `M` (4 to 8) vertices, `x` is near its plane (below 1e-3 of the size) and the
-/// error bound is within [`FAST_TOLERANCE`](super::lambert::FAST_TOLERANCE) of the result;
-/// `None` otherwise, including when nothing is clipped and for invalid polygons (the robust path
-/// reports them). `N = M + 1`, the loop's capacity. Called by
-/// [`lambert_polygon`](super::lambert_polygon)'s entries where the polygon is not certainly
-/// unclipped.
+/// The value of [`polygon_form_factor`](crate::kernels::form_factor::polygon_form_factor) by
+/// Lambert's sum over the clipped loop (module documentation) when the tangent plane certainly cuts
+/// a strictly convex polygon of `M` (4 to 8) vertices, `x` is near its plane (below 1e-3 of the
+/// size) and the error bound is within
+/// [`FAST_TOLERANCE`](crate::kernels::form_factor::tolerance::FAST_TOLERANCE) of the result; `None`
+/// otherwise, including when nothing is clipped and for invalid polygons (the robust path reports
+/// them). `N = M + 1`, the loop's capacity. Called by
+/// [`lambert::polygon`](crate::kernels::form_factor::lambert::polygon)'s entries where the polygon
+/// is not certainly unclipped.
 // Out of line: the loop's frame (~1 KB) stays off the kernel's other paths.
 #[inline(never)]
 pub(crate) fn polygon_value<const M: usize, const N: usize>(
@@ -351,11 +354,12 @@ pub(crate) fn polygon_value<const M: usize, const N: usize>(
 pub(crate) type Derivs = Result<Deriv3, f64>;
 
 /// Gradient (per unit length) and Hessian (per squared length, at [`Order::Hessian`]) of
-/// [`polygon_form_factor`](super::polygon_form_factor) over [`polygon_value`]'s loop, for `order`
-/// above [`Order::Value`]: `Some(Ok(d))` with `d.value` [`polygon_value`]'s bits,
-/// `Some(Err(value))` where the value is certified but the derivatives decline (an ordinary edge
-/// of the loop below `sin β = 1/32`, a cancelling derivative sum, a clip point too close to `x`
-/// for its displacement), `None` where [`polygon_value`] declines. Arguments as there.
+/// [`polygon_form_factor`](crate::kernels::form_factor::polygon_form_factor) over
+/// [`polygon_value`]'s loop, for `order` above [`Order::Value`]: `Some(Ok(d))` with `d.value`
+/// [`polygon_value`]'s bits, `Some(Err(value))` where the value is certified but the derivatives
+/// decline (an ordinary edge of the loop below `sin β = 1/32`, a cancelling derivative sum, a clip
+/// point too close to `x` for its displacement), `None` where [`polygon_value`] declines. Arguments
+/// as there.
 // Inlined into `clipped_polygon_derivs`, out of line, whose frame holds the loop: outside near the
 // plane (the routed derivatives' regime) the decision where to try declines without a call of its
 // own.
@@ -386,17 +390,17 @@ pub(crate) fn clipped_polygon_derivs<const M: usize, const N: usize, const R: us
         .or_else(|| routed_polygon_derivs::<M, N, R>(x, n, v, order))
 }
 
-/// [`polygon_derivs`] where the certified loop is not built: outside the polygon near its
-/// plane, where Lambert's sum cancels and the value order takes the robust path's near-plane
-/// split ([`near_plane_polygon_value`](super::polygon::near_plane_polygon_value), the robust
-/// bits). With that route's value (so the value order's bits), the derivatives of the loop
-/// [`with_loop`] builds on the same cut as the certified path, with the route's double-double
-/// clip points, edge vectors and angles (the loop's points on the polygon's edge
-/// lines with their displacement bounds; the derivatives' accuracy argument,
-/// `lambert_clipped_derivs`, needs only these, not the certified value), oriented by the sign of
-/// the route's exact height `h_P` as the robust edge sum is. `Some(Err(value))` where the
-/// derivatives decline (or no vertex is certainly below the tangent plane), `None` where the
-/// route declines. `N = M + 1` (the loop), `R = 2M` (the route's clipped loop).
+/// [`polygon_derivs`] where the certified loop is not built: outside the polygon near its plane,
+/// where Lambert's sum cancels and the value order takes the robust path's near-plane split
+/// ([`near_plane::polygon::polygon_value`],
+/// the robust bits). With that route's value (so the value order's bits), the derivatives of the
+/// loop [`with_loop`] builds on the same cut as the certified path, with the route's double-double
+/// clip points, edge vectors and angles (the loop's points on the polygon's edge lines with their
+/// displacement bounds; the derivatives' accuracy argument, `lambert::clipped_derivs`, needs only
+/// these, not the certified value), oriented by the sign of the route's exact height `h_P` as the
+/// robust edge sum is. `Some(Err(value))` where the derivatives decline (or no vertex is certainly
+/// below the tangent plane), `None` where the route declines. `N = M + 1` (the loop), `R = 2M` (the
+/// route's clipped loop).
 #[inline(never)]
 pub(crate) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usize>(
     x: DVec3,
@@ -440,8 +444,10 @@ pub(crate) fn routed_polygon_derivs<const M: usize, const N: usize, const R: usi
     ))
 }
 
-/// The unit normal and the differences `r_k = v_k − x`, each in [`lambert::in_range`], as
-/// [`lambert::unclipped`] checks them; `None` otherwise.
+/// The unit normal and the differences `r_k = v_k − x`, each in
+/// [`validate::in_range`](crate::kernels::form_factor::validate::in_range), as
+/// [`lambert::sum::unclipped`](crate::kernels::form_factor::lambert::sum::unclipped) checks them;
+/// `None` otherwise.
 #[inline(always)]
 pub(crate) fn differences<const M: usize>(
     x: DVec3,

@@ -4,9 +4,9 @@
 //!
 //! **Why.** Lambert's terms `β_i (n·w_i)/s_i` are each of size `σ ~ size/distance` while their sum
 //! is of size `σ²`: summed as written they lose `distance/size` digits, and the running bound of
-//! [`lambert`](super::lambert) rejects beyond ~25 sizes. Writing `u_k = r_k/ρ_k` (`ρ_k = ‖r_k‖`),
-//! `σ_i = sin β_i = s_i/(ρ_i ρ_{i+1})` and `β_i/s_i = (1 + ψ(σ_i))/(ρ_i ρ_{i+1})` with
-//! `ψ(σ) = arcsin(σ)/σ − 1` (β < π/2 here):
+//! [`lambert::sum`](crate::kernels::form_factor::lambert::sum) rejects beyond ~25 sizes. Writing
+//! `u_k = r_k/ρ_k` (`ρ_k = ‖r_k‖`), `σ_i = sin β_i = s_i/(ρ_i ρ_{i+1})` and `β_i/s_i = (1 +
+//! ψ(σ_i))/(ρ_i ρ_{i+1})` with `ψ(σ) = arcsin(σ)/σ − 1` (β < π/2 here):
 //!
 //! ```text
 //! 2π F = n·Σ_i β_i ŵ_i = n·Σ_i (u_i × u_{i+1}) + Σ_i ψ(σ_i) n·w_i/(ρ_i ρ_{i+1}),
@@ -39,7 +39,7 @@
 //! truncation), `d ln ψ/d ln σ² ≤ 1.2`, and with `|n·w_i|/(ρ_iρ_{i+1}) ≤ σ_i ≤ E_i`,
 //! `L/(ρ_iρ_{i+1}) ≤ E_i`: `|δ corr_i| ≤ 84 u ψ_i E_i`. Summing the `m + 1` parts adds
 //! `m u (|main| + Σ|corr_i|)`, the final scaling `2u|total|`. The result is accepted when the
-//! bound is within [`FAST_TOLERANCE`](super::lambert::FAST_TOLERANCE) of `|total|` and
+//! bound is within [`FAST_TOLERANCE`] of `|total|` and
 //! `|total| > 1e-250` (no subnormal intermediates that matter).
 
 use glam::DVec3;

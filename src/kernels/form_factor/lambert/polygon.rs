@@ -1,6 +1,8 @@
-//! Certified value fast path of [`polygon_form_factor`](super::polygon_form_factor) for 4 to 8
-//! vertices: Lambert's sum (or its far-field form) with the running bound of
-//! [`lambert`](super::lambert), for convex polygons that the robust path certainly accepts.
+//! Certified value fast path of
+//! [`polygon_form_factor`](crate::kernels::form_factor::polygon_form_factor) for 4 to 8 vertices:
+//! Lambert's sum (or its far-field form) with the running bound of
+//! [`lambert::sum`](crate::kernels::form_factor::lambert::sum), for convex polygons that the robust
+//! path certainly accepts.
 //!
 //! The robust path validates area, planarity (1e-8 of the extent) and simplicity (an O(m²)
 //! segment test) before it evaluates; Lambert's sum needs none of it, but the fast path must keep
@@ -9,7 +11,7 @@
 //! `Σ d_k × d_{k+1}`, `X = max ‖d_k‖` the robust path's extent):
 //!
 //! * area: `‖N‖² ≥ 1.01e-10·X⁴`, i.e. `‖N‖ ≳ 1e-5·X²` (the robust limit is 1e-13; thinner
-//!   polygons are slivers, whose sum cancels: `polygon/sliver_fan.rs`);
+//!   polygons are slivers, whose sum cancels: `sliver/fan.rs`);
 //! * planarity: `|d_k·N| ≤ 0.25·1e-8·X‖N‖` (a quarter of the robust tolerance);
 //! * strictly convex, winding once: every edge `‖e_i‖ ≥ 1e-3 X`, every turn
 //!   `(e_{i−1} × e_i)·N ≥ 1e-3 ‖e_{i−1}‖‖e_i‖‖N‖` (a sine of 1e-3), the fan from `v_0` monotone
@@ -18,9 +20,10 @@
 //!   shaped from `v_0`), and the margins keep every vertex at least ~1e-6 X from the line of any
 //!   edge it is not on, far beyond the rounding of the robust path's orientation tests.
 //!
-//! The derivative fast path ([`polygon_derivs`]) takes the same validation and then the analytic
-//! per-edge derivatives of Lambert's sum with the triangle's certificate generalized to `m` edges
-//! ([`certified_derivs`](super::lambert::certified_derivs)).
+//! The derivative fast path
+//! ([`polygon_derivs`](crate::kernels::form_factor::lambert::clipped_polygon::polygon_derivs))
+//! takes the same validation and then the analytic per-edge derivatives of Lambert's sum with the
+//! triangle's certificate generalized to `m` edges ([`certified_derivs`]).
 //!
 //! Anything else (non-convex, nearly degenerate, non-planar or self-intersecting polygons, more
 //! than 8 vertices) goes to the robust path, which gives the errors.
@@ -58,10 +61,10 @@ pub(crate) fn value_or<const M: usize>(
     Some((sum.abs() * INV_2PI).min(1.0))
 }
 
-/// The value of [`polygon_form_factor`](super::polygon_form_factor) for a strictly convex polygon
-/// of 4 to 8 vertices, every vertex certainly above the tangent plane, when the certified sum is
-/// within the fast-path tolerance; `None` otherwise (including invalid input, which the robust
-/// path reports).
+/// The value of [`polygon_form_factor`](crate::kernels::form_factor::polygon_form_factor) for a
+/// strictly convex polygon of 4 to 8 vertices, every vertex certainly above the tangent plane, when
+/// the certified sum is within the fast-path tolerance; `None` otherwise (including invalid input,
+/// which the robust path reports).
 pub(crate) fn polygon_value(x: DVec3, n: DVec3, v: &[DVec3]) -> Option<f64> {
     match v.len() {
         4 => value::<4>(x, n, v.try_into().ok()?),

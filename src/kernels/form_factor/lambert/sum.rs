@@ -13,15 +13,16 @@
 //!
 //! **Error bound** (u = 2⁻⁵³, first order in u; `L = ‖r_a‖‖e‖`, `p = L/s`, `P = ‖r_a‖‖r_b‖`).
 //! Rounding `r_a`, `e` and the cross product gives `‖δw‖ ≤ 6uL`, so `|δ(n·w)| ≤ 6uL + 3us` and
-//! `|δs| ≤ 6uL + 2us`; `|δc| ≤ 5uP`. With `s² + c² = P²` and `sin β = s/P ≤ β`,
-//! `|δβ| ≤ (|c|·|δs| + s·|δc|)/P² + 2uβ ≤ (6p + 9)uβ` (atan2 within 2 ulp), so `g = β/s` is within
-//! `(12p + 12)u` relatively and `|δf|·2π ≤ uβ(18p + 16)` (using `|n·w| ≤ s`). With
-//! `p ≤ 1 + |r_a·e|/s` the bound needs only computed quantities: `|δf|·2π ≤ u(34β + 18|r_a·e|·g)`,
-//! used below as `u(36β + 20|r_a·e|g)`. Summing three terms, renormalizing `n` and scaling add
-//! `5u Σ|f_i|` (`(m + 2)u Σ|f_i|` for `m` edges). When the bound exceeds [`FAST_TOLERANCE`] times
-//! the result (x near an edge's line, where `p` grows; a cancelling sum: near the polygon's plane),
-//! the caller falls back to the robust path. Far away (every edge within `1/√20` of its distance)
-//! the value comes from [`lambert_far`]'s rearrangement of the same sum, which does not cancel.
+//! `|δs| ≤ 6uL + 2us`; `|δc| ≤ 5uP`. With `s² + c² = P²` and `sin β = s/P ≤ β`, `|δβ| ≤ (|c|·|δs| +
+//! s·|δc|)/P² + 2uβ ≤ (6p + 9)uβ` (atan2 within 2 ulp), so `g = β/s` is within `(12p + 12)u`
+//! relatively and `|δf|·2π ≤ uβ(18p + 16)` (using `|n·w| ≤ s`). With `p ≤ 1 + |r_a·e|/s` the bound
+//! needs only computed quantities: `|δf|·2π ≤ u(34β + 18|r_a·e|·g)`, used below as `u(36β +
+//! 20|r_a·e|g)`. Summing three terms, renormalizing `n` and scaling add `5u Σ|f_i|` (`(m + 2)u
+//! Σ|f_i|` for `m` edges). When the bound exceeds [`FAST_TOLERANCE`] times the result (x near an
+//! edge's line, where `p` grows; a cancelling sum: near the polygon's plane), the caller falls back
+//! to the robust path. Far away (every edge within `1/√20` of its distance) the value comes from
+//! [`lambert::far`](crate::kernels::form_factor::lambert::far)'s rearrangement of the same sum,
+//! which does not cancel.
 
 use glam::{DMat3, DVec3};
 
@@ -61,8 +62,9 @@ pub(crate) fn edge_and_angle(
     (n.dot(w) * g, 36.0 * beta + 20.0 * (c - ra2).abs() * g, beta)
 }
 
-/// The value of [`edge_form_factor`](super::edge_form_factor) by Lambert's formula when its error
-/// bound is within [`FAST_TOLERANCE`] of the result; `None` otherwise or for invalid input.
+/// The value of [`edge_form_factor`](crate::kernels::form_factor::edge_form_factor) by Lambert's
+/// formula when its error bound is within [`FAST_TOLERANCE`] of the result; `None` otherwise or for
+/// invalid input.
 #[inline]
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub(crate) fn edge_value(x: DVec3, n: DVec3, a: DVec3, b: DVec3) -> Option<f64> {
@@ -113,9 +115,9 @@ fn unclipped_triangle(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<(DVec3, [DVec
 }
 
 /// `2π` times the signed form factor of an unclipped polygon (`unclipped`'s output): the far-field
-/// form ([`lambert_far`]) when every edge is small against its distance, otherwise Lambert's sum
-/// with its running bound (`(m + 2)u Σ|f_i|` for summing `m` terms, renormalizing `n` and
-/// scaling). `None` when the chosen form is not certified.
+/// form ([`lambert::far`](crate::kernels::form_factor::lambert::far)) when every edge is small
+/// against its distance, otherwise Lambert's sum with its running bound (`(m + 2)u Σ|f_i|` for
+/// summing `m` terms, renormalizing `n` and scaling). `None` when the chosen form is not certified.
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub(crate) fn certified_sum<const M: usize>(
@@ -145,10 +147,10 @@ pub(crate) fn certified_sum<const M: usize>(
     (err <= FAST_TOLERANCE * sum.abs()).then_some(sum)
 }
 
-/// The value of [`triangle_form_factor`](super::triangle_form_factor) by Lambert's sum (or its
-/// far-field form) when every vertex is certainly above the tangent plane (nothing clipped) and
-/// the running error bound is within [`FAST_TOLERANCE`] of the result; `None` otherwise or for
-/// invalid input.
+/// The value of [`triangle_form_factor`](crate::kernels::form_factor::triangle_form_factor) by
+/// Lambert's sum (or its far-field form) when every vertex is certainly above the tangent plane
+/// (nothing clipped) and the running error bound is within [`FAST_TOLERANCE`] of the result; `None`
+/// otherwise or for invalid input.
 pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
     triangle_value_inlined(x, n, v)
 }
@@ -228,10 +230,10 @@ fn edge_derivs(
 /// `2π` times one Lambert edge term's gradient and Hessian (entries `[xx, yy, zz, xy, xz, yz]`,
 /// zero below [`Order::Hessian`]) and its `sin²β` (the caller chooses its own floor: see
 /// [`DERIV_MIN_SINE`]), for the clipped-triangle derivative path, whose loop is not a polygon of
-/// input vertices. `angle` is the edge's `β` when it has already been computed, NaN otherwise:
-/// by [`edge_and_angle`] for these inputs (the same bits as recomputing it), or by the
-/// near-plane split where that is well conditioned (within a few ulps of the true angle, not
-/// bit-consistent with `atan2(s, c)` of these rounded inputs: see `polygon::near_plane_value`).
+/// input vertices. `angle` is the edge's `β` when it has already been computed, NaN otherwise: by
+/// [`edge_and_angle`] for these inputs (the same bits as recomputing it), or by the near-plane
+/// split where that is well conditioned (within a few ulps of the true angle, not bit-consistent
+/// with `atan2(s, c)` of these rounded inputs: see `near_plane::split::near_plane_value`).
 #[inline(always)]
 pub(crate) fn edge_derivatives(
     n: DVec3,
@@ -387,8 +389,9 @@ fn deriv_size(d: &Terms, order: Order) -> (f64, f64) {
 }
 
 /// Value, gradient (and Hessian at [`Order::Hessian`]) of
-/// [`triangle_form_factor`](super::triangle_form_factor) by the analytic derivatives of Lambert's
-/// sum, for `order` above [`Order::Value`]: [`certified_derivs`] for three vertices.
+/// [`triangle_form_factor`](crate::kernels::form_factor::triangle_form_factor) by the analytic
+/// derivatives of Lambert's sum, for `order` above [`Order::Value`]: [`certified_derivs`] for three
+/// vertices.
 #[inline]
 pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Deriv3> {
     let (n, r, r2) = unclipped_triangle(x, n, v)?;
@@ -508,9 +511,9 @@ fn derivs_at<const M: usize>(
     Some(sum.scaled((sum.value.abs() * INV_2PI).min(1.0), scale))
 }
 
-/// Value and derivatives of [`edge_form_factor`](super::edge_form_factor) by the analytic
-/// derivatives of Lambert's term, for `order` above [`Order::Value`], when the value is certified
-/// and `sin β ≥ DERIV_MIN_SINE`; `None` otherwise.
+/// Value and derivatives of [`edge_form_factor`](crate::kernels::form_factor::edge_form_factor) by
+/// the analytic derivatives of Lambert's term, for `order` above [`Order::Value`], when the value
+/// is certified and `sin β ≥ DERIV_MIN_SINE`; `None` otherwise.
 #[inline]
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub(crate) fn edge_derivs_checked(

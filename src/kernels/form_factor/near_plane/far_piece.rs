@@ -40,13 +40,14 @@ pub(crate) fn far_piece_value(
 
 /// Value, gradient and (at [`Order::Hessian`]) Hessian of the far-field rule on a near-plane
 /// route's loop where the route took it and left its value to the derivative order
-/// ([`RouteLoop::defer_far`](near_plane_triangle::RouteLoop)): the rule summed once, for the value
-/// and the derivatives, the derivatives as `evaluate` has them (the clip line's Hessian term
-/// included). The value is [`far_piece_value`]'s bits: `triangle_rule` sums the value's `q0` and
-/// `RuleSums::assemble` forms it by the same operations at every order, and it is signed and
-/// clamped here as there ([`visible_value`]). `None` where that value is not finite (where
-/// [`far_piece_value`] declines, and the route with it) or `route.far` is not set; `Err(value)`
-/// where the derivatives overflow. Per unit length (per squared length), in the units of the vertices.
+/// ([`RouteLoop::defer_far`](crate::kernels::form_factor::near_plane::route_loop::RouteLoop)): the
+/// rule summed once, for the value and the derivatives, the derivatives as `evaluate` has them (the
+/// clip line's Hessian term included). The value is [`far_piece_value`]'s bits: `triangle_rule`
+/// sums the value's `q0` and `RuleSums::assemble` forms it by the same operations at every order,
+/// and it is signed and clamped here as there ([`visible_value`]). `None` where that value is not
+/// finite (where [`far_piece_value`] declines, and the route with it) or `route.far` is not set;
+/// `Err(value)` where the derivatives overflow. Per unit length (per squared length), in the units
+/// of the vertices.
 pub(crate) fn deferred_far_piece<const N: usize>(
     route: &RouteLoop<N>,
     order: Order,

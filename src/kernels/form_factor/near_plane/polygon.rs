@@ -1,19 +1,20 @@
 //! The value of a strictly convex polygon's form factor (4 to 8 vertices) with `x` near its
 //! plane, outside the part the tangent plane leaves visible: the robust path's near-plane split
-//! ([`near_plane_value`]) without the rest of its set-up, as `near_plane_triangle` does for
+//! ([`near_plane_value`]) without the rest of its set-up, as `near_plane::triangle` does for
 //! triangles (read its module documentation first).
 //!
-//! For `Order::Value` in this configuration [`evaluate`](super::evaluate) validates the polygon
-//! (Newell's plane, planarity, the O(m²) simplicity test), builds the generic machinery (growable
-//! vectors, the fan's far-field test, full edge frames) and then uses only the split. This route
-//! replays the decisions and operations of that evaluation which the split's result depends on,
-//! on fixed-size arrays, so that it returns the robust path's bits, and declines (`None`)
-//! wherever the robust path would not take the split for the value: `x` not near the plane,
-//! nothing clipped, the foot of `x` inside the clipped loop, a sliver, or the split itself
-//! declining. Where the visible part is far-field against its size (a small corner cut off,
-//! seen from afar), the robust path integrates it by its far-field rule instead of the split:
-//! so does the route, on its loop, and the derivative orders take the same rule's derivatives
-//! ([`deferred_far_piece`](super::deferred_far_piece)).
+//! For `Order::Value` in this configuration
+//! [`evaluate`](crate::kernels::form_factor::robust::evaluate) validates the polygon (Newell's
+//! plane, planarity, the O(m²) simplicity test), builds the generic machinery (growable vectors,
+//! the fan's far-field test, full edge frames) and then uses only the split. This route replays the
+//! decisions and operations of that evaluation which the split's result depends on, on fixed-size
+//! arrays, so that it returns the robust path's bits, and declines (`None`) wherever the robust
+//! path would not take the split for the value: `x` not near the plane, nothing clipped, the foot
+//! of `x` inside the clipped loop, a sliver, or the split itself declining. Where the visible part
+//! is far-field against its size (a small corner cut off, seen from afar), the robust path
+//! integrates it by its far-field rule instead of the split: so does the route, on its loop, and
+//! the derivative orders take the same rule's derivatives
+//! ([`deferred_far_piece`](crate::kernels::form_factor::near_plane::far_piece::deferred_far_piece)).
 //!
 //! What differs from the triangle's replay: the plane is Newell's sum over every edge (as
 //! [`Plane::new`] forms it; for a triangle it reduces to one cross product), validated for
@@ -24,12 +25,12 @@
 //! (simplicity included, so its O(m²) test is not replayed) and that are not slivers (neither
 //! the sliver fan path nor `evaluate`'s sliver rule takes them).
 //!
-//! Its f64 screen runs in the portable build; the exact height, the clip, the frames and the
-//! split are compiled a second time with AVX2 and FMA where the CPU has them, with the same bits
-//! (see `near_plane_triangle`'s `split_fma`). The derivative orders run the same route through
+//! Its f64 screen runs in the portable build; the exact height, the clip, the frames and the split
+//! are compiled a second time with AVX2 and FMA where the CPU has them, with the same bits (see
+//! `near_plane::triangle`'s `split_fma`). The derivative orders run the same route through
 //! [`clipped_polygon_value_and_loop`], which also hands out its loop for the clipped loop's
-//! derivatives (`lambert::clipped_polygon::routed_polygon_derivs`). Its cost against the robust path is in
-//! docs/kernels.md, "Hard regimes".
+//! derivatives (`lambert::clipped_polygon::routed_polygon_derivs`). Its cost against the robust
+//! path is in docs/kernels.md, "Hard regimes".
 
 use glam::DVec3;
 
@@ -77,15 +78,15 @@ pub(crate) fn polygon_value<const M: usize, const N: usize>(
 }
 
 /// [`polygon_value`] with the exact signed height `h_P` of `x` over the polygon's plane (along
-/// Newell's normal, positive when it points away from `x`; in the units of `v`), which orients
-/// the derivative orders' loop as the robust edge sum is oriented, and with the clipped loop it
-/// computed the value on, written to `out` (unspecified where it declines), for those orders,
-/// which take its points (the double-double clip points), the vectors of its edges from a kept
-/// vertex to a clip point (or back) and its well-conditioned edges' angles (see
-/// `near_plane_value`) instead of computing them a second time. The loop's points are, for `i`
-/// in `0..M`, vertex `i` when it is kept, then the crossing of edge `i → i + 1` when there is one
-/// (`clip`'s order). Also returned: the unit normal ([`lambert::unit`]) and `r_k = v_k − x`,
-/// which the derivative orders' loop takes rather than forming them again.
+/// Newell's normal, positive when it points away from `x`; in the units of `v`), which orients the
+/// derivative orders' loop as the robust edge sum is oriented, and with the clipped loop it
+/// computed the value on, written to `out` (unspecified where it declines), for those orders, which
+/// take its points (the double-double clip points), the vectors of its edges from a kept vertex to
+/// a clip point (or back) and its well-conditioned edges' angles (see `near_plane_value`) instead
+/// of computing them a second time. The loop's points are, for `i` in `0..M`, vertex `i` when it is
+/// kept, then the crossing of edge `i → i + 1` when there is one (`clip`'s order). Also returned:
+/// the unit normal ([`validate::unit`](crate::kernels::form_factor::validate::unit)) and `r_k = v_k
+/// − x`, which the derivative orders' loop takes rather than forming them again.
 #[inline(always)]
 pub(crate) fn clipped_polygon_value_and_loop<const M: usize, const N: usize>(
     x: DVec3,
@@ -234,13 +235,13 @@ unsafe fn split_fma<const M: usize, const N: usize>(
     split::<M, N>(x, v, s, points, angles, edges, far, defer_far)
 }
 
-/// The exact height, the clip (into `points`), the remaining decisions and the split itself:
-/// the value, the exact height and the loop's length; where `angles` and `edges` have entries,
-/// the loop's edges' angles (see `near_plane_value`) and the vectors of its edges (the clip
-/// edge's from `near_plane_value`). Where the visible part is far-field, the far-field rule's
-/// value instead, and `far` set; with `defer_far` that rule's value is left to
-/// [`deferred_far_piece`](super::deferred_far_piece) (the derivative orders) and the value
-/// returned is NaN.
+/// The exact height, the clip (into `points`), the remaining decisions and the split itself: the
+/// value, the exact height and the loop's length; where `angles` and `edges` have entries, the
+/// loop's edges' angles (see `near_plane_value`) and the vectors of its edges (the clip edge's from
+/// `near_plane_value`). Where the visible part is far-field, the far-field rule's value instead,
+/// and `far` set; with `defer_far` that rule's value is left to
+/// [`deferred_far_piece`](crate::kernels::form_factor::near_plane::far_piece::deferred_far_piece)
+/// (the derivative orders) and the value returned is NaN.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn split<const M: usize, const N: usize>(
@@ -300,9 +301,9 @@ fn split<const M: usize, const N: usize>(
     visible_value(value, h_p).map(|value| (value, h_p, count))
 }
 
-/// [`clip`](super::clip) on fixed arrays (the same operations, so the same vertices): the loop
-/// in `out` (capacity `N ≥ 2M`, Sutherland-Hodgman's bound) and its length, `None` when nothing
-/// is cut away or fewer than three vertices remain.
+/// [`clip`](crate::kernels::form_factor::clip::clip) on fixed arrays (the same operations, so the
+/// same vertices): the loop in `out` (capacity `N ≥ 2M`, Sutherland-Hodgman's bound) and its
+/// length, `None` when nothing is cut away or fewer than three vertices remain.
 #[inline(always)]
 fn clip_polygon<const M: usize, const N: usize>(
     u: &[DVec3; M],

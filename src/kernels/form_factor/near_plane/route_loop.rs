@@ -16,12 +16,13 @@ pub(crate) const CLIP_VERTEX_ZERO: ClipVertex = ClipVertex {
     on_line: false,
 };
 
-/// The clipped loop [`clipped_triangle_value_and_loop`] computed its value on, for the derivative
-/// orders, which use the same clip points instead of clipping a second time: the first
-/// [`count`](RouteLoop::count) points, for `i` in 0..3 vertex `i` when it is kept, then the
-/// crossing of edge `i → i + 1` when there is one. Filled in place by the caller's frame. `N`: the
-/// capacity, 4 for a triangle (`near_plane_polygon`'s loops use `2M` for `M` vertices, their points
-/// in the same order, for `i` in `0..M`).
+/// The clipped loop
+/// [`clipped_triangle_value_and_loop`](crate::kernels::form_factor::near_plane::triangle::clipped_triangle_value_and_loop)
+/// computed its value on, for the derivative orders, which use the same clip points instead of
+/// clipping a second time: the first [`count`](RouteLoop::count) points, for `i` in 0..3 vertex `i`
+/// when it is kept, then the crossing of edge `i → i + 1` when there is one. Filled in place by the
+/// caller's frame. `N`: the capacity, 4 for a triangle (`near_plane::polygon`'s loops use `2M` for
+/// `M` vertices, their points in the same order, for `i` in `0..M`).
 pub(crate) struct RouteLoop<const N: usize = 4> {
     pub(crate) points: [ClipVertex; N],
     pub(crate) angles: [f64; N],
@@ -30,9 +31,10 @@ pub(crate) struct RouteLoop<const N: usize = 4> {
     /// Set where the visible part is far-field against its size and the value came from the
     /// robust path's far-field rule on the loop.
     pub(crate) far: Option<FarPiece>,
-    /// Set by the caller before the route runs: where the far-field rule is taken, leave its
-    /// value to [`deferred_far_piece`](super::deferred_far_piece), which sums it with the
-    /// derivatives (one pass over the rule's nodes instead of two).
+    /// Set by the caller before the route runs: where the far-field rule is taken, leave its value
+    /// to
+    /// [`deferred_far_piece`](crate::kernels::form_factor::near_plane::far_piece::deferred_far_piece),
+    /// which sums it with the derivatives (one pass over the rule's nodes instead of two).
     pub(crate) defer_far: bool,
 }
 
@@ -47,10 +49,10 @@ pub(crate) struct FarPiece {
     pub(crate) h_p: f64,
 }
 
-/// The parts of [`EdgeFrame::with_exact_ends`](crate::kernels::form_factor::EdgeFrame) that
-/// [`near_plane_value`] reads, by the same operations (the double-double cross product and
-/// abscissae when x is near the edge's line), for its edge vector `e` (`edge_vector(a, b)`);
-/// `None` for a zero-length edge.
+/// The parts of [`EdgeFrame::with_exact_ends`](crate::kernels::form_factor::edge::EdgeFrame) that
+/// [`near_plane_value`](crate::kernels::form_factor::near_plane::split::near_plane_value) reads, by
+/// the same operations (the double-double cross product and abscissae when x is near the edge's
+/// line), for its edge vector `e` (`edge_vector(a, b)`); `None` for a zero-length edge.
 #[inline(always)]
 pub(crate) fn in_plane_edge(a: &ClipVertex, b: &ClipVertex, e: DVec3) -> Option<InPlaneEdge> {
     let len = e.length();

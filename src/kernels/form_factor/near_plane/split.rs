@@ -19,13 +19,13 @@ pub(crate) const NEAR_PLANE_CANCELLATION: f64 = 2.0;
 /// recomputed by [`near_plane_value`]; at or above it for some edge, that function declines.
 pub(crate) const NEAR_PLANE_RATIO: f64 = 0.1;
 
-/// Above this ratio of the near-plane split's parts (in magnitude) to its sum, [`evaluate`] does not
-/// take the split up front for a clipped polygon (the value would keep ~`u` times this ratio): the
-/// O(h_P) parts then cancel too, which happens when the visible part is small against its distance
-/// from x (the clip line cuts a small corner off the polygon), where the edge sum's derivatives
-/// cancel as well and the quadrature takes over. Measured: the walks of
-/// `tests/form_factor_near_plane.rs` cancel by 25 to ~150; the accuracy test's worst case (a corner
-/// of 1e-12 relative value) by far more.
+/// Above this ratio of the near-plane split's parts (in magnitude) to its sum,
+/// [`evaluate`](crate::kernels::form_factor::robust::evaluate) does not take the split up front for
+/// a clipped polygon (the value would keep ~`u` times this ratio): the O(h_P) parts then cancel
+/// too, which happens when the visible part is small against its distance from x (the clip line
+/// cuts a small corner off the polygon), where the edge sum's derivatives cancel as well and the
+/// quadrature takes over. Measured: the walks of `tests/form_factor_near_plane.rs` cancel by 25 to
+/// ~150; the accuracy test's worst case (a corner of 1e-12 relative value) by far more.
 pub(crate) const SPLIT_CANCELLATION_LIMIT: f64 = 1e3;
 
 /// Up to this ratio of the split's parts to its sum the value is still the split's, while above
@@ -62,8 +62,10 @@ impl From<EdgeFrame> for InPlaneEdge {
 }
 
 /// The signed edge-sum value for x near the polygon's plane, without the cancellation of the plain
-/// sum (the convention of the edge terms, [`frame_term`]: positive when the loop's right-hand normal `N̂`
-/// points away from x, i.e. for `h_P = N̂·(v − x) > 0`; both signs of `h_P` are handled alike).
+/// sum (the convention of the edge terms,
+/// [`frame_term`](crate::kernels::form_factor::edge::frame_term): positive when the loop's
+/// right-hand normal `N̂` points away from x, i.e. for `h_P = N̂·(v − x) > 0`; both signs of `h_P`
+/// are handled alike).
 ///
 /// Edges not in the tangent plane. Split `n = n_N N̂ + n_t`. With `r_a = q_a + h_P N̂` (`q_a` in the
 /// plane) the lever arm is `r_a × e = q_a × e + h_P N̂ × e`, where `q_a × e` is along `N̂`. So the
@@ -112,7 +114,7 @@ impl From<EdgeFrame> for InPlaneEdge {
 /// `angles[i]`, where `angles` has an entry `i`, receives the angle edge `i` subtends at x
 /// (`atan(s_b/H) − atan(s_a/H)`, Lambert's `β`, in `[0, π]`) for the edges off the tangent
 /// plane that reach the sum, where it is well conditioned (entries of other edges are left
-/// alone): the clipped loop's derivatives (`lambert_clipped_derivs`) reuse them instead of an
+/// alone): the clipped loop's derivatives (`lambert::clipped_derivs`) reuse them instead of an
 /// `atan2` each. Well conditioned: both ends at least `L/4` from x and `sin β ≥ 1/4`. The far
 /// abscissa `s_b = s_a + L` errs by `~u(‖r_a‖ + L)`, which moves the angle by up to
 /// `u(‖r_a‖ + L)/‖r_b‖` (133 ulps measured with an end at `L/73`): at most ~9u here. And the
@@ -243,12 +245,13 @@ pub(crate) fn near_plane_value<E: Copy + Into<InPlaneEdge>>(
 /// ~1e-12 and at 2.5e-6 rad would reach 1e-9.
 pub(crate) const GRAZING_NT2: f64 = 1e-2;
 
-/// Below this `‖n_t‖²` (a receiver within 1e-4 rad of facing the polygon's plane head-on, near
-/// the plane and clipping it) [`evaluate`] takes the derivatives from the quadrature even where the
-/// split does not cancel beyond [`SPLIT_CANCELLATION_LIMIT`]: the edge sum's terms are O(1/size)
-/// while the derivatives are O(F/h_P), which vanish with `h_P` for a head-on receiver
-/// (`tests/form_factor_grazing.rs`: gradient errors up to 6.3e-6 from the edge sum, 3.9e-7 from the
-/// quadrature; above 1e-4 rad the edge sum's were within 5e-11).
+/// Below this `‖n_t‖²` (a receiver within 1e-4 rad of facing the polygon's plane head-on, near the
+/// plane and clipping it) [`evaluate`](crate::kernels::form_factor::robust::evaluate) takes the
+/// derivatives from the quadrature even where the split does not cancel beyond
+/// [`SPLIT_CANCELLATION_LIMIT`]: the edge sum's terms are O(1/size) while the derivatives are
+/// O(F/h_P), which vanish with `h_P` for a head-on receiver (`tests/form_factor_grazing.rs`:
+/// gradient errors up to 6.3e-6 from the edge sum, 3.9e-7 from the quadrature; above 1e-4 rad the
+/// edge sum's were within 5e-11).
 pub(crate) const FACING_NT2: f64 = 1e-8;
 
 /// The in-plane part `n_t` of the receiver normal, `‖n_t‖²` and the distance `D = |h_P|/‖n_t‖`
@@ -321,7 +324,8 @@ fn grazing_tangent(
 
 /// The frames of the loop's edges as the edge sum builds them ([`frame_of`]), pushed onto `out`
 /// (filled in place: returning the small vector would copy it); `None` for the clip edges (when
-/// `cut`), whose terms [`clip_edge_term`] forms from its own frame.
+/// `cut`), whose terms [`clip_edge_term`](crate::kernels::form_factor::edge::clip_edge_term) forms
+/// from its own frame.
 pub(crate) fn edge_frames(verts: &[ClipVertex], cut: bool, out: &mut Frames) {
     let count = verts.len();
     for i in 0..count {
@@ -347,8 +351,9 @@ pub(crate) type Frames = SmallVec<[Option<EdgeFrame>; 10]>;
 
 /// Whether the foot point of x (`h_p N̂` from x) lies inside the clipped loop, by the crossing
 /// number of the loop projected along the dominant axis of `N̂` (bridges along the clip line cross
-/// in pairs and leave the parity alone). Only used to choose between two accurate evaluations
-/// (see [`evaluate`]), so a foot on or next to the boundary may go either way.
+/// in pairs and leave the parity alone). Only used to choose between two accurate evaluations (see
+/// [`evaluate`](crate::kernels::form_factor::robust::evaluate)), so a foot on or next to the
+/// boundary may go either way.
 #[inline]
 pub(crate) fn foot_inside(verts: &[ClipVertex], plane_n: DVec3, h_p: f64) -> bool {
     // `dominant_projection`'s choice made once, each case with its own loop.

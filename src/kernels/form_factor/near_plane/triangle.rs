@@ -2,14 +2,15 @@
 //! leaves visible: the robust path's near-plane split ([`near_plane_value`]) without the rest of its
 //! set-up.
 //!
-//! For `Order::Value` in this configuration [`evaluate`](super::evaluate) builds the generic
-//! machinery (growable vectors, Newell's plane with its planarity check, the fan's far-field test,
-//! full edge frames) and then uses only the split. This route replays exactly the decisions and the
+//! For `Order::Value` in this configuration
+//! [`evaluate`](crate::kernels::form_factor::robust::evaluate) builds the generic machinery
+//! (growable vectors, Newell's plane with its planarity check, the fan's far-field test, full edge
+//! frames) and then uses only the split. This route replays exactly the decisions and the
 //! operations of that evaluation which the split's result depends on, on fixed-size arrays, so that
 //! it returns the robust path's bits (the gradient and Hessian orders, which take their value from
-//! this route or the robust path's split, agree with it bit for bit), and declines (`None`) wherever the
-//! robust path would not take the split for the value: `x` not near the plane, nothing clipped, the
-//! foot of `x` inside the clipped loop, the far field, or the split itself declining.
+//! this route or the robust path's split, agree with it bit for bit), and declines (`None`)
+//! wherever the robust path would not take the split for the value: `x` not near the plane, nothing
+//! clipped, the foot of `x` inside the clipped loop, the far field, or the split itself declining.
 //!
 //! Its f64 screen runs in the portable build; what follows (the exact height and clip points in
 //! double-double, the frames and the split) is compiled a second time with AVX2 and FMA where the
@@ -18,7 +19,7 @@
 //!
 //! The gradient and Hessian orders run the same route through
 //! [`clipped_triangle_value_and_loop`], which also hands out what the clipped loop's derivatives
-//! (`lambert_clipped_derivs`) would otherwise compute a second time: the clipped loop (its
+//! (`lambert::clipped_derivs`) would otherwise compute a second time: the clipped loop (its
 //! double-double clip points), the vectors of the edges from a kept vertex to a clip point, and
 //! the well-conditioned edges' angles (see `near_plane_value`).
 
@@ -40,12 +41,13 @@ use crate::kernels::form_factor::quadrature::rules::far_field_rule;
 use crate::kernels::form_factor::validate::unit;
 use crate::kernels::numeric::dd::{self, Dd3};
 
-/// The value of [`triangle_form_factor`](crate::kernels::triangle_form_factor) for
-/// `Order::Value` (form factor, dimensionless, in `[0, 1]`) when the robust path would take it from
-/// its near-plane split, bit for bit; `None` when it would not (see the module documentation), and
-/// for input outside the unscaled range of
-/// [`triangle_form_factor_in_range`](super::triangle_form_factor_in_range) (coordinate differences
-/// in (1e-30, 1e30)) or invalid input, which the callers leave to the robust path.
+/// The value of [`triangle_form_factor`](crate::kernels::triangle_form_factor) for `Order::Value`
+/// (form factor, dimensionless, in `[0, 1]`) when the robust path would take it from its near-plane
+/// split, bit for bit; `None` when it would not (see the module documentation), and for input
+/// outside the unscaled range of
+/// [`triangle_form_factor_in_range`](crate::kernels::form_factor::robust::triangle_form_factor_in_range)
+/// (coordinate differences in (1e-30, 1e30)) or invalid input, which the callers leave to the
+/// robust path.
 // Not inlined: the callers that do not take it pay for the call's test only.
 #[inline(never)]
 pub(crate) fn triangle_value(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<f64> {
@@ -252,11 +254,12 @@ pub(crate) fn clipped_triangle_value_and_loop(
     Some(value)
 }
 
-/// [`split`] with the loop it clipped (in `loop_`) and its length, and, where `angles` and
-/// `edges` have entries, its edges' angles (see `near_plane_value`) and vectors (the clip
-/// edge's from `near_plane_value`). Where the visible part is far-field against its size, the
-/// robust path's far-field rule on the loop instead of the split, with `far` set; with
-/// `defer_far` that rule's value is left to [`deferred_far_piece`](super::deferred_far_piece)
+/// [`split`] with the loop it clipped (in `loop_`) and its length, and, where `angles` and `edges`
+/// have entries, its edges' angles (see `near_plane_value`) and vectors (the clip edge's from
+/// `near_plane_value`). Where the visible part is far-field against its size, the robust path's
+/// far-field rule on the loop instead of the split, with `far` set; with `defer_far` that rule's
+/// value is left to
+/// [`deferred_far_piece`](crate::kernels::form_factor::near_plane::far_piece::deferred_far_piece)
 /// (the derivative orders) and the value returned is NaN.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
@@ -317,9 +320,9 @@ fn split_loop(
     visible_value(value, h_p).map(|value| (value, count))
 }
 
-/// [`clip`](super::clip) for a triangle, on a fixed array (the same operations, so the same
-/// vertices): the loop in `out` and its length, `None` when nothing is cut away or fewer than
-/// three vertices remain.
+/// [`clip`](crate::kernels::form_factor::clip::clip) for a triangle, on a fixed array (the same
+/// operations, so the same vertices): the loop in `out` and its length, `None` when nothing is cut
+/// away or fewer than three vertices remain.
 #[inline(always)]
 fn clip_triangle(
     u: &[DVec3; 3],

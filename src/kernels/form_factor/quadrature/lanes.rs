@@ -272,8 +272,11 @@ impl<L: Lanes> LaneSums<L> {
     }
 }
 
-/// The far-field rules ([`FAR_FIELD_RULES`](super::FAR_FIELD_RULES): 3, 4, 5, 6 and 8 points)
-/// as the sums take them ([`sums::quads`]), by their number of points, built once.
+/// The far-field rules
+/// ([`FAR_FIELD_RULES`](crate::kernels::form_factor::quadrature::rules::FAR_FIELD_RULES): 3, 4, 5,
+/// 6 and 8 points) as the sums take them
+/// ([`quadrature::lanes::quads`](crate::kernels::form_factor::quadrature::lanes::quads)), by their
+/// number of points, built once.
 fn far_quads(points: usize) -> &'static [[[f64; 4]; 2]] {
     static QUADS: OnceLock<[&'static [[[f64; 4]; 2]]; 9]> = OnceLock::new();
     QUADS.get_or_init(|| {
@@ -292,14 +295,15 @@ fn far_quads(points: usize) -> &'static [[[f64; 4]; 2]] {
     })[points]
 }
 
-/// The sums of the far-field `rule` (`n`x`n` Gauss-Legendre points, Duffy-mapped) over the
-/// triangle `(a, b, c)` (relative to x, as [`triangle_rule`](super::triangle_rule) parametrizes
-/// it: `r_a + s·(u_b − u_a) + s·t·(u_c − u_b)`), four nodes at a time: the subdivided
-/// quadrature's pieces, whose node loop is most of the robust path's cost where it integrates
-/// (x near a polygon's plane with a small or thin visible part). The same rule and integrand as
-/// `triangle_rule`, summed lane by lane (so rounded in another order); the order of the
-/// operations does not depend on `GRADIENT` or `HESSIAN`, nor on the build (module
-/// documentation of [`sums`]).
+/// The sums of the far-field `rule` (`n`x`n` Gauss-Legendre points, Duffy-mapped) over the triangle
+/// `(a, b, c)` (relative to x, as
+/// [`triangle_rule`](crate::kernels::form_factor::quadrature::tensor::triangle_rule) parametrizes
+/// it: `r_a + s·(u_b − u_a) + s·t·(u_c − u_b)`), four nodes at a time: the subdivided quadrature's
+/// pieces, whose node loop is most of the robust path's cost where it integrates (x near a
+/// polygon's plane with a small or thin visible part). The same rule and integrand as
+/// `triangle_rule`, summed lane by lane (so rounded in another order); the order of the operations
+/// does not depend on `GRADIENT` or `HESSIAN`, nor on the build (module documentation of
+/// [`quadrature::lanes`](crate::kernels::form_factor::quadrature::lanes)).
 #[inline(always)]
 pub(crate) fn rule_piece_sums<S: GroupSums, const GRADIENT: bool, const HESSIAN: bool>(
     a: &ClipVertex,

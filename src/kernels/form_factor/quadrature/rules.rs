@@ -12,12 +12,12 @@ pub(crate) const FAR_FIELD_RATIO: f64 = 16.0;
 
 /// The far-field rules: from this distance-over-radius ratio on, `n`x`n` Gauss-Legendre points per
 /// fan triangle (largest ratio first). Above 16 the ratios come from the a-priori bound of
-/// [`far_field_error_bound`]: at each listed ratio (and beyond) that bound on the relative error is
-/// at most 1e-14 for the value and the gradient and 1e-12 for the Hessian (a factor 100 below the
-/// generic accuracy contract; the bound itself ignores that Gauss rules converge faster than
-/// polynomial exactness alone implies, and overestimates the measured errors by orders of
-/// magnitude). Between 16 and 31 radii the 8x8 rule is kept on measurement: there its bound is above
-/// 1e-14 (see the unit test) but its measured error is at the rounding floor.
+/// `far_field_error_bound` (unit tests): at each listed ratio (and beyond) that bound on the
+/// relative error is at most 1e-14 for the value and the gradient and 1e-12 for the Hessian (a
+/// factor 100 below the generic accuracy contract; the bound itself ignores that Gauss rules
+/// converge faster than polynomial exactness alone implies, and overestimates the measured errors
+/// by orders of magnitude). Between 16 and 31 radii the 8x8 rule is kept on measurement: there its
+/// bound is above 1e-14 (see the unit test) but its measured error is at the rounding floor.
 pub(crate) const FAR_FIELD_RULES: [(f64, usize); 5] = [
     (3.6e4, 3),
     (1.5e3, 4),
@@ -26,7 +26,8 @@ pub(crate) const FAR_FIELD_RULES: [(f64, usize); 5] = [
     (FAR_FIELD_RATIO, 8),
 ];
 
-/// The second of [`fast_decisions`]: the far-field rule of the unclipped polygon, if any.
+/// The second of [`fast_decisions`](crate::kernels::form_factor::replay::fast_decisions): the
+/// far-field rule of the unclipped polygon, if any.
 #[inline]
 pub(crate) fn far_rule_of(r: &[DVec3]) -> Option<Rule> {
     let count = r.len() as f64;

@@ -18,17 +18,22 @@ type Piece = ([ClipVertex; 3], (DVec3, f64));
 /// Most triangles [`subdivided_quadrature`] may use before giving up.
 pub(crate) const MAX_PIECES: usize = 256;
 /// The same for x near the polygon's plane with part of the polygon clipped away and the foot of x
-/// outside the visible part, when [`near_plane_value`] declines: x also within `10 h_P` of an edge
-/// line, or the split's own parts cancelling (a small corner cut off). There the edge sum's O(1)
-/// terms sum to the O(h_P) value, and graded refinement towards x takes up to ~1500 pieces at
-/// h_P = 1e-6. Elsewhere in this configuration the split takes the value in closed form (the
-/// cancellation is not intrinsic: see [`near_plane_value`]).
+/// outside the visible part, when
+/// [`near_plane_value`](crate::kernels::form_factor::near_plane::split::near_plane_value) declines:
+/// x also within `10 h_P` of an edge line, or the split's own parts cancelling (a small corner cut
+/// off). There the edge sum's O(1) terms sum to the O(h_P) value, and graded refinement towards x
+/// takes up to ~1500 pieces at h_P = 1e-6. Elsewhere in this configuration the split takes the
+/// value in closed form (the cancellation is not intrinsic: see
+/// [`near_plane_value`](crate::kernels::form_factor::near_plane::split::near_plane_value)).
 pub(crate) const MAX_PIECES_NEAR_PLANE: usize = 4096;
 
 /// The fan triangles of the loop, bisected along their longest edge until each is far from x
-/// (centroid distance ≥ [`FAR_FIELD_RATIO`] × radius), then integrated by [`triangle_rule`]'s rule,
-/// four nodes at a time. For polygons whose edge sum cancels (slivers, x near the plane) while x is
-/// not close to them. `None` if that would take more than `max_pieces` triangles.
+/// (centroid distance ≥
+/// [`FAR_FIELD_RATIO`](crate::kernels::form_factor::quadrature::rules::FAR_FIELD_RATIO) × radius),
+/// then integrated by
+/// [`triangle_rule`](crate::kernels::form_factor::quadrature::tensor::triangle_rule)'s rule, four
+/// nodes at a time. For polygons whose edge sum cancels (slivers, x near the plane) while x is not
+/// close to them. `None` if that would take more than `max_pieces` triangles.
 pub(crate) fn subdivided_quadrature(
     verts: &[ClipVertex],
     n: DVec3,

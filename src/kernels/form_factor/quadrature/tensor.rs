@@ -13,9 +13,10 @@ use crate::{Deriv3, Order};
 
 /// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, `rule` in
 /// both directions), with analytic derivatives of the integrand. Accurate when x is far from the
-/// triangle compared with its size (see [`far_field_rule`]). Signed by the triangle's orientation
-/// (`N` right-handed). The triangle is `r_a + s·ab + s·t·bc` (`s, t ∈ [0, 1]`) relative to x;
-/// `geometry` is its `(2·area·N̂, 2·area·N̂·r_a)` from [`fan_geometry`].
+/// triangle compared with its size (see
+/// [`far_field_rule`](crate::kernels::form_factor::quadrature::rules::far_field_rule)). Signed by
+/// the triangle's orientation (`N` right-handed). The triangle is `r_a + s·ab + s·t·bc` (`s, t ∈
+/// [0, 1]`) relative to x; `geometry` is its `(2·area·N̂, 2·area·N̂·r_a)` from [`fan_geometry`].
 pub(crate) fn triangle_rule(
     r_a: DVec3,
     ab: DVec3,

@@ -14,12 +14,12 @@ use crate::kernels::form_factor::sliver::rule::{rule_sums, rules, ThinPiece};
 use crate::{Deriv3, Order};
 
 /// The form factor of a sliver triangle (`u`, `r`, `r_lo` as for
-/// [`direct_sliver`](super::direct_sliver)) that the receiver's tangent plane may cut, with
-/// `plane` and `h_p` as `evaluate` takes them (x not near the plane): the same clip, rule, sign,
-/// clip-line term and clamp as `evaluate`, so the same bits. `None` when nothing is cut after all
-/// (a vertex within the rounding margin of the tangent plane but above it), when the rule
-/// declines, or when the result or the clip-line term fails; the caller then takes `evaluate`,
-/// which answers (or fails) as it always has.
+/// [`direct_sliver`](crate::kernels::form_factor::sliver::direct::direct_sliver)) that the
+/// receiver's tangent plane may cut, with `plane` and `h_p` as `evaluate` takes them (x not near
+/// the plane): the same clip, rule, sign, clip-line term and clamp as `evaluate`, so the same bits.
+/// `None` when nothing is cut after all (a vertex within the rounding margin of the tangent plane
+/// but above it), when the rule declines, or when the result or the clip-line term fails; the
+/// caller then takes `evaluate`, which answers (or fails) as it always has.
 pub(crate) fn clipped_sliver(
     u: &[DVec3; 3],
     r: &[DVec3; 3],
@@ -96,13 +96,14 @@ fn clipped_sliver_with<S: GroupSums>(
 }
 
 /// The rule on one fan triangle `(a, b, c)` of a clipped sliver's visible part: as
-/// [`sliver_quadrature`](super::sliver_quadrature), split at the foot of the vertex opposite the
-/// longest edge, except where that foot lies within the vertex's height of an end of the edge.
-/// There the piece at that end is no longer than it is wide, but it would cost a whole rule, and
-/// the triangle is one thin piece from the other end instead (its short edge, the opposite one, at
-/// most √2 times the height). Every fan triangle touching the clip edge of a cut sliver is such a
-/// triangle: the clip edge is as short as the sliver is wide, and the foot of its far vertex on
-/// the long side lies at its end. A quadrilateral visible part takes three pieces instead of four.
+/// [`sliver_quadrature`](crate::kernels::form_factor::sliver::rule::sliver_quadrature), split at
+/// the foot of the vertex opposite the longest edge, except where that foot lies within the
+/// vertex's height of an end of the edge. There the piece at that end is no longer than it is wide,
+/// but it would cost a whole rule, and the triangle is one thin piece from the other end instead
+/// (its short edge, the opposite one, at most √2 times the height). Every fan triangle touching the
+/// clip edge of a cut sliver is such a triangle: the clip edge is as short as the sliver is wide,
+/// and the foot of its far vertex on the long side lies at its end. A quadrilateral visible part
+/// takes three pieces instead of four.
 #[inline(always)]
 pub(crate) fn fan_triangle<S: GroupSums>(
     v0: &ClipVertex,
@@ -155,19 +156,19 @@ pub(crate) fn fan_triangle<S: GroupSums>(
 }
 
 /// The signed form factor of a sliver cut by the receiver's tangent plane, from its visible part
-/// `verts` (the clipped loop, x origin of the `r`, the clip points exact in double-double): the
-/// sum of the rule over the loop's fan triangles from its first vertex
-/// ([`clipped::fan_triangle`]); `None` when the rule declines any piece (the caller then takes
-/// the robust path).
+/// `verts` (the clipped loop, x origin of the `r`, the clip points exact in double-double): the sum
+/// of the rule over the loop's fan triangles from its first vertex
+/// ([`clipped::fan_triangle`](crate::kernels::form_factor::sliver::clipped::fan_triangle)); `None`
+/// when the rule declines any piece (the caller then takes the robust path).
 ///
 /// The integrand's factor `n·r` vanishes on the clip line, so the derivatives of the clipped
 /// integral are the integrals of the derivatives over the fixed visible part, except for the
 /// Hessian's term from the clip line's motion, which the caller adds (`clip_line_hessian`, with
-/// [`visible_plane`]). The fan pieces of a sliver are slivers (their widths at most the
-/// sliver's), and the clip points' double-double parts give each piece's geometry
-/// ([`sliver_geometry`]) to a few ulps, as for the uncut sliver. The fan's signed sum is the
-/// integral over the loop for any simple loop (each piece's sign comes from its own
-/// orientation), and every piece is checked by the rule to keep x away from it.
+/// [`visible_plane`](crate::kernels::form_factor::sliver::geometry::visible_plane)). The fan pieces
+/// of a sliver are slivers (their widths at most the sliver's), and the clip points' double-double
+/// parts give each piece's geometry ([`sliver_geometry`]) to a few ulps, as for the uncut sliver.
+/// The fan's signed sum is the integral over the loop for any simple loop (each piece's sign comes
+/// from its own orientation), and every piece is checked by the rule to keep x away from it.
 pub(crate) fn clipped_sliver_quadrature(
     verts: &[ClipVertex],
     n: DVec3,
@@ -181,7 +182,8 @@ pub(crate) fn clipped_sliver_quadrature(
     clipped_sliver_quadrature_with::<PortableSums>(verts, n, order)
 }
 
-/// [`clipped_sliver_quadrature`] compiled with AVX2 and FMA (as [`sliver_quadrature_fma`]).
+/// [`clipped_sliver_quadrature`] compiled with AVX2 and FMA (as the sliver rule's
+/// `sliver_quadrature_fma`).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 pub(crate) unsafe fn clipped_sliver_quadrature_fma(

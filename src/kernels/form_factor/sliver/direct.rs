@@ -11,16 +11,18 @@ use crate::kernels::form_factor::sliver::clipped::clipped_sliver;
 use crate::kernels::form_factor::sliver::rule::sliver_quadrature;
 use crate::{Deriv3, Order};
 
-/// [`evaluate`](super::evaluate)'s sliver branch for a triangle given by `u` (relative to its
-/// first vertex), `r` (relative to x) and `r_lo` (`r + r_lo` exact), without the set-up that
-/// branch does not use: the same decisions from the same rounded quantities (plane, height,
-/// far-field switch), so the result has the robust path's bits. Every vertex above the tangent
-/// plane by more than the rounding of `n·r` certifies that the clip keeps the triangle as it is
-/// (the uncut rule); otherwise the triangle is clipped as `evaluate` clips it and the visible part
-/// takes [`clipped_sliver_quadrature`] and the clip line's Hessian term ([`clipped`]). `None`
-/// whenever the robust path would do anything else (x near the plane or near the sliver, a
-/// zero-area triangle, an uncut far-field sliver, a non-finite result); the caller then takes
-/// that path.
+/// [`evaluate`](crate::kernels::form_factor::robust::evaluate)'s sliver branch for a triangle given
+/// by `u` (relative to its first vertex), `r` (relative to x) and `r_lo` (`r + r_lo` exact),
+/// without the set-up that branch does not use: the same decisions from the same rounded quantities
+/// (plane, height, far-field switch), so the result has the robust path's bits. Every vertex above
+/// the tangent plane by more than the rounding of `n·r` certifies that the clip keeps the triangle
+/// as it is (the uncut rule); otherwise the triangle is clipped as `evaluate` clips it and the
+/// visible part takes
+/// [`clipped_sliver_quadrature`](crate::kernels::form_factor::sliver::clipped::clipped_sliver_quadrature)
+/// and the clip line's Hessian term
+/// ([`sliver::clipped`](crate::kernels::form_factor::sliver::clipped)). `None` whenever the robust
+/// path would do anything else (x near the plane or near the sliver, a zero-area triangle, an uncut
+/// far-field sliver, a non-finite result); the caller then takes that path.
 pub(crate) fn direct_sliver(
     u: &[DVec3; 3],
     r: &[DVec3; 3],

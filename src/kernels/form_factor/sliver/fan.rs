@@ -1,27 +1,28 @@
 //! Very thin polygons (slivers of 4 to 8 vertices) by the triangles' sliver rule, one fan triangle
 //! at a time.
 //!
-//! The sliver rule ([`sliver`](super::sliver)) takes triangles only. A polygon thinner than
-//! `2·area < 1e-5·extent²` has an edge sum that cancels beyond
-//! [`THIN_CANCELLATION_LIMIT`](super::THIN_CANCELLATION_LIMIT), and `evaluate` then bisects it
-//! isotropically into up to 256 pieces: two orders of magnitude the cost of a generic quad for a
-//! quad 1e-6 wide seen from a length away (docs/kernels.md, "Hard regimes").
+//! The sliver rule ([`sliver`](crate::kernels::form_factor::sliver::rule)) takes triangles only. A
+//! polygon thinner than `2·area < 1e-5·extent²` has an edge sum that cancels beyond
+//! [`THIN_CANCELLATION_LIMIT`](crate::kernels::form_factor::tolerance::THIN_CANCELLATION_LIMIT),
+//! and `evaluate` then bisects it isotropically into up to 256 pieces: two orders of magnitude the
+//! cost of a generic quad for a quad 1e-6 wide seen from a length away (docs/kernels.md, "Hard
+//! regimes").
 //!
-//! The clipped form factor is the integral over the polygon of a pointwise integrand (the clip
-//! is a pointwise factor), so it is additive over a partition. When every fan triangle
-//! `(v_0, v_k, v_{k+1})` has the polygon's orientation, the fan partitions the polygon and its
-//! form factor is the sum of the triangles' (each a non-negative number: no cancellation in the
-//! value). The decisions of the sliver rule's direct entry
-//! ([`direct_sliver`](super::sliver::direct_sliver)) are taken once for the polygon (not
-//! near the plane, nothing clipped, no far-field rule), then each triangle is integrated by the
-//! rule ([`sliver_quadrature`], which declines when `x` is not far from the triangle compared
-//! with its width); as soon as one triangle is declined, so is the polygon (with `x` near its
-//! plane [`fan_of_triangles`] then sums the fan triangles through the triangle
-//! kernel, elsewhere the robust path runs). Where the robust path on a fan triangle takes the rule too, the sum has its bits up to
-//! the order of the additions. The derivatives are sums too: a triangle's gradient and Hessian are
-//! within its own accuracy relative to its largest entry, and the pieces' derivatives can only
-//! partly cancel (all pieces are seen under the same small width, from the same side), which
-//! `tests/form_factor_polygon_slivers.rs` measures against 320-bit references.
+//! The clipped form factor is the integral over the polygon of a pointwise integrand (the clip is a
+//! pointwise factor), so it is additive over a partition. When every fan triangle `(v_0, v_k,
+//! v_{k+1})` has the polygon's orientation, the fan partitions the polygon and its form factor is
+//! the sum of the triangles' (each a non-negative number: no cancellation in the value). The
+//! decisions of the sliver rule's direct entry
+//! ([`direct_sliver`](crate::kernels::form_factor::sliver::direct::direct_sliver)) are taken once
+//! for the polygon (not near the plane, nothing clipped, no far-field rule), then each triangle is
+//! integrated by the rule ([`sliver_quadrature`], which declines when `x` is not far from the
+//! triangle compared with its width); as soon as one triangle is declined, so is the polygon (with
+//! `x` near its plane [`fan_of_triangles`] then sums the fan triangles through the triangle kernel,
+//! elsewhere the robust path runs). Where the robust path on a fan triangle takes the rule too, the
+//! sum has its bits up to the order of the additions. The derivatives are sums too: a triangle's
+//! gradient and Hessian are within its own accuracy relative to its largest entry, and the pieces'
+//! derivatives can only partly cancel (all pieces are seen under the same small width, from the
+//! same side), which `tests/form_factor_polygon_slivers.rs` measures against 320-bit references.
 //!
 //! Validation once ([`validated`]): the thinness test's Newell normal and extent are the
 //! robust path's own (term for term), so `Plane::validated` runs its area and planarity tests on
@@ -218,10 +219,10 @@ fn fan_rule(x: DVec3, n: DVec3, v: &[DVec3], thin: &ThinPolygon, order: Order) -
     oriented(sum, h_p)
 }
 
-/// [`fast_decisions`] for [`fan_rule`], which declines a far-field rule: the signed height `h_P`
-/// of x when x is not near the plane and the far field does not apply, `None` otherwise. The same
-/// decisions from the same rounded quantities (unit-tested), with the squared distances `r2`
-/// computed once for them and for the clip test.
+/// [`fast_decisions`](crate::kernels::form_factor::replay::fast_decisions) for [`fan_rule`], which
+/// declines a far-field rule: the signed height `h_P` of x when x is not near the plane and the far
+/// field does not apply, `None` otherwise. The same decisions from the same rounded quantities
+/// (unit-tested), with the squared distances `r2` computed once for them and for the clip test.
 #[inline(always)]
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 fn near_field_height(r: &[DVec3], r2: &[f64], plane: &Plane) -> Option<f64> {

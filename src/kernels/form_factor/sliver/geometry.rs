@@ -38,7 +38,8 @@ impl FanGeometry {
 /// ([`sliver_geometry`]); `None` for a loop of zero area. For the clip line's Hessian term of a
 /// clipped sliver, `∝ |h_P| / ‖n_t‖`: the polygon's Newell normal, from rounded edge vectors, errs
 /// by ~ε/aspect in direction, and so do `n_t` and the height taken with it. Inlined, so that the
-/// clipped sliver's FMA build fuses its exact products ([`clipped`]).
+/// clipped sliver's FMA build fuses its exact products
+/// ([`sliver::clipped`](crate::kernels::form_factor::sliver::clipped)).
 #[inline(always)]
 pub(crate) fn visible_plane(verts: &[ClipVertex]) -> Option<(DVec3, f64)> {
     let mut geometry = FanGeometry::default();

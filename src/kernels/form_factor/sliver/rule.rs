@@ -1,18 +1,18 @@
 //! Thin triangles (slivers) by an anisotropic tensor rule.
 //!
-//! A sliver's edge sum cancels by about its inverse aspect ratio, and the isotropic subdivision
-//! of [`subdivided_quadrature`](super::subdivided_quadrature) bisects it into hundreds of long
-//! pieces. But a sliver is thin in one direction only: across its width `w` the integrand varies
-//! over a distance ~`d` (the distance of x), so a few Gauss points suffice there, and only the
-//! long direction needs many points, graded by the distance of x.
+//! A sliver's edge sum cancels by about its inverse aspect ratio, and the isotropic subdivision of
+//! [`subdivided_quadrature`](crate::kernels::form_factor::quadrature::subdivide::subdivided_quadrature)
+//! bisects it into hundreds of long pieces. But a sliver is thin in one direction only: across its
+//! width `w` the integrand varies over a distance ~`d` (the distance of x), so a few Gauss points
+//! suffice there, and only the long direction needs many points, graded by the distance of x.
 //!
-//! The triangle is split at the foot `f` of its apex `c` on its longest edge `ab` (both angles
-//! at `a` and `b` are acute, so `f` lies on the edge) into `(a, f, c)` and `(b, c, f)`, each
+//! The triangle is split at the foot `f` of its apex `c` on its longest edge `ab` (both angles at
+//! `a` and `b` are acute, so `f` lies on the edge) into `(a, f, c)` and `(b, c, f)`, each
 //! Duffy-mapped from its vertex on the long edge: `r = r_p + s·(q₁ − p) + s·t·(q₂ − q₁)`, with
 //! `q₁q₂` the short edge `fc`. Their `(2·area·N̂, 2·area·N̂·r)` are the shares `t_f` and `1 − t_f`
-//! (`f = a + t_f·ab`) of the whole triangle's, taken from the exact differences; the shares go
-//! into the pieces' weights, so that both pieces add to one set of sums, assembled once. The sums
-//! run four nodes at a time ([`sums`]).
+//! (`f = a + t_f·ab`) of the whole triangle's, taken from the exact differences; the shares go into
+//! the pieces' weights, so that both pieces add to one set of sums, assembled once. The sums run
+//! four nodes at a time ([`quadrature::lanes`](crate::kernels::form_factor::quadrature::lanes)).
 //!
 //! Error bound (per direction; the tensor rule's error is at most their sum). The integrands
 //! `(n·r)/‖r‖⁴ … (n·r) r rᵀ/‖r‖⁸` are analytic along any line except at the two complex zeros of
@@ -45,9 +45,10 @@
 //! value's rule, costing them more than the value saves; the thresholds are the Hessian's.
 //!
 //! Entry points: [`sliver_quadrature`] from `evaluate` (after its set-up) and
-//! [`direct_sliver`] from `triangle_form_factor_in_range` (the same bits without the set-up).
-//! x may be near the sliver's plane: the rule needs x far from the sliver compared with its width
-//! only, and [`sliver_geometry`] takes the height from the exact triple product.
+//! [`direct_sliver`](crate::kernels::form_factor::sliver::direct::direct_sliver) from
+//! `triangle_form_factor_in_range` (the same bits without the set-up). x may be near the sliver's
+//! plane: the rule needs x far from the sliver compared with its width only, and
+//! [`sliver_geometry`] takes the height from the exact triple product.
 
 use std::sync::OnceLock;
 
@@ -125,7 +126,8 @@ pub(crate) fn rule(points: usize) -> &'static [(f64, f64)] {
 pub(crate) struct Rules {
     /// The rules by their number of points (empty elsewhere).
     pub(crate) by_points: [&'static [(f64, f64)]; 25],
-    /// The rules along by their number of points, as the sums take them ([`sums::quads`]).
+    /// The rules along by their number of points, as the sums take them
+    /// ([`quadrature::lanes::quads`](crate::kernels::form_factor::quadrature::lanes::quads)).
     pub(crate) quads: [&'static [[[f64; 4]; 2]]; 25],
     /// [`ALONG`] as `(1/a², 1/b², points)` with `a`, `b` the semi-axes of the threshold's
     /// ellipse ([`semi_axes`]).
@@ -179,10 +181,11 @@ pub(crate) fn sliver_quadrature(verts: &[ClipVertex], n: DVec3, order: Order) ->
 }
 
 /// [`sliver_quadrature`] compiled with AVX2 and FMA: the geometry's exact products are fused
-/// instead of calls to `fma`, and the sums take four nodes per AVX register ([`AvxSums`])
-/// instead of two SSE2 registers. The same bits: the fused product is correctly rounded either way, the
-/// lanes round as the portable ones and are added in the same tree ([`sums`]), and Rust fuses
-/// nothing else (unit-tested).
+/// instead of calls to `fma`, and the sums take four nodes per AVX register ([`AvxSums`]) instead
+/// of two SSE2 registers. The same bits: the fused product is correctly rounded either way, the
+/// lanes round as the portable ones and are added in the same tree
+/// ([`quadrature::lanes`](crate::kernels::form_factor::quadrature::lanes)), and Rust fuses nothing
+/// else (unit-tested).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn sliver_quadrature_fma(verts: &[ClipVertex], n: DVec3, order: Order) -> Option<Deriv3> {

@@ -2,7 +2,7 @@
 
 use std::ops::{Add, Mul, Neg, Sub};
 
-/// A number per lane: `f64` (one edge) or [`Pair`] (two edges).
+/// A number per lane: `f64` (one edge) or [`Pair`](super::Pair) (two edges).
 pub(crate) trait Lane:
     Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
 {

@@ -12,11 +12,11 @@ use crate::test_rng::lcg;
 
 /// Value, gradient (and Hessian at [`Order::Hessian`]) of
 /// [`triangle_form_factor`](super::triangle_form_factor) over the clipped loop of
-/// [`certified_loop`](super::lambert_clipped::certified_loop) (module documentation), for `order`
-/// above [`Order::Value`]; `None` where that loop is not certified or the derivatives are not
-/// accepted.
-/// Derivatives per unit length (gradient) and per squared length (Hessian). The kernel calls
-/// [`loop_derivs`] on the loop it keeps for the value; this is the tests' entry.
+/// [`certified_loop`](crate::kernels::form_factor::lambert::clipped::certified_loop) (module
+/// documentation), for `order` above [`Order::Value`]; `None` where that loop is not certified or
+/// the derivatives are not accepted. Derivatives per unit length (gradient) and per squared length
+/// (Hessian). The kernel calls [`loop_derivs`] on the loop it keeps for the value; this is the
+/// tests' entry.
 pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -> Option<Deriv3> {
     let clipped = certified_loop(x, n, v)?;
     loop_derivs(&clipped, clipped.value(), order)

@@ -185,7 +185,7 @@ fn continuous_where_the_route_switches() {
 
 /// Whether `evaluate` takes its near-plane split for the value of this configuration (its
 /// decisions, through the route's own steps but with the robust path's `clip` and frames).
-/// Also the polygon route's reference (`near_plane_polygon`), hence over any vertex count;
+/// Also the polygon route's reference (`near_plane::polygon`), hence over any vertex count;
 /// with `far_counts` also where it takes its far-field rule on the clipped loop instead (a
 /// far-field visible part), which the polygon route replays.
 pub(crate) fn robust_takes_the_split(x: DVec3, n: DVec3, v: &[DVec3], far_counts: bool) -> bool {

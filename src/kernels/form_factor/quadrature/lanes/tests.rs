@@ -22,10 +22,10 @@ fn paired_sums(
     sums.total().assemble(n, geometry, order)
 }
 
-/// The grouped sums agree with the scalar tensor rule (`polygon::tensor_rule`, one node at a
-/// time, the piece's share on its geometry instead of its weights) to rounding, for every
-/// rule along (padded with zero weights to a multiple of four) and across, on sub-intervals,
-/// at every order; and the value is the same, bit for bit, at every order.
+/// The grouped sums agree with the scalar tensor rule (`quadrature::tensor::tensor_rule`, one node
+/// at a time, the piece's share on its geometry instead of its weights) to rounding, for every rule
+/// along (padded with zero weights to a multiple of four) and across, on sub-intervals, at every
+/// order; and the value is the same, bit for bit, at every order.
 #[test]
 fn paired_sums_match_the_scalar_tensor_rule() {
     let mut state = 1819;
