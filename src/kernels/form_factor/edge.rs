@@ -1,5 +1,5 @@
-//! Point-to-polygon form factors (the Lambert / Holzschuch-Sillion edge sum) with gradient and
-//! Hessian with respect to the receiving point.
+//! The form factor's per-edge term with its gradient and Hessian in the edge's own frame: the
+//! robust path's building block, for ordinary edges and for clip edges in the tangent plane.
 //!
 //! For a differential area at `x` with unit normal `n` and a polygon with vertices `v_i`
 //! (`r_i = v_i − x`), the form factor is
@@ -21,8 +21,17 @@
 //! (This re-derives the thesis' eq. 6.5-6.6, whose printed form is garbled: the leading
 //! "−(−1/2π)" and "norm γ_i" are extraction errors for 1/2π and the edge angle β_i.)
 //! The integrals are evaluated in the edge's own frame (foot point `p`, direction `ê`, abscissae
-//! `s_a`, `s_b`, distance `h` to the edge's line) with closed forms arranged to avoid cancellation,
-//! and with convergent series when `x` lies near the extension of the edge's line.
+//! `s_a`, `s_b`, distance `h` to the edge's line, [`EdgeFrame`]) with closed forms arranged to
+//! avoid cancellation, and with convergent series in `(h/s)²` when `x` lies near the extension of
+//! the edge's line (below [`AXIAL_RATIO`]), differenced between the ends in factored form so that
+//! a short edge keeps its digits. Within a sine of [`NEAR_LINE_SINE`] of the line the frame is
+//! built from the exact ends in double-double ([`ExactEnds`]). A clip edge lies in the tangent
+//! plane, so its term is `±β/2π` in closed form, and [`clip_edge_derivs`] removes the `1/h` and
+//! `1/h²` parts that would cancel as `x` approaches the clip line.
+//!
+//! Error: each term to a few ulps of its own size in every regime (the moments carry no
+//! cancellation); what a sum of terms loses to cancellation is the callers' concern (the far
+//! field, the near-plane split, quadrature).
 
 use glam::{DMat3, DVec3};
 

@@ -1,4 +1,82 @@
-//! Point-to-edge, point-to-triangle and point-to-polygon form factors (the ladder of paths).
+//! Point-to-edge, point-to-triangle and point-to-polygon form factors: the public entry points
+//! and the ladder of paths behind them.
+//!
+//! The form factor from a differential area at `x` with unit normal `n` to a polygon is Lambert's
+//! sum of per-edge terms (`edge`), with the part below the tangent plane clipped away. Evaluated
+//! as written it fails where its terms cancel or are near-singular: far away (terms ~size/d, sum
+//! ~(size/d)²), near the polygon's plane (the clip line passes within ~`h_P` of `x`), near an
+//! edge's line, for slivers. Each such configuration has its own path below, and the generic
+//! configurations, which are most calls, take the cheapest path that can certify its result.
+//!
+//! # The ladder
+//!
+//! Each entry point tries its rungs in order; the first that answers returns. Every rung meets
+//! the accuracy contract (1e-12 / 1e-12 / 1e-10 relative to the largest entry in generic
+//! configurations, 1e-10 / 1e-9 / 1e-8 in the hard regimes). *Certified* rungs return a result
+//! only when its running error bound is within `tolerance::FAST_TOLERANCE` (5e-13); *replays*
+//! repeat the robust path's decisions from a few certain f64 tests and then its f64 operations, so
+//! they return its bits. The value never depends on the order asked for: where the derivative
+//! orders end on another rung than the value order, they take the value order's value.
+//!
+//! **[`triangle_form_factor`], value** (also `triangle_form_factor_value`, the C ABI's):
+//! 1. Very thin (`2·area < 1e-5·extent²`): the sliver rule's direct entry (`sliver::direct`), else
+//!    the robust path (the polygon ladder when the differences need rescaling).
+//! 2. Every vertex certainly above the tangent plane: Lambert's sum, certified (`lambert::sum`),
+//!    or its cancellation-free far form when every edge is small against its distance
+//!    (`lambert::far`).
+//! 3. Clipped, `x` within 1e-3 of the size from the plane: Lambert's sum over the clipped loop,
+//!    certified (`lambert::clipped`).
+//! 4. `x` near the plane outside the visible part: the robust near-plane split, replayed on fixed
+//!    arrays (`near_plane::triangle`).
+//! 5. Far field (centroid beyond 16 radii): the robust far-field rule, replayed (`replay`).
+//! 6. Robust decisions all trivial: the robust edge sum, replayed (`replay`).
+//! 7. The robust path (`robust`), without the rescaling when the differences are in range.
+//!
+//! **[`triangle_form_factor`], gradient and Hessian:**
+//! 1. Very thin: as for the value.
+//! 2. Far field: the far-field rule, replayed (`replay`), with Lambert's value where certified.
+//! 3. Lambert's analytic derivatives, certified (`lambert::sum`): `sin β ≥ 1/4` on every edge,
+//!    neither sum cancelling beyond 100x.
+//! 4. Clipped near the plane: the derivatives of the clipped loop (`lambert::clipped_derivs`),
+//!    built once (`lambert::clipped`) on the certified loop or on the near-plane route's clip
+//!    points (`near_plane::route_loop`).
+//! 5. Rungs 6 and 7 of the value.
+//!
+//! **[`polygon_form_factor`]** (rungs 1 to 3 take 4 to 8 vertices; the certified ones strictly
+//! convex polygons planar to a quarter of the robust tolerance, not slivers, `convex`):
+//! 1. Value: Lambert's sum or far form (`lambert::polygon`); derivatives: the far-field rule
+//!    replayed on any valid polygon (`replay`), then Lambert's derivatives.
+//! 2. Clipped near the plane: the clipped loop's value and derivatives
+//!    (`lambert::clipped_polygon`).
+//! 3. Value, `x` near the plane outside: the near-plane split, replayed (`near_plane::polygon`).
+//! 4. Very thin (4 to 8 vertices): the sum over its fan triangles of the sliver rule
+//!    (`sliver::fan`).
+//! 5. The robust path (`robust`).
+//!
+//! **[`edge_form_factor`]:** Lambert's certified term (`lambert::sum`), the robust term replayed
+//! (`replay`), the robust term on exactly rescaled differences (`edge`).
+//!
+//! **The robust path** (`robust::evaluate`, every valid input): the polygon's plane is validated
+//! (`plane`: area, planarity, simplicity) and the differences rescaled by a power of two
+//! (`scaled`); `x` in the plane gives 0 (derivatives `Degenerate`); near the plane its height is
+//! recomputed exactly; the polygon is clipped (`clip`, clip points in double-double). Then, on the
+//! visible part: far field → the tensor Gauss rule (`quadrature`); very thin → the anisotropic
+//! sliver rule (`sliver`); otherwise the edge sum (`edge`), whose value near the plane outside
+//! the visible part is the cancellation-free near-plane split (`near_plane::split`), and which,
+//! where it still cancels beyond `tolerance::cancellation_limit`, gives way to the sliver rule or
+//! subdivided quadrature. A clipped polygon's Hessian adds the moving clip line's term
+//! (`clip_line`); the sign follows the side of the plane and the value is clamped to `[0, 1]`
+//! (`orient`).
+//!
+//! # Layers
+//!
+//! Modules import only from the ones before them in this list (checked for cycles by
+//! `tests/module_graph.rs`): `validate`, `edge`, `clip`, `orient`, `convex` and
+//! `quadrature::rules` import nothing of the form factor; then `scaled`, `plane`, `tolerance`,
+//! `near_plane::split`, `quadrature::tensor`, `sliver::geometry`, `lambert::far`; then the
+//! rules and sums built on them (`quadrature`, `clip_line`, `lambert::sum`, `replay`,
+//! `sliver::rule`); the routes and direct entries (`near_plane`, `sliver`), `robust`; the
+//! clipped Lambert paths (`lambert::clipped*`, `lambert::polygon`); this module last.
 
 use glam::DVec3;
 
