@@ -7,7 +7,7 @@
 //! repetitions in one process (`RADDIFF_BATCH_REPS`, default 300): on a machine shared with other
 //! jobs the minimum of short runs is far less sensitive to the load than criterion's means.
 //!
-//! `cargo bench --bench form_factoratch -- --warm-up-time 1 --measurement-time 3` (append a filter
+//! `cargo bench --bench kernels_batch -- --warm-up-time 1 --measurement-time 3` (append a filter
 //! that matches nothing, `nomatch`, for the table alone); `RADDIFF_SIMD=avx2` or `portable` caps
 //! the instruction set.
 

@@ -22,7 +22,7 @@ mod baselines;
 #[path = "../tests/kernel_reference/mod.rs"]
 mod reference;
 
-use baselines::{dual_hessian3, fd_hessian3, textbook_solid_angle, D3};
+use baselines::{dual_hessian3, fd_hessian3, textbook_solid_angle, textbook_solid_angle_f64, D3};
 
 type D2 = Dual2SVec64<2>;
 
@@ -61,7 +61,7 @@ fn fd_hessian2(f: &dyn Fn(DVec2) -> f64, x: DVec2, h: f64) -> [f64; 3] {
 // Dual-number baselines: the same value formulas on num-dual's Dual2Vec.
 
 fn textbook_sa(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    textbook_solid_angle(p.to_array(), a, b, c)
+    textbook_solid_angle_f64(p, a, b, c)
 }
 
 fn solid_angle_dual(x: &SVector<D3, 3>, a: DVec3, b: DVec3, c: DVec3) -> D3 {

@@ -21,7 +21,7 @@ mod reference_b;
 use std::hint::black_box;
 use std::time::Instant;
 
-use baselines::{dual_hessian3, fd_hessian3, textbook_solid_angle, D3};
+use baselines::{dual_hessian3, fd_hessian3, textbook_solid_angle, textbook_solid_angle_f64, D3};
 use glam::{DMat3, DVec2, DVec3};
 use num_dual::DualNum;
 use raddiff::{kernels, Deriv3, Order};
@@ -270,7 +270,7 @@ fn main() {
             (r.value, r.gradient, r.hessian),
             Kernel {
                 raddiff: &|p, o| kernels::triangle_solid_angle(p, t[0], t[1], t[2], o),
-                textbook: &|p| textbook_solid_angle(*p, t[0], t[1], t[2]),
+                textbook: &|p| textbook_solid_angle_f64(DVec3::from_array(*p), t[0], t[1], t[2]),
                 dual: &|p| textbook_solid_angle(*p, t[0], t[1], t[2]),
             },
         ));
