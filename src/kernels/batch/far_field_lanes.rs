@@ -10,14 +10,13 @@
 //! picked); the accepted elements are grouped by rule, and each group's quadrature sums run in lanes
 //! (one element per lane, the rule's nodes in the same order). The lane code is the rule's loop body
 //! with the same operations in the same order, with no FMA contraction (Rust never contracts, and
-//! the code has plain products and sums) and correctly rounded division in every instruction set;
-//! the sums are then assembled by a replay of the rule's closing formulas (glam's operations, in
-//! its order), oriented and checked by the kernel's own `oriented`, and given Lambert's value from
-//! the value lanes (`form_factor_lanes`) or its scalar call. The loop body and the assembly are
-//! copies of `tensor_rule`'s: a change there must be made here too, and the bit-equality
-//! tests fail until it is. An accepted element is therefore the single call's result **bit for bit** (the tests assert
-//! equality); a non-finite result, and every element the replay declines (near, clipped, thin, near
-//! the plane, invalid), goes to the single kernel.
+//! the code has plain products and sums) and correctly rounded division in every instruction set.
+//! The node body is the rule's own (`tensor::node_terms`, called lane by lane), the sums are
+//! assembled by the rule's own `RuleSums::assemble`, oriented and checked by the kernel's own
+//! `oriented`, and given Lambert's value from the value lanes (`form_factor_lanes`) or its scalar
+//! call. An accepted element is therefore the single call's result **bit for bit** (the tests
+//! assert equality); a non-finite result, and every element the replay declines (near, clipped,
+//! thin, near the plane, invalid), goes to the single kernel.
 //!
 //! Elements are classified in chunks of [`CHUNK`] and emitted in order, so sums add the per-element
 //! results in the same order as a loop over single calls.
@@ -30,7 +29,9 @@ use crate::kernels::form_factor::lambert::sum as lambert;
 use crate::kernels::form_factor::orient::oriented;
 use crate::kernels::form_factor::plane::{is_very_thin_triangle, triangle_plane};
 use crate::kernels::form_factor::quadrature::rules::Rule;
-use crate::kernels::form_factor::quadrature::tensor::RuleSums;
+use crate::kernels::form_factor::quadrature::tensor::{
+    node_terms, sums_formed, RuleSums, RULE_SUMS,
+};
 use crate::kernels::form_factor::replay::{fast_setup, maybe_far};
 use crate::simd::Isa;
 use crate::{Deriv3, Order};
@@ -45,9 +46,8 @@ const CHUNK: usize = 256;
 /// The far-field rules by point count (`FAR_FIELD_RULES`: 3, 4, 5, 6 and 8).
 const RULES: usize = 5;
 
-/// The quadrature's running sums, in `tensor_rule`'s names: `q0`, `s4`, `u6` (3), `v6`
-/// (3), `s6`, then `xx, yy, zz, xy, xz, yz`.
-const SUMS: usize = 15;
+/// The quadrature's running sums (`tensor::RULE_SUMS`).
+const SUMS: usize = RULE_SUMS;
 
 /// One node of the tensor rule as `tensor_rule` forms it: `s`, `s·t` and the weight `ws·wt·s`
 /// (the same for every lane, so computed once).
@@ -117,34 +117,16 @@ fn block<const W: usize, const HESSIAN: bool>(l: &mut Lanes, base: usize, nodes:
         std::array::from_fn(|axis| std::array::from_fn(|j| v[axis][base + j]))
     };
     let (r_a, ab, bc, n) = (load(&l.r_a), load(&l.ab), load(&l.bc), load(&l.n));
+    let count = sums_formed(true, HESSIAN);
     let mut acc = [[0.0f64; W]; SUMS];
     for node in nodes {
         for j in 0..W {
             let r: [f64; 3] =
                 std::array::from_fn(|a| r_a[a][j] + node.s * ab[a][j] + node.st * bc[a][j]);
-            let inv2 = 1.0 / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-            let inv4 = inv2 * inv2;
-            let nr = n[0][j] * r[0] + n[1][j] * r[1] + n[2][j] * r[2];
-            let weight = node.weight;
-            acc[0][j] += weight * nr * inv4;
-            let w6 = weight * inv4 * inv2;
-            acc[1][j] += weight * inv4;
-            let w6nr = w6 * nr;
-            for a in 0..3 {
-                acc[2 + a][j] += w6nr * r[a];
-            }
-            if HESSIAN {
-                for a in 0..3 {
-                    acc[5 + a][j] += w6 * r[a];
-                }
-                acc[8][j] += w6 * nr;
-                let w8 = w6 * nr * inv2;
-                acc[9][j] += w8 * r[0] * r[0];
-                acc[10][j] += w8 * r[1] * r[1];
-                acc[11][j] += w8 * r[2] * r[2];
-                acc[12][j] += w8 * r[0] * r[1];
-                acc[13][j] += w8 * r[0] * r[2];
-                acc[14][j] += w8 * r[1] * r[2];
+            let n = [n[0][j], n[1][j], n[2][j]];
+            let terms = node_terms::<true, HESSIAN>(r, n, node.weight);
+            for k in 0..count {
+                acc[k][j] += terms[k];
             }
         }
     }
@@ -192,15 +174,7 @@ fn evaluate_on(isa: Isa, l: &mut Lanes, nodes: &[Node], hessian: bool) {
 /// `tensor_rule`'s result from lane `i`'s sums, by its own assembly.
 fn assemble(l: &Lanes, i: usize, n: DVec3, geometry: (DVec3, f64), order: Order) -> Deriv3 {
     let s: [f64; SUMS] = std::array::from_fn(|k| l.sums[k][i]);
-    RuleSums {
-        q0: s[0],
-        s4: s[1],
-        u6: DVec3::new(s[2], s[3], s[4]),
-        v6: DVec3::new(s[5], s[6], s[7]),
-        s6: s[8],
-        second: [s[9], s[10], s[11], s[12], s[13], s[14]],
-    }
-    .assemble(n, geometry, order)
+    RuleSums::from_array(&s).assemble(n, geometry, order)
 }
 
 /// What the assembly needs of an element the replay accepted: the unit normal, the fan geometry

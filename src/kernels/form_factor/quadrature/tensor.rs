@@ -33,7 +33,7 @@ pub(crate) fn triangle_rule(
 /// parallel to `bc`), with Gauss rules `s_rule` along `s` and `t_rule` along `t`. With `[0, 1]`
 /// the nodes and weights are exactly those of `s_rule`, so [`triangle_rule`] is unchanged bit for
 /// bit. (The sliver rule and the subdivided quadrature's pieces sum the same integrand four
-/// nodes at a time, in `sliver::sums`.)
+/// nodes at a time, in `quadrature::lanes`, rounded in another order.)
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub(crate) fn tensor_rule(
@@ -46,59 +46,107 @@ pub(crate) fn tensor_rule(
     (s0, s1, s_rule): (f64, f64, &[(f64, f64)]),
     t_rule: &[(f64, f64)],
 ) -> Deriv3 {
-    let (normal, c_t) = geometry;
-    // Moments of the integrand's derivatives, assembled once after the loop:
-    // ∇q = 4 (n·r) r/‖r‖⁶ − n/‖r‖⁴,
-    // Hq = 24 (n·r) r rᵀ/‖r‖⁸ − 4 (n rᵀ + r nᵀ)/‖r‖⁶ − 4 (n·r) 𝟙/‖r‖⁶.
-    let mut q0 = 0.0;
-    let mut s4 = 0.0; // Σ w/‖r‖⁴
-    let mut u6 = DVec3::ZERO; // Σ w (n·r) r/‖r‖⁶
-    let mut v6 = DVec3::ZERO; // Σ w r/‖r‖⁶
-    let mut s6 = 0.0; // Σ w (n·r)/‖r‖⁶
-    let (mut xx, mut yy, mut zz, mut xy, mut xz, mut yz) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    let along = (s0, s1, s_rule);
+    let sums = match (order.gradient(), order.hessian()) {
+        (false, _) => rule_sums::<false, false>(r_a, ab, bc, n, along, t_rule),
+        (true, false) => rule_sums::<true, false>(r_a, ab, bc, n, along, t_rule),
+        (true, true) => rule_sums::<true, true>(r_a, ab, bc, n, along, t_rule),
+    };
+    RuleSums::from_array(&sums).assemble(n, geometry, order)
+}
+
+/// [`tensor_rule`]'s running sums, the first [`sums_formed`] of them.
+#[inline(always)]
+fn rule_sums<const GRADIENT: bool, const HESSIAN: bool>(
+    r_a: DVec3,
+    ab: DVec3,
+    bc: DVec3,
+    n: DVec3,
+    (s0, s1, s_rule): (f64, f64, &[(f64, f64)]),
+    t_rule: &[(f64, f64)],
+) -> [f64; RULE_SUMS] {
+    let count = sums_formed(GRADIENT, HESSIAN);
+    let mut sums = [0.0; RULE_SUMS];
     let span = s1 - s0;
     for &(s, ws) in s_rule {
         let (s, ws) = (s0 + span * s, ws * span);
         for &(t, wt) in t_rule {
             let weight = ws * wt * s;
             let r = r_a + s * ab + (s * t) * bc;
-            let inv2 = 1.0 / r.length_squared();
-            let inv4 = inv2 * inv2;
-            let nr = n.dot(r);
-            q0 += weight * nr * inv4;
-            if order.gradient() {
-                let w6 = weight * inv4 * inv2;
-                s4 += weight * inv4;
-                u6 += (w6 * nr) * r;
-                if order.hessian() {
-                    v6 += w6 * r;
-                    s6 += w6 * nr;
-                    let w8 = w6 * nr * inv2;
-                    xx += w8 * r.x * r.x;
-                    yy += w8 * r.y * r.y;
-                    zz += w8 * r.z * r.z;
-                    xy += w8 * r.x * r.y;
-                    xz += w8 * r.x * r.z;
-                    yz += w8 * r.y * r.z;
-                }
+            let terms = node_terms::<GRADIENT, HESSIAN>(r.to_array(), n.to_array(), weight);
+            for k in 0..count {
+                sums[k] += terms[k];
             }
         }
     }
-    let sums = RuleSums {
-        q0,
-        s4,
-        u6,
-        v6,
-        s6,
-        second: [xx, yy, zz, xy, xz, yz],
-    };
-    sums.assemble(n, (normal, c_t), order)
+    sums
+}
+
+/// The number of running sums of the far-field rule ([`RuleSums::from_array`]'s order: `q0`,
+/// `s4`, `u6`, `v6`, `s6`, then the six entries of the second moment).
+pub(crate) const RULE_SUMS: usize = 15;
+
+/// How many of the [`RULE_SUMS`] sums an order forms: the value's one, the gradient's five, all.
+#[inline(always)]
+pub(crate) const fn sums_formed(gradient: bool, hessian: bool) -> usize {
+    match (gradient, hessian) {
+        (false, _) => 1,
+        (true, false) => 5,
+        (true, true) => RULE_SUMS,
+    }
+}
+
+/// What the node at `r` (relative to x) with weight `weight` adds to each running sum of the
+/// far-field rule, for the receiver normal `n`: the one node body of [`tensor_rule`] and of the
+/// batch lanes (`batch::far_field_lanes`, which call it lane by lane), so that both round alike.
+/// Only the first [`sums_formed`] terms are formed; the moments of the integrand's derivatives
+/// are assembled once after the loop ([`RuleSums::assemble`]):
+///
+/// ```text
+/// ∇q = 4 (n·r) r/‖r‖⁶ − n/‖r‖⁴,
+/// Hq = 24 (n·r) r rᵀ/‖r‖⁸ − 4 (n rᵀ + r nᵀ)/‖r‖⁶ − 4 (n·r) 𝟙/‖r‖⁶.
+/// ```
+///
+/// `r·r` and `n·r` are glam's `dot`, `(x·x' + y·y') + z·z'`.
+#[inline(always)]
+pub(crate) fn node_terms<const GRADIENT: bool, const HESSIAN: bool>(
+    r: [f64; 3],
+    n: [f64; 3],
+    weight: f64,
+) -> [f64; RULE_SUMS] {
+    let mut t = [0.0; RULE_SUMS];
+    let inv2 = 1.0 / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    let inv4 = inv2 * inv2;
+    let nr = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+    t[0] = weight * nr * inv4;
+    if GRADIENT {
+        let w6 = weight * inv4 * inv2;
+        t[1] = weight * inv4;
+        let w6nr = w6 * nr;
+        for a in 0..3 {
+            t[2 + a] = w6nr * r[a];
+        }
+        if HESSIAN {
+            for a in 0..3 {
+                t[5 + a] = w6 * r[a];
+            }
+            t[8] = w6 * nr;
+            let w8 = w6 * nr * inv2;
+            t[9] = w8 * r[0] * r[0];
+            t[10] = w8 * r[1] * r[1];
+            t[11] = w8 * r[2] * r[2];
+            t[12] = w8 * r[0] * r[1];
+            t[13] = w8 * r[0] * r[2];
+            t[14] = w8 * r[1] * r[2];
+        }
+    }
+    t
 }
 
 /// The sums a fan triangle's Gauss rule accumulates (see [`tensor_rule`]): `q0 = Σ w (n·r)/‖r‖⁴`,
 /// `s4 = Σ w/‖r‖⁴`, `u6 = Σ w (n·r) r/‖r‖⁶`, `v6 = Σ w r/‖r‖⁶`, `s6 = Σ w (n·r)/‖r‖⁶` and the
 /// entries `xx, yy, zz, xy, xz, yz` of `Σ w (n·r) r rᵀ/‖r‖⁸`. The batch lanes accumulate the same
-/// sums and assemble them here, so that both give the same bits.
+/// sums ([`node_terms`]) and assemble them here, so that both give the same bits.
 pub(crate) struct RuleSums {
     pub(crate) q0: f64,
     pub(crate) s4: f64,
@@ -109,6 +157,19 @@ pub(crate) struct RuleSums {
 }
 
 impl RuleSums {
+    /// The sums from an array in [`node_terms`]' order.
+    #[inline(always)]
+    pub(crate) fn from_array(s: &[f64; RULE_SUMS]) -> RuleSums {
+        RuleSums {
+            q0: s[0],
+            s4: s[1],
+            u6: DVec3::new(s[2], s[3], s[4]),
+            v6: DVec3::new(s[5], s[6], s[7]),
+            s6: s[8],
+            second: [s[9], s[10], s[11], s[12], s[13], s[14]],
+        }
+    }
+
     /// The signed form factor and its derivatives from the sums, for the fan geometry
     /// `(2·area·N̂, 2·area·N̂·r_a)` and the receiver normal `n` (`Order` decides what is formed).
     #[inline]
