@@ -172,7 +172,7 @@ impl RuleSums {
 
     /// The signed form factor and its derivatives from the sums, for the fan geometry
     /// `(2·area·N̂, 2·area·N̂·r_a)` and the receiver normal `n` (`Order` decides what is formed).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn assemble(&self, n: DVec3, (normal, c_t): (DVec3, f64), order: Order) -> Deriv3 {
         let mut out = Deriv3::constant(0.0);
         let q1 = 4.0 * self.u6 - self.s4 * n;
