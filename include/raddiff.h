@@ -55,9 +55,12 @@
 // the rule and for other values of c). Saved with the cache and restored by `raddiff_cache_load`.
 #define RADDIFF_INTERP_GRADIENT_LIMIT 512
 
-// The gradient limit c that `RADDIFF_INTERP_GRADIENT_LIMIT` selects: 1, the largest c with which
-// extrapolation never flips the sign of a record's value.
-#define RADDIFF_GRADIENT_LIMIT_DEFAULT 1.0
+// The gradient limit c that `RADDIFF_INTERP_GRADIENT_LIMIT` selects and
+// `raddiff_irradiance_settings_default` sets: 2, the library's one default (Rust:
+// `cache::irradiance::GRADIENT_LIMIT_DEFAULT`, which documents the measurement it comes from).
+// With c > 1 an extrapolated value may change sign: irradiance caches also set
+// `RADDIFF_INTERP_NON_NEGATIVE`.
+#define RADDIFF_GRADIENT_LIMIT_DEFAULT 2.0
 
 // Major version of the library this header belongs to.
 #define RADDIFF_VERSION_MAJOR 0
@@ -77,6 +80,18 @@
 // Compute the value, the gradient and the Hessian.
 #define RADDIFF_ORDER_HESSIAN 2
 
+// Bit of `raddiff_gather_evaluation_new`'s `hessians`: the occlusion-aware Hessian (the
+// `RADDIFF_METRIC_HESSIAN_ISOTROPIC` / `_ANISOTROPIC` metrics).
+#define RADDIFF_HESSIAN_OCCLUSION_AWARE 1
+
+// Bit: the occlusion-unaware (radiometric) Hessian (`RADDIFF_METRIC_HESSIAN_UNAWARE`); needs
+// `hit_normals` and no medium.
+#define RADDIFF_HESSIAN_UNAWARE 2
+
+// Bit: the geometric Hessian (`RADDIFF_METRIC_HESSIAN_GEOMETRIC`); needs `hit_normals` and no
+// medium.
+#define RADDIFF_HESSIAN_GEOMETRIC 4
+
 // Ward-Heckbert cosine-weighted polar strata: `theta_j = asin(sqrt((j+u)/m))`, `phi_k = 2 pi (k+v)/n`.
 #define RADDIFF_LAYOUT_COSINE_POLAR 0
 
@@ -92,6 +107,42 @@
 
 // Largest m*n of a gather layout.
 #define RADDIFF_GATHER_MAX_STRATA 16777216
+
+// Ward's split sphere: radius a * D, D the harmonic-mean hit distance (accuracy a
+// dimensionless, typically 0.1-0.3). Ward interpolation.
+#define RADDIFF_METRIC_SPLIT_SPHERE 0
+
+// The split sphere bounded by the gradient: a * min(D, E / |grad E|). Ward interpolation.
+#define RADDIFF_METRIC_BOUNDED_SPLIT_SPHERE 1
+
+// Jarosz et al. 2008: radius eps * E / |grad E|. Ward interpolation.
+#define RADDIFF_METRIC_GRADIENT 2
+
+// The occlusion-unaware (radiometric) Hessian, anisotropic records. Needs the hits' normals:
+// mid-level calls only (`raddiff_gather_evaluation_new` with `hit_normals`).
+#define RADDIFF_METRIC_HESSIAN_UNAWARE 3
+
+// The geometric Hessian (thesis eq. 4.23), anisotropic records. Needs the hits' normals, as
+// `RADDIFF_METRIC_HESSIAN_UNAWARE`.
+#define RADDIFF_METRIC_HESSIAN_GEOMETRIC 4
+
+// The occlusion-aware Hessian, isotropic (disc) records. Tent interpolation.
+#define RADDIFF_METRIC_HESSIAN_ISOTROPIC 5
+
+// The occlusion-aware Hessian, anisotropic (ellipse) records: the default. Tent interpolation.
+// Accuracy: the relative error integrated over the record, in L^2 (radii grow as its fourth
+// root).
+#define RADDIFF_METRIC_HESSIAN_ANISOTROPIC 6
+
+// The occlusion-aware Hessian metric: `RADDIFF_METRIC_HESSIAN_ANISOTROPIC`.
+#define RADDIFF_METRIC_HESSIAN 6
+
+// Gather jitter hashed from the query point and normal and `seed_salt` (the default): the same
+// record for the same query, whatever the thread or call order.
+#define RADDIFF_SEED_FROM_QUERY 0
+
+// Every gather direction at its stratum's centre (seed 0).
+#define RADDIFF_SEED_CENTRES 1
 
 // `error` bounds the integrated absolute error over the record.
 #define RADDIFF_ERROR_ABSOLUTE 0
@@ -125,6 +176,9 @@ typedef enum raddiff_status {
   RADDIFF_ERROR_CORRUPT = 6,
   // A Rust panic was caught at the boundary (a bug in raddiff: please report it).
   RADDIFF_ERROR_PANIC = 7,
+  // A caller's callback (the `raddiff_trace_fn` of `raddiff_cache_irradiance`) returned
+  // non-zero: the request was abandoned and nothing was inserted.
+  RADDIFF_ERROR_CALLBACK = 8,
 } raddiff_status;
 
 // A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
@@ -135,6 +189,12 @@ typedef struct raddiff_cache raddiff_cache;
 // remembers the records around recent queries so that nearby lookups skip the spatial index.
 // Not thread-safe: one per thread. It holds no reference to a cache and may be used with any.
 typedef struct raddiff_cache_cursor raddiff_cache_cursor;
+
+// A traced gather evaluated once (Rust: `cache::irradiance::GatherEvaluation`): irradiance and
+// gradients per channel, the settings' scalar (e.g. luminance) with its gradient, the
+// harmonic-mean distance and the Hessians asked for. Immutable: any number of threads may read
+// it and build records from it at once.
+typedef struct raddiff_gather_evaluation raddiff_gather_evaluation;
 
 // A refractive triangle mesh with per-vertex shading normals and its bounding-sphere hierarchy
 // (opaque). Create with `raddiff_refractive_mesh_new`, release with `raddiff_refractive_mesh_free`.
@@ -223,6 +283,58 @@ typedef struct raddiff_cache_record {
   struct raddiff_vec3 axes[3];
 } raddiff_cache_record;
 
+// How irradiance records are made (Rust: `cache::irradiance::IrradianceSettings`, whose docs
+// give every field's domain). Start from `raddiff_irradiance_settings_default()` and set
+// fields; the defaults are the library's one set of safeguard defaults.
+typedef struct raddiff_irradiance_settings {
+  // `RADDIFF_METRIC_*` (default `RADDIFF_METRIC_HESSIAN_ANISOTROPIC`).
+  uint32_t metric;
+  // The metric's threshold, > 0 (default 1e-3): a of the split-sphere family and eps of the
+  // gradient metric (dimensionless, 0.1-0.3), or the Hessian metrics' relative error
+  // integrated over the record (L^2). Smaller: more, smaller records.
+  double accuracy;
+  // Floats per record value (default 3).
+  uint32_t channels;
+  // Nullable: `channels` weights of the scalar the metrics measure (>= 0, not all 0). NULL:
+  // Rec. 709 luminance (0.2126, 0.7152, 0.0722) for 3 channels, the mean otherwise. Read
+  // during each call that takes the settings; not kept.
+  const double *channel_weights;
+  // `RADDIFF_LAYOUT_COSINE_POLAR` (default) or `RADDIFF_LAYOUT_CONCENTRIC`.
+  uint32_t gather_kind;
+  // Gather strata along theta (default 32).
+  uint32_t gather_m;
+  // Gather strata along phi (default 128; the occlusion-aware Hessian needs >= 6).
+  uint32_t gather_n;
+  // `RADDIFF_SEED_FROM_QUERY` (default) or `RADDIFF_SEED_CENTRES`.
+  uint32_t seed_policy;
+  // Mixed into every seed of `RADDIFF_SEED_FROM_QUERY` (default 0).
+  uint64_t seed_salt;
+  // Smallest radius in L (default 0).
+  double world_radius_min;
+  // Largest radius in L (default INFINITY: none).
+  double world_radius_max;
+  // Smallest radius in pixels, applied with the query's footprint (default 1).
+  double pixel_radius_min;
+  // Largest radius in pixels, applied with the query's footprint (default 150: the thesis'
+  // clamp at 1800 pixels; scale it with your resolution). A record's bounds are
+  // [max(world_min, pixel_min * footprint), min(world_max, pixel_max * footprint)], the pixel
+  // terms only for footprint > 0; the maximum must come out finite.
+  double pixel_radius_max;
+  // Largest axis ratio of the anisotropic Hessian metrics, >= 1 (default 2).
+  double max_anisotropy;
+  // Weight kappa of the Hessian metrics' curvature floor kappa |E| / D^2, >= 0 (default
+  // `RADDIFF_CURVATURE_FLOOR_WEIGHT`; 0: off).
+  double curvature_floor;
+  // The cache's gradient limit c, > 0 (default `RADDIFF_GRADIENT_LIMIT_DEFAULT`; INFINITY:
+  // off).
+  double gradient_limit;
+  // The cache's leak guard, relative tolerance >= 0 (default INFINITY: off; see
+  // `raddiff_cache_set_leak_guard`).
+  double leak_guard_relative;
+  // The leak guard's absolute tolerance in L, >= 0 (default 0).
+  double leak_guard_absolute;
+} raddiff_irradiance_settings;
+
 // An m x n stratified layout: `kind` is a `RADDIFF_LAYOUT_*` constant; 1 <= m, n <=
 // `RADDIFF_GATHER_MAX_STRATA_PER_AXIS`, m*n <= `RADDIFF_GATHER_MAX_STRATA`. Seed 0: stratum centres;
 // any other seed: deterministic jitter, identical on every platform.
@@ -277,6 +389,25 @@ typedef struct raddiff_gather_input {
   double step;
 } raddiff_gather_input;
 
+// The scalar results of an evaluation. Hessians are row-major, per L^2, and all zero when not
+// computed (see `hessians`).
+typedef struct raddiff_gather_summary {
+  // The metrics' scalar: the channel-weighted irradiance.
+  double scalar;
+  // Its Ward-Heckbert gradient (world axes, per L).
+  double scalar_gradient[3];
+  // Harmonic mean of the hit distances (L); INFINITY if every ray missed.
+  double harmonic_mean_distance;
+  // `RADDIFF_HESSIAN_*` bits of the Hessians present below.
+  uint32_t hessians;
+  // The occlusion-aware Hessian of the scalar, with the thesis' robustness term.
+  double occlusion_hessian[9];
+  // The occlusion-unaware (radiometric) Hessian of the scalar.
+  double unaware_hessian[9];
+  // The geometric Hessian (thesis eq. 4.23) with the gather's brightest scalar radiance.
+  double geometric_hessian[9];
+} raddiff_gather_summary;
+
 // Caller-owned outputs; a NULL array means "not wanted" and its work is skipped. Per-channel
 // vectors are stored channel by channel: `gradient[3*c + axis]`, `hessian[9*c + 3*row + col]`.
 typedef struct raddiff_gather_output {
@@ -305,6 +436,20 @@ typedef struct raddiff_gather_output {
   // Smallest hit distance; INFINITY if every ray missed.
   double min_distance;
 } raddiff_gather_output;
+
+// Traces `count` rays from `origin` along the unit `directions` (world space); writes each ray's
+// hit distance to `distance[i]` (INFINITY for a miss) and the radiance arriving at `origin`
+// along it to `radiance[i*channels + c]` (`channels` floats per ray, interleaved). Returns 0 on
+// success; anything else abandons the request (`RADDIFF_ERROR_CALLBACK`, nothing inserted).
+// `user` is the pointer given to `raddiff_cache_irradiance`. Called at most once per call, on
+// the calling thread; it must not unwind (C++: catch every exception, as
+// `raddiff::IrradianceCache` does) and may call raddiff functions (other caches' lookups too).
+typedef int (*raddiff_trace_fn)(void *user,
+                                struct raddiff_vec3 origin,
+                                const struct raddiff_vec3 *directions,
+                                size_t count,
+                                double *distance,
+                                float *radiance);
 
 // A 2D vector or point.
 typedef struct raddiff_vec2 {
@@ -335,6 +480,12 @@ typedef struct raddiff_medium {
   // Henyey-Greenstein asymmetry in (-1, 1); 0 is isotropic.
   double g;
 } raddiff_medium;
+
+
+
+
+
+
 
 
 
@@ -501,6 +652,26 @@ enum raddiff_status raddiff_cache_set_gradient_limit(struct raddiff_cache *cache
 enum raddiff_status raddiff_cache_get_gradient_limit(const struct raddiff_cache *cache,
                                                      double *limit);
 
+// Sets the leak guard ("record in front of the query" test of Ward's cache, Radiance, pbrt-v2
+// and Mitsuba) for every lookup from now on: a record i is not used at a query x with unit
+// normal n when (x - x_i) . (n + n_i) / 2 < -(relative * R_i + absolute), R_i the record's radius
+// along its normal (the smaller tangent radius). The height is 0 on planes and spheres, so
+// curvature alone never trips it; `relative` is in units of the record's own radius
+// (scale-free), `absolute` in L (for ray epsilons and pull-backs). Off (the default) while
+// either tolerance is INFINITY; for an absolute tolerance alone pass relative 0. Surface domain
+// only. `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for a NaN or negative tolerance. Saved with
+// the cache and restored by `raddiff_cache_load` (files written before it load with it off).
+// **Not thread-safe**: no other thread may use the cache during the call.
+enum raddiff_status raddiff_cache_set_leak_guard(struct raddiff_cache *cache,
+                                                 double relative,
+                                                 double absolute);
+
+// Writes the cache's leak guard tolerances to `*relative` and `*absolute` (relative INFINITY
+// when off).
+enum raddiff_status raddiff_cache_get_leak_guard(const struct raddiff_cache *cache,
+                                                 double *relative,
+                                                 double *absolute);
+
 // Neighbour clamping (Krivanek et al. 2006) of a record about to be inserted: shrinks
 // `record->radii` in place so that the record's largest radius R (surface: of `radii[0..1]`) is at
 // most R_j + d_j for every stored record j at distance d_j = |position - x_j| < R (R_j its largest
@@ -529,8 +700,9 @@ size_t raddiff_cache_len(const struct raddiff_cache *cache);
 // a crash never leaves a damaged file. `RADDIFF_ERROR_IO` on failure.
 enum raddiff_status raddiff_cache_save(const struct raddiff_cache *cache, const char *path);
 
-// Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags and the
-// gradient limit come from the file; files of format version 2 have no gradient limit). Returns
+// Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags, the
+// gradient limit and the leak guard come from the file; files of format version 2 have no
+// gradient limit, those of versions 2 and 3 no leak guard). Returns
 // NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in `raddiff_last_error` for
 // unreadable, truncated, damaged or wrong-version files.
 struct raddiff_cache *raddiff_cache_load(const char *path);
@@ -548,6 +720,43 @@ const char *raddiff_last_error(void);
 
 // The library version as "MAJOR.MINOR.PATCH" (static storage).
 const char *raddiff_version(void);
+
+// Evaluates a traced gather once, for records of any metric and threshold. `settings` gives the
+// channel count and weights (of the scalar the metrics measure); `layout`, `frame` and `input`
+// are what `raddiff_gather_evaluate` takes (a hemisphere layout; the frame's position and normal
+// are the record's); `hit_normals` (nullable) the unit surface normal at every hit, needed by
+// the unaware and geometric Hessians; `hessians` the `RADDIFF_HESSIAN_*` bits to compute (each
+// costs several times the gradient; ask only for those your metrics need). In a medium the
+// occlusion-aware Hessian attenuates the surface radiance and leaves the marched in-scattered
+// radiance out. Returns NULL (with `raddiff_last_error`) for NULL or invalid arguments, a
+// gather `raddiff_gather_evaluate` refuses, or an overflow; `input->channels` must equal
+// `settings->channels`. Free it with `raddiff_gather_evaluation_free`.
+struct raddiff_gather_evaluation *raddiff_gather_evaluation_new(const struct raddiff_irradiance_settings *settings,
+                                                                const struct raddiff_gather_layout *layout,
+                                                                const struct raddiff_frame *frame,
+                                                                const struct raddiff_gather_input *input,
+                                                                const struct raddiff_vec3 *hit_normals,
+                                                                uint32_t hessians);
+
+// Frees an evaluation (NULL is ignored). Records built from it must not be used afterwards.
+void raddiff_gather_evaluation_free(struct raddiff_gather_evaluation *evaluation);
+
+// Writes the evaluation's scalar results (scalar, gradient, distance, Hessians) to `*summary`.
+enum raddiff_status raddiff_gather_evaluation_summary(const struct raddiff_gather_evaluation *evaluation,
+                                                      struct raddiff_gather_summary *summary);
+
+// Builds the record of `evaluation` under `settings` (metric, accuracy, radius bounds at the
+// pixel `footprint`, anisotropy, curvature floor; the settings' channels must be the
+// evaluation's) into `*record`, ready for `raddiff_cache_insert`: position and normal from the
+// gather's frame, radii and axes from the metric, and `value`, `gradient` and
+// `rotation_gradient` pointing into `evaluation` (valid until it is freed). This is the record
+// `raddiff_cache_irradiance` inserts. `RADDIFF_ERROR_INVALID_ARGUMENT` for invalid settings, a
+// negative or non-finite footprint, bounds without a finite maximum, or a metric whose Hessian
+// the evaluation lacks.
+enum raddiff_status raddiff_irradiance_record(const struct raddiff_irradiance_settings *settings,
+                                              const struct raddiff_gather_evaluation *evaluation,
+                                              double footprint,
+                                              struct raddiff_cache_record *record);
 
 // Form factor from a differential area at `x` with unit normal `n` to the triangle `(a, b, c)`:
 // `(1/pi)` times the integral of `n . w` over the triangle's solid angle, with the part below the
@@ -599,6 +808,46 @@ enum raddiff_status raddiff_gather_evaluate(const struct raddiff_gather_layout *
                                             const struct raddiff_frame *frame,
                                             const struct raddiff_gather_input *input,
                                             struct raddiff_gather_output *output);
+
+// The default settings (3 channels, the anisotropic occlusion-aware Hessian, a 32 x 128
+// cosine-polar gather, 1 to 150 pixel radii, the default safeguards, leak guard off).
+struct raddiff_irradiance_settings raddiff_irradiance_settings_default(void);
+
+// A cache for the records `settings` make: surface domain, the settings' channels, the
+// metric's interpolation (`RADDIFF_INTERP_WARD` for the split-sphere family and the gradient
+// metric, `RADDIFF_INTERP_TENT` for the Hessian metrics), values clamped at zero
+// (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit and leak guard, maximum normal
+// deviation 0.2 rad. NULL (with `raddiff_last_error`) for NULL or invalid settings. Free it with
+// `raddiff_cache_free`.
+struct raddiff_cache *raddiff_irradiance_cache_new(const struct raddiff_irradiance_settings *settings);
+
+// The irradiance at the shading point `x` with normal `n` (any non-zero length): looked up in
+// `cache`, or, when no record covers `x`, computed from a new record: the gather's directions
+// are laid out (seeded from the query), traced through one call of `trace` (the whole gather in
+// one batch), evaluated with the Hessian the metric needs, the record's radii built under the
+// settings' metric, bounds and safeguards, and the record inserted. `out` (`channels` floats)
+// receives the cache's interpolation at `x`. Thread-safe: any number of threads may call it on
+// one cache; threads that miss at the same point insert its record once.
+//
+// `x` is the gather point: pull it back from the surface as your rays need (e.g. 1e-4 of the
+// camera ray's hit distance towards the camera). `footprint` is the world-space size of one
+// pixel at `x`, for the settings' pixel radius bounds (0 when unknown: world bounds only).
+//
+// `RADDIFF_ERROR_NULL_POINTER` for a NULL `cache`, `settings`, `trace` or `out`;
+// `RADDIFF_ERROR_INVALID_ARGUMENT` for non-finite `x`, `n` or `footprint`, a zero `n`, a
+// negative footprint, invalid settings or settings that disagree with the cache (create it with
+// `raddiff_irradiance_cache_new`), no finite maximum radius, a metric that needs hit normals,
+// or traced values the gather refuses (distance <= 0 or NaN, non-finite radiance);
+// `RADDIFF_ERROR_CALLBACK` when `trace` returns non-zero; `RADDIFF_ERROR_DEGENERATE` when the
+// evaluation overflows. On any error nothing is inserted and `out` is untouched.
+enum raddiff_status raddiff_cache_irradiance(struct raddiff_cache *cache,
+                                             const struct raddiff_irradiance_settings *settings,
+                                             struct raddiff_vec3 x,
+                                             struct raddiff_vec3 n,
+                                             double footprint,
+                                             raddiff_trace_fn trace,
+                                             void *user,
+                                             float *out);
 
 // `exp(-sigma_t |x - y|)` and its derivatives with respect to `x` (see the Rust
 // `kernels::transmittance`). `RADDIFF_ERROR_DEGENERATE` for a gradient at `x == y`.

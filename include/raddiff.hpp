@@ -3,8 +3,10 @@
  *
  * - Failures become exceptions: every call whose C function returns a status other than RADDIFF_OK
  *   throws raddiff::Error, carrying that status and the message of raddiff_last_error().
- * - Handles (cache, cache cursor, refractive mesh) are move-only owners that free them on
- *   destruction.
+ * - Handles (cache, cache cursor, gather evaluation, refractive mesh) are move-only owners that
+ *   free them on destruction; IrradianceCache owns a cache and the settings it fills it with.
+ * - Callbacks are any C++ callable: an exception thrown by one never crosses the C boundary (it is
+ *   caught, the C call returns, and the exception is rethrown to the caller).
  * - Arrays are passed as raddiff::Span (pointer and size); where raddiff.h documents the length a
  *   function needs, the wrapper checks it before the call and throws raddiff::Error with
  *   RADDIFF_ERROR_INVALID_ARGUMENT otherwise. Outputs are returned by value.
@@ -19,6 +21,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <exception>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -102,6 +105,8 @@ inline void free_handle(raddiff_cache *p) noexcept { raddiff_cache_free(p); }
 inline void free_handle(raddiff_cache_cursor *p) noexcept { raddiff_cache_cursor_free(p); }
 /// Wraps `raddiff_refractive_mesh_free` (NULL is ignored).
 inline void free_handle(raddiff_refractive_mesh *p) noexcept { raddiff_refractive_mesh_free(p); }
+/// Wraps `raddiff_gather_evaluation_free` (NULL is ignored).
+inline void free_handle(raddiff_gather_evaluation *p) noexcept { raddiff_gather_evaluation_free(p); }
 
 /// Move-only owner of one raddiff handle: frees it on destruction; a moved-from owner holds NULL
 /// (and every C call on it then fails with RADDIFF_ERROR_NULL_POINTER).
@@ -283,6 +288,20 @@ class Cache : public detail::Owner<raddiff_cache> {
     double c = 0.0;
     detail::check(raddiff_cache_get_gradient_limit(get(), &c));
     return c;
+  }
+
+  /// Wraps `raddiff_cache_set_leak_guard` (not thread-safe): the "record in front of the query"
+  /// tolerances (relative INFINITY: off; NaN or negative throws).
+  void set_leak_guard(double relative, double absolute = 0.0) {
+    detail::check(raddiff_cache_set_leak_guard(get(), relative, absolute));
+  }
+
+  /// Wraps `raddiff_cache_get_leak_guard`: the tolerances (relative, absolute); relative is
+  /// INFINITY when the guard is off.
+  std::pair<double, double> leak_guard() const {
+    double relative = 0.0, absolute = 0.0;
+    detail::check(raddiff_cache_get_leak_guard(get(), &relative, &absolute));
+    return {relative, absolute};
   }
 
  private:
@@ -615,23 +634,21 @@ struct GatherResult {
   double min_distance = 0.0;
 };
 
-/// Wraps `raddiff_gather_evaluate`: irradiance (or fluence) and the derivatives selected by
-/// `outputs` (GatherOutputs bits) from a traced gather. Array sizes are checked first.
-inline GatherResult gather_evaluate(const raddiff_gather_layout &layout, const raddiff_frame &frame,
-                                    const GatherInput &input,
-                                    unsigned outputs = GATHER_IRRADIANCE | GATHER_GRADIENT |
-                                                       GATHER_ROTATION_GRADIENT) {
+namespace detail {
+
+/// The C input of a GatherInput for `layout`, after checking every array's size.
+inline raddiff_gather_input gather_input(const raddiff_gather_layout &layout, const GatherInput &input) {
   const std::size_t cells = gather_size(layout);
   const std::size_t ch = input.channels;
-  detail::check_size("directions", input.directions.size(), cells);
-  detail::check_size("distance", input.distance.size(), cells);
-  detail::check_size("radiance", input.radiance.size(), detail::mul(cells, ch));
-  const std::size_t samples = detail::mul(detail::mul(cells, input.steps), ch);
+  check_size("directions", input.directions.size(), cells);
+  check_size("distance", input.distance.size(), cells);
+  check_size("radiance", input.radiance.size(), mul(cells, ch));
+  const std::size_t samples = mul(mul(cells, input.steps), ch);
   if (!input.media_radiance.empty()) {
-    detail::check_size("media_radiance", input.media_radiance.size(), samples);
+    check_size("media_radiance", input.media_radiance.size(), samples);
   }
   if (!input.media_radiance_gradient.empty()) {
-    detail::check_size("media_radiance_gradient", input.media_radiance_gradient.size(), detail::mul(samples, 3));
+    check_size("media_radiance_gradient", input.media_radiance_gradient.size(), mul(samples, 3));
   }
   raddiff_gather_input in{};
   in.directions = input.directions.data();
@@ -644,6 +661,19 @@ inline GatherResult gather_evaluate(const raddiff_gather_layout &layout, const r
       input.media_radiance_gradient.empty() ? nullptr : input.media_radiance_gradient.data();
   in.steps = input.steps;
   in.step = input.step;
+  return in;
+}
+
+}  // namespace detail
+
+/// Wraps `raddiff_gather_evaluate`: irradiance (or fluence) and the derivatives selected by
+/// `outputs` (GatherOutputs bits) from a traced gather. Array sizes are checked first.
+inline GatherResult gather_evaluate(const raddiff_gather_layout &layout, const raddiff_frame &frame,
+                                    const GatherInput &input,
+                                    unsigned outputs = GATHER_IRRADIANCE | GATHER_GRADIENT |
+                                                       GATHER_ROTATION_GRADIENT) {
+  const std::size_t ch = input.channels;
+  const raddiff_gather_input in = detail::gather_input(layout, input);
 
   GatherResult result;
   raddiff_gather_output out{};
@@ -724,6 +754,143 @@ inline double single_scatter(const RefractiveMesh &mesh, const raddiff_medium &m
   detail::check(raddiff_single_scatter(mesh.get(), &medium, entry, exit, light, intensity, &radiance));
   return radiance;
 }
+
+/// Wraps `raddiff_irradiance_settings_default`: the library's default irradiance settings (3
+/// channels, the anisotropic occlusion-aware Hessian, a 32 x 128 gather, 1 to 150 pixel radii,
+/// the default safeguards).
+inline raddiff_irradiance_settings irradiance_settings_default() { return raddiff_irradiance_settings_default(); }
+
+/// Owner of a `raddiff_gather_evaluation`: a traced gather evaluated once, from which records of
+/// any metric and threshold are built (the mid-level calls; `IrradianceCache` does all of it in
+/// one call). Immutable: threads may share it.
+class GatherEvaluation : public detail::Owner<raddiff_gather_evaluation> {
+ public:
+  /// Wraps `raddiff_gather_evaluation_new`: `settings` gives the channels and their weights,
+  /// `hit_normals` (empty: none) the unit normal at every hit for the unaware and geometric
+  /// Hessians, `hessians` the RADDIFF_HESSIAN_* bits. Array sizes are checked first; a NULL from
+  /// C throws raddiff::Error with its message.
+  GatherEvaluation(const raddiff_irradiance_settings &settings, const raddiff_gather_layout &layout,
+                   const raddiff_frame &frame, const GatherInput &input,
+                   Span<const raddiff_vec3> hit_normals = {}, std::uint32_t hessians = 0)
+      : Owner(create(settings, layout, frame, input, hit_normals, hessians)) {}
+
+  /// Wraps `raddiff_gather_evaluation_summary`: scalar, gradient, distance and Hessians.
+  raddiff_gather_summary summary() const {
+    raddiff_gather_summary s{};
+    detail::check(raddiff_gather_evaluation_summary(get(), &s));
+    return s;
+  }
+
+  /// Wraps `raddiff_irradiance_record`: the record of this gather under `settings` at the pixel
+  /// `footprint` (0: unknown), ready for Cache::insert; its arrays point into this evaluation.
+  raddiff_cache_record record(const raddiff_irradiance_settings &settings, double footprint) const {
+    raddiff_cache_record r{};
+    detail::check(raddiff_irradiance_record(&settings, get(), footprint, &r));
+    return r;
+  }
+
+ private:
+  static raddiff_gather_evaluation *create(const raddiff_irradiance_settings &settings,
+                                           const raddiff_gather_layout &layout, const raddiff_frame &frame,
+                                           const GatherInput &input, Span<const raddiff_vec3> hit_normals,
+                                           std::uint32_t hessians) {
+    const raddiff_gather_input in = detail::gather_input(layout, input);
+    if (!hit_normals.empty()) detail::check_size("hit_normals", hit_normals.size(), gather_size(layout));
+    return detail::check_handle(raddiff_gather_evaluation_new(&settings, &layout, &frame, &in,
+                                                              hit_normals.empty() ? nullptr : hit_normals.data(),
+                                                              hessians));
+  }
+};
+
+namespace detail {
+
+/// What the C trampoline of IrradianceCache::irradiance needs: the caller's callable, the channel
+/// count, and the exception it threw (kept to be rethrown once the C call has returned).
+template <class Trace>
+struct TraceCall {
+  Trace *trace;
+  std::size_t channels;
+  std::exception_ptr error;
+};
+
+/// The raddiff_trace_fn of IrradianceCache::irradiance: calls the C++ callable; an exception
+/// never crosses the C boundary (it is kept and reported as a non-zero return).
+template <class Trace>
+int trace_trampoline(void *user, raddiff_vec3 origin, const raddiff_vec3 *directions, std::size_t count,
+                     double *distance, float *radiance) noexcept {
+  auto *call = static_cast<TraceCall<Trace> *>(user);
+  try {
+    (*call->trace)(origin, Span<const raddiff_vec3>(directions, count), Span<double>(distance, count),
+                   Span<float>(radiance, mul(count, call->channels)));
+    return 0;
+  } catch (...) {
+    call->error = std::current_exception();
+    return 1;
+  }
+}
+
+}  // namespace detail
+
+/// A radiance cache filled one shading point at a time (`raddiff_cache_irradiance`), with the
+/// settings it was made for (copied, channel weights included). Thread-safe like Cache.
+class IrradianceCache {
+ public:
+  /// Wraps `raddiff_irradiance_cache_new`: an empty cache for `settings` (invalid settings throw).
+  explicit IrradianceCache(const raddiff_irradiance_settings &settings)
+      : weights_(weights_of(settings)),
+        settings_(with_weights(settings, weights_)),
+        cache_(Cache::adopt(raddiff_irradiance_cache_new(&settings_))) {}
+
+  /// Uses `cache` (e.g. Cache::load of a saved IrradianceCache) with `settings`; the first miss
+  /// checks that they agree (channels, gradient limit, leak guard).
+  IrradianceCache(Cache cache, const raddiff_irradiance_settings &settings)
+      : weights_(weights_of(settings)), settings_(with_weights(settings, weights_)), cache_(std::move(cache)) {}
+
+  /// Wraps `raddiff_cache_irradiance`: the irradiance at `x` (normal `n`, pixel footprint
+  /// `footprint`, 0 if unknown) into `out` (`channels` floats, checked). On a miss it calls
+  /// `trace(origin, directions, distance, radiance)` once with Span<const raddiff_vec3>,
+  /// Span<double> and Span<float> (`channels` per ray); an exception thrown by `trace` abandons
+  /// the request (nothing inserted) and is rethrown here, after the C call has returned.
+  template <class Trace>
+  void irradiance(raddiff_vec3 x, raddiff_vec3 n, double footprint, Trace &&trace, Span<float> out) {
+    detail::check_size("out", out.size(), settings_.channels);
+    using Callable = std::remove_reference_t<Trace>;
+    detail::TraceCall<Callable> call{&trace, settings_.channels, nullptr};
+    const raddiff_status status = raddiff_cache_irradiance(cache_.get(), &settings_, x, n, footprint,
+                                                           &detail::trace_trampoline<Callable>, &call, out.data());
+    if (call.error) std::rethrow_exception(call.error);
+    detail::check(status);
+  }
+
+  /// irradiance() returning the `channels` values.
+  template <class Trace>
+  std::vector<float> irradiance(raddiff_vec3 x, raddiff_vec3 n, double footprint, Trace &&trace) {
+    std::vector<float> out(settings_.channels);
+    irradiance(x, n, footprint, std::forward<Trace>(trace), Span<float>(out));
+    return out;
+  }
+
+  /// The settings (their channel_weights point into this object).
+  const raddiff_irradiance_settings &settings() const noexcept { return settings_; }
+  /// The cache (lookups, save, compact, ...).
+  Cache &cache() noexcept { return cache_; }
+  /// The cache (lookups, save, ...).
+  const Cache &cache() const noexcept { return cache_; }
+
+ private:
+  static std::vector<double> weights_of(const raddiff_irradiance_settings &s) {
+    if (s.channel_weights == nullptr) return {};
+    return std::vector<double>(s.channel_weights, s.channel_weights + s.channels);
+  }
+  static raddiff_irradiance_settings with_weights(raddiff_irradiance_settings s, const std::vector<double> &w) {
+    s.channel_weights = w.empty() ? nullptr : w.data();
+    return s;
+  }
+
+  std::vector<double> weights_;
+  raddiff_irradiance_settings settings_;
+  Cache cache_;
+};
 
 }  // namespace raddiff
 

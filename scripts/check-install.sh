@@ -6,6 +6,10 @@
 #       (`pkg-config --static`, forcing libraddiff.a);
 #   (b) examples/consumer/ (C++17, CMake) with find_package(raddiff CONFIG REQUIRED), both imported
 #       targets raddiff::raddiff and raddiff::raddiff_static, before and after moving the prefix.
+#   (c) the README's install lines verbatim (its `check-install: checkout` block in the checkout,
+#       its `check-install: project` block in a project holding examples/consumer/ and hello.c as
+#       app.c), with HOME a scratch directory so that "$HOME/.local" is a fresh user prefix, and a
+#       second install into another prefix must not rebuild the library.
 # It also checks the installed header is byte-identical to include/raddiff.h, the SONAME and the
 # symlinks, and the pkg-config fields. Installs pkg-config, cmake, g++ when missing and run as root.
 # Prints "check-install: OK" or "check-install: FAILED ..." last; exits non-zero on any failure.
@@ -23,7 +27,7 @@ finish() {
     echo "kept $tmp"
   fi
   if [ $status -eq 0 ]; then
-    echo "check-install: OK (pkg-config shared and static, CMake raddiff::raddiff and raddiff::raddiff_static)"
+    echo "check-install: OK (pkg-config shared and static, CMake raddiff::raddiff and raddiff::raddiff_static, the README's lines)"
   else
     echo "check-install: FAILED at step: $step (exit status $status)" >&2
   fi
@@ -140,4 +144,37 @@ consumer_build "$tmp/cmake-build-moved" "$tmp/moved-prefix"
 grep -q "$tmp/moved-prefix/lib/libraddiff.so" \
   "$tmp/cmake-build-moved/CMakeFiles/consumer_shared.dir/link.txt" \
   || fail "the moved prefix's CMake targets do not point into the moved prefix"
+step="(c) the README's install lines, verbatim, into a user prefix"
+# the shell block that follows the line `<!-- check-install: NAME -->` in README.md
+readme_block() {
+  awk -v marker="<!-- check-install: $1 -->" '
+    $0 == marker { found = 1; next }
+    found && !inside && /^```sh$/ { inside = 1; next }
+    inside && /^```$/ { exit }
+    inside { print }' "$root/README.md"
+}
+checkout_lines="$(readme_block checkout)"
+project_lines="$(readme_block project)"
+[ -n "$checkout_lines" ] && [ -n "$project_lines" ] || fail "README.md lacks its check-install blocks"
+home="$tmp/home"
+mkdir -p "$home/my-app"
+cp "$hello" "$home/my-app/app.c"
+cp "$root/examples/consumer/CMakeLists.txt" "$root/examples/consumer/main.cpp" "$home/my-app/"
+# a scratch HOME, with cargo and rustup still where they are
+scratch_home=(env -u PKG_CONFIG_PATH -u LD_LIBRARY_PATH "HOME=$home"
+  "CARGO_HOME=${CARGO_HOME:-$HOME/.cargo}" "RUSTUP_HOME=${RUSTUP_HOME:-$HOME/.rustup}")
+echo "-- in the checkout:"
+echo "$checkout_lines"
+(cd "$root" && "${scratch_home[@]}" bash -euo pipefail -c "$checkout_lines")
+test -f "$home/.local/include/raddiff/raddiff.hpp" || fail "the README's install put no raddiff.hpp into \$HOME/.local"
+echo "-- in the project:"
+echo "$project_lines"
+(cd "$home/my-app" && "${scratch_home[@]}" bash -euo pipefail -c "$project_lines")
+test -x "$home/my-app/build/consumer_shared" || fail "the README's CMake lines built no consumer"
+
+step="(c) installing into another prefix reuses the build"
+log="$tmp/second-install.log"
+bash "$root/scripts/install.sh" "$tmp/another-prefix" > "$log" 2>&1 || { cat "$log"; fail "second install failed"; }
+if grep -q "Compiling raddiff" "$log"; then cat "$log"; fail "installing into a second prefix rebuilt raddiff"; fi
+if grep -q "^note:" "$log"; then cat "$log"; fail "the install printed a note"; fi
 step="done"

@@ -22,6 +22,11 @@ pub enum Error {
     /// A file or buffer failed validation (bad magic, version, checksum, truncation).
     #[error("corrupt data: {0}")]
     Corrupt(String),
+    /// A caller's callback (the tracing function of
+    /// [`Cache::irradiance`](crate::cache::Cache::irradiance)) reported a failure; the message is
+    /// the callback's.
+    #[error("callback failed: {0}")]
+    Callback(String),
 }
 
 impl From<std::io::Error> for Error {

@@ -57,6 +57,8 @@ pub mod guide_doctests {
     pub struct Demo;
     #[doc = include_str!("../docs/embree.md")]
     pub struct Embree;
+    #[doc = include_str!("../docs/integrate.md")]
+    pub struct Integrate;
     #[doc = include_str!("../docs/ARCHITECTURE.md")]
     pub struct Architecture;
 }

@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use proptest::prelude::*;
-use raddiff::cache::{Cache, CacheConfig, Extent, Record};
+use raddiff::cache::{Cache, CacheConfig, Extent, LeakGuard, Record};
 use raddiff::Error;
 
 fn sample(n: usize) -> Cache<[f32; 3]> {
@@ -47,8 +47,10 @@ fn reseal(bytes: &mut [u8]) {
     bytes[body..].copy_from_slice(&sum.to_le_bytes());
 }
 
-/// Size of the version 3 header (records start here).
-const HEADER: usize = 56;
+/// Size of the version 4 header (records start here).
+const HEADER: usize = 72;
+/// Size of the version 3 header: no leak-guard fields (offsets 56..72).
+const HEADER_V3: usize = 56;
 
 fn corrupt_reason(bytes: &[u8]) -> String {
     match Cache::<[f32; 3]>::from_bytes(bytes) {
@@ -120,16 +122,16 @@ fn header_and_record_damage_is_named() {
     b[0] = b'X';
     assert!(corrupt_reason(&b).contains("magic"));
     let mut b = good.clone();
-    b[8] = 4;
+    b[8] = 5;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("version"));
     let mut b = good.clone();
     b[100] ^= 1;
     assert!(corrupt_reason(&b).contains("checksum"));
     // a header flag this version does not know (bit 0 is the non-negative flag, bit 1 the
-    // gradient limit)
+    // gradient limit, bit 2 the leak guard)
     let mut b = good.clone();
-    b[44] = 4;
+    b[44] = 8;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("flags"));
     // a resealed file with a NaN radius (record 0 radii start at HEADER + 40)
@@ -176,18 +178,28 @@ fn header_and_record_damage_is_named() {
     assert!(corrupt_reason(&b).contains("domain"));
 }
 
-/// The version 2 file of a cache without a gradient limit: the version 3 file without the
-/// gradient-limit field (offset 48..56), version 2, resealed.
-fn as_version_2(v3: &[u8]) -> Vec<u8> {
-    let mut b = v3[..48].to_vec();
-    b.extend_from_slice(&v3[HEADER..]);
+/// The version 2 file of a cache without a gradient limit or leak guard: the version 4 file
+/// without the gradient-limit and leak-guard fields (offsets 48..72), version 2, resealed.
+fn as_version_2(v4: &[u8]) -> Vec<u8> {
+    let mut b = v4[..48].to_vec();
+    b.extend_from_slice(&v4[HEADER..]);
     b[8..12].copy_from_slice(&2u32.to_le_bytes());
     reseal(&mut b);
     b
 }
 
+/// The version 3 file of a cache without a leak guard: the version 4 file without the leak-guard
+/// fields (offsets 56..72), version 3, resealed.
+fn as_version_3(v4: &[u8]) -> Vec<u8> {
+    let mut b = v4[..HEADER_V3].to_vec();
+    b.extend_from_slice(&v4[HEADER..]);
+    b[8..12].copy_from_slice(&3u32.to_le_bytes());
+    reseal(&mut b);
+    b
+}
+
 #[test]
-fn gradient_limit_round_trips_in_version_3() {
+fn gradient_limit_round_trips() {
     let config = CacheConfig::surface(3)
         .with_non_negative(true)
         .with_gradient_limit(0.75);
@@ -196,7 +208,7 @@ fn gradient_limit_round_trips_in_version_3() {
         c.insert(&r).unwrap();
     }
     let bytes = c.to_bytes();
-    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 3);
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 4);
     assert_eq!(u32::from_le_bytes(bytes[44..48].try_into().unwrap()), 0b11);
     assert_eq!(f64::from_le_bytes(bytes[48..56].try_into().unwrap()), 0.75);
     let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
@@ -242,15 +254,15 @@ fn gradient_limit_round_trips_in_version_3() {
 #[test]
 fn version_2_files_still_load() {
     let c = sample(30);
-    let v3 = c.to_bytes();
-    let v2 = as_version_2(&v3);
-    assert_eq!(v2.len(), v3.len() - 8);
+    let v4 = c.to_bytes();
+    let v2 = as_version_2(&v4);
+    assert_eq!(v2.len(), v4.len() - 24);
     let back = Cache::<[f32; 3]>::from_bytes(&v2).unwrap();
     assert_eq!(back.config(), c.config());
     assert_eq!(back.config().gradient_limit, f64::INFINITY);
     assert_eq!(back.keys(), c.keys());
-    // saved again, it is the version 3 file of the same cache
-    assert_eq!(back.to_bytes(), v3);
+    // saved again, it is the current file of the same cache
+    assert_eq!(back.to_bytes(), v4);
     // the non-negative flag still reads from version 2
     let nn: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3).with_non_negative(true)).unwrap();
     let v2 = as_version_2(&nn.to_bytes());
@@ -261,7 +273,7 @@ fn version_2_files_still_load() {
             .non_negative
     );
     // version 2 had no gradient-limit flag: bit 1 is unknown there
-    let mut b = as_version_2(&v3);
+    let mut b = as_version_2(&v4);
     b[44] = 2;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("flags"));
@@ -272,6 +284,92 @@ fn version_2_files_still_load() {
         assert!(
             m.contains("truncated") || m.contains("length"),
             "{len}: {m}"
+        );
+    }
+}
+
+/// Version 3 files (written before the leak guard existed) load with the guard off and keep
+/// their gradient limit; version 3 knows no leak-guard flag.
+#[test]
+fn version_3_files_load_with_the_leak_guard_off() {
+    let limited: Cache<[f32; 3]> =
+        Cache::new(CacheConfig::surface(3).with_gradient_limit(2.0)).unwrap();
+    for r in sample(12).records() {
+        limited.insert(&r).unwrap();
+    }
+    let v4 = limited.to_bytes();
+    let v3 = as_version_3(&v4);
+    assert_eq!(v3.len(), v4.len() - 16);
+    let back = Cache::<[f32; 3]>::from_bytes(&v3).unwrap();
+    assert_eq!(back.config(), limited.config());
+    assert_eq!(back.config().leak_guard, LeakGuard::OFF);
+    assert_eq!(back.config().gradient_limit, 2.0);
+    assert_eq!(back.keys(), limited.keys());
+    assert_eq!(back.to_bytes(), v4);
+    let mut b = v3.clone();
+    b[44] |= 4;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("flags"));
+    for len in 0..v3.len() {
+        let m = corrupt_reason(&v3[..len]);
+        assert!(
+            m.contains("truncated") || m.contains("length"),
+            "{len}: {m}"
+        );
+    }
+}
+
+/// The leak guard is cache state: saved (flag bit 2, tolerances at offsets 56 and 64), restored,
+/// and the restored cache answers every lookup as the saved one did.
+#[test]
+fn leak_guard_round_trips() {
+    let guard = LeakGuard {
+        relative: 0.25,
+        absolute: 0.01,
+    };
+    let c: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3).with_leak_guard(guard)).unwrap();
+    for r in sample(20).records() {
+        c.insert(&r).unwrap();
+    }
+    let bytes = c.to_bytes();
+    assert_eq!(u32::from_le_bytes(bytes[44..48].try_into().unwrap()), 0b100);
+    assert_eq!(f64::from_le_bytes(bytes[56..64].try_into().unwrap()), 0.25);
+    assert_eq!(f64::from_le_bytes(bytes[64..72].try_into().unwrap()), 0.01);
+    let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
+    assert_eq!(back.config().leak_guard, guard);
+    assert_eq!(back.to_bytes(), bytes);
+    let mut refused = 0;
+    for i in 0..400 {
+        // queries above and below the records' plane (their normal is (0.1, 0, 1))
+        let p = DVec3::new(
+            i as f64 * 0.02,
+            (i % 9) as f64 * 0.5,
+            (i % 5) as f64 * 0.1 - 0.2,
+        );
+        let (a, b) = (c.lookup(p, DVec3::Z), back.lookup(p, DVec3::Z));
+        assert_eq!(a.ok().map(|l| l.value), b.ok().map(|l| l.value));
+        refused += c.lookup(p, DVec3::Z).is_err() as usize;
+    }
+    assert!(
+        refused > 0,
+        "the guard never refused a query below the records"
+    );
+    // no guard: flag clear and zero fields; fields without the flag are damage
+    let plain = sample(3).to_bytes();
+    assert_eq!(u32::from_le_bytes(plain[44..48].try_into().unwrap()), 0);
+    assert_eq!(u128::from_le_bytes(plain[56..72].try_into().unwrap()), 0);
+    let mut b = plain.clone();
+    b[56..64].copy_from_slice(&0.5f64.to_le_bytes());
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("leak guard"));
+    for (relative, absolute) in [(-1.0, 0.0), (f64::NAN, 0.0), (0.1, f64::INFINITY)] {
+        let mut b = bytes.clone();
+        b[56..64].copy_from_slice(&relative.to_le_bytes());
+        b[64..72].copy_from_slice(&f64::to_le_bytes(absolute));
+        reseal(&mut b);
+        assert!(
+            corrupt_reason(&b).contains("leak guard"),
+            "{relative} {absolute}"
         );
     }
 }

@@ -128,6 +128,41 @@ fn readme_cpp_example_is_tested() {
     );
 }
 
+/// The C and C++ programs of `docs/integrate.md` are the `ffi-tests/` files named in the comment
+/// above each block, byte for byte, so they are compiled and run below.
+#[test]
+fn integration_guide_programs_are_tested() {
+    let guide = std::fs::read_to_string(root().join("docs/integrate.md")).unwrap();
+    let mut shown = Vec::new();
+    for (at, _) in guide.match_indices("<!-- ffi-tests/") {
+        let name_start = at + "<!-- ".len();
+        let name_end = name_start + guide[name_start..].find(" -->").unwrap();
+        let name = &guide[name_start..name_end];
+        let fence = name_end + guide[name_end..].find("```").unwrap();
+        let start = fence + guide[fence..].find('\n').unwrap() + 1;
+        let end = start + guide[start..].find("```").unwrap();
+        let program = std::fs::read_to_string(root().join(name)).unwrap();
+        assert_eq!(
+            &guide[start..end],
+            program,
+            "docs/integrate.md shows another {name}"
+        );
+        shown.push(name.to_string());
+    }
+    let expected = [
+        "integrate_high.c",
+        "integrate_high.cpp",
+        "integrate_low.c",
+        "integrate_low.cpp",
+    ];
+    for file in expected {
+        assert!(
+            shown.iter().any(|s| s.ends_with(file)),
+            "docs/integrate.md does not show ffi-tests/{file}"
+        );
+    }
+}
+
 #[test]
 fn ffi_programs_pass() {
     let lib = static_library();
@@ -148,7 +183,8 @@ fn ffi_programs_pass() {
     }
     assert!(!programs.is_empty(), "no programs in ffi-tests/");
     for exe in programs {
-        let out = Command::new(&exe).output().unwrap();
+        // in the build's scratch directory: programs may write files where they run
+        let out = Command::new(&exe).current_dir(&dir).output().unwrap();
         let stdout = String::from_utf8_lossy(&out.stdout);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(

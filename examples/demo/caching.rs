@@ -10,11 +10,14 @@
 use std::sync::OnceLock;
 
 use glam::DVec3;
-use raddiff::cache::{metric, Cache, CacheConfig, Extent, Interpolation, Record};
-use raddiff::gather::radii::{surface_radii, surface_radii_floored, CurvatureFloor, ErrorMode};
+pub use raddiff::cache::irradiance::Metric;
+use raddiff::cache::irradiance::{
+    Hessians, IrradianceSettings, RadiusBounds, GRADIENT_LIMIT_DEFAULT,
+};
+use raddiff::cache::{Cache, CacheConfig, Record};
 use rayon::prelude::*;
 
-use crate::derivs::{Gathered, Gatherer, Hessians};
+use crate::derivs::{Gathered, Gatherer};
 use crate::lightmap::LightMap;
 use crate::placement::{clamped_extent_to, level_pixels, RADIUS_MAX, RADIUS_MIN};
 use crate::render::GBuffer;
@@ -93,196 +96,66 @@ pub struct Safeguards {
 }
 
 impl Default for Safeguards {
-    /// The gradient limit at c = 2: it stops gradients estimated a hair's breadth from a
-    /// junction (|grad E| R / E up to 132) and leaves sane ones alone (c = 1, which keeps every
-    /// value's sign, trimmed the split sphere's legitimately steep gradients: +9% error).
-    /// Neighbour clamping off: at equal record counts it raised every metric's error here (see
-    /// `docs/demo.md`).
+    /// The library's gradient limit ([`GRADIENT_LIMIT_DEFAULT`], chosen from this demo's
+    /// measurements). Neighbour clamping off: at equal record counts it raised every metric's
+    /// error here (see `docs/demo.md`).
     fn default() -> Self {
         Safeguards {
-            gradient_limit: 2.0,
+            gradient_limit: GRADIENT_LIMIT_DEFAULT,
             neighbour_clamp: false,
         }
     }
 }
 
-/// The metrics compared, by command-line name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Metric {
-    /// Ward's split sphere: radius a·R with R the harmonic-mean hit distance.
-    SplitSphere,
-    /// The split sphere bounded by the measured gradient (Ward-Heckbert, Křivánek): a·min(R, E/|∇E|).
-    BoundedSplitSphere,
-    /// Jarosz et al. 2008: radius ε·E/|∇E| from the gradient alone.
-    Gradient,
-    /// Occlusion-unaware (radiometric) Hessian (thesis ch. 4), anisotropic records like the last.
-    HessianUnaware,
-    /// Geometric Hessian (thesis eq. 4.23: radiance held at its largest), anisotropic records.
-    HessianGeometric,
-    /// Occlusion-aware Hessian (Schwarzhaupt et al.), isotropic (disc) records.
-    HessianIsotropic,
-    /// Occlusion-aware Hessian, anisotropic (ellipse) records, anisotropy ≤ 2.
-    HessianAnisotropic,
-}
-
-impl Metric {
-    pub const ALL: [Metric; 7] = [
-        Metric::SplitSphere,
-        Metric::BoundedSplitSphere,
-        Metric::Gradient,
-        Metric::HessianUnaware,
-        Metric::HessianGeometric,
-        Metric::HessianIsotropic,
-        Metric::HessianAnisotropic,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Metric::SplitSphere => "split-sphere",
-            Metric::BoundedSplitSphere => "bounded-split-sphere",
-            Metric::Gradient => "gradient",
-            Metric::HessianUnaware => "hessian-unaware",
-            Metric::HessianGeometric => "hessian-geometric",
-            Metric::HessianIsotropic => "hessian-isotropic",
-            Metric::HessianAnisotropic => "hessian-anisotropic",
-        }
-    }
-
-    pub fn parse(s: &str) -> Option<Metric> {
-        Metric::ALL.into_iter().find(|m| m.name() == s)
-    }
-
-    /// The Hessians the gathers must compute for `metrics`.
-    pub fn hessians(metrics: &[Metric]) -> Hessians {
-        let any = |wanted: &[Metric]| metrics.iter().any(|m| wanted.contains(m));
-        Hessians {
-            aware: any(&[Metric::HessianIsotropic, Metric::HessianAnisotropic]),
-            unaware: any(&[Metric::HessianUnaware]),
-            geometric: any(&[Metric::HessianGeometric]),
-        }
-    }
-
-    /// Whether the metric is defined only on surfaces outside a medium (its Hessian needs the
-    /// hits' normals and ignores attenuation).
-    pub fn surfaces_only(self) -> bool {
-        matches!(self, Metric::HessianUnaware | Metric::HessianGeometric)
-    }
-
-    pub fn uses_hessian(self) -> bool {
-        matches!(
-            self,
-            Metric::HessianUnaware
-                | Metric::HessianGeometric
-                | Metric::HessianIsotropic
-                | Metric::HessianAnisotropic
-        )
-    }
-
+/// What the demo adds to the library's metrics: where its tuning starts, how radii scale with
+/// the parameter, and where a metric is defined.
+pub trait MetricTuning {
     /// A starting value of the metric's parameter (accuracy a, ε, or relative error).
-    fn initial_parameter(self) -> f64 {
-        match self {
-            Metric::SplitSphere | Metric::BoundedSplitSphere | Metric::Gradient => 0.2,
-            _ => 1e-3,
-        }
-    }
-
+    fn initial_parameter(self) -> f64;
     /// How a record's radius scales with the parameter: as its first power for the
     /// split-sphere and gradient metrics, as its fourth root for the Hessian metrics (they bound
     /// the error integrated over the record's disc, which grows as r⁴).
-    pub fn radius_exponent(self) -> f64 {
-        if self.uses_hessian() {
-            0.25
-        } else {
-            1.0
+    fn radius_exponent(self) -> f64;
+    /// Whether the metric is defined only on surfaces outside a medium (its Hessian needs the
+    /// hits' normals and ignores attenuation).
+    fn surfaces_only(self) -> bool;
+}
+
+impl MetricTuning for Metric {
+    fn initial_parameter(self) -> f64 {
+        match self.hessian() {
+            None => 0.2,
+            Some(_) => 1e-3,
         }
     }
 
-    fn interpolation(self) -> Interpolation {
-        if self.uses_hessian() {
-            Interpolation::Tent
-        } else {
-            Interpolation::Ward
+    fn radius_exponent(self) -> f64 {
+        match self.hessian() {
+            None => 1.0,
+            Some(_) => 0.25,
         }
     }
 
-    /// The record extent this metric gives a gather, before the radius clamps.
-    fn extent(self, g: &Gathered, parameter: f64) -> Result<Extent, raddiff::Error> {
-        self.extent_floored(g, parameter, true)
+    fn surfaces_only(self) -> bool {
+        self.needs_hit_normals()
     }
+}
 
-    /// [`Metric::extent`], the Hessian metrics' radii with or without the curvature floor.
-    pub fn extent_floored(
-        self,
-        g: &Gathered,
-        parameter: f64,
-        curvature_floor: bool,
-    ) -> Result<Extent, raddiff::Error> {
-        let lum = g.luminance.max(1e-12);
-        Ok(match self {
-            Metric::SplitSphere => {
-                Extent::isotropic(metric::split_sphere(parameter, g.harmonic_mean_distance)?)
-            }
-            Metric::BoundedSplitSphere => Extent::isotropic(metric::split_sphere_bounded(
-                parameter,
-                g.harmonic_mean_distance,
-                lum,
-                g.luminance_gradient,
-            )?),
-            Metric::Gradient => {
-                let norm = g.luminance_gradient.length();
-                let r = if norm > 0.0 {
-                    parameter * lum / norm
-                } else {
-                    f64::INFINITY
-                };
-                Extent::isotropic(r)
-            }
-            Metric::HessianUnaware
-            | Metric::HessianGeometric
-            | Metric::HessianIsotropic
-            | Metric::HessianAnisotropic => {
-                let anisotropy = if self == Metric::HessianIsotropic {
-                    1.0
-                } else {
-                    2.0
-                };
-                let hessian = match self {
-                    Metric::HessianUnaware => g.unaware_hessian.ok_or_else(|| {
-                        raddiff::Error::Degenerate("no occlusion-unaware Hessian in media".into())
-                    })?,
-                    Metric::HessianGeometric => g.geometric_hessian.ok_or_else(|| {
-                        raddiff::Error::Degenerate("no geometric Hessian in media".into())
-                    })?,
-                    _ => g.hessian,
-                };
-                // the floor's distance: Ward's harmonic mean (infinite when every ray missed)
-                let distance = g.harmonic_mean_distance;
-                let r = if curvature_floor && distance.is_finite() {
-                    surface_radii_floored(
-                        hessian,
-                        g.normal,
-                        g.luminance,
-                        parameter,
-                        ErrorMode::Relative,
-                        anisotropy,
-                        CurvatureFloor::new(distance),
-                    )?
-                } else {
-                    surface_radii(
-                        hessian,
-                        g.normal,
-                        lum,
-                        parameter,
-                        ErrorMode::Relative,
-                        anisotropy,
-                    )?
-                };
-                Extent {
-                    radii: [r.radii[0], r.radii[1], r.radii[0].min(r.radii[1])],
-                    axes: [r.axes[0], r.axes[1], DVec3::ZERO],
-                }
-            }
-        })
+/// The library's settings for `metric` at `parameter` in the production baseline: luminance as
+/// the metrics' scalar, radii in [`RADIUS_MIN`, `RADIUS_MAX`] x the scene size, the curvature
+/// floor and anisotropy 2 (the library's defaults), the gradient limit of `safeguards`.
+fn production_settings(
+    metric: Metric,
+    parameter: f64,
+    size: f64,
+    safeguards: Safeguards,
+) -> IrradianceSettings {
+    IrradianceSettings {
+        metric,
+        accuracy: parameter,
+        radius_bounds: RadiusBounds::world(RADIUS_MIN * size, RADIUS_MAX * size),
+        gradient_limit: safeguards.gradient_limit,
+        ..IrradianceSettings::new(3)
     }
 }
 
@@ -344,7 +217,8 @@ impl<'a> GatherStore<'a> {
         for (slot, r) in self.slots.iter().zip(reference) {
             if let Some(Some(g)) = slot.get() {
                 let lr = crate::image::luminance(*r);
-                e2 += (g.luminance - lr) * (g.luminance - lr);
+                let l = g.evaluation.scalar;
+                e2 += (l - lr) * (l - lr);
                 r2 += lr * lr;
             }
         }
@@ -380,14 +254,14 @@ pub fn run(
     baseline: Baseline,
     safeguards: Safeguards,
 ) -> Result<Run, raddiff::Error> {
-    let config = CacheConfig::surface(3).with_interpolation(metric.interpolation());
+    let settings = production_settings(metric, parameter, store.scene.size, safeguards);
     let Filled {
         cache,
         record_pixels,
         seconds: placement_seconds,
     } = match baseline {
-        Baseline::Production => fill_production(store, metric, parameter, config, safeguards)?,
-        Baseline::Thesis => fill_thesis(store, metric, parameter, config)?,
+        Baseline::Production => fill_production(store, &settings, safeguards)?,
+        Baseline::Thesis => fill_thesis(store, &settings)?,
     };
     let (image, uncovered, render_seconds) = render(&cache, store.gbuffer);
     // The records' measured costs.
@@ -398,12 +272,7 @@ pub fn run(
             .expect("every record comes from a stored gather");
         trace_seconds += g.trace_seconds;
         raddiff_seconds += g.gradient_seconds;
-        raddiff_seconds += match metric {
-            Metric::HessianUnaware => g.unaware_seconds,
-            Metric::HessianGeometric => g.geometric_seconds,
-            Metric::HessianIsotropic | Metric::HessianAnisotropic => g.hessian_seconds,
-            _ => 0.0,
-        };
+        raddiff_seconds += metric.hessian().map_or(0.0, |kind| g.hessian_seconds(kind));
     }
     Ok(Run {
         metric,
@@ -424,16 +293,6 @@ struct Filled {
     seconds: f64,
 }
 
-/// The record of gather `g` with `extent`, with its gradients or (Ward 1988) without.
-fn record_of(g: &Gathered, extent: Extent, gradients: bool) -> Record<[f32; 3]> {
-    let mut record = Record::new(g.position, g.normal, g.value, extent);
-    if gradients {
-        record.gradient = Some(g.gradient);
-        record.rotation_gradient = Some(g.rotation_gradient);
-    }
-    record
-}
-
 /// Whether a record covers pixel `i` (pixels that show no indirect light count as covered).
 fn covered(cache: &Cache<[f32; 3]>, gb: &GBuffer, i: usize) -> bool {
     match gb.pixels[i].shaded() {
@@ -450,16 +309,13 @@ fn covered(cache: &Cache<[f32; 3]>, gb: &GBuffer, i: usize) -> bool {
 /// filling, until every pixel is covered.
 fn fill_production(
     store: &GatherStore,
-    metric: Metric,
-    parameter: f64,
-    config: CacheConfig,
+    settings: &IrradianceSettings,
     safeguards: Safeguards,
 ) -> Result<Filled, raddiff::Error> {
     let gb = store.gbuffer;
     let (w, h) = (gb.width, gb.height);
-    let size = store.scene.size;
-    let mut cache: Cache<[f32; 3]> =
-        Cache::new(config.with_gradient_limit(safeguards.gradient_limit))?;
+    // the figures of docs/demo.md were measured without the zero clamp of irradiance caches
+    let mut cache: Cache<[f32; 3]> = Cache::new(settings.cache_config().with_non_negative(false))?;
     let clamp = safeguards.neighbour_clamp;
     let mut record_pixels = Vec::new();
     let mut seconds = 0.0;
@@ -490,17 +346,11 @@ fn fill_production(
                 continue;
             }
             let Some(g) = store.get(i) else { continue };
-            let extent = clamped_extent_to(
-                metric.extent(g, parameter).ok(),
-                RADIUS_MIN * size,
-                RADIUS_MAX * size,
-            );
-            let extent = if clamp {
-                cache.clamp_to_neighbours(g.position, &extent)?
-            } else {
-                extent
-            };
-            cache.insert(&record_of(g, extent, true))?;
+            let mut record = settings.record(&g.evaluation, 0.0)?;
+            if clamp {
+                record.extent = cache.clamp_to_neighbours(record.position, &record.extent)?;
+            }
+            cache.insert(&record)?;
             record_pixels.push(i);
         }
         // the last round only fills: every pixel it inserts a record for stays covered
@@ -531,13 +381,13 @@ fn fill_production(
 /// ones count in the CPU time), so the wall time stays low without changing any result.
 fn fill_thesis(
     store: &GatherStore,
-    metric: Metric,
-    parameter: f64,
-    config: CacheConfig,
+    settings: &IrradianceSettings,
 ) -> Result<Filled, raddiff::Error> {
     let gb = store.gbuffer;
     let camera = &store.scene.camera;
     let size = store.scene.size;
+    let metric = settings.metric;
+    let config = CacheConfig::surface(3).with_interpolation(metric.interpolation());
     let cache: Cache<[f32; 3]> = Cache::new(config)?;
     let mut record_pixels = Vec::new();
     let mut seconds = 0.0;
@@ -564,15 +414,21 @@ fn fill_thesis(
             }
             let Some(g) = store.get(p) else { continue };
             // one pixel's footprint at the record's depth
-            let depth = (g.position - camera.position).dot(camera.forward);
+            let depth = (g.evaluation.position - camera.position).dot(camera.forward);
             let pixel = 2.0 * depth * camera.tan_half_fov / gb.height as f64;
             let max = match metric {
                 Metric::BoundedSplitSphere => pixel * 150.0 / 1800.0 * gb.height as f64,
                 Metric::SplitSphere | Metric::Gradient => RADIUS_MAX * size,
                 _ => raddiff::cache::RADIUS_MAX,
             };
-            let extent = clamped_extent_to(metric.extent(g, parameter).ok(), pixel, max);
-            cache.insert(&record_of(g, extent, metric != Metric::SplitSphere))?;
+            let extent = clamped_extent_to(settings.extent(&g.evaluation).ok(), pixel, max);
+            let mut record: Record<[f32; 3]> = g.evaluation.record(extent)?;
+            if metric == Metric::SplitSphere {
+                // Ward 1988: no gradients
+                record.gradient = None;
+                record.rotation_gradient = None;
+            }
+            cache.insert(&record)?;
             record_pixels.push(p);
         }
         seconds += start.seconds();

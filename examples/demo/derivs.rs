@@ -1,51 +1,44 @@
-//! Everything the demo asks raddiff for one irradiance record: gather directions, irradiance with
-//! its Ward-Heckbert gradients, and the occlusion-aware Hessian. Each part is timed separately so
-//! the report can set raddiff's work against the ray casting.
+//! Everything the demo asks raddiff for one irradiance record: gather directions, and the
+//! library's evaluation of the traced gather (irradiance with its Ward-Heckbert gradients, the
+//! luminance the metrics measure, the Hessians they need). Each part is timed separately so the
+//! report can set raddiff's work against the ray casting.
 
-use glam::{DMat3, DVec3};
-use raddiff::gather::hessian::{occlusion_derivatives, HemisphereGather};
-use raddiff::gather::hessian_mesh::Topology;
-use raddiff::gather::hessian_unaware::{geometric_hessian, unaware_derivatives};
-use raddiff::gather::{
-    evaluate, Frame, GatherInput, GatherValues, Layout, LayoutKind, MediaRadiance, Wanted,
+use glam::DVec3;
+use raddiff::cache::irradiance::{
+    GatherEvaluation, HessianKind, Hessians, TracedGather, LUMINANCE_WEIGHTS,
 };
-use raddiff::Order;
+use raddiff::gather::{Frame, GatherInput, Layout, LayoutKind, MediaRadiance};
 
 use crate::geometry::{tangent_of, Ray};
 use crate::lightmap::LightMap;
 use crate::scene::Scene;
 use crate::timing::ThreadTimer;
 
-/// One gather's results, kept for every metric (records differ only in their radii).
+/// One gather's evaluation, kept for every metric (records differ only in their radii), and what
+/// each part cost.
 #[derive(Clone, Debug)]
 pub struct Gathered {
-    pub position: DVec3,
-    pub normal: DVec3,
-    /// RGB indirect irradiance.
-    pub value: [f32; 3],
-    /// Axis-major: `gradient[k][c]` = ∂E_c/∂x_k (the cache's convention).
-    pub gradient: [[f32; 3]; 3],
-    pub rotation_gradient: [[f32; 3]; 3],
-    /// Luminance of the irradiance, its Ward-Heckbert gradient, the harmonic-mean distance.
-    pub luminance: f64,
-    pub luminance_gradient: DVec3,
-    pub harmonic_mean_distance: f64,
-    /// Occlusion-aware Hessian of the luminance with the thesis' 1% robustness term (zero unless
-    /// [`Hessians::aware`]).
-    pub hessian: DMat3,
-    /// Occlusion-unaware (radiometric) Hessian of the luminance; `None` in media or unless
-    /// [`Hessians::unaware`].
-    pub unaware_hessian: Option<DMat3>,
-    /// Geometric Hessian (thesis eq. 4.23: the radiometric Hessian with every hit's luminance
-    /// replaced by the gather's largest); `None` in media or unless [`Hessians::geometric`].
-    pub geometric_hessian: Option<DMat3>,
+    /// Irradiance, gradients, luminance (the metrics' scalar), distance and the Hessians the
+    /// metrics asked for (the occlusion-unaware ones only outside media).
+    pub evaluation: GatherEvaluation,
     /// Seconds spent: ray casting (including the hit radiance), raddiff's irradiance and
-    /// gradients, raddiff's occlusion-aware gradient and Hessian.
+    /// gradients, raddiff's occlusion-aware, occlusion-unaware and geometric Hessians.
     pub trace_seconds: f64,
     pub gradient_seconds: f64,
     pub hessian_seconds: f64,
     pub unaware_seconds: f64,
     pub geometric_seconds: f64,
+}
+
+impl Gathered {
+    /// The seconds raddiff spent on the Hessian `kind` (0 when no metric asked for it).
+    pub fn hessian_seconds(&self, kind: HessianKind) -> f64 {
+        match kind {
+            HessianKind::OcclusionAware => self.hessian_seconds,
+            HessianKind::Unaware => self.unaware_seconds,
+            HessianKind::Geometric => self.geometric_seconds,
+        }
+    }
 }
 
 /// Steps along each gather direction at which in-scattering is sampled in a medium.
@@ -55,10 +48,13 @@ const MEDIA_STEPS: usize = 16;
 pub struct Traced {
     layout: Layout,
     frame: Frame,
+    /// The shading normal the frame was built from (the record's normal, bit for bit).
+    normal: DVec3,
     directions: Vec<DVec3>,
     distance: Vec<f64>,
     /// RGB radiance leaving each hit towards x, before attenuation.
     radiance: Vec<f32>,
+    /// Its luminance, computed before the RGB values were rounded to f32.
     luminance: Vec<f32>,
     /// Unit normal at every hit (zero for misses), for the occlusion-unaware Hessian.
     normals: Vec<DVec3>,
@@ -68,22 +64,10 @@ pub struct Traced {
     media_step: f64,
 }
 
-/// Which Hessians every gather computes: only those of the metrics that run.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Hessians {
-    /// The occlusion-aware Hessian (`gather::hessian`).
-    pub aware: bool,
-    /// The occlusion-unaware (radiometric) Hessian.
-    pub unaware: bool,
-    /// The geometric Hessian (thesis eq. 4.23).
-    pub geometric: bool,
-}
-
-/// Per-gather constants: the layout grid and its triangulation.
+/// Per-gather constants: the layout grid and the Hessians the metrics need.
 pub struct Gatherer {
     pub m: u32,
     pub n: u32,
-    topology: Topology,
     hessians: Hessians,
 }
 
@@ -93,10 +77,11 @@ fn lum(c: DVec3) -> f64 {
 
 impl Gatherer {
     pub fn new(m: usize, n: usize, hessians: Hessians) -> Result<Self, raddiff::Error> {
+        // fails here, not at the first gather, for a grid too small for the Hessian's mesh
+        raddiff::gather::hessian::Topology::new(LayoutKind::CosinePolar, m, n)?;
         Ok(Gatherer {
             m: m as u32,
             n: n as u32,
-            topology: Topology::new(LayoutKind::CosinePolar, m, n)?,
             hessians,
         })
     }
@@ -147,6 +132,7 @@ impl Gatherer {
         Ok(Traced {
             layout,
             frame,
+            normal,
             directions,
             distance,
             radiance,
@@ -158,69 +144,49 @@ impl Gatherer {
         })
     }
 
-    /// raddiff's irradiance, Ward-Heckbert gradients (with the media terms in a medium) and
-    /// distances of a traced gather.
-    pub fn evaluate(&self, t: &Traced) -> Result<GatherValues, raddiff::Error> {
-        let input = GatherInput {
-            directions: &t.directions,
-            distance: &t.distance,
-            radiance: &t.radiance,
-            channels: 3,
-            sigma_t: t.sigma_t,
-            media: (!t.media.is_empty()).then_some(MediaRadiance {
-                radiance: &t.media,
-                gradient: None,
-                steps: MEDIA_STEPS,
-                step: t.media_step,
-            }),
-        };
-        evaluate(&t.layout, &t.frame, &input, Wanted::ALL)
-    }
-
-    /// raddiff's occlusion-aware Hessian of the luminance, with the thesis' robustness term.
-    pub fn hessian(&self, t: &Traced) -> Result<DMat3, raddiff::Error> {
-        Ok(
-            occlusion_derivatives(&self.topology, &self.hemisphere(t), Order::Hessian)?
-                .robust_hessian(0),
-        )
-    }
-
-    /// raddiff's occlusion-unaware (radiometric) Hessian of the luminance, thesis eq. 4.10-4.14.
-    /// Surfaces only: `None` in a medium, where it is not defined.
-    pub fn unaware_hessian(&self, t: &Traced) -> Result<Option<DMat3>, raddiff::Error> {
-        if t.sigma_t > 0.0 {
-            return Ok(None);
+    /// The traced gather as raddiff takes it (with the media terms in a medium).
+    fn traced<'t>(&self, t: &'t Traced) -> TracedGather<'t> {
+        TracedGather {
+            layout: t.layout,
+            frame: t.frame,
+            normal: t.normal,
+            input: GatherInput {
+                directions: &t.directions,
+                distance: &t.distance,
+                radiance: &t.radiance,
+                channels: 3,
+                sigma_t: t.sigma_t,
+                media: (!t.media.is_empty()).then_some(MediaRadiance {
+                    radiance: &t.media,
+                    gradient: None,
+                    steps: MEDIA_STEPS,
+                    step: t.media_step,
+                }),
+            },
+            hit_normals: Some(&t.normals),
+            scalar_radiance: Some(&t.luminance),
         }
-        let d = unaware_derivatives(&self.hemisphere(t), &t.normals, Order::Hessian)?;
-        Ok(Some(d.hessian[0]))
     }
 
-    /// raddiff's geometric Hessian (thesis eq. 4.23) with the gather's largest hit luminance
-    /// standing in for the scene's largest radiance. Surfaces only, as the unaware one.
-    pub fn geometric_hessian(&self, t: &Traced) -> Result<Option<DMat3>, raddiff::Error> {
-        if t.sigma_t > 0.0 {
-            return Ok(None);
-        }
-        let l_max = t.luminance.iter().fold(0.0f32, |m, &l| m.max(l)) as f64;
-        Ok(Some(geometric_hessian(
-            &self.hemisphere(t),
-            &t.normals,
-            l_max,
-        )?))
+    /// raddiff's irradiance, Ward-Heckbert gradients (with the media terms in a medium), luminance
+    /// and distance of a traced gather, no Hessian yet.
+    pub fn evaluate(&self, t: &Traced) -> Result<GatherEvaluation, raddiff::Error> {
+        GatherEvaluation::new(&self.traced(t), &LUMINANCE_WEIGHTS, Hessians::NONE)
     }
 
-    fn hemisphere<'t>(&self, t: &'t Traced) -> HemisphereGather<'t> {
-        HemisphereGather {
-            normal: t.frame.normal,
-            directions: &t.directions,
-            distance: &t.distance,
-            radiance: &t.luminance,
-            channels: 1,
-            sigma_t: t.sigma_t,
-        }
+    /// Adds raddiff's Hessian `kind` of the luminance to `evaluation` (of the gather `t`).
+    pub fn add_hessian(
+        &self,
+        t: &Traced,
+        evaluation: &mut GatherEvaluation,
+        kind: HessianKind,
+    ) -> Result<(), raddiff::Error> {
+        evaluation.add_hessian(&self.traced(t), kind)
     }
 
     /// Traces and evaluates the gather at (position, normal), timing each part on this thread.
+    /// A Hessian no metric asks for is neither computed nor timed (its seconds stay 0); the
+    /// occlusion-unaware ones are not defined in a medium.
     pub fn gather(
         &self,
         scene: &Scene,
@@ -232,56 +198,26 @@ impl Gatherer {
         let start = ThreadTimer::start();
         let traced = self.trace(scene, lightmap, position, normal, seed)?;
         let trace_seconds = start.seconds();
-
-        let (values, gradient_seconds) = timed(|| self.evaluate(&traced))?;
-        // a Hessian no metric asks for is neither computed nor timed (its seconds stay 0)
-        let wanted = self.hessians;
-        let (hessian, hessian_seconds) = match wanted.aware {
-            true => timed(|| self.hessian(&traced))?,
-            false => (DMat3::ZERO, 0.0),
-        };
-        let (unaware_hessian, unaware_seconds) = match wanted.unaware {
-            true => timed(|| self.unaware_hessian(&traced))?,
-            false => (None, 0.0),
-        };
-        let (geometric, geometric_seconds) = match wanted.geometric {
-            true => timed(|| self.geometric_hessian(&traced))?,
-            false => (None, 0.0),
-        };
-
-        let e = DVec3::new(
-            values.irradiance[0],
-            values.irradiance[1],
-            values.irradiance[2],
-        );
-        let axis_major = |g: &[DVec3]| {
-            let mut out = [[0.0f32; 3]; 3];
-            for (c, v) in g.iter().enumerate() {
-                for (k, row) in out.iter_mut().enumerate() {
-                    row[c] = v[k] as f32;
-                }
+        let (mut evaluation, gradient_seconds) = timed(|| self.evaluate(&traced))?;
+        let mut seconds = [0.0; 3];
+        let kinds = [
+            HessianKind::OcclusionAware,
+            HessianKind::Unaware,
+            HessianKind::Geometric,
+        ];
+        for (kind, seconds) in kinds.into_iter().zip(&mut seconds) {
+            let defined = kind == HessianKind::OcclusionAware || traced.sigma_t == 0.0;
+            if self.hessians.contains(kind) && defined {
+                *seconds = timed(|| self.add_hessian(&traced, &mut evaluation, kind))?.1;
             }
-            out
-        };
-        let lg =
-            values.gradient[0] * 0.2126 + values.gradient[1] * 0.7152 + values.gradient[2] * 0.0722;
+        }
         Ok(Gathered {
-            position,
-            normal,
-            value: [e.x as f32, e.y as f32, e.z as f32],
-            gradient: axis_major(&values.gradient),
-            rotation_gradient: axis_major(&values.rotation_gradient),
-            luminance: lum(e),
-            luminance_gradient: lg,
-            harmonic_mean_distance: values.harmonic_mean_distance.unwrap_or(f64::INFINITY),
-            hessian,
-            unaware_hessian,
-            geometric_hessian: geometric,
+            evaluation,
             trace_seconds,
             gradient_seconds,
-            hessian_seconds,
-            unaware_seconds,
-            geometric_seconds,
+            hessian_seconds: seconds[0],
+            unaware_seconds: seconds[1],
+            geometric_seconds: seconds[2],
         })
     }
 }

@@ -29,7 +29,7 @@ use std::time::Instant;
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::caching::{Baseline, GatherStore};
+use crate::caching::{Baseline, GatherStore, MetricTuning};
 use crate::lightmap::LightMap;
 use crate::render::GBuffer;
 use crate::scene::Scene;
@@ -299,7 +299,7 @@ fn run() -> Result<(), String> {
             &gbuffer,
             options.gather_m,
             options.gather_n,
-            caching::Metric::hessians(&options.metrics),
+            raddiff::cache::irradiance::Hessians::for_metrics(&options.metrics),
         )
         .map_err(|e| e.to_string())?;
         let ctx = SceneRun {

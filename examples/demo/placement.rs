@@ -1,6 +1,7 @@
 //! What the surface and the media caches place their records by: the coarse-to-fine pixel
 //! levels and the radius clamps.
 
+use raddiff::cache::irradiance::RadiusBounds;
 use raddiff::cache::Extent;
 
 /// Record radii are clamped to [MIN, MAX] × the scene size (Křivánek et al.'s clamps, in scene
@@ -25,18 +26,8 @@ pub fn clamped_extent(extent: Option<Extent>, size: f64) -> Extent {
 }
 
 /// `extent` (or, when the metric gave none, the largest isotropic one) with every radius clamped
-/// to [`min`, `max`] (a non-finite radius becomes `max`).
+/// to [`min`, `max`] (a non-finite radius becomes `max`), as the library clamps records.
 pub fn clamped_extent_to(extent: Option<Extent>, min: f64, max: f64) -> Extent {
     let extent = extent.unwrap_or_else(|| Extent::isotropic(max));
-    let clamp = |r: f64| {
-        if r.is_finite() {
-            r.clamp(min, max)
-        } else {
-            max
-        }
-    };
-    Extent {
-        radii: extent.radii.map(clamp),
-        axes: extent.axes,
-    }
+    RadiusBounds::apply(&extent, (min, max))
 }

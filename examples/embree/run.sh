@@ -7,38 +7,19 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
-build="$root/target/embree"
-prefix="$root/target/embree-prefix"
 out="$root/out/embree"
 
-# Debian/Ubuntu: install what is missing when allowed to (CI runs as root).
-missing=()
-command -v cmake >/dev/null || missing+=(cmake)
-command -v c++ >/dev/null || missing+=(g++)
-[ -f /usr/include/embree3/rtcore.h ] || missing+=(libembree-dev)
-if [ ${#missing[@]} -gt 0 ]; then
-  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
-  else
-    echo "missing: ${missing[*]} (Debian/Ubuntu: sudo apt-get install ${missing[*]})" >&2
-    exit 1
-  fi
-fi
-
-bash "$root/scripts/ensure-cargo-c.sh"
-bash "$root/scripts/install.sh" "$prefix" >/dev/null
-cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
-cmake --build "$build" -j 2 >/dev/null
+binary="$(bash "$here/build.sh")"
 mkdir -p "$out"
 
 # A small, quick configuration: split-sphere records, then occlusion-aware Hessian records with
 # the Hessian's relative error tuned (--records) to the split sphere's record count, so that the two
 # check errors compare at (nearly) equal records.
-"$build/raddiff_embree" --obj "$here/cornell.obj" --out "$out/cornell" --size 128 --gather 16x48 "$@" \
+"$binary" --obj "$here/cornell.obj" --out "$out/cornell" --size 128 --gather 16x48 "$@" \
   | tee "$out/cornell.log"
 records="$(sed -n 's/^pass 1: \([0-9][0-9]*\) records.*/\1/p' "$out/cornell.log")"
 [ -n "$records" ] || { echo "no record count in $out/cornell.log" >&2; exit 1; }
-"$build/raddiff_embree" --obj "$here/cornell.obj" --out "$out/cornell-hessian" --size 128 \
+"$binary" --obj "$here/cornell.obj" --out "$out/cornell-hessian" --size 128 \
   --gather 16x48 --hessian 0.05 --records "$records" "$@" | tee "$out/cornell-hessian.log"
 runs=(cornell cornell-hessian)
 

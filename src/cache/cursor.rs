@@ -40,6 +40,8 @@ struct Group {
     /// Anisotropic records: the first two frame axes and the three radii.
     axes: [[[f64; GROUP]; 3]; 2],
     radii: [[f64; GROUP]; 3],
+    /// The radius along the normal (the stored third radius), for the leak guard.
+    normal_radius: [f64; GROUP],
     /// The records' gradient scales (translational, rotational), for the blend.
     gradient_scale: [f32; GROUP],
     rotation_scale: [f32; GROUP],
@@ -181,6 +183,7 @@ impl Cursor {
             g.position[i][k] = head.position[i];
         }
         g.reach2[k] = (head.max_radius() * (1.0 + 1e-9)).powi(2);
+        g.normal_radius[k] = head.radii[2] as f64;
         g.gradient_scale[k] = head.gradient_scale;
         g.rotation_scale[k] = head.rotation_scale;
         // exactly what `record_weight` computes from the stored record
@@ -373,6 +376,10 @@ impl Cursor {
             while hits != 0 {
                 let k = hits.trailing_zeros() as usize;
                 hits &= hits - 1;
+                // the same test, on the same values, as `weigh::guarded`
+                if kernel.leaks(x, n, g.position(k), g.normal(k), g.normal_radius[k]) {
+                    continue;
+                }
                 take(g, k, weights[k]);
             }
         }
@@ -380,6 +387,16 @@ impl Cursor {
 }
 
 impl Group {
+    /// The position of lane `k`.
+    #[inline(always)]
+    fn position(&self, k: usize) -> DVec3 {
+        DVec3::new(
+            self.position[0][k],
+            self.position[1][k],
+            self.position[2][k],
+        )
+    }
+
     /// The normal of lane `k`.
     #[inline(always)]
     fn normal(&self, k: usize) -> DVec3 {

@@ -35,6 +35,7 @@
 
 use glam::DVec3;
 
+use super::leak_guard::LeakGuard;
 use super::record::{packed_scale, Channel, Domain, Head};
 use crate::error::{ensure_finite, Error, Result};
 
@@ -87,6 +88,8 @@ pub(crate) struct Kernel {
     pub domain: Domain,
     pub(crate) cos_max: f64,
     pub(crate) inv_a: f64,
+    /// The leak guard, when it is on and the domain has normals (surfaces).
+    pub(crate) leak_guard: Option<LeakGuard>,
 }
 
 /// Floor of t + ρ in Ward's weights: at a record's exact position and normal the weight is
@@ -117,7 +120,31 @@ impl Kernel {
             domain,
             cos_max,
             inv_a: if a > 0.0 { 1.0 / a } else { 0.0 },
+            leak_guard: None,
         })
+    }
+
+    /// The same kernel with `guard` (ignored when off or in the volume domain).
+    pub(crate) fn with_leak_guard(mut self, guard: LeakGuard) -> Self {
+        self.leak_guard = (guard.is_on() && self.domain == Domain::Surface).then_some(guard);
+        self
+    }
+
+    /// Whether the leak guard refuses the record at `position` (unit `normal`, radius
+    /// `normal_radius` along it) at the query `x` with unit normal `n`.
+    #[inline]
+    pub(crate) fn leaks(
+        &self,
+        x: DVec3,
+        n: DVec3,
+        position: DVec3,
+        normal: DVec3,
+        normal_radius: f64,
+    ) -> bool {
+        match self.leak_guard {
+            Some(guard) => !guard.admits(x, n, position, normal, normal_radius),
+            None => false,
+        }
     }
 
     /// Weight of a record at normalized distance `t` whose normal has cosine `cos_n` with the

@@ -67,25 +67,37 @@
 //! pass over the current radii that is the constraints' fixed point, independent of record order
 //! (proof in its documentation).
 //!
-//! # File format (version 3, little-endian)
+//! # Leak guard
+//! A record in front of the query point may see geometry the query does not (the riser of a
+//! step). [`CacheConfig::leak_guard`] (off by default) applies the test of Ward's irradiance
+//! cache, Radiance, pbrt-v2 and Mitsuba when records are weighed: record i is not used at x when
+//! `(x − xᵢ)·(n + nᵢ)/2 < −(relative·Rᵢ + absolute)`, Rᵢ its radius along its normal. Zero on
+//! planes and spheres, so curvature alone never trips it; the tolerance's derivation is in the
+//! [`LeakGuard`] docs.
+//!
+//! # File format (version 4, little-endian)
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic `RDFCACHE` |
-//! | 8 | 4 | format version, u32 = 3 |
+//! | 8 | 4 | format version, u32 = 4 |
 //! | 12 | 4 | channels, u32 ≥ 1 |
 //! | 16 | 4 | domain, u32 (0 surface, 1 volume) |
 //! | 20 | 4 | interpolation, u32 (`RADDIFF_INTERP_*`) |
 //! | 24 | 8 | max normal deviation, f64 radians |
 //! | 32 | 8 | record count N, u64 |
 //! | 40 | 4 | record size S = 64 + 16·channels, u32 |
-//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, the other bits 0 |
+//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, bit 2 leak guard on, the other bits 0 |
 //! | 48 | 8 | gradient limit c, f64: finite and > 0 if flag bit 1 is set, else 0.0 (all bits 0) |
-//! | 56 | N·S | records, in strictly increasing content order |
-//! | 56 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
+//! | 56 | 8 | leak guard relative tolerance, f64: finite and ≥ 0 if flag bit 2 is set, else 0.0 (all bits 0) |
+//! | 64 | 8 | leak guard absolute tolerance, f64: as the relative one |
+//! | 72 | N·S | records, in strictly increasing content order |
+//! | 72 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
 //!
-//! Version 2 (written before the gradient limit existed) is still read: its header is the same
-//! up to offset 48 without the gradient-limit field (records start at 48), flag bit 1 must be 0,
-//! and the cache has no gradient limit. [`Cache::save`] always writes version 3.
+//! Older versions are still read. Version 3 (before the leak guard) has the same header up to
+//! offset 56 without the leak-guard fields (records start at 56), flag bit 2 must be 0, and the
+//! cache has no leak guard. Version 2 (before the gradient limit) also lacks the gradient-limit
+//! field (records start at 48), flag bit 1 must be 0, and the cache has no gradient limit.
+//! [`Cache::save`] always writes version 4.
 //!
 //! Record (S bytes): position 3×f64; frame as a unit quaternion 4×f32 (x, y, z, w with w ≥ 0,
 //! rotating the world axes onto the frame: surface axis 0, axis 1 = n × axis 0, normal n; volume
@@ -107,6 +119,8 @@ mod clamp;
 mod cursor;
 mod index;
 pub mod interp;
+pub mod irradiance;
+mod leak_guard;
 pub mod metric;
 mod persist;
 mod record;
@@ -124,6 +138,7 @@ use smallvec::SmallVec;
 
 pub use cursor::Cursor;
 pub use interp::Interpolation;
+pub use leak_guard::LeakGuard;
 pub use record::{
     Domain, Extent, Record, CHANNEL_BYTES, HEAD_BYTES, POSITION_MAX, RADIUS_MAX, RADIUS_MIN,
 };
@@ -131,7 +146,7 @@ pub use value::CacheValue;
 
 use crate::error::{ensure_finite3, Error, Result};
 use interp::Kernel;
-pub(crate) use record::RecordInput;
+pub(crate) use record::{channel_major, RecordInput};
 use record::{Channel, Head};
 
 /// Largest channel count per record.
@@ -173,6 +188,12 @@ pub struct CacheConfig {
     /// the limit. [`Cache::merge`] and [`Cache::load`] take records as stored (no limit is
     /// re-applied). Saved with the cache (file format version 3).
     pub gradient_limit: f64,
+    /// The "record in front of the query" test (default [`LeakGuard::OFF`]; surface domain
+    /// only): a record i is not used at a query x with normal n when
+    /// `(x − xᵢ)·(n + nᵢ)/2 < −(relative·Rᵢ + absolute)`, Rᵢ the record's radius along its
+    /// normal (see [`LeakGuard`]). Both tolerances must be ≥ 0; [`Cache::new`] rejects NaN and
+    /// negative ones. Saved with the cache (file format version 4; older files load with it off).
+    pub leak_guard: LeakGuard,
 }
 
 impl CacheConfig {
@@ -186,6 +207,7 @@ impl CacheConfig {
             max_normal_deviation: 0.2,
             non_negative: false,
             gradient_limit: f64::INFINITY,
+            leak_guard: LeakGuard::OFF,
         }
     }
 
@@ -198,6 +220,7 @@ impl CacheConfig {
             max_normal_deviation: 0.2,
             non_negative: false,
             gradient_limit: f64::INFINITY,
+            leak_guard: LeakGuard::OFF,
         }
     }
 
@@ -217,6 +240,12 @@ impl CacheConfig {
     /// turns the limit off; [`Cache::new`] rejects `c <= 0` and NaN).
     pub fn with_gradient_limit(mut self, c: f64) -> Self {
         self.gradient_limit = c;
+        self
+    }
+
+    /// The same configuration with [`CacheConfig::leak_guard`] set to `guard`.
+    pub fn with_leak_guard(mut self, guard: LeakGuard) -> Self {
+        self.leak_guard = guard;
         self
     }
 
@@ -303,6 +332,7 @@ impl<V: CacheValue> Cache<V> {
     /// gradient limit that is not > 0 (NaN, 0, negative).
     pub fn new(config: CacheConfig) -> Result<Self> {
         check_gradient_limit(config.gradient_limit)?;
+        config.leak_guard.validate()?;
         if config.channels == 0 || config.channels > MAX_CHANNELS {
             return Err(Error::InvalidArgument(format!(
                 "channels must be in 1..={MAX_CHANNELS} (got {})",
@@ -321,7 +351,8 @@ impl<V: CacheValue> Cache<V> {
             config.interpolation,
             config.domain,
             config.max_normal_deviation,
-        )?;
+        )?
+        .with_leak_guard(config.leak_guard);
         let words = (HEAD_BYTES + CHANNEL_BYTES * config.channels).div_ceil(8);
         Ok(Cache {
             config,
@@ -347,6 +378,16 @@ impl<V: CacheValue> Cache<V> {
     pub fn set_gradient_limit(&mut self, c: f64) -> Result<()> {
         check_gradient_limit(c)?;
         self.config.gradient_limit = c;
+        Ok(())
+    }
+
+    /// Sets [`CacheConfig::leak_guard`] for every lookup from now on (stored records are not
+    /// changed: the guard acts when records are weighed). `InvalidArgument` (and no change) for
+    /// a NaN or negative tolerance.
+    pub fn set_leak_guard(&mut self, guard: LeakGuard) -> Result<()> {
+        guard.validate()?;
+        self.config.leak_guard = guard;
+        self.kernel = self.kernel.with_leak_guard(guard);
         Ok(())
     }
 
@@ -843,7 +884,7 @@ impl<V: CacheValue> Cache<V> {
 }
 
 /// `InvalidArgument` unless `c` is a valid [`CacheConfig::gradient_limit`] (> 0 or +∞).
-fn check_gradient_limit(c: f64) -> Result<()> {
+pub(crate) fn check_gradient_limit(c: f64) -> Result<()> {
     if c > 0.0 {
         Ok(())
     } else {
@@ -864,6 +905,8 @@ fn check_weight_sum(weight_sum: f64, position: DVec3) -> Result<()> {
     }
 }
 
+#[cfg(test)]
+mod leak_guard_tests;
 #[cfg(test)]
 mod safeguard_tests;
 #[cfg(test)]

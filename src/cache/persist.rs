@@ -6,17 +6,22 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::record::{self, Domain, CHANNEL_BYTES, FNV_OFFSET, HEAD_BYTES};
-use super::{Cache, CacheConfig, CacheValue, Interpolation, MAX_CHANNELS};
+use super::{Cache, CacheConfig, CacheValue, Interpolation, LeakGuard, MAX_CHANNELS};
 use crate::error::{Error, Result};
 
 /// File magic.
 pub const MAGIC: [u8; 8] = *b"RDFCACHE";
-/// Format version written by [`Cache::to_bytes`] (versions 2 and 3 are read).
-pub const FORMAT_VERSION: u32 = 3;
-/// The oldest version read: no gradient-limit field, records at [`HEADER_BYTES_V2`].
+/// Format version written by [`Cache::to_bytes`] (versions 2 to 4 are read).
+pub const FORMAT_VERSION: u32 = 4;
+/// Version 3: no leak-guard fields, records at [`HEADER_BYTES_V3`].
+const FORMAT_VERSION_3: u32 = 3;
+/// The oldest version read: no gradient-limit field either, records at [`HEADER_BYTES_V2`].
 const FORMAT_VERSION_2: u32 = 2;
+/// Header size of version 4: the version 3 header plus the leak guard's two tolerances (f64 at
+/// offsets 56 and 64).
+const HEADER_BYTES: usize = 72;
 /// Header size of version 3: the version 2 header plus the gradient limit (f64 at offset 48).
-const HEADER_BYTES: usize = 56;
+const HEADER_BYTES_V3: usize = 56;
 const HEADER_BYTES_V2: usize = 48;
 const CHECKSUM_BYTES: usize = 8;
 /// Header flag (offset 44): [`CacheConfig::non_negative`].
@@ -24,6 +29,9 @@ const FLAG_NON_NEGATIVE: u32 = 1;
 /// Header flag (offset 44, version 3): [`CacheConfig::gradient_limit`] is set (its value at
 /// offset 48).
 const FLAG_GRADIENT_LIMIT: u32 = 2;
+/// Header flag (offset 44, version 4): [`CacheConfig::leak_guard`] is on (its tolerances at
+/// offsets 56 and 64).
+const FLAG_LEAK_GUARD: u32 = 4;
 
 impl<V: CacheValue> Cache<V> {
     /// The cache in the documented binary format (records in content order, so equal record
@@ -50,6 +58,10 @@ impl<V: CacheValue> Cache<V> {
         if limited {
             flags |= FLAG_GRADIENT_LIMIT;
         }
+        let guard = self.config.leak_guard;
+        if guard.is_on() {
+            flags |= FLAG_LEAK_GUARD;
+        }
         out.extend_from_slice(&flags.to_le_bytes());
         let limit = if limited {
             self.config.gradient_limit
@@ -57,6 +69,13 @@ impl<V: CacheValue> Cache<V> {
             0.0
         };
         out.extend_from_slice(&limit.to_le_bytes());
+        let (relative, absolute) = if guard.is_on() {
+            (guard.relative, guard.absolute)
+        } else {
+            (0.0, 0.0)
+        };
+        out.extend_from_slice(&relative.to_le_bytes());
+        out.extend_from_slice(&absolute.to_le_bytes());
         for id in ids {
             let (head, chans) = self.stored(id);
             record::serialize(head, chans, &mut out);
@@ -69,7 +88,8 @@ impl<V: CacheValue> Cache<V> {
     /// Parses and validates a cache in the documented binary format. `Corrupt` with the reason
     /// for anything that [`Cache::to_bytes`] could not have written, including a channel count
     /// that disagrees with `V`. Never panics.
-    /// Version 2 files (no gradient limit) are read as well.
+    /// Version 3 files (no leak guard: it is off) and version 2 files (no gradient limit either)
+    /// are read as well.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
         let corrupt = |m: String| Err(Error::Corrupt(m));
         if bytes.len() < HEADER_BYTES_V2 + CHECKSUM_BYTES {
@@ -87,11 +107,12 @@ impl<V: CacheValue> Cache<V> {
         let version = u32_at(8);
         let header_bytes = match version {
             FORMAT_VERSION => HEADER_BYTES,
+            FORMAT_VERSION_3 => HEADER_BYTES_V3,
             FORMAT_VERSION_2 => HEADER_BYTES_V2,
             _ => {
                 return corrupt(format!(
                     "unsupported format version {version} (this library reads versions \
-                     {FORMAT_VERSION_2} and {FORMAT_VERSION})"
+                     {FORMAT_VERSION_2} to {FORMAT_VERSION})"
                 ))
             }
         };
@@ -125,10 +146,10 @@ impl<V: CacheValue> Cache<V> {
             ));
         }
         let flags = u32_at(44);
-        let known = if version == FORMAT_VERSION_2 {
-            FLAG_NON_NEGATIVE
-        } else {
-            FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT
+        let known = match version {
+            FORMAT_VERSION_2 => FLAG_NON_NEGATIVE,
+            FORMAT_VERSION_3 => FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT,
+            _ => FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT | FLAG_LEAK_GUARD,
         };
         if flags & !known != 0 {
             return corrupt(format!("unknown header flags {flags:#x}"));
@@ -150,6 +171,32 @@ impl<V: CacheValue> Cache<V> {
                 }
                 f64::INFINITY
             }
+        };
+        let leak_guard = if version == FORMAT_VERSION {
+            let f64_at =
+                |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
+            let guard = LeakGuard {
+                relative: f64_at(56),
+                absolute: f64_at(64),
+            };
+            if flags & FLAG_LEAK_GUARD != 0 {
+                if guard.validate().is_err() || !guard.is_on() {
+                    return corrupt(format!(
+                        "leak guard tolerances {} and {} are not finite and >= 0",
+                        guard.relative, guard.absolute
+                    ));
+                }
+                guard
+            } else {
+                if guard.relative.to_bits() != 0 || guard.absolute.to_bits() != 0 {
+                    return corrupt(
+                        "leak guard fields are set but the leak guard flag is not".into(),
+                    );
+                }
+                LeakGuard::OFF
+            }
+        } else {
+            LeakGuard::OFF
         };
         let expected = usize::try_from(count)
             .ok()
@@ -181,6 +228,7 @@ impl<V: CacheValue> Cache<V> {
             max_normal_deviation,
             non_negative: flags & FLAG_NON_NEGATIVE != 0,
             gradient_limit,
+            leak_guard,
         };
         let mut cache = Cache::new(config).map_err(|e| Error::Corrupt(format!("header: {e}")))?;
         let mut previous: Option<(record::Head, record::Channels)> = None;

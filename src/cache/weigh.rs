@@ -30,7 +30,28 @@ pub(crate) fn record_weight(kernel: &Kernel, head: &Head, x: DVec3, n: DVec3) ->
         (head.normalized_distance(&frame, x), frame.0[2])
     };
     let cos_n = if surface { normal.dot(n) } else { 1.0 };
-    (kernel.weight(t, cos_n), normal)
+    (
+        guarded(kernel, kernel.weight(t, cos_n), x, n, head, normal),
+        normal,
+    )
+}
+
+/// `weight`, or 0 when the kernel's leak guard refuses the record `head` (unit `normal`) at the
+/// query (`x`, `n`).
+#[inline(always)]
+pub(crate) fn guarded(
+    kernel: &Kernel,
+    weight: f64,
+    x: DVec3,
+    n: DVec3,
+    head: &Head,
+    normal: DVec3,
+) -> f64 {
+    if weight > 0.0 && kernel.leaks(x, n, head.position(), normal, head.radii[2] as f64) {
+        0.0
+    } else {
+        weight
+    }
 }
 
 /// Appends to `used` every record among `ids` (slot addresses, resolved by `stored`) with a positive weight at
@@ -93,7 +114,10 @@ unsafe fn weigh_avx<'a>(
         let (weights, normals) = unsafe { weigh4(kernel, x, n, heads) };
         for (k, &(head, channels)) in records.iter().enumerate().take(group.len()) {
             let lane = if head.is_isotropic() {
-                (weights[k], normals[k])
+                (
+                    guarded(kernel, weights[k], x, n, head, normals[k]),
+                    normals[k],
+                )
             } else {
                 record_weight(kernel, head, x, n)
             };

@@ -43,14 +43,17 @@ pub const RADDIFF_INTERP_NON_NEGATIVE: u32 = 0x100;
 /// (slope) limit c = `RADDIFF_GRADIENT_LIMIT_DEFAULT` (see `raddiff_cache_set_gradient_limit` for
 /// the rule and for other values of c). Saved with the cache and restored by `raddiff_cache_load`.
 pub const RADDIFF_INTERP_GRADIENT_LIMIT: u32 = 0x200;
-/// The gradient limit c that `RADDIFF_INTERP_GRADIENT_LIMIT` selects: 1, the largest c with which
-/// extrapolation never flips the sign of a record's value.
-pub const RADDIFF_GRADIENT_LIMIT_DEFAULT: f64 = 1.0;
+/// The gradient limit c that `RADDIFF_INTERP_GRADIENT_LIMIT` selects and
+/// `raddiff_irradiance_settings_default` sets: 2, the library's one default (Rust:
+/// `cache::irradiance::GRADIENT_LIMIT_DEFAULT`, which documents the measurement it comes from).
+/// With c > 1 an extrapolated value may change sign: irradiance caches also set
+/// `RADDIFF_INTERP_NON_NEGATIVE`.
+pub const RADDIFF_GRADIENT_LIMIT_DEFAULT: f64 = 2.0;
 
 /// A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
 /// `raddiff_cache_insert` on the same handle at once (lookups never block).
 pub struct raddiff_cache {
-    inner: Cache<Vec<f32>>,
+    pub(super) inner: Cache<Vec<f32>>,
 }
 
 /// How a cache is created.
@@ -105,6 +108,7 @@ fn config_from_c(c: &raddiff_cache_config) -> Result<CacheConfig, FfiError> {
         } else {
             f64::INFINITY
         },
+        leak_guard: crate::cache::LeakGuard::OFF,
     })
 }
 
@@ -335,6 +339,51 @@ pub extern "C" fn raddiff_cache_get_gradient_limit(
     })
 }
 
+/// Sets the leak guard ("record in front of the query" test of Ward's cache, Radiance, pbrt-v2
+/// and Mitsuba) for every lookup from now on: a record i is not used at a query x with unit
+/// normal n when (x - x_i) . (n + n_i) / 2 < -(relative * R_i + absolute), R_i the record's radius
+/// along its normal (the smaller tangent radius). The height is 0 on planes and spheres, so
+/// curvature alone never trips it; `relative` is in units of the record's own radius
+/// (scale-free), `absolute` in L (for ray epsilons and pull-backs). Off (the default) while
+/// either tolerance is INFINITY; for an absolute tolerance alone pass relative 0. Surface domain
+/// only. `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for a NaN or negative tolerance. Saved with
+/// the cache and restored by `raddiff_cache_load` (files written before it load with it off).
+/// **Not thread-safe**: no other thread may use the cache during the call.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_set_leak_guard(
+    cache: *mut raddiff_cache,
+    relative: f64,
+    absolute: f64,
+) -> raddiff_status {
+    guard(|| {
+        // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
+        let cache = unsafe { out_ref(cache, "cache")? };
+        cache
+            .inner
+            .set_leak_guard(crate::cache::LeakGuard { relative, absolute })?;
+        Ok(())
+    })
+}
+
+/// Writes the cache's leak guard tolerances to `*relative` and `*absolute` (relative INFINITY
+/// when off).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_get_leak_guard(
+    cache: *const raddiff_cache,
+    relative: *mut f64,
+    absolute: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        let relative = unsafe { out_ref(relative, "relative")? };
+        let absolute = unsafe { out_ref(absolute, "absolute")? };
+        let g = cache.inner.config().leak_guard;
+        *relative = g.relative;
+        *absolute = g.absolute;
+        Ok(())
+    })
+}
+
 /// Neighbour clamping (Krivanek et al. 2006) of a record about to be inserted: shrinks
 /// `record->radii` in place so that the record's largest radius R (surface: of `radii[0..1]`) is at
 /// most R_j + d_j for every stored record j at distance d_j = |position - x_j| < R (R_j its largest
@@ -410,8 +459,9 @@ pub extern "C" fn raddiff_cache_save(
     })
 }
 
-/// Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags and the
-/// gradient limit come from the file; files of format version 2 have no gradient limit). Returns
+/// Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags, the
+/// gradient limit and the leak guard come from the file; files of format version 2 have no
+/// gradient limit, those of versions 2 and 3 no leak guard). Returns
 /// NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in `raddiff_last_error` for
 /// unreadable, truncated, damaged or wrong-version files.
 #[no_mangle]

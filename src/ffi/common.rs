@@ -43,6 +43,9 @@ pub enum raddiff_status {
     RADDIFF_ERROR_CORRUPT = 6,
     /// A Rust panic was caught at the boundary (a bug in raddiff: please report it).
     RADDIFF_ERROR_PANIC = 7,
+    /// A caller's callback (the `raddiff_trace_fn` of `raddiff_cache_irradiance`) returned
+    /// non-zero: the request was abandoned and nothing was inserted.
+    RADDIFF_ERROR_CALLBACK = 8,
 }
 
 /// A 3D vector or point.
@@ -191,6 +194,7 @@ impl Error {
             Error::NotFound(_) => raddiff_status::RADDIFF_ERROR_NOT_FOUND,
             Error::Io(_) => raddiff_status::RADDIFF_ERROR_IO,
             Error::Corrupt(_) => raddiff_status::RADDIFF_ERROR_CORRUPT,
+            Error::Callback(_) => raddiff_status::RADDIFF_ERROR_CALLBACK,
         }
     }
 }

@@ -178,62 +178,9 @@ pub extern "C" fn raddiff_gather_evaluate(
     guard(|| {
         let layout = Layout::try_from(unsafe { in_ref(layout, "layout")? })?;
         let frame = Frame::from(unsafe { in_ref(frame, "frame")? });
-        let input = unsafe { in_ref(input, "input")? };
+        let input = unsafe { gather_input_from_c(&layout, in_ref(input, "input")?)? };
         let output = unsafe { out_ref(output, "output")? };
-        let cells = layout.len();
-        let ch = input.channels as usize;
-        let directions: &[raddiff_vec3] =
-            unsafe { in_slice(input.directions, cells, "input->directions")? };
-        // SAFETY: same size and alignment (asserted above), both plain triples of f64.
-        let directions: &[DVec3] =
-            unsafe { std::slice::from_raw_parts(directions.as_ptr().cast(), directions.len()) };
-        let distance = unsafe { in_slice(input.distance, cells, "input->distance")? };
-        let radiance = unsafe { in_slice(input.radiance, cells * ch, "input->radiance")? };
-        let media = if input.media_radiance.is_null() {
-            if !input.media_radiance_gradient.is_null() {
-                return Err(Error::InvalidArgument(
-                    "media_radiance_gradient is given without media_radiance".into(),
-                )
-                .into());
-            }
-            None
-        } else {
-            let steps = input.steps as usize;
-            let samples = cells
-                .checked_mul(steps)
-                .and_then(|v| v.checked_mul(ch))
-                .and_then(|v| v.checked_mul(3).map(|_| v))
-                .ok_or_else(|| {
-                    Error::InvalidArgument("m*n*steps*3*channels overflows size_t".into())
-                })?;
-            let radiance =
-                unsafe { in_slice(input.media_radiance, samples, "input->media_radiance")? };
-            let gradient = if input.media_radiance_gradient.is_null() {
-                None
-            } else {
-                Some(unsafe {
-                    in_slice(
-                        input.media_radiance_gradient,
-                        3 * samples,
-                        "input->media_radiance_gradient",
-                    )?
-                })
-            };
-            Some(MediaRadiance {
-                radiance,
-                gradient,
-                steps,
-                step: input.step,
-            })
-        };
-        let input = GatherInput {
-            directions,
-            distance,
-            radiance,
-            channels: ch,
-            sigma_t: input.sigma_t,
-            media,
-        };
+        let ch = input.channels;
         let wanted = Wanted {
             irradiance: !output.irradiance.is_null(),
             gradient: !output.gradient.is_null(),
@@ -257,6 +204,67 @@ pub extern "C" fn raddiff_gather_evaluate(
         output.harmonic_mean_distance = values.harmonic_mean_distance.unwrap_or(f64::INFINITY);
         output.min_distance = values.min_distance.unwrap_or(f64::INFINITY);
         Ok(())
+    })
+}
+
+/// The Rust view of a C gather input for `layout` (array sizes from the layout and the channel
+/// count; values are validated where the gather is evaluated).
+///
+/// # Safety
+/// Every non-NULL array of `input` is valid for the reads its documentation gives it.
+pub(crate) unsafe fn gather_input_from_c<'a>(
+    layout: &Layout,
+    input: &'a raddiff_gather_input,
+) -> Result<GatherInput<'a>, FfiError> {
+    let cells = layout.len();
+    let ch = input.channels as usize;
+    let directions: &[raddiff_vec3] = in_slice(input.directions, cells, "input->directions")?;
+    // SAFETY: same size and alignment (asserted above), both plain triples of f64.
+    let directions: &[DVec3] =
+        std::slice::from_raw_parts(directions.as_ptr().cast(), directions.len());
+    let distance = in_slice(input.distance, cells, "input->distance")?;
+    let radiance = in_slice(input.radiance, cells * ch, "input->radiance")?;
+    let media = if input.media_radiance.is_null() {
+        if !input.media_radiance_gradient.is_null() {
+            return Err(Error::InvalidArgument(
+                "media_radiance_gradient is given without media_radiance".into(),
+            )
+            .into());
+        }
+        None
+    } else {
+        let steps = input.steps as usize;
+        let samples = cells
+            .checked_mul(steps)
+            .and_then(|v| v.checked_mul(ch))
+            .and_then(|v| v.checked_mul(3).map(|_| v))
+            .ok_or_else(|| {
+                Error::InvalidArgument("m*n*steps*3*channels overflows size_t".into())
+            })?;
+        let radiance = in_slice(input.media_radiance, samples, "input->media_radiance")?;
+        let gradient = if input.media_radiance_gradient.is_null() {
+            None
+        } else {
+            Some(in_slice(
+                input.media_radiance_gradient,
+                3 * samples,
+                "input->media_radiance_gradient",
+            )?)
+        };
+        Some(MediaRadiance {
+            radiance,
+            gradient,
+            steps,
+            step: input.step,
+        })
+    };
+    Ok(GatherInput {
+        directions,
+        distance,
+        radiance,
+        channels: ch,
+        sigma_t: input.sigma_t,
+        media,
     })
 }
 

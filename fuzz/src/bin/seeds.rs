@@ -1,8 +1,8 @@
 //! Writes the seed corpora into `fuzz/corpus/<target>/` (run from `fuzz/`:
 //! `cargo run --release --bin seeds`). For every target but `cache_load`: pseudo-random byte
 //! strings (fixed seed), the first few that the target accepts and the first few it refuses. For
-//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 3) and their version 2
-//! forms, each behind the option byte 0, and two refused files (truncated, damaged).
+//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 4) and their version 3
+//! and 2 forms, each behind the option byte 0, and two refused files (truncated, damaged).
 use std::ffi::CString;
 use std::path::Path;
 
@@ -53,8 +53,14 @@ fn main() {
     damaged.extend(first);
     damaged[1 + 60] ^= 0x40;
     std::fs::write(dir.join("damaged"), damaged).expect("writing");
-    for (i, v3) in caches.iter().enumerate() {
-        for (version, file) in [(3, v3.clone()), (2, as_version_2(v3))] {
+    for (i, v4) in caches.iter().enumerate() {
+        let v3 = as_version_3(v4);
+        let v2 = as_version_2(&v3);
+        // the older forms a cache has (none with a leak guard, no version 2 with a gradient limit)
+        for (version, file) in [(4, v4), (3, &v3), (2, &v2)] {
+            if u32::from_le_bytes(file[8..12].try_into().expect("4 bytes")) != version {
+                continue;
+            }
             let mut data = vec![0u8];
             data.extend(file);
             std::fs::write(dir.join(format!("cache-{i}-v{version}")), data).expect("writing");
@@ -84,10 +90,13 @@ fn saved_caches() -> Vec<Vec<u8>> {
             RADDIFF_DOMAIN_VOLUME,
             RADDIFF_INTERP_LOG | RADDIFF_INTERP_NON_NEGATIVE,
         ),
+        // with a leak guard (below)
+        (1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT),
     ];
     kinds
         .iter()
-        .map(|&(channels, domain, interpolation)| {
+        .enumerate()
+        .map(|(kind, &(channels, domain, interpolation))| {
             let config = raddiff_cache_config {
                 channels,
                 domain,
@@ -96,6 +105,12 @@ fn saved_caches() -> Vec<Vec<u8>> {
             };
             let cache = raddiff_cache_new(&config);
             assert!(!cache.is_null());
+            if kind == 4 {
+                assert_eq!(
+                    raddiff_cache_set_leak_guard(cache, 0.1, 0.001),
+                    raddiff_status::RADDIFF_OK
+                );
+            }
             for i in 0..5 {
                 let t = i as f64;
                 let value: Vec<f32> = (0..channels).map(|c| 1.0 + t as f32 + c as f32).collect();
@@ -163,11 +178,27 @@ fn saved_caches() -> Vec<Vec<u8>> {
         .collect()
 }
 
+/// The version 3 form of a version 4 file: no leak-guard fields (bytes 56..72), resealed. Only for
+/// caches without a leak guard (version 3 cannot hold one): others are returned as is.
+fn as_version_3(v4: &[u8]) -> Vec<u8> {
+    let flags = u32::from_le_bytes(v4[44..48].try_into().expect("4 bytes"));
+    if flags & 4 != 0 {
+        return v4.to_vec();
+    }
+    let mut v3 = v4[..56].to_vec();
+    v3[8..12].copy_from_slice(&3u32.to_le_bytes());
+    v3.extend_from_slice(&v4[72..v4.len() - 8]);
+    let sum = fnv1a(&v3);
+    v3.extend_from_slice(&sum.to_le_bytes());
+    v3
+}
+
 /// The version 2 form of a version 3 file: no gradient-limit field (bytes 48..56), resealed. Only
 /// for caches without a gradient limit (version 2 cannot hold one): others are returned as is.
 fn as_version_2(v3: &[u8]) -> Vec<u8> {
     let flags = u32::from_le_bytes(v3[44..48].try_into().expect("4 bytes"));
-    if flags & 2 != 0 {
+    let version = u32::from_le_bytes(v3[8..12].try_into().expect("4 bytes"));
+    if flags & 2 != 0 || version != 3 {
         return v3.to_vec();
     }
     let mut v2 = v3[..48].to_vec();

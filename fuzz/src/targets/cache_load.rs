@@ -3,11 +3,11 @@
 //! Input: one option byte, then the file. When the option byte is odd, the file's last 8 bytes are
 //! replaced by the FNV-1a checksum of the rest (as `raddiff_cache_save` writes it), so that mutated
 //! headers and records get past the checksum and reach the record validation. The seed corpus is
-//! real saved caches of format versions 2 and 3 (surface and volume, 1 and 3 channels, with and
-//! without gradients and a gradient limit).
+//! real saved caches of format versions 2, 3 and 4 (surface and volume, 1 and 3 channels, with and
+//! without gradients, a gradient limit and a leak guard).
 //! Properties: no panic; NULL comes with a message; a loaded cache holds at most the file's record
-//! count, looks up finite values at its records' positions, and saving it reproduces a version 3
-//! file byte for byte (a version 2 file: the same records once loaded again).
+//! count, looks up finite values at its records' positions, and saving it reproduces a version 4
+//! file byte for byte (an older file: the same records once loaded again).
 use std::ffi::CString;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -61,8 +61,8 @@ pub fn run(data: &[u8]) -> Outcome {
     Outcome::Ok
 }
 
-/// Saves the loaded cache: a version 3 file comes back byte for byte, a version 2 file as a
-/// version 3 file that loads with as many records.
+/// Saves the loaded cache: a version 4 file comes back byte for byte, an older file as a version 4
+/// file that loads with as many records.
 fn resave(cache: *const raddiff_cache, file: &[u8], version: u32) {
     let path = scratch_path("resave");
     let c_path = CString::new(path.to_string_lossy().as_bytes()).expect("no NUL in path");
@@ -81,10 +81,10 @@ fn resave(cache: *const raddiff_cache, file: &[u8], version: u32) {
     );
     assert_eq!(raddiff_cache_len(again), raddiff_cache_len(cache));
     raddiff_cache_free(again);
-    if version == 3 {
+    if version == 4 {
         assert!(
             saved == file,
-            "saving a loaded version 3 file changed its bytes"
+            "saving a loaded version 4 file changed its bytes"
         );
     }
 }
@@ -142,7 +142,11 @@ impl Header {
             channels: u32_at(12) as usize,
             count: u64::from_le_bytes(file[32..40].try_into().expect("8 bytes")),
             stride: u32_at(40) as usize,
-            bytes: if version == 2 { 48 } else { 56 },
+            bytes: match version {
+                2 => 48,
+                3 => 56,
+                _ => 72,
+            },
         }
     }
 }

@@ -1,0 +1,594 @@
+#include "bench.hpp"
+
+#include "image.hpp"
+#include "pathtrace.hpp"
+
+#include <sys/resource.h>
+
+#include <cinttypes>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <mutex>
+
+namespace rd {
+namespace {
+
+// A gather computed at most once per pixel and shared by every metric and threshold, with what it
+// cost. Gathers depend only on their pixel (its primary hit and the seed 1 + pixel).
+struct Slot {
+  std::once_flag once;
+  std::unique_ptr<Evaluated> evaluated;
+  double trace_seconds = 0;
+  uint64_t rays = 0;
+};
+
+class GatherStore {
+ public:
+  GatherStore(const Scene &scene, const std::vector<Primary> &primary, const BenchSettings &settings,
+              HessianNeeds needs)
+      : scene_(scene), primary_(primary), settings_(settings), needs_(needs), slots_(new Slot[primary.size()]) {}
+
+  const Slot &get(size_t pixel) {
+    Slot &s = slots_[pixel];
+    std::call_once(s.once, [&] {
+      const Primary &px = primary_[pixel];
+      const double t0 = thread_cpu_seconds();
+      const raddiff_irradiance_settings &irr = settings_.irradiance;
+      const TracedGather g = trace_gather(scene_, settings_.radiance, px.p, px.n, irr.gather_m, irr.gather_n, 1 + pixel);
+      s.trace_seconds = thread_cpu_seconds() - t0;
+      s.rays = g.rays;
+      s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_, irr));
+      if (settings_.oracle_derivative_paths > 0 && s.evaluated->valid) {
+        // Derivatives from the same directions with radiance averaged over K independent paths:
+        // what the records would be with less noisy derivatives (an experiment; not timed).
+        HitRadianceSettings averaged = settings_.radiance;
+        averaged.paths = settings_.oracle_derivative_paths;
+        const TracedGather q = trace_gather(scene_, averaged, px.p, px.n, irr.gather_m, irr.gather_n,
+                                            mix(1 + pixel) ^ 0x0facull);
+        Evaluated o = evaluate_gather(q, needs_, irr);
+        if (o.valid) {
+          // The records' radii and derivatives from the averaged radiance, their values (and the
+          // CPU times) from the usual gather.
+          std::copy(std::begin(s.evaluated->value), std::end(s.evaluated->value), std::begin(o.value));
+          o.luminance = s.evaluated->luminance;
+          std::copy(std::begin(s.evaluated->seconds), std::end(s.evaluated->seconds), std::begin(o.seconds));
+          *s.evaluated = std::move(o);
+        }
+      }
+      ++computed_;
+    });
+    return s;
+  }
+
+  void ensure(const std::vector<size_t> &pixels) {
+    if (pixels.size() == 1) {
+      get(pixels[0]);
+      return;
+    }
+    parallel_for(pixels.size(), settings_.threads, [&](size_t k) { get(pixels[k]); });
+  }
+
+  size_t computed() const { return computed_; }
+
+ private:
+  const Scene &scene_;
+  const std::vector<Primary> &primary_;
+  const BenchSettings &settings_;
+  HessianNeeds needs_;
+  std::unique_ptr<Slot[]> slots_;
+  std::atomic<size_t> computed_{0};
+};
+
+// CPU seconds summed over threads.
+class CpuSum {
+ public:
+  void add(double s) {
+    std::lock_guard<std::mutex> g(lock_);
+    total_ += s;
+  }
+  double total() const { return total_; }
+
+ private:
+  std::mutex lock_;
+  double total_ = 0;
+};
+
+struct RecordInfo {
+  size_t pixel;
+  V3 p, n;
+  double radii[2];
+  raddiff_vec3 axes[2];
+};
+
+struct Fill {
+  Metric metric;
+  double parameter = 0;
+  std::vector<RecordInfo> records;
+  double trace_seconds = 0, raddiff_seconds = 0, cache_seconds = 0;
+  Image image;
+  size_t uncovered = 0, non_finite = 0, negative = 0;
+  double total_seconds() const { return trace_seconds + raddiff_seconds + cache_seconds; }
+};
+
+// Pixel indices of one coarse-to-fine level: the grid of step `step` without the coarser grid's
+// pixels (the coarsest level, 16, takes its whole grid).
+std::vector<size_t> level_pixels(int w, int h, int step) {
+  std::vector<size_t> level;
+  for (int y = 0; y < h; y += step)
+    for (int x = 0; x < w; x += step)
+      if (step == 16 || x % (2 * step) != 0 || y % (2 * step) != 0) level.push_back(static_cast<size_t>(y) * w + x);
+  return level;
+}
+
+class Bench {
+ public:
+  Bench(const Scene &scene, const View &view, const BenchSettings &settings)
+      : scene_(scene),
+        view_(view),
+        settings_(settings),
+        camera_(view),
+        primary_(primary_hits(scene, camera_, settings.threads)),
+        store_(scene, primary_, settings_, hessian_needs(settings.metrics)) {}
+
+  const std::vector<Primary> &primary() const { return primary_; }
+  const Camera &camera() const { return camera_; }
+  GatherStore &store() { return store_; }
+
+  // Fills a fresh cache for metric m with parameter p, coarse to fine over the image. Which pixels
+  // get records does not depend on the thread count: a level's candidates are the pixels the cache
+  // misses when the level starts, taken in pixel order; gathers are computed in parallel, a batch at
+  // a time, and inserted one by one after a second lookup.
+  Fill fill(Metric m, double p, bool render) {
+    Fill out;
+    out.metric = m;
+    out.parameter = p;
+    raddiff_irradiance_settings irr = settings_.irradiance;
+    irr.metric = c_metric(m);
+    irr.accuracy = p;
+    // The cache this metric wants: Ward or tent weights, extrapolation clamped at zero, the
+    // gradient limit and the leak guard of the settings.
+    std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)> cache(raddiff_irradiance_cache_new(&irr),
+                                                                    raddiff_cache_free);
+    if (settings_.interpolation >= 0) {
+      const raddiff_cache_config config{3, RADDIFF_DOMAIN_SURFACE,
+                                        static_cast<uint32_t>(settings_.interpolation) | RADDIFF_INTERP_NON_NEGATIVE,
+                                        0.2};
+      cache.reset(raddiff_cache_new(&config));
+      if (cache) check(raddiff_cache_set_gradient_limit(cache.get(), irr.gradient_limit), "gradient limit");
+    }
+    if (!cache) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
+    CpuSum cache_cpu;
+    const int w = view_.width, h = view_.height;
+    auto covered = [&](size_t i) {
+      float v[3];
+      const raddiff_status st = raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
+      if (st != RADDIFF_OK && st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
+      return st == RADDIFF_OK;
+    };
+    for (int step = 16; step >= 1; step /= 2) {
+      std::vector<size_t> level;
+      for (size_t i : level_pixels(w, h, step))
+        if (primary_[i].hit) level.push_back(i);
+      std::vector<char> missed(level.size(), 0);
+      parallel_for((level.size() + 255) / 256, settings_.threads, [&](size_t chunk) {
+        const double t0 = thread_cpu_seconds();
+        for (size_t k = chunk * 256; k < std::min(level.size(), (chunk + 1) * 256); ++k) missed[k] = !covered(level[k]);
+        cache_cpu.add(thread_cpu_seconds() - t0);
+      });
+      std::vector<size_t> candidates;
+      for (size_t k = 0; k < level.size(); ++k)
+        if (missed[k]) candidates.push_back(level[k]);
+      const size_t batch = 4 * std::max(1u, settings_.threads);
+      for (size_t b = 0; b < candidates.size(); b += batch) {
+        double t0 = thread_cpu_seconds();
+        std::vector<size_t> still;
+        for (size_t k = b; k < std::min(candidates.size(), b + batch); ++k)
+          if (!covered(candidates[k])) still.push_back(candidates[k]);
+        cache_cpu.add(thread_cpu_seconds() - t0);
+        store_.ensure(still);
+        for (size_t i : still) {
+          t0 = thread_cpu_seconds();
+          const bool skip = covered(i);
+          cache_cpu.add(thread_cpu_seconds() - t0);
+          if (skip) continue;
+          const Slot &slot = store_.get(i);
+          const Evaluated &e = *slot.evaluated;
+          out.trace_seconds += slot.trace_seconds;  // a miss traces the gather: its cost counts
+          out.raddiff_seconds += raddiff_seconds(m, e);
+          if (!e.valid) continue;
+          t0 = thread_cpu_seconds();
+          raddiff_cache_record rec{};
+          const bool defined = metric_record(m, p, e, irr, primary_[i].footprint, rec);
+          out.raddiff_seconds += thread_cpu_seconds() - t0;
+          if (!defined) continue;
+          if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
+          if (settings_.hessian_distance_bound > 0 && uses_hessian(m)) {
+            const double bound = std::max(settings_.hessian_distance_bound * e.harmonic_mean_distance,
+                                          irr.pixel_radius_min * primary_[i].footprint);
+            for (double &r : rec.radii) r = std::min(r, bound);
+          }
+          RecordInfo info{i, primary_[i].p, primary_[i].n, {rec.radii[0], rec.radii[1]}, {rec.axes[0], rec.axes[1]}};
+          t0 = thread_cpu_seconds();
+          check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
+          cache_cpu.add(thread_cpu_seconds() - t0);
+          out.records.push_back(info);
+        }
+      }
+    }
+    if (render) {
+      out.image = Image(w, h);
+      check(raddiff_cache_compact(cache.get()), "raddiff_cache_compact");
+      std::atomic<size_t> uncovered{0};
+      parallel_for(static_cast<size_t>(h), settings_.threads, [&](size_t row) {
+        const double t0 = thread_cpu_seconds();
+        for (int x = 0; x < w; ++x) {
+          const size_t i = row * w + x;
+          if (!primary_[i].hit) continue;
+          const raddiff_status st =
+              raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), out.image.at(i), nullptr);
+          if (st == RADDIFF_ERROR_NOT_FOUND) {
+            ++uncovered;
+          } else {
+            check(st, "raddiff_cache_lookup");
+          }
+        }
+        cache_cpu.add(thread_cpu_seconds() - t0);
+      });
+      out.uncovered = uncovered;
+      for (float v : out.image.rgb) {
+        out.non_finite += !std::isfinite(v);
+        out.negative += v < 0;
+      }
+    }
+    out.cache_seconds = cache_cpu.total();
+    return out;
+  }
+
+  // Tunes metric m's parameter until the record count is within 5% of `target` (at most 14
+  // fills): power-law jumps until the target is bracketed, then bisection in log space.
+  double tune(Metric m, size_t target) {
+    double p = initial_parameter(m);
+    double k = 2 * radius_exponent(m);  // records ~ p^-k: area per record ~ radius^2
+    double too_many = 0, too_few = 0, last_p = 0, last_n = 0, best_p = p, best_miss = INFINITY;
+    for (int fills = 0; fills < 14; ++fills) {
+      const Fill f = fill(m, p, false);
+      const double n = static_cast<double>(f.records.size());
+      const double miss = std::abs(std::log(std::max(n, 1.0) / target));
+      std::printf("  tune %s: p = %.5g -> %zu records (%zu gathers so far)\n", metric_name(m), p, f.records.size(),
+                  store_.computed());
+      std::fflush(stdout);
+      if (miss < best_miss) best_p = p, best_miss = miss;
+      if (std::abs(n / target - 1) <= 0.05) break;
+      if (n > target) {
+        too_many = std::max(too_many, p);
+      } else {
+        too_few = too_few > 0 ? std::min(too_few, p) : p;
+      }
+      if (last_p > 0 && last_p != p && last_n > 0 && n > 0 && last_n != n)
+        k = std::clamp(std::log(last_n / n) / std::log(p / last_p), 0.05, 10.0);
+      last_p = p, last_n = n;
+      if (too_many > 0 && too_few > 0) {
+        p = std::sqrt(too_many * too_few);
+      } else {
+        p *= std::pow(std::max(n, 1.0) / target, 1.0 / k);
+      }
+    }
+    return best_p;
+  }
+
+ private:
+  const Scene &scene_;
+  View view_;
+  const BenchSettings &settings_;
+  Camera camera_;
+  std::vector<Primary> primary_;
+  GatherStore store_;
+};
+
+// Errors at the measured pixels.
+struct Measured {
+  double rel_rms = 0, rms = 0, worst_share = 0;
+  std::vector<double> errors;  // luminance error per measured pixel (value - reference)
+};
+
+Measured measure(const Image &image, const Reference &ref) {
+  Measured m;
+  double e2 = 0, r2 = 0;
+  std::vector<double> sq;
+  for (const ReferencePixel &p : ref.pixels) {
+    const double e = luminance(image.at(p.pixel)) - luminance(p.value());
+    m.errors.push_back(e);
+    sq.push_back(e * e);
+    e2 += e * e;
+    r2 += luminance(p.value()) * luminance(p.value());
+  }
+  if (ref.pixels.empty()) return m;
+  m.rms = std::sqrt(e2 / ref.pixels.size());
+  m.rel_rms = r2 > 0 ? std::sqrt(e2 / r2) : 0;
+  std::sort(sq.begin(), sq.end(), std::greater<double>());
+  const size_t worst = std::max<size_t>(1, sq.size() / 100);
+  double top = 0;
+  for (size_t k = 0; k < worst; ++k) top += sq[k];
+  m.worst_share = e2 > 0 ? top / e2 : 0;
+  return m;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * (v.size() - 1) + 0.5))];
+}
+
+// The records' smallest radii in pixels (radius / the footprint of the record's pixel).
+std::vector<double> radii_in_pixels(const Fill &f, const std::vector<Primary> &primary) {
+  std::vector<double> out;
+  for (const RecordInfo &r : f.records)
+    out.push_back(std::min(r.radii[0], r.radii[1]) / std::max(primary[r.pixel].footprint, 1e-300));
+  return out;
+}
+
+// Converged irradiance at record positions for the gather-noise floor, cached on disk by pixel.
+class FloorReferences {
+ public:
+  FloorReferences(const std::string &file) : file_(file) {
+    std::ifstream in(file_, std::ios::binary);
+    uint64_t pixel;
+    double v[6];
+    while (in && in.read(reinterpret_cast<char *>(&pixel), 8) && in.read(reinterpret_cast<char *>(v), sizeof v)) {
+      ReferencePixel r;
+      r.pixel = pixel;
+      r.half[0] = {v[0], v[1], v[2]};
+      r.half[1] = {v[3], v[4], v[5]};
+      map_[pixel] = r;
+    }
+  }
+
+  // Computes the missing ones in parallel and appends them to the file.
+  void ensure(const std::vector<size_t> &pixels, const Scene &scene, const std::vector<Primary> &primary,
+              const BenchSettings &s) {
+    std::vector<size_t> missing;
+    for (size_t p : pixels)
+      if (!map_.count(p)) missing.push_back(p);
+    std::sort(missing.begin(), missing.end());
+    missing.erase(std::unique(missing.begin(), missing.end()), missing.end());
+    if (missing.empty()) return;
+    std::printf("floor: converged irradiance at %zu record positions (%u rays each)...\n", missing.size(),
+                s.floor_rays);
+    std::fflush(stdout);
+    std::vector<ReferencePixel> found(missing.size());
+    HitRadianceSettings single = s.radiance;
+    single.paths = 1;
+    parallel_for(missing.size(), s.threads, [&](size_t k) {
+      const Primary &px = primary[missing[k]];
+      found[k] = converged_irradiance(scene, single, px.p, px.n, s.floor_rays, mix(missing[k] ^ 0xf100ull));
+      found[k].pixel = missing[k];
+    });
+    std::ofstream out(file_, std::ios::binary | std::ios::app);
+    for (const ReferencePixel &r : found) {
+      map_[r.pixel] = r;
+      const uint64_t pixel = r.pixel;
+      const double v[6] = {r.half[0].x, r.half[0].y, r.half[0].z, r.half[1].x, r.half[1].y, r.half[1].z};
+      out.write(reinterpret_cast<const char *>(&pixel), 8);
+      out.write(reinterpret_cast<const char *>(v), sizeof v);
+    }
+  }
+
+  const ReferencePixel &at(size_t pixel) const { return map_.at(pixel); }
+
+ private:
+  std::string file_;
+  std::map<size_t, ReferencePixel> map_;
+};
+
+// The records sampled for the floor: the `count` with the smallest hash of their pixel (so that
+// metrics whose records share pixels share the samples).
+std::vector<size_t> floor_sample(const Fill &f, size_t count) {
+  std::vector<std::pair<uint64_t, size_t>> keyed;
+  for (const RecordInfo &r : f.records) keyed.push_back({mix(r.pixel ^ 0xf1008ull), r.pixel});
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<size_t> out;
+  for (size_t k = 0; k < std::min(count, keyed.size()); ++k) out.push_back(keyed[k].second);
+  return out;
+}
+
+// Relative RMS error of the records' own gathers against converged irradiance at their positions,
+// the reference's own noise removed: the error a cache would have if every pixel had its record.
+double gather_floor(const std::vector<size_t> &pixels, GatherStore &store, const FloorReferences &refs) {
+  double e2 = 0, n2 = 0, r2 = 0;
+  for (size_t p : pixels) {
+    const ReferencePixel &r = refs.at(p);
+    const double e = store.get(p).evaluated->luminance - luminance(r.value());
+    const double noise = 0.5 * (luminance(r.half[0]) - luminance(r.half[1]));
+    e2 += e * e;
+    n2 += noise * noise;
+    r2 += luminance(r.value()) * luminance(r.value());
+  }
+  return r2 > 0 ? std::sqrt(std::max(0.0, e2 - n2) / r2) : 0;
+}
+
+std::string fmt(const char *f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+void write_records_csv(const std::string &path, const Fill &f, const Camera &camera,
+                       const std::vector<Primary> &primary) {
+  std::ofstream out(path);
+  out << "pixel,px,py,ux,uy,vx,vy,radius_px\n";
+  for (const RecordInfo &r : f.records) {
+    double cx, cy;
+    if (!camera.project(r.p, cx, cy)) continue;
+    V3 a0 = from_c(r.axes[0]), a1 = from_c(r.axes[1]);
+    if (length(a0) == 0 || length(a1) == 0) {
+      a0 = tangent_of(r.n);
+      a1 = cross(r.n, a0);
+    }
+    // A short semi-axis projects well enough through a pinhole; off-screen ends keep their values.
+    double ax = cx, ay = cy, bx = cx, by = cy;
+    camera.project(r.p + normalize(a0) * r.radii[0], ax, ay);
+    camera.project(r.p + normalize(a1) * r.radii[1], bx, by);
+    out << r.pixel << "," << cx << "," << cy << "," << ax - cx << "," << ay - cy << "," << bx - cx << "," << by - cy
+        << "," << std::min(r.radii[0], r.radii[1]) / std::max(primary[r.pixel].footprint, 1e-300) << "\n";
+  }
+}
+
+long max_rss_mib() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024;
+}
+
+}  // namespace
+
+int run_bench(const Scene &scene, const View &view, const std::string &scene_key, const BenchSettings &settings) {
+  const double wall0 = process_cpu_seconds();
+  Bench bench(scene, view, settings);
+  const std::vector<Primary> &primary = bench.primary();
+  const size_t pixels = static_cast<size_t>(view.width) * view.height;
+  const size_t target = settings.target_records ? settings.target_records : std::max<size_t>(16, pixels / 32);
+
+  // The converged reference.
+  const Reference ref = reference(scene, primary, view, settings.radiance, settings.reference, scene_key,
+                                  settings.threads);
+  const double ref_mean = [&] {
+    double s = 0;
+    for (const ReferencePixel &p : ref.pixels) s += luminance(p.value());
+    return ref.pixels.empty() ? 1.0 : s / ref.pixels.size();
+  }();
+  std::printf("reference: %zu pixels, %u rays each, relative noise %.5f (%s)\n", ref.pixels.size(),
+              settings.reference.rays, ref.relative_noise(),
+              ref.loaded ? ("loaded from " + ref.file).c_str() : ("computed in " + fmt("%.0f", ref.seconds) + " CPU s").c_str());
+  {
+    std::ofstream out(settings.out + "-measured.csv");
+    out << "pixel,x,y,reference,noise\n";
+    for (const ReferencePixel &p : ref.pixels)
+      out << p.pixel << "," << p.pixel % view.width << "," << p.pixel / view.width << "," << luminance(p.value()) << ","
+          << 0.5 * std::abs(luminance(p.half[0]) - luminance(p.half[1])) << "\n";
+  }
+  Image ref_blocks(view.width, view.height);  // the reference at the measured pixels, for the exposure
+  for (const ReferencePixel &p : ref.pixels) {
+    const V3 v = p.value();
+    ref_blocks.at(p.pixel)[0] = static_cast<float>(v.x);
+    ref_blocks.at(p.pixel)[1] = static_cast<float>(v.y);
+    ref_blocks.at(p.pixel)[2] = static_cast<float>(v.z);
+  }
+  const double exposure = [&] {
+    std::vector<double> l;
+    for (const ReferencePixel &p : ref.pixels) l.push_back(luminance(p.value()));
+    return 0.9 / std::max(1e-12, percentile(l, 0.99));
+  }();
+
+  std::ofstream fills(settings.out + "-fills.csv");
+  fills << "metric,parameter,records,equal_records,trace_s,raddiff_s,cache_s,total_s,rel_rms,rms,worst1_share,"
+           "radius_px_min,radius_px_p5,radius_px_median,radius_px_p95,uncovered,non_finite,negative\n";
+  bool ok = true;
+  std::vector<Fill> tuned;
+  double longest = 0;
+  FloorReferences floor_refs(settings.reference.cache_dir.empty()
+                                 ? std::string()
+                                 : settings.reference.cache_dir + "/floor-" +
+                                       fmt("%.0f", static_cast<double>(settings.floor_rays)) + "-" +
+                                       (ref.file.empty() ? std::string("x") : ref.file.substr(ref.file.rfind('-') + 1)));
+  for (Metric m : settings.metrics) {
+    std::printf("%s: tuning to %zu records\n", metric_name(m), target);
+    std::fflush(stdout);
+    const double p = bench.tune(m, target);
+    // Thresholds spaced so that radii change by 2^0.75 per step: one below the tuned one (more
+    // records), the tuned one, then above it.
+    const int first = settings.thresholds >= 2 ? -1 : 0;
+    for (int k = first; k < first + settings.thresholds; ++k) {
+      const double pk = p * std::pow(2.0, 0.75 * k / radius_exponent(m));
+      Fill f = bench.fill(m, pk, true);
+      const Measured err = measure(f.image, ref);
+      const std::vector<double> rpx = radii_in_pixels(f, primary);
+      const bool equal = k == 0;
+      ok = ok && f.uncovered == 0 && f.non_finite == 0 && f.negative == 0 && !f.records.empty();
+      fills << metric_name(m) << "," << pk << "," << f.records.size() << "," << equal << "," << f.trace_seconds << ","
+            << f.raddiff_seconds << "," << f.cache_seconds << "," << f.total_seconds() << "," << err.rel_rms << ","
+            << err.rms << "," << err.worst_share << "," << percentile(rpx, 0) << "," << percentile(rpx, 0.05) << ","
+            << percentile(rpx, 0.5) << "," << percentile(rpx, 0.95) << "," << f.uncovered << "," << f.non_finite
+            << "," << f.negative << "\n";
+      fills.flush();
+      std::printf("  %-22s p = %-10.5g %6zu records  %7.2f CPU s (trace %.2f, raddiff %.2f, cache %.2f)  error %.4f  "
+                  "worst 1%%: %.2f\n",
+                  metric_name(m), pk, f.records.size(), f.total_seconds(), f.trace_seconds, f.raddiff_seconds,
+                  f.cache_seconds, err.rel_rms, err.worst_share);
+      std::fflush(stdout);
+      longest = std::max(longest, f.total_seconds());
+      if (equal) {
+        const std::string prefix = settings.out + "-" + metric_name(m);
+        write_images(prefix, f.image, exposure);
+        write_records_csv(prefix + "-records.csv", f, bench.camera(), primary);
+        std::ofstream px(prefix + "-pixels.csv");
+        px << "pixel,x,y,value,reference,error\n";
+        for (size_t i = 0; i < ref.pixels.size(); ++i) {
+          const size_t p = ref.pixels[i].pixel;
+          px << p << "," << p % view.width << "," << p / view.width << "," << luminance(f.image.at(p)) << ","
+             << luminance(ref.pixels[i].value()) << "," << err.errors[i] << "\n";
+        }
+        tuned.push_back(std::move(f));
+      }
+    }
+  }
+
+  // The gathers' own error at the records of each equal-records cache.
+  std::ofstream floor_csv(settings.out + "-floor.csv");
+  floor_csv << "metric,records_sampled,floor_rel_rms\n";
+  std::vector<size_t> all_samples;
+  for (const Fill &f : tuned) {
+    const std::vector<size_t> s = floor_sample(f, settings.floor_records);
+    all_samples.insert(all_samples.end(), s.begin(), s.end());
+  }
+  floor_refs.ensure(all_samples, scene, primary, settings);
+  for (const Fill &f : tuned) {
+    const std::vector<size_t> s = floor_sample(f, settings.floor_records);
+    const double floor = gather_floor(s, bench.store(), floor_refs);
+    floor_csv << metric_name(f.metric) << "," << s.size() << "," << floor << "\n";
+    std::printf("floor %-22s %.4f (gathers of %zu records against converged irradiance)\n", metric_name(f.metric),
+                floor, s.size());
+  }
+
+  // Path tracing the indirect irradiance per pixel, up to past the costliest cache.
+  if (settings.path_trace) {
+    write_pfm(settings.out + "-albedo.pfm", albedo_buffer(scene, primary, view));
+    write_pfm(settings.out + "-normal.pfm", normal_buffer(primary, view));
+    std::ofstream pt(settings.out + "-pt.csv");
+    pt << "spp,cpu_s,rays,rel_rms,rms,worst1_share,file\n";
+    path_trace(scene, primary, view, settings.radiance, settings.path_trace_max_spp, 1.3 * longest, settings.threads,
+               [&](const PathTraceSnapshot &s) {
+                 const Measured err = measure(s.image, ref);
+                 const std::string file = settings.out + "-pt-spp" + std::to_string(s.spp);
+                 write_pfm(file + ".pfm", s.image);
+                 if (s.spp == 1 || s.cpu_seconds > longest) write_png(file + ".png", s.image, exposure);
+                 pt << s.spp << "," << s.cpu_seconds << "," << s.rays << "," << err.rel_rms << "," << err.rms << ","
+                    << err.worst_share << "," << file << ".pfm\n";
+                 pt.flush();
+                 std::printf("path tracing: %5u spp  %7.2f CPU s  error %.4f\n", s.spp, s.cpu_seconds, err.rel_rms);
+                 std::fflush(stdout);
+               });
+  }
+
+  std::ofstream summary(settings.out + "-summary.csv");
+  summary << "key,value\n"
+          << "width," << view.width << "\nheight," << view.height << "\ntriangles," << scene.triangle_count()
+          << "\nscene_size," << scene.size() << "\ngather," << settings.irradiance.gather_m << "x"
+          << settings.irradiance.gather_n
+          << "\nhit_radiance," << settings.radiance.describe() << "\ntarget_records," << target
+          << "\nmeasured_pixels," << ref.pixels.size() << "\nreference_grid," << settings.reference.grid << "\nreference_rays," << settings.reference.rays
+          << "\nreference_relative_noise," << ref.relative_noise() << "\nreference_mean," << ref_mean
+          << "\ngathers_computed," << bench.store().computed() << "\nmax_rss_mib," << max_rss_mib()
+          << "\nprocess_cpu_s," << process_cpu_seconds() - wall0 << "\nexposure," << exposure << "\nreference_cpu_s," << ref.seconds
+          << "\nreference_loaded," << ref.loaded << "\ngradient_limit," << settings.irradiance.gradient_limit
+          << "\nleak_guard," << settings.irradiance.leak_guard_relative << " " << settings.irradiance.leak_guard_absolute
+          << "\nradius_bounds," << settings.irradiance.world_radius_min << " " << settings.irradiance.world_radius_max
+          << " " << settings.irradiance.pixel_radius_min << " " << settings.irradiance.pixel_radius_max << "\n";
+  std::printf("bench: %zu gathers computed, max RSS %ld MiB, %.0f CPU s\n", bench.store().computed(), max_rss_mib(),
+              process_cpu_seconds() - wall0);
+  std::printf("%s\n", ok ? "OK" : "FAILED");
+  return ok ? 0 : 1;
+}
+
+}  // namespace rd

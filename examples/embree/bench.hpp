@@ -1,0 +1,46 @@
+// The real-scene benchmark: every metric's cache, tuned to equal records and swept over
+// thresholds, against a converged reference, with the error split into the gathers' own noise and
+// interpolation, and path tracing at equal CPU time. Writes CSV files, images and PFMs under a
+// prefix; examples/embree/report.py turns several runs into the report.
+#pragma once
+
+#include "camera.hpp"
+#include "metrics.hpp"
+#include "reference.hpp"
+
+#include <string>
+#include <vector>
+
+namespace rd {
+
+struct BenchSettings {
+  std::vector<Metric> metrics = all_metrics();
+  size_t target_records = 0;  // 0: one record per 32 pixels
+  int thresholds = 4;         // fills per metric along its error-against-time curve (>= 1)
+  // raddiff's settings of every record: gather size, radius bounds (world and pixels), gradient
+  // limit, leak guard, anisotropy, curvature floor (metric and threshold are set per fill).
+  raddiff_irradiance_settings irradiance = raddiff_irradiance_settings_default();
+  HitRadianceSettings radiance;
+  ReferenceSettings reference;
+  uint32_t floor_records = 200;       // records per metric whose gathers are checked against a reference
+  uint32_t floor_rays = 1u << 16;     // rays of the reference at each of those records
+  uint32_t path_trace_max_spp = 4096;
+  bool path_trace = true;
+  bool record_gradients = true;       // false: records without gradients (to measure what they add)
+  // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
+  // over this many paths, their values from the usual gather: what derivative noise costs.
+  int oracle_derivative_paths = 0;
+  // > 0: Hessian records' radii at most this times the gather's harmonic-mean distance (experiment).
+  double hessian_distance_bound = 0;
+  // >= 0: every cache interpolates with this RADDIFF_INTERP_* kernel instead of its metric's
+  // (experiment; -1: the metric's own).
+  int interpolation = -1;
+  std::string out = "bench";          // file prefix
+  unsigned threads = 2;
+};
+
+// Runs the benchmark on one view; returns 0 when every fill covered the image with finite,
+// non-negative values.
+int run_bench(const Scene &scene, const View &view, const std::string &scene_key, const BenchSettings &settings);
+
+}  // namespace rd

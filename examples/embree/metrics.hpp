@@ -1,0 +1,71 @@
+// The error metrics compared, and a gather evaluated once for all of them.
+//
+// raddiff does the work: raddiff_gather_evaluation_new evaluates a traced gather (irradiance,
+// gradients and the Hessian a metric needs), raddiff_irradiance_record builds a metric's record
+// from it under the settings (threshold, radius bounds at the pixel's footprint, anisotropy,
+// curvature floor). One evaluation per kind of Hessian, so that each metric is charged for the
+// raddiff work it needs and nothing else.
+#pragma once
+
+#include "trace.hpp"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace rd {
+
+enum class Metric {
+  SplitSphere,         // Ward 1988: a R, R the harmonic-mean hit distance
+  BoundedSplitSphere,  // a min(R, E / |grad E|) (Ward-Heckbert, Krivanek)
+  Gradient,            // eps E / |grad E| (Jarosz et al. 2008)
+  HessianUnaware,      // radiometric (occlusion-unaware) Hessian, thesis ch. 4
+  HessianGeometric,    // geometric Hessian, thesis eq. 4.23
+  HessianIsotropic,    // occlusion-aware Hessian, discs
+  HessianAnisotropic,  // occlusion-aware Hessian, ellipses of anisotropy <= 2
+};
+
+const std::vector<Metric> &all_metrics();
+const char *metric_name(Metric m);
+Metric parse_metric(const std::string &name);
+uint32_t c_metric(Metric m);  // RADDIFF_METRIC_*
+bool uses_hessian(Metric m);
+// How a record's radius scales with the metric's parameter (1 for the split-sphere family, 1/4
+// for the Hessians, whose radii bound an error integrated over the record's disc).
+double radius_exponent(Metric m);
+double initial_parameter(Metric m);
+
+// The evaluations a set of metrics needs: index 0 without a Hessian, then one per Hessian kind
+// (occlusion-aware, unaware, geometric).
+struct HessianNeeds {
+  bool kind[4] = {true, false, false, false};
+};
+HessianNeeds hessian_needs(const std::vector<Metric> &metrics);
+
+struct EvaluationDeleter {
+  void operator()(raddiff_gather_evaluation *e) const { raddiff_gather_evaluation_free(e); }
+};
+
+// A gather evaluated once, with the CPU time of each evaluation, shared by every metric.
+struct Evaluated {
+  bool valid = false;  // false: raddiff found the gather degenerate (no record)
+  std::unique_ptr<raddiff_gather_evaluation, EvaluationDeleter> evaluation[4];
+  double seconds[4] = {0, 0, 0, 0};
+  double luminance = 0;     // the evaluation's scalar
+  double harmonic_mean_distance = INFINITY;
+  float value[3] = {0, 0, 0};  // irradiance the records store (the gather's own)
+};
+
+// `settings` gives the channels and their weights.
+Evaluated evaluate_gather(const TracedGather &gather, const HessianNeeds &needs,
+                          const raddiff_irradiance_settings &settings);
+
+// Seconds of raddiff evaluation that metric m's records cost.
+double raddiff_seconds(Metric m, const Evaluated &e);
+
+// Metric m's record from the evaluation (settings.metric and .accuracy are set from m and p),
+// its value the gather's own irradiance. False when raddiff finds the metric undefined there.
+bool metric_record(Metric m, double p, const Evaluated &e, raddiff_irradiance_settings settings, double footprint,
+                   raddiff_cache_record &record);
+
+}  // namespace rd

@@ -1,0 +1,41 @@
+// Tracing what raddiff asks for: the gather of a record (raddiff's stratified directions, traced
+// with Embree, radiance from the hit-radiance estimator), and plain irradiance estimates of the
+// same light for the reference and for path tracing.
+#pragma once
+
+#include "radiance.hpp"
+
+#include <vector>
+
+namespace rd {
+
+// A gather as raddiff's evaluation takes it: directions, hit distances, RGB radiance.
+struct TracedGather {
+  raddiff_gather_layout layout{};
+  raddiff_frame frame{};
+  std::vector<raddiff_vec3> directions;
+  std::vector<double> distance;  // INFINITY for a miss
+  std::vector<float> radiance;   // 3 per direction
+  std::vector<raddiff_vec3> hit_normals;  // unit, facing x (zero for a miss)
+  uint64_t rays = 0;             // every ray traced for it (gather, shadow and continuation rays)
+};
+
+// Traces the m x n cosine-polar gather at (x, n) with layout seed `seed`. The hit radiance of
+// direction i draws its samples from mix(seed + i).
+TracedGather trace_gather(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, uint32_t m,
+                          uint32_t nn, uint64_t seed);
+
+// The same trace into caller-provided arrays (the high-level call's callback): `count` directions
+// from x, their distances and radiance written.
+void trace_directions(const Scene &scene, const HitRadianceSettings &radiance, V3 x, const raddiff_vec3 *directions,
+                      size_t count, uint64_t seed, double *distance, float *radiance_out, uint64_t &rays,
+                      raddiff_vec3 *hit_normals = nullptr);
+
+// Sum of the radiance arriving at (x, n) over `count` cosine-distributed directions from the
+// (0,2)-sequence points [first, first + count) of a scrambled Sobol pair: pi * sum / N is an
+// unbiased irradiance estimate for N points in total, stratified however many are taken, so
+// progressive passes continue one sequence. `scramble` decorrelates pixels.
+V3 irradiance_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, uint32_t first, uint32_t count,
+                  uint64_t scramble, uint64_t &rays);
+
+}  // namespace rd
