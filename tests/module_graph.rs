@@ -20,11 +20,6 @@ use std::path::{Path, PathBuf};
 const KNOWN_CYCLES: &[&[&str]] = &[
     &["src/cache/mod.rs", "src/cache/thread_cursor.rs"],
     &[
-        "src/gather/hessian.rs",
-        "src/gather/hessian/edges.rs",
-        "src/gather/hessian/workspace.rs",
-    ],
-    &[
         "src/gather/input.rs",
         "src/gather/layout.rs",
         "src/gather/strata.rs",

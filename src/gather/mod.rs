@@ -43,10 +43,7 @@ pub use evaluate::{evaluate, GatherValues, ValidGather, Wanted};
 pub use input::{GatherInput, MediaRadiance};
 pub use layout::{concentric_to_local, Frame, Layout, LayoutKind, StratumBounds};
 
-// Occlusion-aware Hessians from the triangulated gather, and the record radii they imply.
+// The gather's Hessians (occlusion-aware on surfaces and in media, occlusion-unaware), and the
+// record radii they imply.
 pub mod hessian;
-pub mod hessian_fill;
-pub mod hessian_media;
-pub mod hessian_mesh;
-pub mod hessian_unaware;
 pub mod radii;

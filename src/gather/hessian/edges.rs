@@ -21,7 +21,8 @@
 
 use glam::{DMat3, DVec3};
 
-use super::super::hessian_mesh::{Edge, NONE};
+use super::gather_mesh::edge_term;
+use super::mesh::{Edge, NONE};
 use crate::error::{Error, Result};
 use crate::kernels::numeric::atan2::atan2_upper;
 use crate::kernels::numeric::fma::fmadd;
@@ -811,7 +812,7 @@ impl EdgeSums {
         let (a, b, _, _) = q.batch.ends(i);
         // The general kernel's terms are not scaled by 2π: scale them so that they can share the
         // geometric sum with the lanes' (the general ones are rare).
-        let f = super::edge_term(n, a, b, order)?;
+        let f = edge_term(n, a, b, order)?;
         if let Some(t) = terms.get_mut(q.index[i] as usize) {
             *t = [f.value, f.gradient.x, f.gradient.y, f.gradient.z];
         }
@@ -1000,7 +1001,7 @@ mod tests {
                     let flag = main[0].general[i];
                     assert!(main.iter().all(|m| m.general[i] == flag));
                     seen[flag as usize] += 1;
-                    let want = super::super::edge_term(n, a, c, order).unwrap();
+                    let want = super::super::gather_mesh::edge_term(n, a, c, order).unwrap();
                     let lanes: Vec<&Batch> = if flag == CLOSED_FORM {
                         main.iter().map(|m| &**m).collect()
                     } else if flag == AXIAL {

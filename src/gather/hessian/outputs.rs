@@ -1,16 +1,21 @@
 //! The occlusion-aware outputs of a gather evaluation (`occlusion_gradient` and `hessian` of
-//! `raddiff_gather_evaluate`), with the mesh topology cached per layout on each thread.
+//! `raddiff_gather_evaluate`, which writes them in its C layout), with the mesh topology cached per
+//! layout on each thread: the occlusion-aware Hessian of a hemisphere gather (with its marched
+//! media rings) or of a sphere gather in a medium, whichever the layout is.
 
 use std::cell::RefCell;
 use std::rc::Rc;
 
 use glam::{DMat3, DVec3};
 
-use super::hessian::{occlusion_derivatives, HemisphereGather, OcclusionDerivatives};
-use super::hessian_media::{media_derivatives, MediaGather, MediaSteps};
-use super::hessian_mesh::Topology;
-use super::{GatherInput, Layout, LayoutKind, MediaRadiance, ValidGather};
+use super::gather_mesh::{HemisphereGather, OcclusionDerivatives};
+use super::media::{media_derivatives, MediaGather, MediaSteps};
+use super::mesh::Topology;
+use super::occlusion::occlusion_derivatives;
 use crate::error::{Error, Result};
+use crate::gather::evaluate::ValidGather;
+use crate::gather::input::{GatherInput, MediaRadiance};
+use crate::gather::layout::{Layout, LayoutKind};
 use crate::Order;
 
 /// How many layouts' topologies each thread keeps.
@@ -175,42 +180,6 @@ fn add_media_rings(
             total.gradient[c] += d.gradient[c] * w;
             total.hessian[c] += d.hessian[c] * w;
             total.all_black[c] &= d.all_black[c];
-        }
-    }
-    Ok(())
-}
-
-/// Fills the caller's `occlusion_gradient` (`3·channels`, `[3c + axis]`) and `hessian`
-/// (`9·channels`, row-major `[9c + 3·row + col]`) from a validated gather (see
-/// [`occlusion_outputs`]); `None` outputs are skipped, and nothing is computed when both are.
-/// `InvalidArgument` if a slice has the wrong length; nothing is written on failure.
-pub fn fill_from_gather(
-    gather: &ValidGather,
-    occlusion_gradient: Option<&mut [f64]>,
-    hessian: Option<&mut [f64]>,
-) -> Result<()> {
-    if occlusion_gradient.is_none() && hessian.is_none() {
-        return Ok(());
-    }
-    let ch = gather.input().channels;
-    if occlusion_gradient
-        .as_ref()
-        .is_some_and(|g| g.len() != 3 * ch)
-        || hessian.as_ref().is_some_and(|h| h.len() != 9 * ch)
-    {
-        return Err(Error::InvalidArgument(
-            "occlusion_gradient must hold 3*channels and hessian 9*channels values".into(),
-        ));
-    }
-    let (gradients, hessians) = occlusion_outputs(gather, hessian.is_some())?;
-    if let Some(out) = occlusion_gradient {
-        for (o, g) in out.chunks_exact_mut(3).zip(&gradients) {
-            o.copy_from_slice(&g.to_array());
-        }
-    }
-    if let Some(out) = hessian {
-        for (o, h) in out.chunks_exact_mut(9).zip(&hessians) {
-            o.copy_from_slice(&h.transpose().to_cols_array());
         }
     }
     Ok(())

@@ -1,7 +1,7 @@
 //! Occlusion-unaware irradiance gradient and Hessian (thesis eq. 4.3-4.14, Jarosz et al. 2012):
 //! Monte-Carlo estimates that differentiate the geometry term of every hit but hold visibility
 //! fixed, and the geometric Hessian (eq. 4.23). Provided to compare against the occlusion-aware
-//! derivatives of [`super::hessian`]; they need the surface normal at every hit.
+//! derivatives of [`super::occlusion`]; they need the surface normal at every hit.
 //!
 //! With `d = y − x`, `a = n_x·d`, `b = n_y·d` (`cosθ_x = a/r`, `cosθ_y = −b/r`), the geometry term
 //! `G = cosθ_x cosθ_y / r² = −a b / r⁴` has, with respect to x,
@@ -19,7 +19,7 @@
 
 use glam::{DMat3, DVec3};
 
-use super::hessian::HemisphereGather;
+use super::gather_mesh::HemisphereGather;
 use crate::error::{ensure_finite3, Error, Result};
 use crate::Order;
 

@@ -22,7 +22,7 @@
 //! fluence of the gather's sphere layout; in flatland, over the circle of directions): multiply by
 //! the phase function (1/4π, 1/2π for isotropic scattering) for the radiance towards the eye. Misses
 //! are attenuated to zero when `σ_t > 0`; with `σ_t = 0` they are an environment at
-//! [`super::hessian::FAR_DISTANCE_FACTOR`] times the largest hit distance.
+//! [`super::gather_mesh::FAR_DISTANCE_FACTOR`] times the largest hit distance.
 //!
 //! The solid angles come from `kernels::triangle_solid_angle_signed` (the ring triangles are
 //! oriented, so a triangle folded over by jitter counts negatively and every ring covers the sphere
@@ -31,10 +31,10 @@
 
 use glam::{DMat2, DVec2, DVec3};
 
-use super::hessian::FAR_DISTANCE_FACTOR;
-use super::hessian_mesh::{Topology, POLE, SOUTH_POLE};
-use super::layout::LayoutKind;
+use super::gather_mesh::FAR_DISTANCE_FACTOR;
+use super::mesh::{Topology, POLE, SOUTH_POLE};
 use crate::error::{ensure_finite, Error, Result};
+use crate::gather::layout::LayoutKind;
 use crate::kernels;
 use crate::{Deriv2, Deriv3, Order};
 

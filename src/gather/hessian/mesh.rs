@@ -16,8 +16,8 @@
 //! once with the triangle on its left (which lists it as `a → b`) and the one on its right (which
 //! lists it `b → a`), or [`NONE`] on the horizon, where the mesh ends.
 
-use super::layout::LayoutKind;
 use crate::error::{Error, Result};
+use crate::gather::layout::LayoutKind;
 
 /// No triangle (the right side of a horizon edge).
 pub const NONE: u32 = u32::MAX;
