@@ -184,13 +184,11 @@ impl LayoutTables {
 /// diagonals `|a| = |b|`, so each wall is split there and integrated by 4-point Gauss-Legendre
 /// per piece.
 pub(crate) struct ConcentricWalls {
-    /// Wall between `(j−1, k)` and `(j, k)`, index `(j−1)·N + k`, pointing into `(j, k)`.
-    pub(crate) first_axis: Vec<DVec3>,
-    /// Wall between `(j, k−1)` and `(j, k)`, index `j·(N−1) + k − 1`, pointing into `(j, k)`.
-    pub(crate) second_axis: Vec<DVec3>,
-    /// `first_axis` by component (x, y, z arrays), for contiguous per-row loops.
+    /// Walls between `(j−1, k)` and `(j, k)`, index `(j−1)·N + k`, pointing into `(j, k)`, by
+    /// component (x, y, z arrays), for contiguous per-row loops.
     pub(crate) first_by_axis: [Vec<f64>; 3],
-    /// `second_axis` by component.
+    /// Walls between `(j, k−1)` and `(j, k)`, index `j·(N−1) + k − 1`, pointing into `(j, k)`, by
+    /// component.
     pub(crate) second_by_axis: [Vec<f64>; 3],
 }
 
@@ -250,9 +248,21 @@ impl ConcentricWalls {
         ConcentricWalls {
             first_by_axis: by_axis(&first_axis),
             second_by_axis: by_axis(&second_axis),
-            first_axis,
-            second_axis,
         }
+    }
+
+    /// Wall `i` between `(j−1, k)` and `(j, k)` as a vector.
+    #[cfg(feature = "reference")]
+    pub(crate) fn first(&self, i: usize) -> DVec3 {
+        let [x, y, z] = &self.first_by_axis;
+        DVec3::new(x[i], y[i], z[i])
+    }
+
+    /// Wall `i` between `(j, k−1)` and `(j, k)` as a vector.
+    #[cfg(feature = "reference")]
+    pub(crate) fn second(&self, i: usize) -> DVec3 {
+        let [x, y, z] = &self.second_by_axis;
+        DVec3::new(x[i], y[i], z[i])
     }
 }
 
@@ -374,9 +384,10 @@ mod tests {
         };
         let sa = |j: usize| 2.0 * j as f64 / 5.0 - 1.0;
         let sb = |k: usize| 2.0 * k as f64 / 7.0 - 1.0;
+        let at = |[x, y, z]: &[Vec<f64>; 3], i: usize| DVec3::new(x[i], y[i], z[i]);
         for (j, k) in [(1, 0), (2, 3), (3, 6), (4, 2)] {
             let want = -dense(DVec2::new(sa(j), sb(k)), DVec2::new(sa(j), sb(k + 1)));
-            let got = walls.first_axis[(j - 1) * 7 + k];
+            let got = at(&walls.first_by_axis, (j - 1) * 7 + k);
             assert!(
                 (got - want).length() < 1e-4 * want.length().max(1e-3),
                 "{got} {want}"
@@ -388,7 +399,7 @@ mod tests {
         }
         for (j, k) in [(0, 1), (2, 3), (4, 6), (2, 4)] {
             let want = dense(DVec2::new(sa(j), sb(k)), DVec2::new(sa(j + 1), sb(k)));
-            let got = walls.second_axis[j * 6 + k - 1];
+            let got = at(&walls.second_by_axis, j * 6 + k - 1);
             assert!(
                 (got - want).length() < 1e-4 * want.length().max(1e-3),
                 "{got} {want}"

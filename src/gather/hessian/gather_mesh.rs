@@ -3,7 +3,7 @@
 //! gather's rays ([`HemisphereGather`]) checked against the layout's [`Topology`], its vertices
 //! placed relative to x ([`MeshGeometry`], misses at [`FAR_DISTANCE_FACTOR`] times the largest hit
 //! distance), the exact power-of-two rescaling that keeps the edge moments in range ([`Scale`]),
-//! each triangle's farthest vertex and radiance, one edge term from its nearer end
+//! each triangle's farthest vertex, one edge term from its nearer end
 //! ([`edge_term`]), and the assembly of the per-channel sums into [`OcclusionDerivatives`].
 //!
 //! It imports nothing else of the Hessian folder but the mesh's topology, so that the entry points,
@@ -367,23 +367,6 @@ pub(super) fn all_black(g: &HemisphereGather) -> Vec<bool> {
         .collect()
 }
 
-/// Radiance of vertex `v` in channel `c` (sample, horizon copy or pole).
-#[inline]
-pub(super) fn vertex_radiance(
-    topo: &Topology,
-    mesh: &MeshGeometry,
-    g: &HemisphereGather,
-    v: u32,
-    c: usize,
-) -> f64 {
-    let src = topo.vertex_source[v as usize];
-    if src == POLE {
-        mesh.pole_radiance[c]
-    } else {
-        g.radiance[src as usize * g.channels + c] as f64
-    }
-}
-
 pub(super) fn empty(channels: usize, black: Vec<bool>) -> OcclusionDerivatives {
     OcclusionDerivatives {
         irradiance: vec![0.0; channels],
@@ -424,46 +407,4 @@ pub(super) fn finish(
         ));
     }
     Ok(out)
-}
-
-pub(super) fn add_scaled(acc: &mut Deriv3, d: &Deriv3, w: f64, order: Order) {
-    acc.value += w * d.value;
-    if order.gradient() {
-        acc.gradient += d.gradient * w;
-    }
-    if order.hessian() {
-        acc.hessian += d.hessian * w;
-    }
-}
-
-/// Radiance of every triangle (its farthest vertex's), channel-interleaved, plus a zero row that
-/// stands for the outside of the horizon.
-pub(super) fn triangle_radiance(
-    topo: &Topology,
-    mesh: &MeshGeometry,
-    g: &HemisphereGather,
-) -> Vec<f64> {
-    let channels = g.channels;
-    let samples = g.radiance.len();
-    // Per-vertex radiance first (samples, then horizon copies and the pole), so the triangles'
-    // lookups are plain indexing.
-    let mut vertex: Vec<f64> = g.radiance.iter().map(|&l| l as f64).collect();
-    vertex.reserve(topo.vertex_count() * channels - samples);
-    for v in samples / channels..topo.vertex_count() {
-        for c in 0..channels {
-            vertex.push(vertex_radiance(topo, mesh, g, v as u32, c));
-        }
-    }
-    let tcount = topo.triangles.len();
-    let mut tri = Vec::with_capacity((tcount + 1) * channels);
-    if channels == 1 {
-        tri.extend(mesh.farthest.iter().map(|&f| vertex[f as usize]));
-    } else {
-        for &f in &mesh.farthest {
-            let f = f as usize * channels;
-            tri.extend_from_slice(&vertex[f..f + channels]);
-        }
-    }
-    tri.resize((tcount + 1) * channels, 0.0);
-    tri
 }

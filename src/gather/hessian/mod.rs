@@ -26,7 +26,9 @@
 //! `edges` (the surface path's edge terms in vector batches); `workspace` (the evaluation on
 //! reusable buffers); [`occlusion`] (the entry points and the per-thread workspace); [`media`],
 //! [`unaware`]; [`outputs`] (the per-layout dispatch the gather evaluation and the C ABI call,
-//! which writes the results in its C layout in `ffi`).
+//! which writes the results in its C layout in `ffi`). Beside them, `reference` holds the
+//! references the tests and benches compare the occlusion-aware path against, compiled only with
+//! the `reference` feature.
 
 pub(crate) mod edges;
 mod gather_mesh;
@@ -34,6 +36,8 @@ pub mod media;
 pub mod mesh;
 pub mod occlusion;
 pub mod outputs;
+#[cfg(feature = "reference")]
+mod reference;
 pub mod unaware;
 mod workspace;
 
@@ -44,8 +48,10 @@ pub use gather_mesh::{
 };
 pub use mesh::{Edge, Topology};
 pub use occlusion::{
-    occlusion_derivatives, occlusion_derivatives_on, occlusion_derivatives_per_triangle,
-    occlusion_derivatives_reference, occlusion_derivatives_with, KEPT_WORKSPACE_VERTICES,
+    occlusion_derivatives, occlusion_derivatives_on, occlusion_derivatives_with,
+    KEPT_WORKSPACE_VERTICES,
 };
 pub use outputs::{cached_topology, occlusion_outputs};
+#[cfg(feature = "reference")]
+pub use reference::{occlusion_derivatives_per_triangle, occlusion_derivatives_reference};
 pub use workspace::OcclusionWorkspace;
