@@ -817,12 +817,7 @@ mod tests {
 
     fn lcg(seed: u64) -> impl FnMut() -> f64 {
         let mut s = seed;
-        move || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        }
+        move || crate::test_rng::lcg(&mut s)
     }
 
     #[test]

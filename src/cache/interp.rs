@@ -280,12 +280,7 @@ mod tests {
     #[test]
     fn vector_blend_equals_portable_blend() {
         let mut state = 0x1234_5678_9abc_def0u64;
-        let mut next = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 33) as u32
-        };
+        let mut next = || (crate::test_rng::step(&mut state) >> 33) as u32;
         let half = |r: u32| -> u16 {
             match r % 5 {
                 0 => 0x3c00 | ((r >> 8) as u16 & 0x8000), // ±1

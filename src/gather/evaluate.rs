@@ -1096,37 +1096,44 @@ impl March {
             (i0[k], i1[k]) = self.full[k];
         }
     }
-
-    /// Calls `f(s, ∫ exp(−σt) dt, ∫ t exp(−σt) dt)` over `[lo, hi) ∩ step s` for every step
-    /// overlapping `[lo, hi)`. (The evaluation uses [`March::weights`], the case `lo = 0`.)
-    #[cfg(test)]
-    fn visit(&self, lo: f64, hi: f64, mut f: impl FnMut(usize, f64, f64)) {
-        let hi = hi.min(self.end());
-        if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
-            return;
-        }
-        let first = ((lo / self.step).floor() as usize).min(self.steps);
-        let last = ((hi / self.step).ceil() as usize).min(self.steps);
-        for s in first..last {
-            let a = s as f64 * self.step;
-            let b = a + self.step;
-            let (i0, i1) = if a >= lo && b <= hi {
-                self.full[s]
-            } else {
-                let (a, b) = (a.max(lo), b.min(hi));
-                if b <= a {
-                    continue;
-                }
-                self.segment(a, b - a)
-            };
-            f(s, i0, i1);
-        }
-    }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::walls::tests::WallVectors;
     use super::*;
+
+    /// The march's weights over any interval, as the tests check them.
+    trait Visit {
+        /// Calls `f(s, ∫ exp(−σt) dt, ∫ t exp(−σt) dt)` over `[lo, hi) ∩ step s` for every step
+        /// overlapping `[lo, hi)`.
+        fn visit(&self, lo: f64, hi: f64, f: impl FnMut(usize, f64, f64));
+    }
+
+    impl Visit for March {
+        fn visit(&self, lo: f64, hi: f64, mut f: impl FnMut(usize, f64, f64)) {
+            let hi = hi.min(self.end());
+            if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+                return;
+            }
+            let first = ((lo / self.step).floor() as usize).min(self.steps);
+            let last = ((hi / self.step).ceil() as usize).min(self.steps);
+            for s in first..last {
+                let a = s as f64 * self.step;
+                let b = a + self.step;
+                let (i0, i1) = if a >= lo && b <= hi {
+                    self.full[s]
+                } else {
+                    let (a, b) = (a.max(lo), b.min(hi));
+                    if b <= a {
+                        continue;
+                    }
+                    self.segment(a, b - a)
+                };
+                f(s, i0, i1);
+            }
+        }
+    }
 
     /// The AVX2 builds (used when the CPU has it) give bitwise the results of the portable build:
     /// the same operations in the same order, no FMA.

@@ -102,29 +102,6 @@ impl Walls {
             ring_sin2,
         }
     }
-
-    /// `∫ w ν dl` of the ring wall at the top of ring `j ≥ 1`, column `k` (local frame).
-    #[cfg(test)]
-    pub(crate) fn ring_wall_vector(&self, j: usize, k: usize) -> DVec3 {
-        let (a, b) = self.ring_wall[j];
-        let (c1, c2) = self.column[k];
-        DVec3::new(a * c1, a * c2, b)
-    }
-
-    /// `∫ w ν dl` of the azimuth wall at the start of column `k`, ring `j` (local frame).
-    #[cfg(test)]
-    pub(crate) fn azimuth_wall_vector(&self, j: usize, k: usize) -> DVec3 {
-        let (c, s) = self.phi_wall[k];
-        let r = self.ring_span[j];
-        DVec3::new(-s * r, c * r, 0.0)
-    }
-
-    /// `∫_cell sinθ e_φ dω` of stratum `(j, k)` (local frame): the rotational-gradient weight.
-    #[cfg(test)]
-    pub(crate) fn rotation_vector(&self, j: usize, k: usize) -> DVec3 {
-        let (c1, c2) = self.column[k];
-        DVec3::new(-c2, c1, 0.0) * self.ring_sin2[j]
-    }
 }
 
 /// Everything about a layout's walls that the validation and the evaluation need and that depends
@@ -357,8 +334,38 @@ fn integrand(s: DVec2, v: DVec2) -> DVec3 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// The polar layout's wall vectors one at a time, as the tests read them (the evaluation reads
+    /// the tables in bulk).
+    pub(crate) trait WallVectors {
+        /// `∫ w ν dl` of the ring wall at the top of ring `j ≥ 1`, column `k` (local frame).
+        fn ring_wall_vector(&self, j: usize, k: usize) -> DVec3;
+        /// `∫ w ν dl` of the azimuth wall at the start of column `k`, ring `j` (local frame).
+        fn azimuth_wall_vector(&self, j: usize, k: usize) -> DVec3;
+        /// `∫_cell sinθ e_φ dω` of stratum `(j, k)` (local frame): the rotational-gradient weight.
+        fn rotation_vector(&self, j: usize, k: usize) -> DVec3;
+    }
+
+    impl WallVectors for Walls {
+        fn ring_wall_vector(&self, j: usize, k: usize) -> DVec3 {
+            let (a, b) = self.ring_wall[j];
+            let (c1, c2) = self.column[k];
+            DVec3::new(a * c1, a * c2, b)
+        }
+
+        fn azimuth_wall_vector(&self, j: usize, k: usize) -> DVec3 {
+            let (c, s) = self.phi_wall[k];
+            let r = self.ring_span[j];
+            DVec3::new(-s * r, c * r, 0.0)
+        }
+
+        fn rotation_vector(&self, j: usize, k: usize) -> DVec3 {
+            let (c1, c2) = self.column[k];
+            DVec3::new(-c2, c1, 0.0) * self.ring_sin2[j]
+        }
+    }
 
     /// Concentric wall vectors against a dense midpoint rule on the map itself, with tangents by
     /// central differences and the sign fixed by the side of the cell it points into. (The midpoint
