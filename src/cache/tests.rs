@@ -724,7 +724,7 @@ fn plain_lookups_through_thread_cursors_equal_index_lookups() {
     assert!(found > 8000, "{found}");
     // the caches walked alternately kept their cursors: most of their lookups were remembered
     for cache in &caches[..2] {
-        let [remembered, anchored, _] = thread_cursor::served::served(cache.identity).unwrap();
+        let [remembered, anchored, _] = thread_cursor::tests::served(cache.identity).unwrap();
         assert!(remembered > 10 * anchored, "{remembered} {anchored}");
     }
     // several threads at once, each with its own cursors

@@ -67,4 +67,4 @@ pub(super) fn with(identity: u64, f: impl FnOnce(&mut Cursor)) {
 }
 
 #[cfg(test)]
-pub(super) mod served;
+pub(super) mod tests;
