@@ -5,17 +5,19 @@
 #
 #   scripts/bench-c-abi.sh [rounds]      (default 30 rounds)
 #
-# The binary is left at target/bench-c-abi/bench_kernels, for callgrind:
+# The binary is left at target/bench-c-abi/bench_kernels (under $CARGO_TARGET_DIR when set), for
+# callgrind:
 #   scripts/instructions-per-call.sh target/bench-c-abi/bench_kernels RADDIFF_C_ABI_PROFILE \
 #       'solid_angle_value,{calls}'
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --lib
-out=target/bench-c-abi
+target="${CARGO_TARGET_DIR:-target}"
+out="$target/bench-c-abi"
 mkdir -p "$out"
 "${CC:-cc}" -std=c99 -D_POSIX_C_SOURCE=200809L -O2 -Wall -Wextra -Werror -pedantic -g \
   -I include benches/c/bench_kernels.c benches/c/textbook.c \
-  target/release/libraddiff.a -lpthread -ldl -lm -lrt -o "$out/bench_kernels"
+  "$target/release/libraddiff.a" -lpthread -ldl -lm -lrt -o "$out/bench_kernels"
 echo "machine: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ //'), $(nproc) cores;" \
   "load average: $(cut -d' ' -f1-3 /proc/loadavg); commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)"
 "$out/bench_kernels" "$@"
