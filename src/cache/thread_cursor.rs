@@ -10,7 +10,7 @@
 
 use std::cell::RefCell;
 
-use super::Cursor;
+use super::cursor::Cursor;
 
 /// Caches per thread that keep a cursor.
 pub(super) const CACHES: usize = 4;

@@ -337,31 +337,6 @@ impl Layout {
         Ok(())
     }
 
-    /// `Ok` if every one of `directions` (index `j*N + k`, M·N of them) is finite, unit and inside
-    /// its own stratum of this layout in `frame`, within
-    /// [`GatherInput::DIRECTION_TOLERANCE`](super::GatherInput::DIRECTION_TOLERANCE): the check
-    /// [`super::evaluate`] makes before it evaluates anything (a few flops per direction, no
-    /// trigonometric call).
-    ///
-    /// `InvalidArgument` if the layout or frame is invalid, the count is not M·N, or a direction
-    /// is not where it belongs; the message names the first such direction (its index, row j and
-    /// column k), where it is and where its stratum is. Shifted, cyclically rotated or swapped
-    /// rows or columns, a direction from the far side of the hemisphere, or directions from
-    /// another layout or frame are all refused: a stratum's directions never leave it, whatever
-    /// the seed.
-    pub fn check_directions(&self, frame: &Frame, directions: &[DVec3]) -> Result<()> {
-        self.validate()?;
-        let frame = frame.orthonormalized()?;
-        if directions.len() != self.len() {
-            return Err(Error::InvalidArgument(format!(
-                "{} directions given, the layout has m*n = {}",
-                directions.len(),
-                self.len()
-            )));
-        }
-        super::strata::check_directions(self, &frame, directions)
-    }
-
     /// The world directions of every stratum, index `j*N + k`.
     pub fn directions(&self, frame: &Frame) -> Result<Vec<DVec3>> {
         self.validate()?;

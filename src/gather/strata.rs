@@ -24,15 +24,46 @@ use std::f64::consts::{FRAC_PI_4, TAU};
 
 use glam::DVec3;
 
-use super::input::GatherInput;
 use super::layout::{Frame, Layout, LayoutKind, StratumBounds};
 use super::walls::LayoutTables;
 use crate::error::{Error, Result};
 
-const TOL: f64 = GatherInput::DIRECTION_TOLERANCE;
+/// How far outside its stratum a direction may lie and still be accepted
+/// ([`GatherInput::DIRECTION_TOLERANCE`](super::GatherInput::DIRECTION_TOLERANCE)).
+pub(crate) const DIRECTION_TOLERANCE: f64 = 1e-6;
+const TOL: f64 = DIRECTION_TOLERANCE;
 
 /// The frame's tangent, bitangent and normal.
 type Axes = (DVec3, DVec3, DVec3);
+
+/// The direction check as the layout's method (here, beside the check, so that the layout needs
+/// nothing of it).
+impl Layout {
+    /// `Ok` if every one of `directions` (index `j*N + k`, M·N of them) is finite, unit and inside
+    /// its own stratum of this layout in `frame`, within
+    /// [`GatherInput::DIRECTION_TOLERANCE`](super::GatherInput::DIRECTION_TOLERANCE): the check
+    /// [`super::evaluate`] makes before it evaluates anything (a few flops per direction, no
+    /// trigonometric call).
+    ///
+    /// `InvalidArgument` if the layout or frame is invalid, the count is not M·N, or a direction
+    /// is not where it belongs; the message names the first such direction (its index, row j and
+    /// column k), where it is and where its stratum is. Shifted, cyclically rotated or swapped
+    /// rows or columns, a direction from the far side of the hemisphere, or directions from
+    /// another layout or frame are all refused: a stratum's directions never leave it, whatever
+    /// the seed.
+    pub fn check_directions(&self, frame: &Frame, directions: &[DVec3]) -> Result<()> {
+        self.validate()?;
+        let frame = frame.orthonormalized()?;
+        if directions.len() != self.len() {
+            return Err(Error::InvalidArgument(format!(
+                "{} directions given, the layout has m*n = {}",
+                directions.len(),
+                self.len()
+            )));
+        }
+        check_directions(self, &frame, directions)
+    }
+}
 
 /// `Ok` if every direction lies in its stratum of `layout` in the orthonormal `frame`, else
 /// `InvalidArgument` naming the first one that does not and why. `directions.len()` must be M·N.
@@ -43,31 +74,6 @@ pub(crate) fn check_directions(layout: &Layout, frame: &Frame, directions: &[DVe
     } else {
         locate_bad_direction(layout, frame, directions)
     }
-}
-
-/// `(cos φ_k, sin φ_k)` of the azimuth walls `φ_k = 2πk/N`, k = 0..=N (the last one is the
-/// first), as the direction check uses them; empty for the concentric layout and N = 1.
-pub(crate) fn azimuth_bounds(layout: &Layout) -> Vec<(f64, f64)> {
-    let n = layout.n as usize;
-    if layout.kind == LayoutKind::Concentric || n < 2 {
-        return Vec::new();
-    }
-    (0..=n)
-        .map(|k| {
-            let (s, c) = (TAU * (k % n) as f64 / n as f64).sin_cos();
-            (c, s)
-        })
-        .collect()
-}
-
-/// The concentric layout's column walls `b_k = 2k/N − 1`, k = 0..=N, on the square `[−1, 1]²`;
-/// empty for the other layouts.
-pub(crate) fn column_bounds(layout: &Layout) -> Vec<f64> {
-    if layout.kind != LayoutKind::Concentric {
-        return Vec::new();
-    }
-    let n = layout.n as f64;
-    (0..=layout.n).map(|k| 2.0 * k as f64 / n - 1.0).collect()
 }
 
 /// Row `j`'s range, widened by the tolerance: in sin²θ (polar), cosθ (sphere) or the square's

@@ -111,10 +111,10 @@ pub(crate) struct LayoutTables {
     /// Wall data for the evaluation ([`Walls`]); `None` for the concentric layout.
     pub(crate) walls: Option<Walls>,
     /// `(cos φ_k, sin φ_k)`, k = 0..=N, for the direction check (see
-    /// [`super::strata::azimuth_bounds`]).
+    /// [`azimuth_bounds`]).
     pub(crate) azimuth_bounds: Vec<(f64, f64)>,
     /// The concentric layout's column walls on the square, k = 0..=N (see
-    /// [`super::strata::column_bounds`]).
+    /// [`column_bounds`]).
     pub(crate) column_bounds: Vec<f64>,
 }
 
@@ -139,8 +139,8 @@ impl LayoutTables {
             }
             let tables = Rc::new(LayoutTables {
                 walls: (layout.kind != LayoutKind::Concentric).then(|| Walls::new(layout)),
-                azimuth_bounds: super::strata::azimuth_bounds(layout),
-                column_bounds: super::strata::column_bounds(layout),
+                azimuth_bounds: azimuth_bounds(layout),
+                column_bounds: column_bounds(layout),
             });
             if cache.len() >= LAYOUT_TABLES_CACHE_SIZE {
                 cache.remove(0);
@@ -331,6 +331,31 @@ fn integrand(s: DVec2, v: DVec2) -> DVec3 {
         z2 * dd.x + d.x * dot,
         z2.sqrt() * d.perp_dot(dd),
     )
+}
+
+/// `(cos φ_k, sin φ_k)` of the azimuth walls `φ_k = 2πk/N`, k = 0..=N (the last one is the
+/// first), as the direction check uses them; empty for the concentric layout and N = 1.
+pub(crate) fn azimuth_bounds(layout: &Layout) -> Vec<(f64, f64)> {
+    let n = layout.n as usize;
+    if layout.kind == LayoutKind::Concentric || n < 2 {
+        return Vec::new();
+    }
+    (0..=n)
+        .map(|k| {
+            let (s, c) = (TAU * (k % n) as f64 / n as f64).sin_cos();
+            (c, s)
+        })
+        .collect()
+}
+
+/// The concentric layout's column walls `b_k = 2k/N − 1`, k = 0..=N, on the square `[−1, 1]²`;
+/// empty for the other layouts.
+pub(crate) fn column_bounds(layout: &Layout) -> Vec<f64> {
+    if layout.kind != LayoutKind::Concentric {
+        return Vec::new();
+    }
+    let n = layout.n as f64;
+    (0..=layout.n).map(|k| 2.0 * k as f64 / n - 1.0).collect()
 }
 
 #[cfg(test)]

@@ -27,9 +27,9 @@ use glam::DVec2;
 
 use super::constraint::{Constraint, ConstraintValue};
 use super::contribution::{path_contribution, Medium};
-use super::integrate::ScatterOptions;
 use super::interval::{is_physical, Ownership, SupportInterval};
 use super::newton::{inside_triangle, pinv_solve, polish_steps, precision_floor, NewtonSettings};
+use super::options::ScatterOptions;
 use super::quadrature::{self, Adaptive};
 use super::stats::ScatterStats;
 
