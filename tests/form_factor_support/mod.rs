@@ -304,16 +304,17 @@ pub fn rel_mat(got: DMat3, want: DMat3, floor: f64) -> f64 {
     err / big
 }
 
+// `examples/kernels.rs` includes both support modules, each of which loads the generator.
+#[allow(clippy::duplicate_mod)]
+#[path = "../common/splitmix.rs"]
+mod splitmix;
+
 /// A tiny deterministic generator (SplitMix64) so accuracy runs are reproducible.
 pub struct Rng(pub u64);
 
 impl Rng {
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        splitmix::next_u64(&mut self.0)
     }
     /// Uniform in [0, 1).
     pub fn uniform(&mut self) -> f64 {
