@@ -19,6 +19,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import Ellipse  # noqa: E402
+from PIL import Image  # noqa: E402  (pillow: a dependency of matplotlib)
 
 LUMA = np.array([0.2126, 0.7152, 0.0722])
 METRICS = [
@@ -262,7 +263,7 @@ def plot_reference(run):
 
 
 def plot_panel(run, metrics, scale):
-    """One figure for the guides: per metric its cache image, error map and records."""
+    """One figure for the guides: per metric (one row each) its cache image, error map and records."""
     metrics = [m for m in metrics if m in run.metrics]
     if not metrics:
         return
@@ -294,6 +295,9 @@ def plot_panel(run, metrics, scale):
     fig.tight_layout()
     fig.savefig(run.path("-panel.png"), dpi=60)
     plt.close(fig)
+    # A 256-colour palette keeps the guides' copies small (a quarter of the RGBA file's size).
+    with Image.open(run.path("-panel.png")) as im:
+        im.convert("RGB").quantize(256).save(run.path("-panel.png"), optimize=True)
 
 
 def fmt(x, digits=4):
@@ -309,7 +313,7 @@ def report_run(run, md, table):
     for m in run.metrics:
         plot_error_map(run, m, scale)
         plot_records(run, m)
-    plot_panel(run, ["split-sphere", "bounded-split-sphere", "hessian-anisotropic"], scale)
+    plot_panel(run, METRICS, scale)
 
     md.append(f"## {run.name}\n")
     md.append(
