@@ -3,7 +3,8 @@
 //! for every layout before anything is evaluated.
 //!
 //! A direction `ω` of stratum `(j, k)` is taken to the layout's own coordinates in the frame and
-//! compared with the stratum's bounds widened by [`GatherInput::DIRECTION_TOLERANCE`]:
+//! compared with the stratum's bounds widened by
+//! [`GatherInput::DIRECTION_TOLERANCE`](super::GatherInput::DIRECTION_TOLERANCE):
 //!
 //! * cosine-polar: `sin²θ = lx² + ly²` against `[j/M, (j+1)/M]`, and the azimuth against the walls
 //!   `φ_k`, `φ_{k+1}` as two signs of 2D cross products with the walls' unit vectors;
