@@ -15,7 +15,7 @@
 //! (solid angles in a medium) of the mesh's triangles held fixed: near-to-far "occlusion
 //! triangles" carry what a translation of x disoccludes. Their error is that of the mesh against
 //! the scene (it converges with the strata, `docs/gathers.md`), plus rounding: every edge term is
-//! a kernel's certified closed form, evaluated from its nearer end. The unaware Hessians are
+//! the kernels' closed-form edge integral, evaluated from its nearer end. The unaware Hessians are
 //! Monte-Carlo estimates that hold visibility fixed and need hit normals; they are kept to compare
 //! against.
 //!
