@@ -13,11 +13,11 @@ use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
 use glam::{DMat3, DVec3};
 use hessian_common::peer::per_edge_closed_forms;
 use hessian_common::{noisy_radiance, scene, SceneGather};
+use raddiff::gather::hessian::occlusion_outputs;
 use raddiff::gather::hessian::{
     mesh_geometry, occlusion_derivatives, occlusion_derivatives_per_triangle,
     occlusion_derivatives_reference, HemisphereGather, LayoutKind, Topology,
 };
-use raddiff::gather::hessian_fill::occlusion_outputs;
 use raddiff::gather::radii::{surface_radii, ErrorMode};
 use raddiff::gather::{Frame, GatherInput, Layout, MediaRadiance, ValidGather, Wanted};
 use raddiff::Order;

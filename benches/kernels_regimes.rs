@@ -3,8 +3,8 @@
 //! generic case), at each order. Before the criterion groups two tables give ns per call and the
 //! ratio to the generic case of the same vertex count at the same order, measured in the same
 //! interleaved rounds (minimum over 40 rounds), so that every row sees the same machine load.
-//! Accuracy in these configurations is checked by `tests/kernels_b_accuracy.rs`,
-//! `tests/kernels_b_regimes.rs` and `tests/kernels_b_near_plane.rs` against 320-bit references.
+//! Accuracy in these configurations is checked by `tests/form_factor_accuracy.rs`,
+//! `tests/form_factor_regimes.rs` and `tests/form_factor_near_plane.rs` against 320-bit references.
 //!
 //! `cargo bench --bench kernels_regimes -- --warm-up-time 1 --measurement-time 2` (table and
 //! criterion); append a filter that matches nothing (`nomatch`) for the table alone.
@@ -96,7 +96,7 @@ fn facing(name: &'static str, v: Vec<DVec3>, x: DVec3) -> Case {
     Case { name, v, x, n }
 }
 
-/// The quad and pentagon of `benches/kernels_b.rs` in the triangle's regimes, each first in its
+/// The quad and pentagon of `benches/form_factor.rs` in the triangle's regimes, each first in its
 /// generic configuration (the baseline of its rows), plus slivers (width 1e-6 of the length).
 fn polygon_cases() -> Vec<Case> {
     let quad: Vec<DVec3> = [(-0.5, -0.4), (0.6, -0.5), (0.7, 0.6), (-0.4, 0.5)]

@@ -9,19 +9,19 @@
 //! numbers on the textbook formula, and prints each time with its ratio to the textbook value next
 //! to the relative errors (max-norm, normalized by the largest reference entry) against an
 //! independent 320-bit evaluation (astro-float, central differences with a step far below every
-//! length scale). `cargo bench --bench kernels_a` / `kernels_b` has the criterion measurements.
+//! length scale). `cargo bench --bench solid_angle_transmittance` / `form_factor` has the criterion measurements.
 
 #[path = "../benches/baselines/mod.rs"]
 mod baselines;
-#[path = "../tests/kernels_a_ref/mod.rs"]
+#[path = "../tests/kernel_reference/mod.rs"]
 mod reference_a;
-#[path = "../tests/kernels_b_common/mod.rs"]
+#[path = "../tests/form_factor_support/mod.rs"]
 mod reference_b;
 
 use std::hint::black_box;
 use std::time::Instant;
 
-use baselines::{dual_hessian3, fd_hessian3, textbook_solid_angle, D3};
+use baselines::{dual_hessian3, fd_hessian3, textbook_solid_angle, textbook_solid_angle_f64, D3};
 use glam::{DMat3, DVec2, DVec3};
 use num_dual::DualNum;
 use raddiff::{kernels, Deriv3, Order};
@@ -270,7 +270,7 @@ fn main() {
             (r.value, r.gradient, r.hessian),
             Kernel {
                 raddiff: &|p, o| kernels::triangle_solid_angle(p, t[0], t[1], t[2], o),
-                textbook: &|p| textbook_solid_angle(*p, t[0], t[1], t[2]),
+                textbook: &|p| textbook_solid_angle_f64(DVec3::from_array(*p), t[0], t[1], t[2]),
                 dual: &|p| textbook_solid_angle(*p, t[0], t[1], t[2]),
             },
         ));

@@ -1,5 +1,5 @@
 // raddiff.hpp free functions: kernels, gathers, radii (single scattering: hpp_owners.cpp), against
-// the values ffi-tests/transmittance.c, kernels_a.c, kernels_b.c, gather.c and radii.c assert
+// the values ffi-tests/transmittance.c, kernels.c, form_factor.c, gather.c and radii.c assert
 // through the C API; their errors as raddiff::Error with the C status and message; the size checks.
 #include "hpp_check.h"
 #include <array>

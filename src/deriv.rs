@@ -77,6 +77,7 @@ impl Deriv3 {
     }
 
     /// Whether every component is finite.
+    #[inline]
     pub fn is_finite(&self) -> bool {
         self.value.is_finite() && self.gradient.is_finite() && self.hessian.is_finite()
     }
@@ -111,6 +112,7 @@ impl Deriv2 {
     }
 
     /// Whether every component is finite.
+    #[inline]
     pub fn is_finite(&self) -> bool {
         self.value.is_finite() && self.gradient.is_finite() && self.hessian.is_finite()
     }

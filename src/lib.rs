@@ -25,6 +25,8 @@ pub mod gather;
 pub mod kernels;
 pub mod scatter;
 mod simd;
+#[cfg(test)]
+mod test_rng;
 
 pub use deriv::{Deriv2, Deriv3, Order};
 pub use error::{Error, Result};

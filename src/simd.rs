@@ -85,3 +85,30 @@ pub(crate) fn avx2_fma() -> bool {
 pub(crate) fn avx512() -> bool {
     allowed().avx512
 }
+
+/// The instruction sets the kernels' vectorized loops are compiled for: each such loop has a
+/// portable copy and copies compiled with these target features, chosen once per call.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Isa {
+    /// Baseline code (SSE2 on x86-64): what `RADDIFF_SIMD=portable` runs everywhere.
+    Portable,
+    /// AVX2 with FMA.
+    #[cfg(target_arch = "x86_64")]
+    Avx2,
+    /// AVX-512 (F, VL, DQ) with FMA, when the build enables it (`raddiff_avx512`).
+    #[cfg(all(target_arch = "x86_64", raddiff_avx512))]
+    Avx512,
+}
+
+/// The best [`Isa`] this CPU runs and `RADDIFF_SIMD` allows.
+pub(crate) fn best_isa() -> Isa {
+    #[cfg(all(target_arch = "x86_64", raddiff_avx512))]
+    if avx512() {
+        return Isa::Avx512;
+    }
+    #[cfg(target_arch = "x86_64")]
+    if avx2_fma() {
+        return Isa::Avx2;
+    }
+    Isa::Portable
+}

@@ -121,3 +121,101 @@ fn slugs_follow_github() {
     assert_eq!(slug("Set-up: two commands"), "set-up-two-commands");
     assert_eq!(links("see [a](b.md#c) and [d](e)"), vec!["b.md#c", "e"]);
 }
+
+/// docs/ARCHITECTURE.md names the code as it is: every path it writes in backticks exists.
+///
+/// A path starting with a top-level folder of the repository (`src/`, `tests/`, ...) is taken from
+/// the repository's root; a bare file or folder name (`marched.rs`, `lambert/`) from the folder of
+/// the last such path on the same line, as the table writes them
+/// (`src/kernels/transmittance.rs`, `marched.rs`).
+#[test]
+fn architecture_names_only_existing_paths() {
+    const ROOTS: &[&str] = &[
+        "src/",
+        "tests/",
+        "benches/",
+        "include/",
+        "ffi-tests/",
+        "examples/",
+        "fuzz/",
+        "docs/",
+        "scripts/",
+        ".ci/",
+    ];
+    let text = std::fs::read_to_string(root().join("docs/ARCHITECTURE.md")).unwrap();
+    let mut missing = Vec::new();
+    let mut named = 0;
+    for line in prose(&text).lines() {
+        let mut folder: Option<String> = None;
+        for (i, token) in line.split('`').enumerate() {
+            if i % 2 == 0 || token.contains(' ') {
+                continue;
+            }
+            let path = if ROOTS.iter().any(|r| token.starts_with(r)) {
+                folder = Some(match token.rfind('/') {
+                    Some(j) => token[..=j].to_string(),
+                    None => String::new(),
+                });
+                token.to_string()
+            } else if token.ends_with(".rs") || (token.ends_with('/') && !token.contains("::")) {
+                match &folder {
+                    Some(f) => format!("{f}{token}"),
+                    None => continue,
+                }
+            } else {
+                continue;
+            };
+            named += 1;
+            if !root().join(&path).exists() {
+                missing.push(path);
+            }
+        }
+    }
+    assert!(
+        named > 40,
+        "only {named} paths found in docs/ARCHITECTURE.md"
+    );
+    assert!(
+        missing.is_empty(),
+        "docs/ARCHITECTURE.md names paths that do not exist: {missing:?}"
+    );
+}
+
+/// docs/ARCHITECTURE.md names every folder of `src/` (each module folder is a concept with a map),
+/// but for folders that hold only a module's sibling `tests.rs`.
+#[test]
+fn architecture_names_every_source_folder() {
+    let text = std::fs::read_to_string(root().join("docs/ARCHITECTURE.md")).unwrap();
+    let mut folders = Vec::new();
+    let mut stack = vec![root().join("src")];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if !path.is_dir() {
+                continue;
+            }
+            stack.push(path.clone());
+            // A folder that holds only a module's `tests.rs` is that module's tests, not a concept.
+            let only_tests = std::fs::read_dir(&path)
+                .unwrap()
+                .all(|e| e.unwrap().file_name() == "tests.rs");
+            if !only_tests {
+                let rel = path.strip_prefix(root()).unwrap().to_string_lossy();
+                folders.push(format!("{}/", rel.replace('\\', "/")));
+            }
+        }
+    }
+    folders.sort();
+    let unnamed: Vec<&String> = folders
+        .iter()
+        .filter(|f| {
+            // Named whole, or as `name/` after its parent (`src/kernels/form_factor/` (`lambert/`)).
+            let last = f.trim_end_matches('/').rsplit('/').next().unwrap();
+            !text.contains(f.as_str()) && !text.contains(&format!("`{last}/`"))
+        })
+        .collect();
+    assert!(
+        unnamed.is_empty(),
+        "folders of src/ docs/ARCHITECTURE.md does not name: {unnamed:?}"
+    );
+}

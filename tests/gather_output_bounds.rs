@@ -14,7 +14,7 @@
 use std::f64::consts::PI;
 
 use glam::DVec3;
-use raddiff::gather::hessian_fill::fill_from_gather;
+use raddiff::ffi::fill_from_gather;
 use raddiff::gather::{Frame, GatherInput, Layout, LayoutKind, ValidGather, Wanted};
 
 /// Documented constants of the occlusion-aware outputs (see the module docs).

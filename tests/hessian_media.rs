@@ -6,11 +6,11 @@ mod hessian_common;
 use std::f64::consts::{PI, TAU};
 
 use glam::{DVec2, DVec3};
-use raddiff::gather::hessian::{LayoutKind, Topology};
-use raddiff::gather::hessian_media::{
+use raddiff::gather::hessian::media::{
     flatland_derivatives, flatland_derivatives_from, media_derivatives, media_derivatives_from,
     MediaGather, MediaSteps,
 };
+use raddiff::gather::hessian::{LayoutKind, Topology};
 use raddiff::Order;
 
 struct Sphere3 {

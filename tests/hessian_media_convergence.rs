@@ -7,7 +7,7 @@
 use std::f64::consts::TAU;
 
 use glam::DVec2;
-use raddiff::gather::hessian_media::{flatland_derivatives, MediaGather, MediaSteps};
+use raddiff::gather::hessian::media::{flatland_derivatives, MediaGather, MediaSteps};
 use raddiff::Order;
 
 const SIGMA_T: f64 = 0.3;

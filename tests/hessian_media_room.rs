@@ -4,7 +4,7 @@
 //! (dense layout, re-traced at x ± h). Run with `--nocapture` for the table.
 
 use glam::DVec3;
-use raddiff::gather::hessian_fill::occlusion_outputs;
+use raddiff::gather::hessian::occlusion_outputs;
 use raddiff::gather::{
     evaluate, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, ValidGather, Wanted,
 };

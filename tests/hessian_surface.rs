@@ -315,7 +315,8 @@ fn invalid_gathers_are_rejected() {
 
 #[test]
 fn fill_from_gather_writes_row_major_per_channel() {
-    use raddiff::gather::hessian_fill::{fill_from_gather, occlusion_outputs};
+    use raddiff::ffi::fill_from_gather;
+    use raddiff::gather::hessian::occlusion_outputs;
     use raddiff::gather::{Frame, GatherInput, Layout, ValidGather};
     let rects = scene();
     let x = DVec3::new(0.05, 0.1, 0.0);

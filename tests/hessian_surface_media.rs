@@ -1,10 +1,10 @@
 //! A surface point inside a medium: the hemisphere gather's marched media radiance enters the
-//! occlusion-aware gradient through one hemisphere ring per march step (`gather::hessian_fill`).
+//! occlusion-aware gradient through one hemisphere ring per march step (`gather::hessian::outputs`).
 //! Reference: central differences of the gather's own Monte-Carlo irradiance (dense concentric
 //! layout, re-traced at x ± h), which includes the media and the ceiling.
 
 use glam::DVec3;
-use raddiff::gather::hessian_fill::occlusion_outputs;
+use raddiff::gather::hessian::occlusion_outputs;
 use raddiff::gather::{
     evaluate, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, ValidGather, Wanted,
 };

@@ -10,8 +10,8 @@ mod hessian_common;
 use glam::{DMat3, DVec3};
 use hessian_common::scene::{self, exact_gradient, exact_hessian, tangent_eigenvalues};
 use hessian_common::SceneGather;
+use raddiff::gather::hessian::unaware::{geometric_hessian, unaware_derivatives};
 use raddiff::gather::hessian::{occlusion_derivatives, LayoutKind, Topology};
-use raddiff::gather::hessian_unaware::{geometric_hessian, unaware_derivatives};
 use raddiff::Order;
 
 struct Errors {

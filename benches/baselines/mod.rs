@@ -1,6 +1,7 @@
-//! Baselines the kernel benches (`benches/kernels_a.rs`) and the `kernels` example time raddiff
-//! against, written as a user would: central finite differences, num-dual second-order dual
-//! numbers, and the textbook Van Oosterom-Strackee solid angle (generic over `f64` and duals).
+//! Baselines the kernel benches (`benches/solid_angle_transmittance.rs`) and the `kernels` example
+//! time raddiff against, written as a user would: central finite differences, num-dual
+//! second-order dual numbers, and the textbook Van Oosterom-Strackee solid angle (in plain `f64`,
+//! and generic over dual numbers).
 
 #![allow(dead_code)] // each includer uses its own subset
 #![allow(clippy::needless_range_loop)] // index loops mirror the finite-difference stencils
@@ -36,8 +37,18 @@ pub fn fd_hessian3(f: &dyn Fn(DVec3) -> f64, x: DVec3, h: f64) -> DMat3 {
     DMat3::from_cols_array_2d(&m)
 }
 
-/// The textbook Van Oosterom-Strackee formula, `2 atan2(|r_0·(r_1×r_2)|, D)`, as a user writes it
-/// (generic over f64 and dual numbers).
+/// The textbook Van Oosterom-Strackee formula, `2 atan2(|r_0·(r_1×r_2)|, D)`, in plain `f64` as a
+/// user writes it: the value baseline (the generic form below is the dual numbers' baseline).
+pub fn textbook_solid_angle_f64(x: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let (r0, r1, r2) = (a - x, b - x, c - x);
+    let (l0, l1, l2) = (r0.length(), r1.length(), r2.length());
+    let num = r0.dot(r1.cross(r2)).abs();
+    let den = l0 * l1 * l2 + r0.dot(r1) * l2 + r1.dot(r2) * l0 + r2.dot(r0) * l1;
+    2.0 * num.atan2(den)
+}
+
+/// The textbook Van Oosterom-Strackee formula, `2 atan2(|r_0·(r_1×r_2)|, D)`, generic over f64 and
+/// dual numbers (the baseline of num-dual's Hessian).
 pub fn textbook_solid_angle<D: DualNum<Primitive = f64> + Copy>(
     x: [D; 3],
     a: DVec3,

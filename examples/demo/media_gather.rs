@@ -10,8 +10,8 @@
 //! irradiance. Units: radiance per unit length, like `LightMap::inscattered`.
 
 use glam::{DMat3, DVec3};
-use raddiff::gather::hessian_media::{media_derivatives, MediaGather, MediaSteps};
-use raddiff::gather::hessian_mesh::Topology;
+use raddiff::gather::hessian::media::{media_derivatives, MediaGather, MediaSteps};
+use raddiff::gather::hessian::mesh::Topology;
 use raddiff::gather::{evaluate, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, Wanted};
 use raddiff::Order;
 

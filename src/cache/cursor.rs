@@ -155,8 +155,8 @@ impl Cursor {
         self.served[1] += 1;
         // 0.3 of the finest cell side: the ball query visits at most 3 cells per axis and level,
         // the ball stays smaller than the smallest record's bounding sphere, and fewer remembered
-        // records outweigh the more frequent anchoring (coherent bench: 2285 instructions per
-        // lookup against 2372 at half the side)
+        // records outweigh the more frequent anchoring (the coherent lookups of the cache bench
+        // are cheaper than at half the side)
         Plan::Anchor(0.3 * finest_side)
     }
 

@@ -22,8 +22,8 @@
 //! # Concurrency and determinism
 //! `Cache` is `Sync`: any number of threads call [`Cache::lookup`] and [`Cache::insert`] through a
 //! shared reference. Lookups never lock and never wait for each other or for inserts; inserts are
-//! serialized by one mutex (an insert costs ~12k instructions, the gather that produces a record
-//! hundreds of µs) and are visible to every lookup that starts after the insert returns. Records
+//! serialized by one mutex (an insert is cheap next to the gather that produces its record, so
+//! they rarely wait) and are visible to every lookup that starts after the insert returns. Records
 //! are immutable once inserted and live in an append-only arena; the index is a hashed grid whose
 //! table and entry lists are published with release/acquire atomics and never freed while readers
 //! may hold them ([`Cache::compact`] reclaims the replaced ones under `&mut`).

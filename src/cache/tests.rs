@@ -26,12 +26,7 @@ fn rec(p: DVec3, value: f32, gradient: [f32; 3], r: f64) -> Record<f32> {
 /// A deterministic uniform generator on [0, 1) (shared with the safeguard tests).
 pub(super) fn lcg(seed: u64) -> impl FnMut() -> f64 {
     let mut s = seed;
-    move || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    }
+    move || crate::test_rng::lcg(&mut s)
 }
 
 fn close(a: f64, b: f64, tol: f64) {
@@ -729,7 +724,7 @@ fn plain_lookups_through_thread_cursors_equal_index_lookups() {
     assert!(found > 8000, "{found}");
     // the caches walked alternately kept their cursors: most of their lookups were remembered
     for cache in &caches[..2] {
-        let [remembered, anchored, _] = thread_cursor::served(cache.identity).unwrap();
+        let [remembered, anchored, _] = thread_cursor::tests::served(cache.identity).unwrap();
         assert!(remembered > 10 * anchored, "{remembered} {anchored}");
     }
     // several threads at once, each with its own cursors

@@ -10,7 +10,7 @@
 
 use std::cell::RefCell;
 
-use super::Cursor;
+use super::cursor::Cursor;
 
 /// Caches per thread that keep a cursor.
 pub(super) const CACHES: usize = 4;
@@ -66,13 +66,5 @@ pub(super) fn with(identity: u64, f: impl FnOnce(&mut Cursor)) {
     });
 }
 
-/// How many lookups this thread's cursor for `identity` served by each plan (remembered,
-/// anchored, plain), if it has one.
 #[cfg(test)]
-pub(super) fn served(identity: u64) -> Option<[usize; 3]> {
-    CURSORS.with(|cell| {
-        let cursors = cell.borrow();
-        let slot = cursors.slots.iter().find(|s| s.identity == identity)?;
-        Some(slot.cursor.served)
-    })
-}
+pub(super) mod tests;

@@ -94,6 +94,27 @@ pub struct raddiff_deriv2 {
     pub hessian: [f64; 4],
 }
 
+impl raddiff_vec3 {
+    /// The vector of an argument passed by value, read one component at a time.
+    ///
+    /// A C caller passes `raddiff_vec3` arguments in memory, written with its own store widths. A
+    /// wider load that spans two of those stores cannot take its data from them (store-to-load
+    /// forwarding) and waits until they reach the cache, about a dozen cycles each, which the
+    /// compiler's 16-byte loads of `(y, z)` pairs did on every call (seen in `benches/c`). Volatile
+    /// reads keep every load at the width of one component, which every caller's stores cover.
+    #[inline(always)]
+    pub(crate) fn read(&self) -> DVec3 {
+        // SAFETY: `self` is a reference to an initialized value.
+        unsafe {
+            DVec3::new(
+                std::ptr::read_volatile(&self.x),
+                std::ptr::read_volatile(&self.y),
+                std::ptr::read_volatile(&self.z),
+            )
+        }
+    }
+}
+
 impl From<raddiff_vec3> for DVec3 {
     fn from(v: raddiff_vec3) -> Self {
         DVec3::new(v.x, v.y, v.z)
@@ -134,6 +155,15 @@ pub(crate) fn mat3_from_row_major(a: &[f64; 9]) -> DMat3 {
 
 fn mat2_to_row_major(m: DMat2) -> [f64; 4] {
     m.transpose().to_cols_array()
+}
+
+/// A value with zero gradient and Hessian (the value order's output).
+#[inline]
+pub(crate) fn value_only(value: f64) -> raddiff_deriv3 {
+    raddiff_deriv3 {
+        value,
+        ..raddiff_deriv3::default()
+    }
 }
 
 impl From<Deriv3> for raddiff_deriv3 {
@@ -202,28 +232,47 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 }
 
 /// Runs an FFI body: catches panics, records the message of any failure, and maps it to a status.
+///
+/// Inlined into every entry point with the body, so that a successful call costs the body alone:
+/// the unwinding landing pad adds no instructions on the path that does not unwind, and the
+/// failures are reported out of line ([`failed`], [`panicked`]).
+#[inline(always)]
 pub(crate) fn guard<F>(body: F) -> raddiff_status
 where
     F: FnOnce() -> Result<(), FfiError>,
 {
     match catch_unwind(AssertUnwindSafe(body)) {
         Ok(Ok(())) => raddiff_status::RADDIFF_OK,
-        Ok(Err(FfiError::Lib(e))) => {
+        Ok(Err(e)) => failed(e),
+        Err(payload) => panicked(payload),
+    }
+}
+
+/// Records the message of a failed call and returns its status.
+#[cold]
+#[inline(never)]
+fn failed(e: FfiError) -> raddiff_status {
+    match e {
+        FfiError::Lib(e) => {
             set_last_error(&e.to_string());
             e.status()
         }
-        Ok(Err(FfiError::Null(name))) => {
+        FfiError::Null(name) => {
             set_last_error(&format!("null pointer: {name} must not be NULL"));
             raddiff_status::RADDIFF_ERROR_NULL_POINTER
         }
-        Err(payload) => {
-            set_last_error(&format!(
-                "internal panic (please report): {}",
-                panic_message(payload.as_ref())
-            ));
-            raddiff_status::RADDIFF_ERROR_PANIC
-        }
     }
+}
+
+/// Records the message of a caught panic.
+#[cold]
+#[inline(never)]
+fn panicked(payload: Box<dyn std::any::Any + Send>) -> raddiff_status {
+    set_last_error(&format!(
+        "internal panic (please report): {}",
+        panic_message(payload.as_ref())
+    ));
+    raddiff_status::RADDIFF_ERROR_PANIC
 }
 
 /// Like [`guard`] for constructors: returns the value or NULL, with the message recorded.

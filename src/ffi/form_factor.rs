@@ -5,6 +5,8 @@ use smallvec::SmallVec;
 
 use super::common::*;
 use crate::kernels;
+use crate::kernels::form_factor::triangle_form_factor_value;
+use crate::Order;
 
 /// Form factor from a differential area at `x` with unit normal `n` to the triangle `(a, b, c)`:
 /// `(1/pi)` times the integral of `n . w` over the triangle's solid angle, with the part below the
@@ -29,10 +31,17 @@ pub unsafe extern "C" fn raddiff_triangle_form_factor(
 ) -> raddiff_status {
     guard(|| {
         let out = unsafe { out_ref(out, "out")? };
-        let order = order_from_c(order)?;
-        let d =
-            kernels::triangle_form_factor(x.into(), n.into(), a.into(), b.into(), c.into(), order)?;
-        *out = d.into();
+        *out = match order_from_c(order)? {
+            // The value alone, inlined here, without the derivatives' plumbing.
+            Order::Value => {
+                let v = [a.read(), b.read(), c.read()];
+                value_only(triangle_form_factor_value(x.read(), n.read(), v)?)
+            }
+            order => {
+                let (x, n, a, b, c) = (x.into(), n.into(), a.into(), b.into(), c.into());
+                kernels::triangle_form_factor(x, n, a, b, c, order)?.into()
+            }
+        };
         Ok(())
     })
 }

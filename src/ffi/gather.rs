@@ -6,7 +6,10 @@
 use glam::DVec3;
 
 use super::common::*;
-use crate::gather::{self, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, Wanted};
+use crate::gather::hessian::occlusion_outputs;
+use crate::gather::{
+    self, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, ValidGather, Wanted,
+};
 use crate::Error;
 
 /// Ward-Heckbert cosine-weighted polar strata: `theta_j = asin(sqrt((j+u)/m))`, `phi_k = 2 pi (k+v)/n`.
@@ -196,7 +199,7 @@ pub extern "C" fn raddiff_gather_evaluate(
             let hessian = (!output.hessian.is_null())
                 .then(|| std::slice::from_raw_parts_mut(output.hessian, 9 * ch));
             // Computes before writing: on failure nothing has been written.
-            gather::hessian_fill::fill_from_gather(&valid, occlusion_gradient, hessian)?;
+            fill_from_gather(&valid, occlusion_gradient, hessian)?;
             write(output.irradiance, &values.irradiance);
             write_vec3(output.gradient, &values.gradient);
             write_vec3(output.rotation_gradient, &values.rotation_gradient);
@@ -205,6 +208,43 @@ pub extern "C" fn raddiff_gather_evaluate(
         output.min_distance = values.min_distance.unwrap_or(f64::INFINITY);
         Ok(())
     })
+}
+
+/// The C layout of [`raddiff_gather_evaluate`]'s occlusion-aware outputs: fills the caller's
+/// `occlusion_gradient` (`3·channels`, `[3c + axis]`) and `hessian` (`9·channels`, row-major
+/// `[9c + 3·row + col]`) from a validated gather (see [`occlusion_outputs`]); `None` outputs are
+/// skipped, and nothing is computed when both are.
+/// `InvalidArgument` if a slice has the wrong length; nothing is written on failure.
+pub fn fill_from_gather(
+    gather: &ValidGather,
+    occlusion_gradient: Option<&mut [f64]>,
+    hessian: Option<&mut [f64]>,
+) -> crate::Result<()> {
+    if occlusion_gradient.is_none() && hessian.is_none() {
+        return Ok(());
+    }
+    let ch = gather.input().channels;
+    if occlusion_gradient
+        .as_ref()
+        .is_some_and(|g| g.len() != 3 * ch)
+        || hessian.as_ref().is_some_and(|h| h.len() != 9 * ch)
+    {
+        return Err(Error::InvalidArgument(
+            "occlusion_gradient must hold 3*channels and hessian 9*channels values".into(),
+        ));
+    }
+    let (gradients, hessians) = occlusion_outputs(gather, hessian.is_some())?;
+    if let Some(out) = occlusion_gradient {
+        for (o, g) in out.chunks_exact_mut(3).zip(&gradients) {
+            o.copy_from_slice(&g.to_array());
+        }
+    }
+    if let Some(out) = hessian {
+        for (o, h) in out.chunks_exact_mut(9).zip(&hessians) {
+            o.copy_from_slice(&h.transpose().to_cols_array());
+        }
+    }
+    Ok(())
 }
 
 /// The Rust view of a C gather input for `layout` (array sizes from the layout and the channel

@@ -6,6 +6,8 @@
 
 use super::common::*;
 use crate::kernels;
+use crate::kernels::solid_angle::{solid_angle_to, solid_angle_value};
+use crate::Order;
 
 /// `exp(-sigma_t |x - y|)` and its derivatives with respect to `x` (see the Rust
 /// `kernels::transmittance`). `RADDIFF_ERROR_DEGENERATE` for a gradient at `x == y`.
@@ -80,8 +82,12 @@ pub extern "C" fn raddiff_triangle_solid_angle(
 ) -> raddiff_status {
     guard(|| {
         let out = unsafe { out_ref(out, "out")? };
-        let order = order_from_c(order)?;
-        *out = kernels::triangle_solid_angle(x.into(), a.into(), b.into(), c.into(), order)?.into();
+        let (x, y) = (x.read(), [a.read(), b.read(), c.read()]);
+        match order_from_c(order)? {
+            // The value alone, without the derivatives' plumbing (13 numbers through each layer).
+            Order::Value => *out = value_only(solid_angle_value(x, y, false)?),
+            order => solid_angle_to(x, y, order, false, |d| *out = (*d).into())?,
+        }
         Ok(())
     })
 }

@@ -1,8 +1,8 @@
 //! The C ABI: thin `extern "C"` wrappers over the Rust API, exported through `include/raddiff.h`.
 //!
-//! Conventions (see `../shared/C-ABI.md`): every fallible call returns a [`raddiff_status`]; the
-//! message of the last failed call on a thread is available from [`raddiff_last_error`]; outputs are
-//! written only on success; panics are caught and reported as `RADDIFF_ERROR_PANIC`; every pointer is
+//! Conventions (`docs/c-abi.md`): every fallible call returns a [`raddiff_status`]; the message of
+//! the last failed call on a thread is available from [`raddiff_last_error`]; outputs are written
+//! only on success; panics are caught and reported as `RADDIFF_ERROR_PANIC`; every pointer is
 //! NULL-checked; non-finite inputs are rejected. This module holds no logic beyond argument
 //! conversion: the computation lives in the Rust modules.
 #![allow(non_camel_case_types)]

@@ -1,6 +1,7 @@
 //! The gather evaluation as it was before the single-pass rewrite (validation included), kept
 //! verbatim as the reference the tests compare the fast path against and as the baseline of
-//! `benches/gather.rs`. Not part of the supported API.
+//! `benches/gather.rs`. Compiled only with the `reference` feature, which the crate's tests and
+//! benches turn on and users' builds leave off.
 
 use std::f64::consts::PI;
 
@@ -324,20 +325,12 @@ impl<'a> ReferenceGather<'a> {
         };
         for j in 1..m {
             for k in 0..n {
-                wall(
-                    j * n + k,
-                    (j - 1) * n + k,
-                    walls.first_axis[(j - 1) * n + k],
-                );
+                wall(j * n + k, (j - 1) * n + k, walls.first((j - 1) * n + k));
             }
         }
         for j in 0..m {
             for k in 1..n {
-                wall(
-                    j * n + k,
-                    j * n + k - 1,
-                    walls.second_axis[j * (n - 1) + k - 1],
-                );
+                wall(j * n + k, j * n + k - 1, walls.second(j * (n - 1) + k - 1));
             }
         }
         g

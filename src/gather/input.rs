@@ -118,7 +118,7 @@ impl GatherInput<'_> {
     /// See [`Layout::check_directions`].
     ///
     /// cbindgen:ignore
-    pub const DIRECTION_TOLERANCE: f64 = 1e-6;
+    pub const DIRECTION_TOLERANCE: f64 = super::strata::DIRECTION_TOLERANCE;
 
     /// Checks sizes and values against `layout` and the (orthonormalized) `frame`.
     pub(crate) fn validate(&self, layout: &Layout, frame: &Frame) -> Result<()> {

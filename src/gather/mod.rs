@@ -31,8 +31,9 @@
 //! ```
 
 mod evaluate;
-// The previous evaluation, for the equivalence tests and the bench baseline.
-#[doc(hidden)]
+// The previous evaluation, the reference of the equivalence tests and the bench baseline; only
+// with the `reference` feature (on for the crate's tests and benches, off in users' builds).
+#[cfg(feature = "reference")]
 pub mod evaluate_reference;
 mod input;
 pub mod layout;
@@ -43,10 +44,7 @@ pub use evaluate::{evaluate, GatherValues, ValidGather, Wanted};
 pub use input::{GatherInput, MediaRadiance};
 pub use layout::{concentric_to_local, Frame, Layout, LayoutKind, StratumBounds};
 
-// Occlusion-aware Hessians from the triangulated gather, and the record radii they imply.
+// The gather's Hessians (occlusion-aware on surfaces and in media, occlusion-unaware), and the
+// record radii they imply.
 pub mod hessian;
-pub mod hessian_fill;
-pub mod hessian_media;
-pub mod hessian_mesh;
-pub mod hessian_unaware;
 pub mod radii;

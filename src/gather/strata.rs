@@ -3,7 +3,8 @@
 //! for every layout before anything is evaluated.
 //!
 //! A direction `ω` of stratum `(j, k)` is taken to the layout's own coordinates in the frame and
-//! compared with the stratum's bounds widened by [`GatherInput::DIRECTION_TOLERANCE`]:
+//! compared with the stratum's bounds widened by
+//! [`GatherInput::DIRECTION_TOLERANCE`](super::GatherInput::DIRECTION_TOLERANCE):
 //!
 //! * cosine-polar: `sin²θ = lx² + ly²` against `[j/M, (j+1)/M]`, and the azimuth against the walls
 //!   `φ_k`, `φ_{k+1}` as two signs of 2D cross products with the walls' unit vectors;
@@ -24,15 +25,46 @@ use std::f64::consts::{FRAC_PI_4, TAU};
 
 use glam::DVec3;
 
-use super::input::GatherInput;
 use super::layout::{Frame, Layout, LayoutKind, StratumBounds};
 use super::walls::LayoutTables;
 use crate::error::{Error, Result};
 
-const TOL: f64 = GatherInput::DIRECTION_TOLERANCE;
+/// How far outside its stratum a direction may lie and still be accepted
+/// ([`GatherInput::DIRECTION_TOLERANCE`](super::GatherInput::DIRECTION_TOLERANCE)).
+pub(crate) const DIRECTION_TOLERANCE: f64 = 1e-6;
+const TOL: f64 = DIRECTION_TOLERANCE;
 
 /// The frame's tangent, bitangent and normal.
 type Axes = (DVec3, DVec3, DVec3);
+
+/// The direction check as the layout's method (here, beside the check, so that the layout needs
+/// nothing of it).
+impl Layout {
+    /// `Ok` if every one of `directions` (index `j*N + k`, M·N of them) is finite, unit and inside
+    /// its own stratum of this layout in `frame`, within
+    /// [`GatherInput::DIRECTION_TOLERANCE`](super::GatherInput::DIRECTION_TOLERANCE): the check
+    /// [`super::evaluate`] makes before it evaluates anything (a few flops per direction, no
+    /// trigonometric call).
+    ///
+    /// `InvalidArgument` if the layout or frame is invalid, the count is not M·N, or a direction
+    /// is not where it belongs; the message names the first such direction (its index, row j and
+    /// column k), where it is and where its stratum is. Shifted, cyclically rotated or swapped
+    /// rows or columns, a direction from the far side of the hemisphere, or directions from
+    /// another layout or frame are all refused: a stratum's directions never leave it, whatever
+    /// the seed.
+    pub fn check_directions(&self, frame: &Frame, directions: &[DVec3]) -> Result<()> {
+        self.validate()?;
+        let frame = frame.orthonormalized()?;
+        if directions.len() != self.len() {
+            return Err(Error::InvalidArgument(format!(
+                "{} directions given, the layout has m*n = {}",
+                directions.len(),
+                self.len()
+            )));
+        }
+        check_directions(self, &frame, directions)
+    }
+}
 
 /// `Ok` if every direction lies in its stratum of `layout` in the orthonormal `frame`, else
 /// `InvalidArgument` naming the first one that does not and why. `directions.len()` must be M·N.
@@ -43,31 +75,6 @@ pub(crate) fn check_directions(layout: &Layout, frame: &Frame, directions: &[DVe
     } else {
         locate_bad_direction(layout, frame, directions)
     }
-}
-
-/// `(cos φ_k, sin φ_k)` of the azimuth walls `φ_k = 2πk/N`, k = 0..=N (the last one is the
-/// first), as the direction check uses them; empty for the concentric layout and N = 1.
-pub(crate) fn azimuth_bounds(layout: &Layout) -> Vec<(f64, f64)> {
-    let n = layout.n as usize;
-    if layout.kind == LayoutKind::Concentric || n < 2 {
-        return Vec::new();
-    }
-    (0..=n)
-        .map(|k| {
-            let (s, c) = (TAU * (k % n) as f64 / n as f64).sin_cos();
-            (c, s)
-        })
-        .collect()
-}
-
-/// The concentric layout's column walls `b_k = 2k/N − 1`, k = 0..=N, on the square `[−1, 1]²`;
-/// empty for the other layouts.
-pub(crate) fn column_bounds(layout: &Layout) -> Vec<f64> {
-    if layout.kind != LayoutKind::Concentric {
-        return Vec::new();
-    }
-    let n = layout.n as f64;
-    (0..=layout.n).map(|k| 2.0 * k as f64 / n - 1.0).collect()
 }
 
 /// Row `j`'s range, widened by the tolerance: in sin²θ (polar), cosθ (sphere) or the square's
@@ -341,72 +348,4 @@ fn describe(layout: &Layout, frame: &Frame, w: DVec3, i: usize) -> Error {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::gather::concentric_to_local;
-    use glam::DVec2;
-
-    /// The polynomial arctangent is within its documented error of the library's everywhere on
-    /// `[−1, 1]`, and exact at 0 and odd.
-    #[test]
-    fn polynomial_arctangent_is_within_its_bound() {
-        let mut worst = 0.0f64;
-        for i in -200_000..=200_000 {
-            let t = i as f64 / 200_000.0;
-            worst = worst.max((atan_unit(t) - t.atan()).abs());
-            assert_eq!(atan_unit(-t), -atan_unit(t));
-        }
-        assert_eq!(atan_unit(0.0), 0.0);
-        assert!(worst < 1.8e-9, "{worst}");
-        assert!(worst > 1e-10, "the bound is tight ({worst})");
-    }
-
-    /// The inverse concentric map returns the square point the forward map started from, in all
-    /// four wedges, on the diagonals and axes, and at the pole.
-    #[test]
-    fn inverse_concentric_map_round_trips() {
-        let mut worst = 0.0f64;
-        for i in 0..=64 {
-            for k in 0..=64 {
-                let s = DVec2::new(i as f64 / 32.0 - 1.0, k as f64 / 32.0 - 1.0);
-                let l = concentric_to_local(s);
-                let (a, b) = local_to_square(l.x, l.y);
-                worst = worst.max((a - s.x).abs()).max((b - s.y).abs());
-            }
-        }
-        assert!(worst < 2.3e-9, "{worst}");
-        assert_eq!(local_to_square(0.0, 0.0), (0.0, 0.0));
-    }
-
-    /// The AVX2 build of the scan gives the portable build's and the scalar locator's verdicts.
-    #[test]
-    fn avx2_scan_matches_the_portable_scan_and_the_locator() {
-        let frame = Frame::new(DVec3::ZERO, DVec3::new(0.0, 0.6, 0.8), DVec3::X).unwrap();
-        for kind in [
-            LayoutKind::CosinePolar,
-            LayoutKind::Sphere,
-            LayoutKind::Concentric,
-        ] {
-            let layout = Layout::new(kind, 5, 9, 3).unwrap();
-            let dirs = layout.directions(&frame).unwrap();
-            assert!(directions_ok(&layout, &frame, &dirs));
-            assert!(directions_ok_any(&layout, &frame, &dirs));
-            for (i, scale) in [(0, 1.0 + 1e-5), (17, -1.0), (44, 1.0 + 1e-7)] {
-                let mut d = dirs.clone();
-                d[i] *= scale;
-                let want = locate_bad_direction(&layout, &frame, &d).is_ok();
-                assert_eq!(directions_ok(&layout, &frame, &d), want, "{kind:?} {i}");
-                assert_eq!(directions_ok_any(&layout, &frame, &d), want, "{kind:?} {i}");
-            }
-            // Two neighbours swapped: refused by all three.
-            let mut d = dirs.clone();
-            d.swap(20, 21);
-            assert!(!directions_ok(&layout, &frame, &d), "{kind:?}");
-            assert!(!directions_ok_any(&layout, &frame, &d), "{kind:?}");
-            assert!(
-                locate_bad_direction(&layout, &frame, &d).is_err(),
-                "{kind:?}"
-            );
-        }
-    }
-}
+mod tests;

@@ -102,29 +102,6 @@ impl Walls {
             ring_sin2,
         }
     }
-
-    /// `∫ w ν dl` of the ring wall at the top of ring `j ≥ 1`, column `k` (local frame).
-    #[cfg(test)]
-    pub(crate) fn ring_wall_vector(&self, j: usize, k: usize) -> DVec3 {
-        let (a, b) = self.ring_wall[j];
-        let (c1, c2) = self.column[k];
-        DVec3::new(a * c1, a * c2, b)
-    }
-
-    /// `∫ w ν dl` of the azimuth wall at the start of column `k`, ring `j` (local frame).
-    #[cfg(test)]
-    pub(crate) fn azimuth_wall_vector(&self, j: usize, k: usize) -> DVec3 {
-        let (c, s) = self.phi_wall[k];
-        let r = self.ring_span[j];
-        DVec3::new(-s * r, c * r, 0.0)
-    }
-
-    /// `∫_cell sinθ e_φ dω` of stratum `(j, k)` (local frame): the rotational-gradient weight.
-    #[cfg(test)]
-    pub(crate) fn rotation_vector(&self, j: usize, k: usize) -> DVec3 {
-        let (c1, c2) = self.column[k];
-        DVec3::new(-c2, c1, 0.0) * self.ring_sin2[j]
-    }
 }
 
 /// Everything about a layout's walls that the validation and the evaluation need and that depends
@@ -134,10 +111,10 @@ pub(crate) struct LayoutTables {
     /// Wall data for the evaluation ([`Walls`]); `None` for the concentric layout.
     pub(crate) walls: Option<Walls>,
     /// `(cos φ_k, sin φ_k)`, k = 0..=N, for the direction check (see
-    /// [`super::strata::azimuth_bounds`]).
+    /// [`azimuth_bounds`]).
     pub(crate) azimuth_bounds: Vec<(f64, f64)>,
     /// The concentric layout's column walls on the square, k = 0..=N (see
-    /// [`super::strata::column_bounds`]).
+    /// [`column_bounds`]).
     pub(crate) column_bounds: Vec<f64>,
 }
 
@@ -162,8 +139,8 @@ impl LayoutTables {
             }
             let tables = Rc::new(LayoutTables {
                 walls: (layout.kind != LayoutKind::Concentric).then(|| Walls::new(layout)),
-                azimuth_bounds: super::strata::azimuth_bounds(layout),
-                column_bounds: super::strata::column_bounds(layout),
+                azimuth_bounds: azimuth_bounds(layout),
+                column_bounds: column_bounds(layout),
             });
             if cache.len() >= LAYOUT_TABLES_CACHE_SIZE {
                 cache.remove(0);
@@ -184,13 +161,11 @@ impl LayoutTables {
 /// diagonals `|a| = |b|`, so each wall is split there and integrated by 4-point Gauss-Legendre
 /// per piece.
 pub(crate) struct ConcentricWalls {
-    /// Wall between `(j−1, k)` and `(j, k)`, index `(j−1)·N + k`, pointing into `(j, k)`.
-    pub(crate) first_axis: Vec<DVec3>,
-    /// Wall between `(j, k−1)` and `(j, k)`, index `j·(N−1) + k − 1`, pointing into `(j, k)`.
-    pub(crate) second_axis: Vec<DVec3>,
-    /// `first_axis` by component (x, y, z arrays), for contiguous per-row loops.
+    /// Walls between `(j−1, k)` and `(j, k)`, index `(j−1)·N + k`, pointing into `(j, k)`, by
+    /// component (x, y, z arrays), for contiguous per-row loops.
     pub(crate) first_by_axis: [Vec<f64>; 3],
-    /// `second_axis` by component.
+    /// Walls between `(j, k−1)` and `(j, k)`, index `j·(N−1) + k − 1`, pointing into `(j, k)`, by
+    /// component.
     pub(crate) second_by_axis: [Vec<f64>; 3],
 }
 
@@ -250,9 +225,21 @@ impl ConcentricWalls {
         ConcentricWalls {
             first_by_axis: by_axis(&first_axis),
             second_by_axis: by_axis(&second_axis),
-            first_axis,
-            second_axis,
         }
+    }
+
+    /// Wall `i` between `(j−1, k)` and `(j, k)` as a vector.
+    #[cfg(feature = "reference")]
+    pub(crate) fn first(&self, i: usize) -> DVec3 {
+        let [x, y, z] = &self.first_by_axis;
+        DVec3::new(x[i], y[i], z[i])
+    }
+
+    /// Wall `i` between `(j, k−1)` and `(j, k)` as a vector.
+    #[cfg(feature = "reference")]
+    pub(crate) fn second(&self, i: usize) -> DVec3 {
+        let [x, y, z] = &self.second_by_axis;
+        DVec3::new(x[i], y[i], z[i])
     }
 }
 
@@ -346,102 +333,30 @@ fn integrand(s: DVec2, v: DVec2) -> DVec3 {
     )
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Concentric wall vectors against a dense midpoint rule on the map itself, with tangents by
-    /// central differences and the sign fixed by the side of the cell it points into. (The midpoint
-    /// rule is first-order across the map's kinks at the diagonals: 1e-4 relative.)
-    #[test]
-    fn concentric_wall_vectors_match_dense_quadrature() {
-        use super::super::layout::concentric_to_local;
-        let layout = Layout::new(LayoutKind::Concentric, 5, 7, 0).unwrap();
-        let walls = ConcentricWalls::new(&layout);
-        let dense = |s0: DVec2, s1: DVec2| {
-            let q = 20000;
-            let mut sum = DVec3::ZERO;
-            for i in 0..q {
-                let t = (i as f64 + 0.5) / q as f64;
-                let h = 1e-7;
-                let w = concentric_to_local(s0 + (s1 - s0) * t);
-                let dw = (concentric_to_local(s0 + (s1 - s0) * (t + h))
-                    - concentric_to_local(s0 + (s1 - s0) * (t - h)))
-                    / (2.0 * h);
-                sum += w.cross(dw) * (w.z / q as f64);
-            }
-            sum
-        };
-        let sa = |j: usize| 2.0 * j as f64 / 5.0 - 1.0;
-        let sb = |k: usize| 2.0 * k as f64 / 7.0 - 1.0;
-        for (j, k) in [(1, 0), (2, 3), (3, 6), (4, 2)] {
-            let want = -dense(DVec2::new(sa(j), sb(k)), DVec2::new(sa(j), sb(k + 1)));
-            let got = walls.first_axis[(j - 1) * 7 + k];
-            assert!(
-                (got - want).length() < 1e-4 * want.length().max(1e-3),
-                "{got} {want}"
-            );
-            // it points from (j-1, k) into (j, k)
-            let from = layout.grid_to_local(j as f64 - 0.5, k as f64 + 0.5);
-            let into = layout.grid_to_local(j as f64 + 0.5, k as f64 + 0.5);
-            assert!(got.dot(into - from) > 0.0);
-        }
-        for (j, k) in [(0, 1), (2, 3), (4, 6), (2, 4)] {
-            let want = dense(DVec2::new(sa(j), sb(k)), DVec2::new(sa(j + 1), sb(k)));
-            let got = walls.second_axis[j * 6 + k - 1];
-            assert!(
-                (got - want).length() < 1e-4 * want.length().max(1e-3),
-                "{got} {want}"
-            );
-            let from = layout.grid_to_local(j as f64 + 0.5, k as f64 - 0.5);
-            let into = layout.grid_to_local(j as f64 + 0.5, k as f64 + 0.5);
-            assert!(got.dot(into - from) > 0.0);
-        }
+/// `(cos φ_k, sin φ_k)` of the azimuth walls `φ_k = 2πk/N`, k = 0..=N (the last one is the
+/// first), as the direction check uses them; empty for the concentric layout and N = 1.
+pub(crate) fn azimuth_bounds(layout: &Layout) -> Vec<(f64, f64)> {
+    let n = layout.n as usize;
+    if layout.kind == LayoutKind::Concentric || n < 2 {
+        return Vec::new();
     }
-
-    /// Numerical ∫ w ν dl along the walls, by midpoint quadrature on θ and φ.
-    #[test]
-    fn wall_vectors_match_numerical_wall_integrals() {
-        for kind in [LayoutKind::CosinePolar, LayoutKind::Sphere] {
-            let layout = Layout::new(kind, 5, 6, 0).unwrap();
-            let walls = Walls::new(&layout);
-            let sphere = kind == LayoutKind::Sphere;
-            let w = |t: f64| if sphere { 1.0 } else { t.cos() };
-            let q = 20000;
-            let (j, k) = (2, 4);
-            let super::super::layout::StratumBounds::Polar { theta, phi } =
-                layout.stratum_bounds(j, k)
-            else {
-                panic!()
-            };
-            // ring wall at theta.0: ∫ w(θ) e_θ sinθ dφ
-            let mut ring = DVec3::ZERO;
-            let mut rot = DVec3::ZERO;
-            for i in 0..q {
-                let p = phi.0 + (phi.1 - phi.0) * (i as f64 + 0.5) / q as f64;
-                let t = theta.0;
-                let e_theta = DVec3::new(t.cos() * p.cos(), t.cos() * p.sin(), -t.sin());
-                ring += e_theta * w(t) * t.sin() * (phi.1 - phi.0) / q as f64;
-                for l in 0..200 {
-                    let tt = theta.0 + (theta.1 - theta.0) * (l as f64 + 0.5) / 200.0;
-                    let e_phi = DVec3::new(-p.sin(), p.cos(), 0.0);
-                    rot += e_phi * tt.sin() * tt.sin() * (phi.1 - phi.0) / q as f64
-                        * (theta.1 - theta.0)
-                        / 200.0;
-                }
-            }
-            let got = walls.ring_wall_vector(j as usize, k as usize);
-            assert!((got - ring).length() < 1e-8, "{kind:?} {got} {ring}");
-            let got = walls.rotation_vector(j as usize, k as usize);
-            assert!((got - rot).length() < 1e-6, "{kind:?} {got} {rot}");
-            let mut az = 0.0;
-            for i in 0..q {
-                let t = theta.0 + (theta.1 - theta.0) * (i as f64 + 0.5) / q as f64;
-                az += w(t) * (theta.1 - theta.0) / q as f64;
-            }
-            let e_phi = DVec3::new(-phi.0.sin(), phi.0.cos(), 0.0);
-            let got = walls.azimuth_wall_vector(j as usize, k as usize);
-            assert!((got - e_phi * az).length() < 1e-9, "{kind:?}");
-        }
-    }
+    (0..=n)
+        .map(|k| {
+            let (s, c) = (TAU * (k % n) as f64 / n as f64).sin_cos();
+            (c, s)
+        })
+        .collect()
 }
+
+/// The concentric layout's column walls `b_k = 2k/N − 1`, k = 0..=N, on the square `[−1, 1]²`;
+/// empty for the other layouts.
+pub(crate) fn column_bounds(layout: &Layout) -> Vec<f64> {
+    if layout.kind != LayoutKind::Concentric {
+        return Vec::new();
+    }
+    let n = layout.n as f64;
+    (0..=layout.n).map(|k| 2.0 * k as f64 / n - 1.0).collect()
+}
+
+#[cfg(test)]
+pub(crate) mod tests;

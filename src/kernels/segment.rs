@@ -15,8 +15,8 @@
 
 use glam::{DMat2, DVec2};
 
-use super::dd::Dd;
-use super::solid_angle::pow2_scale;
+use super::numeric::dd::Dd;
+use super::numeric::pow2::pow2_scale;
 use crate::error::{ensure_finite2, Error, Result};
 use crate::{Deriv2, Order};
 

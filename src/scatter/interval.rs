@@ -116,12 +116,7 @@ pub fn is_physical(c: &Constraint, x: f64, ab: DVec2) -> bool {
     l.dot(ns) > 0.0 && l.dot(ng) > 0.0 && v.dot(ns) < 0.0 && v.dot(ng) < 0.0
 }
 
-/// Solutions this close to a boundary feature (in barycentric coordinates, i.e. relative to the
-/// triangle's size) lie on it: an edge or a vertex shared by several triangles, whose paths only its
-/// owner counts ([`Ownership`]). A polished solution ([`super::newton::polish`]) is within ~1e-14
-/// of its true coordinates, and a generic solution falls within the band only on a set of x of
-/// relative measure ~1e-12.
-pub const BOUNDARY: f64 = 1e-12;
+pub use super::newton::BOUNDARY;
 
 /// The edge opposite each vertex (the edge where its barycentric coordinate vanishes).
 const OPPOSITE_EDGE: [usize; 3] = [1, 2, 0];

@@ -39,6 +39,7 @@ pub mod integrate;
 pub mod interval;
 pub mod mesh;
 pub mod newton;
+mod options;
 pub mod prune;
 pub mod quadrature;
 pub mod scene;

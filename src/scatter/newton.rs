@@ -104,12 +104,19 @@ pub fn foot_seed(c: &Constraint, x: f64) -> Option<DVec2> {
         .then(|| ab.clamp(DVec2::splat(-1.0), DVec2::splat(2.0)))
 }
 
-/// Whether (α, β) lies in the closed triangle widened by [`super::interval::BOUNDARY`] (so that a
+/// Solutions this close to a boundary feature (in barycentric coordinates, i.e. relative to the
+/// triangle's size) lie on it: an edge or a vertex shared by several triangles, whose paths only its
+/// owner counts ([`Ownership`](super::interval::Ownership)). A polished solution ([`polish`]) is within ~1e-14
+/// of its true coordinates, and a generic solution falls within the band only on a set of x of
+/// relative measure ~1e-12.
+pub const BOUNDARY: f64 = 1e-12;
+
+/// Whether (α, β) lies in the closed triangle widened by [`BOUNDARY`] (so that a
 /// solution on a shared edge or vertex, which rounding may put just outside either triangle, is
 /// found by every triangle sharing it; [`super::interval::Ownership`] then counts it once).
 #[inline]
 pub fn inside_triangle(ab: DVec2) -> bool {
-    let d = super::interval::BOUNDARY;
+    let d = BOUNDARY;
     ab.x >= -d && ab.y >= -d && ab.x + ab.y <= 1.0 + d
 }
 

@@ -18,8 +18,8 @@
 //! `K₃ = (I₂ − Q₀ I₃ − 2b J₃)/a`.
 
 use glam::{DMat3, DVec3};
+use raddiff::gather::hessian::mesh::{NONE, POLE};
 use raddiff::gather::hessian::{HemisphereGather, MeshGeometry, Topology};
-use raddiff::gather::hessian_mesh::{NONE, POLE};
 
 /// `π Σ L_Δ F_Δ` of one channel with its gradient and Hessian, as `occlusion_derivatives`
 /// returns them (before the robustness term).

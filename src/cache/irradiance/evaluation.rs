@@ -7,9 +7,9 @@ use glam::{DMat3, DVec3};
 use super::metric::{HessianKind, Metric};
 use super::traced::TracedGather;
 use crate::error::{Error, Result};
+use crate::gather::hessian::outputs::cached_topology;
+use crate::gather::hessian::unaware::{geometric_hessian, unaware_derivatives};
 use crate::gather::hessian::{occlusion_derivatives, HemisphereGather};
-use crate::gather::hessian_fill::cached_topology;
-use crate::gather::hessian_unaware::{geometric_hessian, unaware_derivatives};
 use crate::gather::{ValidGather, Wanted};
 use crate::Order;
 

@@ -40,7 +40,7 @@ pub enum HessianKind {
     /// ([`gather::hessian`](crate::gather::hessian)), with the thesis' robustness term.
     OcclusionAware,
     /// The occlusion-unaware (radiometric) Hessian
-    /// ([`gather::hessian_unaware`](crate::gather::hessian_unaware)); needs hit normals.
+    /// ([`gather::hessian::unaware`](crate::gather::hessian::unaware)); needs hit normals.
     Unaware,
     /// The geometric Hessian (thesis eq. 4.23) with the gather's largest scalar radiance as the
     /// scene's; needs hit normals.

@@ -21,8 +21,11 @@
 
 use glam::{DMat3, DVec3};
 
-use super::super::hessian_mesh::{Edge, NONE};
+use super::gather_mesh::edge_term;
+use super::mesh::{Edge, NONE};
 use crate::error::{Error, Result};
+use crate::kernels::numeric::atan2::atan2_upper;
+use crate::kernels::numeric::fma::fmadd;
 use crate::{Deriv3, Order};
 
 /// Edges evaluated together (a multiple of [`LANES`]).
@@ -121,68 +124,6 @@ impl Batch {
         for i in from..BATCH {
             self.set(i, a, b, a.length_squared(), b.length_squared());
         }
-    }
-}
-
-#[inline(always)]
-fn fmadd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
-    if FMA {
-        a.mul_add(b, c)
-    } else {
-        a * b + c
-    }
-}
-
-/// `tan(π/8)`, `tan(3π/8)`.
-const TAN_PI_8: f64 = 0.414_213_562_373_095_03;
-const TAN_3PI_8: f64 = 2.414_213_562_373_095;
-
-/// `(atan(z) − z)/z³` as a polynomial in `t = z²` on `[0, tan²(π/8)]`, highest degree first
-/// (Chebyshev interpolant of degree 10 computed at 50 digits; absolute error 3.2e-17, i.e. below
-/// 1e-16 relative to the value, which is about −1/3).
-const ATAN_POLY: [f64; 11] = [
-    -0.019_176_887_119_062_26,
-    0.039_231_658_295_587_19,
-    -0.050_854_497_379_402_6,
-    0.058_581_489_128_022_1,
-    -0.066_645_114_473_819_48,
-    0.076_921_831_908_260_87,
-    -0.090_909_045_781_239_03,
-    0.111_111_110_152_563_61,
-    -0.142_857_142_846_665_42,
-    0.199_999_999_999_955_2,
-    -0.333_333_333_333_333_3,
-];
-
-/// `atan2(y, x)` for `y ≥ 0` (an angle in `[0, π]`), without branches or table lookups, so that it
-/// vectorises. The angle of `(|x|, y)` is reduced to `|z| ≤ tan(π/8)` by one division (`y/|x|`,
-/// `(y − |x|)/(y + |x|)` about π/4, or `−|x|/y` about π/2) and `atan z = z + z³ P(z²)`; then
-/// reflected for `x < 0`. Within 2 ulps of `f64::atan2` over the whole domain (tested, including
-/// subnormal and huge arguments). `(0, 0)` gives NaN (callers exclude it).
-#[inline(always)]
-pub(crate) fn atan2_upper<const FMA: bool>(y: f64, x: f64) -> f64 {
-    use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
-    let a = x.abs();
-    let low = y <= TAN_PI_8 * a;
-    let high = y >= TAN_3PI_8 * a;
-    let (num, den, base) = if low {
-        (y, a, 0.0)
-    } else if high {
-        (-a, y, FRAC_PI_2)
-    } else {
-        (y - a, y + a, FRAC_PI_4)
-    };
-    let z = num / den;
-    let t = z * z;
-    let mut p = ATAN_POLY[0];
-    for &c in &ATAN_POLY[1..] {
-        p = fmadd::<FMA>(p, t, c);
-    }
-    let phi = base + fmadd::<FMA>(z * t, p, z);
-    if x < 0.0 {
-        PI - phi
-    } else {
-        phi
     }
 }
 
@@ -871,7 +812,7 @@ impl EdgeSums {
         let (a, b, _, _) = q.batch.ends(i);
         // The general kernel's terms are not scaled by 2π: scale them so that they can share the
         // geometric sum with the lanes' (the general ones are rare).
-        let f = super::edge_term(n, a, b, order)?;
+        let f = edge_term(n, a, b, order)?;
         if let Some(t) = terms.get_mut(q.index[i] as usize) {
             *t = [f.value, f.gradient.x, f.gradient.y, f.gradient.z];
         }
@@ -959,154 +900,4 @@ fn add_scaled(acc: &mut Deriv3, d: &Deriv3, w: f64, order: Order) {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::kernels::form_factor;
-
-    /// A small deterministic generator (xorshift) for test inputs.
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-        fn vec(&mut self, s: f64) -> DVec3 {
-            DVec3::new(self.next() - 0.5, self.next() - 0.5, self.next() - 0.5) * (2.0 * s)
-        }
-    }
-
-    fn available_isas() -> Vec<Isa> {
-        #[allow(unused_mut)]
-        let mut isas = vec![Isa::Portable];
-        #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::is_x86_feature_detected as has;
-            if has!("avx2") && has!("fma") {
-                isas.push(Isa::Avx2);
-                #[cfg(raddiff_avx512)]
-                if has!("avx512f") && has!("avx512vl") && has!("avx512dq") {
-                    isas.push(Isa::Avx512);
-                }
-            }
-        }
-        isas
-    }
-
-    /// Pad lanes are evaluated in closed form with finite outputs in both batch kinds and every
-    /// compiled version, so nothing depends on the finiteness check to drop them.
-    #[test]
-    fn pad_lanes_are_finite_closed_form_lanes() {
-        let n = DVec3::new(0.3, -0.2, 0.9).normalize();
-        for isa in available_isas() {
-            let (w, mut s) = ([[0.0; BATCH]; 1], vec![[[0.0; LANES]; OUTPUTS]; 1]);
-            let mut main = Batch::new();
-            main.pad(0, false);
-            run_batch_on::<false>(isa, &mut main, n, true, &w, &mut s);
-            let mut axial = Batch::new();
-            axial.pad(0, true);
-            run_batch_on::<true>(isa, &mut axial, n, true, &w, &mut s);
-            for b in [&main, &axial] {
-                assert!(b.general.iter().all(|&f| f == CLOSED_FORM), "{isa:?}");
-                assert!(b.out.iter().flatten().all(|v| v.is_finite()), "{isa:?}");
-            }
-            assert!(s.iter().flatten().flatten().all(|&v| v == 0.0));
-        }
-    }
-
-    /// Every lane against `hessian::edge_term` (the general kernel from the nearer end), in both
-    /// compiled versions this CPU runs, for both regimes' batches.
-    #[test]
-    fn batch_lanes_match_the_general_kernel() {
-        let mut rng = Rng(0x2545_f491_4f6c_dd1d);
-        let n = DVec3::new(0.3, -0.2, 0.9).normalize();
-        let mut seen = [0usize; 3];
-        for order in [Order::Gradient, Order::Hessian] {
-            for round in 0..40 {
-                let mut b = Batch::new();
-                let mut ends = Vec::new();
-                for i in 0..BATCH {
-                    let scale = 10f64.powi((round % 7) - 3);
-                    let a = rng.vec(scale);
-                    let c = match i % 5 {
-                        // far along nearly the same direction: the axial regime
-                        0 => a * (1.0 + 1e3 * rng.next()) + rng.vec(scale * 0.05),
-                        // short edges (1e-7..1e-5 of their distance) in the axial regime, where
-                        // the difference of the two tails cancelled by distance/length
-                        4 => {
-                            let len = 10f64.powf(-7.0 + 2.0 * rng.next());
-                            a * (1.0 + len) + rng.vec(scale * len * 0.05)
-                        }
-                        1 => rng.vec(scale * 1e3),
-                        _ => rng.vec(scale),
-                    };
-                    b.set(i, a, c, a.length_squared(), c.length_squared());
-                    ends.push((a, c));
-                }
-                let (w, mut s) = ([[0.0; BATCH]; 1], vec![[[0.0; LANES]; OUTPUTS]; 1]);
-                // Every compiled version this CPU runs, for both batch kinds.
-                let mut main = Vec::new();
-                let mut axial = Vec::new();
-                for isa in available_isas() {
-                    let mut m = b.clone();
-                    run_batch_on::<false>(isa, &mut m, n, order.hessian(), &w, &mut s);
-                    let mut x = b.clone();
-                    run_batch_on::<true>(isa, &mut x, n, order.hessian(), &w, &mut s);
-                    main.push(m);
-                    axial.push(x);
-                }
-                for (i, &(a, c)) in ends.iter().enumerate() {
-                    let flag = main[0].general[i];
-                    assert!(main.iter().all(|m| m.general[i] == flag));
-                    seen[flag as usize] += 1;
-                    let want = super::super::edge_term(n, a, c, order).unwrap();
-                    let lanes: Vec<&Batch> = if flag == CLOSED_FORM {
-                        main.iter().map(|m| &**m).collect()
-                    } else if flag == AXIAL {
-                        assert!(axial.iter().all(|x| x.general[i] == CLOSED_FORM));
-                        axial.iter().map(|x| &**x).collect()
-                    } else {
-                        vec![]
-                    };
-                    // Tolerances relative to the sizes of the terms each output sums (n·w,
-                    // for one, cancels when the edge is seen edge-on from n), and to ε/sin of the
-                    // angle between r and the edge (near its line the rounded r × e loses digits
-                    // in both evaluations).
-                    let (r, e) = if a.length_squared() <= c.length_squared() {
-                        (a, c - a)
-                    } else {
-                        (c, a - c)
-                    };
-                    let frame = form_factor::EdgeFrame::new(r, e).unwrap();
-                    let m = frame.moments(Order::Hessian).unwrap();
-                    let (h, p) = (frame.h, frame.p.length());
-                    let g = p * m.a2 + m.b2;
-                    let scale_value = INV_2PI * h * m.a1;
-                    let scale_gradient = INV_2PI * (m.a1 + 2.0 * h * g);
-                    let scale_hessian = INV_2PI
-                        * (4.0 * g
-                            + h * (2.0 * m.a2 + 8.0 * (m.a3 * p * p + 2.0 * m.b3 * p + m.c3)));
-                    let sin = r.cross(e).length() / (r.length() * e.length());
-                    let tol = 1e-13f64.max(1e-15 / sin);
-                    for lane in lanes {
-                        let mut got = Deriv3::constant(0.0);
-                        add_lane(&mut got, lane, i, order);
-                        let k = INV_2PI;
-                        let dv = (got.value * k - want.value).abs();
-                        assert!(dv <= tol * scale_value, "{i} value {got:?} {want:?}");
-                        let dg = (got.gradient * k - want.gradient).abs().max_element();
-                        assert!(dg <= tol * scale_gradient, "{i} gradient {got:?} {want:?}");
-                        if order.hessian() {
-                            let dh = (got.hessian * k - want.hessian).abs().to_cols_array();
-                            let dh = dh.iter().fold(0.0f64, |m, v| m.max(*v));
-                            assert!(dh <= tol * scale_hessian, "{i} hessian {got:?} {want:?}");
-                        }
-                    }
-                }
-            }
-        }
-        // Both regimes were exercised.
-        assert!(seen[0] > 1000 && seen[1] > 100, "{seen:?}");
-    }
-}
+mod tests;

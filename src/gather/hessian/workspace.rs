@@ -8,12 +8,12 @@
 use glam::{DMat3, DVec3};
 
 use super::edges::EdgeSums;
-use super::{
+use super::gather_mesh::{
     all_black, empty, farthest_vertices, finish, place, validate, HemisphereGather, MeshGeometry,
-    OcclusionDerivatives, Scale, Topology,
+    OcclusionDerivatives, Scale,
 };
+use super::mesh::{Topology, NONE, POLE, REVERSED};
 use crate::error::{Error, Result};
-use crate::gather::hessian_mesh::{NONE, POLE, REVERSED};
 use crate::kernels::transmittance::separation;
 use crate::Order;
 

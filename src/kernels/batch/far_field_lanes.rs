@@ -3,33 +3,37 @@
 //!
 //! Far from `x` (vertex centroid at least 16 radii away), `triangle_form_factor` takes its
 //! derivatives from `form_factor::triangle_far_field_fast`: an `n`x`n` Gauss-Legendre rule on the
-//! Duffy-mapped triangle (`polygon::triangle_rule`), `n` picked by distance over radius
-//! (`polygon::far_field_rule`), with the value replaced by Lambert's where that is certified. Here
+//! Duffy-mapped triangle (`triangle_rule`), `n` picked by distance over radius
+//! (`far_field_rule`), with the value replaced by Lambert's where that is certified. Here
 //! each element first replays, in scalar code and with the kernel's own functions, every decision
 //! the single call takes before the rule (not a sliver, `maybe_far`, `fast_setup`, not thin, a rule
 //! picked); the accepted elements are grouped by rule, and each group's quadrature sums run in lanes
 //! (one element per lane, the rule's nodes in the same order). The lane code is the rule's loop body
 //! with the same operations in the same order, with no FMA contraction (Rust never contracts, and
-//! the code has plain products and sums) and correctly rounded division in every instruction set;
-//! the sums are then assembled by a replay of the rule's closing formulas (glam's operations, in
-//! its order), oriented and checked by the kernel's own `oriented`, and given Lambert's value from
-//! the value lanes (`form_factor_lanes`) or its scalar call. The loop body and the assembly are
-//! copies of `polygon::tensor_rule`'s: a change there must be made here too, and the bit-equality
-//! tests fail until it is. An accepted element is therefore the single call's result **bit for bit** (the tests assert
-//! equality); a non-finite result, and every element the replay declines (near, clipped, thin, near
-//! the plane, invalid), goes to the single kernel.
+//! the code has plain products and sums) and correctly rounded division in every instruction set.
+//! The node body is the rule's own (`tensor::node_terms`, called lane by lane), the sums are
+//! assembled by the rule's own `RuleSums::assemble`, oriented and checked by the kernel's own
+//! `oriented`, and given Lambert's value from the value lanes (`form_factor_lanes`) or its scalar
+//! call. An accepted element is therefore the single call's result **bit for bit** (the tests
+//! assert equality); a non-finite result, and every element the replay declines (near, clipped,
+//! thin, near the plane, invalid), goes to the single kernel.
 //!
 //! Elements are classified in chunks of [`CHUNK`] and emitted in order, so sums add the per-element
 //! results in the same order as a loop over single calls.
 
 use glam::DVec3;
 
-use super::super::form_factor::{fast_setup, maybe_far, oriented};
-use super::super::lambert;
-use super::super::polygon::{self, Rule, RuleSums};
 use super::form_factor_lanes;
-use super::solid_angle_lanes::Isa;
 use crate::error::Result;
+use crate::kernels::form_factor::lambert::sum as lambert;
+use crate::kernels::form_factor::orient::oriented;
+use crate::kernels::form_factor::plane::{is_very_thin_triangle, triangle_plane};
+use crate::kernels::form_factor::quadrature::rules::Rule;
+use crate::kernels::form_factor::quadrature::tensor::{
+    node_terms, sums_formed, RuleSums, RULE_SUMS,
+};
+use crate::kernels::form_factor::replay::{fast_setup, maybe_far};
+use crate::simd::Isa;
 use crate::{Deriv3, Order};
 
 /// Lanes per evaluation (a multiple of the widest vector, 8 f64).
@@ -39,12 +43,11 @@ const BATCH: usize = 32;
 /// filled groups flushed at its end cost little.
 const CHUNK: usize = 256;
 
-/// The far-field rules by point count (`polygon::FAR_FIELD_RULES`: 3, 4, 5, 6 and 8).
+/// The far-field rules by point count (`FAR_FIELD_RULES`: 3, 4, 5, 6 and 8).
 const RULES: usize = 5;
 
-/// The quadrature's running sums, in `polygon::tensor_rule`'s names: `q0`, `s4`, `u6` (3), `v6`
-/// (3), `s6`, then `xx, yy, zz, xy, xz, yz`.
-const SUMS: usize = 15;
+/// The quadrature's running sums (`tensor::RULE_SUMS`).
+const SUMS: usize = RULE_SUMS;
 
 /// One node of the tensor rule as `tensor_rule` forms it: `s`, `s·t` and the weight `ws·wt·s`
 /// (the same for every lane, so computed once).
@@ -114,34 +117,16 @@ fn block<const W: usize, const HESSIAN: bool>(l: &mut Lanes, base: usize, nodes:
         std::array::from_fn(|axis| std::array::from_fn(|j| v[axis][base + j]))
     };
     let (r_a, ab, bc, n) = (load(&l.r_a), load(&l.ab), load(&l.bc), load(&l.n));
+    let count = sums_formed(true, HESSIAN);
     let mut acc = [[0.0f64; W]; SUMS];
     for node in nodes {
         for j in 0..W {
             let r: [f64; 3] =
                 std::array::from_fn(|a| r_a[a][j] + node.s * ab[a][j] + node.st * bc[a][j]);
-            let inv2 = 1.0 / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-            let inv4 = inv2 * inv2;
-            let nr = n[0][j] * r[0] + n[1][j] * r[1] + n[2][j] * r[2];
-            let weight = node.weight;
-            acc[0][j] += weight * nr * inv4;
-            let w6 = weight * inv4 * inv2;
-            acc[1][j] += weight * inv4;
-            let w6nr = w6 * nr;
-            for a in 0..3 {
-                acc[2 + a][j] += w6nr * r[a];
-            }
-            if HESSIAN {
-                for a in 0..3 {
-                    acc[5 + a][j] += w6 * r[a];
-                }
-                acc[8][j] += w6 * nr;
-                let w8 = w6 * nr * inv2;
-                acc[9][j] += w8 * r[0] * r[0];
-                acc[10][j] += w8 * r[1] * r[1];
-                acc[11][j] += w8 * r[2] * r[2];
-                acc[12][j] += w8 * r[0] * r[1];
-                acc[13][j] += w8 * r[0] * r[2];
-                acc[14][j] += w8 * r[1] * r[2];
+            let n = [n[0][j], n[1][j], n[2][j]];
+            let terms = node_terms::<true, HESSIAN>(r, n, node.weight);
+            for k in 0..count {
+                acc[k][j] += terms[k];
             }
         }
     }
@@ -189,15 +174,7 @@ fn evaluate_on(isa: Isa, l: &mut Lanes, nodes: &[Node], hessian: bool) {
 /// `tensor_rule`'s result from lane `i`'s sums, by its own assembly.
 fn assemble(l: &Lanes, i: usize, n: DVec3, geometry: (DVec3, f64), order: Order) -> Deriv3 {
     let s: [f64; SUMS] = std::array::from_fn(|k| l.sums[k][i]);
-    RuleSums {
-        q0: s[0],
-        s4: s[1],
-        u6: DVec3::new(s[2], s[3], s[4]),
-        v6: DVec3::new(s[5], s[6], s[7]),
-        s6: s[8],
-        second: [s[9], s[10], s[11], s[12], s[13], s[14]],
-    }
-    .assemble(n, geometry, order)
+    RuleSums::from_array(&s).assemble(n, geometry, order)
 }
 
 /// What the assembly needs of an element the replay accepted: the unit normal, the fan geometry
@@ -214,10 +191,10 @@ struct Accepted {
 /// `triangle_rule`'s inputs where it would integrate by that rule, `None` where it would not.
 #[inline]
 fn classify(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<(Rule, [DVec3; 4], Accepted)> {
-    if polygon::is_very_thin_triangle(v) || !maybe_far(&v, x) {
+    if is_very_thin_triangle(v) || !maybe_far(&v, x) {
         return None;
     }
-    let setup = fast_setup(x, n, v, polygon::triangle_plane)?;
+    let setup = fast_setup(x, n, v, triangle_plane)?;
     if setup.plane.is_thin() {
         return None;
     }
@@ -389,201 +366,4 @@ pub(super) fn run_on(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::super::solid_angle_lanes::tests::{isas, Lcg};
-    use super::super::{add, form_factor, form_factors, TriangleMesh, VertexData};
-    use super::*;
-    use std::cell::Cell;
-
-    fn bits(d: &Deriv3) -> Vec<u64> {
-        let mut v = vec![d.value.to_bits()];
-        v.extend(d.gradient.to_array().map(f64::to_bits));
-        v.extend(d.hessian.to_cols_array().map(f64::to_bits));
-        v
-    }
-
-    /// Elements at every far-field rule's distance and nearer, some clipped by the receiver's
-    /// tangent plane, some slivers (thin and very thin), some seen from below their plane.
-    fn elements() -> Vec<(DVec3, DVec3, [DVec3; 3])> {
-        let mut rng = Lcg(11);
-        let mut elems = Vec::new();
-        for k in 0..3000 {
-            // Distance over size: near (edge sum), then each rule's range (3.6e4+, 1.5e3+, 280+,
-            // 100+, 16+ radii; the radius is about half the size).
-            let ratio = [2.0, 12.0, 20.0, 45.0, 80.0, 300.0, 1e3, 5e3, 2e5][k % 9];
-            let size = [0.1, 1e-3, 30.0][(k / 9) % 3];
-            let dir = DVec3::new(
-                rng.next() - 0.5,
-                rng.next() - 0.5,
-                if k % 5 == 0 { -1.0 } else { 1.0 },
-            );
-            let c = dir.normalize() * (ratio * size);
-            let mut y = [0, 1, 2].map(|_| c + rng.point(size));
-            match k % 23 {
-                // A sliver of aspect 1e-3 (thin: the replay declines) and 1e-7 (very thin).
-                3 => y[2] = (y[0] + y[1]) * 0.5 + rng.point(size * 1e-3),
-                4 => y[2] = (y[0] + y[1]) * 0.5 + rng.point(size * 1e-7),
-                _ => {}
-            }
-            let x = rng.point(0.1 * size);
-            // Mostly facing the triangle, sometimes tilted enough to clip it.
-            let facing = if k % 7 == 0 { 0.0 } else { 1.0 };
-            let n = (dir.normalize() * facing + rng.point(3.0)).normalize();
-            elems.push((x, n, y));
-        }
-        elems
-    }
-
-    #[test]
-    fn lanes_are_the_single_call_bit_for_bit_on_every_isa() {
-        let elems = elements();
-        let mut per_rule = [0usize; RULES];
-        for (x, n, y) in &elems {
-            if let Some((rule, ..)) = classify(*x, *n, *y) {
-                per_rule[rule_index(rule)] += 1;
-            }
-        }
-        // Every rule's lanes are exercised, and many elements go to the single kernel.
-        let taken: usize = per_rule.iter().sum();
-        assert!(per_rule.iter().all(|&c| c >= 50), "{per_rule:?}");
-        assert!(taken > 1000 && taken < 2700, "{taken}");
-        for isa in isas() {
-            for order in [Order::Gradient, Order::Hessian] {
-                let single = |i: usize| {
-                    let (x, n, [a, b, c]) = elems[i];
-                    crate::kernels::triangle_form_factor(x, n, a, b, c, order)
-                };
-                let fell_back = Cell::new(0);
-                let mut seen = 0;
-                run_on(
-                    isa,
-                    elems.len(),
-                    |i| {
-                        let (x, n, y) = elems[i];
-                        (x, n, form_factor_lanes::lane_normal(n), y)
-                    },
-                    order,
-                    |i| {
-                        fell_back.set(fell_back.get() + 1);
-                        single(i)
-                    },
-                    |i, d| {
-                        assert_eq!(i, seen);
-                        seen += 1;
-                        let reference = single(i).unwrap();
-                        assert_eq!(bits(&d), bits(&reference), "{isa:?} {order:?} element {i}");
-                    },
-                )
-                .unwrap();
-                assert_eq!(seen, elems.len());
-                // Only the declined elements (and none of the taken ones) called the kernel.
-                assert_eq!(fell_back.get(), elems.len() - taken, "{isa:?} {order:?}");
-            }
-        }
-    }
-
-    /// A mesh light like the benchmark's (f32, 1024 triangles ~0.1 in size 1-2 above the
-    /// receiver), every third one flipped, stored with a vertex stride of 4 floats; the same in
-    /// f64, packed; and the same lifted far away.
-    #[test]
-    fn meshes_near_and_far_f32_strided_and_f64_sums_and_each_are_bit_for_bit() {
-        let mut rng = Lcg(1);
-        let count = 1024;
-        let mut v32 = Vec::new();
-        let mut ix = Vec::new();
-        for t in 0..count as u32 {
-            let c = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, 1.0 + rng.next());
-            for _ in 0..3 {
-                let p = c + rng.point(0.1);
-                v32.extend([p.x as f32, p.y as f32, p.z as f32, f32::NAN]);
-            }
-            let o = if t % 3 == 0 { [0, 2, 1] } else { [0, 1, 2] };
-            ix.extend(o.map(|k| 3 * t + k));
-        }
-        let strided =
-            TriangleMesh::new(VertexData::F32(&v32), 4, 3 * count, Some(&ix), 3, count).unwrap();
-        // Lifted by 5 to 2000 (rules of 6 down to 3 points).
-        let far: Vec<f64> = v32
-            .chunks(4)
-            .enumerate()
-            .flat_map(|(i, p)| {
-                let lift = [0.0, 5.0, 20.0, 2e3][(i / 3) % 4];
-                [p[0] as f64, p[1] as f64, p[2] as f64 + lift]
-            })
-            .collect();
-        let near: Vec<f64> = v32
-            .chunks(4)
-            .flat_map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
-            .collect();
-        let packed_near =
-            TriangleMesh::new(VertexData::F64(&near), 3, 3 * count, Some(&ix), 3, count).unwrap();
-        let packed_far =
-            TriangleMesh::new(VertexData::F64(&far), 3, 3 * count, Some(&ix), 3, count).unwrap();
-        let x = DVec3::new(0.05, -0.03, 0.0);
-        let n = DVec3::new(0.1, 0.0, 1.0).normalize();
-        for mesh in [&strided, &packed_near, &packed_far] {
-            let taken = (0..count)
-                .filter(|&t| classify(x, n, mesh.triangle(t)).is_some())
-                .count();
-            assert!(taken > count / 2, "{taken}");
-            for isa in isas() {
-                for order in [Order::Gradient, Order::Hessian] {
-                    let single = |t: usize| form_factor(x, n, mesh.triangle(t), order, "t", t);
-                    let mut reference = Deriv3::constant(0.0);
-                    let mut sum = Deriv3::constant(0.0);
-                    form_factors(
-                        isa,
-                        count,
-                        |t| (x, n, form_factor_lanes::lane_normal(n), mesh.triangle(t)),
-                        order,
-                        "t",
-                        |t, d| {
-                            let r = single(t).unwrap();
-                            assert_eq!(bits(&d), bits(&r), "{isa:?} {order:?} {t}");
-                            add(&mut reference, &r, order);
-                            add(&mut sum, &d, order);
-                        },
-                    )
-                    .unwrap();
-                    assert_eq!(bits(&sum), bits(&reference), "{isa:?} {order:?}");
-                }
-            }
-        }
-    }
-
-    /// The benchmark's mesh light (`benches/kernels_batch.rs`, same generator): which path each
-    /// triangle's single call takes for its derivatives (the figures docs/kernels.md quotes).
-    #[test]
-    fn benchmark_mesh_paths() {
-        let mut rng = Lcg(1);
-        let x = DVec3::new(0.05, -0.03, 0.0);
-        let mut per_rule = [0usize; RULES];
-        let (mut thin, mut near) = (0, 0);
-        for _ in 0..1024 {
-            let (cx, cy, cz) = (rng.next() - 0.5, rng.next() - 0.5, 1.0 + rng.next());
-            let y = [0, 1, 2].map(|_| {
-                let d = [rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5];
-                DVec3::new(
-                    (cx + 0.1 * d[0]) as f32 as f64,
-                    (cy + 0.1 * d[1]) as f32 as f64,
-                    (cz + 0.1 * d[2]) as f32 as f64,
-                )
-            });
-            match classify(x, DVec3::Z, y) {
-                Some((rule, ..)) => per_rule[rule_index(rule)] += 1,
-                None if polygon::is_very_thin_triangle(y)
-                    || fast_setup(x, DVec3::Z, y, polygon::triangle_plane)
-                        .is_some_and(|s| s.plane.is_thin()) =>
-                {
-                    thin += 1
-                }
-                // Nearer than 16 radii (the edge sum).
-                None => near += 1,
-            }
-        }
-        println!(
-            "bench mesh: rules [3, 4, 5, 6, 8] points {per_rule:?}, slivers {thin}, near {near}"
-        );
-        assert_eq!((per_rule, thin, near), ([0, 0, 0, 5, 1013], 0, 6));
-    }
-}
+mod tests;

@@ -1,10 +1,11 @@
 //! The triangle form factor's value in SIMD lanes: the cancellation-free far form of Lambert's sum
-//! (`kernels::lambert_far`) with its per-lane certificate, and the single kernel as the fallback.
+//! (`form_factor::lambert::far`) with its per-lane certificate, and the single kernel as the
+//! fallback.
 //!
 //! Each lane evaluates exactly what the single kernel's value path evaluates when it takes the far
-//! form (`lambert::triangle_value` → `lambert_far::far_sum`): the same operations in the same order,
-//! with no FMA contraction (Rust never contracts, and the lane code uses plain products and sums)
-//! and correctly rounded `sqrt` and division in every instruction set. An accepted lane is
+//! form (`lambert::sum::triangle_value` → `lambert::far::far_sum`): the same operations in the same
+//! order, with no FMA contraction (Rust never contracts, and the lane code uses plain products and
+//! sums) and correctly rounded `sqrt` and division in every instruction set. An accepted lane is
 //! therefore the single call's value **bit for bit**, a stronger statement than the 1e-14 relative
 //! the batch contract asks for (the tests assert equality). The batch is structure-of-arrays and
 //! the lane code has no branches (the certificate is a product of comparisons), so the compiler
@@ -18,10 +19,12 @@
 
 use glam::DVec3;
 
-use super::super::lambert::{self, FAST_TOLERANCE, INV_2PI};
-use super::super::lambert_far::{psi, FAR_RATIO2};
-use super::solid_angle_lanes::Isa;
 use crate::error::Result;
+use crate::kernels::form_factor::edge::INV_2PI;
+use crate::kernels::form_factor::lambert::far::{psi, FAR_RATIO2};
+use crate::kernels::form_factor::tolerance::FAST_TOLERANCE;
+use crate::kernels::form_factor::validate::unit;
+use crate::simd::Isa;
 use crate::Deriv3;
 
 /// Lanes per batch (a multiple of the widest vector, 8 f64).
@@ -201,7 +204,7 @@ fn evaluate_on(isa: Isa, l: &mut Lanes) {
 /// rejects it.
 #[inline]
 pub(super) fn lane_normal(n: DVec3) -> DVec3 {
-    lambert::unit(n).unwrap_or(DVec3::NAN)
+    unit(n).unwrap_or(DVec3::NAN)
 }
 
 /// Runs the lanes over `count` elements, element `i` being receiver, normal (from [`lane_normal`])
@@ -280,58 +283,4 @@ pub(super) fn lambert_values(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::super::solid_angle_lanes::tests::{isas, Lcg};
-    use super::*;
-    use crate::Order;
-
-    #[test]
-    fn accepted_lanes_are_the_single_call_bit_for_bit_on_every_isa() {
-        // Triangles of size 0.1 .. 1e-6 at distances 0.3 .. 1e3 from receivers with random normals:
-        // near ones (declined: Lambert's sum), far ones (accepted), clipped ones (declined).
-        let mut rng = Lcg(7);
-        let mut elems = Vec::new();
-        for k in 0..4000 {
-            let size = [0.1, 1e-2, 1e-4, 1e-6][k % 4];
-            let dist = [0.3, 1.0, 10.0, 1e3][(k / 4) % 4];
-            let c = DVec3::new(rng.next() - 0.5, rng.next() - 0.5, 1.0).normalize() * dist;
-            let y = [
-                c + rng.point(size),
-                c + rng.point(size),
-                c + rng.point(size),
-            ];
-            let x = rng.point(0.1);
-            let n = (DVec3::Z + rng.point(1.5)).normalize();
-            elems.push((x, n, y));
-        }
-        for isa in isas() {
-            let mut accepted = 0;
-            let single = |i: usize| {
-                let (x, n, [a, b, c]) = elems[i];
-                super::super::super::triangle_form_factor(x, n, a, b, c, Order::Value)
-            };
-            // The fallback marks its results with a unit gradient (value orders have none).
-            let mut got = vec![(0.0, false); elems.len()];
-            run_on(
-                isa,
-                elems.len(),
-                |i| (elems[i].0, lane_normal(elems[i].1), elems[i].2),
-                |i| {
-                    single(i).map(|mut d| {
-                        d.gradient = DVec3::X;
-                        d
-                    })
-                },
-                |i, d| got[i] = (d.value, d.gradient == DVec3::X),
-            )
-            .unwrap();
-            for (i, (g, fell_back)) in got.iter().enumerate() {
-                let reference = single(i).unwrap().value;
-                accepted += !fell_back as usize;
-                assert_eq!(g.to_bits(), reference.to_bits(), "{isa:?} element {i}");
-            }
-            // Far lanes (distance/size >= 10, unclipped) are the majority.
-            assert!(accepted > 2000 && accepted < 4000, "{isa:?}: {accepted}");
-        }
-    }
-}
+mod tests;

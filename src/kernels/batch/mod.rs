@@ -31,6 +31,7 @@
 //! requested, ...) fails the whole call with that error, its message prefixed with the element's
 //! kind and index ("triangle 12: ..."). Per-element outputs are unspecified after an error.
 
+mod element_error;
 mod far_field_lanes;
 mod form_factor_lanes;
 mod mesh;
@@ -42,6 +43,7 @@ pub use mesh::{TriangleMesh, VertexData};
 
 use crate::error::{ensure_finite3, Error, Result};
 use crate::{Deriv3, Order};
+use element_error::label;
 
 /// Sum over the triangles of `mesh` of the unsigned solid angle (steradians) each subtends at `x`
 /// ([`triangle_solid_angle`](super::triangle_solid_angle)), with gradient (sr/L) and Hessian
@@ -137,7 +139,7 @@ pub fn mesh_form_factor(x: DVec3, n: DVec3, mesh: &TriangleMesh, order: Order) -
     let mut sum = Deriv3::constant(0.0);
     let ln = form_factor_lanes::lane_normal(n);
     form_factors(
-        solid_angle_lanes::best_isa(),
+        crate::simd::best_isa(),
         mesh.len(),
         |t| (x, n, ln, mesh.triangle(t)),
         order,
@@ -161,7 +163,7 @@ pub fn mesh_form_factor_each(
     check_len(out.len(), mesh.len(), "out", "triangles")?;
     let ln = form_factor_lanes::lane_normal(n);
     form_factors(
-        solid_angle_lanes::best_isa(),
+        crate::simd::best_isa(),
         mesh.len(),
         |t| (x, n, ln, mesh.triangle(t)),
         order,
@@ -193,7 +195,7 @@ pub fn points_form_factor(
     ensure_finite3(b, "b")?;
     ensure_finite3(c, "c")?;
     form_factors(
-        solid_angle_lanes::best_isa(),
+        crate::simd::best_isa(),
         points.len(),
         |i| {
             let n = normals[i];
@@ -211,7 +213,7 @@ pub fn points_form_factor(
 /// value comes from the far form's lanes, the gradient and Hessian from the far-field rule's lanes,
 /// the rest from the single call (whose error, labelled `what i`, stops the run).
 fn form_factors(
-    isa: solid_angle_lanes::Isa,
+    isa: crate::simd::Isa,
     count: usize,
     get: impl Fn(usize) -> (DVec3, DVec3, DVec3, [DVec3; 3]),
     order: Order,
@@ -257,19 +259,10 @@ fn form_factor(
     what: &str,
     index: usize,
 ) -> Result<Deriv3> {
-    match super::triangle_form_factor(x, n, y[0], y[1], y[2], order) {
+    match crate::kernels::form_factor::triangle_form_factor(x, n, y[0], y[1], y[2], order) {
         Ok(d) => Ok(d),
         Err(Error::Degenerate(_)) if zero_area(y) => Ok(Deriv3::constant(0.0)),
         Err(e) => Err(label(e, what, index)),
-    }
-}
-
-/// `e` with its message prefixed by the element it concerns.
-pub(crate) fn label(e: Error, what: &str, index: usize) -> Error {
-    match e {
-        Error::InvalidArgument(m) => Error::InvalidArgument(format!("{what} {index}: {m}")),
-        Error::Degenerate(m) => Error::Degenerate(format!("{what} {index}: {m}")),
-        other => other,
     }
 }
 
@@ -310,5 +303,5 @@ fn check_points(points: &[DVec3], what: &str) -> Result<()> {
 /// The single kernel's normal check (finite, unit length within 1e-6), done up front so that a
 /// bad normal is reported even for an empty batch.
 fn check_normal(n: DVec3) -> Result<()> {
-    super::polygon::unit_normal(n).map(|_| ())
+    crate::kernels::form_factor::validate::unit_normal(n).map(|_| ())
 }
