@@ -25,19 +25,13 @@
 
 use glam::DVec3;
 
-use crate::kernels::form_factor::clip::{clip_by_heights, edge_vector, next, ArrayOut, ClipVertex};
-use crate::kernels::form_factor::near_plane::far_piece::far_piece_value;
-use crate::kernels::form_factor::near_plane::route_loop::{
-    in_plane_edge, FarPiece, RouteLoop, CLIP_VERTEX_ZERO,
-};
-use crate::kernels::form_factor::near_plane::split::{
-    foot_inside, near_plane_value, NEAR_PLANE_RATIO, SPLIT_VALUE_LIMIT,
-};
-use crate::kernels::form_factor::orient::visible_value;
+use crate::kernels::form_factor::clip::{clip_by_heights, next, ArrayOut, ClipVertex};
+use crate::kernels::form_factor::near_plane::clipped_loop::clipped_loop_value;
+use crate::kernels::form_factor::near_plane::route_loop::{FarPiece, RouteLoop, CLIP_VERTEX_ZERO};
+use crate::kernels::form_factor::near_plane::split::NEAR_PLANE_RATIO;
 use crate::kernels::form_factor::plane::{
     exact_height_of, triangle_plane, Plane, NEAR_PLANE_HEIGHT,
 };
-use crate::kernels::form_factor::quadrature::rules::far_field_rule;
 use crate::kernels::form_factor::validate::unit;
 use crate::kernels::numeric::dd::{self, Dd3};
 
@@ -281,43 +275,17 @@ fn split_loop(
     let r_lo = [r_lo_of(v[0]), r_lo_of(v[1]), r_lo_of(v[2])];
     let h_p = exact_height_of(&r, &r_lo, plane.twice_area);
     let count = clip_triangle(&u, &r, &r_lo, n, loop_)?;
-    let verts = &loop_[..count];
-    let centroid = verts.iter().map(|v| v.r).sum::<DVec3>() / count as f64;
-    let radius = verts
-        .iter()
-        .map(|v| (v.r - centroid).length_squared())
-        .fold(0.0, f64::max)
-        .sqrt();
-    if let Some(rule) = far_field_rule(centroid.length(), radius) {
-        let value = far_piece_value(verts, n, plane.normal, h_p, rule, far, defer_far)?;
-        return Some((value, count));
-    }
-    if foot_inside(verts, plane.normal, h_p) {
-        return None;
-    }
-    let mut frames = [None; 4];
-    for (i, frame) in frames[..count].iter_mut().enumerate() {
-        let (a, b) = (&verts[i], &verts[next(i, count)]);
-        if !(a.on_line && b.on_line) {
-            let e = edge_vector(a, b);
-            if let Some(edge) = edges.get_mut(i) {
-                *edge = e;
-            }
-            *frame = in_plane_edge(a, b, e);
-        }
-    }
-    let value = near_plane_value(
-        verts,
-        &frames[..count],
+    let value = clipped_loop_value::<4>(
+        &loop_[..count],
         n,
         plane.normal,
         h_p,
-        SPLIT_VALUE_LIMIT,
         angles,
         edges,
-    )?
-    .0;
-    visible_value(value, h_p).map(|value| (value, count))
+        far,
+        defer_far,
+    )?;
+    Some((value, count))
 }
 
 /// [`clip`](crate::kernels::form_factor::clip::clip) for a triangle, on a fixed array (the same
