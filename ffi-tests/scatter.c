@@ -2,6 +2,8 @@
    value against the closed-form 1D Snell solution, and the error paths. */
 #include "raddiff.h"
 #include "check.h"
+#include <float.h>
+#include <math.h>
 #include <string.h>
 
 static const double ETA = 1.5, SIGMA_T = 0.8, SIGMA_S = 0.6, G = 0.4;
@@ -72,6 +74,24 @@ int main(void) {
   }
   CHECK_STATUS(raddiff_single_scatter(mesh, &medium, entry, exit, light, 3.0, &radiance), RADDIFF_OK);
   CHECK_CLOSE(radiance / 3.0, ref, 1e-6 * ref);
+
+  /* Linear in the intensity up to the largest double; past it, refused rather than infinite. A light
+     1e-6 above the interface beside an eye segment that starts 1e-6 below it gives about 1e4 per
+     unit intensity, so an intensity of DBL_MAX overflows and DBL_MAX / (2 * that) does not. */
+  {
+    const raddiff_vec3 near_entry = {0.1, 0.1, -1e-6}, near_exit = {0.5, 0.1, -1.0}, near_light = {0.1 + 1e-6, 0.1, 1e-6};
+    double unit = -1.0, fits;
+    CHECK_STATUS(raddiff_single_scatter(mesh, &medium, near_entry, near_exit, near_light, 1.0, &unit), RADDIFF_OK);
+    CHECK(unit > 1.0 && isfinite(unit));
+    fits = DBL_MAX / (2.0 * unit);
+    CHECK_STATUS(raddiff_single_scatter(mesh, &medium, near_entry, near_exit, near_light, fits, &radiance), RADDIFF_OK);
+    CHECK(isfinite(radiance));
+    CHECK_CLOSE(radiance / (0.5 * DBL_MAX), 1.0, 1e-12);
+    radiance = 42.0;
+    CHECK_STATUS(raddiff_single_scatter(mesh, &medium, near_entry, near_exit, near_light, DBL_MAX, &radiance), RADDIFF_ERROR_DEGENERATE);
+    CHECK(strstr(raddiff_last_error(), "overflows") != NULL);
+    CHECK(radiance == 42.0);
+  }
 
   /* error paths: the output stays untouched */
   radiance = 42.0;

@@ -89,7 +89,9 @@ pub unsafe extern "C" fn raddiff_refractive_mesh_free(mesh: *mut raddiff_refract
 ///
 /// Errors: NULL pointer; `RADDIFF_ERROR_INVALID_ARGUMENT` for eta <= 1, sigma_s outside
 /// [0, sigma_t], |g| >= 1, non-finite input, negative intensity; for a closed mesh also entry/exit
-/// outside its bounding sphere or a light inside it. `*radiance` is written only on success;
+/// outside its bounding sphere or a light inside it; `RADDIFF_ERROR_DEGENERATE` when the radiance
+/// itself overflows a double (an intensity near `DBL_MAX` focused by refraction; the radiance is
+/// linear in `intensity`, scaled once at the end, so any result that fits is returned). `*radiance` is written only on success;
 /// `entry == exit` gives 0. Occlusion of the light paths by other parts of the mesh is not tested.
 ///
 /// # Safety

@@ -110,7 +110,9 @@ pub(crate) fn validate(
 /// Errors: [`Error::InvalidArgument`] for a bad medium (η ≤ 1, σ_s outside [0, σ_t], |g| ≥ 1),
 /// non-finite points, negative intensity; for a closed mesh also an entry/exit outside its bounding
 /// sphere or a light inside it (parity of ray crossings). Open meshes (a single interface) accept
-/// any points.
+/// any points. The paths are integrated per unit intensity and scaled once at the end, so an
+/// intensity up to `f64::MAX` is exact while the radiance itself fits a double;
+/// [`Error::Degenerate`] when it does not (an intensity near `f64::MAX` focused by refraction).
 /// `entry == exit` gives 0.
 #[allow(clippy::too_many_arguments)]
 pub fn single_scatter(
@@ -167,22 +169,28 @@ pub fn single_scatter(
             continue;
         }
         for &ti in h.leaf_triangles(node) {
+            // Per unit intensity, scaled once at the end: the radiance is linear in the intensity,
+            // and a huge intensity would overflow in the paths' products before the sum does.
             total += triangle_contribution(
                 mesh,
                 ti as usize,
                 &eye,
                 light,
-                intensity,
+                1.0,
                 medium,
                 options,
                 &mut stats,
             );
         }
     }
-    Ok(ScatterResult {
-        radiance: total,
-        stats,
-    })
+    let radiance = total * intensity;
+    if !radiance.is_finite() {
+        return Err(Error::Degenerate(format!(
+            "the radiance overflows a double (intensity {intensity:e} times {total:e} per unit \
+             intensity); scale the intensity down and the result up"
+        )));
+    }
+    Ok(ScatterResult { radiance, stats })
 }
 
 /// The integral over the eye segment of triangle `ti`'s contribution, with pruning per `options`.
