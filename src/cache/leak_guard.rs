@@ -1,43 +1,46 @@
-//! The "record in front of the query" test of Ward's irradiance cache (also in Radiance, pbrt-v2
-//! and Mitsuba): a surface record that lies in front of the query point may see geometry the
-//! query point does not (the riser of a step, the far side of a concave junction), so its value
-//! must not be extrapolated there.
-//!
-//! # The test
-//! With the query at x (unit normal n) and record i at xᵢ (unit normal nᵢ), the query's height
-//! over the record along the mean normal is
-//!
-//! ```text
-//!   h = (x − xᵢ)·(n + nᵢ)/2
-//! ```
-//!
-//! and the record is rejected when `h < −(relative·Rᵢ + absolute)`, with Rᵢ the record's radius
-//! along its normal (the third radius of a surface record, the smaller of its two tangent radii).
-//!
-//! # Why this tolerance
-//! * On a plane h = 0, and on a sphere h = 0 exactly (the chord between two points is
-//!   perpendicular to the sum of their normals), so curvature alone does not trigger the test: for
-//!   a smooth surface h is of third order in the distance. What remains are steps, creases and the
-//!   small offsets renderers give their gather points (the pull-back from the surface).
-//! * `relative` is scale-free: h/Rᵢ is the query's height below the record in the record's own
-//!   normalized coordinates, the same coordinate the ellipsoid distance of
-//!   [`interp`](super::interp) uses along the normal. A step much lower than the record's radius
-//!   changes what the record sees by little (it fills a thin band near the horizon); one of a
-//!   sizable fraction of the radius hides part of the record's hemisphere from the query.
-//! * `absolute` (length unit L) covers offsets that do not scale with records: the renderer's
-//!   ray epsilon or pull-back distance (Radiance uses `minarad·ambacc + 0.001`, pbrt-v2 an
-//!   absolute 0.01).
-//!
-//! The guard is off when the tolerance is infinite ([`LeakGuard::OFF`], the default) and applies
-//! in the surface domain only (volume records have no normal).
+//! The leak guard: the "record in front of the query" test, its tolerance and why (documented
+//! on [`LeakGuard`], where users see it).
 
 use glam::DVec3;
 
 use crate::error::{Error, Result};
 
-/// The tolerance of the leak guard (see the [module docs](self)): a record i is not used at a
-/// query whose height over it, `(x − xᵢ)·(n + nᵢ)/2`, is below `−(relative·Rᵢ + absolute)`, Rᵢ
-/// the record's radius along its normal. Infinite tolerance turns the guard off.
+/// The "record in front of the query" test of Ward's irradiance cache (also in Radiance, pbrt-v2
+/// and Mitsuba): a surface record that lies in front of the query point may see geometry the
+/// query point does not (the riser of a step, the far side of a concave junction), so its value
+/// must not be extrapolated there.
+///
+/// # The test
+/// With the query at x (unit normal n) and record i at xᵢ (unit normal nᵢ), the query's height
+/// over the record along the mean normal is
+///
+/// ```text
+///   h = (x − xᵢ)·(n + nᵢ)/2
+/// ```
+///
+/// and the record is rejected when `h < −(relative·Rᵢ + absolute)`, with Rᵢ the record's radius
+/// along its normal (the third radius of a surface record, the smaller of its two tangent radii).
+///
+/// # Why this tolerance
+/// * On a plane h = 0, and on a sphere h = 0 exactly (the chord between two points is
+///   perpendicular to the sum of their normals), so curvature alone does not trigger the test: for
+///   a smooth surface h is of third order in the distance. What remains are steps, creases and the
+///   small offsets renderers give their gather points (the pull-back from the surface).
+/// * `relative` is scale-free: h/Rᵢ is the query's height below the record in the record's own
+///   normalized coordinates, the same coordinate the ellipsoid distance of
+///   [`interp`](super::interp) uses along the normal. A step much lower than the record's radius
+///   changes what the record sees by little (it fills a thin band near the horizon); one of a
+///   sizable fraction of the radius hides part of the record's hemisphere from the query.
+/// * `absolute` (length unit L) covers offsets that do not scale with records: the renderer's
+///   ray epsilon or pull-back distance (Radiance uses `minarad·ambacc + 0.001`, pbrt-v2 an
+///   absolute 0.01).
+///
+/// The guard is off when the tolerance is infinite ([`LeakGuard::OFF`], the default) and applies
+/// in the surface domain only (volume records have no normal).
+///
+/// In short: a record i is not used at a query whose height over it, `(x − xᵢ)·(n + nᵢ)/2`, is
+/// below `−(relative·Rᵢ + absolute)`, Rᵢ the record's radius along its normal. Infinite tolerance
+/// turns the guard off.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LeakGuard {
     /// Tolerance in units of the record's radius along its normal (dimensionless, ≥ 0, may be

@@ -35,8 +35,10 @@
 //! **[`triangle_form_factor`], gradient and Hessian:**
 //! 1. Very thin: as for the value.
 //! 2. Far field: the far-field rule, replayed (`replay`), with Lambert's value where certified.
-//! 3. Lambert's analytic derivatives, certified (`lambert::sum`): `sin β ≥ 1/4` on every edge,
-//!    neither sum cancelling beyond 100x.
+//! 3. Lambert's analytic derivatives, certified (`lambert::sum`): `sin β ≥ 1/32` on every edge,
+//!    neither sum cancelling beyond 100x once each edge below `sin β = 1/4` is charged with the
+//!    growth of its rounding errors (the common case a few sizes away, where some edge is seen
+//!    under a small angle).
 //! 4. Clipped near the plane: the derivatives of the clipped loop (`lambert::clipped_derivs`),
 //!    built once (`lambert::clipped`) on the certified loop or on the near-plane route's clip
 //!    points (`near_plane::route_loop`).

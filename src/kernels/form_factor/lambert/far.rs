@@ -64,8 +64,8 @@ const PSI: [f64; 12] = [
     676039.0 / 104857600.0,
 ];
 
-/// Smallest `ρ_{i+1}² / ‖e_i‖²` of the far regime (`σ² ≤ 1/20`). Disjoint from the derivative
-/// fast path (`sin β ≥ 1/4`), which must see the value path choose Lambert's sum.
+/// Smallest `ρ_{i+1}² / ‖e_i‖²` of the far regime (`σ² ≤ 1/20`). The derivative fast path, which
+/// takes edges down to `sin β = 1/32`, then takes the far form's value, as the value path does.
 pub(crate) const FAR_RATIO2: f64 = 20.0;
 
 /// Outcome of [`far_sum`].

@@ -181,10 +181,20 @@ pub(crate) fn triangle_value_inlined(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Optio
     Some((sum.abs() * INV_2PI).min(1.0))
 }
 
-/// Smallest `sin β = s/‖r_a‖‖r_b‖` of an edge at which the derivative fast path is used: its
-/// Hessian has terms up to `β/s³` and `(w×e)(w×e)ᵀ/s⁵` that cancel like `1/sin³β` as `x`
-/// approaches the extension of the edge's line (`β → 0`) or `1/sin β` near the segment.
+/// `sin β = s/‖r_a‖‖r_b‖` of an edge above which its derivative terms are charged at their size in
+/// the cancellation test: its Hessian has terms up to `β/s³` and `(w×e)(w×e)ᵀ/s⁵` that cancel like
+/// `1/sin³β` as `x` approaches the extension of the edge's line (`β → 0`) or `1/sin β` near the
+/// segment (the gradient like `1/sin²β`), which is at most `4³` (`4²`) here.
 const DERIV_MIN_SINE: f64 = 0.25;
+
+/// Smallest `sin β` of an edge the derivative fast path takes. Below [`DERIV_MIN_SINE`] an edge's
+/// gradient (Hessian) is charged in the cancellation test at its size times the growth of its
+/// rounding errors relative to there, `1/(16 sin²β)` (`(1/(16 sin²β))^{3/2}`), so the accepted
+/// error stays what [`CANCELLATION`] accepts at `DERIV_MIN_SINE` (the clipped loop's rule,
+/// [`clipped_derivs`](crate::kernels::form_factor::lambert::clipped_derivs)). Edges seen under a
+/// small angle are the common case from a few sizes away, where the robust edge sum would answer
+/// otherwise; the floor keeps the charge below `8³`.
+const DERIV_FLOOR_SINE: f64 = 1.0 / 32.0;
 
 /// One Lambert edge term times 2π with its derivatives, its value error bound times 2π / u, and
 /// whether `sin β ≥ DERIV_MIN_SINE`. With `k = w × e`, `m = r_a + r_b`, `P = s² + c²`,
@@ -402,14 +412,14 @@ pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -
 /// (`unclipped`'s output, any `M ≥ 3`) by the analytic derivatives of Lambert's sum
 /// ([`edge_derivs`] per edge), for `order` above [`Order::Value`]. Taken when Lambert's value is
 /// certified (as in [`certified_sum`]'s near branch: `u(Σ err_i + (M + 2) Σ|f_i|)` within
-/// [`FAST_TOLERANCE`]), every edge has `sin β ≥ DERIV_MIN_SINE` (no cancelling near-line terms)
-/// and neither the gradient nor the Hessian sum cancels by more than [`CANCELLATION`] (summed
-/// max-norms of the edge terms' parts against the max-norm of their sum); `None` otherwise.
+/// [`FAST_TOLERANCE`]), every edge has `sin β ≥ DERIV_FLOOR_SINE`, and neither the gradient nor
+/// the Hessian sum cancels by more than [`CANCELLATION`] (summed max-norms of the edge terms'
+/// parts, each charged with its rounding growth below [`DERIV_MIN_SINE`], against the max-norm of
+/// their sum); `None` otherwise.
 ///
 /// The value is the one [`certified_sum`] gives, bit for bit, so that it does not depend on the
-/// order asked for: that sum's far form needs `20‖e_i‖² ≤ ‖r_{i+1}‖²` on every edge, hence
-/// `sin β_i ≤ ‖e_i‖/‖r_{i+1}‖ ≤ 1/√20 < DERIV_MIN_SINE`, which this path declines, and otherwise
-/// it is this same Lambert sum, summed in the same order.
+/// order asked for: its far form where that sum takes it ([`value_sum`]), otherwise this same
+/// Lambert sum, summed in the same order.
 /// Derivatives are per unit length (gradient) and per squared length (Hessian), signed so that
 /// the form factor is two-sided (the sum's sign is the polygon's orientation as seen from `x`).
 #[inline(always)]
@@ -490,9 +500,18 @@ fn derivs_at<const M: usize>(
             }
             magnitude += f.abs();
             err += t.err.get(l);
-            is_steep &= steep(s2.get(l), t.p.get(l));
-            g_mag += g_size.get(l);
-            h_mag += h_size.get(l);
+            let (edge_s2, edge_p) = (s2.get(l), t.p.get(l));
+            is_steep &= edge_s2 >= DERIV_FLOOR_SINE * DERIV_FLOOR_SINE * edge_p;
+            // The growth of the edge's rounding errors below DERIV_MIN_SINE, relative to there.
+            let growth = if steep(edge_s2, edge_p) {
+                1.0
+            } else {
+                edge_p / (16.0 * edge_s2)
+            };
+            g_mag += growth * g_size.get(l);
+            if order.hessian() {
+                h_mag += growth * growth.sqrt() * h_size.get(l);
+            }
         }
     }
     let err = U * (err + (M as f64 + 2.0) * magnitude);
@@ -508,7 +527,29 @@ fn derivs_at<const M: usize>(
     }
     // Orientation as seen from x: the form factor is two-sided.
     let scale = INV_2PI.copysign(sum.value);
-    Some(sum.scaled((sum.value.abs() * INV_2PI).min(1.0), scale))
+    Some(sum.scaled(
+        (value_sum(n, v, r, r2, sum.value).abs() * INV_2PI).min(1.0),
+        scale,
+    ))
+}
+
+/// The value [`certified_sum`] gives, from Lambert's `lambert` summed as it sums it: its far form
+/// where it takes that (every edge small against its distance, so every `sin β ≤ 1/√20`), so that
+/// the value does not depend on the order asked for.
+#[inline(always)]
+fn value_sum<const M: usize>(
+    n: DVec3,
+    v: &[DVec3; M],
+    r: &[DVec3; M],
+    r2: &[f64; M],
+    lambert: f64,
+) -> f64 {
+    if FAR_RATIO2 * (v[1] - v[0]).length_squared() <= r2[1] {
+        if let Far::Certified(total) = far_sum(n, v, r, r2) {
+            return total;
+        }
+    }
+    lambert
 }
 
 /// Value and derivatives of [`edge_form_factor`](crate::kernels::form_factor::edge_form_factor) by
