@@ -4,10 +4,10 @@
 //! medium marched in 16 steps per direction (with media radiance gradients), the gradients with
 //! the marched radiance but without its gradient (the demo's room), and the concentric layout's
 //! gradients. Every evaluation is also timed with the previous implementation
-//! (`gather::evaluate_reference`, cases named "reference ...") as the baseline. After the criterion
-//! groups, a summary table in ns per sample with the speed-up over the previous implementation,
-//! timed in the same run as on-CPU time of the thread (robust on a shared machine; criterion's
-//! figures are wall time).
+//! (`tests/gather_support/evaluate_reference.rs`, cases named "reference ...") as the baseline.
+//! After the criterion groups, a summary table in ns per sample with the speed-up over the previous
+//! implementation, timed in the same run as on-CPU time of the thread (robust on a shared machine;
+//! criterion's figures are wall time).
 //! A second summary times the stratum check alone (`Layout::check_directions`, the validation of
 //! every direction against its stratum that `evaluate` runs first) against the evaluation with
 //! Ward-Heckbert gradients, for each layout kind at every size (criterion group `gather_check`).
@@ -23,9 +23,10 @@ use std::time::Instant;
 
 use criterion::{criterion_group, Criterion, Throughput};
 use glam::DVec3;
-use raddiff::gather::{
-    evaluate, evaluate_reference, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, Wanted,
-};
+use raddiff::gather::{evaluate, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, Wanted};
+
+#[path = "../tests/gather_support/evaluate_reference.rs"]
+mod evaluate_reference;
 
 const CHANNELS: usize = 3;
 const STEPS: usize = 16;
@@ -129,7 +130,8 @@ const EVALUATIONS: [Evaluation; 6] = [
 ];
 
 /// The direction generation, then every evaluation with this implementation and with the previous
-/// one (`gather::evaluate_reference`, named "reference ..."), the baseline of the speed-up.
+/// one (`tests/gather_support/evaluate_reference.rs`, named "reference ..."), the baseline of the
+/// speed-up.
 fn cases(s: &Scene) -> Vec<Case<'_>> {
     let buf = RefCell::new(vec![DVec3::ZERO; s.layout.len()]);
     let mut v: Vec<Case<'_>> = vec![(

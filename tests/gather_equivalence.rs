@@ -1,15 +1,17 @@
 //! The single-pass gather evaluation against the previous implementation, kept as
-//! `gather::evaluate_reference`: random gathers over every layout (with misses, grazing and
-//! slightly non-unit directions, 1-4 channels, with and without an absorbing medium and marched media
-//! radiance with or without its gradient) and every combination of requested outputs must agree to
+//! `tests/gather_support/evaluate_reference.rs`: random gathers over every layout (with misses,
+//! grazing and slightly non-unit directions, 1-4 channels, with and without an absorbing medium and
+//! marched media radiance with or without its gradient) and every combination of requested outputs must agree to
 //! rounding (1e-13 of the scale of the summed terms), and bad input must fail with the same error.
 
 use glam::{DQuat, DVec3};
 use raddiff::gather::{
-    evaluate, evaluate_reference, Frame, GatherInput, GatherValues, Layout, LayoutKind,
-    MediaRadiance, Wanted,
+    evaluate, Frame, GatherInput, GatherValues, Layout, LayoutKind, MediaRadiance, Wanted,
 };
 use raddiff::Error;
+
+#[path = "gather_support/evaluate_reference.rs"]
+mod evaluate_reference;
 
 struct Rng(u64);
 

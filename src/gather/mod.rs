@@ -31,10 +31,6 @@
 //! ```
 
 mod evaluate;
-// The previous evaluation, the reference of the equivalence tests and the bench baseline; only
-// with the `reference` feature (on for the crate's tests and benches, off in users' builds).
-#[cfg(feature = "reference")]
-pub mod evaluate_reference;
 mod input;
 pub mod layout;
 mod strata;

@@ -227,20 +227,6 @@ impl ConcentricWalls {
             second_by_axis: by_axis(&second_axis),
         }
     }
-
-    /// Wall `i` between `(j−1, k)` and `(j, k)` as a vector.
-    #[cfg(feature = "reference")]
-    pub(crate) fn first(&self, i: usize) -> DVec3 {
-        let [x, y, z] = &self.first_by_axis;
-        DVec3::new(x[i], y[i], z[i])
-    }
-
-    /// Wall `i` between `(j, k−1)` and `(j, k)` as a vector.
-    #[cfg(feature = "reference")]
-    pub(crate) fn second(&self, i: usize) -> DVec3 {
-        let [x, y, z] = &self.second_by_axis;
-        DVec3::new(x[i], y[i], z[i])
-    }
 }
 
 /// `∫ z (ω × ω') dt` along the image of the axis-aligned segment `s0 → s1` of the square.

@@ -1,23 +1,22 @@
-//! The gather evaluation as it was before the single-pass rewrite (validation included), kept
-//! verbatim as the reference the tests compare the fast path against and as the baseline of
-//! `benches/gather.rs`. Compiled only with the `reference` feature, which the crate's tests and
-//! benches turn on and users' builds leave off.
+//! The gather evaluation as it was before the single-pass rewrite (validation included), kept as
+//! the reference `tests/gather_equivalence.rs` compares `raddiff::gather::evaluate` against and as
+//! the baseline of `benches/gather.rs` (which includes this file by path). It uses the crate's
+//! public API only; the wall vectors of the Ward-Heckbert gradient (`src/gather/walls.rs`, private
+//! to the crate) are computed here from the same formulas, so that the comparison covers the
+//! evaluation's passes, and the walls have their own unit tests against numerical wall integrals.
 
-use std::f64::consts::PI;
+use std::f64::consts::{PI, TAU};
 
-use glam::DVec3;
-
-use super::evaluate::{GatherValues, Wanted};
-use super::input::{GatherInput, MediaRadiance};
-use super::layout::{Frame, Layout, LayoutKind};
-use super::walls::{ConcentricWalls, Walls};
-use crate::error::{ensure_finite, Error, Result};
-use crate::{kernels, Order};
+use glam::{DVec2, DVec3};
+use raddiff::gather::{
+    Frame, GatherInput, GatherValues, Layout, LayoutKind, MediaRadiance, Wanted,
+};
+use raddiff::{kernels, Error, Order, Result};
 
 /// A gather whose layout, frame and input passed validation; evaluate it once or several times
 /// (a Hessian pass can reuse it without validating again).
 #[derive(Debug, Clone, Copy)]
-pub struct ReferenceGather<'a> {
+struct ReferenceGather<'a> {
     layout: Layout,
     frame: Frame,
     input: GatherInput<'a>,
@@ -27,10 +26,11 @@ impl<'a> ReferenceGather<'a> {
     /// Validates `layout`, `frame` (re-orthonormalized) and `input` (sizes, finite values, unit
     /// directions inside their strata, distances > 0 or `INFINITY`). `InvalidArgument` with a
     /// message naming the first problem.
-    pub fn new(layout: &Layout, frame: &Frame, input: &GatherInput<'a>) -> Result<Self> {
+    fn new(layout: &Layout, frame: &Frame, input: &GatherInput<'a>) -> Result<Self> {
         layout.validate()?;
+        let given = *frame;
         let frame = frame.orthonormalized()?;
-        validate(input, layout, &frame)?;
+        validate(input, layout, &given)?;
         Ok(ReferenceGather {
             layout: *layout,
             frame,
@@ -38,23 +38,8 @@ impl<'a> ReferenceGather<'a> {
         })
     }
 
-    /// The layout.
-    pub fn layout(&self) -> &Layout {
-        &self.layout
-    }
-
-    /// The orthonormalized frame.
-    pub fn frame(&self) -> &Frame {
-        &self.frame
-    }
-
-    /// The validated input.
-    pub fn input(&self) -> &GatherInput<'a> {
-        &self.input
-    }
-
     /// Monte-Carlo weight of one stratum: `π/(MN)` (cosine-weighted hemisphere) or `4π/(MN)`.
-    pub fn stratum_weight(&self) -> f64 {
+    fn stratum_weight(&self) -> f64 {
         let sr = if self.layout.kind.is_hemisphere() {
             PI
         } else {
@@ -66,7 +51,7 @@ impl<'a> ReferenceGather<'a> {
     /// Computes what `wanted` asks for.
     ///
     /// `Degenerate` if a result overflows (e.g. hits at ~1e-300 L).
-    pub fn evaluate(&self, wanted: Wanted) -> Result<GatherValues> {
+    fn evaluate(&self, wanted: Wanted) -> Result<GatherValues> {
         let mut out = GatherValues::default();
         let ch = self.input.channels;
         let weight = self.stratum_weight();
@@ -108,7 +93,7 @@ impl<'a> ReferenceGather<'a> {
                 let local = match &walls {
                     Some(walls) => self.wall_gradient(walls, &rad),
                     None => {
-                        let walls = ConcentricWalls::cached(&self.layout);
+                        let walls = ConcentricWalls::new(&self.layout);
                         self.concentric_wall_gradient(&walls, &rad)
                     }
                 };
@@ -376,7 +361,7 @@ impl<'a> ReferenceGather<'a> {
     }
 }
 
-/// The previous implementation of [`super::evaluate`]: validates, then evaluates.
+/// The previous implementation of `raddiff::gather::evaluate`: validates, then evaluates.
 pub fn evaluate(
     layout: &Layout,
     frame: &Frame,
@@ -493,7 +478,8 @@ fn check_all_finite(values: &[f32], what: &str) -> Result<()> {
     Ok(())
 }
 
-/// Checks sizes and values against `layout` and the (orthonormalized) `frame`.
+/// Checks sizes and values against `layout` and `frame` (as given: the direction check
+/// orthonormalizes it).
 fn validate(input: &GatherInput<'_>, layout: &Layout, frame: &Frame) -> Result<()> {
     let cells = layout.len();
     if input.channels == 0 {
@@ -553,11 +539,242 @@ fn validate(input: &GatherInput<'_>, layout: &Layout, frame: &Frame) -> Result<(
             check_all_finite(g, "media_radiance_gradient")?;
         }
     }
-    check_directions(layout, frame, input.directions)
+    // The direction check is the library's own: the reference is the baseline of the evaluation,
+    // not of the validation (the messages of both must match).
+    layout.check_directions(frame, input.directions)
 }
 
-/// The direction check shared with the current implementation: the reference is the baseline of
-/// the evaluation, not of the validation (the messages of both must match).
-fn check_directions(layout: &Layout, frame: &Frame, directions: &[DVec3]) -> Result<()> {
-    super::strata::check_directions(layout, frame, directions)
+/// `InvalidArgument` naming `what` unless `v` is finite (the library's message).
+fn ensure_finite(v: f64, what: &str) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::InvalidArgument(format!(
+            "{what} is not finite ({v})"
+        )))
+    }
+}
+
+// The wall vectors of the Ward-Heckbert gradient (the model and its formulas:
+// `src/gather/walls.rs`).
+
+/// Per-ring and per-column wall data of a polar or sphere layout (local frame).
+struct Walls {
+    /// Per column k: `(cos φ_k, sin φ_k)` of its lower azimuth wall.
+    phi_wall: Vec<(f64, f64)>,
+    /// Per column k: `(sinφ_{k+1} − sinφ_k, cosφ_k − cosφ_{k+1})` = `∫ (cosφ, sinφ) dφ` over the column.
+    column: Vec<(f64, f64)>,
+    /// Per ring wall j (index j, used for j ≥ 1): `(w sinθ cosθ, −w sin²θ Δφ)` at `θ_j`.
+    ring_wall: Vec<(f64, f64)>,
+    /// Per ring j: `∫_{θ_j}^{θ_{j+1}} w(θ) dθ`.
+    ring_span: Vec<f64>,
+    /// Per ring j: `∫_{θ_j}^{θ_{j+1}} sin²θ dθ` (rotational gradient of the cosine-polar layout).
+    ring_sin2: Vec<f64>,
+}
+
+impl Walls {
+    /// Wall data for a [`LayoutKind::CosinePolar`] or [`LayoutKind::Sphere`] layout.
+    fn new(layout: &Layout) -> Walls {
+        debug_assert!(layout.kind != LayoutKind::Concentric);
+        let (m, n) = (layout.m as usize, layout.n as usize);
+        let d_phi = TAU / n as f64;
+        let phi_wall: Vec<(f64, f64)> = (0..n)
+            .map(|k| {
+                let (s, c) = (d_phi * k as f64).sin_cos();
+                (c, s)
+            })
+            .collect();
+        let column = (0..n)
+            .map(|k| {
+                let (c0, s0) = phi_wall[k];
+                let (c1, s1) = phi_wall[(k + 1) % n];
+                (s1 - s0, c0 - c1)
+            })
+            .collect();
+        // (sin θ_j, cos θ_j) at the ring boundaries j = 0..=M.
+        let bound: Vec<(f64, f64)> = (0..=m)
+            .map(|j| {
+                let f = j as f64 / m as f64;
+                match layout.kind {
+                    LayoutKind::Sphere => {
+                        let c = 1.0 - 2.0 * f;
+                        (((1.0 - c) * (1.0 + c)).max(0.0).sqrt(), c)
+                    }
+                    _ => (f.sqrt(), (1.0 - f).max(0.0).sqrt()),
+                }
+            })
+            .collect();
+        let sphere = layout.kind == LayoutKind::Sphere;
+        let weight = |c: f64| if sphere { 1.0 } else { c };
+        let ring_wall = bound
+            .iter()
+            .map(|&(s, c)| (weight(c) * s * c, -weight(c) * s * s * d_phi))
+            .collect();
+        let theta = |(s, c): (f64, f64)| s.atan2(c);
+        let ring_span = (0..m)
+            .map(|j| {
+                if sphere {
+                    theta(bound[j + 1]) - theta(bound[j])
+                } else {
+                    bound[j + 1].0 - bound[j].0
+                }
+            })
+            .collect();
+        // ∫ sin²θ dθ = (θ − sinθ cosθ)/2
+        let g = |b: (f64, f64)| 0.5 * (theta(b) - b.0 * b.1);
+        let ring_sin2 = (0..m).map(|j| g(bound[j + 1]) - g(bound[j])).collect();
+        Walls {
+            phi_wall,
+            column,
+            ring_wall,
+            ring_span,
+            ring_sin2,
+        }
+    }
+}
+
+/// Wall vectors `∫_wall w ν dl` (w = cosθ) of the concentric layout, whose walls are the images of
+/// the grid lines of `[−1, 1]²` under the Shirley-Chiu map, lifted to the hemisphere.
+///
+/// For a wall traced as `ω(t)` with `t ∈ [0, 1]` along its grid line, `ν dl = ∓(ω × ω') dt` (the
+/// sign picks the side). With `ω = (d, z)`, `z = sqrt(1 − |d|²)` and `z' = −(d·d')/z`, the integrand
+/// `z (ω × ω')` is `(−(d_y (d·d') + z² d_y'), z² d_x' + d_x (d·d'), z (d × d'))`: bounded up to the
+/// horizon. The map is smooth inside each of its four wedges and only continuous across the
+/// diagonals `|a| = |b|`, so each wall is split there and integrated by 4-point Gauss-Legendre
+/// per piece.
+struct ConcentricWalls {
+    /// Walls between `(j−1, k)` and `(j, k)`, index `(j−1)·N + k`, pointing into `(j, k)`.
+    first: Vec<DVec3>,
+    /// Walls between `(j, k−1)` and `(j, k)`, index `j·(N−1) + k − 1`, pointing into `(j, k)`.
+    second: Vec<DVec3>,
+}
+
+impl ConcentricWalls {
+    fn new(layout: &Layout) -> ConcentricWalls {
+        let (m, n) = (layout.m as usize, layout.n as usize);
+        let sa = |j: usize| 2.0 * j as f64 / m as f64 - 1.0;
+        let sb = |k: usize| 2.0 * k as f64 / n as f64 - 1.0;
+        let mut first_axis = Vec::with_capacity((m - 1) * n);
+        for j in 1..m {
+            for k in 0..n {
+                // Travelling towards +b, the cell with the larger a lies on the right.
+                let s0 = DVec2::new(sa(j), sb(k));
+                let s1 = DVec2::new(sa(j), sb(k + 1));
+                first_axis.push(-grid_line_integral(s0, s1));
+            }
+        }
+        let mut second_axis = Vec::with_capacity(m * (n - 1));
+        for j in 0..m {
+            for k in 1..n {
+                // Travelling towards +a, the cell with the larger b lies on the left.
+                let s0 = DVec2::new(sa(j), sb(k));
+                let s1 = DVec2::new(sa(j + 1), sb(k));
+                second_axis.push(grid_line_integral(s0, s1));
+            }
+        }
+        ConcentricWalls {
+            first: first_axis,
+            second: second_axis,
+        }
+    }
+
+    /// Wall `i` between `(j−1, k)` and `(j, k)`.
+    fn first(&self, i: usize) -> DVec3 {
+        self.first[i]
+    }
+
+    /// Wall `i` between `(j, k−1)` and `(j, k)`.
+    fn second(&self, i: usize) -> DVec3 {
+        self.second[i]
+    }
+}
+
+/// `∫ z (ω × ω') dt` along the image of the axis-aligned segment `s0 → s1` of the square.
+fn grid_line_integral(s0: DVec2, s1: DVec2) -> DVec3 {
+    let delta = s1 - s0;
+    // Split where the segment crosses a diagonal |a| = |b| (a kink of the concentric map).
+    let mut cuts: Vec<f64> = Vec::with_capacity(4);
+    cuts.push(0.0);
+    let (fixed, moving0, moving_len) = if delta.x == 0.0 {
+        (s0.x, s0.y, delta.y)
+    } else {
+        (s0.y, s0.x, delta.x)
+    };
+    for target in [fixed.abs(), -fixed.abs()] {
+        let t = (target - moving0) / moving_len;
+        if t > 0.0 && t < 1.0 && !cuts.contains(&t) {
+            cuts.push(t);
+        }
+    }
+    cuts.push(1.0);
+    cuts.sort_by(f64::total_cmp);
+    const X: [f64; 2] = [0.339_981_043_584_856, 0.861_136_311_594_053];
+    const W: [f64; 2] = [0.652_145_154_862_546, 0.347_854_845_137_454];
+    let on_horizon = |t: f64| {
+        let p = s0 + delta * t;
+        p.x.abs().max(p.y.abs()) >= 1.0 - 1e-12
+    };
+    let mut sum = DVec3::ZERO;
+    for piece in cuts.windows(2) {
+        let (t0, t1) = (piece[0], piece[1]);
+        // z ~ sqrt(distance to the horizon) at a horizon end: substitute t = end ∓ len·u² there,
+        // which makes the integrand smooth again.
+        let end = if on_horizon(t1) {
+            Some((t1, -1.0))
+        } else if on_horizon(t0) {
+            Some((t0, 1.0))
+        } else {
+            None
+        };
+        for (x, w) in X.iter().zip(W) {
+            for u in [0.5 - 0.5 * x, 0.5 + 0.5 * x] {
+                let (t, jac) = match end {
+                    Some((e, sign)) => {
+                        let len = t1 - t0;
+                        (e + sign * len * u * u, 2.0 * len * u)
+                    }
+                    None => (t0 + (t1 - t0) * u, t1 - t0),
+                };
+                sum += integrand(s0 + delta * t, delta) * (0.5 * w * jac);
+            }
+        }
+    }
+    sum
+}
+
+/// `z (ω × ω')` at square point `s` for the velocity `ds/dt = v`.
+fn integrand(s: DVec2, v: DVec2) -> DVec3 {
+    use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
+    let (a, b) = (s.x, s.y);
+    // d and its derivatives ∂d/∂a, ∂d/∂b inside the wedge that contains s.
+    let (d, da, db) = if a.abs() > b.abs() {
+        let (sp, cp) = (FRAC_PI_4 * (b / a)).sin_cos();
+        let radial = DVec2::new(cp, sp);
+        let tangential = DVec2::new(-sp, cp);
+        (
+            radial * a,
+            radial - tangential * (FRAC_PI_4 * b / a),
+            tangential * FRAC_PI_4,
+        )
+    } else if b != 0.0 {
+        let (sp, cp) = (FRAC_PI_2 - FRAC_PI_4 * (a / b)).sin_cos();
+        let radial = DVec2::new(cp, sp);
+        let tangential = DVec2::new(-sp, cp);
+        (
+            radial * b,
+            -tangential * FRAC_PI_4,
+            radial + tangential * (FRAC_PI_4 * a / b),
+        )
+    } else {
+        // The centre: never a quadrature node (nodes are interior to each piece).
+        return DVec3::ZERO;
+    };
+    let dd = da * v.x + db * v.y;
+    let z2 = (1.0 - d.length_squared()).max(0.0);
+    let dot = d.dot(dd);
+    DVec3::new(
+        -(d.y * dot + z2 * dd.y),
+        z2 * dd.x + d.x * dot,
+        z2.sqrt() * d.perp_dot(dd),
+    )
 }
