@@ -475,9 +475,10 @@ fn generic_triangles_with_edges_seen_under_small_angles() {
 /// derivative terms lose `1/sin²β` (gradient) and `1/sin³β` (Hessian) and the derivative fast
 /// path must charge that growth or decline. `x` is within `ε` of the triangle's plane: the hard
 /// regime's contract below 1e-3 sizes, the generic one above. The derivatives meet them; the value
-/// does not (a known gap, docs/kernels.md "Form factor accuracy": there the near-plane split
-/// declines, `x` being as close to the edge's line as to the plane, and the edge sum cancels like
-/// `1/ε`), so the value is held to its measured accuracy.
+/// does not (a known gap, docs/kernels.md "Form factor accuracy"): `n`, aimed at the centroid,
+/// is within ~`ε` of the triangle's plane, so the value is `O(ε)` and every edge term's `n·w`
+/// loses `u/ε` relative in f64 (the problem's condition number in `n`; the edge sum does not
+/// cancel). The value is held to its measured accuracy.
 #[test]
 fn walks_towards_an_edge_line_beyond_a_vertex() {
     let mut big = Big::new();
