@@ -265,6 +265,12 @@ fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
     }
 
     if order.hessian() {
+        // The Hessian's rank-two part is scaled by 1/g², which underflows to zero for g ≳ 1e154
+        // (lengths ≳ 1e25, within the range above) and would drop that part unseen by the bound:
+        // larger `g` goes to the robust rung, which rescales.
+        if !(g < 1e150) {
+            return None;
+        }
         let s_sum = s[0] + s[1] + s[2];
         out.hessian = hessian_of_parts(
             &Parts { r, s, inv_s, p, c },
