@@ -1,8 +1,9 @@
 //! The solid angle's certified rung: Van Oosterom-Strackee in plain f64 with a running error
 //! bound, in the manner of adaptive geometric predicates.
 //!
-//! It answers when the inputs are in the range where no rescaling is needed (coordinate
-//! differences in [1e-30, 1e30], finite, `x` off the plane and the vertices) and the first-order
+//! It answers when the inputs are in the range where no rescaling is needed (distances
+//! `|y_k − x|` in ([`S_MIN`], 1e30), hence coordinate differences in [1e-30, 1e30]; finite, `x` off
+//! the plane and the vertices) and the first-order
 //! bound of every rounding certifies the result within [`FAST_TOL`] (5e-13 value and gradient,
 //! 5e-12 Hessian: 2-20x under the contract). Where only `A` fails its bound (`x` near the plane
 //! relative to its distance, slivers) `A` and `N` are recomputed in double-double within this
@@ -27,6 +28,10 @@ const FAST_TOL: [f64; 3] = [5e-13, 5e-13, 5e-12];
 /// `N` in double-double (x near the plane relative to its distance, or a sliver whose angle at `a`
 /// is small) before certifying.
 const FAST_A_TOL: f64 = 5e-14;
+/// Smallest distance `|y_k − x|` the rung takes (the largest is 1e30): `√3·1e-30` rounded up, so
+/// that the largest coordinate difference is above 1e-30 (a distance is at most √3 times it) and
+/// the range check needs the three distances alone, not the nine differences.
+const S_MIN: f64 = 1.75e-30;
 /// Absolute error allowance for products that may be subnormal (inputs are restricted to
 /// magnitudes in [1e-30, 1e30], where every other quantity bounded below is normal).
 const TINY: f64 = 1e-290;
@@ -49,7 +54,7 @@ fn l1(v: DVec3) -> f64 {
 
 /// The fast evaluation of the (signed or unsigned) solid angle with a running error bound, in the
 /// manner of adaptive geometric predicates: `None` when the inputs are outside the range it handles
-/// (non-finite, coordinate differences outside [1e-30, 1e30], `x` on the plane or at a vertex) or
+/// (non-finite, distances `|y_k − x|` outside ([`S_MIN`], 1e30), `x` on the plane or at a vertex) or
 /// when the bound cannot certify the result to [`FAST_TOL`]; the caller then takes the robust path.
 ///
 /// It is the robust path's formulation without its exact rescaling (not needed in that range) and
@@ -113,25 +118,15 @@ pub(super) struct CertifiedParts {
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // negated so that NaN fails every check
 pub(super) fn certified_parts(x: DVec3, y: [DVec3; 3], signed: bool) -> Option<CertifiedParts> {
     let r = [y[0] - x, y[1] - x, y[2] - x];
-    let mut extent = 0.0f64;
-    for rk in &r {
-        for c in [rk.x.abs(), rk.y.abs(), rk.z.abs()] {
-            if c > extent {
-                extent = c;
-            }
-        }
-    }
-    // NaN and infinities fail this too.
-    if !(extent > 1e-30 && extent < 1e30) {
-        return None;
-    }
     let dot = |a: DVec3, b: DVec3| a.x * b.x + a.y * b.y + a.z * b.z;
     let s = [
         dot(r[0], r[0]).sqrt(),
         dot(r[1], r[1]).sqrt(),
         dot(r[2], r[2]).sqrt(),
     ];
-    if !(s[0] > 1e-30 && s[1] > 1e-30 && s[2] > 1e-30) {
+    // NaN and infinities fail this too, and so do differences whose squares overflow.
+    let in_range = |v: f64| v > S_MIN && v < 1e30;
+    if !(in_range(s[0]) && in_range(s[1]) && in_range(s[2])) {
         return None;
     }
     let e1 = y[1] - y[0];
@@ -270,6 +265,12 @@ fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
     }
 
     if order.hessian() {
+        // The Hessian's rank-two part is scaled by 1/g², which underflows to zero for g ≳ 1e154
+        // (lengths ≳ 1e25, within the range above) and would drop that part unseen by the bound:
+        // larger `g` goes to the robust rung, which rescales.
+        if !(g < 1e150) {
+            return None;
+        }
         let s_sum = s[0] + s[1] + s[2];
         out.hessian = hessian_of_parts(
             &Parts { r, s, inv_s, p, c },
@@ -281,19 +282,25 @@ fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
         );
         let w = s[1] * s[2] * inv_s[0] + s[2] * s[0] * inv_s[1] + s[0] * s[1] * inv_s[2];
         let hd_mag = 4.0 * w + 14.0 * s_sum;
-        let err_hd = 40.0 * U * hd_mag;
         // HΩ = 2[−sin θ HD/√g − (sin 2θ (aaᵀ − ddᵀ) + cos 2θ (adᵀ + daᵀ))/g], a = ∇A, d = ∇D;
-        // δ(sin 2θ) = 2 cos 2θ δθ, δ(cos 2θ) = −2 sin 2θ δθ, 1/g moves by 2Δg relatively.
-        let (sin2, cos2) = (2.0 * aa * dd * inv_g, (dd * dd - aa * aa).abs() * inv_g);
+        // δ(sin 2θ) = 2 cos 2θ δθ, δ(cos 2θ) = −2 sin 2θ δθ, 1/g moves by 2Δg relatively. Each
+        // entry's error is at most 2/g times the sum of
+        // * `HD`'s part: (δθ|D| + Δg|A|) hd_mag + |A| |δHD|, |δHD| ≤ 40u·hd_mag;
+        // * the rank-two part, with n = ‖a‖₁, m = ‖d‖₁: 2δθ(|cos 2θ|(n² + m²) + |sin 2θ| 2nm) +
+        //   2Δg(|sin 2θ|(n² + m²) + |cos 2θ| 2nm) + 2|sin 2θ|(n‖δN‖₁ + m‖δ∇D‖₁) +
+        //   2|cos 2θ|(n‖δ∇D‖₁ + m‖δN‖₁);
+        // * rounding: 32u(|A| hd_mag + |sin 2θ|(n² + m²) + |cos 2θ| 2nm).
+        // Gathered below by factor (the same sum): 72u|A| hd_mag for `HD`'s error and rounding, the
+        // rank-two part and its rounding as |sin 2θ|·X + |cos 2θ|·Y, and |sin 2θ|, |cos 2θ| as
+        // 2|A||D|/g, |D² − A²|/g with their 1/g taken out.
         let (sq, cross2) = (n1 * n1 + g1 * g1, 2.0 * n1 * g1);
-        let term1 = (delta_theta * dd * hd_mag + aa * err_hd + delta_g * aa * hd_mag) * inv_g;
-        let term2 = (2.0 * delta_theta * (cos2 * sq + sin2 * cross2)
-            + 2.0 * sin2 * (n1 * err_n + g1 * err_g)
-            + 2.0 * cos2 * (n1 * err_g + g1 * err_n)
-            + 2.0 * delta_g * (sin2 * sq + cos2 * cross2))
-            * inv_g;
-        let rounding = 32.0 * U * (aa * hd_mag + sin2 * sq + cos2 * cross2) * inv_g;
-        let hess_bound = 2.0 * (term1 + term2 + rounding);
+        let (t_theta, t_g) = (2.0 * delta_theta, 2.0 * delta_g + 32.0 * U);
+        let x_sin = t_g * sq + t_theta * cross2 + 2.0 * (n1 * err_n + g1 * err_g);
+        let y_cos = t_theta * sq + t_g * cross2 + 2.0 * (n1 * err_g + g1 * err_n);
+        let hess_bound = 2.0
+            * inv_g
+            * (hd_mag * (delta_theta * dd + (delta_g + 72.0 * U) * aa)
+                + (2.0 * aa * dd * x_sin + (dd * dd - aa * aa).abs() * y_cos) * inv_g);
         // The Hessian is symmetric to the bit (`hessian_of_parts`): its upper triangle has every
         // entry. `if e > m` skips a NaN as `f64::max` does (the finiteness test below rejects it).
         let h = &out.hessian;
@@ -313,18 +320,16 @@ fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
 }
 
 /// [`Deriv3::is_finite`] for a Hessian symmetric to the bit, from its upper triangle, without
-/// branches.
+/// branches: `e − e` is `+0` for a finite `e` and NaN for an infinite or NaN one, and a sum of zeros
+/// is zero while a NaN term makes it NaN, so the sum below is zero exactly when every entry is
+/// finite (one comparison instead of one per entry).
 #[inline(always)]
+#[allow(clippy::eq_op)] // `e − e` is the test: zero for finite `e` only
 fn symmetric_finite(d: &Deriv3) -> bool {
     let (g, h) = (d.gradient, &d.hessian);
-    d.value.is_finite()
-        & g.x.is_finite()
-        & g.y.is_finite()
-        & g.z.is_finite()
-        & h.x_axis.x.is_finite()
-        & h.y_axis.y.is_finite()
-        & h.z_axis.z.is_finite()
-        & h.y_axis.x.is_finite()
-        & h.z_axis.x.is_finite()
-        & h.z_axis.y.is_finite()
+    let zero = |e: f64| e - e;
+    let sum = ((zero(d.value) + zero(g.x)) + (zero(g.y) + zero(g.z)))
+        + ((zero(h.x_axis.x) + zero(h.y_axis.y)) + (zero(h.z_axis.z) + zero(h.y_axis.x)))
+        + (zero(h.z_axis.x) + zero(h.z_axis.y));
+    sum == 0.0
 }

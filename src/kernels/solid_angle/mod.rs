@@ -35,8 +35,8 @@
 //! / 1e-10 relative in generic configurations, 1e-10 / 1e-9 / 1e-8 in the hard regimes: near the
 //! plane, an edge or a vertex, slivers, far away, extreme scales).
 //!
-//! 1. **Certified, f64** (`certified`): coordinate differences in [1e-30, 1e30], `x` off the
-//!    plane and the vertices. Van Oosterom-Strackee in plain f64 from the edges at the nearest
+//! 1. **Certified, f64** (`certified`): distances `|y_k − x|` in (1.75e-30, 1e30) (coordinate
+//!    differences in [1e-30, 1e30]), `x` off the plane and the vertices. Van Oosterom-Strackee in plain f64 from the edges at the nearest
 //!    vertex with a running error bound, accepted within 5e-13 / 5e-13 / 5e-12. Answers almost
 //!    every generic configuration, far away and near a vertex.
 //! 2. **Certified, exact `A`** (same module): where only `A` fails its bound (`x` near the plane

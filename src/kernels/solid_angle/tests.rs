@@ -239,3 +239,25 @@ fn fast_path_leaves_singular_and_out_of_range_inputs_to_the_robust_path() {
     let flat = [DVec3::ZERO, DVec3::X, DVec3::X * 2.0];
     assert!(solid_angle_fast(DVec3::Z, flat, Order::Value, false).is_none());
 }
+
+#[test]
+fn hessian_at_huge_scales_is_the_rescaled_hessian() {
+    // Ω is scale-invariant and HΩ scales as 1/L²: at lengths near 1e28 (inside the certified
+    // rung's range) 1/g² underflows, where the rank-two part of the Hessian would be lost.
+    let x = DVec3::new(0.4, 0.3, 0.8);
+    let unit = triangle_solid_angle(x, TRI[0], TRI[1], TRI[2], Order::Hessian).unwrap();
+    for scale in [1e20, 1e25, 1e28, 1e29] {
+        let [a, b, c] = TRI.map(|v| v * scale);
+        let d = triangle_solid_angle(x * scale, a, b, c, Order::Hessian).unwrap();
+        let rescaled = Deriv3 {
+            value: d.value,
+            gradient: d.gradient * scale,
+            hessian: d.hessian * (scale * scale),
+        };
+        let diff = differences(&rescaled, &unit);
+        assert!(
+            diff[0] <= 1e-12 && diff[1] <= 1e-12 && diff[2] <= 1e-10,
+            "{scale}: {diff:?}"
+        );
+    }
+}
