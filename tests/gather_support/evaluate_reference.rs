@@ -6,6 +6,7 @@
 //! evaluation's passes, and the walls have their own unit tests against numerical wall integrals.
 
 use std::f64::consts::{PI, TAU};
+use std::sync::{Arc, Mutex};
 
 use glam::{DVec2, DVec3};
 use raddiff::gather::{
@@ -93,7 +94,7 @@ impl<'a> ReferenceGather<'a> {
                 let local = match &walls {
                     Some(walls) => self.wall_gradient(walls, &rad),
                     None => {
-                        let walls = ConcentricWalls::new(&self.layout);
+                        let walls = ConcentricWalls::cached(&self.layout);
                         self.concentric_wall_gradient(&walls, &rad)
                     }
                 };
@@ -649,7 +650,26 @@ struct ConcentricWalls {
     second: Vec<DVec3>,
 }
 
+/// Recently used concentric wall sets, keyed by (M, N), as the library keeps them: they depend on
+/// the grid only, so the baseline does not pay for them on every gather either.
+static CONCENTRIC_CACHE: Mutex<Vec<(u32, u32, Arc<ConcentricWalls>)>> = Mutex::new(Vec::new());
+
 impl ConcentricWalls {
+    /// The wall set of an M×N concentric grid from [`CONCENTRIC_CACHE`] (computed on a miss).
+    fn cached(layout: &Layout) -> Arc<ConcentricWalls> {
+        let key = (layout.m, layout.n);
+        let mut cache = CONCENTRIC_CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(hit) = cache.iter().find(|e| (e.0, e.1) == key) {
+            return Arc::clone(&hit.2);
+        }
+        let walls = Arc::new(ConcentricWalls::new(layout));
+        if cache.len() >= 4 {
+            cache.remove(0);
+        }
+        cache.push((key.0, key.1, Arc::clone(&walls)));
+        walls
+    }
+
     fn new(layout: &Layout) -> ConcentricWalls {
         let (m, n) = (layout.m as usize, layout.n as usize);
         let sa = |j: usize| 2.0 * j as f64 / m as f64 - 1.0;
