@@ -126,14 +126,8 @@ pub(crate) fn certified_sum<const M: usize>(
     r: &[DVec3; M],
     r2: &[f64; M],
 ) -> Option<f64> {
-    // The far form only when the first edge is already small against its distance: one test
-    // keeps Lambert's cost for nearby polygons (the full far test first would not).
-    if FAR_RATIO2 * (v[1] - v[0]).length_squared() <= r2[1] {
-        match far_sum(n, v, r, r2) {
-            Far::Certified(total) => return Some(total),
-            // Lambert's bound is wider than the far form's only for unusual shapes: try it.
-            Far::Declined | Far::Near => {}
-        }
+    if let Some(total) = certified_far_value(n, v, r, r2) {
+        return Some(total);
     }
     let (mut sum, mut magnitude, mut err) = (0.0, 0.0, 0.0);
     for i in 0..M {
@@ -418,8 +412,8 @@ pub(crate) fn triangle_derivs(x: DVec3, n: DVec3, v: [DVec3; 3], order: Order) -
 /// their sum); `None` otherwise.
 ///
 /// The value is the one [`certified_sum`] gives, bit for bit, so that it does not depend on the
-/// order asked for: its far form where that sum takes it ([`value_sum`]), otherwise this same
-/// Lambert sum, summed in the same order.
+/// order asked for: its far form where that sum takes it ([`certified_far_value`]), otherwise
+/// this same Lambert sum, summed in the same order.
 /// Derivatives are per unit length (gradient) and per squared length (Hessian), signed so that
 /// the form factor is two-sided (the sum's sign is the polygon's orientation as seen from `x`).
 #[inline(always)]
@@ -528,28 +522,32 @@ fn derivs_at<const M: usize>(
     // Orientation as seen from x: the form factor is two-sided.
     let scale = INV_2PI.copysign(sum.value);
     Some(sum.scaled(
-        (value_sum(n, v, r, r2, sum.value).abs() * INV_2PI).min(1.0),
+        (certified_far_value(n, v, r, r2).unwrap_or(sum.value).abs() * INV_2PI).min(1.0),
         scale,
     ))
 }
 
-/// The value [`certified_sum`] gives, from Lambert's `lambert` summed as it sums it: its far form
-/// where it takes that (every edge small against its distance, so every `sin β ≤ 1/√20`), so that
-/// the value does not depend on the order asked for.
+/// `2π` times the signed form factor by Lambert's far form ([`far_sum`]) when [`certified_sum`]
+/// takes it: every edge small against its distance (so every `sin β ≤ 1/√20`) and the far form
+/// certified; `None` otherwise, where Lambert's sum is the value. The derivative path takes its
+/// value from here too, so that the value does not depend on the order asked for.
 #[inline(always)]
-fn value_sum<const M: usize>(
+fn certified_far_value<const M: usize>(
     n: DVec3,
     v: &[DVec3; M],
     r: &[DVec3; M],
     r2: &[f64; M],
-    lambert: f64,
-) -> f64 {
+) -> Option<f64> {
+    // The far form only when the first edge is already small against its distance: one test
+    // keeps Lambert's cost for nearby polygons (the full far test first would not). Lambert's
+    // bound is wider than the far form's only for unusual shapes, so a declined far form leaves
+    // the value to Lambert's sum.
     if FAR_RATIO2 * (v[1] - v[0]).length_squared() <= r2[1] {
         if let Far::Certified(total) = far_sum(n, v, r, r2) {
-            return total;
+            return Some(total);
         }
     }
-    lambert
+    None
 }
 
 /// Value and derivatives of [`edge_form_factor`](crate::kernels::form_factor::edge_form_factor) by
