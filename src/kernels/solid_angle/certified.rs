@@ -13,7 +13,7 @@
 
 use glam::DVec3;
 
-use super::hessian::{hessian_of_parts, Parts};
+use super::hessian::{hessian_of_parts, Parts, Quotient};
 use crate::kernels::numeric::dd::Dd3;
 use crate::{Deriv3, Order};
 
@@ -265,20 +265,17 @@ fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
     }
 
     if order.hessian() {
-        // The Hessian's rank-two part is scaled by 1/g², which underflows to zero for g ≳ 1e154
-        // (lengths ≳ 1e25, within the range above) and would drop that part unseen by the bound:
-        // larger `g` goes to the robust rung, which rescales.
-        if !(g < 1e150) {
-            return None;
-        }
         let s_sum = s[0] + s[1] + s[2];
         out.hessian = hessian_of_parts(
             &Parts { r, s, inv_s, p, c },
-            a_num,
-            d_den,
-            inv_g,
-            grad_a,
-            grad_d,
+            &Quotient {
+                a_num,
+                d_den,
+                inv_g,
+                grad_a,
+                grad_d,
+                gradient: out.gradient,
+            },
         );
         let w = s[1] * s[2] * inv_s[0] + s[2] * s[0] * inv_s[1] + s[0] * s[1] * inv_s[2];
         let hd_mag = 4.0 * w + 14.0 * s_sum;
@@ -289,17 +286,21 @@ fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
         // * the rank-two part, with n = ‖a‖₁, m = ‖d‖₁: 2δθ(|cos 2θ|(n² + m²) + |sin 2θ| 2nm) +
         //   2Δg(|sin 2θ|(n² + m²) + |cos 2θ| 2nm) + 2|sin 2θ|(n‖δN‖₁ + m‖δ∇D‖₁) +
         //   2|cos 2θ|(n‖δ∇D‖₁ + m‖δN‖₁);
-        // * rounding: 32u(|A| hd_mag + |sin 2θ|(n² + m²) + |cos 2θ| 2nm).
+        // * rounding: 32u(|A| hd_mag + |sin 2θ|(n² + m²) + 2nm). The rank-two part is evaluated as
+        //   G vᵀ + v Gᵀ (`hessian_of_parts`), whose entries are at most 2|G|·|v| ≤
+        //   4(n|D| + m|A|)(n|A| + m|D|)/g² = (2/g)(|sin 2θ|(n² + m²) + 2nm), each rounded within
+        //   about 12u of that.
         // Gathered below by factor (the same sum): 72u|A| hd_mag for `HD`'s error and rounding, the
-        // rank-two part and its rounding as |sin 2θ|·X + |cos 2θ|·Y, and |sin 2θ|, |cos 2θ| as
+        // rank-two part as |sin 2θ|·X + |cos 2θ|·Y + 32u·2nm, and |sin 2θ|, |cos 2θ| as
         // 2|A||D|/g, |D² − A²|/g with their 1/g taken out.
         let (sq, cross2) = (n1 * n1 + g1 * g1, 2.0 * n1 * g1);
-        let (t_theta, t_g) = (2.0 * delta_theta, 2.0 * delta_g + 32.0 * U);
-        let x_sin = t_g * sq + t_theta * cross2 + 2.0 * (n1 * err_n + g1 * err_g);
+        let (t_theta, t_g) = (2.0 * delta_theta, 2.0 * delta_g);
+        let x_sin = (t_g + 32.0 * U) * sq + t_theta * cross2 + 2.0 * (n1 * err_n + g1 * err_g);
         let y_cos = t_theta * sq + t_g * cross2 + 2.0 * (n1 * err_g + g1 * err_n);
         let hess_bound = 2.0
             * inv_g
             * (hd_mag * (delta_theta * dd + (delta_g + 72.0 * U) * aa)
+                + 32.0 * U * cross2
                 + (2.0 * aa * dd * x_sin + (dd * dd - aa * aa).abs() * y_cos) * inv_g);
         // The Hessian is symmetric to the bit (`hessian_of_parts`): its upper triangle has every
         // entry. `if e > m` skips a NaN as `f64::max` does (the finiteness test below rejects it).

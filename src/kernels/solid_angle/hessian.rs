@@ -1,9 +1,15 @@
 //! The Hessian of `Ω = 2 atan2(A, D)`, the one formula both rungs of the solid angle evaluate.
 //!
-//! `HΩ = 2[−A HD/g − (2AD(aaᵀ − ddᵀ) + (D² − A²)(adᵀ + daᵀ))/g²]` with `a = ∇A`, `d = ∇D`,
-//! `g = A² + D²` (`HA = 0`: `A` is linear in `x`) and `HD = (Σc) 𝟙 + S U Uᵀ − Σ_k w_k u_k u_kᵀ`
-//! from the per-vertex [`Parts`]. Only the six distinct entries are evaluated, each written so
-//! that `(i, j)` and `(j, i)` give the same bits: the result is exactly symmetric.
+//! With `a = ∇A`, `d = ∇D`, `g = A² + D²` (`HA = 0`: `A` is linear in `x`) and
+//! `HD = (Σc) 𝟙 + S U Uᵀ − Σ_k w_k u_k u_kᵀ` from the per-vertex [`Parts`],
+//!
+//! `HΩ = 2[−A HD/g − (2AD(aaᵀ − ddᵀ) + (D² − A²)(adᵀ + daᵀ))/g²] = −2A HD/g − (G vᵀ + v Gᵀ)`,
+//!
+//! where `G = 2(D a − A d)/g = ∇Ω` is the gradient the caller has already computed and
+//! `v = (A a + D d)/g` (expand `G vᵀ + v Gᵀ`: the `aaᵀ` and `ddᵀ` terms carry `±2AD/g²`, the
+//! `adᵀ` and `daᵀ` terms `(D² − A²)/g²`). The rank-two part is then two products per entry, with
+//! no `1/g²` (which underflows for lengths ≳ 1e25). Only the six distinct entries are evaluated,
+//! each written so that `(i, j)` and `(j, i)` give the same bits: the result is exactly symmetric.
 
 use glam::{DMat3, DVec3};
 
@@ -18,19 +24,29 @@ pub(super) struct Parts {
     pub(super) c: [f64; 3],
 }
 
-/// Hessian of `Ω = 2 atan2(A, D)` from the parts, `A`, `D`, `1/(A² + D²)` and the gradients of
-/// `A` and `D`: `HΩ = 2[−A HD/g − (2AD(aaᵀ − ddᵀ) + (D² − A²)(adᵀ + daᵀ))/g²]`, `a = ∇A`,
-/// `d = ∇D` (`HA = 0`: A is linear in x).
+/// What the Hessian takes besides the [`Parts`]: `A`, `D`, `1/(A² + D²)`, `a = ∇A`, `d = ∇D` and
+/// the gradient `∇Ω = 2(D a − A d)/(A² + D²)` as the caller computed it.
+pub(super) struct Quotient {
+    pub(super) a_num: f64,
+    pub(super) d_den: f64,
+    pub(super) inv_g: f64,
+    pub(super) grad_a: DVec3,
+    pub(super) grad_d: DVec3,
+    pub(super) gradient: DVec3,
+}
+
+/// Hessian of `Ω = 2 atan2(A, D)`: `−2A HD/g − (G vᵀ + v Gᵀ)` (see the module documentation).
 #[inline(always)]
-pub(super) fn hessian_of_parts(
-    parts: &Parts,
-    a_num: f64,
-    d_den: f64,
-    inv_g: f64,
-    grad_a: DVec3,
-    grad_d: DVec3,
-) -> DMat3 {
+pub(super) fn hessian_of_parts(parts: &Parts, quotient: &Quotient) -> DMat3 {
     let Parts { r, s, inv_s, p, c } = parts;
+    let &Quotient {
+        a_num,
+        d_den,
+        inv_g,
+        grad_a,
+        grad_d,
+        gradient,
+    } = quotient;
     let s_sum = s[0] + s[1] + s[2];
     // Written out: array maps and closures were left out of line.
     let u = [
@@ -45,10 +61,7 @@ pub(super) fn hessian_of_parts(
         s_sum + p[2] * inv_s[2],
     ];
     let c_sum = c[0] + c[1] + c[2];
-    let inv_g2 = inv_g * inv_g;
-    let q = 2.0 * d_den * a_num * inv_g2;
-    let m = (d_den * d_den - a_num * a_num) * inv_g2;
-    let (ga, gd) = (grad_a.to_array(), grad_d.to_array());
+    let v = (grad_a * a_num + grad_d * d_den) * inv_g;
     // Symmetric to the bit (`HessianTerms::entry`): the upper triangle gives the matrix.
     let h = HessianTerms {
         u,
@@ -56,11 +69,9 @@ pub(super) fn hessian_of_parts(
         weight,
         c_sum,
         s_sum,
-        a_over_g: -a_num * inv_g,
-        q,
-        m,
-        ga,
-        gd,
+        hd_scale: -2.0 * a_num * inv_g,
+        gradient: gradient.to_array(),
+        v: v.to_array(),
     };
     let entry = |i: usize, j: usize| h.entry(i, j);
     let (xx, yy, zz) = (entry(0, 0), entry(1, 1), entry(2, 2));
@@ -79,26 +90,24 @@ struct HessianTerms {
     weight: [f64; 3],
     c_sum: f64,
     s_sum: f64,
-    /// `−A/g`.
-    a_over_g: f64,
-    q: f64,
-    m: f64,
-    ga: [f64; 3],
-    gd: [f64; 3],
+    /// `−2A/g`.
+    hd_scale: f64,
+    gradient: [f64; 3],
+    v: [f64; 3],
 }
 
 impl HessianTerms {
-    /// Entry (i, j) of `2[−(A/g) HD − (aaᵀ − ddᵀ) q − (adᵀ + daᵀ) m]`, `HD = (Σc) 𝟙 + S U Uᵀ −
-    /// Σ_k w_k u_k u_kᵀ`. Every term is symmetric in (i, j) to the bit (products of two factors,
-    /// scalars applied after them, `adᵀ + daᵀ` a sum of the two orders).
+    /// Entry (i, j) of `−(2A/g) HD − (G vᵀ + v Gᵀ)`, `HD = (Σc) 𝟙 + S U Uᵀ − Σ_k w_k u_k u_kᵀ`.
+    /// Every term is symmetric in (i, j) to the bit (products of two factors, scalars applied
+    /// after them, `G vᵀ + v Gᵀ` a sum of the two orders).
     #[inline(always)]
     fn entry(&self, i: usize, j: usize) -> f64 {
         let Self {
             u,
             u_sum,
             weight,
-            ga,
-            gd,
+            gradient,
+            v,
             ..
         } = self;
         let diagonal = if i == j { self.c_sum } else { 0.0 };
@@ -106,9 +115,6 @@ impl HessianTerms {
         for k in 0..3 {
             hd -= u[k][i] * u[k][j] * weight[k];
         }
-        (hd * self.a_over_g
-            - (ga[i] * ga[j] - gd[i] * gd[j]) * self.q
-            - (ga[i] * gd[j] + ga[j] * gd[i]) * self.m)
-            * 2.0
+        hd * self.hd_scale - (gradient[i] * v[j] + v[i] * gradient[j])
     }
 }

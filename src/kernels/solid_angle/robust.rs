@@ -16,7 +16,7 @@
 
 use glam::DVec3;
 
-use super::hessian::{hessian_of_parts, Parts};
+use super::hessian::{hessian_of_parts, Parts, Quotient};
 use crate::error::{ensure_finite3, Error, Result};
 use crate::kernels::numeric::dd::{Dd, Dd3};
 use crate::kernels::numeric::pow2::pow2_scale;
@@ -139,11 +139,14 @@ pub(super) fn solid_angle_unchecked(
     if order.hessian() {
         out.hessian = hessian_of_parts(
             &Parts { r, s, inv_s, p, c },
-            a_num,
-            d_den,
-            inv_g,
-            grad_a,
-            grad_d,
+            &Quotient {
+                a_num,
+                d_den,
+                inv_g,
+                grad_a,
+                grad_d,
+                gradient: out.gradient,
+            },
         );
     }
 

@@ -1,11 +1,11 @@
 use glam::DMat3;
 
 use super::certified::solid_angle_fast;
-use super::hessian::{hessian_of_parts, Parts};
+use super::hessian::{hessian_of_parts, Parts, Quotient};
 use super::*;
 
 /// The Hessian's six entries are those of the 3x3 matrix expression they were written from
-/// (`2[−(A/g) HD − (aaᵀ − ddᵀ) q − (adᵀ + daᵀ) m]` with glam's operations), bit for bit, on
+/// (`−(2A/g) HD − (G vᵀ + v Gᵀ)` with glam's operations, `v = (A a + D d)/g`), bit for bit, on
 /// random parts of mixed magnitudes.
 #[test]
 fn hessian_entries_are_the_matrix_expression_bit_for_bit() {
@@ -20,7 +20,7 @@ fn hessian_entries_are_the_matrix_expression_bit_for_bit() {
     for _ in 0..2000 {
         let mut v = || DVec3::new(next(), next(), next());
         let r = [v(), v(), v()];
-        let (grad_a, grad_d) = (v(), v());
+        let (grad_a, grad_d, gradient) = (v(), v(), v());
         let s = r.map(|r| r.length());
         let inv_s = s.map(|s| 1.0 / s);
         let p = [next(), next(), next()];
@@ -28,11 +28,14 @@ fn hessian_entries_are_the_matrix_expression_bit_for_bit() {
         let (a_num, d_den, inv_g) = (next(), next(), next().abs());
         let got = hessian_of_parts(
             &Parts { r, s, inv_s, p, c },
-            a_num,
-            d_den,
-            inv_g,
-            grad_a,
-            grad_d,
+            &Quotient {
+                a_num,
+                d_den,
+                inv_g,
+                grad_a,
+                grad_d,
+                gradient,
+            },
         );
         let s_sum = s[0] + s[1] + s[2];
         let u = [r[0] * inv_s[0], r[1] * inv_s[1], r[2] * inv_s[2]];
@@ -42,18 +45,14 @@ fn hessian_entries_are_the_matrix_expression_bit_for_bit() {
         for k in 0..3 {
             hess_d -= outer(u[k], u[k]) * (s_sum + p[k] * inv_s[k]);
         }
-        let inv_g2 = inv_g * inv_g;
-        let q = 2.0 * d_den * a_num * inv_g2;
-        let m = (d_den * d_den - a_num * a_num) * inv_g2;
-        let ad = outer(grad_a, grad_d);
-        let want = (hess_d * (-a_num * inv_g)
-            - (outer(grad_a, grad_a) - outer(grad_d, grad_d)) * q
-            - (ad + ad.transpose()) * m)
-            * 2.0;
+        let v = (grad_a * a_num + grad_d * d_den) * inv_g;
+        let gv = outer(gradient, v);
+        let want = hess_d * (-2.0 * a_num * inv_g) - (gv + gv.transpose());
         let bits = |m: DMat3| m.to_cols_array().map(f64::to_bits);
         assert_eq!(bits(got), bits(want));
     }
 }
+
 use std::f64::consts::PI;
 
 #[test]
@@ -242,12 +241,16 @@ fn fast_path_leaves_singular_and_out_of_range_inputs_to_the_robust_path() {
 
 #[test]
 fn hessian_at_huge_scales_is_the_rescaled_hessian() {
-    // Ω is scale-invariant and HΩ scales as 1/L²: at lengths near 1e28 (inside the certified
-    // rung's range) 1/g² underflows, where the rank-two part of the Hessian would be lost.
+    // Ω is scale-invariant and HΩ scales as 1/L²: at the ends of the certified rung's range
+    // (lengths 1e-29 to 1e29, g = A² + D² from 1e-174 to 1e174) every product of the Hessian and
+    // of its bound stays normal (1/g² would not: it underflows from lengths near 1e25), so the
+    // certified rung answers there, with the rescaled Hessian.
     let x = DVec3::new(0.4, 0.3, 0.8);
     let unit = triangle_solid_angle(x, TRI[0], TRI[1], TRI[2], Order::Hessian).unwrap();
-    for scale in [1e20, 1e25, 1e28, 1e29] {
+    for scale in [1e-29, 1e-25, 1e20, 1e25, 1e28, 1e29] {
         let [a, b, c] = TRI.map(|v| v * scale);
+        let fast = solid_angle_fast(x * scale, [a, b, c], Order::Hessian, false);
+        assert!(fast.is_some(), "{scale}: the certified rung declines");
         let d = triangle_solid_angle(x * scale, a, b, c, Order::Hessian).unwrap();
         let rescaled = Deriv3 {
             value: d.value,
