@@ -14,6 +14,7 @@
 use glam::DVec3;
 
 use super::hessian::{hessian_of_parts, Parts, Quotient};
+use crate::kernels::numeric::atan2::atan2_upper;
 use crate::kernels::numeric::dd::Dd3;
 use crate::{Deriv3, Order};
 
@@ -71,8 +72,11 @@ fn l1(v: DVec3) -> f64 {
 ///   `‖δ∇D‖₁ ≤ 200u·Σ s_i s_j`, entries of `δHD` ≤ `40u·(4 Σ s_i s_j/s_k + 14 Σ s_k)`;
 /// * with `g = A² + D²` and `Δ = (|δA| + |δD|)/√g` (which bounds the perturbation of the angle
 ///   `atan2(A, D)` and the relative perturbation of `√g`), the value's error is at most
-///   `2(|D||δA| + |A||δD|)/g` plus the last-bit error of `atan2`; the gradient `2(cos θ ∇A − sin θ ∇D)/√g`
-///   and the Hessian are bounded term by term the same way (see the code).
+///   `2(|D||δA| + |A||δD|)/g` plus the last bits of `atan2` (the inline polynomial
+///   [`atan2_upper`], within 2 ulps of libm's); the gradient `2(cos θ ∇A − sin θ ∇D)/√g` and the
+///   Hessian `−(2A/g) HD − (G vᵀ + v Gᵀ)` are bounded term by term the same way (see the code).
+///   The Hessian's bound reuses the gradient's: the rank-two part is built from the computed
+///   gradient `G`.
 #[inline(always)]
 pub(super) fn solid_angle_fast(
     x: DVec3,
@@ -84,8 +88,8 @@ pub(super) fn solid_angle_fast(
     if !order.gradient() {
         return Some(Deriv3::constant(certified_value(&parts)?));
     }
-    // The derivatives first and the value's `atan2` last: every xmm register is the callee's in a
-    // call, so what the derivatives need would otherwise be kept on the stack across it.
+    // The derivatives first and the value's `atan2` last: its polynomial is a chain of dependent
+    // operations, which then overlaps what follows the call instead of delaying the derivatives.
     let mut out = certified_derivs(&parts, order)?;
     out.value = certified_value(&parts)?;
     Some(out)
@@ -186,10 +190,12 @@ pub(super) fn certified_value(parts: &CertifiedParts) -> Option<f64> {
         err_d,
         ..
     } = parts;
-    let theta = a_num.atan2(d_den);
-    // |δθ| ≤ (|D||δA| + |A||δD|)/g (+ 2u|θ| for atan2 and the rounding of g).
+    // `atan2_upper` is within 2 ulps of libm's `atan2` (itself within 1), inline and without
+    // branches; the angle's sign is `A`'s.
+    let theta = atan2_upper::<false>(a_num.abs(), d_den).copysign(a_num);
+    // |δθ| ≤ (|D||δA| + |A||δD|)/g (+ 8u|θ| for the 3 ulps of atan2 and the rounding of g).
     if !(d_den.abs() * err_a + a_num.abs() * err_d
-        <= (0.5 * FAST_TOL[0] - 4.0 * U) * theta.abs() * g)
+        <= (0.5 * FAST_TOL[0] - 8.0 * U) * theta.abs() * g)
     {
         return None;
     }
@@ -254,13 +260,15 @@ fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
     let err_g = 200.0 * U * q;
     let (n1, g1) = (l1(normal), l1(grad_d));
     // ∇Ω = 2(cos θ ∇A − sin θ ∇D)/√g with cos θ = D/√g, sin θ = A/√g.
+    let v_mag = aa * n1 + dd * g1;
     let grad_bound = 2.0
         * inv_g
-        * (delta_theta * (aa * n1 + dd * g1)
+        * (delta_theta * v_mag
             + dd * err_n
             + aa * err_g
             + (delta_g + 8.0 * U) * (dd * n1 + aa * g1));
-    if !(grad_bound <= FAST_TOL[1] * out.gradient.abs().max_element()) {
+    let g_max = out.gradient.abs().max_element();
+    if !(grad_bound <= FAST_TOL[1] * g_max) {
         return None;
     }
 
@@ -279,58 +287,54 @@ fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
         );
         let w = s[1] * s[2] * inv_s[0] + s[2] * s[0] * inv_s[1] + s[0] * s[1] * inv_s[2];
         let hd_mag = 4.0 * w + 14.0 * s_sum;
-        // HΩ = 2[−sin θ HD/√g − (sin 2θ (aaᵀ − ddᵀ) + cos 2θ (adᵀ + daᵀ))/g], a = ∇A, d = ∇D;
-        // δ(sin 2θ) = 2 cos 2θ δθ, δ(cos 2θ) = −2 sin 2θ δθ, 1/g moves by 2Δg relatively. Each
-        // entry's error is at most 2/g times the sum of
-        // * `HD`'s part: (δθ|D| + Δg|A|) hd_mag + |A| |δHD|, |δHD| ≤ 40u·hd_mag;
-        // * the rank-two part, with n = ‖a‖₁, m = ‖d‖₁: 2δθ(|cos 2θ|(n² + m²) + |sin 2θ| 2nm) +
-        //   2Δg(|sin 2θ|(n² + m²) + |cos 2θ| 2nm) + 2|sin 2θ|(n‖δN‖₁ + m‖δ∇D‖₁) +
-        //   2|cos 2θ|(n‖δ∇D‖₁ + m‖δN‖₁);
-        // * rounding: 32u(|A| hd_mag + |sin 2θ|(n² + m²) + 2nm). The rank-two part is evaluated as
-        //   G vᵀ + v Gᵀ (`hessian_of_parts`), whose entries are at most 2|G|·|v| ≤
-        //   4(n|D| + m|A|)(n|A| + m|D|)/g² = (2/g)(|sin 2θ|(n² + m²) + 2nm), each rounded within
-        //   about 12u of that.
-        // Gathered below by factor (the same sum): 72u|A| hd_mag for `HD`'s error and rounding, the
-        // rank-two part as |sin 2θ|·X + |cos 2θ|·Y + 32u·2nm, and |sin 2θ|, |cos 2θ| as
-        // 2|A||D|/g, |D² − A²|/g with their 1/g taken out.
-        let (sq, cross2) = (n1 * n1 + g1 * g1, 2.0 * n1 * g1);
-        let (t_theta, t_g) = (2.0 * delta_theta, 2.0 * delta_g);
-        let x_sin = (t_g + 32.0 * U) * sq + t_theta * cross2 + 2.0 * (n1 * err_n + g1 * err_g);
-        let y_cos = t_theta * sq + t_g * cross2 + 2.0 * (n1 * err_g + g1 * err_n);
+        // HΩ = −(2A/g) HD − (G vᵀ + v Gᵀ), G = ∇Ω, v = (A a + D d)/g, a = ∇A, d = ∇D
+        // (`hessian_of_parts`). Each entry's error is at most the sum of
+        // * `HD`'s part: (2/g)[(δθ|D| + Δg|A|) hd_mag + |A| |δHD|], |δHD| ≤ 40u·hd_mag, with
+        //   `−2A/g = −2 sin θ/√g` perturbed by (2/g)(δθ|D| + Δg|A|), and 32u|A| hd_mag for its
+        //   product and the entry's last sums (72u in all);
+        // * the rank-two part: 2(|δG| |v| + |G| |δv|), where |δG| ≤ `grad_bound` (the gradient's
+        //   certified bound covers the computed G the Hessian uses), |v| ≤ V = (|A| ‖a‖₁ +
+        //   |D| ‖d‖₁)/g, |G| ≤ max|G| + `grad_bound`, and |δv| ≤ (‖a‖₁|δA| + |A| ‖δN‖₁ +
+        //   ‖d‖₁|δD| + |D| ‖δ∇D‖₁)/g + V(2Δg + 16u): the perturbation of the inputs, of 1/g, and
+        //   the rounding of v (7u) and of the two products and their sum (3u of 2 max|G| V).
+        let v_bound = v_mag * inv_g;
+        let delta_v = (n1 * err_a + aa * err_n + g1 * err_d + dd * err_g) * inv_g
+            + v_bound * (2.0 * delta_g + 16.0 * U);
         let hess_bound = 2.0
-            * inv_g
-            * (hd_mag * (delta_theta * dd + (delta_g + 72.0 * U) * aa)
-                + 32.0 * U * cross2
-                + (2.0 * aa * dd * x_sin + (dd * dd - aa * aa).abs() * y_cos) * inv_g);
-        // The Hessian is symmetric to the bit (`hessian_of_parts`): its upper triangle has every
-        // entry. `if e > m` skips a NaN as `f64::max` does (the finiteness test below rejects it).
+            * (inv_g * hd_mag * (delta_theta * dd + (delta_g + 72.0 * U) * aa)
+                + grad_bound * v_bound
+                + (g_max + grad_bound) * delta_v);
+        // The Hessian is symmetric (`hessian_of_parts`): its upper triangle has every entry. The
+        // largest modulus as a tree of three levels rather than a chain of six; a NaN entry is
+        // either skipped or fails the comparison, and the finiteness test rejects it either way.
         let h = &out.hessian;
-        let mut h_max = 0.0f64;
-        for e in [
-            h.x_axis.x, h.y_axis.y, h.z_axis.z, h.y_axis.x, h.z_axis.x, h.z_axis.y,
-        ] {
-            if e.abs() > h_max {
-                h_max = e.abs();
-            }
-        }
+        let larger = |a: f64, b: f64| if a > b { a } else { b };
+        let h_max = larger(
+            larger(
+                larger(h.x_axis.x.abs(), h.y_axis.y.abs()),
+                larger(h.z_axis.z.abs(), h.y_axis.x.abs()),
+            ),
+            larger(h.z_axis.x.abs(), h.z_axis.y.abs()),
+        );
         if !(hess_bound <= FAST_TOL[2] * h_max) {
             return None;
         }
     }
-    symmetric_finite(&out).then_some(out)
+    derivatives_finite(&out).then_some(out)
 }
 
-/// [`Deriv3::is_finite`] for a Hessian symmetric to the bit, from its upper triangle, without
-/// branches: `e − e` is `+0` for a finite `e` and NaN for an infinite or NaN one, and a sum of zeros
-/// is zero while a NaN term makes it NaN, so the sum below is zero exactly when every entry is
-/// finite (one comparison instead of one per entry).
+/// Whether the derivatives of a result whose Hessian is symmetric are all finite, from the
+/// gradient and the Hessian's upper triangle (the value is set later, from `atan2` of finite
+/// parts), without a comparison per entry: their sum is finite when every one is (or overflows, a
+/// false "no" that only sends the call to the robust rung), and infinite or NaN when one is
+/// (`inf + x` is `inf` for finite `x`, `inf − inf` and NaN terms give NaN); `s − s` is zero
+/// exactly for a finite `s`.
 #[inline(always)]
-#[allow(clippy::eq_op)] // `e − e` is the test: zero for finite `e` only
-fn symmetric_finite(d: &Deriv3) -> bool {
+#[allow(clippy::eq_op)] // `s − s` is the test: zero for finite `s` only
+fn derivatives_finite(d: &Deriv3) -> bool {
     let (g, h) = (d.gradient, &d.hessian);
-    let zero = |e: f64| e - e;
-    let sum = ((zero(d.value) + zero(g.x)) + (zero(g.y) + zero(g.z)))
-        + ((zero(h.x_axis.x) + zero(h.y_axis.y)) + (zero(h.z_axis.z) + zero(h.y_axis.x)))
-        + (zero(h.z_axis.x) + zero(h.z_axis.y));
-    sum == 0.0
+    let sum = ((g.x + g.y) + (g.z + h.x_axis.x))
+        + ((h.y_axis.y + h.z_axis.z) + (h.y_axis.x + h.z_axis.x))
+        + h.z_axis.y;
+    sum - sum == 0.0
 }

@@ -36,9 +36,10 @@
 //! plane, an edge or a vertex, slivers, far away, extreme scales).
 //!
 //! 1. **Certified, f64** (`certified`): distances `|y_k − x|` in (1.75e-30, 1e30) (coordinate
-//!    differences in [1e-30, 1e30]), `x` off the plane and the vertices. Van Oosterom-Strackee in plain f64 from the edges at the nearest
-//!    vertex with a running error bound, accepted within 5e-13 / 5e-13 / 5e-12. Answers almost
-//!    every generic configuration, far away and near a vertex.
+//!    differences in [1e-30, 1e30]), `x` off the plane and the vertices. Van Oosterom-Strackee in
+//!    plain f64 from the edges at the nearest vertex with a running error bound, accepted within
+//!    5e-13 / 5e-13 / 5e-12; the angle from an inline `atan2` polynomial (no libm call). Answers
+//!    almost every generic configuration, far away and near a vertex.
 //! 2. **Certified, exact `A`** (same module): where only `A` fails its bound (`x` near the plane
 //!    relative to its distance, slivers), `A` and `N` recomputed in double-double from the exact
 //!    differences, then the same certificate.
@@ -128,8 +129,8 @@ fn solid_angle(x: DVec3, y: [DVec3; 3], order: Order, signed: bool) -> Result<De
 
 /// The value of [`triangle_solid_angle`] (`signed == false`) or
 /// [`triangle_solid_angle_signed`]: the certified fast path's angle, inlined into the caller down
-/// to its two calls (`atan2`, and the robust path where the certificate fails), so that a caller
-/// that wants the value alone pays for no derivative plumbing (the C ABI's value order).
+/// to its one call (the robust path, where the certificate fails), so that a caller that wants
+/// the value alone pays for no derivative plumbing (the C ABI's value order).
 #[inline(always)]
 pub(crate) fn solid_angle_value(x: DVec3, y: [DVec3; 3], signed: bool) -> Result<f64> {
     match certified_parts(x, y, signed).and_then(|parts| certified_value(&parts)) {
