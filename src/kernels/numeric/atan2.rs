@@ -2,7 +2,7 @@
 //!
 //! std's `f64::atan2` is a libm call, which a vectorized loop cannot contain. [`atan2_upper`]
 //! reduces the angle of `(|x|, y)` to `|z| ≤ tan(π/8)` with one division, evaluates
-//! `atan z = z + z³ P(z²)` by Horner's rule, and reflects for `x < 0`; the three reductions are
+//! `atan z = z + z³ P(z²)` by Estrin's scheme, and reflects for `x < 0`; the three reductions are
 //! selects, not branches, so every lane runs the same instructions. Users: the batch solid angle
 //! (`batch::solid_angle_lanes`) and the gather's edge batches.
 //!
@@ -52,10 +52,20 @@ pub(crate) fn atan2_upper<const FMA: bool>(y: f64, x: f64) -> f64 {
     };
     let z = num / den;
     let t = z * z;
-    let mut p = ATAN_POLY[0];
-    for &c in &ATAN_POLY[1..] {
-        p = fmadd::<FMA>(p, t, c);
-    }
+    let c = &ATAN_POLY;
+    // Estrin's scheme: P = c₀t¹⁰ + t⁸e₀ + t⁶e₁ + t⁴e₂ + t²e₃ + e₄ with e_k = c_{2k+1} t + c_{2k+2}.
+    // The five pairs are independent, so the chain of dependent operations is about half as long
+    // as Horner's (the value is at the end of its callers' critical path).
+    let t2 = t * t;
+    let t4 = t2 * t2;
+    let e0 = fmadd::<FMA>(c[1], t, c[2]);
+    let e1 = fmadd::<FMA>(c[3], t, c[4]);
+    let e2 = fmadd::<FMA>(c[5], t, c[6]);
+    let e3 = fmadd::<FMA>(c[7], t, c[8]);
+    let e4 = fmadd::<FMA>(c[9], t, c[10]);
+    let high = fmadd::<FMA>(fmadd::<FMA>(c[0], t2, e0), t2, e1); // c₀t⁴ + e₀t² + e₁
+    let middle = fmadd::<FMA>(e2, t2, e3); // e₂t² + e₃
+    let p = fmadd::<FMA>(fmadd::<FMA>(high, t4, middle), t2, e4);
     let phi = base + fmadd::<FMA>(z * t, p, z);
     if x < 0.0 {
         PI - phi
