@@ -30,9 +30,10 @@ use crate::kernels::form_factor::orient::oriented;
 use crate::kernels::form_factor::plane::{is_very_thin_triangle, triangle_plane};
 use crate::kernels::form_factor::quadrature::rules::Rule;
 use crate::kernels::form_factor::quadrature::tensor::{
-    node_terms, sums_formed, RuleSums, RULE_SUMS,
+    node_terms, rule_nodes, sums_formed, Node, RuleSums, RULE_SUMS,
 };
 use crate::kernels::form_factor::replay::{fast_setup, maybe_far};
+use crate::kernels::numeric::lanes::V3;
 use crate::simd::Isa;
 use crate::{Deriv3, Order};
 
@@ -48,34 +49,6 @@ const RULES: usize = 5;
 
 /// The quadrature's running sums (`tensor::RULE_SUMS`).
 const SUMS: usize = RULE_SUMS;
-
-/// One node of the tensor rule as `tensor_rule` forms it: `s`, `s·t` and the weight `ws·wt·s`
-/// (the same for every lane, so computed once).
-#[derive(Clone, Copy)]
-struct Node {
-    s: f64,
-    st: f64,
-    weight: f64,
-}
-
-/// The nodes of `rule` on `s ∈ [0, 1]`, with `tensor_rule`'s operations (its `s0 + span·s` with
-/// `s0 = 0`, `span = 1` changes no bit, and is kept so that the claim does not rest on that).
-fn nodes(rule: Rule) -> Vec<Node> {
-    let (s0, s1) = (0.0, 1.0);
-    let span = s1 - s0;
-    let mut out = Vec::with_capacity(rule.0.len() * rule.0.len());
-    for &(s, ws) in rule.0 {
-        let (s, ws) = (s0 + span * s, ws * span);
-        for &(t, wt) in rule.0 {
-            out.push(Node {
-                s,
-                st: s * t,
-                weight: ws * wt * s,
-            });
-        }
-    }
-    out
-}
 
 /// Structure-of-arrays batch: `triangle_rule`'s inputs `r_a`, `ab`, `bc`, `n` as `[axis][lane]`,
 /// and the sums it accumulates, `[sum][lane]`.
@@ -121,10 +94,18 @@ fn block<const W: usize, const HESSIAN: bool>(l: &mut Lanes, base: usize, nodes:
     let mut acc = [[0.0f64; W]; SUMS];
     for node in nodes {
         for j in 0..W {
-            let r: [f64; 3] =
-                std::array::from_fn(|a| r_a[a][j] + node.s * ab[a][j] + node.st * bc[a][j]);
-            let n = [n[0][j], n[1][j], n[2][j]];
-            let terms = node_terms::<true, HESSIAN>(r, n, node.weight);
+            let at = |a: usize| r_a[a][j] + node.s * ab[a][j] + node.st * bc[a][j];
+            let r = V3 {
+                x: at(0),
+                y: at(1),
+                z: at(2),
+            };
+            let n = V3 {
+                x: n[0][j],
+                y: n[1][j],
+                z: n[2][j],
+            };
+            let terms = node_terms::<f64, true, HESSIAN>(r, n, node.weight);
             for k in 0..count {
                 acc[k][j] += terms[k];
             }
@@ -211,7 +192,7 @@ fn classify(x: DVec3, n: DVec3, v: [DVec3; 3]) -> Option<(Rule, [DVec3; 4], Acce
 
 /// The elements of one rule awaiting evaluation: lane `k` is chunk slot `slots[k]`.
 struct Group {
-    nodes: Vec<Node>,
+    nodes: &'static [Node],
     lanes: Box<Lanes>,
     slots: [usize; BATCH],
     len: usize,
@@ -235,7 +216,7 @@ struct Chunk {
 impl Group {
     fn new(rule: Rule) -> Group {
         Group {
-            nodes: nodes(rule),
+            nodes: rule_nodes(rule),
             lanes: Lanes::new(),
             slots: [0; BATCH],
             len: 0,
@@ -252,7 +233,7 @@ impl Group {
             let far = [DVec3::Z * 10.0, DVec3::X * 0.1, DVec3::Y * 0.1, DVec3::Z];
             self.lanes.set(i, far);
         }
-        evaluate_on(isa, &mut self.lanes, &self.nodes, order.hessian());
+        evaluate_on(isa, &mut self.lanes, self.nodes, order.hessian());
         for (k, &slot) in self.slots[..self.len].iter().enumerate() {
             let a = chunk.accepted[slot].expect("grouped slots were accepted");
             let d = assemble(&self.lanes, k, a.n, a.geometry, order);

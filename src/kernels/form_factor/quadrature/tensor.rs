@@ -2,6 +2,7 @@
 //! triangle, summed into value, gradient and Hessian moments.
 
 use std::f64::consts::FRAC_1_PI;
+use std::sync::OnceLock;
 
 use glam::{DMat3, DVec3};
 
@@ -9,6 +10,7 @@ use crate::kernels::form_factor::clip::ClipVertex;
 use crate::kernels::form_factor::edge::sym_outer;
 use crate::kernels::form_factor::quadrature::rules::Rule;
 use crate::kernels::numeric::dd;
+use crate::kernels::numeric::lanes::{Lane, Pair, V3};
 use crate::{Deriv3, Order};
 
 /// Signed form factor of one triangle by quadrature of `(n·r)(N·r)/(π‖r‖⁴)` (Duffy map, `rule` in
@@ -26,15 +28,12 @@ pub(crate) fn triangle_rule(
     geometry: (DVec3, f64),
     rule: Rule,
 ) -> Deriv3 {
-    tensor_rule(r_a, ab, bc, n, order, geometry, (0.0, 1.0, rule.0), rule.0)
+    tensor_rule(r_a, ab, bc, n, order, geometry, rule_nodes(rule))
 }
 
-/// [`triangle_rule`] restricted to `s ∈ [s0, s1]` (the part of the triangle between two lines
-/// parallel to `bc`), with Gauss rules `s_rule` along `s` and `t_rule` along `t`. With `[0, 1]`
-/// the nodes and weights are exactly those of `s_rule`, so [`triangle_rule`] is unchanged bit for
-/// bit. (The sliver rule and the subdivided quadrature's pieces sum the same integrand four
-/// nodes at a time, in `quadrature::lanes`, rounded in another order.)
-#[allow(clippy::too_many_arguments)]
+/// [`triangle_rule`] with the nodes of any tensor rule ([`tensor_nodes`]), summed in their order.
+/// (The sliver rule and the subdivided quadrature's pieces sum the same integrand four nodes at a
+/// time, in `quadrature::lanes`, rounded in another order.)
 #[inline]
 pub(crate) fn tensor_rule(
     r_a: DVec3,
@@ -43,40 +42,91 @@ pub(crate) fn tensor_rule(
     n: DVec3,
     order: Order,
     geometry: (DVec3, f64),
-    (s0, s1, s_rule): (f64, f64, &[(f64, f64)]),
-    t_rule: &[(f64, f64)],
+    nodes: &[Node],
 ) -> Deriv3 {
-    let along = (s0, s1, s_rule);
     let sums = match (order.gradient(), order.hessian()) {
-        (false, _) => rule_sums::<false, false>(r_a, ab, bc, n, along, t_rule),
-        (true, false) => rule_sums::<true, false>(r_a, ab, bc, n, along, t_rule),
-        (true, true) => rule_sums::<true, true>(r_a, ab, bc, n, along, t_rule),
+        (false, _) => rule_sums::<false, false>(r_a, ab, bc, n, nodes),
+        (true, false) => rule_sums::<true, false>(r_a, ab, bc, n, nodes),
+        (true, true) => rule_sums::<true, true>(r_a, ab, bc, n, nodes),
     };
     RuleSums::from_array(&sums).assemble(n, geometry, order)
 }
 
-/// [`tensor_rule`]'s running sums, the first [`sums_formed`] of them.
+/// A node of the tensor rule on the Duffy-mapped triangle: `s`, `s·t` and the weight `ws·wt·s`.
+#[derive(Clone, Copy)]
+pub(crate) struct Node {
+    pub(crate) s: f64,
+    pub(crate) st: f64,
+    pub(crate) weight: f64,
+}
+
+/// The nodes of the tensor rule with `s_rule` on `s ∈ [s0, s1]` (the part of the triangle between
+/// two lines parallel to `bc`) and `t_rule` along `t`, in the order they are summed (`s` outer).
+/// With `[0, 1]` the nodes and weights along `s` are exactly those of `s_rule`.
+pub(crate) fn tensor_nodes(
+    (s0, s1, s_rule): (f64, f64, &[(f64, f64)]),
+    t_rule: &[(f64, f64)],
+) -> Vec<Node> {
+    let span = s1 - s0;
+    let mut nodes = Vec::with_capacity(s_rule.len() * t_rule.len());
+    for &(s, ws) in s_rule {
+        let (s, ws) = (s0 + span * s, ws * span);
+        for &(t, wt) in t_rule {
+            nodes.push(Node {
+                s,
+                st: s * t,
+                weight: ws * wt * s,
+            });
+        }
+    }
+    nodes
+}
+
+/// [`tensor_nodes`] of a far-field `rule` in both directions on `[0, 1]`
+/// ([`FAR_FIELD_RULES`](crate::kernels::form_factor::quadrature::rules::FAR_FIELD_RULES): at most
+/// 8 points; a rule is the Gauss-Legendre rule of its number of points), built once per rule.
+pub(crate) fn rule_nodes(rule: Rule) -> &'static [Node] {
+    static NODES: [OnceLock<Vec<Node>>; 9] = [const { OnceLock::new() }; 9];
+    NODES[rule.0.len()].get_or_init(|| tensor_nodes((0.0, 1.0, rule.0), rule.0))
+}
+
+/// [`tensor_rule`]'s running sums, the first [`sums_formed`] of them, over `nodes` in their order.
+///
+/// Two consecutive nodes side by side in the lanes of a [`Pair`], each lane then added to the
+/// sums, first lane first, and an odd last node alone: the sums of one node at a time, bit for bit
+/// (those of the batch lanes, which take one node per lane). Why: written for one node, the
+/// body's 3-vectors fill one and a half SSE2 registers, and how LLVM paired their components
+/// depended on the code around the body (sharing [`node_terms`] with the batch lanes made this
+/// loop slower that way, with the same operations); two nodes in two lanes need no shuffles until
+/// the sums.
 #[inline(always)]
 fn rule_sums<const GRADIENT: bool, const HESSIAN: bool>(
     r_a: DVec3,
     ab: DVec3,
     bc: DVec3,
     n: DVec3,
-    (s0, s1, s_rule): (f64, f64, &[(f64, f64)]),
-    t_rule: &[(f64, f64)],
+    nodes: &[Node],
 ) -> [f64; RULE_SUMS] {
     let count = sums_formed(GRADIENT, HESSIAN);
     let mut sums = [0.0; RULE_SUMS];
-    let span = s1 - s0;
-    for &(s, ws) in s_rule {
-        let (s, ws) = (s0 + span * s, ws * span);
-        for &(t, wt) in t_rule {
-            let weight = ws * wt * s;
-            let r = r_a + s * ab + (s * t) * bc;
-            let terms = node_terms::<GRADIENT, HESSIAN>(r.to_array(), n.to_array(), weight);
+    let [r_a2, ab2, bc2, n2] = [r_a, ab, bc, n].map(V3::<Pair>::splat);
+    let mut pairs = nodes.chunks_exact(2);
+    for pair in &mut pairs {
+        let (a, b) = (pair[0], pair[1]);
+        let r = r_a2 + ab2.scale(Pair::new(a.s, b.s)) + bc2.scale(Pair::new(a.st, b.st));
+        let terms = node_terms::<Pair, GRADIENT, HESSIAN>(r, n2, Pair::new(a.weight, b.weight));
+        for lane in 0..2 {
             for k in 0..count {
-                sums[k] += terms[k];
+                sums[k] += terms[k].get(lane);
             }
+        }
+    }
+    if let [last] = pairs.remainder() {
+        let r = r_a + last.s * ab + last.st * bc;
+        let (r, n) = (V3::from_dvec(r), V3::from_dvec(n));
+        let terms = node_terms::<f64, GRADIENT, HESSIAN>(r, n, last.weight);
+        for k in 0..count {
+            sums[k] += terms[k];
         }
     }
     sums
@@ -97,32 +147,34 @@ pub(crate) const fn sums_formed(gradient: bool, hessian: bool) -> usize {
 }
 
 /// What the node at `r` (relative to x) with weight `weight` adds to each running sum of the
-/// far-field rule, for the receiver normal `n`: the one node body of [`tensor_rule`] and of the
-/// batch lanes (`batch::far_field_lanes`, which call it lane by lane), so that both round alike.
-/// Only the first [`sums_formed`] terms are formed; the moments of the integrand's derivatives
-/// are assembled once after the loop ([`RuleSums::assemble`]):
+/// far-field rule, for the receiver normal `n`, in each lane: the one node body of
+/// [`tensor_rule`] (two nodes in a [`Pair`], an odd last one in `f64`) and of the batch lanes
+/// (`batch::far_field_lanes`, one `f64` lane at a time), so that both round alike. Only the first [`sums_formed`] terms are
+/// formed; the moments of the integrand's derivatives are assembled once after the loop
+/// ([`RuleSums::assemble`]):
 ///
 /// ```text
 /// ∇q = 4 (n·r) r/‖r‖⁶ − n/‖r‖⁴,
 /// Hq = 24 (n·r) r rᵀ/‖r‖⁸ − 4 (n rᵀ + r nᵀ)/‖r‖⁶ − 4 (n·r) 𝟙/‖r‖⁶.
 /// ```
 ///
-/// `r·r` and `n·r` are glam's `dot`, `(x·x' + y·y') + z·z'`.
+/// `r·r` and `n·r` are [`V3::dot`], glam's `(x·x' + y·y') + z·z'`.
 #[inline(always)]
-pub(crate) fn node_terms<const GRADIENT: bool, const HESSIAN: bool>(
-    r: [f64; 3],
-    n: [f64; 3],
-    weight: f64,
-) -> [f64; RULE_SUMS] {
-    let mut t = [0.0; RULE_SUMS];
-    let inv2 = 1.0 / (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+pub(crate) fn node_terms<L: Lane, const GRADIENT: bool, const HESSIAN: bool>(
+    r: V3<L>,
+    n: V3<L>,
+    weight: L,
+) -> [L; RULE_SUMS] {
+    let mut t = [L::splat(0.0); RULE_SUMS];
+    let inv2 = r.dot(r).recip();
     let inv4 = inv2 * inv2;
-    let nr = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+    let nr = n.dot(r);
     t[0] = weight * nr * inv4;
     if GRADIENT {
         let w6 = weight * inv4 * inv2;
         t[1] = weight * inv4;
         let w6nr = w6 * nr;
+        let r = [r.x, r.y, r.z];
         for a in 0..3 {
             t[2 + a] = w6nr * r[a];
         }

@@ -7,8 +7,8 @@
 //! and adds the lanes back in one fixed tree, `(l0 + l1) + (l2 + l3)`.
 //!
 //! Who uses them: the derivative fast path of Lambert's sum takes two edges side by side
-//! (`V3<Pair>`), the sliver rule's sums take four nodes at a time (`Wide` in the AVX2 build, two
-//! `Pair` halves in the portable one).
+//! (`V3<Pair>`), the far-field tensor rule two consecutive nodes (`V3<Pair>`), the sliver rule's
+//! sums four nodes at a time (`Wide` in the AVX2 build, two `Pair` halves in the portable one).
 //!
 //! Why lanes written by hand: without AVX a `DVec3` fills one and a half SSE2 registers, and
 //! per-edge arithmetic (cross products, six Hessian entries) spends as many instructions on

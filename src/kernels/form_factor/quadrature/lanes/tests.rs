@@ -1,5 +1,5 @@
 use super::*;
-use crate::kernels::form_factor::quadrature::tensor::tensor_rule;
+use crate::kernels::form_factor::quadrature::tensor::{tensor_nodes, tensor_rule};
 use crate::kernels::form_factor::sliver::rule::rules;
 use crate::test_rng::lcg;
 use crate::{Deriv3, Order};
@@ -49,10 +49,11 @@ fn paired_sums_match_the_scalar_tensor_rule() {
         let s_paired = rules().quads[8 + k % 9];
         let t_rule = rules().by_points[[2, 3, 4, 8][k % 4]];
         let frame = PieceFrame { r_p, ab, bc, part };
+        let nodes = tensor_nodes((s0, s1, s_rule), t_rule);
         let mut value = None;
         for order in [Order::Value, Order::Gradient, Order::Hessian] {
             let d = paired_sums(&frame, n, order, geometry, (s0, s1, s_paired), t_rule);
-            let r = tensor_rule(r_p, ab, bc, n, order, scaled, (s0, s1, s_rule), t_rule);
+            let r = tensor_rule(r_p, ab, bc, n, order, scaled, &nodes);
             let max = |m: glam::DMat3| {
                 m.to_cols_array()
                     .iter()
