@@ -149,9 +149,9 @@ pub(crate) const fn sums_formed(gradient: bool, hessian: bool) -> usize {
 /// What the node at `r` (relative to x) with weight `weight` adds to each running sum of the
 /// far-field rule, for the receiver normal `n`, in each lane: the one node body of
 /// [`tensor_rule`] (two nodes in a [`Pair`], an odd last one in `f64`) and of the batch lanes
-/// (`batch::far_field_lanes`, one `f64` lane at a time), so that both round alike. Only the first [`sums_formed`] terms are
-/// formed; the moments of the integrand's derivatives are assembled once after the loop
-/// ([`RuleSums::assemble`]):
+/// (`batch::far_field_lanes`, one `f64` lane at a time), so that both round alike. Only the first
+/// [`sums_formed`] terms are formed; the moments of the integrand's derivatives are assembled once
+/// after the loop ([`RuleSums::assemble`]):
 ///
 /// ```text
 /// ∇q = 4 (n·r) r/‖r‖⁶ − n/‖r‖⁴,
