@@ -248,9 +248,9 @@ fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
         p[2] * inv_s[2] + s[0] + s[1],
     ];
     let grad_d = -(r[0] * c[0] + r[1] * c[1] + r[2] * c[2]);
-    let grad_a = -normal;
-    let inv_g = 1.0 / g;
-    out.gradient = (grad_a * d_den - grad_d * a_num) * (2.0 * inv_g);
+    let quotient = Quotient::new(a_num, d_den, g, -normal, grad_d);
+    let inv_g = quotient.inv_g;
+    out.gradient = quotient.gradient;
 
     // Perturbation bounds: |δθ| ≤ Δθ, |δ√g|/√g ≤ Δg (first order; the checks keep them ≪ 1).
     let (aa, dd) = (a_num.abs(), d_den.abs());
@@ -274,17 +274,7 @@ fn certified_derivs(parts: &CertifiedParts, order: Order) -> Option<Deriv3> {
 
     if order.hessian() {
         let s_sum = s[0] + s[1] + s[2];
-        out.hessian = hessian_of_parts(
-            &Parts { r, s, inv_s, p, c },
-            &Quotient {
-                a_num,
-                d_den,
-                inv_g,
-                grad_a,
-                grad_d,
-                gradient: out.gradient,
-            },
-        );
+        out.hessian = hessian_of_parts(&Parts { r, s, inv_s, p, c }, &quotient);
         let w = s[1] * s[2] * inv_s[0] + s[2] * s[0] * inv_s[1] + s[0] * s[1] * inv_s[2];
         let hd_mag = 4.0 * w + 14.0 * s_sum;
         // HΩ = −(2A/g) HD − (G vᵀ + v Gᵀ), G = ∇Ω, v = (A a + D d)/g, a = ∇A, d = ∇D

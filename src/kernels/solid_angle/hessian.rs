@@ -24,8 +24,8 @@ pub(super) struct Parts {
     pub(super) c: [f64; 3],
 }
 
-/// What the Hessian takes besides the [`Parts`]: `A`, `D`, `1/(A² + D²)`, `a = ∇A`, `d = ∇D` and
-/// the gradient `∇Ω = 2(D a − A d)/(A² + D²)` as the caller computed it.
+/// `Ω = 2 atan2(A, D)` as a quotient: `A`, `D`, `1/g` with `g = A² + D²`, `a = ∇A`, `d = ∇D`, and
+/// the gradient `∇Ω = 2(D a − A d)/g`, which both rungs return and the Hessian is built from.
 pub(super) struct Quotient {
     pub(super) a_num: f64,
     pub(super) d_den: f64,
@@ -33,6 +33,23 @@ pub(super) struct Quotient {
     pub(super) grad_a: DVec3,
     pub(super) grad_d: DVec3,
     pub(super) gradient: DVec3,
+}
+
+impl Quotient {
+    /// The quotient of `A`, `D`, their sum of squares `g` and their gradients, with `1/g` and
+    /// `∇Ω`.
+    #[inline(always)]
+    pub(super) fn new(a_num: f64, d_den: f64, g: f64, grad_a: DVec3, grad_d: DVec3) -> Self {
+        let inv_g = 1.0 / g;
+        Quotient {
+            a_num,
+            d_den,
+            inv_g,
+            grad_a,
+            grad_d,
+            gradient: (grad_a * d_den - grad_d * a_num) * (2.0 * inv_g),
+        }
+    }
 }
 
 /// Hessian of `Ω = 2 atan2(A, D)`: `−2A HD/g − (G vᵀ + v Gᵀ)` (see the module documentation).

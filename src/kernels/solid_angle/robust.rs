@@ -131,23 +131,12 @@ pub(super) fn solid_angle_unchecked(
             (p, c, -(r[0] * c[0] + r[1] * c[1] + r[2] * c[2]))
         }
     };
-    let grad_a = -normal;
     let g = a_num * a_num + d_den * d_den;
-    let inv_g = 1.0 / g;
-    out.gradient = (grad_a * d_den - grad_d * a_num) * (2.0 * inv_g);
+    let quotient = Quotient::new(a_num, d_den, g, -normal, grad_d);
+    out.gradient = quotient.gradient;
 
     if order.hessian() {
-        out.hessian = hessian_of_parts(
-            &Parts { r, s, inv_s, p, c },
-            &Quotient {
-                a_num,
-                d_den,
-                inv_g,
-                grad_a,
-                grad_d,
-                gradient: out.gradient,
-            },
-        );
+        out.hessian = hessian_of_parts(&Parts { r, s, inv_s, p, c }, &quotient);
     }
 
     Ok(rescale(out, sc1, sc2))
