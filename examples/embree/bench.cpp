@@ -5,6 +5,7 @@
 
 #include <sys/resource.h>
 
+#include <array>
 #include <cinttypes>
 #include <cstdio>
 #include <fstream>
@@ -95,6 +96,13 @@ class CpuSum {
   double total_ = 0;
 };
 
+// A surface cache of three channels with `interpolation` (RADDIFF_INTERP_*) clamped at zero.
+const raddiff_cache_config &config_of(int interpolation) {
+  static thread_local raddiff_cache_config c{};
+  c = {3, RADDIFF_DOMAIN_SURFACE, static_cast<uint32_t>(interpolation) | RADDIFF_INTERP_NON_NEGATIVE, 0.2};
+  return c;
+}
+
 struct RecordInfo {
   size_t pixel;
   V3 p, n;
@@ -152,15 +160,23 @@ class Bench {
     std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)> cache(raddiff_irradiance_cache_new(&irr),
                                                                     raddiff_cache_free);
     if (settings_.interpolation >= 0) {
-      const raddiff_cache_config config{3, RADDIFF_DOMAIN_SURFACE,
-                                        static_cast<uint32_t>(settings_.interpolation) | RADDIFF_INTERP_NON_NEGATIVE,
-                                        0.2};
-      cache.reset(raddiff_cache_new(&config));
+      cache.reset(raddiff_cache_new(&config_of(settings_.interpolation)));
       if (cache) check(raddiff_cache_set_gradient_limit(cache.get(), irr.gradient_limit), "gradient limit");
     }
     if (!cache) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
+    auto make_record = [&](size_t i, raddiff_cache_record &rec) {
+      const Evaluated &e = *store_.get(i).evaluated;
+      if (!metric_record(m, p, e, irr, primary_[i].footprint, rec)) return false;
+      if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
+      if (settings_.hessian_distance_bound > 0 && uses_hessian(m)) {
+        const double bound = std::max(settings_.hessian_distance_bound * e.harmonic_mean_distance,
+                                      irr.pixel_radius_min * primary_[i].footprint);
+        for (double &r : rec.radii) r = std::min(r, bound);
+      }
+      return true;
+    };
     auto covered = [&](size_t i) {
       float v[3];
       const raddiff_status st = raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
@@ -200,21 +216,44 @@ class Bench {
           if (!e.valid) continue;
           t0 = thread_cpu_seconds();
           raddiff_cache_record rec{};
-          const bool defined = metric_record(m, p, e, irr, primary_[i].footprint, rec);
+          const bool defined = make_record(i, rec);
           out.raddiff_seconds += thread_cpu_seconds() - t0;
           if (!defined) continue;
-          if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
-          if (settings_.hessian_distance_bound > 0 && uses_hessian(m)) {
-            const double bound = std::max(settings_.hessian_distance_bound * e.harmonic_mean_distance,
-                                          irr.pixel_radius_min * primary_[i].footprint);
-            for (double &r : rec.radii) r = std::min(r, bound);
-          }
           RecordInfo info{i, primary_[i].p, primary_[i].n, {rec.radii[0], rec.radii[1]}, {rec.axes[0], rec.axes[1]}};
           t0 = thread_cpu_seconds();
           check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
           cache_cpu.add(thread_cpu_seconds() - t0);
           out.records.push_back(info);
         }
+      }
+    }
+    if (render && settings_.smooth_records > 0) {
+      // Experiment: every record's value replaced by the tent-weighted blend of the records
+      // covering its position (its own included), each extrapolated through its gradient.
+      const raddiff_cache_config tent{3, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT | RADDIFF_INTERP_NON_NEGATIVE, 0.2};
+      std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)> blend(raddiff_cache_new(&tent), raddiff_cache_free);
+      check(raddiff_cache_set_gradient_limit(blend.get(), irr.gradient_limit), "gradient limit");
+      for (const RecordInfo &r : out.records) {
+        raddiff_cache_record rec{};
+        if (!make_record(r.pixel, rec)) continue;
+        for (double &x : rec.radii) x *= settings_.smooth_records;
+        check(raddiff_cache_insert(blend.get(), &rec), "raddiff_cache_insert");
+      }
+      check(raddiff_cache_compact(blend.get()), "raddiff_cache_compact");
+      std::vector<std::array<float, 3>> smoothed(out.records.size());
+      for (size_t k = 0; k < out.records.size(); ++k)
+        check(raddiff_cache_lookup(blend.get(), to_c(out.records[k].p), to_c(out.records[k].n), smoothed[k].data(),
+                                   nullptr),
+              "raddiff_cache_lookup");
+      cache.reset(settings_.interpolation >= 0 ? raddiff_cache_new(&config_of(settings_.interpolation))
+                                               : raddiff_irradiance_cache_new(&irr));
+      if (settings_.interpolation >= 0)
+        check(raddiff_cache_set_gradient_limit(cache.get(), irr.gradient_limit), "gradient limit");
+      for (size_t k = 0; k < out.records.size(); ++k) {
+        raddiff_cache_record rec{};
+        if (!make_record(out.records[k].pixel, rec)) continue;
+        rec.value = smoothed[k].data();
+        check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
       }
     }
     if (render) {
@@ -551,10 +590,12 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
                 floor, s.size());
   }
 
+  // The primary hits' normals: the denoiser's guide, and where the report finds geometric edges.
+  write_pfm(settings.out + "-normal.pfm", normal_buffer(primary, view));
+
   // Path tracing the indirect irradiance per pixel, up to past the costliest cache.
   if (settings.path_trace) {
     write_pfm(settings.out + "-albedo.pfm", albedo_buffer(scene, primary, view));
-    write_pfm(settings.out + "-normal.pfm", normal_buffer(primary, view));
     std::ofstream pt(settings.out + "-pt.csv");
     pt << "spp,cpu_s,rays,rel_rms,rms,worst1_share,file\n";
     path_trace(scene, primary, view, settings.radiance, settings.path_trace_max_spp, 1.3 * longest, settings.threads,

@@ -26,6 +26,7 @@ struct BenchSettings {
   uint32_t floor_rays = 1u << 16;     // rays of the reference at each of those records
   uint32_t path_trace_max_spp = 4096;
   bool path_trace = true;
+  double smooth_records = 0;          // > 0: records' values blended with their neighbours' (tent, radii x this)
   bool record_gradients = true;       // false: records without gradients (to measure what they add)
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.

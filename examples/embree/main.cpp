@@ -44,7 +44,8 @@ const char *kUsage =
     "  --bench:            [--records N (default pixels/32)] [--metrics name,name,...] [--thresholds N]\n"
     "                      [--reference-rays N (65536)] [--reference-grid G (64)] [--cache-dir DIR] [--floor-records N]\n"
     "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n"
-    "                      [--oracle-derivatives K]\n";
+    "                      [--oracle-derivatives K] [--interpolation ward|tent|cubic]\n"
+    "                      [--hessian-distance-bound k] [--smooth-records s]\n";
 
 }  // namespace
 
@@ -110,6 +111,7 @@ int main(int argc, char **argv) {
       else if (a == "--floor-rays") bench.floor_rays = static_cast<uint32_t>(std::stoul(next()));
       else if (a == "--pt-max-spp") bench.path_trace_max_spp = static_cast<uint32_t>(std::stoul(next()));
       else if (a == "--no-path-trace") bench.path_trace = false;
+      else if (a == "--smooth-records") bench.smooth_records = std::stod(next());
       else if (a == "--no-record-gradients") bench.record_gradients = false;
       else if (a == "--oracle-derivatives") bench.oracle_derivative_paths = std::stoi(next());
       else if (a == "--hessian-distance-bound") bench.hessian_distance_bound = std::stod(next());

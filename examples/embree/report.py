@@ -139,6 +139,45 @@ def trimmed_error(run, metric):
     return math.sqrt(sum(sq[len(sq) // 100:]) / ref2) if ref2 > 0 else 0.0
 
 
+EDGE_ANGLE = 0.2  # radians: the cache's own maximum normal deviation
+
+
+def edge_pixels(run):
+    """The measured pixels within one pixel of a geometric edge (a crease, a silhouette or the
+    rim of the background): a 4-neighbour pair whose primary-hit normals differ by more than
+    EDGE_ANGLE marks both pixels, then the mark grows by one pixel. None without a normal buffer."""
+    path = run.path("-normal.pfm")
+    if not os.path.exists(path):
+        return None
+    n = read_pfm(path)
+    n = n / np.maximum(np.linalg.norm(n, axis=2, keepdims=True), 1e-12)
+    edge = np.zeros(n.shape[:2], dtype=bool)
+    for dy, dx in ((0, 1), (1, 0)):
+        h, w = n.shape[0] - dy, n.shape[1] - dx
+        apart = (n[:h, :w] * n[dy:, dx:]).sum(axis=2) < math.cos(EDGE_ANGLE)
+        edge[:h, :w] |= apart
+        edge[dy:, dx:] |= apart
+    near = edge.copy()
+    near[1:, :] |= edge[:-1, :]
+    near[:-1, :] |= edge[1:, :]
+    near[:, 1:] |= edge[:, :-1]
+    near[:, :-1] |= edge[:, 1:]
+    return np.array([near[int(r["y"]), int(r["x"])] for r in run.measured])
+
+
+def edge_split(run, metric, at_edge):
+    """A metric's relative RMS error split into the part at edge pixels and the part away from
+    them (each over the same total reference, so the squares add up to the error's square)."""
+    if at_edge is None:
+        return None, None
+    pixels = rows(run.path(f"-{metric}-pixels.csv"))
+    e2 = np.array([float(r["error"]) ** 2 for r in pixels])
+    ref2 = sum(float(r["reference"]) ** 2 for r in pixels)
+    if ref2 <= 0 or len(e2) != len(at_edge):
+        return None, None
+    return math.sqrt(e2[at_edge].sum() / ref2), math.sqrt(e2[~at_edge].sum() / ref2)
+
+
 def mosaic(run, values):
     """Each measured pixel's value over its stratum (the grid of the stratified selection)."""
     g = int(run.summary["reference_grid"])
@@ -326,10 +365,16 @@ def report_run(run, md, table):
         f"{float(s['process_cpu_s']):.0f} CPU s in all.\n")
     split = run.equal("split-sphere")
     anis = run.equal("hessian-anisotropic")
+    at_edge = edge_pixels(run)
+    if at_edge is not None:
+        md.append(
+            f"Edge pixels (within one pixel of a crease or silhouette, normals {EDGE_ANGLE} rad apart): "
+            f"{int(at_edge.sum())} of {len(at_edge)} measured pixels; the error is split into its part at "
+            f"them and away from them (the squares add up to the error's square).\n")
     md.append("| metric | records | CPU s (trace / raddiff / cache) | raddiff share | error | vs split sphere "
               "| gathers' floor | interpolation | worst 1% share | without the worst 1% "
-              "| CPU s to the Hessian's error | radius px (min / 5% / median) |")
-    md.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
+              "| at edges / away | CPU s to the Hessian's error | radius px (min / 5% / median) |")
+    md.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     errors = []
     for m in run.metrics:
         f = run.equal(m)
@@ -341,23 +386,26 @@ def report_run(run, md, table):
         share = f["raddiff_s"] / f["total_s"] if f["total_s"] > 0 else 0
         errors.append(f["rel_rms"])
         trimmed = trimmed_error(run, m)
+        edge_part, away_part = edge_split(run, m, at_edge)
+        edges_text = "" if edge_part is None else f"{edge_part:.4f} / {away_part:.4f}"
         reach = time_to_reach([(g["total_s"], g["rel_rms"]) for g in run.curve(m)], anis["rel_rms"]) if anis else None
         reach_text = "not reached" if reach is None else f"{reach:.1f}"
         md.append(
             f"| {m} | {int(f['records'])} | {f['total_s']:.1f} ({f['trace_s']:.1f} / {f['raddiff_s']:.2f} / "
             f"{f['cache_s']:.2f}) | {100 * share:.1f}% | {fmt(f['rel_rms'])} | {fmt(ratio, 2)} | {fmt(floor)} | "
-            f"{fmt(interp)} | {f['worst1_share']:.2f} | {fmt(trimmed)} | {reach_text} | "
+            f"{fmt(interp)} | {f['worst1_share']:.2f} | {fmt(trimmed)} | {edges_text} | {reach_text} | "
             f"{f['radius_px_min']:.1f} / {f['radius_px_p5']:.1f} / {f['radius_px_median']:.1f} |")
         table.append([run.name, m, f["parameter"], int(f["records"]), f["trace_s"], f["raddiff_s"], f["cache_s"],
-                      f["total_s"], f["rel_rms"], floor, f["worst1_share"], trimmed, 1])
+                      f["total_s"], f["rel_rms"], floor, f["worst1_share"], trimmed, fmt(edge_part),
+                      fmt(away_part), 1])
         for g in run.curve(m):
             if int(g["equal_records"]) == 0:
                 table.append([run.name, m, g["parameter"], int(g["records"]), g["trace_s"], g["raddiff_s"],
-                              g["cache_s"], g["total_s"], g["rel_rms"], "", g["worst1_share"], "", 0])
+                              g["cache_s"], g["total_s"], g["rel_rms"], "", g["worst1_share"], "", "", "", 0])
     for kind, pts in (("path-tracing", run.pt), ("path-tracing+oidn", run.oidn)):
         for p in pts:
             table.append([run.name, kind, p["spp"], "", "", "", "", p["cpu_s"], p["rel_rms"], "", p["worst1_share"],
-                          "", 0])
+                          "", "", "", 0])
         if anis and pts:
             e = interpolate_loglog([(p["cpu_s"], p["rel_rms"]) for p in pts], anis["total_s"])
             reach = time_to_reach([(p["cpu_s"], p["rel_rms"]) for p in pts], anis["rel_rms"])
@@ -365,7 +413,7 @@ def report_run(run, md, table):
             if e is not None:
                 errors.append(e)
                 md.append(f"| {kind} at the anisotropic Hessian's {anis['total_s']:.1f} CPU s | | | | {fmt(e)} | "
-                          f"{fmt(e / split['rel_rms'] if split else None, 2)} | | | | | {reach_text} | |")
+                          f"{fmt(e / split['rel_rms'] if split else None, 2)} | | | | | | {reach_text} | |")
     md.append("")
     noise = float(s["reference_relative_noise"])
     smallest = min(errors) if errors else 0
@@ -392,7 +440,8 @@ def main():
           "Relative RMS error of the indirect irradiance's luminance at the measured pixels against the "
           "converged reference; CPU seconds summed over threads. Written by examples/embree/report.py.\n"]
     table = [["run", "metric", "parameter", "records", "trace_s", "raddiff_s", "cache_s", "total_s", "rel_rms",
-              "gather_floor", "worst1_share", "rel_rms_without_worst1", "equal_records"]]
+              "gather_floor", "worst1_share", "rel_rms_without_worst1", "rel_rms_at_edges", "rel_rms_away_from_edges",
+              "equal_records"]]
     for name in runs:
         report_run(Run(folder, name), md, table)
     with open(os.path.join(folder, "report.md"), "w") as f:
