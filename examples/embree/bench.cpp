@@ -5,7 +5,6 @@
 
 #include <sys/resource.h>
 
-#include <array>
 #include <cinttypes>
 #include <cstdio>
 #include <fstream>
@@ -96,11 +95,17 @@ class CpuSum {
   double total_ = 0;
 };
 
-// A surface cache of three channels with `interpolation` (RADDIFF_INTERP_*) clamped at zero.
-const raddiff_cache_config &config_of(int interpolation) {
-  static thread_local raddiff_cache_config c{};
-  c = {3, RADDIFF_DOMAIN_SURFACE, static_cast<uint32_t>(interpolation) | RADDIFF_INTERP_NON_NEGATIVE, 0.2};
-  return c;
+using CachePtr = std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)>;
+
+// A surface cache of three channels with `interpolation` (RADDIFF_INTERP_*), clamped at zero, with
+// gradient limit c.
+CachePtr surface_cache(int interpolation, double c) {
+  const raddiff_cache_config config{3, RADDIFF_DOMAIN_SURFACE,
+                                    static_cast<uint32_t>(interpolation) | RADDIFF_INTERP_NON_NEGATIVE, 0.2};
+  CachePtr cache(raddiff_cache_new(&config), raddiff_cache_free);
+  if (!cache) throw std::runtime_error(std::string("raddiff_cache_new: ") + raddiff_last_error());
+  check(raddiff_cache_set_gradient_limit(cache.get(), c), "raddiff_cache_set_gradient_limit");
+  return cache;
 }
 
 struct RecordInfo {
@@ -156,14 +161,14 @@ class Bench {
     irr.metric = c_metric(m);
     irr.accuracy = p;
     // The cache this metric wants: Ward or tent weights, extrapolation clamped at zero, the
-    // gradient limit and the leak guard of the settings.
-    std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)> cache(raddiff_irradiance_cache_new(&irr),
-                                                                    raddiff_cache_free);
-    if (settings_.interpolation >= 0) {
-      cache.reset(raddiff_cache_new(&config_of(settings_.interpolation)));
-      if (cache) check(raddiff_cache_set_gradient_limit(cache.get(), irr.gradient_limit), "gradient limit");
-    }
-    if (!cache) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
+    // gradient limit and the leak guard of the settings (or the interpolation the settings force).
+    auto new_cache = [&] {
+      if (settings_.interpolation >= 0) return surface_cache(settings_.interpolation, irr.gradient_limit);
+      CachePtr c(raddiff_irradiance_cache_new(&irr), raddiff_cache_free);
+      if (!c) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
+      return c;
+    };
+    CachePtr cache = new_cache();
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
     auto make_record = [&](size_t i, raddiff_cache_record &rec) {
@@ -228,11 +233,10 @@ class Bench {
       }
     }
     if (render && settings_.smooth_records > 0) {
-      // Experiment: every record's value replaced by the tent-weighted blend of the records
-      // covering its position (its own included), each extrapolated through its gradient.
-      const raddiff_cache_config tent{3, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT | RADDIFF_INTERP_NON_NEGATIVE, 0.2};
-      std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)> blend(raddiff_cache_new(&tent), raddiff_cache_free);
-      check(raddiff_cache_set_gradient_limit(blend.get(), irr.gradient_limit), "gradient limit");
+      // Experiment (not timed): every record's value replaced by the tent-weighted blend of the
+      // records covering its position (its own included, radii times smooth_records), each
+      // extrapolated through its gradient; the cache rebuilt from the same records.
+      CachePtr blend = surface_cache(RADDIFF_INTERP_TENT, irr.gradient_limit);
       for (const RecordInfo &r : out.records) {
         raddiff_cache_record rec{};
         if (!make_record(r.pixel, rec)) continue;
@@ -240,19 +244,14 @@ class Bench {
         check(raddiff_cache_insert(blend.get(), &rec), "raddiff_cache_insert");
       }
       check(raddiff_cache_compact(blend.get()), "raddiff_cache_compact");
-      std::vector<std::array<float, 3>> smoothed(out.records.size());
-      for (size_t k = 0; k < out.records.size(); ++k)
-        check(raddiff_cache_lookup(blend.get(), to_c(out.records[k].p), to_c(out.records[k].n), smoothed[k].data(),
-                                   nullptr),
-              "raddiff_cache_lookup");
-      cache.reset(settings_.interpolation >= 0 ? raddiff_cache_new(&config_of(settings_.interpolation))
-                                               : raddiff_irradiance_cache_new(&irr));
-      if (settings_.interpolation >= 0)
-        check(raddiff_cache_set_gradient_limit(cache.get(), irr.gradient_limit), "gradient limit");
-      for (size_t k = 0; k < out.records.size(); ++k) {
+      cache = new_cache();
+      for (const RecordInfo &r : out.records) {
         raddiff_cache_record rec{};
-        if (!make_record(out.records[k].pixel, rec)) continue;
-        rec.value = smoothed[k].data();
+        if (!make_record(r.pixel, rec)) continue;
+        float smoothed[3];
+        const raddiff_status st = raddiff_cache_lookup(blend.get(), to_c(r.p), to_c(r.n), smoothed, nullptr);
+        if (st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
+        if (st == RADDIFF_OK) rec.value = smoothed;
         check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
       }
     }
