@@ -171,17 +171,10 @@ class Bench {
     CachePtr cache = new_cache();
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
-    auto make_record = [&](size_t i, raddiff_cache_record &rec) {
-      const Evaluated &e = *store_.get(i).evaluated;
-      if (!metric_record(m, p, e, irr, primary_[i].footprint, rec)) return false;
-      if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
-      if (settings_.hessian_distance_bound > 0 && uses_hessian(m)) {
-        const double bound = std::max(settings_.hessian_distance_bound * e.harmonic_mean_distance,
-                                      irr.pixel_radius_min * primary_[i].footprint);
-        for (double &r : rec.radii) r = std::min(r, bound);
-      }
-      return true;
-    };
+    // The inserted records, kept for the smoothing experiment (their derivatives point into the
+    // store's evaluations, which outlive the fill).
+    const bool smooth = render && settings_.smooth_records > 0;
+    std::vector<raddiff_cache_record> kept;
     auto covered = [&](size_t i) {
       float v[3];
       const raddiff_status st = raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
@@ -221,35 +214,38 @@ class Bench {
           if (!e.valid) continue;
           t0 = thread_cpu_seconds();
           raddiff_cache_record rec{};
-          const bool defined = make_record(i, rec);
+          const bool defined = metric_record(m, p, e, irr, primary_[i].footprint, rec);
           out.raddiff_seconds += thread_cpu_seconds() - t0;
           if (!defined) continue;
+          if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
+          if (settings_.hessian_distance_bound > 0 && uses_hessian(m)) {
+            const double bound = std::max(settings_.hessian_distance_bound * e.harmonic_mean_distance,
+                                          irr.pixel_radius_min * primary_[i].footprint);
+            for (double &r : rec.radii) r = std::min(r, bound);
+          }
           RecordInfo info{i, primary_[i].p, primary_[i].n, {rec.radii[0], rec.radii[1]}, {rec.axes[0], rec.axes[1]}};
           t0 = thread_cpu_seconds();
           check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
           cache_cpu.add(thread_cpu_seconds() - t0);
           out.records.push_back(info);
+          if (smooth) kept.push_back(rec);
         }
       }
     }
-    if (render && settings_.smooth_records > 0) {
+    if (smooth) {
       // Experiment (not timed): every record's value replaced by the tent-weighted blend of the
       // records covering its position (its own included, radii times smooth_records), each
       // extrapolated through its gradient; the cache rebuilt from the same records.
       CachePtr blend = surface_cache(RADDIFF_INTERP_TENT, irr.gradient_limit);
-      for (const RecordInfo &r : out.records) {
-        raddiff_cache_record rec{};
-        if (!make_record(r.pixel, rec)) continue;
+      for (raddiff_cache_record rec : kept) {
         for (double &x : rec.radii) x *= settings_.smooth_records;
         check(raddiff_cache_insert(blend.get(), &rec), "raddiff_cache_insert");
       }
       check(raddiff_cache_compact(blend.get()), "raddiff_cache_compact");
       cache = new_cache();
-      for (const RecordInfo &r : out.records) {
-        raddiff_cache_record rec{};
-        if (!make_record(r.pixel, rec)) continue;
+      for (raddiff_cache_record rec : kept) {
         float smoothed[3];
-        const raddiff_status st = raddiff_cache_lookup(blend.get(), to_c(r.p), to_c(r.n), smoothed, nullptr);
+        const raddiff_status st = raddiff_cache_lookup(blend.get(), rec.position, rec.normal, smoothed, nullptr);
         if (st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
         if (st == RADDIFF_OK) rec.value = smoothed;
         check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
