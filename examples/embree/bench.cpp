@@ -5,6 +5,7 @@
 
 #include <sys/resource.h>
 
+#include <array>
 #include <cinttypes>
 #include <cstdio>
 #include <fstream>
@@ -97,15 +98,56 @@ class CpuSum {
 
 using CachePtr = std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)>;
 
-// A surface cache of three channels with `interpolation` (RADDIFF_INTERP_*), clamped at zero, with
-// gradient limit c.
-CachePtr surface_cache(int interpolation, double c) {
-  const raddiff_cache_config config{3, RADDIFF_DOMAIN_SURFACE,
-                                    static_cast<uint32_t>(interpolation) | RADDIFF_INTERP_NON_NEGATIVE, 0.2};
+// A surface cache of `channels` channels with `interpolation` (RADDIFF_INTERP_*), clamped at zero
+// when `non_negative`, with gradient limit c.
+CachePtr surface_cache(int interpolation, double c, uint32_t channels = 3, bool non_negative = true) {
+  const raddiff_cache_config config{
+      channels, RADDIFF_DOMAIN_SURFACE,
+      static_cast<uint32_t>(interpolation) | (non_negative ? RADDIFF_INTERP_NON_NEGATIVE : 0u), 0.2};
   CachePtr cache(raddiff_cache_new(&config), raddiff_cache_free);
   if (!cache) throw std::runtime_error(std::string("raddiff_cache_new: ") + raddiff_last_error());
   check(raddiff_cache_set_gradient_limit(cache.get(), c), "raddiff_cache_set_gradient_limit");
   return cache;
+}
+
+// The second-order experiment (--second-order): the blend of the covering records' terms
+// q_i(x) = 1/2 (x - x_i)^T H_i (x - x_i) is linear in the records' constants H_i, H_i x_i and
+// 1/2 x_i^T H_i x_i, so a cache of those ten channels (no gradients; the main cache's kernel, hence
+// its weights) blends them, and q(x) = 1/2 x^T <H> x - <H x_i> . x + <1/2 x_i^T H x_i>.
+constexpr uint32_t kQuadraticChannels = 10;
+
+// The ten channels of a record at `p` (unit normal `n`) whose scalar has Hessian `h` (row-major),
+// projected on the tangent plane (the Hessian's normal rows carry robustness terms, not curvature).
+std::array<float, kQuadraticChannels> quadratic_channels(const V3 &p, const V3 &n, const double h[9]) {
+  double proj[9], t[9], ht[9];
+  const double nv[3] = {n.x, n.y, n.z};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) proj[3 * i + j] = (i == j) - nv[i] * nv[j];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      t[3 * i + j] = 0;
+      for (int k = 0; k < 3; ++k) t[3 * i + j] += h[3 * i + k] * proj[3 * k + j];
+    }
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      ht[3 * i + j] = 0;
+      for (int k = 0; k < 3; ++k) ht[3 * i + j] += proj[3 * i + k] * t[3 * k + j];
+    }
+  const double x[3] = {p.x, p.y, p.z};
+  double hx[3];
+  for (int i = 0; i < 3; ++i) hx[i] = ht[3 * i] * x[0] + ht[3 * i + 1] * x[1] + ht[3 * i + 2] * x[2];
+  const double c = 0.5 * (x[0] * hx[0] + x[1] * hx[1] + x[2] * hx[2]);
+  return {static_cast<float>(ht[0]), static_cast<float>(ht[4]), static_cast<float>(ht[8]),
+          static_cast<float>(0.5 * (ht[1] + ht[3])), static_cast<float>(0.5 * (ht[2] + ht[6])),
+          static_cast<float>(0.5 * (ht[5] + ht[7])), static_cast<float>(hx[0]), static_cast<float>(hx[1]),
+          static_cast<float>(hx[2]), static_cast<float>(c)};
+}
+
+// q(x) from the blended channels `b` of kQuadraticChannels.
+double quadratic_term(const V3 &p, const float *b) {
+  const double x = p.x, y = p.y, z = p.z;
+  const double xhx = b[0] * x * x + b[1] * y * y + b[2] * z * z + 2 * (b[3] * x * y + b[4] * x * z + b[5] * y * z);
+  return 0.5 * xhx - (b[6] * x + b[7] * y + b[8] * z) + b[9];
 }
 
 struct RecordInfo {
@@ -175,16 +217,40 @@ class Bench {
     // store's evaluations, which outlive the fill).
     const bool smooth = render && settings_.smooth_records > 0;
     std::vector<raddiff_cache_record> kept;
+    // The second-order experiment's cache of the records' quadratic terms (same extents, same kernel).
+    CachePtr quadratic(nullptr, raddiff_cache_free);
+    if (render && settings_.second_order > 0) {
+      const int kernel = settings_.interpolation >= 0 ? settings_.interpolation
+                         : uses_hessian(m)            ? RADDIFF_INTERP_TENT
+                                                      : RADDIFF_INTERP_WARD;
+      quadratic = surface_cache(kernel, irr.gradient_limit, kQuadraticChannels, false);
+      check(raddiff_cache_set_leak_guard(quadratic.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
+            "raddiff_cache_set_leak_guard");
+    }
     auto covered = [&](size_t i) {
       float v[3];
       const raddiff_status st = raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
       if (st != RADDIFF_OK && st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
       return st == RADDIFF_OK;
     };
-    for (int step = 16; step >= 1; step /= 2) {
+    // With neighbour clamping, the two-sided pass runs after each level; it can uncover pixels, so
+    // the finest level is repeated over every pixel until a round inserts nothing, the last
+    // allowed round filling only (as the render mode does).
+    const bool clamp = settings_.neighbour_clamp;
+    if (clamp && (settings_.smooth_records > 0 || settings_.second_order > 0))
+      throw std::runtime_error("--neighbour-clamp does not combine with --smooth-records or --second-order");
+    constexpr int kClampRounds = 3;
+    int finest_rounds = 0;
+    for (int step = 16;;) {
       std::vector<size_t> level;
-      for (size_t i : level_pixels(w, h, step))
-        if (primary_[i].hit) level.push_back(i);
+      if (finest_rounds == 0) {
+        for (size_t i : level_pixels(w, h, step))
+          if (primary_[i].hit) level.push_back(i);
+      } else {
+        for (size_t i = 0; i < primary_.size(); ++i)
+          if (primary_[i].hit) level.push_back(i);
+      }
+      const size_t records_before = out.records.size();
       std::vector<char> missed(level.size(), 0);
       parallel_for((level.size() + 255) / 256, settings_.threads, [&](size_t chunk) {
         const double t0 = thread_cpu_seconds();
@@ -223,14 +289,43 @@ class Bench {
                                           irr.pixel_radius_min * primary_[i].footprint);
             for (double &r : rec.radii) r = std::min(r, bound);
           }
+          if (settings_.error_norm > 0 && uses_hessian(m)) norm_radii(m, p, e, irr, primary_[i].footprint, rec);
           RecordInfo info{i, primary_[i].p, primary_[i].n, {rec.radii[0], rec.radii[1]}, {rec.axes[0], rec.axes[1]}};
           t0 = thread_cpu_seconds();
           check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
           cache_cpu.add(thread_cpu_seconds() - t0);
           out.records.push_back(info);
           if (smooth) kept.push_back(rec);
+          if (quadratic) {
+            if (!e.evaluation[1]) throw std::runtime_error("--second-order needs an occlusion-aware Hessian metric");
+            raddiff_gather_summary summary{};
+            check(raddiff_gather_evaluation_summary(e.evaluation[1].get(), &summary),
+                  "raddiff_gather_evaluation_summary");
+            const double len = std::sqrt(rec.normal.x * rec.normal.x + rec.normal.y * rec.normal.y +
+                                         rec.normal.z * rec.normal.z);
+            const std::array<float, kQuadraticChannels> q =
+                quadratic_channels({rec.position.x, rec.position.y, rec.position.z},
+                                   {rec.normal.x / len, rec.normal.y / len, rec.normal.z / len}, summary.occlusion_hessian);
+            raddiff_cache_record qr = rec;
+            qr.value = q.data();
+            qr.gradient = qr.rotation_gradient = nullptr;
+            check(raddiff_cache_insert(quadratic.get(), &qr), "raddiff_cache_insert");
+          }
         }
       }
+      const bool last_round = step == 1 && finest_rounds == kClampRounds;
+      if (clamp && !last_round) {
+        const double t0 = thread_cpu_seconds();
+        size_t shrunk = 0;
+        check(raddiff_cache_clamp_neighbours(cache.get(), &shrunk), "raddiff_cache_clamp_neighbours");
+        cache_cpu.add(thread_cpu_seconds() - t0);
+      }
+      if (step > 1) {
+        step /= 2;
+        continue;
+      }
+      ++finest_rounds;
+      if (!clamp || out.records.size() == records_before || last_round) break;
     }
     if (smooth) {
       // Experiment (not timed): every record's value replaced by the tent-weighted blend of the
@@ -260,12 +355,21 @@ class Bench {
         for (int x = 0; x < w; ++x) {
           const size_t i = row * w + x;
           if (!primary_[i].hit) continue;
-          const raddiff_status st =
-              raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), out.image.at(i), nullptr);
+          float *v = out.image.at(i);
+          const raddiff_status st = raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
           if (st == RADDIFF_ERROR_NOT_FOUND) {
             ++uncovered;
           } else {
             check(st, "raddiff_cache_lookup");
+          }
+          float b[kQuadraticChannels];
+          if (st == RADDIFF_OK && quadratic &&
+              raddiff_cache_lookup(quadratic.get(), to_c(primary_[i].p), to_c(primary_[i].n), b, nullptr) ==
+                  RADDIFF_OK) {
+            // the scalar's term shared by the channels in proportion to the interpolated value
+            const double lum = 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2];
+            const double scale = lum > 0 ? 1 + settings_.second_order * quadratic_term(primary_[i].p, b) / lum : 1;
+            for (int c = 0; c < 3; ++c) v[c] = static_cast<float>(std::max(0.0, v[c] * scale));
           }
         }
         cache_cpu.add(thread_cpu_seconds() - t0);
@@ -278,6 +382,38 @@ class Bench {
     }
     out.cache_seconds = cache_cpu.total();
     return out;
+  }
+
+  // The error-norm experiment: rec's radii replaced by those minimizing the image's L^p error at
+  // equal records (see BenchSettings::error_norm). The library's radii a ~ (tau/|lambda|)^(1/4)
+  // (its anisotropy and curvature floor) are raised to the power 4q, q = p/(2p + 2), in scene
+  // units, and scaled by the footprint^(1/(p+1)) (pixels are uniform on the image, not on
+  // surfaces); then the pixel bounds and the anisotropy limit are applied again.
+  void norm_radii(Metric m, double p, const Evaluated &e, const raddiff_irradiance_settings &irr, double footprint,
+                  raddiff_cache_record &rec) const {
+    raddiff_gather_summary summary{};
+    check(raddiff_gather_evaluation_summary(e.evaluation[1].get(), &summary), "raddiff_gather_evaluation_summary");
+    const double len = std::sqrt(rec.normal.x * rec.normal.x + rec.normal.y * rec.normal.y + rec.normal.z * rec.normal.z);
+    const raddiff_vec3 n{rec.normal.x / len, rec.normal.y / len, rec.normal.z / len};
+    const double anisotropy = m == Metric::HessianIsotropic ? 1.0 : irr.max_anisotropy;
+    const double distance = std::isfinite(e.harmonic_mean_distance) ? e.harmonic_mean_distance : 1e30;
+    double radii[2];
+    raddiff_vec3 axes[2];
+    check(raddiff_surface_radii_floored(summary.occlusion_hessian, n, e.luminance, p,
+                                        settings_.absolute_error ? RADDIFF_ERROR_ABSOLUTE : RADDIFF_ERROR_RELATIVE,
+                                        anisotropy, distance, irr.curvature_floor, radii, axes),
+          "raddiff_surface_radii_floored");
+    const double norm = settings_.error_norm;
+    const double q = norm / (2 * norm + 2);
+    const double lo = irr.pixel_radius_min * footprint, hi = irr.pixel_radius_max * footprint;
+    for (int k = 0; k < 2; ++k) {
+      const double r = std::pow(std::min(radii[k], 1e6), 4 * q) * std::pow(footprint, 1 / (norm + 1));
+      rec.radii[k] = std::clamp(r, lo, hi);
+      rec.axes[k] = axes[k];
+    }
+    rec.radii[1] = std::min(rec.radii[1], anisotropy * rec.radii[0]);
+    rec.radii[0] = std::min(rec.radii[0], rec.radii[1]);
+    rec.radii[2] = rec.radii[0];
   }
 
   // Tunes metric m's parameter until the record count is within 5% of `target` (at most 14

@@ -45,7 +45,8 @@ const char *kUsage =
     "                      [--reference-rays N (65536)] [--reference-grid G (64)] [--cache-dir DIR] [--floor-records N]\n"
     "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n"
     "                      [--oracle-derivatives K] [--interpolation ward|tent|cubic]\n"
-    "                      [--hessian-distance-bound k] [--smooth-records s]\n";
+    "                      [--hessian-distance-bound k] [--smooth-records s]\n"
+    "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n";
 
 }  // namespace
 
@@ -89,7 +90,7 @@ int main(int argc, char **argv) {
         const long n = std::stol(next());
         if (n < 1) throw std::runtime_error("--records N needs N >= 1");
         render.target_records = bench.target_records = static_cast<size_t>(n);
-      } else if (a == "--neighbour-clamp") render.neighbour_clamp = true;
+      } else if (a == "--neighbour-clamp") render.neighbour_clamp = bench.neighbour_clamp = true;
       else if (a == "--gradient-limit") render.irradiance.gradient_limit = std::stod(next());
       else if (a == "--max-anisotropy") render.irradiance.max_anisotropy = std::stod(next());
       else if (a == "--curvature-floor") render.irradiance.curvature_floor = std::stod(next());
@@ -112,6 +113,9 @@ int main(int argc, char **argv) {
       else if (a == "--pt-max-spp") bench.path_trace_max_spp = static_cast<uint32_t>(std::stoul(next()));
       else if (a == "--no-path-trace") bench.path_trace = false;
       else if (a == "--smooth-records") bench.smooth_records = std::stod(next());
+      else if (a == "--second-order") bench.second_order = std::stod(next());
+      else if (a == "--error-norm") bench.error_norm = std::stod(next());
+      else if (a == "--absolute-error") bench.absolute_error = true;
       else if (a == "--no-record-gradients") bench.record_gradients = false;
       else if (a == "--oracle-derivatives") bench.oracle_derivative_paths = std::stoi(next());
       else if (a == "--hessian-distance-bound") bench.hessian_distance_bound = std::stod(next());
