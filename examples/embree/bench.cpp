@@ -150,6 +150,12 @@ double quadratic_term(const V3 &p, const float *b) {
   return 0.5 * xhx - (b[6] * x + b[7] * y + b[8] * z) + b[9];
 }
 
+// `v` scaled to unit length (a record's normal need not be).
+raddiff_vec3 unit(const raddiff_vec3 &v) {
+  const double len = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+  return {v.x / len, v.y / len, v.z / len};
+}
+
 struct RecordInfo {
   size_t pixel;
   V3 p, n;
@@ -289,7 +295,8 @@ class Bench {
                                           irr.pixel_radius_min * primary_[i].footprint);
             for (double &r : rec.radii) r = std::min(r, bound);
           }
-          if (settings_.error_norm > 0 && uses_hessian(m)) norm_radii(m, p, e, irr, primary_[i].footprint, rec);
+          if (settings_.error_norm > 0 && (m == Metric::HessianAnisotropic || m == Metric::HessianIsotropic))
+            norm_radii(m, p, e, irr, primary_[i].footprint, rec);
           RecordInfo info{i, primary_[i].p, primary_[i].n, {rec.radii[0], rec.radii[1]}, {rec.axes[0], rec.axes[1]}};
           t0 = thread_cpu_seconds();
           check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
@@ -301,11 +308,9 @@ class Bench {
             raddiff_gather_summary summary{};
             check(raddiff_gather_evaluation_summary(e.evaluation[1].get(), &summary),
                   "raddiff_gather_evaluation_summary");
-            const double len = std::sqrt(rec.normal.x * rec.normal.x + rec.normal.y * rec.normal.y +
-                                         rec.normal.z * rec.normal.z);
-            const std::array<float, kQuadraticChannels> q =
-                quadratic_channels({rec.position.x, rec.position.y, rec.position.z},
-                                   {rec.normal.x / len, rec.normal.y / len, rec.normal.z / len}, summary.occlusion_hessian);
+            const raddiff_vec3 n = unit(rec.normal);
+            const std::array<float, kQuadraticChannels> q = quadratic_channels(
+                {rec.position.x, rec.position.y, rec.position.z}, {n.x, n.y, n.z}, summary.occlusion_hessian);
             raddiff_cache_record qr = rec;
             qr.value = q.data();
             qr.gradient = qr.rotation_gradient = nullptr;
@@ -356,7 +361,8 @@ class Bench {
           const size_t i = row * w + x;
           if (!primary_[i].hit) continue;
           float *v = out.image.at(i);
-          const raddiff_status st = raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
+          const raddiff_status st =
+              raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
           if (st == RADDIFF_ERROR_NOT_FOUND) {
             ++uncovered;
           } else {
@@ -384,17 +390,17 @@ class Bench {
     return out;
   }
 
-  // The error-norm experiment: rec's radii replaced by those minimizing the image's L^p error at
-  // equal records (see BenchSettings::error_norm). The library's radii a ~ (tau/|lambda|)^(1/4)
-  // (its anisotropy and curvature floor) are raised to the power 4q, q = p/(2p + 2), in scene
-  // units, and scaled by the footprint^(1/(p+1)) (pixels are uniform on the image, not on
-  // surfaces); then the pixel bounds and the anisotropy limit are applied again.
+  // The error-norm experiment: rec's radii (an occlusion-aware Hessian metric's) replaced by those
+  // minimizing the image's L^p error at equal records (see BenchSettings::error_norm). The
+  // library's radii a ~ (tau/|lambda|)^(1/4) (its anisotropy and curvature floor) are raised to the
+  // power 4q, q = p/(2p + 2), in scene units, and scaled by the footprint^(1/(p+1)) (pixels are
+  // uniform on the image, not on surfaces); then the pixel bounds and the anisotropy limit are
+  // applied again.
   void norm_radii(Metric m, double p, const Evaluated &e, const raddiff_irradiance_settings &irr, double footprint,
                   raddiff_cache_record &rec) const {
     raddiff_gather_summary summary{};
     check(raddiff_gather_evaluation_summary(e.evaluation[1].get(), &summary), "raddiff_gather_evaluation_summary");
-    const double len = std::sqrt(rec.normal.x * rec.normal.x + rec.normal.y * rec.normal.y + rec.normal.z * rec.normal.z);
-    const raddiff_vec3 n{rec.normal.x / len, rec.normal.y / len, rec.normal.z / len};
+    const raddiff_vec3 n = unit(rec.normal);
     const double anisotropy = m == Metric::HessianIsotropic ? 1.0 : irr.max_anisotropy;
     const double distance = std::isfinite(e.harmonic_mean_distance) ? e.harmonic_mean_distance : 1e30;
     double radii[2];

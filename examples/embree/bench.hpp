@@ -40,13 +40,15 @@ struct BenchSettings {
   // H the occlusion-aware Hessian of the record's gather projected on its tangent plane (experiment;
   // needs hessian-anisotropic or hessian-isotropic among the metrics).
   double second_order = 0;
-  // > 0: the Hessian metrics' radii chosen for the image's L^p error at equal records (experiment):
-  // R ~ (tau / |lambda|)^(p / (2p + 2)) * footprint^(1 / (p + 1)), from the library's radii (p = 1
-  // without the footprint term is the library's own rule), bounds and anisotropy applied again.
+  // > 0: the occlusion-aware Hessian metrics' radii chosen for the image's L^p error at equal
+  // records (experiment): R ~ (tau / |lambda|)^(p / (2p + 2)) * footprint^(1 / (p + 1)), from the
+  // library's radii (p = 1 without the footprint term is the library's own rule), bounds and
+  // anisotropy applied again.
   double error_norm = 0;
   bool absolute_error = false;
   // Two-sided neighbour clamping (raddiff_cache_clamp_neighbours) after each coarse-to-fine level,
-  // the finest level repeated until covered, as the render mode's --neighbour-clamp.
+  // the finest level repeated until covered, as the render mode's --neighbour-clamp (the records'
+  // radii in <out>-<metric>-records.csv and -fills.csv are those inserted, before clamping).
   bool neighbour_clamp = false;  // with error_norm: tau absolute instead of relative to the record's value
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
