@@ -119,22 +119,17 @@ constexpr uint32_t kQuadraticChannels = 10;
 // The ten channels of a record at `p` (unit normal `n`) whose scalar has Hessian `h` (row-major),
 // projected on the tangent plane (the Hessian's normal rows carry robustness terms, not curvature).
 std::array<float, kQuadraticChannels> quadratic_channels(const V3 &p, const V3 &n, const double h[9]) {
-  double proj[9], t[9], ht[9];
-  const double nv[3] = {n.x, n.y, n.z};
+  // P H P with P = I - n n^T: H - n (n^T H) - (H n) n^T + (n^T H n) n n^T
+  const double nv[3] = {n.x, n.y, n.z}, x[3] = {p.x, p.y, p.z};
+  double hn[3], nh[3], ht[9], hx[3];
+  for (int i = 0; i < 3; ++i) {
+    hn[i] = h[3 * i] * nv[0] + h[3 * i + 1] * nv[1] + h[3 * i + 2] * nv[2];
+    nh[i] = nv[0] * h[i] + nv[1] * h[3 + i] + nv[2] * h[6 + i];
+  }
+  const double nhn = nv[0] * hn[0] + nv[1] * hn[1] + nv[2] * hn[2];
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) proj[3 * i + j] = (i == j) - nv[i] * nv[j];
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      t[3 * i + j] = 0;
-      for (int k = 0; k < 3; ++k) t[3 * i + j] += h[3 * i + k] * proj[3 * k + j];
-    }
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      ht[3 * i + j] = 0;
-      for (int k = 0; k < 3; ++k) ht[3 * i + j] += proj[3 * i + k] * t[3 * k + j];
-    }
-  const double x[3] = {p.x, p.y, p.z};
-  double hx[3];
+    for (int j = 0; j < 3; ++j)
+      ht[3 * i + j] = h[3 * i + j] - nv[i] * nh[j] - hn[i] * nv[j] + nhn * nv[i] * nv[j];
   for (int i = 0; i < 3; ++i) hx[i] = ht[3 * i] * x[0] + ht[3 * i + 1] * x[1] + ht[3 * i + 2] * x[2];
   const double c = 0.5 * (x[0] * hx[0] + x[1] * hx[1] + x[2] * hx[2]);
   return {static_cast<float>(ht[0]), static_cast<float>(ht[4]), static_cast<float>(ht[8]),
@@ -148,12 +143,6 @@ double quadratic_term(const V3 &p, const float *b) {
   const double x = p.x, y = p.y, z = p.z;
   const double xhx = b[0] * x * x + b[1] * y * y + b[2] * z * z + 2 * (b[3] * x * y + b[4] * x * z + b[5] * y * z);
   return 0.5 * xhx - (b[6] * x + b[7] * y + b[8] * z) + b[9];
-}
-
-// `v` scaled to unit length (a record's normal need not be).
-raddiff_vec3 unit(const raddiff_vec3 &v) {
-  const double len = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
-  return {v.x / len, v.y / len, v.z / len};
 }
 
 struct RecordInfo {
@@ -308,9 +297,8 @@ class Bench {
             raddiff_gather_summary summary{};
             check(raddiff_gather_evaluation_summary(e.evaluation[1].get(), &summary),
                   "raddiff_gather_evaluation_summary");
-            const raddiff_vec3 n = unit(rec.normal);
             const std::array<float, kQuadraticChannels> q = quadratic_channels(
-                {rec.position.x, rec.position.y, rec.position.z}, {n.x, n.y, n.z}, summary.occlusion_hessian);
+                from_c(rec.position), normalize(from_c(rec.normal)), summary.occlusion_hessian);
             raddiff_cache_record qr = rec;
             qr.value = q.data();
             qr.gradient = qr.rotation_gradient = nullptr;
@@ -373,7 +361,7 @@ class Bench {
               raddiff_cache_lookup(quadratic.get(), to_c(primary_[i].p), to_c(primary_[i].n), b, nullptr) ==
                   RADDIFF_OK) {
             // the scalar's term shared by the channels in proportion to the interpolated value
-            const double lum = 0.2126 * v[0] + 0.7152 * v[1] + 0.0722 * v[2];
+            const double lum = luminance(v);
             const double scale = lum > 0 ? 1 + settings_.second_order * quadratic_term(primary_[i].p, b) / lum : 1;
             for (int c = 0; c < 3; ++c) v[c] = static_cast<float>(std::max(0.0, v[c] * scale));
           }
@@ -400,7 +388,7 @@ class Bench {
                   raddiff_cache_record &rec) const {
     raddiff_gather_summary summary{};
     check(raddiff_gather_evaluation_summary(e.evaluation[1].get(), &summary), "raddiff_gather_evaluation_summary");
-    const raddiff_vec3 n = unit(rec.normal);
+    const raddiff_vec3 n = to_c(normalize(from_c(rec.normal)));
     const double anisotropy = m == Metric::HessianIsotropic ? 1.0 : irr.max_anisotropy;
     const double distance = std::isfinite(e.harmonic_mean_distance) ? e.harmonic_mean_distance : 1e30;
     double radii[2];

@@ -45,11 +45,11 @@ struct BenchSettings {
   // library's radii (p = 1 without the footprint term is the library's own rule), bounds and
   // anisotropy applied again.
   double error_norm = 0;
-  bool absolute_error = false;
+  bool absolute_error = false;  // with error_norm: tau absolute instead of relative to the record's value
   // Two-sided neighbour clamping (raddiff_cache_clamp_neighbours) after each coarse-to-fine level,
   // the finest level repeated until covered, as the render mode's --neighbour-clamp (the records'
   // radii in <out>-<metric>-records.csv and -fills.csv are those inserted, before clamping).
-  bool neighbour_clamp = false;  // with error_norm: tau absolute instead of relative to the record's value
+  bool neighbour_clamp = false;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
 };
