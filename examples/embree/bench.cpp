@@ -37,9 +37,11 @@ class GatherStore {
       const Primary &px = primary_[pixel];
       const double t0 = thread_cpu_seconds();
       const raddiff_irradiance_settings &irr = settings_.irradiance;
-      const TracedGather g = trace_gather(scene_, settings_.radiance, px.p, px.n, irr.gather_m, irr.gather_n, 1 + pixel);
+      TracedGather g = trace_gather(scene_, settings_.radiance, px.p, px.n, irr.gather_m, irr.gather_n, 1 + pixel);
       s.trace_seconds = thread_cpu_seconds() - t0;
       s.rays = g.rays;
+      if (settings_.near_field_px > 0 && settings_.far_field_gathers)
+        fill_near_with_far(g, settings_.near_field_px * px.footprint);
       s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_, irr));
       if (settings_.oracle_derivative_paths > 0 && s.evaluated->valid) {
         // Derivatives from the same directions with radiance averaged over K independent paths:
@@ -58,6 +60,7 @@ class GatherStore {
           *s.evaluated = std::move(o);
         }
       }
+      if (settings_.near_field_px > 0) split_far_field(g, settings_.near_field_px * px.footprint, *s.evaluated);
       ++computed_;
     });
     return s;
@@ -72,6 +75,44 @@ class GatherStore {
   }
 
   size_t computed() const { return computed_; }
+
+  // The near-field experiment's far-field gather: the radiance of the hits closer than `reach`
+  // replaced by the mean radiance of the directions that reach farther (zero when none does), so
+  // that the gather's irradiance is the far field as if the near geometry did not block it, and its
+  // derivatives and radii are those of that far field (near hits keep their distances and normals).
+  static void fill_near_with_far(TracedGather &g, double reach) {
+    double far[3] = {0, 0, 0};
+    size_t open = 0;
+    for (size_t k = 0; k < g.distance.size(); ++k)
+      if (!(g.distance[k] < reach)) {
+        ++open;
+        for (int c = 0; c < 3; ++c) far[c] += g.radiance[3 * k + c];
+      }
+    for (size_t k = 0; k < g.distance.size(); ++k)
+      if (g.distance[k] < reach)
+        for (int c = 0; c < 3; ++c) g.radiance[3 * k + c] = open > 0 ? static_cast<float>(far[c] / open) : 0.0f;
+  }
+
+  // The near-field experiment's far field of a gather: the share of its irradiance carried by
+  // directions that reach at least `reach`, over the fraction of directions that do (the cosine-polar
+  // layout's directions carry equal weights).
+  static void split_far_field(const TracedGather &g, double reach, Evaluated &e) {
+    double all[3] = {0, 0, 0}, far[3] = {0, 0, 0};
+    size_t open = 0;
+    for (size_t k = 0; k < g.distance.size(); ++k) {
+      const bool reaches = !(g.distance[k] < reach);
+      open += reaches;
+      for (int c = 0; c < 3; ++c) {
+        all[c] += g.radiance[3 * k + c];
+        if (reaches) far[c] += g.radiance[3 * k + c];
+      }
+    }
+    e.open_fraction = g.distance.empty() ? 1.0 : static_cast<double>(open) / g.distance.size();
+    for (int c = 0; c < 3; ++c)
+      e.far_value[c] = open > 0 && all[c] > 0
+                           ? static_cast<float>(e.value[c] * (far[c] / all[c]) / e.open_fraction)
+                           : 0.0f;
+  }
 
  private:
   const Scene &scene_;
@@ -186,6 +227,35 @@ class Bench {
   const Camera &camera() const { return camera_; }
   GatherStore &store() { return store_; }
 
+  // The near-field experiment: every pixel's near irradiance (RGB) and open fraction, traced once
+  // and shared by every fill, and what that cost in CPU seconds.
+  const std::vector<std::array<float, 4>> &near_field() {
+    if (!near_.empty() || settings_.near_field_px <= 0) return near_;
+    near_.assign(primary_.size(), {0, 0, 0, 1});
+    CpuSum cpu;
+    const size_t w = static_cast<size_t>(view_.width);
+    parallel_for(static_cast<size_t>(view_.height), settings_.threads, [&](size_t row) {
+      const double t0 = thread_cpu_seconds();
+      for (size_t i = row * w; i < (row + 1) * w; ++i) {
+        const Primary &px = primary_[i];
+        if (!px.hit) continue;
+        uint64_t rays = 0;
+        const uint32_t count = settings_.near_field_rays;
+        const NearField f = near_field_sum(scene_, settings_.radiance, px.p, px.n,
+                                           settings_.near_field_px * px.footprint, count, mix(i) ^ 0x6e656172ull, rays);
+        const double scale = kPi / count;
+        near_[i] = {static_cast<float>(f.near.x * scale), static_cast<float>(f.near.y * scale),
+                    static_cast<float>(f.near.z * scale), static_cast<float>(static_cast<double>(f.open) / count)};
+      }
+      cpu.add(thread_cpu_seconds() - t0);
+    });
+    near_seconds_ = cpu.total();
+    std::printf("near field: %u rays of %.3g pixels' reach per pixel, %.2f CPU s\n", settings_.near_field_rays,
+                settings_.near_field_px, near_seconds_);
+    std::fflush(stdout);
+    return near_;
+  }
+
   // Fills a fresh cache for metric m with parameter p, coarse to fine over the image. Which pixels
   // get records does not depend on the thread count: a level's candidates are the pixels the cache
   // misses when the level starts, taken in pixel order; gathers are computed in parallel, a batch at
@@ -279,6 +349,21 @@ class Bench {
           out.raddiff_seconds += thread_cpu_seconds() - t0;
           if (!defined) continue;
           if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
+          float far_gradient[9], far_rotation_gradient[9];
+          if (settings_.near_field_px > 0) {
+            // The far field's record: its value, and the gather's gradients in the same ratio.
+            rec.value = e.far_value;
+            for (int c = 0; c < 3; ++c) {
+              const double ratio = e.value[c] > 0 ? e.far_value[c] / e.value[c] : 0.0;
+              for (int k = 0; k < 3; ++k) {
+                if (rec.gradient) far_gradient[3 * c + k] = static_cast<float>(rec.gradient[3 * c + k] * ratio);
+                if (rec.rotation_gradient)
+                  far_rotation_gradient[3 * c + k] = static_cast<float>(rec.rotation_gradient[3 * c + k] * ratio);
+              }
+            }
+            if (rec.gradient) rec.gradient = far_gradient;
+            if (rec.rotation_gradient) rec.rotation_gradient = far_rotation_gradient;
+          }
           if (settings_.hessian_distance_bound > 0 && uses_hessian(m)) {
             const double bound = std::max(settings_.hessian_distance_bound * e.harmonic_mean_distance,
                                           irr.pixel_radius_min * primary_[i].footprint);
@@ -340,6 +425,8 @@ class Bench {
       }
     }
     if (render) {
+      const std::vector<std::array<float, 4>> &near = near_field();
+      out.trace_seconds += near_seconds_;
       out.image = Image(w, h);
       check(raddiff_cache_compact(cache.get()), "raddiff_cache_compact");
       std::atomic<size_t> uncovered{0};
@@ -365,6 +452,8 @@ class Bench {
             const double scale = lum > 0 ? 1 + settings_.second_order * quadratic_term(primary_[i].p, b) / lum : 1;
             for (int c = 0; c < 3; ++c) v[c] = static_cast<float>(std::max(0.0, v[c] * scale));
           }
+          if (st == RADDIFF_OK && !near.empty())
+            for (int c = 0; c < 3; ++c) v[c] = v[c] * near[i][3] + near[i][c];
         }
         cache_cpu.add(thread_cpu_seconds() - t0);
       });
@@ -449,6 +538,8 @@ class Bench {
   Camera camera_;
   std::vector<Primary> primary_;
   GatherStore store_;
+  std::vector<std::array<float, 4>> near_;
+  double near_seconds_ = 0;
 };
 
 // Errors at the measured pixels.

@@ -46,7 +46,8 @@ const char *kUsage =
     "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n"
     "                      [--oracle-derivatives K] [--interpolation ward|tent|cubic]\n"
     "                      [--hessian-distance-bound k] [--smooth-records s]\n"
-    "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n";
+    "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n"
+    "                      [--near-field reach_px[,rays]] [--far-field-gathers]\n";
 
 }  // namespace
 
@@ -115,6 +116,15 @@ int main(int argc, char **argv) {
       else if (a == "--smooth-records") bench.smooth_records = std::stod(next());
       else if (a == "--second-order") bench.second_order = std::stod(next());
       else if (a == "--error-norm") bench.error_norm = std::stod(next());
+      else if (a == "--far-field-gathers") bench.far_field_gathers = true;
+      else if (a == "--near-field") {
+        // K (pixel footprints of reach) or K,N (N rays per pixel)
+        const std::string v = next();
+        const size_t comma = v.find(',');
+        bench.near_field_px = std::stod(v.substr(0, comma));
+        if (comma != std::string::npos) bench.near_field_rays = static_cast<uint32_t>(std::stoul(v.substr(comma + 1)));
+        if (bench.near_field_px <= 0 || bench.near_field_rays < 1) throw std::runtime_error("--near-field K[,N]: K > 0, N >= 1");
+      }
       else if (a == "--absolute-error") bench.absolute_error = true;
       else if (a == "--no-record-gradients") bench.record_gradients = false;
       else if (a == "--oracle-derivatives") bench.oracle_derivative_paths = std::stoi(next());

@@ -54,6 +54,12 @@ struct Evaluated {
   double luminance = 0;     // the evaluation's scalar
   double harmonic_mean_distance = INFINITY;
   float value[3] = {0, 0, 0};  // irradiance the records store (the gather's own)
+  // The near-field experiment (BenchSettings::near_field_px): the gather's irradiance from hits at
+  // least the near reach away, divided by the fraction of its directions that reach that far (the
+  // far field as if the near geometry did not block it: what the records store then), and that
+  // fraction.
+  float far_value[3] = {0, 0, 0};
+  double open_fraction = 1;
 };
 
 // `settings` gives the channels and their weights.

@@ -129,7 +129,7 @@ Scene::~Scene() {
   rtcReleaseDevice(device_);
 }
 
-Hit Scene::intersect(V3 o, V3 d) const {
+Hit Scene::intersect(V3 o, V3 d, double tfar) const {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRayHit rh{};
@@ -140,7 +140,7 @@ Hit Scene::intersect(V3 o, V3 d) const {
   rh.ray.dir_y = static_cast<float>(d.y);
   rh.ray.dir_z = static_cast<float>(d.z);
   rh.ray.tnear = static_cast<float>(epsilon_);
-  rh.ray.tfar = INFINITY;
+  rh.ray.tfar = static_cast<float>(tfar);
   rh.ray.mask = 0xFFFFFFFFu;
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(scene_, &context, &rh);

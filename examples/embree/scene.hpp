@@ -49,7 +49,8 @@ class Scene {
   Scene(const Scene &) = delete;
   Scene &operator=(const Scene &) = delete;
 
-  Hit intersect(V3 origin, V3 direction) const;
+  // The first hit along origin + t direction, t in (tnear, tfar]; a miss when there is none.
+  Hit intersect(V3 origin, V3 direction, double tfar = INFINITY) const;
   // Whether anything lies on the open segment origin + t direction, t in (tnear, tfar).
   bool occluded(V3 origin, V3 direction, double tfar) const;
 

@@ -54,6 +54,19 @@ TracedGather trace_gather(const Scene &scene, const HitRadianceSettings &radianc
   return g;
 }
 
+namespace {
+
+// Point k of the scrambled (0,2)-sequence as a cosine-distributed direction about n (t, b, n a frame).
+V3 cosine_direction(uint32_t k, uint32_t shift1, uint32_t shift2, V3 t, V3 b, V3 n) {
+  // A digital shift keeps the (0,2)-sequence's stratification of every 2^k-point block.
+  const double u1 = (reverse_bits(k) ^ shift1) * (1.0 / 4294967296.0);
+  const double u2 = (sobol_second(k) ^ shift2) * (1.0 / 4294967296.0);
+  const double r = std::sqrt(u1), phi = 2 * kPi * u2;
+  return normalize(t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * std::sqrt(std::max(0.0, 1 - u1)));
+}
+
+}  // namespace
+
 V3 irradiance_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, uint32_t first, uint32_t count,
                   uint64_t scramble, uint64_t &rays) {
   const V3 t = tangent_of(n), b = cross(n, t);
@@ -61,16 +74,31 @@ V3 irradiance_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x,
   V3 sum;
   hit_radiance_rays() = 0;
   for (uint32_t k = first; k < first + count; ++k) {
-    // A digital shift keeps the (0,2)-sequence's stratification of every 2^k-point block.
-    const double u1 = (reverse_bits(k) ^ shift1) * (1.0 / 4294967296.0);
-    const double u2 = (sobol_second(k) ^ shift2) * (1.0 / 4294967296.0);
-    const double r = std::sqrt(u1), phi = 2 * kPi * u2;
-    const V3 d = normalize(t * (r * std::cos(phi)) + b * (r * std::sin(phi)) + n * std::sqrt(std::max(0.0, 1 - u1)));
+    const V3 d = cosine_direction(k, shift1, shift2, t, b, n);
     const Hit hit = scene.intersect(x, d);
     sum += hit_radiance(scene, radiance, x, d, hit, mix(scramble ^ (0x5bd1e995ull * (k + 1))));
   }
   rays += count + hit_radiance_rays();
   return sum;
+}
+
+NearField near_field_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, double reach,
+                         uint32_t count, uint64_t scramble, uint64_t &rays) {
+  const V3 t = tangent_of(n), b = cross(n, t);
+  const uint32_t shift1 = static_cast<uint32_t>(mix(scramble)), shift2 = static_cast<uint32_t>(mix(scramble + 1));
+  NearField f;
+  hit_radiance_rays() = 0;
+  for (uint32_t k = 0; k < count; ++k) {
+    const V3 d = cosine_direction(k, shift1, shift2, t, b, n);
+    const Hit hit = scene.intersect(x, d, reach);  // a short ray: its traversal stops at the reach
+    if (hit.distance < reach) {
+      f.near += hit_radiance(scene, radiance, x, d, hit, mix(scramble ^ (0x5bd1e995ull * (k + 1))));
+    } else {
+      ++f.open;
+    }
+  }
+  rays += count + hit_radiance_rays();
+  return f;
 }
 
 }  // namespace rd

@@ -38,4 +38,16 @@ void trace_directions(const Scene &scene, const HitRadianceSettings &radiance, V
 V3 irradiance_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, uint32_t first, uint32_t count,
                   uint64_t scramble, uint64_t &rays);
 
+// The near field at (x, n), as in Arikan et al. 2005's decomposition of irradiance into near and
+// far parts: over `count` cosine-distributed directions from the (0,2)-sequence points [0, count)
+// (as irradiance_sum, scrambled by `scramble`), the radiance of the hits closer than `reach`
+// summed (pi * near / count estimates the near irradiance), and how many directions reach farther
+// (open / count estimates the cosine-weighted fraction of the hemisphere the near field leaves open).
+struct NearField {
+  V3 near;
+  uint32_t open = 0;
+};
+NearField near_field_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, double reach,
+                         uint32_t count, uint64_t scramble, uint64_t &rays);
+
 }  // namespace rd
