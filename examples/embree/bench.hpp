@@ -59,7 +59,8 @@ struct BenchSettings {
   double near_field_px = 0;
   uint32_t near_field_rays = 16;
   // With near_field_px: the records made from their far-field gathers (near hits' radiance replaced
-  // by the far directions' mean), so that their derivatives and radii are the far field's too.
+  // by the far directions' mean), so that their derivatives and radii are the far field's too. The
+  // gathers' floor then compares the far field with the whole irradiance: it is not a floor.
   bool far_field_gathers = false;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
