@@ -699,6 +699,8 @@ long max_rss_mib() {
 }  // namespace
 
 int run_bench(const Scene &scene, const View &view, const std::string &scene_key, const BenchSettings &settings) {
+  if (settings.far_field_gathers && settings.near_field_px <= 0)
+    throw std::runtime_error("--far-field-gathers needs --near-field");
   const double wall0 = process_cpu_seconds();
   Bench bench(scene, view, settings);
   const std::vector<Primary> &primary = bench.primary();
