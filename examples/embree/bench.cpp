@@ -76,41 +76,45 @@ class GatherStore {
 
   size_t computed() const { return computed_; }
 
+  // The near-field experiment's split of a gather at `reach`: how many directions reach at least
+  // that far, and the radiance summed over those (far) and over all directions (RGB).
+  struct FarShare {
+    size_t open = 0;
+    double far[3] = {0, 0, 0}, all[3] = {0, 0, 0};
+  };
+  static FarShare far_share(const TracedGather &g, double reach) {
+    FarShare f;
+    for (size_t k = 0; k < g.distance.size(); ++k) {
+      const bool reaches = !(g.distance[k] < reach);
+      f.open += reaches;
+      for (int c = 0; c < 3; ++c) {
+        f.all[c] += g.radiance[3 * k + c];
+        if (reaches) f.far[c] += g.radiance[3 * k + c];
+      }
+    }
+    return f;
+  }
+
   // The near-field experiment's far-field gather: the radiance of the hits closer than `reach`
   // replaced by the mean radiance of the directions that reach farther (zero when none does), so
   // that the gather's irradiance is the far field as if the near geometry did not block it, and its
   // derivatives and radii are those of that far field (near hits keep their distances and normals).
   static void fill_near_with_far(TracedGather &g, double reach) {
-    double far[3] = {0, 0, 0};
-    size_t open = 0;
-    for (size_t k = 0; k < g.distance.size(); ++k)
-      if (!(g.distance[k] < reach)) {
-        ++open;
-        for (int c = 0; c < 3; ++c) far[c] += g.radiance[3 * k + c];
-      }
+    const FarShare f = far_share(g, reach);
     for (size_t k = 0; k < g.distance.size(); ++k)
       if (g.distance[k] < reach)
-        for (int c = 0; c < 3; ++c) g.radiance[3 * k + c] = open > 0 ? static_cast<float>(far[c] / open) : 0.0f;
+        for (int c = 0; c < 3; ++c) g.radiance[3 * k + c] = f.open > 0 ? static_cast<float>(f.far[c] / f.open) : 0.0f;
   }
 
   // The near-field experiment's far field of a gather: the share of its irradiance carried by
   // directions that reach at least `reach`, over the fraction of directions that do (the cosine-polar
   // layout's directions carry equal weights).
   static void split_far_field(const TracedGather &g, double reach, Evaluated &e) {
-    double all[3] = {0, 0, 0}, far[3] = {0, 0, 0};
-    size_t open = 0;
-    for (size_t k = 0; k < g.distance.size(); ++k) {
-      const bool reaches = !(g.distance[k] < reach);
-      open += reaches;
-      for (int c = 0; c < 3; ++c) {
-        all[c] += g.radiance[3 * k + c];
-        if (reaches) far[c] += g.radiance[3 * k + c];
-      }
-    }
-    e.open_fraction = g.distance.empty() ? 1.0 : static_cast<double>(open) / g.distance.size();
+    const FarShare f = far_share(g, reach);
+    e.open_fraction = g.distance.empty() ? 1.0 : static_cast<double>(f.open) / g.distance.size();
     for (int c = 0; c < 3; ++c)
-      e.far_value[c] = open > 0 && all[c] > 0
-                           ? static_cast<float>(e.value[c] * (far[c] / all[c]) / e.open_fraction)
+      e.far_value[c] = f.open > 0 && f.all[c] > 0
+                           ? static_cast<float>(e.value[c] * (f.far[c] / f.all[c]) / e.open_fraction)
                            : 0.0f;
   }
 
