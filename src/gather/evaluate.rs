@@ -15,8 +15,6 @@
 //! * Rotational gradient (thesis eq. 3.23-3.24): `∫ L (n × ω) dω`, integrated exactly over each
 //!   polar stratum (no `tanθ` blow-up at the horizon); Monte Carlo for the concentric layout.
 
-use std::f64::consts::PI;
-
 use glam::DVec3;
 
 use super::input::{GatherInput, MediaRadiance};
@@ -117,12 +115,7 @@ impl<'a> ValidGather<'a> {
 
     /// Monte-Carlo weight of one stratum: `π/(MN)` (cosine-weighted hemisphere) or `4π/(MN)`.
     pub fn stratum_weight(&self) -> f64 {
-        let sr = if self.layout.kind.is_hemisphere() {
-            PI
-        } else {
-            4.0 * PI
-        };
-        sr / self.layout.len() as f64
+        self.layout.kind.measure() / self.layout.len() as f64
     }
 
     /// Computes what `wanted` asks for.

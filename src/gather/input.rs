@@ -108,6 +108,40 @@ fn all_finite_any(values: &[f32]) -> bool {
     acc & 0x8000_0000 == 0
 }
 
+/// Checks what a layout's rays found: `channels >= 1`, `distance` of `m·n` values, each > 0 or
+/// `INFINITY`, `radiance` of `m·n·channels` finite values. `InvalidArgument` naming the first
+/// problem.
+pub(crate) fn validate_hits(
+    layout: &Layout,
+    distance: &[f64],
+    radiance: &[f32],
+    channels: usize,
+) -> Result<()> {
+    let cells = layout.len();
+    if channels == 0 {
+        return Err(Error::InvalidArgument("channels must be >= 1".into()));
+    }
+    check_len("distance", distance.len(), Some(cells), "m*n")?;
+    check_len(
+        "radiance",
+        radiance.len(),
+        cells.checked_mul(channels),
+        "m*n*channels",
+    )?;
+    // `d > 0` is false for NaN too; branch-free so the scan vectorizes.
+    if !distance.iter().fold(true, |ok, &d| ok & (d > 0.0)) {
+        let i = distance
+            .iter()
+            .position(|&d| d.is_nan() || d <= 0.0)
+            .unwrap_or(0);
+        let d = distance[i];
+        return Err(Error::InvalidArgument(format!(
+            "distance[{i}] = {d}: distances must be > 0, or INFINITY for a miss"
+        )));
+    }
+    check_all_finite(radiance, "radiance")
+}
+
 impl GatherInput<'_> {
     /// How far a traced direction may be from unit length (`| |ω|² − 1 | ≤ 2·tol`) and from its
     /// stratum: in sin²θ (cosine-polar) or cosθ (sphere) across a ring wall, in the sine of the
@@ -123,17 +157,8 @@ impl GatherInput<'_> {
     /// Checks sizes and values against `layout` and the (orthonormalized) `frame`.
     pub(crate) fn validate(&self, layout: &Layout, frame: &Frame) -> Result<()> {
         let cells = layout.len();
-        if self.channels == 0 {
-            return Err(Error::InvalidArgument("channels must be >= 1".into()));
-        }
         check_len("directions", self.directions.len(), Some(cells), "m*n")?;
-        check_len("distance", self.distance.len(), Some(cells), "m*n")?;
-        check_len(
-            "radiance",
-            self.radiance.len(),
-            cells.checked_mul(self.channels),
-            "m*n*channels",
-        )?;
+        validate_hits(layout, self.distance, self.radiance, self.channels)?;
         ensure_finite(self.sigma_t, "sigma_t")?;
         if self.sigma_t < 0.0 {
             return Err(Error::InvalidArgument(format!(
@@ -141,19 +166,6 @@ impl GatherInput<'_> {
                 self.sigma_t
             )));
         }
-        // `d > 0` is false for NaN too; branch-free so the scan vectorizes.
-        if !self.distance.iter().fold(true, |ok, &d| ok & (d > 0.0)) {
-            let i = self
-                .distance
-                .iter()
-                .position(|&d| d.is_nan() || d <= 0.0)
-                .unwrap_or(0);
-            let d = self.distance[i];
-            return Err(Error::InvalidArgument(format!(
-                "distance[{i}] = {d}: distances must be > 0, or INFINITY for a miss"
-            )));
-        }
-        check_all_finite(self.radiance, "radiance")?;
         if let Some(media) = &self.media {
             if media.steps == 0 {
                 return Err(Error::InvalidArgument("media steps must be >= 1".into()));

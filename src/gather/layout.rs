@@ -38,6 +38,16 @@ impl LayoutKind {
     pub fn is_hemisphere(self) -> bool {
         !matches!(self, LayoutKind::Sphere)
     }
+
+    /// The measure every stratum carries an equal share of: π for the cosine-weighted hemisphere
+    /// (`∫ n·ω dω`), 4π sr for the sphere.
+    pub fn measure(self) -> f64 {
+        if self.is_hemisphere() {
+            std::f64::consts::PI
+        } else {
+            4.0 * std::f64::consts::PI
+        }
+    }
 }
 
 impl TryFrom<u32> for LayoutKind {
