@@ -893,6 +893,46 @@ enum raddiff_status raddiff_segment_form_factor_2d(struct raddiff_vec2 x,
                                                    uint32_t order,
                                                    struct raddiff_deriv2 *out);
 
+// The near field at a pixel's point (Arikan et al. 2005): from the directions of `layout`
+// (`raddiff_gather_directions`) traced no farther than `reach` (L, finite and > 0), writes the
+// irradiance of the hits closer than `reach` to `near_irradiance` (`channels` values: `pi/(m*n)`
+// times the sum of their radiance; `4 pi/(m*n)`, fluence, for the sphere layout) and the open
+// fraction to `open_fraction` (the share of the layout's measure whose rays reach at least
+// `reach`: a miss, `INFINITY`, or any distance >= `reach`; in [0, 1]).
+//
+// `distance` (m*n) and `radiance` (m*n*channels, index `i*channels + c`) are as in
+// `raddiff_gather_input`. The pixel's irradiance is then `near_irradiance[c] + open_fraction *
+// F[c]`, with F the far field interpolated from records made from
+// `raddiff_gather_far_field_radiance`'s gathers at the same reach.
+// `RADDIFF_ERROR_INVALID_ARGUMENT` for a bad layout, a reach not finite and > 0, `channels` 0,
+// a distance not > 0 (or NaN) or non-finite radiance; nothing is written on failure.
+enum raddiff_status raddiff_gather_near_field(const struct raddiff_gather_layout *layout,
+                                              const double *distance,
+                                              const float *radiance,
+                                              uint32_t channels,
+                                              double reach,
+                                              double *near_irradiance,
+                                              double *open_fraction);
+
+// Turns a traced gather into its far-field gather at `reach` (L, finite and > 0), in place: the
+// radiance of every direction whose hit is closer than `reach` becomes the mean radiance of the
+// directions that reach at least that far (per channel; 0 when none does). Evaluated as usual
+// (`raddiff_gather_evaluate`, `raddiff_gather_evaluation_new`, the radii), the gather then gives
+// the far field F and its derivatives, which is what the records of a near/far cache hold. Near
+// hits keep their distances. Without a medium F is `(E - E_near) / open_fraction` of the
+// unmodified gather, up to the mean's rounding to float.
+//
+// `distance` (m*n) and `radiance` (m*n*channels, read and written) are as in
+// `raddiff_gather_input`; `open_fraction` (nullable) receives the open fraction in [0, 1].
+// `RADDIFF_ERROR_INVALID_ARGUMENT` for a bad layout, a reach not finite and > 0, `channels` 0,
+// a distance not > 0 (or NaN) or non-finite radiance; nothing is written on failure.
+enum raddiff_status raddiff_gather_far_field_radiance(const struct raddiff_gather_layout *layout,
+                                                      const double *distance,
+                                                      float *radiance,
+                                                      uint32_t channels,
+                                                      double reach,
+                                                      double *open_fraction);
+
 // Elliptical surface record from a 3x3 Hessian (see the Rust `gather::radii::surface_radii`): the
 // Hessian (row-major) is projected on the tangent plane of the unit `normal` and eigen-decomposed;
 // `radii[0] <= radii[1]` are the semi-axes along the world-space unit tangents `axes[0..2]`, chosen so

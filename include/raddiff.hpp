@@ -694,6 +694,46 @@ inline GatherResult gather_evaluate(const raddiff_gather_layout &layout, const r
   return result;
 }
 
+/// The near field at a pixel's point (`raddiff_gather_near_field`): the irradiance of the hits
+/// closer than the reach, per channel, and the open fraction (share of the layout's measure whose
+/// rays reach at least that far). The pixel's irradiance is `irradiance[c] + open_fraction * F[c]`
+/// with F the far field interpolated from far-field records at the same reach.
+struct NearField {
+  /// Irradiance (fluence for the sphere layout) from hits closer than the reach, per channel.
+  std::vector<double> irradiance;
+  /// In [0, 1].
+  double open_fraction = 0.0;
+};
+
+/// Wraps `raddiff_gather_near_field`: `distance` (m*n) and `radiance` (m*n*channels) of the
+/// layout's directions traced no farther than `reach` (sizes checked).
+inline NearField gather_near_field(const raddiff_gather_layout &layout, Span<const double> distance,
+                                   Span<const float> radiance, std::uint32_t channels, double reach) {
+  const std::size_t cells = gather_size(layout);
+  detail::check_size("distance", distance.size(), cells);
+  detail::check_size("radiance", radiance.size(), detail::mul(cells, channels));
+  NearField f;
+  f.irradiance.resize(channels);
+  detail::check(raddiff_gather_near_field(&layout, distance.data(), radiance.data(), channels, reach,
+                                          f.irradiance.data(), &f.open_fraction));
+  return f;
+}
+
+/// Wraps `raddiff_gather_far_field_radiance`: replaces, in place, the radiance of the hits closer
+/// than `reach` by the mean radiance of the directions that reach farther, so that evaluating the
+/// gather gives the far field; returns the open fraction (sizes checked; `radiance` unchanged on
+/// failure).
+inline double gather_far_field_radiance(const raddiff_gather_layout &layout, Span<const double> distance,
+                                        Span<float> radiance, std::uint32_t channels, double reach) {
+  const std::size_t cells = gather_size(layout);
+  detail::check_size("distance", distance.size(), cells);
+  detail::check_size("radiance", radiance.size(), detail::mul(cells, channels));
+  double open = 0.0;
+  detail::check(
+      raddiff_gather_far_field_radiance(&layout, distance.data(), radiance.data(), channels, reach, &open));
+  return open;
+}
+
 /// An elliptical surface record: `radii[0] <= radii[1]` along the world-space unit tangents `axes`.
 struct SurfaceRadii {
   /// Semi-axes (caller's length unit; RADDIFF_MAX_RADIUS at most).

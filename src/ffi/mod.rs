@@ -15,6 +15,7 @@ mod form_factor;
 mod gather;
 mod irradiance;
 mod kernels;
+mod near_far;
 mod radii;
 mod scatter;
 
@@ -26,5 +27,6 @@ pub use form_factor::*;
 pub use gather::*;
 pub use irradiance::*;
 pub use kernels::*;
+pub use near_far::*;
 pub use radii::*;
 pub use scatter::*;
