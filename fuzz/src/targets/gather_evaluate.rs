@@ -1,4 +1,5 @@
-//! Gathers: `raddiff_gather_directions` and `raddiff_gather_evaluate`.
+//! Gathers: `raddiff_gather_directions`, `raddiff_gather_evaluate`, and the near/far split of the
+//! same rays (`raddiff_gather_near_field`, `raddiff_gather_far_field_radiance`).
 //!
 //! Input: the layout (each kind, m and n in 1..=16 or out of range, a seed), the frame (unit normal
 //! and tangent built from decoded angles, or raw vectors), how the directions are made (the
@@ -9,7 +10,10 @@
 //! Properties: no panic; `raddiff_gather_directions` writes finite unit vectors or nothing; with
 //! `RADDIFF_OK` every wanted output is finite, `harmonic_mean_distance` and `min_distance` too
 //! unless every ray missed (then both are `INFINITY`); on failure nothing is written (arrays and
-//! the two distances keep their sentinels) and a message is set.
+//! the two distances keep their sentinels) and a message is set. The near/far split at a decoded
+//! reach (any f64): both calls accept or refuse together; on success the open fractions agree and
+//! lie in [0, 1], the near irradiance and the far-field radiance are finite and open directions keep
+//! their radiance; on failure nothing is written.
 use raddiff::ffi::*;
 
 use super::check::{self, sentinel, sentinel3};
@@ -75,6 +79,12 @@ pub fn run(data: &[u8]) -> Outcome {
     };
     let name = "raddiff_gather_evaluate";
     let status = raddiff_gather_evaluate(&layout, &frame, &gather, &mut output);
+    let reach = match input.below(4) {
+        0 => input.f64(),
+        1 => input.magnitude(),
+        _ => 0.01 + input.magnitude().min(1e3),
+    };
+    near_far(&layout, &distance, &radiance, channels, reach);
     let names = [
         "irradiance",
         "gradient",
@@ -199,6 +209,73 @@ fn directions(
         _ => {}
     }
     dirs
+}
+
+/// The near/far split of the gather's rays at `reach`, and its properties.
+fn near_far(
+    layout: &raddiff_gather_layout,
+    distance: &[f64],
+    radiance: &[f32],
+    channels: usize,
+    reach: f64,
+) {
+    let mut near = vec![sentinel(); channels];
+    let mut open = sentinel();
+    let near_name = "raddiff_gather_near_field";
+    let near_status = raddiff_gather_near_field(
+        layout,
+        distance.as_ptr(),
+        radiance.as_ptr(),
+        channels as u32,
+        reach,
+        near.as_mut_ptr(),
+        &mut open,
+    );
+    let mut far = radiance.to_vec();
+    let mut far_open = sentinel();
+    let far_name = "raddiff_gather_far_field_radiance";
+    let far_status = raddiff_gather_far_field_radiance(
+        layout,
+        distance.as_ptr(),
+        far.as_mut_ptr(),
+        channels as u32,
+        reach,
+        &mut far_open,
+    );
+    let near_ok = check::status(near_name, near_status);
+    assert_eq!(
+        near_ok,
+        check::status(far_name, far_status),
+        "{near_name} and {far_name} disagree on reach {reach}"
+    );
+    if !near_ok {
+        check::untouched(near_name, "near_irradiance", &near);
+        check::untouched(near_name, "open_fraction", &[open]);
+        check::untouched(far_name, "open_fraction", &[far_open]);
+        assert!(
+            far.iter()
+                .zip(radiance)
+                .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{far_name}: radiance written on failure"
+        );
+        return;
+    }
+    check::finite(near_name, "near_irradiance", &near);
+    assert!(
+        (0.0..=1.0).contains(&open) && open == far_open,
+        "open fractions {open} and {far_open}"
+    );
+    check::finite_f32(far_name, "radiance", &far);
+    for (i, &d) in distance.iter().enumerate() {
+        if d >= reach {
+            let (a, b) = (i * channels, (i + 1) * channels);
+            assert_eq!(
+                far[a..b],
+                radiance[a..b],
+                "{far_name}: open direction {i} changed"
+            );
+        }
+    }
 }
 
 fn distance(input: &mut Input) -> f64 {
