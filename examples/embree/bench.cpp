@@ -40,8 +40,9 @@ class GatherStore {
       TracedGather g = trace_gather(scene_, settings_.radiance, px.p, px.n, irr.gather_m, irr.gather_n, 1 + pixel);
       s.trace_seconds = thread_cpu_seconds() - t0;
       s.rays = g.rays;
-      if (settings_.near_field_px > 0 && settings_.far_field_gathers)
-        fill_near_with_far(g, settings_.near_field_px * px.footprint);
+      const double reach = settings_.near_field_px * px.footprint;
+      const bool far_field_gather = settings_.near_field_px > 0 && settings_.far_field_gathers;
+      const double open = far_field_gather ? fill_near_with_far(g, reach) : 1.0;
       s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_, irr));
       if (settings_.oracle_derivative_paths > 0 && s.evaluated->valid) {
         // Derivatives from the same directions with radiance averaged over K independent paths:
@@ -60,7 +61,7 @@ class GatherStore {
           *s.evaluated = std::move(o);
         }
       }
-      if (settings_.near_field_px > 0) split_far_field(g, settings_.near_field_px * px.footprint, *s.evaluated);
+      if (settings_.near_field_px > 0) split_far_field(g, reach, open, *s.evaluated, far_field_gather);
       ++computed_;
     });
     return s;
@@ -76,46 +77,31 @@ class GatherStore {
 
   size_t computed() const { return computed_; }
 
-  // The near-field experiment's split of a gather at `reach`: how many directions reach at least
-  // that far, and the radiance summed over those (far) and over all directions (RGB).
-  struct FarShare {
-    size_t open = 0;
-    double far[3] = {0, 0, 0}, all[3] = {0, 0, 0};
-  };
-  static FarShare far_share(const TracedGather &g, double reach) {
-    FarShare f;
-    for (size_t k = 0; k < g.distance.size(); ++k) {
-      const bool reaches = !(g.distance[k] < reach);
-      f.open += reaches;
-      for (int c = 0; c < 3; ++c) {
-        f.all[c] += g.radiance[3 * k + c];
-        if (reaches) f.far[c] += g.radiance[3 * k + c];
-      }
+  // The near-field experiment's far-field gather (raddiff_gather_far_field_radiance): the radiance
+  // of the hits closer than `reach` replaced by the mean radiance of the directions that reach
+  // farther, so that the gather's irradiance, derivatives and radii are the far field's.
+  static double fill_near_with_far(TracedGather &g, double reach) {
+    double open = 0;
+    check(raddiff_gather_far_field_radiance(&g.layout, g.distance.data(), g.radiance.data(), 3, reach, &open),
+          "raddiff_gather_far_field_radiance");
+    return open;
+  }
+
+  // The near-field experiment's far field of an evaluated gather at `reach`: with far-field gathers
+  // (`open` from fill_near_with_far) its value; otherwise (E - E_near) / V of the gather itself
+  // (raddiff_gather_near_field), 0 where nothing is open.
+  static void split_far_field(const TracedGather &g, double reach, double open, Evaluated &e, bool far_field_gather) {
+    if (far_field_gather) {
+      e.open_fraction = open;
+      std::copy(std::begin(e.value), std::end(e.value), std::begin(e.far_value));
+      return;
     }
-    return f;
-  }
-
-  // The near-field experiment's far-field gather: the radiance of the hits closer than `reach`
-  // replaced by the mean radiance of the directions that reach farther (zero when none does), so
-  // that the gather's irradiance is the far field as if the near geometry did not block it, and its
-  // derivatives and radii are those of that far field (near hits keep their distances and normals).
-  static void fill_near_with_far(TracedGather &g, double reach) {
-    const FarShare f = far_share(g, reach);
-    for (size_t k = 0; k < g.distance.size(); ++k)
-      if (g.distance[k] < reach)
-        for (int c = 0; c < 3; ++c) g.radiance[3 * k + c] = f.open > 0 ? static_cast<float>(f.far[c] / f.open) : 0.0f;
-  }
-
-  // The near-field experiment's far field of a gather: the share of its irradiance carried by
-  // directions that reach at least `reach`, over the fraction of directions that do (the cosine-polar
-  // layout's directions carry equal weights).
-  static void split_far_field(const TracedGather &g, double reach, Evaluated &e) {
-    const FarShare f = far_share(g, reach);
-    e.open_fraction = g.distance.empty() ? 1.0 : static_cast<double>(f.open) / g.distance.size();
+    double near[3];
+    check(raddiff_gather_near_field(&g.layout, g.distance.data(), g.radiance.data(), 3, reach, near, &e.open_fraction),
+          "raddiff_gather_near_field");
     for (int c = 0; c < 3; ++c)
-      e.far_value[c] = f.open > 0 && f.all[c] > 0
-                           ? static_cast<float>(e.value[c] * (f.far[c] / f.all[c]) / e.open_fraction)
-                           : 0.0f;
+      e.far_value[c] =
+          e.open_fraction > 0 ? static_cast<float>(std::max(0.0, (e.value[c] - near[c]) / e.open_fraction)) : 0.0f;
   }
 
  private:
@@ -244,18 +230,17 @@ class Bench {
         const Primary &px = primary_[i];
         if (!px.hit) continue;
         uint64_t rays = 0;
-        const uint32_t count = settings_.near_field_rays;
-        const NearField f = near_field_sum(scene_, settings_.radiance, px.p, px.n,
-                                           settings_.near_field_px * px.footprint, count, mix(i) ^ 0x6e656172ull, rays);
-        const double scale = kPi / count;
-        near_[i] = {static_cast<float>(f.near.x * scale), static_cast<float>(f.near.y * scale),
-                    static_cast<float>(f.near.z * scale), static_cast<float>(static_cast<double>(f.open) / count)};
+        const NearField f = trace_near_field(scene_, settings_.radiance, px.p, px.n,
+                                             settings_.near_field_px * px.footprint, settings_.near_field_m,
+                                             mix(i) ^ 0x6e656172ull, rays);
+        near_[i] = {static_cast<float>(f.near[0]), static_cast<float>(f.near[1]), static_cast<float>(f.near[2]),
+                    static_cast<float>(f.open_fraction)};
       }
       cpu.add(thread_cpu_seconds() - t0);
     });
     near_seconds_ = cpu.total();
-    std::printf("near field: %u rays of %.3g pixels' reach per pixel, %.2f CPU s\n", settings_.near_field_rays,
-                settings_.near_field_px, near_seconds_);
+    std::printf("near field: %u x %u rays of %.3g pixels' reach per pixel, %.2f CPU s\n", settings_.near_field_m,
+                settings_.near_field_m, settings_.near_field_px, near_seconds_);
     std::fflush(stdout);
     return near_;
   }
@@ -654,11 +639,20 @@ std::vector<size_t> floor_sample(const Fill &f, size_t count) {
 
 // Relative RMS error of the records' own gathers against converged irradiance at their positions,
 // the reference's own noise removed: the error a cache would have if every pixel had its record.
-double gather_floor(const std::vector<size_t> &pixels, GatherStore &store, const FloorReferences &refs) {
+// With the near field (`near` not empty) a record's pixel shows its own near field plus its open
+// fraction times the record's far field, so that is what is compared.
+double gather_floor(const std::vector<size_t> &pixels, GatherStore &store, const FloorReferences &refs,
+                    const std::vector<std::array<float, 4>> &near) {
   double e2 = 0, n2 = 0, r2 = 0;
   for (size_t p : pixels) {
     const ReferencePixel &r = refs.at(p);
-    const double e = store.get(p).evaluated->luminance - luminance(r.value());
+    const Evaluated &g = *store.get(p).evaluated;
+    const double shown =
+        near.empty() ? g.luminance
+                     : luminance(V3{near[p][0] + near[p][3] * static_cast<double>(g.far_value[0]),
+                                    near[p][1] + near[p][3] * static_cast<double>(g.far_value[1]),
+                                    near[p][2] + near[p][3] * static_cast<double>(g.far_value[2])});
+    const double e = shown - luminance(r.value());
     const double noise = 0.5 * (luminance(r.half[0]) - luminance(r.half[1]));
     e2 += e * e;
     n2 += noise * noise;
@@ -806,7 +800,7 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
   floor_refs.ensure(all_samples, scene, primary, settings);
   for (const Fill &f : tuned) {
     const std::vector<size_t> s = floor_sample(f, settings.floor_records);
-    const double floor = gather_floor(s, bench.store(), floor_refs);
+    const double floor = gather_floor(s, bench.store(), floor_refs, bench.near_field());
     floor_csv << metric_name(f.metric) << "," << s.size() << "," << floor << "\n";
     std::printf("floor %-22s %.4f (gathers of %zu records against converged irradiance)\n", metric_name(f.metric),
                 floor, s.size());

@@ -50,17 +50,17 @@ struct BenchSettings {
   // the finest level repeated until covered, as the render mode's --neighbour-clamp (the records'
   // radii in <out>-<metric>-records.csv and -fills.csv are those inserted, before clamping).
   bool neighbour_clamp = false;
-  // > 0: the near-field experiment (Arikan et al. 2005's decomposition). Each pixel traces
-  // near_field_rays cosine-distributed rays of this many pixel footprints' reach and takes the
+  // > 0: the near-field experiment (Arikan et al. 2005's decomposition, raddiff_gather_near_field
+  // and raddiff_gather_far_field_radiance). Each pixel traces a near_field_m x near_field_m
+  // jittered cosine-polar layout of rays of this many pixel footprints' reach and takes the
   // radiance of what they hit as its near irradiance; the records store the far field (their
-  // gathers' hits beyond the same reach at the record, divided by the fraction of directions that
-  // reach that far), and a pixel's irradiance is its near irradiance plus the interpolated far
-  // field times its own open fraction. The pixels' rays count in every rendered fill's CPU time.
+  // gathers' irradiance minus the near field at the same reach, over the open fraction), and a
+  // pixel's irradiance is its near irradiance plus the interpolated far field times its own open
+  // fraction. The pixels' rays count in every rendered fill's CPU time.
   double near_field_px = 0;
-  uint32_t near_field_rays = 16;
+  uint32_t near_field_m = 4;
   // With near_field_px: the records made from their far-field gathers (near hits' radiance replaced
-  // by the far directions' mean), so that their derivatives and radii are the far field's too. The
-  // gathers' floor then compares the far field with the whole irradiance: it is not a floor.
+  // by the far directions' mean), so that their derivatives and radii are the far field's too.
   bool far_field_gathers = false;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;

@@ -14,6 +14,7 @@
 #include "bench.hpp"
 #include "render.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -122,8 +123,10 @@ int main(int argc, char **argv) {
         const std::string v = next();
         const size_t comma = v.find(',');
         bench.near_field_px = std::stod(v.substr(0, comma));
-        if (comma != std::string::npos) bench.near_field_rays = static_cast<uint32_t>(std::stoul(v.substr(comma + 1)));
-        if (bench.near_field_px <= 0 || bench.near_field_rays < 1) throw std::runtime_error("--near-field K[,N]: K > 0, N >= 1");
+        const unsigned long rays = comma == std::string::npos ? 16 : std::stoul(v.substr(comma + 1));
+        bench.near_field_m = static_cast<uint32_t>(std::lround(std::sqrt(static_cast<double>(rays))));
+        if (!(bench.near_field_px > 0) || rays < 1 || static_cast<unsigned long>(bench.near_field_m) * bench.near_field_m != rays)
+          throw std::runtime_error("--near-field K[,N]: K > 0 pixels, N rays a square (16, 256, 1024)");
       }
       else if (a == "--absolute-error") bench.absolute_error = true;
       else if (a == "--no-record-gradients") bench.record_gradients = false;

@@ -82,22 +82,34 @@ V3 irradiance_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x,
   return sum;
 }
 
-NearField near_field_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, double reach,
-                         uint32_t count, uint64_t scramble, uint64_t &rays) {
-  const V3 t = tangent_of(n), b = cross(n, t);
-  const uint32_t shift1 = static_cast<uint32_t>(mix(scramble)), shift2 = static_cast<uint32_t>(mix(scramble + 1));
-  NearField f;
+NearField trace_near_field(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, double reach,
+                           uint32_t m, uint64_t seed, uint64_t &rays) {
+  const raddiff_gather_layout layout{RADDIFF_LAYOUT_COSINE_POLAR, m, m, seed | 1};  // a nonzero seed: jitter
+  const raddiff_frame frame{to_c(x), to_c(n), to_c(tangent_of(n))};
+  const size_t count = static_cast<size_t>(m) * m;
+  thread_local std::vector<raddiff_vec3> directions;
+  thread_local std::vector<double> distance;
+  thread_local std::vector<float> hit;
+  directions.resize(count);
+  distance.resize(count);
+  hit.assign(3 * count, 0.0f);
+  check(raddiff_gather_directions(&layout, &frame, directions.data()), "raddiff_gather_directions");
   hit_radiance_rays() = 0;
-  for (uint32_t k = 0; k < count; ++k) {
-    const V3 d = cosine_direction(k, shift1, shift2, t, b, n);
-    const Hit hit = scene.intersect(x, d, reach);  // a short ray: its traversal stops at the reach
-    if (hit.distance < reach) {
-      f.near += hit_radiance(scene, radiance, x, d, hit, mix(scramble ^ (0x5bd1e995ull * (k + 1))));
-    } else {
-      ++f.open;
+  for (size_t k = 0; k < count; ++k) {
+    const V3 d = from_c(directions[k]);
+    const Hit h = scene.intersect(x, d, reach);  // a short ray: its traversal stops at the reach
+    distance[k] = h.found() ? h.distance : INFINITY;
+    if (distance[k] < reach) {
+      const V3 l = hit_radiance(scene, radiance, x, d, h, mix(seed ^ (0x5bd1e995ull * (k + 1))));
+      hit[3 * k] = static_cast<float>(l.x);
+      hit[3 * k + 1] = static_cast<float>(l.y);
+      hit[3 * k + 2] = static_cast<float>(l.z);
     }
   }
   rays += count + hit_radiance_rays();
+  NearField f;
+  check(raddiff_gather_near_field(&layout, distance.data(), hit.data(), 3, reach, f.near, &f.open_fraction),
+        "raddiff_gather_near_field");
   return f;
 }
 

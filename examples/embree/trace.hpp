@@ -38,16 +38,15 @@ void trace_directions(const Scene &scene, const HitRadianceSettings &radiance, V
 V3 irradiance_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, uint32_t first, uint32_t count,
                   uint64_t scramble, uint64_t &rays);
 
-// The near field at (x, n), as in Arikan et al. 2005's decomposition of irradiance into near and
-// far parts: over `count` cosine-distributed directions from the (0,2)-sequence points [0, count)
-// (as irradiance_sum, scrambled by `scramble`), the radiance of the hits closer than `reach`
-// summed (pi * near / count estimates the near irradiance), and how many directions reach farther
-// (open / count estimates the cosine-weighted fraction of the hemisphere the near field leaves open).
+// The near field at (x, n) (Arikan et al. 2005's near/far decomposition, raddiff_gather_near_field):
+// an m x m jittered cosine-polar layout's directions traced no farther than `reach`, the hits'
+// radiance only where they are closer. `near` is the near irradiance (RGB), `open_fraction` the
+// cosine-weighted share of the hemisphere whose rays reach farther.
 struct NearField {
-  V3 near;
-  uint32_t open = 0;
+  double near[3] = {0, 0, 0};
+  double open_fraction = 1;
 };
-NearField near_field_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, double reach,
-                         uint32_t count, uint64_t scramble, uint64_t &rays);
+NearField trace_near_field(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, double reach,
+                           uint32_t m, uint64_t seed, uint64_t &rays);
 
 }  // namespace rd
