@@ -42,7 +42,7 @@ class GatherStore {
       s.rays = g.rays;
       const double reach = settings_.near_field_px * px.footprint;
       const bool far_field_gather = settings_.near_field_px > 0 && settings_.far_field_gathers;
-      const double open = far_field_gather ? fill_near_with_far(g, reach) : 1.0;
+      const double open = far_field_gather ? fill_near_with_far(g, reach, settings_.near_at_reach) : 1.0;
       s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_, irr));
       if (settings_.oracle_derivative_paths > 0 && s.evaluated->valid) {
         // Derivatives from the same directions with radiance averaged over K independent paths:
@@ -80,10 +80,18 @@ class GatherStore {
   // The near-field experiment's far-field gather (raddiff_gather_far_field_radiance): the radiance
   // of the hits closer than `reach` replaced by the mean radiance of the directions that reach
   // farther, so that the gather's irradiance, derivatives and radii are the far field's.
-  static double fill_near_with_far(TracedGather &g, double reach) {
+  // With `near_at_reach` the near hits also move to the reach (a surface facing x there), so that
+  // the far field's derivatives and radii do not see the near geometry.
+  static double fill_near_with_far(TracedGather &g, double reach, bool near_at_reach) {
     double open = 0;
     check(raddiff_gather_far_field_radiance(&g.layout, g.distance.data(), g.radiance.data(), 3, reach, &open),
           "raddiff_gather_far_field_radiance");
+    if (near_at_reach)
+      for (size_t k = 0; k < g.distance.size(); ++k)
+        if (g.distance[k] < reach) {
+          g.distance[k] = reach;
+          g.hit_normals[k] = {-g.directions[k].x, -g.directions[k].y, -g.directions[k].z};
+        }
     return open;
   }
 
@@ -697,6 +705,8 @@ long max_rss_mib() {
 }  // namespace
 
 int run_bench(const Scene &scene, const View &view, const std::string &scene_key, const BenchSettings &settings) {
+  if (settings.near_at_reach && !settings.far_field_gathers)
+    throw std::runtime_error("--near-at-reach needs --far-field-gathers");
   if (settings.far_field_gathers && settings.near_field_px <= 0)
     throw std::runtime_error("--far-field-gathers needs --near-field");
   const double wall0 = process_cpu_seconds();

@@ -62,6 +62,9 @@ struct BenchSettings {
   // With near_field_px: the records made from their far-field gathers (near hits' radiance replaced
   // by the far directions' mean), so that their derivatives and radii are the far field's too.
   bool far_field_gathers = false;
+  // With far_field_gathers: the near hits also moved to the reach (distance = reach, a surface
+  // facing the record), so that the far field's derivatives and radii do not see the near geometry.
+  bool near_at_reach = false;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
 };
