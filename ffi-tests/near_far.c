@@ -1,4 +1,5 @@
-/* raddiff_gather_near_field / raddiff_gather_far_field_radiance through the C header only: the open
+/* raddiff_gather_near_field / raddiff_gather_far_field_radiance / raddiff_gather_far_field through the
+   C header only: the open
    fraction under a ceiling against its closed form, the identity E = E_near + V F of one gather
    split with itself, and every rejected argument (nothing written). */
 #include "raddiff.h"
@@ -72,6 +73,24 @@ int main(void) {
   for (i = 0; i < CELLS; i++) {
     if (dist[i] >= 1.5) CHECK(far_rad[2 * i] == rad[2 * i]);
     if (dist[i] < 1.5) CHECK(far_rad[2 * i + 1] == far_rad[3]);
+  }
+  /* the far-field gather with distances: the same radiance, near hits moved to the reach */
+  {
+    static double moved[CELLS];
+    static float moved_rad[CELLS * 2];
+    double open_gather = -1.0;
+    memcpy(moved, dist, sizeof dist);
+    memcpy(moved_rad, rad, sizeof rad);
+    CHECK_STATUS(raddiff_gather_far_field(&layout, moved, moved_rad, 2, 1.5, &open_gather), RADDIFF_OK);
+    CHECK(open_gather == open);
+    CHECK(memcmp(moved_rad, far_rad, sizeof far_rad) == 0);
+    for (i = 0; i < CELLS; i++) CHECK(moved[i] == (dist[i] < 1.5 ? 1.5 : dist[i]));
+    CHECK_STATUS(raddiff_gather_far_field(&layout, moved, (float *)(void *)moved, 2, 1.5, NULL),
+                 RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK_STATUS(raddiff_gather_far_field(&layout, NULL, moved_rad, 2, 1.5, NULL), RADDIFF_ERROR_NULL_POINTER);
+    CHECK_STATUS(raddiff_gather_far_field(&layout, moved, moved_rad, 2, 0.0, &open_gather),
+                 RADDIFF_ERROR_INVALID_ARGUMENT);
+    CHECK(open_gather == open);
   }
   /* open_fraction is optional for the far field */
   CHECK_STATUS(raddiff_gather_far_field_radiance(&layout, dist, far_rad, 2, 1.5, NULL), RADDIFF_OK);

@@ -32,6 +32,13 @@ int main() {
   const double far_field = raddiff::gather_evaluate(layout, frame, in, raddiff::GATHER_IRRADIANCE).irradiance[0];
   CHECK(std::fabs(near.irradiance[0] + open * far_field - whole) <= 1e-6 * whole);
 
+  // The far-field gather with distances: the same radiance, the near hits at the reach.
+  std::vector<double> moved = distance;
+  std::vector<float> moved_radiance = radiance;
+  CHECK(raddiff::gather_far_field(layout, moved, moved_radiance, 1, 0.3) == open);
+  CHECK(moved_radiance == far);
+  for (std::size_t i = 0; i < moved.size(); ++i) CHECK(moved[i] == (distance[i] < 0.3 ? 0.3 : distance[i]));
+
   // Sizes are checked before the call; a bad reach comes back as the library's status.
   std::vector<float> short_radiance(radiance.size() - 1);
   CHECK_THROWS(raddiff::gather_near_field(layout, distance, short_radiance, 1, 0.3), RADDIFF_ERROR_INVALID_ARGUMENT,

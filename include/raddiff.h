@@ -933,6 +933,19 @@ enum raddiff_status raddiff_gather_far_field_radiance(const struct raddiff_gathe
                                                       double reach,
                                                       double *open_fraction);
 
+// As `raddiff_gather_far_field_radiance`, and every hit closer than `reach` moves to the reach
+// (`distance[i] = reach`, read and written), as if a surface at the reach showed the far field's
+// mean radiance: the far field's derivatives and radii then see only the far geometry, which is
+// what a near/far cache's records want (the pixels' near fields carry the near geometry). Hit
+// normals given to a metric (the geometric Hessian) should face the gather point for the moved
+// hits. Errors as `raddiff_gather_far_field_radiance`; nothing is written on failure.
+enum raddiff_status raddiff_gather_far_field(const struct raddiff_gather_layout *layout,
+                                             double *distance,
+                                             float *radiance,
+                                             uint32_t channels,
+                                             double reach,
+                                             double *open_fraction);
+
 // Elliptical surface record from a 3x3 Hessian (see the Rust `gather::radii::surface_radii`): the
 // Hessian (row-major) is projected on the tangent plane of the unit `normal` and eigen-decomposed;
 // `radii[0] <= radii[1]` are the semi-axes along the world-space unit tangents `axes[0..2]`, chosen so

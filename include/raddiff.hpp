@@ -734,6 +734,19 @@ inline double gather_far_field_radiance(const raddiff_gather_layout &layout, Spa
   return open;
 }
 
+/// Wraps `raddiff_gather_far_field`: as gather_far_field_radiance, and the hits closer than
+/// `reach` move to the reach (`distance` written), so that the far field's derivatives and radii
+/// see only the far geometry; returns the open fraction (sizes checked; nothing changed on failure).
+inline double gather_far_field(const raddiff_gather_layout &layout, Span<double> distance, Span<float> radiance,
+                               std::uint32_t channels, double reach) {
+  const std::size_t cells = gather_size(layout);
+  detail::check_size("distance", distance.size(), cells);
+  detail::check_size("radiance", radiance.size(), detail::mul(cells, channels));
+  double open = 0.0;
+  detail::check(raddiff_gather_far_field(&layout, distance.data(), radiance.data(), channels, reach, &open));
+  return open;
+}
+
 /// An elliptical surface record: `radii[0] <= radii[1]` along the world-space unit tangents `axes`.
 struct SurfaceRadii {
   /// Semi-axes (caller's length unit; RADDIFF_MAX_RADIUS at most).

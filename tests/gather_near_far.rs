@@ -8,8 +8,8 @@ mod splitmix;
 
 use glam::DVec3;
 use raddiff::gather::{
-    evaluate, far_field_radiance, near_field, Frame, GatherInput, Layout, LayoutKind, NearField,
-    Wanted,
+    evaluate, far_field_gather, far_field_radiance, near_field, Frame, GatherInput, Layout,
+    LayoutKind, NearField, Wanted,
 };
 use raddiff::Error;
 use splitmix::uniform;
@@ -387,4 +387,64 @@ fn rejected_inputs_write_nothing() {
         near.irradiance_with(&[f64::NAN]),
         Err(Error::InvalidArgument(_))
     ));
+}
+
+/// The far-field gather with distances: the radiance as `far_field_radiance` gives it, near hits at
+/// the reach, far hits and misses where they were; its evaluation is the same far field (no
+/// medium); nothing changes on failure.
+#[test]
+fn the_far_field_gather_moves_near_hits_to_the_reach() {
+    let frame = frame();
+    let layout = Layout::new(LayoutKind::CosinePolar, 12, 20, 9).unwrap();
+    let reach = 2.0;
+    let (distance, radiance) = random_gather(&layout, reach, 77);
+    let mut moved = distance.clone();
+    let mut moved_radiance = radiance.clone();
+    let open = far_field_gather(&layout, &mut moved, &mut moved_radiance, 3, reach).unwrap();
+    let mut kept_radiance = radiance.clone();
+    assert_eq!(
+        open,
+        far_field_radiance(&layout, &distance, &mut kept_radiance, 3, reach).unwrap()
+    );
+    assert_eq!(moved_radiance, kept_radiance);
+    for (&before, &after) in distance.iter().zip(&moved) {
+        if before < reach {
+            assert_eq!(after, reach);
+        } else {
+            assert_eq!(after.to_bits(), before.to_bits());
+        }
+    }
+    let directions = layout.directions(&frame).unwrap();
+    let value = |distance: &[f64], radiance: &[f32]| {
+        let input = GatherInput {
+            directions: &directions,
+            distance,
+            radiance,
+            channels: 3,
+            sigma_t: 0.0,
+            media: None,
+        };
+        evaluate(&layout, &frame, &input, Wanted::ALL).unwrap()
+    };
+    let (a, b) = (
+        value(&moved, &moved_radiance),
+        value(&distance, &kept_radiance),
+    );
+    assert_eq!(a.irradiance, b.irradiance);
+    // Its smallest distance is the reach: the near geometry is gone from its derivatives.
+    assert_eq!(a.min_distance, Some(reach));
+
+    let mut bad = distance.clone();
+    bad[5] = f64::NAN;
+    let (before_d, before_l) = (bad.clone(), radiance.clone());
+    let mut l = radiance.clone();
+    assert!(far_field_gather(&layout, &mut bad, &mut l, 3, reach).is_err());
+    assert!(bad
+        .iter()
+        .zip(&before_d)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+    assert_eq!(l, before_l);
+    let mut d = distance.clone();
+    assert!(far_field_gather(&layout, &mut d, &mut l, 3, -1.0).is_err());
+    assert_eq!(d, distance);
 }

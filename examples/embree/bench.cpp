@@ -146,18 +146,19 @@ class GatherStore {
       }
   }
 
-  // With `near_at_reach` the near hits also move to the reach (a surface facing x there), so that
-  // the far field's derivatives and radii do not see the near geometry.
+  // With `near_at_reach` the near hits also move to the reach (raddiff_gather_far_field; their
+  // normals then face x), so that the far field's derivatives and radii do not see the near geometry.
   static double fill_near_with_far(TracedGather &g, double reach, bool near_at_reach) {
     double open = 0;
-    check(raddiff_gather_far_field_radiance(&g.layout, g.distance.data(), g.radiance.data(), 3, reach, &open),
-          "raddiff_gather_far_field_radiance");
-    if (near_at_reach)
-      for (size_t k = 0; k < g.distance.size(); ++k)
-        if (g.distance[k] < reach) {
-          g.distance[k] = reach;
-          g.hit_normals[k] = {-g.directions[k].x, -g.directions[k].y, -g.directions[k].z};
-        }
+    if (!near_at_reach) {
+      check(raddiff_gather_far_field_radiance(&g.layout, g.distance.data(), g.radiance.data(), 3, reach, &open),
+            "raddiff_gather_far_field_radiance");
+      return open;
+    }
+    for (size_t k = 0; k < g.distance.size(); ++k)
+      if (g.distance[k] < reach) g.hit_normals[k] = {-g.directions[k].x, -g.directions[k].y, -g.directions[k].z};
+    check(raddiff_gather_far_field(&g.layout, g.distance.data(), g.radiance.data(), 3, reach, &open),
+          "raddiff_gather_far_field");
     return open;
   }
 

@@ -1,12 +1,12 @@
 //! C wrappers for the near/far decomposition at a reach (`raddiff_gather_near_field`,
-//! `raddiff_gather_far_field_radiance`; see `gather::near_far`).
+//! `raddiff_gather_far_field_radiance`, `raddiff_gather_far_field`; see `gather::near_far`).
 // The C functions take raw pointers by contract (documented per argument) and NULL-check them;
 // marking them `unsafe fn` would change nothing for C callers.
 #![allow(clippy::not_unsafe_ptr_arg_deref)]
 
 use super::common::*;
 use super::gather::raddiff_gather_layout;
-use crate::gather::{far_field_radiance, near_field, Layout};
+use crate::gather::{far_field_gather, far_field_radiance, near_field, Layout};
 use crate::Error;
 
 /// `m*n*channels` for a valid layout, or an error when it overflows.
@@ -90,6 +90,54 @@ pub extern "C" fn raddiff_gather_far_field_radiance(
             unsafe { std::slice::from_raw_parts_mut(radiance, len) }
         };
         let open = far_field_radiance(&layout, distance, radiance, channels as usize, reach)?;
+        if let Some(out) = unsafe { open_fraction.as_mut() } {
+            *out = open;
+        }
+        Ok(())
+    })
+}
+
+/// As `raddiff_gather_far_field_radiance`, and every hit closer than `reach` moves to the reach
+/// (`distance[i] = reach`, read and written), as if a surface at the reach showed the far field's
+/// mean radiance: the far field's derivatives and radii then see only the far geometry, which is
+/// what a near/far cache's records want (the pixels' near fields carry the near geometry). Hit
+/// normals given to a metric (the geometric Hessian) should face the gather point for the moved
+/// hits. Errors as `raddiff_gather_far_field_radiance`; nothing is written on failure.
+#[no_mangle]
+pub extern "C" fn raddiff_gather_far_field(
+    layout: *const raddiff_gather_layout,
+    distance: *mut f64,
+    radiance: *mut f32,
+    channels: u32,
+    reach: f64,
+    open_fraction: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let layout = Layout::try_from(unsafe { in_ref(layout, "layout")? })?;
+        let cells = layout.len();
+        let len = radiance_len(&layout, channels)?;
+        if distance.is_null() && cells > 0 {
+            return Err(FfiError::Null("distance"));
+        }
+        if radiance.is_null() && len > 0 {
+            return Err(FfiError::Null("radiance"));
+        }
+        if !distance.is_null() && std::ptr::eq(distance.cast::<u8>(), radiance.cast::<u8>()) {
+            return Err(
+                Error::InvalidArgument("distance and radiance are the same array".into()).into(),
+            );
+        }
+        let distance: &mut [f64] = if cells == 0 {
+            &mut []
+        } else {
+            unsafe { std::slice::from_raw_parts_mut(distance, cells) }
+        };
+        let radiance: &mut [f32] = if len == 0 {
+            &mut []
+        } else {
+            unsafe { std::slice::from_raw_parts_mut(radiance, len) }
+        };
+        let open = far_field_gather(&layout, distance, radiance, channels as usize, reach)?;
         if let Some(out) = unsafe { open_fraction.as_mut() } {
             *out = open;
         }

@@ -40,7 +40,7 @@ mod walls;
 pub use evaluate::{evaluate, GatherValues, ValidGather, Wanted};
 pub use input::{GatherInput, MediaRadiance};
 pub use layout::{concentric_to_local, Frame, Layout, LayoutKind, StratumBounds};
-pub use near_far::{far_field_radiance, near_field, NearField};
+pub use near_far::{far_field_gather, far_field_radiance, near_field, NearField};
 
 // The gather's Hessians (occlusion-aware on surfaces and in media, occlusion-unaware), and the
 // record radii they imply.

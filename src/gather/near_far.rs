@@ -176,3 +176,28 @@ pub fn far_field_radiance(
     }
     Ok(open as f64 / layout.len() as f64)
 }
+
+/// Turns a gather into its far-field gather, in place, radiance and distances: as
+/// [`far_field_radiance`], and every hit closer than `reach` moves to the reach (its distance
+/// becomes `reach`), as if a surface at the reach showed the far field's mean radiance. The far
+/// field's derivatives and radii then see only the far geometry: the near geometry is the pixel's
+/// near field's business, and a record's radius no longer shrinks beside a junction whose light
+/// the near field already carries. Returns the open fraction, in `[0, 1]`.
+///
+/// Hit normals, where a metric uses them (the geometric Hessian), should face the gather point
+/// for the moved hits (`−ω`). Errors as [`far_field_radiance`]; nothing is changed on failure.
+pub fn far_field_gather(
+    layout: &Layout,
+    distance: &mut [f64],
+    radiance: &mut [f32],
+    channels: usize,
+    reach: f64,
+) -> Result<f64> {
+    let open = far_field_radiance(layout, distance, radiance, channels, reach)?;
+    for d in distance.iter_mut() {
+        if !reaches(*d, reach) {
+            *d = reach;
+        }
+    }
+    Ok(open)
+}

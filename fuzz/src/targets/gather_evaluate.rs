@@ -1,5 +1,6 @@
 //! Gathers: `raddiff_gather_directions`, `raddiff_gather_evaluate`, and the near/far split of the
-//! same rays (`raddiff_gather_near_field`, `raddiff_gather_far_field_radiance`).
+//! same rays (`raddiff_gather_near_field`, `raddiff_gather_far_field_radiance`,
+//! `raddiff_gather_far_field`).
 //!
 //! Input: the layout (each kind, m and n in 1..=16 or out of range, a seed), the frame (unit normal
 //! and tangent built from decoded angles, or raw vectors), how the directions are made (the
@@ -242,7 +243,51 @@ fn near_far(
         reach,
         &mut far_open,
     );
+    let mut moved = distance.to_vec();
+    let mut moved_radiance = radiance.to_vec();
+    let mut moved_open = sentinel();
+    let gather_name = "raddiff_gather_far_field";
+    let gather_status = raddiff_gather_far_field(
+        layout,
+        moved.as_mut_ptr(),
+        moved_radiance.as_mut_ptr(),
+        channels as u32,
+        reach,
+        &mut moved_open,
+    );
     let near_ok = check::status(near_name, near_status);
+    assert_eq!(
+        near_ok,
+        check::status(gather_name, gather_status),
+        "{near_name} and {gather_name} disagree on reach {reach}"
+    );
+    if near_ok {
+        assert!(
+            moved_open == open && moved_radiance == far,
+            "{gather_name}: not the far-field radiance"
+        );
+        for (&before, &after) in distance.iter().zip(&moved) {
+            let want = if before < reach { reach } else { before };
+            assert_eq!(
+                after.to_bits(),
+                want.to_bits(),
+                "{gather_name}: distance {before} -> {after}"
+            );
+        }
+    } else {
+        check::untouched(gather_name, "open_fraction", &[moved_open]);
+        assert!(
+            moved
+                .iter()
+                .zip(distance)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+                && moved_radiance
+                    .iter()
+                    .zip(radiance)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+            "{gather_name}: written on failure"
+        );
+    }
     assert_eq!(
         near_ok,
         check::status(far_name, far_status),
