@@ -938,7 +938,8 @@ enum raddiff_status raddiff_gather_far_field_radiance(const struct raddiff_gathe
 // mean radiance: the far field's derivatives and radii then see only the far geometry, which is
 // what a near/far cache's records want (the pixels' near fields carry the near geometry). Hit
 // normals given to a metric (the geometric Hessian) should face the gather point for the moved
-// hits. Errors as `raddiff_gather_far_field_radiance`; nothing is written on failure.
+// hits. `distance` and `radiance` must not overlap. Errors as
+// `raddiff_gather_far_field_radiance`; nothing is written on failure.
 enum raddiff_status raddiff_gather_far_field(const struct raddiff_gather_layout *layout,
                                              double *distance,
                                              float *radiance,

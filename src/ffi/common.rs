@@ -330,6 +330,25 @@ pub(crate) unsafe fn in_slice<'a, T>(
     Ok(std::slice::from_raw_parts(ptr, len))
 }
 
+/// Turns an in-out array into a mutable slice, or reports which argument was NULL. A zero-length
+/// array may be NULL.
+///
+/// # Safety
+/// `ptr` must be NULL or valid for reads and writes of `len` values of `T`, and not aliased.
+pub(crate) unsafe fn inout_slice<'a, T>(
+    ptr: *mut T,
+    len: usize,
+    name: &'static str,
+) -> Result<&'a mut [T], FfiError> {
+    if len == 0 {
+        return Ok(&mut []);
+    }
+    if ptr.is_null() {
+        return Err(FfiError::Null(name));
+    }
+    Ok(std::slice::from_raw_parts_mut(ptr, len))
+}
+
 /// Parses a C `order` argument.
 pub(crate) fn order_from_c(order: u32) -> Result<Order, FfiError> {
     Ok(Order::try_from(order)?)

@@ -80,15 +80,8 @@ pub extern "C" fn raddiff_gather_far_field_radiance(
     guard(|| {
         let layout = Layout::try_from(unsafe { in_ref(layout, "layout")? })?;
         let distance = unsafe { in_slice(distance, layout.len(), "distance")? };
-        let len = radiance_len(&layout, channels)?;
-        if radiance.is_null() && len > 0 {
-            return Err(FfiError::Null("radiance"));
-        }
-        let radiance: &mut [f32] = if len == 0 {
-            &mut []
-        } else {
-            unsafe { std::slice::from_raw_parts_mut(radiance, len) }
-        };
+        let radiance =
+            unsafe { inout_slice(radiance, radiance_len(&layout, channels)?, "radiance")? };
         let open = far_field_radiance(&layout, distance, radiance, channels as usize, reach)?;
         if let Some(out) = unsafe { open_fraction.as_mut() } {
             *out = open;
@@ -102,7 +95,8 @@ pub extern "C" fn raddiff_gather_far_field_radiance(
 /// mean radiance: the far field's derivatives and radii then see only the far geometry, which is
 /// what a near/far cache's records want (the pixels' near fields carry the near geometry). Hit
 /// normals given to a metric (the geometric Hessian) should face the gather point for the moved
-/// hits. Errors as `raddiff_gather_far_field_radiance`; nothing is written on failure.
+/// hits. `distance` and `radiance` must not overlap. Errors as
+/// `raddiff_gather_far_field_radiance`; nothing is written on failure.
 #[no_mangle]
 pub extern "C" fn raddiff_gather_far_field(
     layout: *const raddiff_gather_layout,
@@ -114,29 +108,14 @@ pub extern "C" fn raddiff_gather_far_field(
 ) -> raddiff_status {
     guard(|| {
         let layout = Layout::try_from(unsafe { in_ref(layout, "layout")? })?;
-        let cells = layout.len();
-        let len = radiance_len(&layout, channels)?;
-        if distance.is_null() && cells > 0 {
-            return Err(FfiError::Null("distance"));
-        }
-        if radiance.is_null() && len > 0 {
-            return Err(FfiError::Null("radiance"));
-        }
         if !distance.is_null() && std::ptr::eq(distance.cast::<u8>(), radiance.cast::<u8>()) {
             return Err(
                 Error::InvalidArgument("distance and radiance are the same array".into()).into(),
             );
         }
-        let distance: &mut [f64] = if cells == 0 {
-            &mut []
-        } else {
-            unsafe { std::slice::from_raw_parts_mut(distance, cells) }
-        };
-        let radiance: &mut [f32] = if len == 0 {
-            &mut []
-        } else {
-            unsafe { std::slice::from_raw_parts_mut(radiance, len) }
-        };
+        let distance = unsafe { inout_slice(distance, layout.len(), "distance")? };
+        let radiance =
+            unsafe { inout_slice(radiance, radiance_len(&layout, channels)?, "radiance")? };
         let open = far_field_gather(&layout, distance, radiance, channels as usize, reach)?;
         if let Some(out) = unsafe { open_fraction.as_mut() } {
             *out = open;

@@ -77,6 +77,45 @@ fn validate_reach(reach: f64) -> Result<()> {
     }
 }
 
+/// A gather's radiance summed per channel over its near hits and over its open directions, and
+/// how many directions are open, after validating every input.
+struct Split {
+    near: Vec<f64>,
+    far: Vec<f64>,
+    open: usize,
+}
+
+impl Split {
+    fn new(
+        layout: &Layout,
+        distance: &[f64],
+        radiance: &[f32],
+        channels: usize,
+        reach: f64,
+    ) -> Result<Split> {
+        layout.validate()?;
+        validate_reach(reach)?;
+        validate_hits(layout, distance, radiance, channels)?;
+        let mut split = Split {
+            near: vec![0.0; channels],
+            far: vec![0.0; channels],
+            open: 0,
+        };
+        for (&d, l) in distance.iter().zip(radiance.chunks_exact(channels)) {
+            let sums = if reaches(d, reach) {
+                split.open += 1;
+                &mut split.far
+            } else {
+                &mut split.near
+            };
+            for (s, &v) in sums.iter_mut().zip(l) {
+                *s += f64::from(v);
+            }
+        }
+        Ok(split)
+    }
+}
+
 /// Whether a ray that found `distance` reaches at least `reach` (a miss, `INFINITY`, does).
 #[inline]
 fn reaches(distance: f64, reach: f64) -> bool {
@@ -101,27 +140,11 @@ pub fn near_field(
     channels: usize,
     reach: f64,
 ) -> Result<NearField> {
-    layout.validate()?;
-    validate_reach(reach)?;
-    validate_hits(layout, distance, radiance, channels)?;
-    let mut sum = vec![0.0f64; channels];
-    let mut open = 0usize;
-    for (&d, l) in distance.iter().zip(radiance.chunks_exact(channels)) {
-        if reaches(d, reach) {
-            open += 1;
-        } else {
-            for (s, &v) in sum.iter_mut().zip(l) {
-                *s += f64::from(v);
-            }
-        }
-    }
+    let split = Split::new(layout, distance, radiance, channels, reach)?;
     let weight = layout.kind.measure() / layout.len() as f64;
-    for s in &mut sum {
-        *s *= weight;
-    }
     Ok(NearField {
-        irradiance: sum,
-        open_fraction: open as f64 / layout.len() as f64,
+        irradiance: split.near.iter().map(|s| s * weight).collect(),
+        open_fraction: split.open as f64 / layout.len() as f64,
     })
 }
 
@@ -145,19 +168,7 @@ pub fn far_field_radiance(
     channels: usize,
     reach: f64,
 ) -> Result<f64> {
-    layout.validate()?;
-    validate_reach(reach)?;
-    validate_hits(layout, distance, radiance, channels)?;
-    let mut far = vec![0.0f64; channels];
-    let mut open = 0usize;
-    for (&d, l) in distance.iter().zip(radiance.chunks_exact(channels)) {
-        if reaches(d, reach) {
-            open += 1;
-            for (s, &v) in far.iter_mut().zip(l) {
-                *s += f64::from(v);
-            }
-        }
-    }
+    let Split { far, open, .. } = Split::new(layout, distance, radiance, channels, reach)?;
     // A mean of finite f32 values is a finite f32.
     let mean: Vec<f32> = far
         .iter()
