@@ -41,8 +41,6 @@ class GatherStore {
       s.trace_seconds = thread_cpu_seconds() - t0;
       s.rays = g.rays;
       const double reach = settings_.near_field_px * px.footprint;
-      float far_direction[27] = {};
-      if (settings_.near_field_px > 0 && settings_.far_field_directions) fit_far_directions(g, reach, far_direction);
       const bool far_field_gather = settings_.near_field_px > 0 && settings_.far_field_gathers;
       const double open = far_field_gather ? fill_near_with_far(g, reach, settings_.near_at_reach) : 1.0;
       s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_, irr));
@@ -64,7 +62,6 @@ class GatherStore {
         }
       }
       if (settings_.near_field_px > 0) split_far_field(g, reach, open, *s.evaluated, far_field_gather);
-      std::copy(std::begin(far_direction), std::end(far_direction), std::begin(s.evaluated->far_direction));
       ++computed_;
     });
     return s;
@@ -83,69 +80,6 @@ class GatherStore {
   // The near-field experiment's far-field gather (raddiff_gather_far_field_radiance): the radiance
   // of the hits closer than `reach` replaced by the mean radiance of the directions that reach
   // farther, so that the gather's irradiance, derivatives and radii are the far field's.
-  // The directional far-field experiment's record: the far radiance regressed on far_basis over the
-  // directions that reach at least `reach`, centred (features and radiance minus their means), with
-  // a ridge of 1e-9 of the trace; out[3 l + c] the coefficients, out[24 + c] their sum times the
-  // basis means. Zero with fewer open directions than twice the basis.
-  static void fit_far_directions(const TracedGather &g, double reach, float out[27]) {
-    std::vector<std::array<double, kFarBasis>> basis;
-    std::vector<std::array<double, 3>> radiance;
-    for (size_t k = 0; k < g.distance.size(); ++k) {
-      if (g.distance[k] < reach) continue;
-      std::array<double, kFarBasis> b;
-      far_basis(from_c(g.directions[k]), b.data());
-      basis.push_back(b);
-      radiance.push_back({g.radiance[3 * k], g.radiance[3 * k + 1], g.radiance[3 * k + 2]});
-    }
-    std::fill(out, out + 27, 0.0f);
-    const size_t n = basis.size();
-    if (n < 2 * kFarBasis) return;
-    double bm[kFarBasis] = {}, lm[3] = {};
-    for (size_t k = 0; k < n; ++k) {
-      for (int l = 0; l < kFarBasis; ++l) bm[l] += basis[k][l] / n;
-      for (int c = 0; c < 3; ++c) lm[c] += radiance[k][c] / n;
-    }
-    // Normal equations A x = r for the three channels at once: A is kFarBasis^2, r kFarBasis x 3.
-    double a[kFarBasis][kFarBasis] = {}, r[kFarBasis][3] = {};
-    for (size_t k = 0; k < n; ++k) {
-      double d[kFarBasis];
-      for (int l = 0; l < kFarBasis; ++l) d[l] = basis[k][l] - bm[l];
-      for (int i = 0; i < kFarBasis; ++i) {
-        for (int j = 0; j < kFarBasis; ++j) a[i][j] += d[i] * d[j];
-        for (int c = 0; c < 3; ++c) r[i][c] += d[i] * (radiance[k][c] - lm[c]);
-      }
-    }
-    double trace = 0;
-    for (int i = 0; i < kFarBasis; ++i) trace += a[i][i];
-    if (!(trace > 0)) return;
-    for (int i = 0; i < kFarBasis; ++i) a[i][i] += 1e-9 * trace;
-    // Gaussian elimination with partial pivoting (A is symmetric positive definite after the ridge).
-    for (int col = 0; col < kFarBasis; ++col) {
-      int pivot = col;
-      for (int i = col + 1; i < kFarBasis; ++i)
-        if (std::fabs(a[i][col]) > std::fabs(a[pivot][col])) pivot = i;
-      std::swap(a[col], a[pivot]);
-      std::swap(r[col], r[pivot]);
-      for (int i = col + 1; i < kFarBasis; ++i) {
-        const double f = a[i][col] / a[col][col];
-        for (int j = col; j < kFarBasis; ++j) a[i][j] -= f * a[col][j];
-        for (int c = 0; c < 3; ++c) r[i][c] -= f * r[col][c];
-      }
-    }
-    double x[kFarBasis][3];
-    for (int i = kFarBasis - 1; i >= 0; --i)
-      for (int c = 0; c < 3; ++c) {
-        double v = r[i][c];
-        for (int j = i + 1; j < kFarBasis; ++j) v -= a[i][j] * x[j][c];
-        x[i][c] = v / a[i][i];
-      }
-    for (int l = 0; l < kFarBasis; ++l)
-      for (int c = 0; c < 3; ++c) {
-        out[3 * l + c] = static_cast<float>(x[l][c]);
-        out[24 + c] += static_cast<float>(x[l][c] * bm[l]);
-      }
-  }
-
   // With `near_at_reach` the near hits also move to the reach (raddiff_gather_far_field; their
   // normals then face x), so that the far field's derivatives and radii do not see the near geometry.
   static double fill_near_with_far(TracedGather &g, double reach, bool near_at_reach) {
@@ -292,19 +226,11 @@ class Bench {
   const Camera &camera() const { return camera_; }
   GatherStore &store() { return store_; }
 
-  // The directional far-field experiment's per-pixel open_basis_mean (empty without it), filled
-  // with near_field().
-  const std::vector<std::array<float, kFarBasis>> &near_basis() {
-    near_field();
-    return near_basis_;
-  }
-
   // The near-field experiment: every pixel's near irradiance (RGB) and open fraction, traced once
   // and shared by every fill, and what that cost in CPU seconds.
   const std::vector<std::array<float, 4>> &near_field() {
     if (!near_.empty() || settings_.near_field_px <= 0) return near_;
     near_.assign(primary_.size(), {0, 0, 0, 1});
-    if (settings_.far_field_directions) near_basis_.assign(primary_.size(), {});
     CpuSum cpu;
     const size_t w = static_cast<size_t>(view_.width);
     parallel_for(static_cast<size_t>(view_.height), settings_.threads, [&](size_t row) {
@@ -318,8 +244,6 @@ class Bench {
                                              mix(i) ^ 0x6e656172ull, rays);
         near_[i] = {static_cast<float>(f.near[0]), static_cast<float>(f.near[1]), static_cast<float>(f.near[2]),
                     static_cast<float>(f.open_fraction)};
-        if (settings_.far_field_directions)
-          for (int l = 0; l < kFarBasis; ++l) near_basis_[i][l] = static_cast<float>(f.open_basis_mean[l]);
       }
       cpu.add(thread_cpu_seconds() - t0);
     });
@@ -364,17 +288,6 @@ class Bench {
                                                       : RADDIFF_INTERP_WARD;
       quadratic = surface_cache(kernel, irr.gradient_limit, kQuadraticChannels, false);
       check(raddiff_cache_set_leak_guard(quadratic.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
-            "raddiff_cache_set_leak_guard");
-    }
-    // The directional far-field experiment's cache of the records' regressions (same extents, same
-    // kernel, no gradients).
-    CachePtr directional(nullptr, raddiff_cache_free);
-    if (render && settings_.far_field_directions) {
-      const int kernel = settings_.interpolation >= 0 ? settings_.interpolation
-                         : uses_hessian(m)            ? RADDIFF_INTERP_TENT
-                                                      : RADDIFF_INTERP_WARD;
-      directional = surface_cache(kernel, irr.gradient_limit, 27, false);
-      check(raddiff_cache_set_leak_guard(directional.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
             "raddiff_cache_set_leak_guard");
     }
     auto covered = [&](size_t i) {
@@ -462,12 +375,6 @@ class Bench {
           cache_cpu.add(thread_cpu_seconds() - t0);
           out.records.push_back(info);
           if (smooth) kept.push_back(rec);
-          if (directional) {
-            raddiff_cache_record dr = rec;
-            dr.value = e.far_direction;
-            dr.gradient = dr.rotation_gradient = nullptr;
-            check(raddiff_cache_insert(directional.get(), &dr), "raddiff_cache_insert");
-          }
           if (quadratic) {
             if (!e.evaluation[1]) throw std::runtime_error("--second-order needs an occlusion-aware Hessian metric");
             raddiff_gather_summary summary{};
@@ -543,22 +450,8 @@ class Bench {
             const double scale = lum > 0 ? 1 + settings_.second_order * quadratic_term(primary_[i].p, b) / lum : 1;
             for (int c = 0; c < 3; ++c) v[c] = static_cast<float>(std::max(0.0, v[c] * scale));
           }
-          float q[27];
-          const bool directed =
-              st == RADDIFF_OK && directional &&
-              raddiff_cache_lookup(directional.get(), to_c(primary_[i].p), to_c(primary_[i].n), q, nullptr) ==
-                  RADDIFF_OK;
           if (st == RADDIFF_OK && !near.empty())
-            for (int c = 0; c < 3; ++c) {
-              double far = v[c];
-              if (directed) {
-                // E_far = pi V (L_far + sum_l c_l (mean_l(pixel) - mean_l(record))), F = pi L_far
-                double d = -q[24 + c];
-                for (int l = 0; l < kFarBasis; ++l) d += q[3 * l + c] * near_basis_[i][l];
-                far = std::max(0.0, far + kPi * d);
-              }
-              v[c] = static_cast<float>(far * near[i][3] + near[i][c]);
-            }
+            for (int c = 0; c < 3; ++c) v[c] = v[c] * near[i][3] + near[i][c];
         }
         cache_cpu.add(thread_cpu_seconds() - t0);
       });
@@ -644,7 +537,6 @@ class Bench {
   std::vector<Primary> primary_;
   GatherStore store_;
   std::vector<std::array<float, 4>> near_;
-  std::vector<std::array<float, kFarBasis>> near_basis_;  // the directional experiment's open_basis_mean
   double near_seconds_ = 0;
 };
 
@@ -759,26 +651,16 @@ std::vector<size_t> floor_sample(const Fill &f, size_t count) {
 // With the near field (`near` not empty) a record's pixel shows its own near field plus its open
 // fraction times the record's far field, so that is what is compared.
 double gather_floor(const std::vector<size_t> &pixels, GatherStore &store, const FloorReferences &refs,
-                    const std::vector<std::array<float, 4>> &near,
-                    const std::vector<std::array<float, kFarBasis>> &near_basis) {
+                    const std::vector<std::array<float, 4>> &near) {
   double e2 = 0, n2 = 0, r2 = 0;
   for (size_t p : pixels) {
     const ReferencePixel &r = refs.at(p);
     const Evaluated &g = *store.get(p).evaluated;
-    double shown = g.luminance;
-    if (!near.empty()) {
-      double rgb[3];
-      for (int c = 0; c < 3; ++c) {
-        double far = g.far_value[c];
-        if (!near_basis.empty()) {
-          double d = -g.far_direction[24 + c];
-          for (int l = 0; l < kFarBasis; ++l) d += g.far_direction[3 * l + c] * near_basis[p][l];
-          far = std::max(0.0, far + kPi * d);
-        }
-        rgb[c] = near[p][c] + near[p][3] * far;
-      }
-      shown = luminance(rgb);
-    }
+    const double shown =
+        near.empty() ? g.luminance
+                     : luminance(V3{near[p][0] + near[p][3] * static_cast<double>(g.far_value[0]),
+                                    near[p][1] + near[p][3] * static_cast<double>(g.far_value[1]),
+                                    near[p][2] + near[p][3] * static_cast<double>(g.far_value[2])});
     const double e = shown - luminance(r.value());
     const double noise = 0.5 * (luminance(r.half[0]) - luminance(r.half[1]));
     e2 += e * e;
@@ -824,8 +706,6 @@ long max_rss_mib() {
 }  // namespace
 
 int run_bench(const Scene &scene, const View &view, const std::string &scene_key, const BenchSettings &settings) {
-  if (settings.far_field_directions && settings.near_field_px <= 0)
-    throw std::runtime_error("--far-field-directions needs --near-field");
   if (settings.near_at_reach && !settings.far_field_gathers)
     throw std::runtime_error("--near-at-reach needs --far-field-gathers");
   if (settings.far_field_gathers && settings.near_field_px <= 0)
@@ -931,7 +811,7 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
   floor_refs.ensure(all_samples, scene, primary, settings);
   for (const Fill &f : tuned) {
     const std::vector<size_t> s = floor_sample(f, settings.floor_records);
-    const double floor = gather_floor(s, bench.store(), floor_refs, bench.near_field(), bench.near_basis());
+    const double floor = gather_floor(s, bench.store(), floor_refs, bench.near_field());
     floor_csv << metric_name(f.metric) << "," << s.size() << "," << floor << "\n";
     std::printf("floor %-22s %.4f (gathers of %zu records against converged irradiance)\n", metric_name(f.metric),
                 floor, s.size());

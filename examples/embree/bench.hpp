@@ -65,12 +65,6 @@ struct BenchSettings {
   // With far_field_gathers: the near hits also moved to the reach (distance = reach, a surface
   // facing the record), so that the far field's derivatives and radii do not see the near geometry.
   bool near_at_reach = false;
-  // With near_field_px: the far field's direction taken into account (an experiment). Each record
-  // also stores a linear regression of its far radiance on the direction's first two harmonic bands
-  // (over its open directions, centred so that its own mean is the far field), and each pixel
-  // integrates that over its own open directions instead of scaling the far field by its open
-  // fraction: E = E_near + pi V (L_far + sum_l c_l (mean_l(pixel) - mean_l(record))).
-  bool far_field_directions = false;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
 };

@@ -60,10 +60,6 @@ struct Evaluated {
   // fraction.
   float far_value[3] = {0, 0, 0};
   double open_fraction = 1;
-  // The directional far-field experiment: the far radiance's regression on far_basis over the open
-  // directions, [3 l + c] for basis l and channel c, then at [24 + c] the fit's value at the
-  // record's own mean basis (sum over l of coefficient times mean).
-  float far_direction[27] = {};
 };
 
 // `settings` gives the channels and their weights.

@@ -37,10 +37,9 @@ awk -v n="$(records_of cornell)" -v x="$(error_of cornell)" -v m="$(records_of c
     printf "equal records: split sphere %d records error %.4f, hessian %d records error %.4f (hessian/split sphere = %.2f)\n",
       n, x, m, y, (x > 0 ? y / x : 0) }'
 # The benchmark's near-field experiment on the same box, small and quick, with far-field gathers as
-# raddiff_gather_far_field_radiance and raddiff_gather_far_field make them, and with the far
-# field's direction: each run exits non-zero unless every fill covers the image with finite,
-# non-negative values.
-for near in "--far-field-gathers" "--far-field-gathers --near-at-reach" "--far-field-gathers --far-field-directions"; do
+# raddiff_gather_far_field_radiance and raddiff_gather_far_field make them: each run exits non-zero
+# unless every fill covers the image with finite, non-negative values.
+for near in "--far-field-gathers" "--far-field-gathers --near-at-reach"; do
   # shellcheck disable=SC2086 # the options are meant to split
   "$binary" --bench --obj "$here/cornell.obj" --out "$out/cornell-near" --size 64 --metrics split-sphere,hessian-anisotropic \
     --thresholds 1 --no-path-trace --reference-rays 4096 --near-field 4,64 $near > "$out/cornell-near.log"

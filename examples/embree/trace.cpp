@@ -108,21 +108,6 @@ NearField trace_near_field(const Scene &scene, const HitRadianceSettings &radian
   }
   rays += count + hit_radiance_rays();
   NearField f;
-  double near_sum[kFarBasis] = {};
-  size_t open = 0;
-  for (size_t k = 0; k < count; ++k) {
-    if (!(distance[k] < reach)) {
-      ++open;
-      continue;
-    }
-    double b[kFarBasis];
-    far_basis(from_c(directions[k]), b);
-    for (int l = 0; l < kFarBasis; ++l) near_sum[l] += b[l];
-  }
-  double whole[kFarBasis];
-  far_basis_hemisphere_mean(n, whole);
-  for (int l = 0; l < kFarBasis; ++l)
-    f.open_basis_mean[l] = open ? (whole[l] - near_sum[l] / count) * count / open : 0.0;
   check(raddiff_gather_near_field(&layout, distance.data(), hit.data(), 3, reach, f.near, &f.open_fraction),
         "raddiff_gather_near_field");
   return f;

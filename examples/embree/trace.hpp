@@ -42,30 +42,9 @@ V3 irradiance_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x,
 // an m x m jittered cosine-polar layout's directions traced no farther than `reach`, the hits'
 // radiance only where they are closer. `near` is the near irradiance (RGB), `open_fraction` the
 // cosine-weighted share of the hemisphere whose rays reach farther.
-// The directional far-field experiment's basis: the world-space direction's linear and quadratic
-// harmonics (spherical harmonics of bands 1 and 2 up to constants).
-constexpr int kFarBasis = 8;
-inline void far_basis(V3 w, double b[kFarBasis]) {
-  b[0] = w.x, b[1] = w.y, b[2] = w.z;
-  b[3] = w.x * w.y, b[4] = w.y * w.z, b[5] = w.x * w.z;
-  b[6] = w.x * w.x - w.y * w.y, b[7] = 3 * w.z * w.z - 1;
-}
-
-// far_basis averaged over the cosine-weighted hemisphere about the unit normal n, in closed form:
-// E[w] = 2n/3 and E[w w^T] = (I + n n^T)/4.
-inline void far_basis_hemisphere_mean(V3 n, double b[kFarBasis]) {
-  b[0] = 2 * n.x / 3, b[1] = 2 * n.y / 3, b[2] = 2 * n.z / 3;
-  b[3] = n.x * n.y / 4, b[4] = n.y * n.z / 4, b[5] = n.x * n.z / 4;
-  b[6] = (n.x * n.x - n.y * n.y) / 4, b[7] = 3 * (1 + n.z * n.z) / 4 - 1;
-}
-
 struct NearField {
   double near[3] = {0, 0, 0};
   double open_fraction = 1;
-  // far_basis averaged over the open directions (0: none), as the hemisphere's closed-form mean
-  // minus the near directions' sampled share, over the open fraction: only the near directions
-  // are sampled, so an open pixel's mean carries no sampling noise.
-  double open_basis_mean[kFarBasis] = {};
 };
 NearField trace_near_field(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, double reach,
                            uint32_t m, uint64_t seed, uint64_t &rays);
