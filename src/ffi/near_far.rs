@@ -26,8 +26,8 @@ fn radiance_len(layout: &Layout, channels: u32) -> Result<usize, FfiError> {
 ///
 /// `distance` (m*n) and `radiance` (m*n*channels, index `i*channels + c`) are as in
 /// `raddiff_gather_input`. The pixel's irradiance is then `near_irradiance[c] + open_fraction *
-/// F[c]`, with F the far field interpolated from records made from
-/// `raddiff_gather_far_field_radiance`'s gathers at the same reach.
+/// F[c]`, with F the far field interpolated from records made from `raddiff_gather_far_field`'s
+/// (or `raddiff_gather_far_field_radiance`'s) gathers at the same reach.
 /// `RADDIFF_ERROR_INVALID_ARGUMENT` for a bad layout, a reach not finite and > 0, `channels` 0,
 /// a distance not > 0 (or NaN) or non-finite radiance; nothing is written on failure.
 #[no_mangle]
