@@ -333,6 +333,17 @@ typedef struct raddiff_irradiance_settings {
   double leak_guard_relative;
   // The leak guard's absolute tolerance in L, >= 0 (default 0).
   double leak_guard_absolute;
+  // The near/far decomposition's reach in L, >= 0 (default 0). With either reach > 0 the
+  // records hold far fields (cache state, saved with the cache) and the cache is queried with
+  // `raddiff_cache_irradiance_near_far`; the reach at a query is
+  // max(near_field_reach_world, near_field_reach_pixels * footprint).
+  double near_field_reach_world;
+  // The reach in pixel footprints, >= 0 (default 0; the real-scene benchmark used 8).
+  double near_field_reach_pixels;
+  // Near rays per query along theta, in the gather's layout kind (default 32).
+  uint32_t near_field_m;
+  // Near rays per query along phi (default 32).
+  uint32_t near_field_n;
 } raddiff_irradiance_settings;
 
 // An m x n stratified layout: `kind` is a `RADDIFF_LAYOUT_*` constant; 1 <= m, n <=
@@ -451,6 +462,22 @@ typedef int (*raddiff_trace_fn)(void *user,
                                 double *distance,
                                 float *radiance);
 
+// Traces `count` rays from `origin` along the unit `directions` (world space), none farther
+// than `max_distance` (INFINITY: as far as they go); writes each ray's hit distance to
+// `distance[i]` and the radiance arriving at `origin` along it to `radiance[i*channels + c]`.
+// A ray that finds nothing closer than `max_distance` gets INFINITY (or any distance >=
+// `max_distance`) and its radiance may be left as it is (zeros; not read). Returns 0 on success;
+// anything else abandons the request (`RADDIFF_ERROR_CALLBACK`, nothing inserted). `user` is the
+// pointer given to `raddiff_cache_irradiance_near_far`. Called exactly once per call, on the
+// calling thread; it must not unwind and may call raddiff functions.
+typedef int (*raddiff_trace_bounded_fn)(void *user,
+                                        struct raddiff_vec3 origin,
+                                        const struct raddiff_vec3 *directions,
+                                        size_t count,
+                                        double max_distance,
+                                        double *distance,
+                                        float *radiance);
+
 // A 2D vector or point.
 typedef struct raddiff_vec2 {
   // x component.
@@ -480,6 +507,8 @@ typedef struct raddiff_medium {
   // Henyey-Greenstein asymmetry in (-1, 1); 0 is isotropic.
   double g;
 } raddiff_medium;
+
+
 
 
 
@@ -816,9 +845,9 @@ struct raddiff_irradiance_settings raddiff_irradiance_settings_default(void);
 // A cache for the records `settings` make: surface domain, the settings' channels, the
 // metric's interpolation (`RADDIFF_INTERP_WARD` for the split-sphere family and the gradient
 // metric, `RADDIFF_INTERP_TENT` for the Hessian metrics), values clamped at zero
-// (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit and leak guard, maximum normal
-// deviation 0.2 rad. NULL (with `raddiff_last_error`) for NULL or invalid settings. Free it with
-// `raddiff_cache_free`.
+// (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit, leak guard and near-field
+// reach (records then hold far fields), maximum normal deviation 0.2 rad. NULL (with
+// `raddiff_last_error`) for NULL or invalid settings. Free it with `raddiff_cache_free`.
 struct raddiff_cache *raddiff_irradiance_cache_new(const struct raddiff_irradiance_settings *settings);
 
 // The irradiance at the shading point `x` with normal `n` (any non-zero length): looked up in
@@ -835,8 +864,9 @@ struct raddiff_cache *raddiff_irradiance_cache_new(const struct raddiff_irradian
 //
 // `RADDIFF_ERROR_NULL_POINTER` for a NULL `cache`, `settings`, `trace` or `out`;
 // `RADDIFF_ERROR_INVALID_ARGUMENT` for non-finite `x`, `n` or `footprint`, a zero `n`, a
-// negative footprint, invalid settings or settings that disagree with the cache (create it with
-// `raddiff_irradiance_cache_new`), no finite maximum radius, a metric that needs hit normals,
+// negative footprint, settings with a near-field reach or a cache of far fields (query those
+// with `raddiff_cache_irradiance_near_far`), invalid settings or settings that disagree with the
+// cache (create it with `raddiff_irradiance_cache_new`), no finite maximum radius, a metric that needs hit normals,
 // or traced values the gather refuses (distance <= 0 or NaN, non-finite radiance);
 // `RADDIFF_ERROR_CALLBACK` when `trace` returns non-zero; `RADDIFF_ERROR_DEGENERATE` when the
 // evaluation overflows. On any error nothing is inserted and `out` is untouched.
@@ -848,6 +878,42 @@ enum raddiff_status raddiff_cache_irradiance(struct raddiff_cache *cache,
                                              raddiff_trace_fn trace,
                                              void *user,
                                              float *out);
+
+// The irradiance at the shading point `x` with normal `n` as the near/far decomposition gives
+// it (Arikan et al. 2005): `E_near + V * F`, with the near field `E_near` and open fraction `V`
+// from the query's own short rays and the far field `F` from `cache`, or from a new record when
+// none covers `x`. `settings` must have a near-field reach and `cache` must be made from them
+// (`raddiff_irradiance_cache_new`): its records hold far fields. The reach at this query is
+// rho = max(near_field_reach_world, near_field_reach_pixels * footprint).
+//
+// `trace` is called exactly once: when a record covers `x`, with the
+// `near_field_m * near_field_n` near rays and `max_distance` = rho; on a miss, with the
+// record's `gather_m * gather_n` gather and `max_distance` = INFINITY, whose rays give both the
+// near field and, split at rho (near hits moved to the reach with the far field's mean
+// radiance, as `raddiff_gather_far_field`), the new record. `out` (`channels` floats) receives
+// `E_near + V * F`. Thread-safe as `raddiff_cache_irradiance`.
+//
+// `x`, `n`, `footprint` and the errors are as `raddiff_cache_irradiance`'s, and
+// `RADDIFF_ERROR_INVALID_ARGUMENT` when the settings have no near-field reach or disagree with
+// the cache's, the reach comes out 0 (a reach in pixels with footprint 0), the near-ray layout
+// is invalid, or the near rays' values are refused; `RADDIFF_ERROR_DEGENERATE` when the sum
+// overflows a float. On any error nothing is inserted and `out` is untouched.
+enum raddiff_status raddiff_cache_irradiance_near_far(struct raddiff_cache *cache,
+                                                      const struct raddiff_irradiance_settings *settings,
+                                                      struct raddiff_vec3 x,
+                                                      struct raddiff_vec3 n,
+                                                      double footprint,
+                                                      raddiff_trace_bounded_fn trace,
+                                                      void *user,
+                                                      float *out);
+
+// Writes the cache's far-field reach to `*world` (L) and `*pixels` (pixel footprints): both 0
+// when its records hold irradiance, not far fields. Set when the cache is made
+// (`raddiff_irradiance_cache_new` with a near-field reach), saved with it and restored by
+// `raddiff_cache_load` (files written before it load with both 0).
+enum raddiff_status raddiff_cache_get_far_field(const struct raddiff_cache *cache,
+                                                double *world,
+                                                double *pixels);
 
 // `exp(-sigma_t |x - y|)` and its derivatives with respect to `x` (see the Rust
 // `kernels::transmittance`). `RADDIFF_ERROR_DEGENERATE` for a gradient at `x == y`.

@@ -304,6 +304,14 @@ class Cache : public detail::Owner<raddiff_cache> {
     return {relative, absolute};
   }
 
+  /// Wraps `raddiff_cache_get_far_field`: the far-field reach (world, pixels) its records were
+  /// made at; both 0 when they hold irradiance.
+  std::pair<double, double> far_field() const {
+    double world = 0.0, pixels = 0.0;
+    detail::check(raddiff_cache_get_far_field(get(), &world, &pixels));
+    return {world, pixels};
+  }
+
  private:
   /// Owns `cache` (already NULL-checked).
   explicit Cache(raddiff_cache *cache) noexcept : Owner(cache) {}
@@ -882,6 +890,21 @@ int trace_trampoline(void *user, raddiff_vec3 origin, const raddiff_vec3 *direct
   }
 }
 
+/// The raddiff_trace_bounded_fn of IrradianceCache::irradiance_near_far, as trace_trampoline.
+template <class Trace>
+int trace_bounded_trampoline(void *user, raddiff_vec3 origin, const raddiff_vec3 *directions, std::size_t count,
+                             double max_distance, double *distance, float *radiance) noexcept {
+  auto *call = static_cast<TraceCall<Trace> *>(user);
+  try {
+    (*call->trace)(origin, Span<const raddiff_vec3>(directions, count), max_distance, Span<double>(distance, count),
+                   Span<float>(radiance, mul(count, call->channels)));
+    return 0;
+  } catch (...) {
+    call->error = std::current_exception();
+    return 1;
+  }
+}
+
 }  // namespace detail
 
 /// A radiance cache filled one shading point at a time (`raddiff_cache_irradiance`), with the
@@ -895,7 +918,8 @@ class IrradianceCache {
         cache_(Cache::adopt(raddiff_irradiance_cache_new(&settings_))) {}
 
   /// Uses `cache` (e.g. Cache::load of a saved IrradianceCache) with `settings`; the first miss
-  /// checks that they agree (channels, gradient limit, leak guard).
+  /// checks that they agree (channels, gradient limit, leak guard; near/far queries check the
+  /// far-field reach at every call).
   IrradianceCache(Cache cache, const raddiff_irradiance_settings &settings)
       : weights_(weights_of(settings)), settings_(with_weights(settings, weights_)), cache_(std::move(cache)) {}
 
@@ -920,6 +944,31 @@ class IrradianceCache {
   std::vector<float> irradiance(raddiff_vec3 x, raddiff_vec3 n, double footprint, Trace &&trace) {
     std::vector<float> out(settings_.channels);
     irradiance(x, n, footprint, std::forward<Trace>(trace), Span<float>(out));
+    return out;
+  }
+
+  /// Wraps `raddiff_cache_irradiance_near_far` (settings with a near-field reach): the irradiance
+  /// E_near + V * F at `x` into `out` (`channels` floats, checked). Calls
+  /// `trace(origin, directions, max_distance, distance, radiance)` exactly once: with the near
+  /// rays and the reach when a record covers `x`, with the record's gather and INFINITY on a miss;
+  /// rays that find nothing closer than `max_distance` get INFINITY. Exceptions as irradiance().
+  template <class Trace>
+  void irradiance_near_far(raddiff_vec3 x, raddiff_vec3 n, double footprint, Trace &&trace, Span<float> out) {
+    detail::check_size("out", out.size(), settings_.channels);
+    using Callable = std::remove_reference_t<Trace>;
+    detail::TraceCall<Callable> call{&trace, settings_.channels, nullptr};
+    const raddiff_status status =
+        raddiff_cache_irradiance_near_far(cache_.get(), &settings_, x, n, footprint,
+                                          &detail::trace_bounded_trampoline<Callable>, &call, out.data());
+    if (call.error) std::rethrow_exception(call.error);
+    detail::check(status);
+  }
+
+  /// irradiance_near_far() returning the `channels` values.
+  template <class Trace>
+  std::vector<float> irradiance_near_far(raddiff_vec3 x, raddiff_vec3 n, double footprint, Trace &&trace) {
+    std::vector<float> out(settings_.channels);
+    irradiance_near_far(x, n, footprint, std::forward<Trace>(trace), Span<float>(out));
     return out;
   }
 

@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use proptest::prelude::*;
-use raddiff::cache::{Cache, CacheConfig, Extent, LeakGuard, Record};
+use raddiff::cache::{Cache, CacheConfig, Extent, FarFieldReach, LeakGuard, Record};
 use raddiff::Error;
 
 fn sample(n: usize) -> Cache<[f32; 3]> {
@@ -47,9 +47,11 @@ fn reseal(bytes: &mut [u8]) {
     bytes[body..].copy_from_slice(&sum.to_le_bytes());
 }
 
-/// Size of the version 4 header (records start here).
-const HEADER: usize = 72;
-/// Size of the version 3 header: no leak-guard fields (offsets 56..72).
+/// Size of the version 5 header (records start here).
+const HEADER: usize = 88;
+/// Size of the version 4 header: no far-field fields (offsets 72..88).
+const HEADER_V4: usize = 72;
+/// Size of the version 3 header: no leak-guard fields either (offsets 56..72).
 const HEADER_V3: usize = 56;
 
 fn corrupt_reason(bytes: &[u8]) -> String {
@@ -122,16 +124,16 @@ fn header_and_record_damage_is_named() {
     b[0] = b'X';
     assert!(corrupt_reason(&b).contains("magic"));
     let mut b = good.clone();
-    b[8] = 5;
+    b[8] = 6;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("version"));
     let mut b = good.clone();
     b[100] ^= 1;
     assert!(corrupt_reason(&b).contains("checksum"));
     // a header flag this version does not know (bit 0 is the non-negative flag, bit 1 the
-    // gradient limit, bit 2 the leak guard)
+    // gradient limit, bit 2 the leak guard, bit 3 the far field)
     let mut b = good.clone();
-    b[44] = 8;
+    b[44] = 16;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("flags"));
     // a resealed file with a NaN radius (record 0 radii start at HEADER + 40)
@@ -178,22 +180,32 @@ fn header_and_record_damage_is_named() {
     assert!(corrupt_reason(&b).contains("domain"));
 }
 
-/// The version 2 file of a cache without a gradient limit or leak guard: the version 4 file
-/// without the gradient-limit and leak-guard fields (offsets 48..72), version 2, resealed.
-fn as_version_2(v4: &[u8]) -> Vec<u8> {
-    let mut b = v4[..48].to_vec();
-    b.extend_from_slice(&v4[HEADER..]);
+/// The version 2 file of a cache without a gradient limit, leak guard or far field: the version
+/// 5 file without the fields at offsets 48..88, version 2, resealed.
+fn as_version_2(v5: &[u8]) -> Vec<u8> {
+    let mut b = v5[..48].to_vec();
+    b.extend_from_slice(&v5[HEADER..]);
     b[8..12].copy_from_slice(&2u32.to_le_bytes());
     reseal(&mut b);
     b
 }
 
-/// The version 3 file of a cache without a leak guard: the version 4 file without the leak-guard
-/// fields (offsets 56..72), version 3, resealed.
-fn as_version_3(v4: &[u8]) -> Vec<u8> {
-    let mut b = v4[..HEADER_V3].to_vec();
-    b.extend_from_slice(&v4[HEADER..]);
+/// The version 3 file of a cache without a leak guard or far field: the version 5 file without
+/// the fields at offsets 56..88, version 3, resealed.
+fn as_version_3(v5: &[u8]) -> Vec<u8> {
+    let mut b = v5[..HEADER_V3].to_vec();
+    b.extend_from_slice(&v5[HEADER..]);
     b[8..12].copy_from_slice(&3u32.to_le_bytes());
+    reseal(&mut b);
+    b
+}
+
+/// The version 4 file of a cache without a far field: the version 5 file without the far-field
+/// fields (offsets 72..88), version 4, resealed.
+fn as_version_4(v5: &[u8]) -> Vec<u8> {
+    let mut b = v5[..HEADER_V4].to_vec();
+    b.extend_from_slice(&v5[HEADER..]);
+    b[8..12].copy_from_slice(&4u32.to_le_bytes());
     reseal(&mut b);
     b
 }
@@ -208,7 +220,7 @@ fn gradient_limit_round_trips() {
         c.insert(&r).unwrap();
     }
     let bytes = c.to_bytes();
-    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 4);
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 5);
     assert_eq!(u32::from_le_bytes(bytes[44..48].try_into().unwrap()), 0b11);
     assert_eq!(f64::from_le_bytes(bytes[48..56].try_into().unwrap()), 0.75);
     let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
@@ -254,15 +266,15 @@ fn gradient_limit_round_trips() {
 #[test]
 fn version_2_files_still_load() {
     let c = sample(30);
-    let v4 = c.to_bytes();
-    let v2 = as_version_2(&v4);
-    assert_eq!(v2.len(), v4.len() - 24);
+    let v5 = c.to_bytes();
+    let v2 = as_version_2(&v5);
+    assert_eq!(v2.len(), v5.len() - 40);
     let back = Cache::<[f32; 3]>::from_bytes(&v2).unwrap();
     assert_eq!(back.config(), c.config());
     assert_eq!(back.config().gradient_limit, f64::INFINITY);
     assert_eq!(back.keys(), c.keys());
     // saved again, it is the current file of the same cache
-    assert_eq!(back.to_bytes(), v4);
+    assert_eq!(back.to_bytes(), v5);
     // the non-negative flag still reads from version 2
     let nn: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3).with_non_negative(true)).unwrap();
     let v2 = as_version_2(&nn.to_bytes());
@@ -273,7 +285,7 @@ fn version_2_files_still_load() {
             .non_negative
     );
     // version 2 had no gradient-limit flag: bit 1 is unknown there
-    let mut b = as_version_2(&v4);
+    let mut b = as_version_2(&v5);
     b[44] = 2;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("flags"));
@@ -297,15 +309,15 @@ fn version_3_files_load_with_the_leak_guard_off() {
     for r in sample(12).records() {
         limited.insert(&r).unwrap();
     }
-    let v4 = limited.to_bytes();
-    let v3 = as_version_3(&v4);
-    assert_eq!(v3.len(), v4.len() - 16);
+    let v5 = limited.to_bytes();
+    let v3 = as_version_3(&v5);
+    assert_eq!(v3.len(), v5.len() - 32);
     let back = Cache::<[f32; 3]>::from_bytes(&v3).unwrap();
     assert_eq!(back.config(), limited.config());
     assert_eq!(back.config().leak_guard, LeakGuard::OFF);
     assert_eq!(back.config().gradient_limit, 2.0);
     assert_eq!(back.keys(), limited.keys());
-    assert_eq!(back.to_bytes(), v4);
+    assert_eq!(back.to_bytes(), v5);
     let mut b = v3.clone();
     b[44] |= 4;
     reseal(&mut b);
@@ -371,6 +383,92 @@ fn leak_guard_round_trips() {
             corrupt_reason(&b).contains("leak guard"),
             "{relative} {absolute}"
         );
+    }
+}
+
+/// Version 4 files (written before the far-field marker existed) load with it off and keep their
+/// leak guard; version 4 knows no far-field flag.
+#[test]
+fn version_4_files_load_without_far_fields() {
+    let guard = LeakGuard::relative(0.5);
+    let guarded: Cache<[f32; 3]> =
+        Cache::new(CacheConfig::surface(3).with_leak_guard(guard)).unwrap();
+    for r in sample(12).records() {
+        guarded.insert(&r).unwrap();
+    }
+    let v5 = guarded.to_bytes();
+    let v4 = as_version_4(&v5);
+    assert_eq!(v4.len(), v5.len() - 16);
+    let back = Cache::<[f32; 3]>::from_bytes(&v4).unwrap();
+    assert_eq!(back.config(), guarded.config());
+    assert_eq!(back.config().far_field, FarFieldReach::OFF);
+    assert_eq!(back.config().leak_guard, guard);
+    assert_eq!(back.keys(), guarded.keys());
+    assert_eq!(back.to_bytes(), v5);
+    let mut b = v4.clone();
+    b[44] |= 8;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("flags"));
+    for len in 0..v4.len() {
+        let m = corrupt_reason(&v4[..len]);
+        assert!(
+            m.contains("truncated") || m.contains("length"),
+            "{len}: {m}"
+        );
+    }
+}
+
+/// The far-field marker is cache state: saved (flag bit 3, reaches at offsets 72 and 80) and
+/// restored; fields without the flag, or a flag with no positive finite reach, are damage.
+#[test]
+fn far_field_marker_round_trips() {
+    let reach = FarFieldReach {
+        world: 0.05,
+        pixels: 8.0,
+    };
+    let c: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3).with_far_field(reach)).unwrap();
+    for r in sample(20).records() {
+        c.insert(&r).unwrap();
+    }
+    let bytes = c.to_bytes();
+    assert_eq!(
+        u32::from_le_bytes(bytes[44..48].try_into().unwrap()),
+        0b1000
+    );
+    assert_eq!(f64::from_le_bytes(bytes[72..80].try_into().unwrap()), 0.05);
+    assert_eq!(f64::from_le_bytes(bytes[80..88].try_into().unwrap()), 8.0);
+    let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
+    assert_eq!(back.config().far_field, reach);
+    assert_eq!(back.config(), c.config());
+    assert_eq!(back.keys(), c.keys());
+    assert_eq!(back.to_bytes(), bytes);
+    // no far field: flag clear and zero fields; fields without the flag are damage
+    let plain = sample(3).to_bytes();
+    assert_eq!(u32::from_le_bytes(plain[44..48].try_into().unwrap()), 0);
+    assert_eq!(u128::from_le_bytes(plain[72..88].try_into().unwrap()), 0);
+    let mut b = plain.clone();
+    b[80..88].copy_from_slice(&4.0f64.to_le_bytes());
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("far-field"));
+    for (world, pixels) in [
+        (-1.0, 0.0),
+        (f64::NAN, 1.0),
+        (0.0, f64::INFINITY),
+        (0.0, 0.0),
+    ] {
+        let mut b = bytes.clone();
+        b[72..80].copy_from_slice(&f64::to_le_bytes(world));
+        b[80..88].copy_from_slice(&f64::to_le_bytes(pixels));
+        reseal(&mut b);
+        assert!(corrupt_reason(&b).contains("far-field"), "{world} {pixels}");
+    }
+    // an invalid reach is refused when the cache is made
+    for bad in [-1.0, f64::NAN, f64::INFINITY] {
+        let config = CacheConfig::surface(3).with_far_field(FarFieldReach::pixels(bad));
+        assert!(matches!(
+            Cache::<[f32; 3]>::new(config),
+            Err(Error::InvalidArgument(_))
+        ));
     }
 }
 

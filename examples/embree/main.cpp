@@ -41,7 +41,7 @@ const char *kUsage =
     "                      [--gradient-limit c (default 2, inf: off)] [--leak-guard relative,absolute]\n"
     "                      [--max-anisotropy r (default 2)] [--curvature-floor kappa (default 0.04)]\n"
     "  render mode:        [--accuracy a | --hessian relative_error] [--records N] [--neighbour-clamp]\n"
-    "                      [--check pixels (default 96)]\n"
+    "                      [--check pixels (default 96)] [--near-field reach_px[,rays]]\n"
     "  --bench:            [--records N (default pixels/32)] [--metrics name,name,...] [--thresholds N]\n"
     "                      [--reference-rays N (65536)] [--reference-grid G (64)] [--cache-dir DIR] [--floor-records N]\n"
     "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n"
@@ -128,6 +128,9 @@ int main(int argc, char **argv) {
         bench.near_field_m = static_cast<uint32_t>(std::lround(std::sqrt(static_cast<double>(rays))));
         if (!(bench.near_field_px > 0) || rays < 1 || static_cast<unsigned long>(bench.near_field_m) * bench.near_field_m != rays)
           throw std::runtime_error("--near-field K[,N]: K > 0 pixels, N rays a square (16, 256, 1024)");
+        // the render mode: raddiff_cache_irradiance_near_far with this reach and these rays
+        render.irradiance.near_field_reach_pixels = bench.near_field_px;
+        render.irradiance.near_field_m = render.irradiance.near_field_n = bench.near_field_m;
       }
       else if (a == "--absolute-error") bench.absolute_error = true;
       else if (a == "--no-record-gradients") bench.record_gradients = false;
@@ -158,6 +161,9 @@ int main(int argc, char **argv) {
     // Radius bounds: raddiff's defaults (one to 150 pixels of the query's footprint) unless given;
     // they follow the image's pixels whatever the scene's size.
     bench.irradiance = render.irradiance;
+    bench.irradiance.near_field_reach_pixels = 0;  // the benchmark splits its gathers itself
+    if (!bench_mode && render.neighbour_clamp && render.irradiance.near_field_reach_pixels > 0)
+      throw std::runtime_error("--neighbour-clamp makes records by hand: not with --near-field in render mode");
     if (!gather_given) {
       bench.irradiance.gather_m = 32;
       bench.irradiance.gather_n = 128;

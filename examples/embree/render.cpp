@@ -37,6 +37,41 @@ int trace_callback(void *user, raddiff_vec3 origin, const raddiff_vec3 *directio
   }
 }
 
+// raddiff_trace_bounded_fn (raddiff_cache_irradiance_near_far): the same, with rays that stop at
+// `max_distance` (the near field's short rays; INFINITY for a record's gather).
+int trace_bounded_callback(void *user, raddiff_vec3 origin, const raddiff_vec3 *directions, size_t count,
+                           double max_distance, double *distance, float *radiance) {
+  auto *ctx = static_cast<TraceContext *>(user);
+  try {
+    uint64_t seed = 0, rays = 0;
+    for (double c : {origin.x, origin.y, origin.z}) {
+      uint64_t bits;
+      std::memcpy(&bits, &c, sizeof bits);
+      seed = mix(seed ^ bits);
+    }
+    trace_directions(*ctx->scene, *ctx->radiance, from_c(origin), directions, count, seed, distance, radiance, rays,
+                     nullptr, max_distance);
+    ctx->rays += rays;
+    return 0;
+  } catch (...) {
+    return 1;
+  }
+}
+
+bool near_field_on(const raddiff_irradiance_settings &s) {
+  return s.near_field_reach_pixels > 0 || s.near_field_reach_world > 0;
+}
+
+// One shading point through the one-call API: raddiff_cache_irradiance, or with a near-field reach
+// raddiff_cache_irradiance_near_far (every call traces the pixel's near rays; a miss its gather).
+raddiff_status shade_pixel(raddiff_cache *cache, const raddiff_irradiance_settings &s, TraceContext &ctx,
+                           const Primary &px, float *e) {
+  if (near_field_on(s))
+    return raddiff_cache_irradiance_near_far(cache, &s, to_c(px.p), to_c(px.n), px.footprint, trace_bounded_callback,
+                                             &ctx, e);
+  return raddiff_cache_irradiance(cache, &s, to_c(px.p), to_c(px.n), px.footprint, trace_callback, &ctx, e);
+}
+
 raddiff_irradiance_settings settings_of(const RenderSettings &cfg) {
   raddiff_irradiance_settings s = cfg.irradiance;
   s.metric = cfg.hessian_error > 0 ? RADDIFF_METRIC_HESSIAN_ANISOTROPIC : RADDIFF_METRIC_SPLIT_SPHERE;
@@ -111,8 +146,7 @@ Fill fill_cache(const Scene &scene, const RenderSettings &cfg, const View &view,
         return;
       }
       float e[3];
-      const raddiff_status st =
-          raddiff_cache_irradiance(cache, &s, to_c(px.p), to_c(px.n), px.footprint, trace_callback, &ctx, e);
+      const raddiff_status st = shade_pixel(cache, s, ctx, px, e);
       if (st != RADDIFF_ERROR_DEGENERATE) check(st, "raddiff_cache_irradiance");  // degenerate: every ray missed
       if (raddiff_cache_len(cache) > before) ++inserted;
     };
@@ -210,6 +244,9 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
   if (settings.neighbour_clamp)
     std::printf("neighbour clamp: %zu records shrunk by the two-sided passes, %d finest-level rounds\n",
                 filled.shrunk, filled.finest_rounds);
+  if (near_field_on(used.irradiance))
+    std::printf("near field: reach %g px, %u x %u rays per pixel; records hold far fields\n",
+                used.irradiance.near_field_reach_pixels, used.irradiance.near_field_m, used.irradiance.near_field_n);
 
   // Render through a per-thread cursor, or with plain lookups (the library keeps a cursor per
   // thread). Both give the same bits; pass 2 uses the other one, so its check covers that too.
@@ -217,11 +254,21 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
     raddiff_cache_cursor *p = raddiff_cache_cursor_new();
     ~Cursor() { raddiff_cache_cursor_free(p); }
   };
-  auto render = [&](const raddiff_cache *c, bool use_cursor, size_t &misses) {
+  const raddiff_irradiance_settings used_settings = settings_of(used);
+  const bool near_field = near_field_on(used_settings);
+  TraceContext near_ctx{&scene, &settings.radiance};
+  auto render = [&](raddiff_cache *c, bool use_cursor, size_t &misses) {
     Image image(w, h);
     std::atomic<size_t> miss{0};
+    const size_t records_before = raddiff_cache_len(c);
     parallel_for(primary.size(), settings.threads, [&](size_t i) {
       if (!primary[i].hit) return;
+      if (near_field) {
+        // E_near + V * F: the pixel's own near rays on top of the cached far field
+        const raddiff_status st = shade_pixel(c, used_settings, near_ctx, primary[i], image.at(i));
+        if (st != RADDIFF_ERROR_DEGENERATE) check(st, "raddiff_cache_irradiance_near_far");
+        return;
+      }
       thread_local Cursor cursor;
       const raddiff_status st =
           use_cursor ? raddiff_cache_lookup_with(c, cursor.p, to_c(primary[i].p), to_c(primary[i].n), image.at(i),
@@ -233,15 +280,16 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
         check(st, "raddiff_cache_lookup");
       }
     });
-    misses = miss;
+    // under the near field a pixel no record covered made one
+    misses = near_field ? raddiff_cache_len(c) - records_before : miss.load();
     return image;
   };
   size_t misses1 = 0;
   check(raddiff_cache_compact(cache), "raddiff_cache_compact");
+  const size_t records = raddiff_cache_len(cache);
   const auto t1 = clock::now();
   const Image first = render(cache, true, misses1);
   const double render_seconds = std::chrono::duration<double>(clock::now() - t1).count();
-  const size_t records = raddiff_cache_len(cache);
   std::printf("pass 1: %zu records, %.2f Mrays, fill %.2f s, render %.3f s, %zu uncovered pixels\n", records,
               filled.rays * 1e-6, filled.seconds, render_seconds, misses1);
   write_images(settings.out + "-irradiance", first);

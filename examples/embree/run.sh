@@ -21,7 +21,14 @@ records="$(sed -n 's/^pass 1: \([0-9][0-9]*\) records.*/\1/p' "$out/cornell.log"
 [ -n "$records" ] || { echo "no record count in $out/cornell.log" >&2; exit 1; }
 "$binary" --obj "$here/cornell.obj" --out "$out/cornell-hessian" --size 128 \
   --gather 16x48 --hessian 0.05 --records "$records" "$@" | tee "$out/cornell-hessian.log"
-runs=(cornell cornell-hessian)
+# The same two with the near field in the one-call API (raddiff_cache_irradiance_near_far): a
+# reach of 4 pixels, 16 x 16 short rays per pixel, records holding far fields.
+"$binary" --obj "$here/cornell.obj" --out "$out/cornell-near-split" --size 128 --gather 16x48 \
+  --near-field 4,256 "$@" | tee "$out/cornell-near-split.log"
+near_records="$(sed -n 's/^pass 1: \([0-9][0-9]*\) records.*/\1/p' "$out/cornell-near-split.log")"
+"$binary" --obj "$here/cornell.obj" --out "$out/cornell-near-hessian" --size 128 --gather 16x48 \
+  --near-field 4,256 --hessian 0.05 --records "$near_records" "$@" | tee "$out/cornell-near-hessian.log"
+runs=(cornell cornell-hessian cornell-near-split cornell-near-hessian)
 
 # The program exits non-zero when its own checks fail; check the files too.
 for f in "${runs[@]}"; do
@@ -36,6 +43,7 @@ awk -v n="$(records_of cornell)" -v x="$(error_of cornell)" -v m="$(records_of c
   -v y="$(error_of cornell-hessian)" 'BEGIN {
     printf "equal records: split sphere %d records error %.4f, hessian %d records error %.4f (hessian/split sphere = %.2f)\n",
       n, x, m, y, (x > 0 ? y / x : 0) }'
+grep -q '^near field: reach 4 px' "$out/cornell-near-hessian.log"
 # The benchmark's near-field experiment on the same box, small and quick, with far-field gathers as
 # raddiff_gather_far_field_radiance and raddiff_gather_far_field make them: each run exits non-zero
 # unless every fill covers the image with finite, non-negative values.

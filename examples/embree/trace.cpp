@@ -23,12 +23,14 @@ uint32_t sobol_second(uint32_t i) {
 
 void trace_directions(const Scene &scene, const HitRadianceSettings &radiance, V3 x, const raddiff_vec3 *directions,
                       size_t count, uint64_t seed, double *distance, float *radiance_out, uint64_t &rays,
-                      raddiff_vec3 *hit_normals) {
+                      raddiff_vec3 *hit_normals, double max_distance) {
   hit_radiance_rays() = 0;
+  const bool bounded = std::isfinite(max_distance);
   for (size_t i = 0; i < count; ++i) {
     const V3 d = from_c(directions[i]);
-    const Hit hit = scene.intersect(x, d);
+    const Hit hit = scene.intersect(x, d, max_distance);
     distance[i] = hit.distance;
+    if (bounded && !hit.found()) continue;  // beyond the reach: its radiance is not read
     if (hit_normals) hit_normals[i] = hit.found() ? to_c(hit.normal) : raddiff_vec3{0, 0, 0};
     const V3 l = hit_radiance(scene, radiance, x, d, hit, mix(seed + i));
     radiance_out[3 * i] = static_cast<float>(l.x);

@@ -25,11 +25,12 @@ struct TracedGather {
 TracedGather trace_gather(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, uint32_t m,
                           uint32_t nn, uint64_t seed);
 
-// The same trace into caller-provided arrays (the high-level call's callback): `count` directions
-// from x, their distances and radiance written.
+// The same trace into caller-provided arrays (the high-level calls' callbacks): `count` directions
+// from x, their distances and radiance written. Rays stop at `max_distance`: one that finds nothing
+// closer gets INFINITY and its radiance is left as it is.
 void trace_directions(const Scene &scene, const HitRadianceSettings &radiance, V3 x, const raddiff_vec3 *directions,
                       size_t count, uint64_t seed, double *distance, float *radiance_out, uint64_t &rays,
-                      raddiff_vec3 *hit_normals = nullptr);
+                      raddiff_vec3 *hit_normals = nullptr, double max_distance = INFINITY);
 
 // Sum of the radiance arriving at (x, n) over `count` cosine-distributed directions from the
 // (0,2)-sequence points [first, first + count) of a scrambled Sobol pair: pi * sum / N is an

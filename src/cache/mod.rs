@@ -75,29 +75,32 @@
 //! planes and spheres, so curvature alone never trips it; the tolerance's derivation is in the
 //! [`LeakGuard`] docs.
 //!
-//! # File format (version 4, little-endian)
+//! # File format (version 5, little-endian)
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic `RDFCACHE` |
-//! | 8 | 4 | format version, u32 = 4 |
+//! | 8 | 4 | format version, u32 = 5 |
 //! | 12 | 4 | channels, u32 ≥ 1 |
 //! | 16 | 4 | domain, u32 (0 surface, 1 volume) |
 //! | 20 | 4 | interpolation, u32 (`RADDIFF_INTERP_*`) |
 //! | 24 | 8 | max normal deviation, f64 radians |
 //! | 32 | 8 | record count N, u64 |
 //! | 40 | 4 | record size S = 64 + 16·channels, u32 |
-//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, bit 2 leak guard on, the other bits 0 |
+//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, bit 2 leak guard on, bit 3 far field on, the other bits 0 |
 //! | 48 | 8 | gradient limit c, f64: finite and > 0 if flag bit 1 is set, else 0.0 (all bits 0) |
 //! | 56 | 8 | leak guard relative tolerance, f64: finite and ≥ 0 if flag bit 2 is set, else 0.0 (all bits 0) |
 //! | 64 | 8 | leak guard absolute tolerance, f64: as the relative one |
-//! | 72 | N·S | records, in strictly increasing content order |
-//! | 72 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
+//! | 72 | 8 | far-field reach in L ([`FarFieldReach::world`]), f64: finite and ≥ 0 if flag bit 3 is set (one of the two reaches > 0), else 0.0 (all bits 0) |
+//! | 80 | 8 | far-field reach in pixels ([`FarFieldReach::pixels`]), f64: as the one in L |
+//! | 88 | N·S | records, in strictly increasing content order |
+//! | 88 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
 //!
-//! Older versions are still read. Version 3 (before the leak guard) has the same header up to
-//! offset 56 without the leak-guard fields (records start at 56), flag bit 2 must be 0, and the
-//! cache has no leak guard. Version 2 (before the gradient limit) also lacks the gradient-limit
-//! field (records start at 48), flag bit 1 must be 0, and the cache has no gradient limit.
-//! [`Cache::save`] always writes version 4.
+//! Older versions are still read. Version 4 (before the far-field marker) has the same header up
+//! to offset 72 without the reaches (records start at 72), flag bit 3 must be 0, and the cache's
+//! records hold no far fields. Version 3 (before the leak guard) also lacks the leak-guard fields
+//! (records start at 56), flag bit 2 must be 0, and the cache has no leak guard. Version 2 (before
+//! the gradient limit) also lacks the gradient-limit field (records start at 48), flag bit 1 must
+//! be 0, and the cache has no gradient limit. [`Cache::save`] always writes version 5.
 //!
 //! Record (S bytes): position 3×f64; frame as a unit quaternion 4×f32 (x, y, z, w with w ≥ 0,
 //! rotating the world axes onto the frame: surface axis 0, axis 1 = n × axis 0, normal n; volume
@@ -117,6 +120,7 @@
 mod blend;
 mod clamp;
 mod cursor;
+mod far_field;
 mod index;
 pub mod interp;
 pub mod irradiance;
@@ -137,6 +141,7 @@ use glam::DVec3;
 use smallvec::SmallVec;
 
 pub use cursor::Cursor;
+pub use far_field::FarFieldReach;
 pub use interp::Interpolation;
 pub use leak_guard::LeakGuard;
 pub use record::{
@@ -194,6 +199,13 @@ pub struct CacheConfig {
     /// normal (see [`LeakGuard`]). Both tolerances must be ≥ 0; [`Cache::new`] rejects NaN and
     /// negative ones. Saved with the cache (file format version 4; older files load with it off).
     pub leak_guard: LeakGuard,
+    /// Whether records hold far fields of the near/far decomposition, and at which reach
+    /// (default [`FarFieldReach::OFF`]: records hold what their gathers saw). The cache itself
+    /// stores and interpolates far fields as any value; the marker tells irradiance queries
+    /// ([`Cache::irradiance_near_far`]) that the near field is theirs to add, and keeps such a
+    /// cache from being filled or read as one of irradiance. Saved with the cache (file format
+    /// version 5; older files load with it off).
+    pub far_field: FarFieldReach,
 }
 
 impl CacheConfig {
@@ -208,6 +220,7 @@ impl CacheConfig {
             non_negative: false,
             gradient_limit: f64::INFINITY,
             leak_guard: LeakGuard::OFF,
+            far_field: FarFieldReach::OFF,
         }
     }
 
@@ -221,6 +234,7 @@ impl CacheConfig {
             non_negative: false,
             gradient_limit: f64::INFINITY,
             leak_guard: LeakGuard::OFF,
+            far_field: FarFieldReach::OFF,
         }
     }
 
@@ -246,6 +260,12 @@ impl CacheConfig {
     /// The same configuration with [`CacheConfig::leak_guard`] set to `guard`.
     pub fn with_leak_guard(mut self, guard: LeakGuard) -> Self {
         self.leak_guard = guard;
+        self
+    }
+
+    /// The same configuration with [`CacheConfig::far_field`] set to `reach`.
+    pub fn with_far_field(mut self, reach: FarFieldReach) -> Self {
+        self.far_field = reach;
         self
     }
 
@@ -328,11 +348,13 @@ const PRECISION_RATIO: f64 = (1u64 << 40) as f64;
 
 impl<V: CacheValue> Cache<V> {
     /// An empty cache. `InvalidArgument` for 0 or more than [`MAX_CHANNELS`] channels, a channel
-    /// count that disagrees with `V`, a maximum normal deviation outside (0, π] (surfaces), or a
-    /// gradient limit that is not > 0 (NaN, 0, negative).
+    /// count that disagrees with `V`, a maximum normal deviation outside (0, π] (surfaces), a
+    /// gradient limit that is not > 0 (NaN, 0, negative), or a far-field reach that is negative
+    /// or not finite.
     pub fn new(config: CacheConfig) -> Result<Self> {
         check_gradient_limit(config.gradient_limit)?;
         config.leak_guard.validate()?;
+        config.far_field.validate()?;
         if config.channels == 0 || config.channels > MAX_CHANNELS {
             return Err(Error::InvalidArgument(format!(
                 "channels must be in 1..={MAX_CHANNELS} (got {})",

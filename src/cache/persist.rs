@@ -6,20 +6,27 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::record::{self, Domain, CHANNEL_BYTES, FNV_OFFSET, HEAD_BYTES};
-use super::{Cache, CacheConfig, CacheValue, Interpolation, LeakGuard, MAX_CHANNELS};
+use super::{
+    Cache, CacheConfig, CacheValue, FarFieldReach, Interpolation, LeakGuard, MAX_CHANNELS,
+};
 use crate::error::{Error, Result};
 
 /// File magic.
 pub const MAGIC: [u8; 8] = *b"RDFCACHE";
-/// Format version written by [`Cache::to_bytes`] (versions 2 to 4 are read).
-pub const FORMAT_VERSION: u32 = 4;
-/// Version 3: no leak-guard fields, records at [`HEADER_BYTES_V3`].
+/// Format version written by [`Cache::to_bytes`] (versions 2 to 5 are read).
+pub const FORMAT_VERSION: u32 = 5;
+/// Version 4: no far-field fields, records at [`HEADER_BYTES_V4`].
+const FORMAT_VERSION_4: u32 = 4;
+/// Version 3: no leak-guard fields either, records at [`HEADER_BYTES_V3`].
 const FORMAT_VERSION_3: u32 = 3;
 /// The oldest version read: no gradient-limit field either, records at [`HEADER_BYTES_V2`].
 const FORMAT_VERSION_2: u32 = 2;
+/// Header size of version 5: the version 4 header plus the far field's two reaches (f64 at
+/// offsets 72 and 80).
+const HEADER_BYTES: usize = 88;
 /// Header size of version 4: the version 3 header plus the leak guard's two tolerances (f64 at
 /// offsets 56 and 64).
-const HEADER_BYTES: usize = 72;
+const HEADER_BYTES_V4: usize = 72;
 /// Header size of version 3: the version 2 header plus the gradient limit (f64 at offset 48).
 const HEADER_BYTES_V3: usize = 56;
 const HEADER_BYTES_V2: usize = 48;
@@ -32,6 +39,9 @@ const FLAG_GRADIENT_LIMIT: u32 = 2;
 /// Header flag (offset 44, version 4): [`CacheConfig::leak_guard`] is on (its tolerances at
 /// offsets 56 and 64).
 const FLAG_LEAK_GUARD: u32 = 4;
+/// Header flag (offset 44, version 5): [`CacheConfig::far_field`] is on (its reaches at offsets
+/// 72 and 80).
+const FLAG_FAR_FIELD: u32 = 8;
 
 impl<V: CacheValue> Cache<V> {
     /// The cache in the documented binary format (records in content order, so equal record
@@ -62,6 +72,10 @@ impl<V: CacheValue> Cache<V> {
         if guard.is_on() {
             flags |= FLAG_LEAK_GUARD;
         }
+        let far = self.config.far_field;
+        if far.is_on() {
+            flags |= FLAG_FAR_FIELD;
+        }
         out.extend_from_slice(&flags.to_le_bytes());
         let limit = if limited {
             self.config.gradient_limit
@@ -76,6 +90,9 @@ impl<V: CacheValue> Cache<V> {
         };
         out.extend_from_slice(&relative.to_le_bytes());
         out.extend_from_slice(&absolute.to_le_bytes());
+        let far = if far.is_on() { far } else { FarFieldReach::OFF };
+        out.extend_from_slice(&far.world.to_le_bytes());
+        out.extend_from_slice(&far.pixels.to_le_bytes());
         for id in ids {
             let (head, chans) = self.stored(id);
             record::serialize(head, chans, &mut out);
@@ -88,8 +105,9 @@ impl<V: CacheValue> Cache<V> {
     /// Parses and validates a cache in the documented binary format. `Corrupt` with the reason
     /// for anything that [`Cache::to_bytes`] could not have written, including a channel count
     /// that disagrees with `V`. Never panics.
-    /// Version 3 files (no leak guard: it is off) and version 2 files (no gradient limit either)
-    /// are read as well.
+    /// Version 4 files (no far-field marker: records hold no far fields), version 3 files (no
+    /// leak guard either: it is off) and version 2 files (no gradient limit either) are read as
+    /// well.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
         let corrupt = |m: String| Err(Error::Corrupt(m));
         if bytes.len() < HEADER_BYTES_V2 + CHECKSUM_BYTES {
@@ -107,6 +125,7 @@ impl<V: CacheValue> Cache<V> {
         let version = u32_at(8);
         let header_bytes = match version {
             FORMAT_VERSION => HEADER_BYTES,
+            FORMAT_VERSION_4 => HEADER_BYTES_V4,
             FORMAT_VERSION_3 => HEADER_BYTES_V3,
             FORMAT_VERSION_2 => HEADER_BYTES_V2,
             _ => {
@@ -149,8 +168,10 @@ impl<V: CacheValue> Cache<V> {
         let known = match version {
             FORMAT_VERSION_2 => FLAG_NON_NEGATIVE,
             FORMAT_VERSION_3 => FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT,
-            _ => FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT | FLAG_LEAK_GUARD,
+            FORMAT_VERSION_4 => FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT | FLAG_LEAK_GUARD,
+            _ => FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT | FLAG_LEAK_GUARD | FLAG_FAR_FIELD,
         };
+        let f64_at = |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
         if flags & !known != 0 {
             return corrupt(format!("unknown header flags {flags:#x}"));
         }
@@ -172,9 +193,7 @@ impl<V: CacheValue> Cache<V> {
                 f64::INFINITY
             }
         };
-        let leak_guard = if version == FORMAT_VERSION {
-            let f64_at =
-                |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
+        let leak_guard = if version >= FORMAT_VERSION_4 {
             let guard = LeakGuard {
                 relative: f64_at(56),
                 absolute: f64_at(64),
@@ -197,6 +216,30 @@ impl<V: CacheValue> Cache<V> {
             }
         } else {
             LeakGuard::OFF
+        };
+        let far_field = if version == FORMAT_VERSION {
+            let reach = FarFieldReach {
+                world: f64_at(72),
+                pixels: f64_at(80),
+            };
+            if flags & FLAG_FAR_FIELD != 0 {
+                if reach.validate().is_err() || !reach.is_on() {
+                    return corrupt(format!(
+                        "far-field reaches {} and {} are not finite and >= 0 with one > 0",
+                        reach.world, reach.pixels
+                    ));
+                }
+                reach
+            } else {
+                if reach.world.to_bits() != 0 || reach.pixels.to_bits() != 0 {
+                    return corrupt(
+                        "far-field fields are set but the far-field flag is not".into(),
+                    );
+                }
+                FarFieldReach::OFF
+            }
+        } else {
+            FarFieldReach::OFF
         };
         let expected = usize::try_from(count)
             .ok()
@@ -229,6 +272,7 @@ impl<V: CacheValue> Cache<V> {
             non_negative: flags & FLAG_NON_NEGATIVE != 0,
             gradient_limit,
             leak_guard,
+            far_field,
         };
         let mut cache = Cache::new(config).map_err(|e| Error::Corrupt(format!("header: {e}")))?;
         let mut previous: Option<(record::Head, record::Channels)> = None;

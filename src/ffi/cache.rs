@@ -109,6 +109,7 @@ fn config_from_c(c: &raddiff_cache_config) -> Result<CacheConfig, FfiError> {
             f64::INFINITY
         },
         leak_guard: crate::cache::LeakGuard::OFF,
+        far_field: crate::cache::FarFieldReach::OFF,
     })
 }
 

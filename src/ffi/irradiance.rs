@@ -11,8 +11,10 @@ use glam::DVec3;
 
 use super::cache::raddiff_cache;
 use super::common::*;
-use crate::cache::irradiance::{IrradianceSettings, Metric, RadiusBounds, SeedPolicy};
-use crate::cache::{Cache, LeakGuard};
+use crate::cache::irradiance::{
+    IrradianceSettings, Metric, NearFieldSettings, RadiusBounds, SeedPolicy,
+};
+use crate::cache::{Cache, FarFieldReach, LeakGuard};
 use crate::gather::LayoutKind;
 use crate::Error;
 
@@ -106,6 +108,17 @@ pub struct raddiff_irradiance_settings {
     pub leak_guard_relative: f64,
     /// The leak guard's absolute tolerance in L, >= 0 (default 0).
     pub leak_guard_absolute: f64,
+    /// The near/far decomposition's reach in L, >= 0 (default 0). With either reach > 0 the
+    /// records hold far fields (cache state, saved with the cache) and the cache is queried with
+    /// `raddiff_cache_irradiance_near_far`; the reach at a query is
+    /// max(near_field_reach_world, near_field_reach_pixels * footprint).
+    pub near_field_reach_world: f64,
+    /// The reach in pixel footprints, >= 0 (default 0; the real-scene benchmark used 8).
+    pub near_field_reach_pixels: f64,
+    /// Near rays per query along theta, in the gather's layout kind (default 32).
+    pub near_field_m: u32,
+    /// Near rays per query along phi (default 32).
+    pub near_field_n: u32,
 }
 
 /// The default settings (3 channels, the anisotropic occlusion-aware Hessian, a 32 x 128
@@ -139,6 +152,10 @@ fn settings_to_c(s: &IrradianceSettings) -> raddiff_irradiance_settings {
         gradient_limit: s.gradient_limit,
         leak_guard_relative: s.leak_guard.relative,
         leak_guard_absolute: s.leak_guard.absolute,
+        near_field_reach_world: s.near_field.reach.world,
+        near_field_reach_pixels: s.near_field.reach.pixels,
+        near_field_m: s.near_field.m,
+        near_field_n: s.near_field.n,
     }
 }
 
@@ -195,15 +212,23 @@ pub(crate) unsafe fn settings_from_c(
             relative: settings.leak_guard_relative,
             absolute: settings.leak_guard_absolute,
         },
+        near_field: NearFieldSettings {
+            reach: FarFieldReach {
+                world: settings.near_field_reach_world,
+                pixels: settings.near_field_reach_pixels,
+            },
+            m: settings.near_field_m,
+            n: settings.near_field_n,
+        },
     })
 }
 
 /// A cache for the records `settings` make: surface domain, the settings' channels, the
 /// metric's interpolation (`RADDIFF_INTERP_WARD` for the split-sphere family and the gradient
 /// metric, `RADDIFF_INTERP_TENT` for the Hessian metrics), values clamped at zero
-/// (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit and leak guard, maximum normal
-/// deviation 0.2 rad. NULL (with `raddiff_last_error`) for NULL or invalid settings. Free it with
-/// `raddiff_cache_free`.
+/// (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit, leak guard and near-field
+/// reach (records then hold far fields), maximum normal deviation 0.2 rad. NULL (with
+/// `raddiff_last_error`) for NULL or invalid settings. Free it with `raddiff_cache_free`.
 #[no_mangle]
 pub extern "C" fn raddiff_irradiance_cache_new(
     settings: *const raddiff_irradiance_settings,
@@ -248,8 +273,9 @@ pub type raddiff_trace_fn = Option<
 ///
 /// `RADDIFF_ERROR_NULL_POINTER` for a NULL `cache`, `settings`, `trace` or `out`;
 /// `RADDIFF_ERROR_INVALID_ARGUMENT` for non-finite `x`, `n` or `footprint`, a zero `n`, a
-/// negative footprint, invalid settings or settings that disagree with the cache (create it with
-/// `raddiff_irradiance_cache_new`), no finite maximum radius, a metric that needs hit normals,
+/// negative footprint, settings with a near-field reach or a cache of far fields (query those
+/// with `raddiff_cache_irradiance_near_far`), invalid settings or settings that disagree with the
+/// cache (create it with `raddiff_irradiance_cache_new`), no finite maximum radius, a metric that needs hit normals,
 /// or traced values the gather refuses (distance <= 0 or NaN, non-finite radiance);
 /// `RADDIFF_ERROR_CALLBACK` when `trace` returns non-zero; `RADDIFF_ERROR_DEGENERATE` when the
 /// evaluation overflows. On any error nothing is inserted and `out` is untouched.

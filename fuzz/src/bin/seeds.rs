@@ -1,8 +1,8 @@
 //! Writes the seed corpora into `fuzz/corpus/<target>/` (run from `fuzz/`:
 //! `cargo run --release --bin seeds`). For every target but `cache_load`: pseudo-random byte
 //! strings (fixed seed), the first few that the target accepts and the first few it refuses. For
-//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 4) and their version 3
-//! and 2 forms, each behind the option byte 0, and two refused files (truncated, damaged).
+//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 5) and their version 4,
+//! 3 and 2 forms, each behind the option byte 0, and two refused files (truncated, damaged).
 use std::ffi::CString;
 use std::path::Path;
 
@@ -53,11 +53,13 @@ fn main() {
     damaged.extend(first);
     damaged[1 + 60] ^= 0x40;
     std::fs::write(dir.join("damaged"), damaged).expect("writing");
-    for (i, v4) in caches.iter().enumerate() {
-        let v3 = as_version_3(v4);
+    for (i, v5) in caches.iter().enumerate() {
+        let v4 = as_version_4(v5);
+        let v3 = as_version_3(&v4);
         let v2 = as_version_2(&v3);
-        // the older forms a cache has (none with a leak guard, no version 2 with a gradient limit)
-        for (version, file) in [(4, v4), (3, &v3), (2, &v2)] {
+        // the older forms a cache has (none with a far field, no version 3 with a leak guard, no
+        // version 2 with a gradient limit)
+        for (version, file) in [(5, v5), (4, &v4), (3, &v3), (2, &v2)] {
             if u32::from_le_bytes(file[8..12].try_into().expect("4 bytes")) != version {
                 continue;
             }
@@ -92,6 +94,8 @@ fn saved_caches() -> Vec<Vec<u8>> {
         ),
         // with a leak guard (below)
         (1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT),
+        // irradiance far fields (below: the interpolation is the settings' metric's)
+        (3, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT),
     ];
     kinds
         .iter()
@@ -103,7 +107,14 @@ fn saved_caches() -> Vec<Vec<u8>> {
                 interpolation,
                 max_normal_deviation: 0.3,
             };
-            let cache = raddiff_cache_new(&config);
+            let cache = if kind == 5 {
+                let mut settings = raddiff_irradiance_settings_default();
+                settings.channels = channels;
+                settings.near_field_reach_pixels = 8.0;
+                raddiff_irradiance_cache_new(&settings)
+            } else {
+                raddiff_cache_new(&config)
+            };
             assert!(!cache.is_null());
             if kind == 4 {
                 assert_eq!(
@@ -178,11 +189,27 @@ fn saved_caches() -> Vec<Vec<u8>> {
         .collect()
 }
 
+/// The version 4 form of a version 5 file: no far-field fields (bytes 72..88), resealed. Only for
+/// caches without a far field (version 4 cannot hold one): others are returned as is.
+fn as_version_4(v5: &[u8]) -> Vec<u8> {
+    let flags = u32::from_le_bytes(v5[44..48].try_into().expect("4 bytes"));
+    if flags & 8 != 0 {
+        return v5.to_vec();
+    }
+    let mut v4 = v5[..72].to_vec();
+    v4[8..12].copy_from_slice(&4u32.to_le_bytes());
+    v4.extend_from_slice(&v5[88..v5.len() - 8]);
+    let sum = fnv1a(&v4);
+    v4.extend_from_slice(&sum.to_le_bytes());
+    v4
+}
+
 /// The version 3 form of a version 4 file: no leak-guard fields (bytes 56..72), resealed. Only for
 /// caches without a leak guard (version 3 cannot hold one): others are returned as is.
 fn as_version_3(v4: &[u8]) -> Vec<u8> {
     let flags = u32::from_le_bytes(v4[44..48].try_into().expect("4 bytes"));
-    if flags & 4 != 0 {
+    let version = u32::from_le_bytes(v4[8..12].try_into().expect("4 bytes"));
+    if flags & 4 != 0 || version != 4 {
         return v4.to_vec();
     }
     let mut v3 = v4[..56].to_vec();

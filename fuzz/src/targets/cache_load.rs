@@ -3,10 +3,10 @@
 //! Input: one option byte, then the file. When the option byte is odd, the file's last 8 bytes are
 //! replaced by the FNV-1a checksum of the rest (as `raddiff_cache_save` writes it), so that mutated
 //! headers and records get past the checksum and reach the record validation. The seed corpus is
-//! real saved caches of format versions 2, 3 and 4 (surface and volume, 1 and 3 channels, with and
-//! without gradients, a gradient limit and a leak guard).
+//! real saved caches of format versions 2 to 5 (surface and volume, 1 and 3 channels, with and
+//! without gradients, a gradient limit, a leak guard and a far-field marker).
 //! Properties: no panic; NULL comes with a message; a loaded cache holds at most the file's record
-//! count, looks up finite values at its records' positions, and saving it reproduces a version 4
+//! count, looks up finite values at its records' positions, and saving it reproduces a version 5
 //! file byte for byte (an older file: the same records once loaded again).
 use std::ffi::CString;
 use std::path::PathBuf;
@@ -61,7 +61,7 @@ pub fn run(data: &[u8]) -> Outcome {
     Outcome::Ok
 }
 
-/// Saves the loaded cache: a version 4 file comes back byte for byte, an older file as a version 4
+/// Saves the loaded cache: a version 5 file comes back byte for byte, an older file as a version 5
 /// file that loads with as many records.
 fn resave(cache: *const raddiff_cache, file: &[u8], version: u32) {
     let path = scratch_path("resave");
@@ -81,10 +81,10 @@ fn resave(cache: *const raddiff_cache, file: &[u8], version: u32) {
     );
     assert_eq!(raddiff_cache_len(again), raddiff_cache_len(cache));
     raddiff_cache_free(again);
-    if version == 4 {
+    if version == 5 {
         assert!(
             saved == file,
-            "saving a loaded version 4 file changed its bytes"
+            "saving a loaded version 5 file changed its bytes"
         );
     }
 }
@@ -145,7 +145,8 @@ impl Header {
             bytes: match version {
                 2 => 48,
                 3 => 56,
-                _ => 72,
+                4 => 72,
+                _ => 88,
             },
         }
     }

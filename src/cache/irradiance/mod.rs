@@ -48,6 +48,7 @@
 mod bounds;
 mod evaluation;
 mod metric;
+mod near_far;
 mod query;
 mod record;
 mod seed;
@@ -57,9 +58,11 @@ mod traced;
 pub use bounds::RadiusBounds;
 pub use evaluation::{GatherEvaluation, Hessians};
 pub use metric::{HessianKind, Metric};
+pub use near_far::NearFarLookup;
 pub use seed::SeedPolicy;
 pub use settings::{
-    IrradianceSettings, GRADIENT_LIMIT_DEFAULT, LUMINANCE_WEIGHTS, MAX_ANISOTROPY_DEFAULT,
+    IrradianceSettings, NearFieldSettings, GRADIENT_LIMIT_DEFAULT, LUMINANCE_WEIGHTS,
+    MAX_ANISOTROPY_DEFAULT,
 };
 pub use traced::TracedGather;
 

@@ -11,7 +11,7 @@ use super::traced::TracedGather;
 use crate::cache::{Cache, CacheValue, Lookup};
 use crate::error::{ensure_finite3, Error, Result};
 use crate::gather::radii::tangent_basis;
-use crate::gather::Frame;
+use crate::gather::{Frame, Layout};
 
 impl<V: CacheValue> Cache<V> {
     /// The irradiance at the shading point `x` with normal `n`, from the cache, or from a new
@@ -39,7 +39,8 @@ impl<V: CacheValue> Cache<V> {
     /// same gather and insert its record once.
     ///
     /// Errors: `InvalidArgument` for non-finite `x` or `n`, a zero `n`, a footprint that is
-    /// negative or not finite, and, on a miss (a covered point needs none of the settings),
+    /// negative or not finite, settings with a near-field reach or a cache of far fields (both
+    /// need [`Cache::irradiance_near_far`]), and, on a miss (a covered point needs none of the settings),
     /// settings that are invalid or disagree with the cache
     /// ([`IrradianceSettings::check_cache`]), no finite maximum radius, a metric that needs hit
     /// normals (the occlusion-unaware Hessians: use [`GatherEvaluation`] and
@@ -54,13 +55,42 @@ impl<V: CacheValue> Cache<V> {
         footprint: f64,
         trace: impl FnOnce(DVec3, &[DVec3], &mut [f64], &mut [f32]) -> std::result::Result<(), E>,
     ) -> Result<Lookup<V>> {
-        ensure_finite3(x, "query position")?;
-        ensure_finite3(n, "query normal")?;
-        check_footprint(footprint)?;
+        check_query(x, n, footprint)?;
+        if settings.near_field.reach.is_on() || self.config().far_field.is_on() {
+            return Err(Error::InvalidArgument(
+                "with a near-field reach the records hold far fields: query with \
+                 Cache::irradiance_near_far (raddiff_cache_irradiance_near_far)"
+                    .into(),
+            ));
+        }
         match self.lookup(x, n) {
             Err(Error::NotFound(_)) => {}
             found => return found,
         }
+        self.insert_traced(
+            settings,
+            x,
+            n,
+            footprint,
+            |directions, distance, radiance| trace(x, directions, distance, radiance),
+            |_, _, _| Ok(()),
+        )?;
+        self.lookup(x, n)
+    }
+
+    /// The miss path shared by the one-call queries: validates the settings against the cache,
+    /// lays out and traces the record's gather at `x`, lets `prepare` read and rewrite what the
+    /// rays found (the far-field split), evaluates it and inserts its record. Returns what
+    /// `prepare` returned.
+    pub(super) fn insert_traced<T, E: Display>(
+        &self,
+        settings: &IrradianceSettings,
+        x: DVec3,
+        n: DVec3,
+        footprint: f64,
+        trace: impl FnOnce(&[DVec3], &mut [f64], &mut [f32]) -> std::result::Result<(), E>,
+        prepare: impl FnOnce(&Layout, &mut [f64], &mut [f32]) -> Result<T>,
+    ) -> Result<T> {
         settings.validate()?;
         settings.check_cache(self.config())?;
         if settings.metric.needs_hit_normals() {
@@ -73,14 +103,14 @@ impl<V: CacheValue> Cache<V> {
         }
         // fail before tracing when no bound can hold an unbounded radius
         settings.radius_bounds.resolve(footprint)?;
-        let unit = n / n.length();
-        let frame = Frame::new(x, unit, tangent_basis(unit).0)?;
+        let frame = query_frame(x, n)?;
         let layout = settings.layout(settings.seed.seed(x, n))?;
         let directions = layout.directions(&frame)?;
         let mut distance = vec![0.0; directions.len()];
         let mut radiance = vec![0.0f32; directions.len() * settings.channels];
-        trace(x, &directions, &mut distance, &mut radiance)
+        trace(&directions, &mut distance, &mut radiance)
             .map_err(|e| Error::Callback(e.to_string()))?;
+        let prepared = prepare(&layout, &mut distance, &mut radiance).map_err(traced_error)?;
         let mut traced = TracedGather::new(
             layout,
             frame,
@@ -89,13 +119,33 @@ impl<V: CacheValue> Cache<V> {
             &radiance,
             settings.channels,
         );
-        traced.normal = unit;
+        // the record keeps the bits of the normalized query normal (the frame re-normalizes)
+        traced.normal = n / n.length();
         let evaluation = GatherEvaluation::new(&traced, &settings.weights(), settings.hessians())
-            .map_err(|e| match e {
-            Error::InvalidArgument(m) => Error::InvalidArgument(format!("the traced gather: {m}")),
-            other => other,
-        })?;
+            .map_err(traced_error)?;
         self.insert(&settings.record(&evaluation, footprint)?)?;
-        self.lookup(x, n)
+        Ok(prepared)
+    }
+}
+
+/// `InvalidArgument` for a non-finite point or normal, a zero normal, or a footprint that is
+/// negative or not finite.
+pub(super) fn check_query(x: DVec3, n: DVec3, footprint: f64) -> Result<()> {
+    ensure_finite3(x, "query position")?;
+    ensure_finite3(n, "query normal")?;
+    check_footprint(footprint)
+}
+
+/// The gather frame at a query: at `x`, about the unit normal of `n`.
+pub(super) fn query_frame(x: DVec3, n: DVec3) -> Result<Frame> {
+    let unit = n / n.length();
+    Frame::new(x, unit, tangent_basis(unit).0)
+}
+
+/// Names the traced rays as the source of an `InvalidArgument`.
+pub(super) fn traced_error(e: Error) -> Error {
+    match e {
+        Error::InvalidArgument(m) => Error::InvalidArgument(format!("the traced gather: {m}")),
+        other => other,
     }
 }

@@ -1,0 +1,135 @@
+//! One call per shading point with the near/far decomposition: every query traces its own short
+//! rays for the near field, and the cache holds far fields.
+
+use std::fmt::Display;
+
+use glam::DVec3;
+
+use super::query::{check_query, query_frame, traced_error};
+use super::settings::IrradianceSettings;
+use crate::cache::{Cache, CacheValue, Lookup};
+use crate::error::{Error, Result};
+use crate::gather::{far_field_gather, near_field, Layout, NearField};
+
+/// What [`Cache::irradiance_near_far`] found at a shading point.
+#[derive(Debug, Clone)]
+pub struct NearFarLookup<V> {
+    /// The irradiance `E_near + V·F`, per channel.
+    pub value: V,
+    /// The query's near field: the irradiance of hits closer than the reach and the open
+    /// fraction V.
+    pub near: NearField,
+    /// The far field F interpolated from the cache, with its weights and record count.
+    pub far: Lookup<V>,
+    /// The reach ρ at this query (L).
+    pub reach: f64,
+}
+
+impl<V: CacheValue> Cache<V> {
+    /// The irradiance at the shading point `x` with normal `n` as the near/far decomposition
+    /// gives it, `E_near + V·F`: the near field `E_near` and open fraction `V` from the query's
+    /// own short rays, the far field `F` from the cache, or from a new record when none covers
+    /// `x`. The settings' [`IrradianceSettings::near_field`] must have a reach, and the cache
+    /// must hold far fields at that reach (made from [`IrradianceSettings::cache_config`]).
+    ///
+    /// * `x`, `n`, `footprint`: as [`Cache::irradiance`]; the reach at this query is
+    ///   `ρ = max(reach.world, reach.pixels·footprint)`.
+    /// * `trace(origin, directions, max_distance, distance, radiance)`: trace every one of the
+    ///   unit `directions` from `origin` (= `x`) in one batch, writing each ray's hit distance
+    ///   and the radiance arriving along it (`channels` per ray, interleaved). Rays need go no
+    ///   farther than `max_distance`: for one that finds nothing closer, write
+    ///   `f64::INFINITY` (or any distance ≥ `max_distance`) and leave its radiance (it is not
+    ///   read; the buffer holds zeros). Called exactly once per call, on the calling thread:
+    ///   when a record covers `x`, with the `near_field.m·near_field.n` near rays and
+    ///   `max_distance = ρ`; on a miss, with the record's `gather_m·gather_n` gather and
+    ///   `max_distance = f64::INFINITY`, whose rays give both the near field and, split at ρ
+    ///   ([`far_field_gather`]: near hits moved to the reach with the far field's mean
+    ///   radiance), the new record. An `Err` abandons the request ([`Error::Callback`]; nothing
+    ///   inserted).
+    ///
+    /// Errors: as [`Cache::irradiance`], and `InvalidArgument` when the settings have no
+    /// near-field reach, the cache holds no far fields or holds them at another reach, the reach
+    /// comes out 0 at this query (a reach in pixels with footprint 0), the near-ray layout is
+    /// invalid, or the near rays' values are refused (a non-positive or NaN distance,
+    /// non-finite radiance); `Degenerate` when `E_near + V·F` overflows an `f32`.
+    pub fn irradiance_near_far<E: Display>(
+        &self,
+        settings: &IrradianceSettings,
+        x: DVec3,
+        n: DVec3,
+        footprint: f64,
+        trace: impl FnOnce(DVec3, &[DVec3], f64, &mut [f64], &mut [f32]) -> std::result::Result<(), E>,
+    ) -> Result<NearFarLookup<V>> {
+        check_query(x, n, footprint)?;
+        if !settings.near_field.reach.is_on() {
+            return Err(Error::InvalidArgument(
+                "the settings have no near-field reach: query with Cache::irradiance \
+                 (raddiff_cache_irradiance)"
+                    .into(),
+            ));
+        }
+        settings.check_cache(self.config())?;
+        let reach = settings.near_field.reach.resolve(footprint)?;
+        let channels = settings.channels;
+        let (near, far) = match self.lookup(x, n) {
+            Ok(far) => {
+                let layout = Layout::new(
+                    settings.gather_kind,
+                    settings.near_field.m,
+                    settings.near_field.n,
+                    settings.seed.seed(x, n),
+                )
+                .map_err(|e| match e {
+                    Error::InvalidArgument(m) => {
+                        Error::InvalidArgument(format!("the near-field rays: {m}"))
+                    }
+                    other => other,
+                })?;
+                let directions = layout.directions(&query_frame(x, n)?)?;
+                let mut distance = vec![0.0; directions.len()];
+                let mut radiance = vec![0.0f32; directions.len() * channels];
+                trace(x, &directions, reach, &mut distance, &mut radiance)
+                    .map_err(|e| Error::Callback(e.to_string()))?;
+                let near = near_field(&layout, &distance, &radiance, channels, reach)
+                    .map_err(traced_error)?;
+                (near, far)
+            }
+            Err(Error::NotFound(_)) => {
+                let near = self.insert_traced(
+                    settings,
+                    x,
+                    n,
+                    footprint,
+                    |directions, distance, radiance| {
+                        trace(x, directions, f64::INFINITY, distance, radiance)
+                    },
+                    |layout, distance, radiance| {
+                        let near = near_field(layout, distance, radiance, channels, reach)?;
+                        far_field_gather(layout, distance, radiance, channels, reach)?;
+                        Ok(near)
+                    },
+                )?;
+                (near, self.lookup(x, n)?)
+            }
+            Err(other) => return Err(other),
+        };
+        let far_field: Vec<f64> = far.value.as_channels().iter().map(|&f| f.into()).collect();
+        let sum = near.irradiance_with(&far_field)?;
+        let mut value = Vec::with_capacity(sum.len());
+        for e in sum {
+            let e32 = e as f32;
+            if !e32.is_finite() {
+                return Err(Error::Degenerate(format!(
+                    "the irradiance {e} (near field plus far field) overflows an f32"
+                )));
+            }
+            value.push(e32);
+        }
+        Ok(NearFarLookup {
+            value: V::from_channels(&value),
+            near,
+            far,
+            reach,
+        })
+    }
+}

@@ -1,0 +1,124 @@
+//! C wrappers for irradiance caching with the near/far decomposition
+//! (`raddiff_cache_irradiance_near_far`) and the cache's far-field marker.
+
+// These are C entry points: every pointer is NULL-checked and the caller's validity contract is
+// the header's; marking them `unsafe fn` would change nothing for C callers.
+#![allow(clippy::not_unsafe_ptr_arg_deref)]
+
+use std::ffi::{c_int, c_void};
+
+use glam::DVec3;
+
+use super::cache::raddiff_cache;
+use super::common::*;
+use super::irradiance::{raddiff_irradiance_settings, settings_from_c};
+
+/// Traces `count` rays from `origin` along the unit `directions` (world space), none farther
+/// than `max_distance` (INFINITY: as far as they go); writes each ray's hit distance to
+/// `distance[i]` and the radiance arriving at `origin` along it to `radiance[i*channels + c]`.
+/// A ray that finds nothing closer than `max_distance` gets INFINITY (or any distance >=
+/// `max_distance`) and its radiance may be left as it is (zeros; not read). Returns 0 on success;
+/// anything else abandons the request (`RADDIFF_ERROR_CALLBACK`, nothing inserted). `user` is the
+/// pointer given to `raddiff_cache_irradiance_near_far`. Called exactly once per call, on the
+/// calling thread; it must not unwind and may call raddiff functions.
+pub type raddiff_trace_bounded_fn = Option<
+    unsafe extern "C" fn(
+        user: *mut c_void,
+        origin: raddiff_vec3,
+        directions: *const raddiff_vec3,
+        count: usize,
+        max_distance: f64,
+        distance: *mut f64,
+        radiance: *mut f32,
+    ) -> c_int,
+>;
+
+/// The irradiance at the shading point `x` with normal `n` as the near/far decomposition gives
+/// it (Arikan et al. 2005): `E_near + V * F`, with the near field `E_near` and open fraction `V`
+/// from the query's own short rays and the far field `F` from `cache`, or from a new record when
+/// none covers `x`. `settings` must have a near-field reach and `cache` must be made from them
+/// (`raddiff_irradiance_cache_new`): its records hold far fields. The reach at this query is
+/// rho = max(near_field_reach_world, near_field_reach_pixels * footprint).
+///
+/// `trace` is called exactly once: when a record covers `x`, with the
+/// `near_field_m * near_field_n` near rays and `max_distance` = rho; on a miss, with the
+/// record's `gather_m * gather_n` gather and `max_distance` = INFINITY, whose rays give both the
+/// near field and, split at rho (near hits moved to the reach with the far field's mean
+/// radiance, as `raddiff_gather_far_field`), the new record. `out` (`channels` floats) receives
+/// `E_near + V * F`. Thread-safe as `raddiff_cache_irradiance`.
+///
+/// `x`, `n`, `footprint` and the errors are as `raddiff_cache_irradiance`'s, and
+/// `RADDIFF_ERROR_INVALID_ARGUMENT` when the settings have no near-field reach or disagree with
+/// the cache's, the reach comes out 0 (a reach in pixels with footprint 0), the near-ray layout
+/// is invalid, or the near rays' values are refused; `RADDIFF_ERROR_DEGENERATE` when the sum
+/// overflows a float. On any error nothing is inserted and `out` is untouched.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub extern "C" fn raddiff_cache_irradiance_near_far(
+    cache: *mut raddiff_cache,
+    settings: *const raddiff_irradiance_settings,
+    x: raddiff_vec3,
+    n: raddiff_vec3,
+    footprint: f64,
+    trace: raddiff_trace_bounded_fn,
+    user: *mut c_void,
+    out: *mut f32,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        let settings = unsafe { settings_from_c(in_ref(settings, "settings")?)? };
+        let trace = trace.ok_or(FfiError::Null("trace"))?;
+        if out.is_null() {
+            return Err(FfiError::Null("out"));
+        }
+        let found = cache.inner.irradiance_near_far(
+            &settings,
+            DVec3::from(x),
+            DVec3::from(n),
+            footprint,
+            |origin, directions, max_distance, distance, radiance| {
+                // SAFETY: the arrays hold `count` directions and distances and
+                // `count * channels` radiances, as the callback's contract says.
+                let status = unsafe {
+                    trace(
+                        user,
+                        origin.into(),
+                        directions.as_ptr().cast(),
+                        directions.len(),
+                        max_distance,
+                        distance.as_mut_ptr(),
+                        radiance.as_mut_ptr(),
+                    )
+                };
+                match status {
+                    0 => Ok(()),
+                    s => Err(format!("the trace callback returned {s}")),
+                }
+            },
+        )?;
+        // SAFETY: the caller provides `channels` writable floats at `out`.
+        unsafe { std::ptr::copy_nonoverlapping(found.value.as_ptr(), out, found.value.len()) };
+        Ok(())
+    })
+}
+
+/// Writes the cache's far-field reach to `*world` (L) and `*pixels` (pixel footprints): both 0
+/// when its records hold irradiance, not far fields. Set when the cache is made
+/// (`raddiff_irradiance_cache_new` with a near-field reach), saved with it and restored by
+/// `raddiff_cache_load` (files written before it load with both 0).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_get_far_field(
+    cache: *const raddiff_cache,
+    world: *mut f64,
+    pixels: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        let world = unsafe { out_ref(world, "world")? };
+        let pixels = unsafe { out_ref(pixels, "pixels")? };
+        let reach = cache.inner.config().far_field;
+        *world = reach.world;
+        *pixels = reach.pixels;
+        Ok(())
+    })
+}
