@@ -17,28 +17,10 @@ struct TraceContext {
   std::atomic<uint64_t> rays{0};
 };
 
-// raddiff_trace_fn: traces the whole gather with Embree. The hit radiance's samples are seeded
-// from the origin, so that a gather is the same whichever thread asks for it.
-int trace_callback(void *user, raddiff_vec3 origin, const raddiff_vec3 *directions, size_t count, double *distance,
-                   float *radiance) {
-  auto *ctx = static_cast<TraceContext *>(user);
-  try {
-    uint64_t seed = 0, rays = 0;
-    for (double c : {origin.x, origin.y, origin.z}) {
-      uint64_t bits;
-      std::memcpy(&bits, &c, sizeof bits);
-      seed = mix(seed ^ bits);
-    }
-    trace_directions(*ctx->scene, *ctx->radiance, from_c(origin), directions, count, seed, distance, radiance, rays);
-    ctx->rays += rays;
-    return 0;
-  } catch (...) {
-    return 1;  // no exception crosses raddiff's C boundary: the call reports RADDIFF_ERROR_CALLBACK
-  }
-}
-
-// raddiff_trace_bounded_fn (raddiff_cache_irradiance_near_far): the same, with rays that stop at
-// `max_distance` (the near field's short rays; INFINITY for a record's gather).
+// raddiff_trace_bounded_fn (raddiff_cache_irradiance_near_far): traces the batch with Embree, rays
+// stopping at `max_distance` (the near field's short rays; INFINITY for a record's gather). The hit
+// radiance's samples are seeded from the origin, so that a gather is the same whichever thread asks
+// for it.
 int trace_bounded_callback(void *user, raddiff_vec3 origin, const raddiff_vec3 *directions, size_t count,
                            double max_distance, double *distance, float *radiance) {
   auto *ctx = static_cast<TraceContext *>(user);
@@ -54,8 +36,14 @@ int trace_bounded_callback(void *user, raddiff_vec3 origin, const raddiff_vec3 *
     ctx->rays += rays;
     return 0;
   } catch (...) {
-    return 1;
+    return 1;  // no exception crosses raddiff's C boundary: the call reports RADDIFF_ERROR_CALLBACK
   }
+}
+
+// raddiff_trace_fn (raddiff_cache_irradiance): the whole gather, rays as far as they go.
+int trace_callback(void *user, raddiff_vec3 origin, const raddiff_vec3 *directions, size_t count, double *distance,
+                   float *radiance) {
+  return trace_bounded_callback(user, origin, directions, count, INFINITY, distance, radiance);
 }
 
 bool near_field_on(const raddiff_irradiance_settings &s) {

@@ -193,53 +193,48 @@ impl<V: CacheValue> Cache<V> {
                 f64::INFINITY
             }
         };
-        let leak_guard = if version >= FORMAT_VERSION_4 {
-            let guard = LeakGuard {
-                relative: f64_at(56),
-                absolute: f64_at(64),
+        // fields of versions that have them only: older headers are shorter
+        let field_pair = |present: bool, flag: u32, at: usize, what: &str| {
+            let values = if present {
+                (f64_at(at), f64_at(at + 8))
+            } else {
+                (0.0, 0.0)
             };
-            if flags & FLAG_LEAK_GUARD != 0 {
+            flagged_pair(present, flags & flag != 0, values, what)
+        };
+        let leak_guard = match field_pair(
+            version >= FORMAT_VERSION_4,
+            FLAG_LEAK_GUARD,
+            56,
+            "leak guard",
+        )? {
+            Some((relative, absolute)) => {
+                let guard = LeakGuard { relative, absolute };
                 if guard.validate().is_err() || !guard.is_on() {
                     return corrupt(format!(
-                        "leak guard tolerances {} and {} are not finite and >= 0",
-                        guard.relative, guard.absolute
+                        "leak guard tolerances {relative} and {absolute} are not finite and >= 0"
                     ));
                 }
                 guard
-            } else {
-                if guard.relative.to_bits() != 0 || guard.absolute.to_bits() != 0 {
-                    return corrupt(
-                        "leak guard fields are set but the leak guard flag is not".into(),
-                    );
-                }
-                LeakGuard::OFF
             }
-        } else {
-            LeakGuard::OFF
+            None => LeakGuard::OFF,
         };
-        let far_field = if version == FORMAT_VERSION {
-            let reach = FarFieldReach {
-                world: f64_at(72),
-                pixels: f64_at(80),
-            };
-            if flags & FLAG_FAR_FIELD != 0 {
+        let far_field = match field_pair(
+            version == FORMAT_VERSION,
+            FLAG_FAR_FIELD,
+            72,
+            "far-field",
+        )? {
+            Some((world, pixels)) => {
+                let reach = FarFieldReach { world, pixels };
                 if reach.validate().is_err() || !reach.is_on() {
                     return corrupt(format!(
-                        "far-field reaches {} and {} are not finite and >= 0 with one > 0",
-                        reach.world, reach.pixels
+                        "far-field reaches {world} and {pixels} are not finite and >= 0 with one > 0"
                     ));
                 }
                 reach
-            } else {
-                if reach.world.to_bits() != 0 || reach.pixels.to_bits() != 0 {
-                    return corrupt(
-                        "far-field fields are set but the far-field flag is not".into(),
-                    );
-                }
-                FarFieldReach::OFF
             }
-        } else {
-            FarFieldReach::OFF
+            None => FarFieldReach::OFF,
         };
         let expected = usize::try_from(count)
             .ok()
@@ -352,4 +347,27 @@ fn temp_path(path: &Path) -> Result<PathBuf> {
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
     Ok(path.with_file_name(tmp))
+}
+
+/// A header's pair of f64 fields that hold values only when their flag is set: `Some(values)`
+/// when the version has the fields (`present`) and the flag is set, `None` when it is clear (the
+/// fields must then be 0.0, all bits 0) or the version predates them.
+fn flagged_pair(
+    present: bool,
+    flag: bool,
+    values: (f64, f64),
+    what: &str,
+) -> Result<Option<(f64, f64)>> {
+    if !present {
+        return Ok(None);
+    }
+    if flag {
+        return Ok(Some(values));
+    }
+    if values.0.to_bits() != 0 || values.1.to_bits() != 0 {
+        return Err(Error::Corrupt(format!(
+            "{what} fields are set but the {what} flag is not"
+        )));
+    }
+    Ok(None)
 }

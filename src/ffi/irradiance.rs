@@ -292,12 +292,8 @@ pub extern "C" fn raddiff_cache_irradiance(
     out: *mut f32,
 ) -> raddiff_status {
     guard(|| {
-        let cache = unsafe { in_ref(cache, "cache")? };
-        let settings = unsafe { settings_from_c(in_ref(settings, "settings")?)? };
+        let (cache, settings) = unsafe { query_args(cache, settings, out)? };
         let trace = trace.ok_or(FfiError::Null("trace"))?;
-        if out.is_null() {
-            return Err(FfiError::Null("out"));
-        }
         let found = cache.inner.irradiance(
             &settings,
             DVec3::from(x),
@@ -316,14 +312,37 @@ pub extern "C" fn raddiff_cache_irradiance(
                         radiance.as_mut_ptr(),
                     )
                 };
-                match status {
-                    0 => Ok(()),
-                    s => Err(format!("the trace callback returned {s}")),
-                }
+                callback_result(status)
             },
         )?;
         // SAFETY: the caller provides `channels` writable floats at `out`.
         unsafe { std::ptr::copy_nonoverlapping(found.value.as_ptr(), out, found.value.len()) };
         Ok(())
     })
+}
+
+/// What both one-call queries check first: the cache, the settings (converted) and a non-NULL
+/// `out`.
+///
+/// # Safety
+/// The pointers are NULL or valid as the queries' contracts say.
+pub(super) unsafe fn query_args<'a>(
+    cache: *mut raddiff_cache,
+    settings: *const raddiff_irradiance_settings,
+    out: *mut f32,
+) -> Result<(&'a raddiff_cache, IrradianceSettings), FfiError> {
+    let cache = in_ref(cache, "cache")?;
+    let settings = settings_from_c(in_ref(settings, "settings")?)?;
+    if out.is_null() {
+        return Err(FfiError::Null("out"));
+    }
+    Ok((cache, settings))
+}
+
+/// A trace callback's return value as the tracing closure's result.
+pub(super) fn callback_result(status: c_int) -> Result<(), String> {
+    match status {
+        0 => Ok(()),
+        s => Err(format!("the trace callback returned {s}")),
+    }
 }

@@ -11,7 +11,7 @@ use glam::DVec3;
 
 use super::cache::raddiff_cache;
 use super::common::*;
-use super::irradiance::{raddiff_irradiance_settings, settings_from_c};
+use super::irradiance::{callback_result, query_args, raddiff_irradiance_settings};
 
 /// Traces `count` rays from `origin` along the unit `directions` (world space), none farther
 /// than `max_distance` (INFINITY: as far as they go); writes each ray's hit distance to
@@ -65,12 +65,8 @@ pub extern "C" fn raddiff_cache_irradiance_near_far(
     out: *mut f32,
 ) -> raddiff_status {
     guard(|| {
-        let cache = unsafe { in_ref(cache, "cache")? };
-        let settings = unsafe { settings_from_c(in_ref(settings, "settings")?)? };
+        let (cache, settings) = unsafe { query_args(cache, settings, out)? };
         let trace = trace.ok_or(FfiError::Null("trace"))?;
-        if out.is_null() {
-            return Err(FfiError::Null("out"));
-        }
         let found = cache.inner.irradiance_near_far(
             &settings,
             DVec3::from(x),
@@ -90,10 +86,7 @@ pub extern "C" fn raddiff_cache_irradiance_near_far(
                         radiance.as_mut_ptr(),
                     )
                 };
-                match status {
-                    0 => Ok(()),
-                    s => Err(format!("the trace callback returned {s}")),
-                }
+                callback_result(status)
             },
         )?;
         // SAFETY: the caller provides `channels` writable floats at `out`.
