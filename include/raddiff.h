@@ -897,7 +897,9 @@ enum raddiff_status raddiff_cache_irradiance(struct raddiff_cache *cache,
 // `RADDIFF_ERROR_INVALID_ARGUMENT` when the settings have no near-field reach or disagree with
 // the cache's, the reach comes out 0 (a reach in pixels with footprint 0), the near-ray layout
 // is invalid, or the near rays' values are refused; `RADDIFF_ERROR_DEGENERATE` when the sum
-// overflows a float. On any error nothing is inserted and `out` is untouched.
+// overflows a float. On any error `out` is untouched and nothing is inserted, with one exception:
+// on a miss whose own gather's sum fits a float but whose interpolated far field (blended with
+// other records) makes it overflow, `RADDIFF_ERROR_DEGENERATE` comes with the new record kept.
 enum raddiff_status raddiff_cache_irradiance_near_far(struct raddiff_cache *cache,
                                                       const struct raddiff_irradiance_settings *settings,
                                                       struct raddiff_vec3 x,

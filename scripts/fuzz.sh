@@ -2,7 +2,8 @@
 # Coverage-guided fuzzing of the C entry points with AFL++ through cargo-afl (docs/fuzzing.md).
 #
 #   scripts/fuzz.sh TARGET SECONDS [OUTPUT_DIR]   one target (kernels, radii, gather_evaluate,
-#                                                  cache_ops, cache_load, single_scatter)
+#                                                  cache_ops, cache_load, cache_irradiance,
+#                                                  single_scatter)
 #   scripts/fuzz.sh all SECONDS                    every target, SECONDS each, one after another
 #
 # Starts from fuzz/corpus/TARGET, writes AFL++'s state to OUTPUT_DIR (default
@@ -13,7 +14,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
-targets=(kernels radii gather_evaluate cache_ops cache_load single_scatter)
+targets=(kernels radii gather_evaluate cache_ops cache_load cache_irradiance single_scatter)
 
 if [ $# -lt 2 ]; then
   sed -n '2,12p' "$0" >&2

@@ -231,6 +231,9 @@ fn refusals_insert_nothing() {
         }),
         "traced gather",
     );
+    // a gather whose own sum overflows an f32 makes no record
+    let huge = cache.irradiance_near_far(&s, x, n, 0.1, ceiling(0.5, |_| [2e38; 3]));
+    assert!(matches!(huge, Err(Error::Degenerate(_))), "{huge:?}");
     assert_eq!(cache.len(), 0);
     // now a record covers x: the near rays are refused the same way, and a near-ray layout the
     // gather cannot make is named

@@ -323,7 +323,7 @@ fn near_far(
     }
 }
 
-fn distance(input: &mut Input) -> f64 {
+pub(super) fn distance(input: &mut Input) -> f64 {
     match input.below(16) {
         0 | 1 => f64::INFINITY,
         2 => input.f64(),
@@ -333,7 +333,7 @@ fn distance(input: &mut Input) -> f64 {
     }
 }
 
-fn radiance(input: &mut Input) -> f32 {
+pub(super) fn radiance(input: &mut Input) -> f32 {
     if input.byte() < 16 {
         input.f32()
     } else {

@@ -5,6 +5,7 @@
 //! and `std`.
 #![allow(dead_code)]
 
+pub mod cache_irradiance;
 pub mod cache_load;
 pub mod cache_ops;
 pub mod check;
@@ -25,12 +26,13 @@ pub enum Outcome {
 }
 
 /// Target names, as used for `fuzz/corpus/<name>/` and `fuzz/regressions/<name>/`.
-pub const NAMES: [&str; 6] = [
+pub const NAMES: [&str; 7] = [
     "kernels",
     "radii",
     "gather_evaluate",
     "cache_ops",
     "cache_load",
+    "cache_irradiance",
     "single_scatter",
 ];
 
@@ -42,6 +44,7 @@ pub fn by_name(name: &str) -> Option<fn(&[u8]) -> Outcome> {
         "gather_evaluate" => gather_evaluate::run,
         "cache_ops" => cache_ops::run,
         "cache_load" => cache_load::run,
+        "cache_irradiance" => cache_irradiance::run,
         "single_scatter" => single_scatter::run,
         _ => return None,
     })

@@ -51,7 +51,10 @@ impl<V: CacheValue> Cache<V> {
     /// near-field reach, the cache holds no far fields or holds them at another reach, the reach
     /// comes out 0 at this query (a reach in pixels with footprint 0), the near-ray layout is
     /// invalid, or the near rays' values are refused (a non-positive or NaN distance,
-    /// non-finite radiance); `Degenerate` when `E_near + V·F` overflows an `f32`.
+    /// non-finite radiance); `Degenerate` when `E_near + V·F` overflows an `f32`. On any error
+    /// nothing is inserted, with one exception: on a miss whose own gather's sum fits an `f32`
+    /// but whose interpolated far field (blended with other records) makes it overflow, the new
+    /// record stays.
     pub fn irradiance_near_far<E: Display>(
         &self,
         settings: &IrradianceSettings,
@@ -95,7 +98,7 @@ impl<V: CacheValue> Cache<V> {
                 (near, far)
             }
             Err(Error::NotFound(_)) => {
-                let near = self.insert_traced(
+                let (near, evaluation) = self.evaluate_traced(
                     settings,
                     x,
                     n,
@@ -109,22 +112,15 @@ impl<V: CacheValue> Cache<V> {
                         Ok(near)
                     },
                 )?;
+                // a record whose own point's sum overflows is not inserted
+                sum_f32(&near, &evaluation.irradiance)?;
+                self.insert(&settings.record(&evaluation, footprint)?)?;
                 (near, self.lookup(x, n)?)
             }
             Err(other) => return Err(other),
         };
         let far_field: Vec<f64> = far.value.as_channels().iter().map(|&f| f.into()).collect();
-        let sum = near.irradiance_with(&far_field)?;
-        let mut value = Vec::with_capacity(sum.len());
-        for e in sum {
-            let e32 = e as f32;
-            if !e32.is_finite() {
-                return Err(Error::Degenerate(format!(
-                    "the irradiance {e} (near field plus far field) overflows an f32"
-                )));
-            }
-            value.push(e32);
-        }
+        let value = sum_f32(&near, &far_field)?;
         Ok(NearFarLookup {
             value: V::from_channels(&value),
             near,
@@ -132,4 +128,21 @@ impl<V: CacheValue> Cache<V> {
             reach,
         })
     }
+}
+
+/// `E_near + V·F` per channel as `f32`; `Degenerate` when a channel overflows.
+fn sum_f32(near: &NearField, far_field: &[f64]) -> Result<Vec<f32>> {
+    near.irradiance_with(far_field)?
+        .into_iter()
+        .map(|e| {
+            let e32 = e as f32;
+            if e32.is_finite() {
+                Ok(e32)
+            } else {
+                Err(Error::Degenerate(format!(
+                    "the irradiance {e} (near field plus far field) overflows an f32"
+                )))
+            }
+        })
+        .collect()
 }

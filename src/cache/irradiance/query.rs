@@ -67,7 +67,7 @@ impl<V: CacheValue> Cache<V> {
             Err(Error::NotFound(_)) => {}
             found => return found,
         }
-        self.insert_traced(
+        let ((), evaluation) = self.evaluate_traced(
             settings,
             x,
             n,
@@ -75,14 +75,15 @@ impl<V: CacheValue> Cache<V> {
             |directions, distance, radiance| trace(x, directions, distance, radiance),
             |_, _, _| Ok(()),
         )?;
+        self.insert(&settings.record(&evaluation, footprint)?)?;
         self.lookup(x, n)
     }
 
-    /// The miss path shared by the one-call queries: validates the settings against the cache,
-    /// lays out and traces the record's gather at `x`, lets `prepare` read and rewrite what the
-    /// rays found (the far-field split), evaluates it and inserts its record. Returns what
-    /// `prepare` returned.
-    pub(super) fn insert_traced<T, E: Display>(
+    /// The miss path shared by the one-call queries, up to the record: validates the settings
+    /// against the cache, lays out and traces the record's gather at `x`, lets `prepare` read
+    /// and rewrite what the rays found (the far-field split), and evaluates it. Returns what
+    /// `prepare` returned and the evaluation.
+    pub(super) fn evaluate_traced<T, E: Display>(
         &self,
         settings: &IrradianceSettings,
         x: DVec3,
@@ -90,7 +91,7 @@ impl<V: CacheValue> Cache<V> {
         footprint: f64,
         trace: impl FnOnce(&[DVec3], &mut [f64], &mut [f32]) -> std::result::Result<(), E>,
         prepare: impl FnOnce(&Layout, &mut [f64], &mut [f32]) -> Result<T>,
-    ) -> Result<T> {
+    ) -> Result<(T, GatherEvaluation)> {
         settings.validate()?;
         settings.check_cache(self.config())?;
         if settings.metric.needs_hit_normals() {
@@ -123,8 +124,7 @@ impl<V: CacheValue> Cache<V> {
         traced.normal = n / n.length();
         let evaluation = GatherEvaluation::new(&traced, &settings.weights(), settings.hessians())
             .map_err(traced_error)?;
-        self.insert(&settings.record(&evaluation, footprint)?)?;
-        Ok(prepared)
+        Ok((prepared, evaluation))
     }
 }
 
