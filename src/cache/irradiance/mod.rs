@@ -29,6 +29,11 @@
 //! # Ok::<(), raddiff::Error>(())
 //! ```
 //!
+//! With a near-field reach ([`IrradianceSettings::near_field`]) the records hold far fields and
+//! [`Cache::irradiance_near_far`](crate::cache::Cache::irradiance_near_far) gives each shading
+//! point its own near field (short rays, traced through the same kind of closure, which then
+//! also takes a maximum distance) plus the interpolated far field ([`NearFarLookup`]).
+//!
 //! Renderers that share one gather between several metrics or thresholds (benchmarks, parameter
 //! sweeps) use the pieces: a [`TracedGather`] evaluated once into a [`GatherEvaluation`] (with the
 //! [`Hessians`] every metric of interest needs), then [`IrradianceSettings::record`] per metric

@@ -29,11 +29,12 @@ pub const MAX_ANISOTROPY_DEFAULT: f64 = 2.0;
 /// Rec. 709 / sRGB luminance weights of linear RGB: the scalar of 3-channel caches by default.
 pub const LUMINANCE_WEIGHTS: [f64; 3] = [0.2126, 0.7152, 0.0722];
 
-/// The near/far decomposition of [`Cache::irradiance_near_far`] (Arikan et al. 2005; see
+/// The near/far decomposition of
+/// [`Cache::irradiance_near_far`](crate::cache::Cache::irradiance_near_far) (Arikan et al. 2005; see
 /// [`gather::near_far`](crate::gather::near_far)). Off by default.
 ///
 /// On the real-scene benchmark at 512 px (`docs/real-scenes.md`) a reach of 8 pixel footprints
-/// with 32 × 32 near rays per pixel lowered every metric's error by 30-50% at the same record
+/// with 32 × 32 near rays per pixel lowered every metric's error by 24-51% at the same record
 /// count, for about 40 CPU s of short rays next to the 8,192 gathers' 65; 16 rays per pixel
 /// doubled the error (the near field's noise is the pixel's and shows in the image).
 #[derive(Debug, Clone, Copy, PartialEq)]
