@@ -55,6 +55,31 @@ impl<V: CacheValue> Cache<V> {
     /// nothing is inserted, with one exception: on a miss whose own gather's sum fits an `f32`
     /// but whose interpolated far field (blended with other records) makes it overflow, the new
     /// record stays.
+    ///
+    /// ```
+    /// use raddiff::cache::irradiance::{IrradianceSettings, RadiusBounds};
+    /// use raddiff::cache::{Cache, FarFieldReach};
+    /// use raddiff::glam::DVec3;
+    ///
+    /// let mut settings = IrradianceSettings::new(1);
+    /// (settings.gather_m, settings.gather_n) = (8, 24);
+    /// settings.radius_bounds = RadiusBounds::world(0.01, 1.0);
+    /// settings.near_field.reach = FarFieldReach::world(1.0);
+    /// let cache: Cache<f32> = Cache::new(settings.cache_config())?;
+    /// // a floor under a ceiling of radiance 1 at height 0.5; rays stop at `max_distance`
+    /// let trace = |_o: DVec3, dirs: &[DVec3], max_distance: f64, t: &mut [f64], l: &mut [f32]| {
+    ///     for (i, w) in dirs.iter().enumerate() {
+    ///         let hit = 0.5 / w.z.max(1e-9);
+    ///         (t[i], l[i]) = if hit < max_distance { (hit, 1.0) } else { (f64::INFINITY, 0.0) };
+    ///     }
+    ///     Ok::<(), String>(())
+    /// };
+    /// let e = cache.irradiance_near_far(&settings, DVec3::ZERO, DVec3::Z, 0.0, trace)?;
+    /// assert!((e.value - std::f32::consts::PI).abs() < 1e-4);
+    /// // the ceiling is nearer than the reach where cos θ > 1/2: three quarters of the measure
+    /// assert!((e.near.open_fraction - 0.25).abs() < 1e-12);
+    /// # Ok::<(), raddiff::Error>(())
+    /// ```
     pub fn irradiance_near_far<E: Display>(
         &self,
         settings: &IrradianceSettings,
