@@ -839,7 +839,8 @@ enum raddiff_status raddiff_gather_evaluate(const struct raddiff_gather_layout *
                                             struct raddiff_gather_output *output);
 
 // The default settings (3 channels, the anisotropic occlusion-aware Hessian, a 32 x 128
-// cosine-polar gather, 1 to 150 pixel radii, the default safeguards, leak guard off).
+// cosine-polar gather, 1 to 150 pixel radii, the default safeguards, leak guard off, no near
+// field).
 struct raddiff_irradiance_settings raddiff_irradiance_settings_default(void);
 
 // A cache for the records `settings` make: surface domain, the settings' channels, the

@@ -122,7 +122,8 @@ pub struct raddiff_irradiance_settings {
 }
 
 /// The default settings (3 channels, the anisotropic occlusion-aware Hessian, a 32 x 128
-/// cosine-polar gather, 1 to 150 pixel radii, the default safeguards, leak guard off).
+/// cosine-polar gather, 1 to 150 pixel radii, the default safeguards, leak guard off, no near
+/// field).
 #[no_mangle]
 pub extern "C" fn raddiff_irradiance_settings_default() -> raddiff_irradiance_settings {
     settings_to_c(&IrradianceSettings::default())
