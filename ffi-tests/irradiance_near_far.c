@@ -120,7 +120,7 @@ int main(void) {
   sc.fail = 0, sc.poison = 1;
   CHECK_STATUS(raddiff_cache_irradiance_near_far(cache, &s, nearby, up, 0.01, trace, &sc, out),
                RADDIFF_ERROR_INVALID_ARGUMENT);
-  CHECK(strstr(raddiff_last_error(), "traced gather") != NULL);
+  CHECK(strstr(raddiff_last_error(), "traced near-field rays") != NULL);
   sc.poison = 0, sc.scale = 1.0e38f; /* 2e38 radiance is finite, pi x 2e38 x 3/4 is not */
   CHECK_STATUS(raddiff_cache_irradiance_near_far(cache, &s, nearby, up, 0.01, trace, &sc, out), RADDIFF_ERROR_DEGENERATE);
   sc.scale = 1.0f;

@@ -468,8 +468,9 @@ typedef int (*raddiff_trace_fn)(void *user,
 // A ray that finds nothing closer than `max_distance` gets INFINITY (or any distance >=
 // `max_distance`) and its radiance may be left as it is (zeros; not read). Returns 0 on success;
 // anything else abandons the request (`RADDIFF_ERROR_CALLBACK`, nothing inserted). `user` is the
-// pointer given to `raddiff_cache_irradiance_near_far`. Called exactly once per call, on the
-// calling thread; it must not unwind and may call raddiff functions.
+// pointer given to `raddiff_cache_irradiance_near_far`. Called once per call that passes the
+// argument checks (never after a refusal), on the calling thread; it must not unwind and may
+// call raddiff functions.
 typedef int (*raddiff_trace_bounded_fn)(void *user,
                                         struct raddiff_vec3 origin,
                                         const struct raddiff_vec3 *directions,
@@ -887,8 +888,8 @@ enum raddiff_status raddiff_cache_irradiance(struct raddiff_cache *cache,
 // (`raddiff_irradiance_cache_new`): its records hold far fields. The reach at this query is
 // rho = max(near_field_reach_world, near_field_reach_pixels * footprint).
 //
-// `trace` is called exactly once: when a record covers `x`, with the
-// `near_field_m * near_field_n` near rays and `max_distance` = rho; on a miss, with the
+// `trace` is called once (unless the arguments are refused first): when a record covers `x`,
+// with the `near_field_m * near_field_n` near rays and `max_distance` = rho; on a miss, with the
 // record's `gather_m * gather_n` gather and `max_distance` = INFINITY, whose rays give both the
 // near field and, split at rho (near hits moved to the reach with the far field's mean
 // radiance, as `raddiff_gather_far_field`), the new record. `out` (`channels` floats) receives

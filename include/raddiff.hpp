@@ -949,7 +949,8 @@ class IrradianceCache {
 
   /// Wraps `raddiff_cache_irradiance_near_far` (settings with a near-field reach): the irradiance
   /// E_near + V * F at `x` into `out` (`channels` floats, checked). Calls
-  /// `trace(origin, directions, max_distance, distance, radiance)` exactly once: with the near
+  /// `trace(origin, directions, max_distance, distance, radiance)` once (unless the arguments are
+  /// refused first): with the near
   /// rays and the reach when a record covers `x`, with the record's gather and INFINITY on a miss;
   /// rays that find nothing closer than `max_distance` get INFINITY. Exceptions as irradiance().
   template <class Trace>

@@ -244,7 +244,7 @@ fn refusals_insert_nothing() {
             d.fill(-1.0);
             Ok::<(), String>(())
         }),
-        "traced gather",
+        "traced near-field rays",
     );
     let mut bad = s.clone();
     bad.near_field.m = 0;

@@ -19,8 +19,9 @@ use super::irradiance::{callback_result, query_args, raddiff_irradiance_settings
 /// A ray that finds nothing closer than `max_distance` gets INFINITY (or any distance >=
 /// `max_distance`) and its radiance may be left as it is (zeros; not read). Returns 0 on success;
 /// anything else abandons the request (`RADDIFF_ERROR_CALLBACK`, nothing inserted). `user` is the
-/// pointer given to `raddiff_cache_irradiance_near_far`. Called exactly once per call, on the
-/// calling thread; it must not unwind and may call raddiff functions.
+/// pointer given to `raddiff_cache_irradiance_near_far`. Called once per call that passes the
+/// argument checks (never after a refusal), on the calling thread; it must not unwind and may
+/// call raddiff functions.
 pub type raddiff_trace_bounded_fn = Option<
     unsafe extern "C" fn(
         user: *mut c_void,
@@ -40,8 +41,8 @@ pub type raddiff_trace_bounded_fn = Option<
 /// (`raddiff_irradiance_cache_new`): its records hold far fields. The reach at this query is
 /// rho = max(near_field_reach_world, near_field_reach_pixels * footprint).
 ///
-/// `trace` is called exactly once: when a record covers `x`, with the
-/// `near_field_m * near_field_n` near rays and `max_distance` = rho; on a miss, with the
+/// `trace` is called once (unless the arguments are refused first): when a record covers `x`,
+/// with the `near_field_m * near_field_n` near rays and `max_distance` = rho; on a miss, with the
 /// record's `gather_m * gather_n` gather and `max_distance` = INFINITY, whose rays give both the
 /// near field and, split at rho (near hits moved to the reach with the far field's mean
 /// radiance, as `raddiff_gather_far_field`), the new record. `out` (`channels` floats) receives

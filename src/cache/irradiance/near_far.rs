@@ -5,7 +5,7 @@ use std::fmt::Display;
 
 use glam::DVec3;
 
-use super::query::{check_query, query_frame, traced_error};
+use super::query::{check_query, query_frame};
 use super::settings::IrradianceSettings;
 use crate::cache::{Cache, CacheValue, Lookup};
 use crate::error::{Error, Result};
@@ -39,7 +39,8 @@ impl<V: CacheValue> Cache<V> {
     ///   and the radiance arriving along it (`channels` per ray, interleaved). Rays need go no
     ///   farther than `max_distance`: for one that finds nothing closer, write
     ///   `f64::INFINITY` (or any distance ≥ `max_distance`) and leave its radiance (it is not
-    ///   read; the buffer holds zeros). Called exactly once per call, on the calling thread:
+    ///   read; the buffer holds zeros). Called once per call that passes the argument checks, on
+    ///   the calling thread:
     ///   when a record covers `x`, with the `near_field.m·near_field.n` near rays and
     ///   `max_distance = ρ`; on a miss, with the record's `gather_m·gather_n` gather and
     ///   `max_distance = f64::INFINITY`, whose rays give both the near field and, split at ρ
@@ -118,8 +119,14 @@ impl<V: CacheValue> Cache<V> {
                 let mut radiance = vec![0.0f32; directions.len() * channels];
                 trace(x, &directions, reach, &mut distance, &mut radiance)
                     .map_err(|e| Error::Callback(e.to_string()))?;
-                let near = near_field(&layout, &distance, &radiance, channels, reach)
-                    .map_err(traced_error)?;
+                let near = near_field(&layout, &distance, &radiance, channels, reach).map_err(
+                    |e| match e {
+                        Error::InvalidArgument(m) => {
+                            Error::InvalidArgument(format!("the traced near-field rays: {m}"))
+                        }
+                        other => other,
+                    },
+                )?;
                 (near, far)
             }
             Err(Error::NotFound(_)) => {
