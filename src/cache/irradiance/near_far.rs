@@ -5,7 +5,7 @@ use std::fmt::Display;
 
 use glam::DVec3;
 
-use super::query::{check_query, query_frame};
+use super::query::{check_query, query_frame, refusing};
 use super::settings::IrradianceSettings;
 use crate::cache::{Cache, CacheValue, Lookup};
 use crate::error::{Error, Result};
@@ -108,25 +108,14 @@ impl<V: CacheValue> Cache<V> {
                     settings.near_field.n,
                     settings.seed.seed(x, n),
                 )
-                .map_err(|e| match e {
-                    Error::InvalidArgument(m) => {
-                        Error::InvalidArgument(format!("the near-field rays: {m}"))
-                    }
-                    other => other,
-                })?;
+                .map_err(refusing("the near-field rays"))?;
                 let directions = layout.directions(&query_frame(x, n)?)?;
                 let mut distance = vec![0.0; directions.len()];
                 let mut radiance = vec![0.0f32; directions.len() * channels];
                 trace(x, &directions, reach, &mut distance, &mut radiance)
                     .map_err(|e| Error::Callback(e.to_string()))?;
-                let near = near_field(&layout, &distance, &radiance, channels, reach).map_err(
-                    |e| match e {
-                        Error::InvalidArgument(m) => {
-                            Error::InvalidArgument(format!("the traced near-field rays: {m}"))
-                        }
-                        other => other,
-                    },
-                )?;
+                let near = near_field(&layout, &distance, &radiance, channels, reach)
+                    .map_err(refusing("the traced near-field rays"))?;
                 (near, far)
             }
             Err(Error::NotFound(_)) => {

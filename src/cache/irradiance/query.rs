@@ -111,7 +111,8 @@ impl<V: CacheValue> Cache<V> {
         let mut radiance = vec![0.0f32; directions.len() * settings.channels];
         trace(&directions, &mut distance, &mut radiance)
             .map_err(|e| Error::Callback(e.to_string()))?;
-        let prepared = prepare(&layout, &mut distance, &mut radiance).map_err(traced_error)?;
+        let prepared =
+            prepare(&layout, &mut distance, &mut radiance).map_err(refusing(TRACED_GATHER))?;
         let mut traced = TracedGather::new(
             layout,
             frame,
@@ -123,10 +124,13 @@ impl<V: CacheValue> Cache<V> {
         // the record keeps the bits of the normalized query normal (the frame re-normalizes)
         traced.normal = n / n.length();
         let evaluation = GatherEvaluation::new(&traced, &settings.weights(), settings.hessians())
-            .map_err(traced_error)?;
+            .map_err(refusing(TRACED_GATHER))?;
         Ok((prepared, evaluation))
     }
 }
+
+/// What refused values of a record's gather are called in errors.
+const TRACED_GATHER: &str = "the traced gather";
 
 /// `InvalidArgument` for a non-finite point or normal, a zero normal, or a footprint that is
 /// negative or not finite.
@@ -142,10 +146,11 @@ pub(super) fn query_frame(x: DVec3, n: DVec3) -> Result<Frame> {
     Frame::new(x, unit, tangent_basis(unit).0)
 }
 
-/// Names the traced rays as the source of an `InvalidArgument`.
-pub(super) fn traced_error(e: Error) -> Error {
-    match e {
-        Error::InvalidArgument(m) => Error::InvalidArgument(format!("the traced gather: {m}")),
+/// Names `what` as the source of an `InvalidArgument` (its message prefixed); other errors pass
+/// unchanged.
+pub(super) fn refusing(what: &'static str) -> impl Fn(Error) -> Error {
+    move |e| match e {
+        Error::InvalidArgument(m) => Error::InvalidArgument(format!("{what}: {m}")),
         other => other,
     }
 }
