@@ -1,7 +1,7 @@
 /* raddiff_cache_irradiance_near_far through the header: a point under a ceiling against the
    closed form (miss and hit), what the callback is asked for, the far-field marker saved and
-   loaded, the plain call refused on a far-field cache, and every refusal leaving `out` and the
-   cache untouched. */
+   loaded, the plain call refused on a far-field cache, every refusal leaving `out` and the cache
+   untouched, and the near field's parts (raddiff_cache_irradiance_near_far_parts). */
 #include "raddiff.h"
 #include "check.h"
 #include <stdio.h>
@@ -145,6 +145,45 @@ int main(void) {
   CHECK(out[0] == -7.0f);
   CHECK_STATUS(raddiff_cache_get_far_field(NULL, &world, &pixels), RADDIFF_ERROR_NULL_POINTER);
   CHECK_STATUS(raddiff_cache_get_far_field(cache, NULL, &pixels), RADDIFF_ERROR_NULL_POINTER);
+
+  /* the parts: E_near = (3/4) pi L and V = 1/4 (exact: the stratum boundary), on a miss (from the
+     record's gather) and on a hit (from the near rays); out = E_near + V F with F the plain lookup
+     of the finished cache; NULL parts are not wanted; a refusal writes none of them */
+  {
+    raddiff_cache *fresh = raddiff_irradiance_cache_new(&s);
+    const raddiff_vec3 points[2] = {{0.5, 0.5, 0.0}, {0.502, 0.499, 0.0}};
+    double near[3], v = -1.0;
+    float far[3], whole[3];
+    int k;
+    CHECK(fresh != NULL);
+    for (k = 0; k < 2; ++k) {
+      CHECK_STATUS(raddiff_cache_irradiance_near_far_parts(fresh, &s, points[k], up, 0.01, trace, &sc, out, near, &v),
+                   RADDIFF_OK);
+      CHECK(raddiff_cache_len(fresh) == 1);
+      CHECK_CLOSE(v, 0.25, 1e-12);
+      for (c = 0; c < 3; ++c) CHECK_CLOSE(near[c], 0.75 * PI * (2.0 / (1 << c)), 1e-9);
+      CHECK_STATUS(raddiff_cache_lookup(fresh, points[k], up, far, NULL), RADDIFF_OK);
+      for (c = 0; c < 3; ++c) {
+        CHECK_CLOSE(far[c], PI * (2.0 / (1 << c)), 1e-5);
+        CHECK_CLOSE(out[c], near[c] + v * far[c], 1e-5);
+      }
+      /* the same call without parts gives the same value */
+      CHECK_STATUS(raddiff_cache_irradiance_near_far(fresh, &s, points[k], up, 0.01, trace, &sc, whole), RADDIFF_OK);
+      CHECK(memcmp(whole, out, sizeof whole) == 0);
+      CHECK_STATUS(raddiff_cache_irradiance_near_far_parts(fresh, &s, points[k], up, 0.01, trace, &sc, whole, NULL, NULL),
+                   RADDIFF_OK);
+      CHECK(memcmp(whole, out, sizeof whole) == 0);
+    }
+    near[0] = -7.0, v = -7.0, out[0] = -7.0f;
+    sc.fail = 2;
+    CHECK_STATUS(raddiff_cache_irradiance_near_far_parts(fresh, &s, points[1], up, 0.01, trace, &sc, out, near, &v),
+                 RADDIFF_ERROR_CALLBACK);
+    sc.fail = 0;
+    CHECK_STATUS(raddiff_cache_irradiance_near_far_parts(fresh, &s, points[1], up, 0.01, trace, &sc, NULL, near, &v),
+                 RADDIFF_ERROR_NULL_POINTER);
+    CHECK(near[0] == -7.0 && v == -7.0 && out[0] == -7.0f && raddiff_cache_len(fresh) == 1);
+    raddiff_cache_free(fresh);
+  }
 
   /* saved and loaded, the marker stays and the loaded cache answers as the saved one */
   CHECK_STATUS(raddiff_cache_save(cache, path), RADDIFF_OK);

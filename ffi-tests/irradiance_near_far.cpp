@@ -1,6 +1,6 @@
 // raddiff::IrradianceCache::irradiance_near_far: a lambda traces with a maximum distance, the
-// value matches the closed form under a ceiling, exceptions come back with nothing inserted, and
-// Cache::far_field reads the marker.
+// value matches the closed form under a ceiling, exceptions come back with nothing inserted,
+// Cache::far_field reads the marker, and irradiance_near_far_parts returns the near field.
 #include "raddiff.hpp"
 #include "hpp_check.h"
 
@@ -62,6 +62,22 @@ int main() {
   for (int c = 0; c < 3; ++c) {
     const double want = kPi * 2.0 / (1 << c);
     CHECK(std::fabs(miss[c] - want) < 1e-5 * want && std::fabs(hit[c] - want) < 1e-5 * want);
+  }
+  // the parts: E_near = (3/4) pi L and V = 1/4 on a hit, and E_near + V * F with F the cache's
+  // plain lookup gives the value
+  {
+    const raddiff_vec3 p{0.002, -0.003, 0};
+    const raddiff::NearFarParts parts = cache.irradiance_near_far_parts(p, up, 0.0, trace);
+    CHECK(parts.value.size() == 3 && parts.near_irradiance.size() == 3);
+    CHECK(std::fabs(parts.open_fraction - 0.25) < 1e-12);
+    float far[3];
+    cache.cache().lookup(p, up, raddiff::Span<float>(far));
+    for (int c = 0; c < 3; ++c) {
+      const double want = kPi * 2.0 / (1 << c);
+      CHECK(std::fabs(parts.near_irradiance[c] - 0.75 * want) < 1e-9 * want);
+      CHECK(std::fabs(parts.value[c] - (parts.near_irradiance[c] + parts.open_fraction * far[c])) < 1e-5 * want);
+    }
+    CHECK(counts.size() == 3 && counts[2] == 64 && cache.cache().size() == 1);
   }
   // an exception in the lambda comes back as itself; nothing is inserted
   bool caught = false;

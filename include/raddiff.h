@@ -911,6 +911,29 @@ enum raddiff_status raddiff_cache_irradiance_near_far(struct raddiff_cache *cach
                                                       void *user,
                                                       float *out);
 
+// `raddiff_cache_irradiance_near_far`, which also writes the query's near field: its near
+// irradiance `E_near` to `near_irradiance` (`channels` doubles) and its open fraction `V` (in
+// [0, 1]) to `*open_fraction`. Either may be NULL (not wanted). Both are written only on
+// success, with `out`.
+//
+// They let a renderer shade a pixel once while it fills the cache and again, without tracing,
+// once the cache is complete: keep `E_near` and `V` from the call that visited the pixel, then
+// show `E_near + V * F` with the far field `F` from `raddiff_cache_lookup` (or
+// `raddiff_cache_lookup_with`) on the finished cache. On a miss the near field comes from the
+// new record's gather (its rays closer than the reach), on a hit from the near rays.
+//
+// Arguments, callback and errors as `raddiff_cache_irradiance_near_far`'s.
+enum raddiff_status raddiff_cache_irradiance_near_far_parts(struct raddiff_cache *cache,
+                                                            const struct raddiff_irradiance_settings *settings,
+                                                            struct raddiff_vec3 x,
+                                                            struct raddiff_vec3 n,
+                                                            double footprint,
+                                                            raddiff_trace_bounded_fn trace,
+                                                            void *user,
+                                                            float *out,
+                                                            double *near_irradiance,
+                                                            double *open_fraction);
+
 // Writes the cache's far-field reach to `*world` (L) and `*pixels` (pixel footprints): both 0
 // when its records hold irradiance, not far fields. Set when the cache is made
 // (`raddiff_irradiance_cache_new` with a near-field reach), saved with it and restored by

@@ -907,6 +907,14 @@ int trace_bounded_trampoline(void *user, raddiff_vec3 origin, const raddiff_vec3
 
 }  // namespace detail
 
+/// What IrradianceCache::irradiance_near_far_parts returns: the irradiance E_near + V * F and the
+/// query's near field (its near irradiance E_near per channel and its open fraction V in [0, 1]).
+struct NearFarParts {
+  std::vector<float> value;
+  std::vector<double> near_irradiance;
+  double open_fraction = 0;
+};
+
 /// A radiance cache filled one shading point at a time (`raddiff_cache_irradiance`), with the
 /// settings it was made for (copied, channel weights included). Thread-safe like Cache.
 class IrradianceCache {
@@ -971,6 +979,25 @@ class IrradianceCache {
     std::vector<float> out(settings_.channels);
     irradiance_near_far(x, n, footprint, std::forward<Trace>(trace), Span<float>(out));
     return out;
+  }
+
+  /// Wraps `raddiff_cache_irradiance_near_far_parts`: irradiance_near_far(), also returning the
+  /// query's near field (E_near, `channels` values, and the open fraction V). A renderer keeps
+  /// them from the call that filled a pixel and shows E_near + V * F later with F from
+  /// cache().lookup() on the finished cache, without tracing again.
+  template <class Trace>
+  NearFarParts irradiance_near_far_parts(raddiff_vec3 x, raddiff_vec3 n, double footprint, Trace &&trace) {
+    NearFarParts parts;
+    parts.value.resize(settings_.channels);
+    parts.near_irradiance.resize(settings_.channels);
+    using Callable = std::remove_reference_t<Trace>;
+    detail::TraceCall<Callable> call{&trace, settings_.channels, nullptr};
+    const raddiff_status status = raddiff_cache_irradiance_near_far_parts(
+        cache_.get(), &settings_, x, n, footprint, &detail::trace_bounded_trampoline<Callable>, &call,
+        parts.value.data(), parts.near_irradiance.data(), &parts.open_fraction);
+    if (call.error) std::rethrow_exception(call.error);
+    detail::check(status);
+    return parts;
   }
 
   /// The settings (their channel_weights point into this object).

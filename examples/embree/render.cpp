@@ -50,14 +50,26 @@ bool near_field_on(const raddiff_irradiance_settings &s) {
   return s.near_field_reach_pixels > 0 || s.near_field_reach_world > 0;
 }
 
+// A pixel's near field as its fill call found it: E_near + V * F is its irradiance for any far
+// field F, so the render passes need no ray. `valid` is false until a call succeeded.
+struct NearParts {
+  double irradiance[3] = {0, 0, 0};
+  double open_fraction = 0;
+  bool valid = false;
+};
+
 // One shading point through the one-call API: raddiff_cache_irradiance, or with a near-field reach
-// raddiff_cache_irradiance_near_far (every call traces the pixel's near rays; a miss its gather).
+// raddiff_cache_irradiance_near_far_parts (every call traces the pixel's near rays, a miss its
+// gather), keeping the pixel's near field in `parts`.
 raddiff_status shade_pixel(raddiff_cache *cache, const raddiff_irradiance_settings &s, TraceContext &ctx,
-                           const Primary &px, float *e) {
-  if (near_field_on(s))
-    return raddiff_cache_irradiance_near_far(cache, &s, to_c(px.p), to_c(px.n), px.footprint, trace_bounded_callback,
-                                             &ctx, e);
-  return raddiff_cache_irradiance(cache, &s, to_c(px.p), to_c(px.n), px.footprint, trace_callback, &ctx, e);
+                           const Primary &px, float *e, NearParts &parts) {
+  if (!near_field_on(s))
+    return raddiff_cache_irradiance(cache, &s, to_c(px.p), to_c(px.n), px.footprint, trace_callback, &ctx, e);
+  const raddiff_status st =
+      raddiff_cache_irradiance_near_far_parts(cache, &s, to_c(px.p), to_c(px.n), px.footprint, trace_bounded_callback,
+                                              &ctx, e, parts.irradiance, &parts.open_fraction);
+  parts.valid = st == RADDIFF_OK;
+  return st;
 }
 
 raddiff_irradiance_settings settings_of(const RenderSettings &cfg) {
@@ -77,6 +89,8 @@ std::vector<size_t> level_pixels(int w, int h, int step) {
 
 struct Fill {
   raddiff_cache *cache = nullptr;
+  // per pixel, with a near-field reach: the near field of the call that filled it
+  std::vector<NearParts> near;
   size_t records = 0;
   uint64_t rays = 0;
   double seconds = 0;
@@ -117,6 +131,8 @@ Fill fill_cache(const Scene &scene, const RenderSettings &cfg, const View &view,
   out.cache = raddiff_irradiance_cache_new(&s);
   if (!out.cache) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
   raddiff_cache *cache = out.cache;
+  if (near_field_on(s)) out.near.resize(primary.size());
+  NearParts unused;
   try {
     TraceContext ctx{&scene, &cfg.radiance};
     std::atomic<size_t> inserted{0};
@@ -134,7 +150,7 @@ Fill fill_cache(const Scene &scene, const RenderSettings &cfg, const View &view,
         return;
       }
       float e[3];
-      const raddiff_status st = shade_pixel(cache, s, ctx, px, e);
+      const raddiff_status st = shade_pixel(cache, s, ctx, px, e, out.near.empty() ? unused : out.near[i]);
       if (st != RADDIFF_ERROR_DEGENERATE) check(st, "raddiff_cache_irradiance");  // degenerate: every ray missed
       if (raddiff_cache_len(cache) > before) ++inserted;
     };
@@ -242,34 +258,30 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
     raddiff_cache_cursor *p = raddiff_cache_cursor_new();
     ~Cursor() { raddiff_cache_cursor_free(p); }
   };
-  const raddiff_irradiance_settings used_settings = settings_of(used);
-  const bool near_field = near_field_on(used_settings);
-  TraceContext near_ctx{&scene, &settings.radiance};
+  // With a near field a pixel shows E_near + V * F: its near field as its fill call found it, the
+  // far field F looked up in the finished cache. No ray is traced.
+  const std::vector<NearParts> &near = filled.near;
   auto render = [&](raddiff_cache *c, bool use_cursor, size_t &misses) {
     Image image(w, h);
     std::atomic<size_t> miss{0};
-    const size_t records_before = raddiff_cache_len(c);
     parallel_for(primary.size(), settings.threads, [&](size_t i) {
       if (!primary[i].hit) return;
-      if (near_field) {
-        // E_near + V * F: the pixel's own near rays on top of the cached far field
-        const raddiff_status st = shade_pixel(c, used_settings, near_ctx, primary[i], image.at(i));
-        if (st != RADDIFF_ERROR_DEGENERATE) check(st, "raddiff_cache_irradiance_near_far");
-        return;
-      }
+      if (!near.empty() && !near[i].valid) return;  // its fill call found no value (every ray missed)
       thread_local Cursor cursor;
+      float *value = image.at(i);
       const raddiff_status st =
-          use_cursor ? raddiff_cache_lookup_with(c, cursor.p, to_c(primary[i].p), to_c(primary[i].n), image.at(i),
-                                                 nullptr)
-                     : raddiff_cache_lookup(c, to_c(primary[i].p), to_c(primary[i].n), image.at(i), nullptr);
+          use_cursor ? raddiff_cache_lookup_with(c, cursor.p, to_c(primary[i].p), to_c(primary[i].n), value, nullptr)
+                     : raddiff_cache_lookup(c, to_c(primary[i].p), to_c(primary[i].n), value, nullptr);
       if (st == RADDIFF_ERROR_NOT_FOUND) {
         ++miss;
-      } else {
-        check(st, "raddiff_cache_lookup");
+        return;
       }
+      check(st, "raddiff_cache_lookup");
+      if (!near.empty())
+        for (int k = 0; k < 3; ++k)
+          value[k] = static_cast<float>(near[i].irradiance[k] + near[i].open_fraction * value[k]);
     });
-    // under the near field a pixel no record covered made one
-    misses = near_field ? raddiff_cache_len(c) - records_before : miss.load();
+    misses = miss.load();
     return image;
   };
   size_t misses1 = 0;

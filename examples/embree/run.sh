@@ -21,7 +21,7 @@ records="$(sed -n 's/^pass 1: \([0-9][0-9]*\) records.*/\1/p' "$out/cornell.log"
 [ -n "$records" ] || { echo "no record count in $out/cornell.log" >&2; exit 1; }
 "$binary" --obj "$here/cornell.obj" --out "$out/cornell-hessian" --size 128 \
   --gather 16x48 --hessian 0.05 --records "$records" "$@" | tee "$out/cornell-hessian.log"
-# The same two with the near field in the one-call API (raddiff_cache_irradiance_near_far): a
+# The same two with the near field in the one-call API (raddiff_cache_irradiance_near_far_parts): a
 # reach of 4 pixels, 16 x 16 short rays per pixel, records holding far fields.
 "$binary" --obj "$here/cornell.obj" --out "$out/cornell-near-split" --size 128 --gather 16x48 \
   --near-field 4,256 "$@" | tee "$out/cornell-near-split.log"

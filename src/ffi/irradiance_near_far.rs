@@ -67,6 +67,46 @@ pub extern "C" fn raddiff_cache_irradiance_near_far(
     user: *mut c_void,
     out: *mut f32,
 ) -> raddiff_status {
+    raddiff_cache_irradiance_near_far_parts(
+        cache,
+        settings,
+        x,
+        n,
+        footprint,
+        trace,
+        user,
+        out,
+        std::ptr::null_mut(),
+        std::ptr::null_mut(),
+    )
+}
+
+/// `raddiff_cache_irradiance_near_far`, which also writes the query's near field: its near
+/// irradiance `E_near` to `near_irradiance` (`channels` doubles) and its open fraction `V` (in
+/// [0, 1]) to `*open_fraction`. Either may be NULL (not wanted). Both are written only on
+/// success, with `out`.
+///
+/// They let a renderer shade a pixel once while it fills the cache and again, without tracing,
+/// once the cache is complete: keep `E_near` and `V` from the call that visited the pixel, then
+/// show `E_near + V * F` with the far field `F` from `raddiff_cache_lookup` (or
+/// `raddiff_cache_lookup_with`) on the finished cache. On a miss the near field comes from the
+/// new record's gather (its rays closer than the reach), on a hit from the near rays.
+///
+/// Arguments, callback and errors as `raddiff_cache_irradiance_near_far`'s.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub extern "C" fn raddiff_cache_irradiance_near_far_parts(
+    cache: *mut raddiff_cache,
+    settings: *const raddiff_irradiance_settings,
+    x: raddiff_vec3,
+    n: raddiff_vec3,
+    footprint: f64,
+    trace: raddiff_trace_bounded_fn,
+    user: *mut c_void,
+    out: *mut f32,
+    near_irradiance: *mut f64,
+    open_fraction: *mut f64,
+) -> raddiff_status {
     guard(|| {
         let (cache, settings) = unsafe { query_args(cache, settings, out)? };
         let trace = trace.ok_or(FfiError::Null("trace"))?;
@@ -92,8 +132,18 @@ pub extern "C" fn raddiff_cache_irradiance_near_far(
                 callback_result(status)
             },
         )?;
-        // SAFETY: the caller provides `channels` writable floats at `out`.
-        unsafe { std::ptr::copy_nonoverlapping(found.value.as_ptr(), out, found.value.len()) };
+        // SAFETY: the caller provides `channels` writable floats at `out`, and `channels`
+        // writable doubles at `near_irradiance` unless it is NULL.
+        unsafe {
+            std::ptr::copy_nonoverlapping(found.value.as_ptr(), out, found.value.len());
+            if !near_irradiance.is_null() {
+                let near = &found.near.irradiance;
+                std::ptr::copy_nonoverlapping(near.as_ptr(), near_irradiance, near.len());
+            }
+            if let Some(v) = open_fraction.as_mut() {
+                *v = found.near.open_fraction;
+            }
+        }
         Ok(())
     })
 }

@@ -1,6 +1,7 @@
 //! Irradiance in one call per shading point: `raddiff_irradiance_cache_new`,
-//! `raddiff_cache_irradiance` and `raddiff_cache_irradiance_near_far`, with the renderer's
-//! callback answering from the fuzzer's bytes.
+//! `raddiff_cache_irradiance`, `raddiff_cache_irradiance_near_far` and (every other near/far
+//! query) `raddiff_cache_irradiance_near_far_parts`, with the renderer's callback answering from
+//! the fuzzer's bytes.
 //!
 //! Input: the settings (each metric or an unknown one, the threshold, 1..=3 channels, small gathers
 //! of each hemisphere kind or out of range, the seed policy, radius bounds, anisotropy, curvature
@@ -13,7 +14,9 @@
 //! with `RADDIFF_OK` `out` is finite; the callback runs at most once per call, for the gather's or
 //! the near rays' count, with a maximum distance that is INFINITY or finite and > 0; a cache made
 //! with a near-field reach reads that reach back (`raddiff_cache_get_far_field`) and refuses the
-//! plain call, a cache without one refuses the near/far call.
+//! plain call, a cache without one refuses the near/far call; the parts, written only on success,
+//! are a finite near irradiance and an open fraction in [0, 1] that give `out` with the far field
+//! the cache's plain lookup returns after the call.
 use std::ffi::{c_int, c_void};
 
 use raddiff::ffi::*;
@@ -53,7 +56,7 @@ pub fn run(data: &[u8]) -> Outcome {
     );
     let channels = settings.channels as usize;
     let mut outcome = Outcome::Refused;
-    for _ in 0..1 + input.below(8) {
+    for query in 0..1 + input.below(8) {
         let x = input.vec3();
         let n = input.vec3();
         let footprint = if input.flag() { 0.0 } else { input.f64() };
@@ -68,7 +71,24 @@ pub fn run(data: &[u8]) -> Outcome {
         let user = (&mut callback as *mut Callback).cast::<c_void>();
         let mut out = vec![sentinel_f32(); channels];
         let before = raddiff_cache_len(cache);
-        let (name, status) = if use_near_far {
+        let with_parts = use_near_far && query % 2 == 1;
+        let mut near = vec![check::sentinel(); channels];
+        let mut open = check::sentinel();
+        let (name, status) = if with_parts {
+            let status = raddiff_cache_irradiance_near_far_parts(
+                cache,
+                &settings,
+                x,
+                n,
+                footprint,
+                Some(trace_bounded),
+                user,
+                out.as_mut_ptr(),
+                near.as_mut_ptr(),
+                &mut open,
+            );
+            ("raddiff_cache_irradiance_near_far_parts", status)
+        } else if use_near_far {
             let status = raddiff_cache_irradiance_near_far(
                 cache,
                 &settings,
@@ -118,9 +138,16 @@ pub fn run(data: &[u8]) -> Outcome {
                 "{name} succeeded on a cache whose far-field reach is ({world}, {pixels})"
             );
             check::finite_f32(name, "out", &out);
+            if with_parts {
+                parts_give_out(cache, x, n, &out, &near, open);
+            }
             outcome = Outcome::Ok;
         } else {
             check::untouched_f32(name, "out", &out);
+            if with_parts {
+                check::untouched(name, "near_irradiance", &near);
+                check::untouched(name, "open_fraction", &[open]);
+            }
             // the one documented exception: a near/far sum that overflows only once the new
             // record's far field is blended with others
             let kept = use_near_far && status == raddiff_status::RADDIFF_ERROR_DEGENERATE;
@@ -134,6 +161,36 @@ pub fn run(data: &[u8]) -> Outcome {
     }
     raddiff_cache_free(cache);
     outcome
+}
+
+/// The parts of a successful near/far query: a finite near irradiance and an open fraction in
+/// [0, 1] whose `E_near + V·F`, with `F` the cache's plain lookup now, is `out` (up to the rounding
+/// of the sum to `f32`).
+fn parts_give_out(
+    cache: *mut raddiff_cache,
+    x: raddiff_vec3,
+    n: raddiff_vec3,
+    out: &[f32],
+    near: &[f64],
+    open: f64,
+) {
+    let name = "raddiff_cache_irradiance_near_far_parts";
+    check::finite(name, "near_irradiance", near);
+    assert!((0.0..=1.0).contains(&open), "{name}: open fraction {open}");
+    let mut far = vec![sentinel_f32(); out.len()];
+    assert_eq!(
+        raddiff_cache_lookup(cache, x, n, far.as_mut_ptr(), std::ptr::null_mut()),
+        raddiff_status::RADDIFF_OK,
+        "{name} succeeded but the plain lookup at its point failed"
+    );
+    for ((&o, &e), &f) in out.iter().zip(near).zip(&far) {
+        let sum = e + open * f as f64;
+        let scale = e.abs() + open * (f as f64).abs();
+        assert!(
+            (o as f64 - sum).abs() <= 1e-5 * scale + f64::from(f32::MIN_POSITIVE),
+            "{name}: out {o} but E_near + V·F = {e} + {open}·{f} = {sum}"
+        );
+    }
 }
 
 fn settings(input: &mut Input) -> raddiff_irradiance_settings {
