@@ -128,7 +128,7 @@ int main(int argc, char **argv) {
         bench.near_field_m = static_cast<uint32_t>(std::lround(std::sqrt(static_cast<double>(rays))));
         if (!(bench.near_field_px > 0) || rays < 1 || static_cast<unsigned long>(bench.near_field_m) * bench.near_field_m != rays)
           throw std::runtime_error("--near-field K[,N]: K > 0 pixels, N rays a square (16, 256, 1024)");
-        // the render mode: raddiff_cache_irradiance_near_far with this reach and these rays
+        // the render mode: raddiff_cache_irradiance_near_far_parts with this reach and these rays
         render.irradiance.near_field_reach_pixels = bench.near_field_px;
         render.irradiance.near_field_m = render.irradiance.near_field_n = bench.near_field_m;
       }
