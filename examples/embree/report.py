@@ -131,6 +131,20 @@ def time_to_reach(points, target):
     return None
 
 
+def records_to_reach(run, target):
+    """The anisotropic Hessian's records at `target` error, log-log between the points of its
+    error-against-records curve: (records, False), or (its fewest records, True) when already its
+    cheapest point is at or below the target, or None when it never reaches it (or did not run)."""
+    pts = [(g["records"], g["rel_rms"]) for g in run.curve("hessian-anisotropic")]
+    if not pts:
+        return None
+    fewest = min(pts)
+    if fewest[1] <= target:
+        return fewest[0], True
+    n = time_to_reach(pts, target)
+    return None if n is None else (n, False)
+
+
 def trimmed_error(run, metric):
     """Relative RMS error without the worst 1% of the measured pixels (the bulk of the image)."""
     pixels = rows(run.path(f"-{metric}-pixels.csv"))
@@ -373,8 +387,9 @@ def report_run(run, md, table):
             f"them and away from them (the squares add up to the error's square).\n")
     md.append("| metric | records | CPU s (trace / raddiff / cache) | raddiff share | error | vs split sphere "
               "| gathers' floor | interpolation | worst 1% share | without the worst 1% "
-              "| at edges / away | CPU s to the Hessian's error | radius px (min / 5% / median) |")
-    md.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+              "| at edges / away | CPU s to the Hessian's error | the Hessian's records at this error "
+              "| radius px (min / 5% / median) |")
+    md.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     errors = []
     for m in run.metrics:
         f = run.equal(m)
@@ -390,10 +405,13 @@ def report_run(run, md, table):
         edges_text = "" if edge_part is None else f"{edge_part:.4f} / {away_part:.4f}"
         reach = time_to_reach([(g["total_s"], g["rel_rms"]) for g in run.curve(m)], anis["rel_rms"]) if anis else None
         reach_text = "not reached" if reach is None else f"{reach:.1f}"
+        need = None if m == "hessian-anisotropic" else records_to_reach(run, f["rel_rms"])
+        need_text = ("" if m == "hessian-anisotropic" else "not reached" if need is None else
+                     f"{'at most ' if need[1] else ''}{need[0]:.0f} ({need[0] / f['records']:.2f}x)")
         md.append(
             f"| {m} | {int(f['records'])} | {f['total_s']:.1f} ({f['trace_s']:.1f} / {f['raddiff_s']:.2f} / "
             f"{f['cache_s']:.2f}) | {100 * share:.1f}% | {fmt(f['rel_rms'])} | {fmt(ratio, 2)} | {fmt(floor)} | "
-            f"{fmt(interp)} | {f['worst1_share']:.2f} | {fmt(trimmed)} | {edges_text} | {reach_text} | "
+            f"{fmt(interp)} | {f['worst1_share']:.2f} | {fmt(trimmed)} | {edges_text} | {reach_text} | {need_text} | "
             f"{f['radius_px_min']:.1f} / {f['radius_px_p5']:.1f} / {f['radius_px_median']:.1f} |")
         table.append([run.name, m, f["parameter"], int(f["records"]), f["trace_s"], f["raddiff_s"], f["cache_s"],
                       f["total_s"], f["rel_rms"], floor, f["worst1_share"], trimmed, fmt(edge_part),
@@ -413,7 +431,7 @@ def report_run(run, md, table):
             if e is not None:
                 errors.append(e)
                 md.append(f"| {kind} at the anisotropic Hessian's {anis['total_s']:.1f} CPU s | | | | {fmt(e)} | "
-                          f"{fmt(e / split['rel_rms'] if split else None, 2)} | | | | | | {reach_text} | |")
+                          f"{fmt(e / split['rel_rms'] if split else None, 2)} | | | | | | {reach_text} | | |")
     md.append("")
     noise = float(s["reference_relative_noise"])
     smallest = min(errors) if errors else 0

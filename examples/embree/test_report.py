@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Checks of report.py's edge split on synthetic runs whose answers are known by construction.
+"""Checks of report.py's edge split and equal-error records on synthetic runs whose answers are
+known by construction.
 
 usage: python3 examples/embree/test_report.py   (needs numpy and matplotlib, as report.py does)
 """
@@ -92,6 +93,27 @@ def test_no_normal_buffer_means_no_split(folder):
     os.remove(run.path("-normal.pfm"))
     assert report.edge_pixels(run) is None
     assert report.edge_split(run, "m", None) == (None, None)
+
+
+class CurveRun:
+    """A run whose anisotropic Hessian has the fills `points` (records, error)."""
+
+    def __init__(self, points):
+        self.fills = [{"metric": "hessian-anisotropic", "records": n, "rel_rms": e, "total_s": n / 100.0}
+                      for n, e in points]
+
+    def curve(self, metric):
+        return sorted((f for f in self.fills if f["metric"] == metric), key=lambda f: f["total_s"])
+
+
+def test_records_to_reach_an_error(folder):
+    # error proportional to records^-1/2: 2,000 records give 0.04 / sqrt(2)
+    run = CurveRun([(4000, 0.02), (1000, 0.04), (16000, 0.01)])
+    n, at_most = report.records_to_reach(run, 0.04 / math.sqrt(2.0))
+    assert abs(n - 2000) < 1e-9 and not at_most, n
+    assert report.records_to_reach(run, 0.05) == (1000, True)  # its cheapest point is already below
+    assert report.records_to_reach(run, 0.005) is None  # never reached
+    assert report.records_to_reach(CurveRun([]), 0.03) is None
 
 
 def main():
