@@ -42,8 +42,11 @@ class GatherStore {
       s.rays = g.rays;
       const double reach = settings_.near_field_px * px.footprint;
       const bool far_field_gather = settings_.near_field_px > 0 && settings_.far_field_gathers;
+      float far_bins[3 * kDirBins] = {};
+      if (settings_.near_field_px > 0 && settings_.far_field_bins) bin_far_radiance(g, reach, far_bins);
       const double open = far_field_gather ? fill_near_with_far(g, reach, settings_.near_at_reach) : 1.0;
       s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_, irr));
+      std::copy(std::begin(far_bins), std::end(far_bins), std::begin(s.evaluated->far_bins));
       if (settings_.oracle_derivative_paths > 0 && s.evaluated->valid) {
         // Derivatives from the same directions with radiance averaged over K independent paths:
         // what the records would be with less noisy derivatives (an experiment; not timed).
@@ -76,6 +79,24 @@ class GatherStore {
   }
 
   size_t computed() const { return computed_; }
+
+  // The binned far-field experiment's record (Evaluated::far_bins): over the rays that reach at
+  // least `reach`, each bin's mean radiance minus the mean of them all, shrunk by n_b / (n_b + 16).
+  static void bin_far_radiance(const TracedGather &g, double reach, float out[3 * kDirBins]) {
+    double sum[kDirBins][3] = {}, count[kDirBins] = {}, all[3] = {}, n = 0;
+    for (size_t k = 0; k < g.distance.size(); ++k) {
+      if (g.distance[k] < reach) continue;
+      const int b = direction_bin(from_c(g.directions[k]));
+      for (int c = 0; c < 3; ++c) sum[b][c] += g.radiance[3 * k + c], all[c] += g.radiance[3 * k + c];
+      ++count[b], ++n;
+    }
+    std::fill(out, out + 3 * kDirBins, 0.0f);
+    if (n == 0) return;
+    for (int b = 0; b < kDirBins; ++b)
+      if (count[b] > 0)
+        for (int c = 0; c < 3; ++c)
+          out[3 * b + c] = static_cast<float>((sum[b][c] / count[b] - all[c] / n) * count[b] / (count[b] + 16));
+  }
 
   // The near-field experiment's far-field gather (raddiff_gather_far_field_radiance): the radiance
   // of the hits closer than `reach` replaced by the mean radiance of the directions that reach
@@ -226,11 +247,18 @@ class Bench {
   const Camera &camera() const { return camera_; }
   GatherStore &store() { return store_; }
 
+  // The binned far-field experiment's per-pixel open_bins (empty without it), filled with near_field().
+  const std::vector<std::array<float, kDirBins>> &near_bins() {
+    near_field();
+    return near_bins_;
+  }
+
   // The near-field experiment: every pixel's near irradiance (RGB) and open fraction, traced once
   // and shared by every fill, and what that cost in CPU seconds.
   const std::vector<std::array<float, 4>> &near_field() {
     if (!near_.empty() || settings_.near_field_px <= 0) return near_;
     near_.assign(primary_.size(), {0, 0, 0, 1});
+    if (settings_.far_field_bins) near_bins_.assign(primary_.size(), {});
     CpuSum cpu;
     const size_t w = static_cast<size_t>(view_.width);
     parallel_for(static_cast<size_t>(view_.height), settings_.threads, [&](size_t row) {
@@ -244,6 +272,7 @@ class Bench {
                                              mix(i) ^ 0x6e656172ull, rays);
         near_[i] = {static_cast<float>(f.near[0]), static_cast<float>(f.near[1]), static_cast<float>(f.near[2]),
                     static_cast<float>(f.open_fraction)};
+        if (settings_.far_field_bins) std::copy(std::begin(f.open_bins), std::end(f.open_bins), near_bins_[i].begin());
       }
       cpu.add(thread_cpu_seconds() - t0);
     });
@@ -288,6 +317,17 @@ class Bench {
                                                       : RADDIFF_INTERP_WARD;
       quadratic = surface_cache(kernel, irr.gradient_limit, kQuadraticChannels, false);
       check(raddiff_cache_set_leak_guard(quadratic.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
+            "raddiff_cache_set_leak_guard");
+    }
+    // The binned far-field experiment's cache of the records' bins (same extents, same kernel, no
+    // gradients).
+    CachePtr binned(nullptr, raddiff_cache_free);
+    if (render && settings_.far_field_bins) {
+      const int kernel = settings_.interpolation >= 0 ? settings_.interpolation
+                         : uses_hessian(m)            ? RADDIFF_INTERP_TENT
+                                                      : RADDIFF_INTERP_WARD;
+      binned = surface_cache(kernel, irr.gradient_limit, 3 * kDirBins, false);
+      check(raddiff_cache_set_leak_guard(binned.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
             "raddiff_cache_set_leak_guard");
     }
     auto covered = [&](size_t i) {
@@ -373,6 +413,12 @@ class Bench {
           t0 = thread_cpu_seconds();
           check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
           cache_cpu.add(thread_cpu_seconds() - t0);
+          if (binned) {
+            raddiff_cache_record br = rec;
+            br.value = e.far_bins;
+            br.gradient = br.rotation_gradient = nullptr;
+            check(raddiff_cache_insert(binned.get(), &br), "raddiff_cache_insert");
+          }
           out.records.push_back(info);
           if (smooth) kept.push_back(rec);
           if (quadratic) {
@@ -450,8 +496,21 @@ class Bench {
             const double scale = lum > 0 ? 1 + settings_.second_order * quadratic_term(primary_[i].p, b) / lum : 1;
             for (int c = 0; c < 3; ++c) v[c] = static_cast<float>(std::max(0.0, v[c] * scale));
           }
+          float q[3 * kDirBins];
+          const bool bins = st == RADDIFF_OK && binned &&
+                            raddiff_cache_lookup(binned.get(), to_c(primary_[i].p), to_c(primary_[i].n), q,
+                                                 nullptr) == RADDIFF_OK;
           if (st == RADDIFF_OK && !near.empty())
-            for (int c = 0; c < 3; ++c) v[c] = v[c] * near[i][3] + near[i][c];
+            for (int c = 0; c < 3; ++c) {
+              // F corrected by the bins' deviations weighted by the pixel's own open directions
+              double far = v[c];
+              if (bins) {
+                double d = 0;
+                for (int b = 0; b < kDirBins; ++b) d += near_bins_[i][b] * q[3 * b + c];
+                far = std::max(0.0, far + kPi * d);
+              }
+              v[c] = static_cast<float>(far * near[i][3] + near[i][c]);
+            }
         }
         cache_cpu.add(thread_cpu_seconds() - t0);
       });
@@ -537,6 +596,7 @@ class Bench {
   std::vector<Primary> primary_;
   GatherStore store_;
   std::vector<std::array<float, 4>> near_;
+  std::vector<std::array<float, kDirBins>> near_bins_;  // the binned experiment's open_bins per pixel
   double near_seconds_ = 0;
 };
 
@@ -651,16 +711,26 @@ std::vector<size_t> floor_sample(const Fill &f, size_t count) {
 // With the near field (`near` not empty) a record's pixel shows its own near field plus its open
 // fraction times the record's far field, so that is what is compared.
 double gather_floor(const std::vector<size_t> &pixels, GatherStore &store, const FloorReferences &refs,
-                    const std::vector<std::array<float, 4>> &near) {
+                    const std::vector<std::array<float, 4>> &near,
+                    const std::vector<std::array<float, kDirBins>> &near_bins) {
   double e2 = 0, n2 = 0, r2 = 0;
   for (size_t p : pixels) {
     const ReferencePixel &r = refs.at(p);
     const Evaluated &g = *store.get(p).evaluated;
-    const double shown =
-        near.empty() ? g.luminance
-                     : luminance(V3{near[p][0] + near[p][3] * static_cast<double>(g.far_value[0]),
-                                    near[p][1] + near[p][3] * static_cast<double>(g.far_value[1]),
-                                    near[p][2] + near[p][3] * static_cast<double>(g.far_value[2])});
+    double shown = g.luminance;
+    if (!near.empty()) {
+      double rgb[3];
+      for (int c = 0; c < 3; ++c) {
+        double far = g.far_value[c];
+        if (!near_bins.empty()) {
+          double d = 0;
+          for (int b = 0; b < kDirBins; ++b) d += near_bins[p][b] * g.far_bins[3 * b + c];
+          far = std::max(0.0, far + kPi * d);
+        }
+        rgb[c] = near[p][c] + near[p][3] * far;
+      }
+      shown = luminance(rgb);
+    }
     const double e = shown - luminance(r.value());
     const double noise = 0.5 * (luminance(r.half[0]) - luminance(r.half[1]));
     e2 += e * e;
@@ -706,6 +776,8 @@ long max_rss_mib() {
 }  // namespace
 
 int run_bench(const Scene &scene, const View &view, const std::string &scene_key, const BenchSettings &settings) {
+  if (settings.far_field_bins && settings.near_field_px <= 0)
+    throw std::runtime_error("--far-field-bins needs --near-field");
   if (settings.near_at_reach && !settings.far_field_gathers)
     throw std::runtime_error("--near-at-reach needs --far-field-gathers");
   if (settings.far_field_gathers && settings.near_field_px <= 0)
@@ -811,7 +883,7 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
   floor_refs.ensure(all_samples, scene, primary, settings);
   for (const Fill &f : tuned) {
     const std::vector<size_t> s = floor_sample(f, settings.floor_records);
-    const double floor = gather_floor(s, bench.store(), floor_refs, bench.near_field());
+    const double floor = gather_floor(s, bench.store(), floor_refs, bench.near_field(), bench.near_bins());
     floor_csv << metric_name(f.metric) << "," << s.size() << "," << floor << "\n";
     std::printf("floor %-22s %.4f (gathers of %zu records against converged irradiance)\n", metric_name(f.metric),
                 floor, s.size());

@@ -65,6 +65,11 @@ struct BenchSettings {
   // With far_field_gathers: the near hits also moved to the reach (distance = reach, a surface
   // facing the record), so that the far field's derivatives and radii do not see the near geometry.
   bool near_at_reach = false;
+  // An experiment (with a near field): records also store their far radiance per world-direction
+  // bin (Evaluated::far_bins), and each pixel's far field is corrected by the bins' deviations
+  // weighted by its own open rays' bins, F + pi * sum_b w_b delta_b, instead of its open fraction
+  // times the record's mean alone.
+  bool far_field_bins = false;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
 };

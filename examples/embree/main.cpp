@@ -48,7 +48,7 @@ const char *kUsage =
     "                      [--oracle-derivatives K] [--interpolation ward|tent|cubic]\n"
     "                      [--hessian-distance-bound k] [--smooth-records s]\n"
     "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n"
-    "                      [--near-field reach_px[,rays]] [--far-field-gathers] [--near-at-reach]\n";
+    "                      [--near-field reach_px[,rays]] [--far-field-gathers] [--near-at-reach] [--far-field-bins]\n";
 
 }  // namespace
 
@@ -119,6 +119,7 @@ int main(int argc, char **argv) {
       else if (a == "--error-norm") bench.error_norm = std::stod(next());
       else if (a == "--far-field-gathers") bench.far_field_gathers = true;
       else if (a == "--near-at-reach") bench.near_at_reach = true;
+      else if (a == "--far-field-bins") bench.far_field_bins = true;
       else if (a == "--near-field") {
         // K (pixel footprints of reach) or K,N (N rays per pixel)
         const std::string v = next();

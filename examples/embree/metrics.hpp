@@ -60,6 +60,10 @@ struct Evaluated {
   // fraction.
   float far_value[3] = {0, 0, 0};
   double open_fraction = 1;
+  // The binned far-field experiment: per direction bin b and channel c, [3 b + c], the mean far
+  // radiance of the gather's open rays in the bin minus the mean over all its open rays, shrunk
+  // towards 0 by n_b / (n_b + 16) for a bin of n_b rays (0 for an empty bin).
+  float far_bins[3 * kDirBins] = {};
 };
 
 // `settings` gives the channels and their weights.

@@ -110,6 +110,11 @@ NearField trace_near_field(const Scene &scene, const HitRadianceSettings &radian
   }
   rays += count + hit_radiance_rays();
   NearField f;
+  size_t open = 0;
+  for (size_t k = 0; k < count; ++k)
+    if (!(distance[k] < reach)) ++f.open_bins[direction_bin(from_c(directions[k]))], ++open;
+  if (open > 0)
+    for (float &b : f.open_bins) b /= static_cast<float>(open);
   check(raddiff_gather_near_field(&layout, distance.data(), hit.data(), 3, reach, f.near, &f.open_fraction),
         "raddiff_gather_near_field");
   return f;

@@ -5,6 +5,7 @@
 
 #include "radiance.hpp"
 
+#include <cmath>
 #include <vector>
 
 namespace rd {
@@ -43,9 +44,25 @@ V3 irradiance_sum(const Scene &scene, const HitRadianceSettings &radiance, V3 x,
 // an m x m jittered cosine-polar layout's directions traced no farther than `reach`, the hits'
 // radiance only where they are closer. `near` is the near irradiance (RGB), `open_fraction` the
 // cosine-weighted share of the hemisphere whose rays reach farther.
+// The binned far-field experiment's direction bins: the cube's 6 faces in world space, each in
+// 2 x 2 quadrants (24 bins over the sphere, 12 to 16 of them over a hemisphere).
+constexpr int kDirBins = 24;
+inline int direction_bin(V3 w) {
+  const double ax = std::fabs(w.x), ay = std::fabs(w.y), az = std::fabs(w.z);
+  int face;
+  double u, v;
+  if (ax >= ay && ax >= az) face = w.x > 0 ? 0 : 1, u = w.y, v = w.z;
+  else if (ay >= az) face = w.y > 0 ? 2 : 3, u = w.z, v = w.x;
+  else face = w.z > 0 ? 4 : 5, u = w.x, v = w.y;
+  return 4 * face + 2 * (u > 0) + (v > 0);
+}
+
 struct NearField {
   double near[3] = {0, 0, 0};
   double open_fraction = 1;
+  // The binned experiment: the share of the open rays (reaching the reach) in each direction bin
+  // (all 0 when none is open).
+  float open_bins[kDirBins] = {};
 };
 NearField trace_near_field(const Scene &scene, const HitRadianceSettings &radiance, V3 x, V3 n, double reach,
                            uint32_t m, uint64_t seed, uint64_t &rays);
