@@ -60,15 +60,15 @@ struct NearParts {
 
 // One shading point through the one-call API: raddiff_cache_irradiance, or with a near-field reach
 // raddiff_cache_irradiance_near_far_parts (every call traces the pixel's near rays, a miss its
-// gather), keeping the pixel's near field in `parts`.
+// gather), keeping the pixel's near field in `*parts` (not NULL with a near-field reach).
 raddiff_status shade_pixel(raddiff_cache *cache, const raddiff_irradiance_settings &s, TraceContext &ctx,
-                           const Primary &px, float *e, NearParts &parts) {
+                           const Primary &px, float *e, NearParts *parts) {
   if (!near_field_on(s))
     return raddiff_cache_irradiance(cache, &s, to_c(px.p), to_c(px.n), px.footprint, trace_callback, &ctx, e);
   const raddiff_status st =
       raddiff_cache_irradiance_near_far_parts(cache, &s, to_c(px.p), to_c(px.n), px.footprint, trace_bounded_callback,
-                                              &ctx, e, parts.irradiance, &parts.open_fraction);
-  parts.valid = st == RADDIFF_OK;
+                                              &ctx, e, parts->irradiance, &parts->open_fraction);
+  parts->valid = st == RADDIFF_OK;
   return st;
 }
 
@@ -132,7 +132,6 @@ Fill fill_cache(const Scene &scene, const RenderSettings &cfg, const View &view,
   if (!out.cache) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
   raddiff_cache *cache = out.cache;
   if (near_field_on(s)) out.near.resize(primary.size());
-  NearParts unused;
   try {
     TraceContext ctx{&scene, &cfg.radiance};
     std::atomic<size_t> inserted{0};
@@ -150,7 +149,7 @@ Fill fill_cache(const Scene &scene, const RenderSettings &cfg, const View &view,
         return;
       }
       float e[3];
-      const raddiff_status st = shade_pixel(cache, s, ctx, px, e, out.near.empty() ? unused : out.near[i]);
+      const raddiff_status st = shade_pixel(cache, s, ctx, px, e, out.near.empty() ? nullptr : &out.near[i]);
       if (st != RADDIFF_ERROR_DEGENERATE) check(st, "raddiff_cache_irradiance");  // degenerate: every ray missed
       if (raddiff_cache_len(cache) > before) ++inserted;
     };
