@@ -25,6 +25,14 @@ struct Slot {
   uint64_t rays = 0;
 };
 
+// The binned far-field experiment's far field for channel c: F plus pi times the records' bin
+// departures `bins` weighted by the pixel's open rays' bins, at least 0.
+double binned_far(double far, const std::array<float, kDirBins> &open_bins, const float *bins, int c) {
+  double d = 0;
+  for (int b = 0; b < kDirBins; ++b) d += open_bins[b] * bins[3 * b + c];
+  return std::max(0.0, far + kPi * d);
+}
+
 class GatherStore {
  public:
   GatherStore(const Scene &scene, const std::vector<Primary> &primary, const BenchSettings &settings,
@@ -272,7 +280,8 @@ class Bench {
                                              mix(i) ^ 0x6e656172ull, rays);
         near_[i] = {static_cast<float>(f.near[0]), static_cast<float>(f.near[1]), static_cast<float>(f.near[2]),
                     static_cast<float>(f.open_fraction)};
-        if (settings_.far_field_bins) std::copy(std::begin(f.open_bins), std::end(f.open_bins), near_bins_[i].begin());
+        if (settings_.far_field_bins)
+          std::copy(std::begin(f.open_bins), std::end(f.open_bins), near_bins_[i].begin());
       }
       cpu.add(thread_cpu_seconds() - t0);
     });
@@ -309,12 +318,13 @@ class Bench {
     // store's evaluations, which outlive the fill).
     const bool smooth = render && settings_.smooth_records > 0;
     std::vector<raddiff_cache_record> kept;
+    // The kernel of the experiments' side caches: the one the settings force, or the metric's own.
+    const int kernel = settings_.interpolation >= 0 ? settings_.interpolation
+                       : uses_hessian(m)            ? RADDIFF_INTERP_TENT
+                                                    : RADDIFF_INTERP_WARD;
     // The second-order experiment's cache of the records' quadratic terms (same extents, same kernel).
     CachePtr quadratic(nullptr, raddiff_cache_free);
     if (render && settings_.second_order > 0) {
-      const int kernel = settings_.interpolation >= 0 ? settings_.interpolation
-                         : uses_hessian(m)            ? RADDIFF_INTERP_TENT
-                                                      : RADDIFF_INTERP_WARD;
       quadratic = surface_cache(kernel, irr.gradient_limit, kQuadraticChannels, false);
       check(raddiff_cache_set_leak_guard(quadratic.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
             "raddiff_cache_set_leak_guard");
@@ -323,9 +333,6 @@ class Bench {
     // gradients).
     CachePtr binned(nullptr, raddiff_cache_free);
     if (render && settings_.far_field_bins) {
-      const int kernel = settings_.interpolation >= 0 ? settings_.interpolation
-                         : uses_hessian(m)            ? RADDIFF_INTERP_TENT
-                                                      : RADDIFF_INTERP_WARD;
       binned = surface_cache(kernel, irr.gradient_limit, 3 * kDirBins, false);
       check(raddiff_cache_set_leak_guard(binned.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
             "raddiff_cache_set_leak_guard");
@@ -502,13 +509,7 @@ class Bench {
                                                  nullptr) == RADDIFF_OK;
           if (st == RADDIFF_OK && !near.empty())
             for (int c = 0; c < 3; ++c) {
-              // F corrected by the bins' deviations weighted by the pixel's own open directions
-              double far = v[c];
-              if (bins) {
-                double d = 0;
-                for (int b = 0; b < kDirBins; ++b) d += near_bins_[i][b] * q[3 * b + c];
-                far = std::max(0.0, far + kPi * d);
-              }
+              const double far = bins ? binned_far(v[c], near_bins_[i], q, c) : v[c];
               v[c] = static_cast<float>(far * near[i][3] + near[i][c]);
             }
         }
@@ -721,12 +722,8 @@ double gather_floor(const std::vector<size_t> &pixels, GatherStore &store, const
     if (!near.empty()) {
       double rgb[3];
       for (int c = 0; c < 3; ++c) {
-        double far = g.far_value[c];
-        if (!near_bins.empty()) {
-          double d = 0;
-          for (int b = 0; b < kDirBins; ++b) d += near_bins[p][b] * g.far_bins[3 * b + c];
-          far = std::max(0.0, far + kPi * d);
-        }
+        const double far =
+            near_bins.empty() ? g.far_value[c] : binned_far(g.far_value[c], near_bins[p], g.far_bins, c);
         rgb[c] = near[p][c] + near[p][3] * far;
       }
       shown = luminance(rgb);
