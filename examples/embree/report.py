@@ -192,6 +192,29 @@ def edge_split(run, metric, at_edge):
     return math.sqrt(e2[at_edge].sum() / ref2), math.sqrt(e2[~at_edge].sum() / ref2)
 
 
+def shared_split(run, metrics):
+    """Every metric's error split into the part all of `metrics` share and its own part: at each
+    measured pixel the shared part is the mean of the metrics' errors, a metric's own part its
+    error minus that mean. Returns (shared relative RMS, {metric: own relative RMS}), or None
+    with fewer than two metrics. The shared part holds what every metric gets wrong alike (the
+    near field's and the reference's noise, the noise of the gathers they all interpolate, the
+    near/far decomposition's bias) besides the mean of their interpolation errors; a metric's own
+    part is where its records make it depart from the others."""
+    if len(metrics) < 2:
+        return None
+    pixels = {m: {(int(r["x"]), int(r["y"])): r for r in rows(run.path(f"-{m}-pixels.csv"))} for m in metrics}
+    keys = sorted(set.intersection(*(set(p) for p in pixels.values())))
+    if not keys:
+        return None
+    e = np.array([[float(pixels[m][k]["error"]) for k in keys] for m in metrics])
+    ref2 = sum(float(pixels[metrics[0]][k]["reference"]) ** 2 for k in keys)
+    if ref2 <= 0:
+        return None
+    shared = e.mean(axis=0)
+    own = {m: math.sqrt(((e[i] - shared) ** 2).sum() / ref2) for i, m in enumerate(metrics)}
+    return math.sqrt((shared**2).sum() / ref2), own
+
+
 def mosaic(run, values):
     """Each measured pixel's value over its stratum (the grid of the stratified selection)."""
     g = int(run.summary["reference_grid"])
@@ -385,11 +408,17 @@ def report_run(run, md, table):
             f"Edge pixels (within one pixel of a crease or silhouette, normals {EDGE_ANGLE} rad apart): "
             f"{int(at_edge.sum())} of {len(at_edge)} measured pixels; the error is split into its part at "
             f"them and away from them (the squares add up to the error's square).\n")
+    shared = shared_split(run, [m for m in run.metrics if run.equal(m) is not None])
+    if shared is not None:
+        md.append(
+            f"Shared by every metric: {shared[0]:.4f} (at each measured pixel the mean of the metrics' errors "
+            f"at equal records); \"own part\" is a metric's error minus that mean, where its records make it "
+            f"depart from the others.\n")
     md.append("| metric | records | CPU s (trace / raddiff / cache) | raddiff share | error | vs split sphere "
-              "| gathers' floor | interpolation | worst 1% share | without the worst 1% "
+              "| gathers' floor | interpolation | own part | worst 1% share | without the worst 1% "
               "| at edges / away | CPU s to the Hessian's error | the Hessian's records at this error "
               "| radius px (min / 5% / median) |")
-    md.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    md.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     errors = []
     for m in run.metrics:
         f = run.equal(m)
@@ -403,6 +432,7 @@ def report_run(run, md, table):
         trimmed = trimmed_error(run, m)
         edge_part, away_part = edge_split(run, m, at_edge)
         edges_text = "" if edge_part is None else f"{edge_part:.4f} / {away_part:.4f}"
+        own = shared[1][m] if shared is not None else None
         reach = time_to_reach([(g["total_s"], g["rel_rms"]) for g in run.curve(m)], anis["rel_rms"]) if anis else None
         reach_text = "not reached" if reach is None else f"{reach:.1f}"
         need = None if m == "hessian-anisotropic" else records_to_reach(run, f["rel_rms"])
@@ -411,19 +441,19 @@ def report_run(run, md, table):
         md.append(
             f"| {m} | {int(f['records'])} | {f['total_s']:.1f} ({f['trace_s']:.1f} / {f['raddiff_s']:.2f} / "
             f"{f['cache_s']:.2f}) | {100 * share:.1f}% | {fmt(f['rel_rms'])} | {fmt(ratio, 2)} | {fmt(floor)} | "
-            f"{fmt(interp)} | {f['worst1_share']:.2f} | {fmt(trimmed)} | {edges_text} | {reach_text} | {need_text} | "
+            f"{fmt(interp)} | {fmt(own)} | {f['worst1_share']:.2f} | {fmt(trimmed)} | {edges_text} | {reach_text} | {need_text} | "
             f"{f['radius_px_min']:.1f} / {f['radius_px_p5']:.1f} / {f['radius_px_median']:.1f} |")
         table.append([run.name, m, f["parameter"], int(f["records"]), f["trace_s"], f["raddiff_s"], f["cache_s"],
                       f["total_s"], f["rel_rms"], floor, f["worst1_share"], trimmed, fmt(edge_part),
-                      fmt(away_part), 1])
+                      fmt(away_part), fmt(own), 1])
         for g in run.curve(m):
             if int(g["equal_records"]) == 0:
                 table.append([run.name, m, g["parameter"], int(g["records"]), g["trace_s"], g["raddiff_s"],
-                              g["cache_s"], g["total_s"], g["rel_rms"], "", g["worst1_share"], "", "", "", 0])
+                              g["cache_s"], g["total_s"], g["rel_rms"], "", g["worst1_share"], "", "", "", "", 0])
     for kind, pts in (("path-tracing", run.pt), ("path-tracing+oidn", run.oidn)):
         for p in pts:
             table.append([run.name, kind, p["spp"], "", "", "", "", p["cpu_s"], p["rel_rms"], "", p["worst1_share"],
-                          "", "", "", 0])
+                          "", "", "", "", 0])
         if anis and pts:
             e = interpolate_loglog([(p["cpu_s"], p["rel_rms"]) for p in pts], anis["total_s"])
             reach = time_to_reach([(p["cpu_s"], p["rel_rms"]) for p in pts], anis["rel_rms"])
@@ -431,7 +461,7 @@ def report_run(run, md, table):
             if e is not None:
                 errors.append(e)
                 md.append(f"| {kind} at the anisotropic Hessian's {anis['total_s']:.1f} CPU s | | | | {fmt(e)} | "
-                          f"{fmt(e / split['rel_rms'] if split else None, 2)} | | | | | | {reach_text} | | |")
+                          f"{fmt(e / split['rel_rms'] if split else None, 2)} | | | | | | | {reach_text} | | |")
     md.append("")
     noise = float(s["reference_relative_noise"])
     smallest = min(errors) if errors else 0
@@ -459,7 +489,7 @@ def main():
           "converged reference; CPU seconds summed over threads. Written by examples/embree/report.py.\n"]
     table = [["run", "metric", "parameter", "records", "trace_s", "raddiff_s", "cache_s", "total_s", "rel_rms",
               "gather_floor", "worst1_share", "rel_rms_without_worst1", "rel_rms_at_edges", "rel_rms_away_from_edges",
-              "equal_records"]]
+              "rel_rms_own_part", "equal_records"]]
     for name in runs:
         report_run(Run(folder, name), md, table)
     with open(os.path.join(folder, "report.md"), "w") as f:

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Checks of report.py's edge split and equal-error records on synthetic runs whose answers are
-known by construction.
+"""Checks of report.py's edge split, shared and own errors and equal-error records on synthetic
+runs whose answers are known by construction.
 
 usage: python3 examples/embree/test_report.py   (needs numpy and matplotlib, as report.py does)
 """
@@ -93,6 +93,30 @@ def test_no_normal_buffer_means_no_split(folder):
     os.remove(run.path("-normal.pfm"))
     assert report.edge_pixels(run) is None
     assert report.edge_split(run, "m", None) == (None, None)
+
+
+def test_the_shared_part_is_the_metrics_mean_and_the_own_parts_their_departures(folder):
+    run = SyntheticRun(folder, "shared", crease(8, 5, 4, 0.5))
+    rng = np.random.default_rng(11)
+    n = len(run.measured)
+    common = rng.normal(0.0, 0.1, n)
+    departure = rng.normal(0.0, 0.03, n)
+    references = rng.uniform(1.0, 2.0, n)
+    ref = math.sqrt((references**2).sum())
+    run.write_pixels("a", common + departure, references)
+    run.write_pixels("b", common - 3 * departure, references)
+    run.write_pixels("c", common + 2 * departure, references)
+    shared, own = report.shared_split(run, ["a", "b", "c"])
+    # the departures sum to zero over the metrics, so the mean is the common error exactly
+    rms = lambda e: math.sqrt((e**2).sum()) / ref  # noqa: E731
+    assert abs(shared - rms(common)) < 1e-6 * rms(common), (shared, rms(common))
+    for m, k in (("a", 1), ("b", -3), ("c", 2)):
+        assert abs(own[m] - abs(k) * rms(departure)) < 1e-5 * rms(departure), (m, own[m])
+    # a metric identical to another leaves its own part, not the shared one, to the difference
+    run.write_pixels("d", common + departure, references)
+    shared2, own2 = report.shared_split(run, ["a", "d"])
+    assert abs(shared2 - rms(common + departure)) < 1e-6 and own2["a"] < 1e-7 and own2["d"] < 1e-7
+    assert report.shared_split(run, ["a"]) is None
 
 
 class CurveRun:
