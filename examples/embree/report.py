@@ -441,7 +441,8 @@ def report_run(run, md, table):
         md.append(
             f"| {m} | {int(f['records'])} | {f['total_s']:.1f} ({f['trace_s']:.1f} / {f['raddiff_s']:.2f} / "
             f"{f['cache_s']:.2f}) | {100 * share:.1f}% | {fmt(f['rel_rms'])} | {fmt(ratio, 2)} | {fmt(floor)} | "
-            f"{fmt(interp)} | {fmt(own)} | {f['worst1_share']:.2f} | {fmt(trimmed)} | {edges_text} | {reach_text} | {need_text} | "
+            f"{fmt(interp)} | {fmt(own)} | {f['worst1_share']:.2f} | {fmt(trimmed)} | {edges_text} | {reach_text} | "
+            f"{need_text} | "
             f"{f['radius_px_min']:.1f} / {f['radius_px_p5']:.1f} / {f['radius_px_median']:.1f} |")
         table.append([run.name, m, f["parameter"], int(f["records"]), f["trace_s"], f["raddiff_s"], f["cache_s"],
                       f["total_s"], f["rel_rms"], floor, f["worst1_share"], trimmed, fmt(edge_part),
