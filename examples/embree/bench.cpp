@@ -219,6 +219,7 @@ struct RecordInfo {
   V3 p, n;
   double radii[2];
   raddiff_vec3 axes[2];
+  double value;  // the luminance the cache interpolates (the far field under --near-field)
 };
 
 struct Fill {
@@ -311,7 +312,21 @@ class Bench {
       if (!c) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
       return c;
     };
-    CachePtr cache = new_cache();
+    // With --open-fraction-bands, one cache per band of open fraction (a record goes into its own
+    // band's and the two neighbouring bands' caches; a pixel looks only into its own band's).
+    const bool banded = settings_.open_fraction_bands > 0 && settings_.near_field_px > 0;
+    const int bands = banded ? static_cast<int>(std::ceil(1.0 / settings_.open_fraction_bands)) + 1 : 1;
+    auto band_of = [&](double open) {
+      return banded ? std::clamp(static_cast<int>(open / settings_.open_fraction_bands), 0, bands - 1) : 0;
+    };
+    if (banded && (settings_.neighbour_clamp || settings_.smooth_records > 0 || settings_.second_order > 0))
+      throw std::runtime_error("--open-fraction-bands does not combine with --neighbour-clamp, --smooth-records "
+                               "or --second-order");
+    const std::vector<std::array<float, 4>> *pixel_near = banded ? &near_field() : nullptr;
+    std::vector<CachePtr> caches;
+    for (int b = 0; b < bands; ++b) caches.push_back(new_cache());
+    CachePtr &cache = caches[0];
+    auto cache_of = [&](size_t pixel) { return caches[band_of(pixel_near ? (*pixel_near)[pixel][3] : 0.0)].get(); };
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
     // The inserted records, kept for the smoothing experiment (their derivatives point into the
@@ -331,15 +346,21 @@ class Bench {
     }
     // The binned far-field experiment's cache of the records' bins (same extents, same kernel, no
     // gradients).
-    CachePtr binned(nullptr, raddiff_cache_free);
-    if (render && settings_.far_field_bins) {
-      binned = surface_cache(kernel, irr.gradient_limit, 3 * kDirBins, false);
-      check(raddiff_cache_set_leak_guard(binned.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
-            "raddiff_cache_set_leak_guard");
-    }
+    std::vector<CachePtr> binned_caches;
+    if (render && settings_.far_field_bins)
+      for (int b = 0; b < bands; ++b) {
+        binned_caches.push_back(surface_cache(kernel, irr.gradient_limit, 3 * kDirBins, false));
+        check(raddiff_cache_set_leak_guard(binned_caches.back().get(), irr.leak_guard_relative,
+                                           irr.leak_guard_absolute),
+              "raddiff_cache_set_leak_guard");
+      }
+    const bool binned = !binned_caches.empty();
+    auto binned_of = [&](size_t pixel) {
+      return binned_caches[band_of(pixel_near ? (*pixel_near)[pixel][3] : 0.0)].get();
+    };
     auto covered = [&](size_t i) {
       float v[3];
-      const raddiff_status st = raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
+      const raddiff_status st = raddiff_cache_lookup(cache_of(i), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
       if (st != RADDIFF_OK && st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
       return st == RADDIFF_OK;
     };
@@ -416,15 +437,24 @@ class Bench {
           }
           if (settings_.error_norm > 0 && (m == Metric::HessianAnisotropic || m == Metric::HessianIsotropic))
             norm_radii(m, p, e, irr, primary_[i].footprint, rec);
-          RecordInfo info{i, primary_[i].p, primary_[i].n, {rec.radii[0], rec.radii[1]}, {rec.axes[0], rec.axes[1]}};
+          RecordInfo info{i,
+                          primary_[i].p,
+                          primary_[i].n,
+                          {rec.radii[0], rec.radii[1]},
+                          {rec.axes[0], rec.axes[1]},
+                          luminance(rec.value)};
           t0 = thread_cpu_seconds();
-          check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
+          const int band = band_of(e.open_fraction);
+          for (int b = std::max(0, band - 1); b <= std::min(bands - 1, band + 1); ++b)
+            if (banded || b == 0) check(raddiff_cache_insert(caches[b].get(), &rec), "raddiff_cache_insert");
           cache_cpu.add(thread_cpu_seconds() - t0);
           if (binned) {
             raddiff_cache_record br = rec;
             br.value = e.far_bins;
             br.gradient = br.rotation_gradient = nullptr;
-            check(raddiff_cache_insert(binned.get(), &br), "raddiff_cache_insert");
+            for (int b = std::max(0, band - 1); b <= std::min(bands - 1, band + 1); ++b)
+              if (banded || b == 0)
+                check(raddiff_cache_insert(binned_caches[b].get(), &br), "raddiff_cache_insert");
           }
           out.records.push_back(info);
           if (smooth) kept.push_back(rec);
@@ -479,7 +509,7 @@ class Bench {
       const std::vector<std::array<float, 4>> &near = near_field();
       out.trace_seconds += near_seconds_;
       out.image = Image(w, h);
-      check(raddiff_cache_compact(cache.get()), "raddiff_cache_compact");
+      for (CachePtr &c : caches) check(raddiff_cache_compact(c.get()), "raddiff_cache_compact");
       std::atomic<size_t> uncovered{0};
       parallel_for(static_cast<size_t>(h), settings_.threads, [&](size_t row) {
         const double t0 = thread_cpu_seconds();
@@ -488,7 +518,7 @@ class Bench {
           if (!primary_[i].hit) continue;
           float *v = out.image.at(i);
           const raddiff_status st =
-              raddiff_cache_lookup(cache.get(), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
+              raddiff_cache_lookup(cache_of(i), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
           if (st == RADDIFF_ERROR_NOT_FOUND) {
             ++uncovered;
           } else {
@@ -505,7 +535,7 @@ class Bench {
           }
           float q[3 * kDirBins];
           const bool bins = st == RADDIFF_OK && binned &&
-                            raddiff_cache_lookup(binned.get(), to_c(primary_[i].p), to_c(primary_[i].n), q,
+                            raddiff_cache_lookup(binned_of(i), to_c(primary_[i].p), to_c(primary_[i].n), q,
                                                  nullptr) == RADDIFF_OK;
           if (st == RADDIFF_OK && !near.empty())
             for (int c = 0; c < 3; ++c) {
@@ -746,7 +776,7 @@ std::string fmt(const char *f, double v) {
 void write_records_csv(const std::string &path, const Fill &f, const Camera &camera,
                        const std::vector<Primary> &primary) {
   std::ofstream out(path);
-  out << "pixel,px,py,ux,uy,vx,vy,radius_px\n";
+  out << "pixel,px,py,ux,uy,vx,vy,radius_px,value\n";
   for (const RecordInfo &r : f.records) {
     double cx, cy;
     if (!camera.project(r.p, cx, cy)) continue;
@@ -760,7 +790,8 @@ void write_records_csv(const std::string &path, const Fill &f, const Camera &cam
     camera.project(r.p + normalize(a0) * r.radii[0], ax, ay);
     camera.project(r.p + normalize(a1) * r.radii[1], bx, by);
     out << r.pixel << "," << cx << "," << cy << "," << ax - cx << "," << ay - cy << "," << bx - cx << "," << by - cy
-        << "," << std::min(r.radii[0], r.radii[1]) / std::max(primary[r.pixel].footprint, 1e-300) << "\n";
+        << "," << std::min(r.radii[0], r.radii[1]) / std::max(primary[r.pixel].footprint, 1e-300) << "," << r.value
+        << "\n";
   }
 }
 

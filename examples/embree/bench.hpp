@@ -70,6 +70,11 @@ struct BenchSettings {
   // weighted by its own open rays' bins, F + pi * sum_b w_b delta_b, instead of its open fraction
   // times the record's mean alone.
   bool far_field_bins = false;
+  // An experiment (with a near field; 0: off): records kept in bands of their gather's open
+  // fraction, this wide, and a pixel interpolating only records within one band of its own open
+  // fraction (its near field's), so that a record beside a step, whose hemisphere is partly
+  // closed, does not lend its far field to pixels that see more of theirs.
+  double open_fraction_bands = 0;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
 };

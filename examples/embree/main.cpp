@@ -48,7 +48,8 @@ const char *kUsage =
     "                      [--oracle-derivatives K] [--interpolation ward|tent|cubic]\n"
     "                      [--hessian-distance-bound k] [--smooth-records s]\n"
     "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n"
-    "                      [--near-field reach_px[,rays]] [--far-field-gathers] [--near-at-reach] [--far-field-bins]\n";
+    "                      [--near-field reach_px[,rays]] [--far-field-gathers] [--near-at-reach] [--far-field-bins]\n"
+    "                      [--open-fraction-bands width]\n";
 
 }  // namespace
 
@@ -120,6 +121,7 @@ int main(int argc, char **argv) {
       else if (a == "--far-field-gathers") bench.far_field_gathers = true;
       else if (a == "--near-at-reach") bench.near_at_reach = true;
       else if (a == "--far-field-bins") bench.far_field_bins = true;
+      else if (a == "--open-fraction-bands") bench.open_fraction_bands = std::stod(next());
       else if (a == "--near-field") {
         // K (pixel footprints of reach) or K,N (N rays per pixel)
         const std::string v = next();
