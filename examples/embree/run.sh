@@ -47,7 +47,8 @@ grep -q '^near field: reach 4 px' "$out/cornell-near-hessian.log"
 # The benchmark's near-field experiment on the same box, small and quick, with far-field gathers as
 # raddiff_gather_far_field_radiance and raddiff_gather_far_field make them: each run exits non-zero
 # unless every fill covers the image with finite, non-negative values.
-for near in "--far-field-gathers" "--far-field-gathers --near-at-reach" "--far-field-gathers --near-at-reach --far-field-bins"; do
+for near in "--far-field-gathers" "--far-field-gathers --near-at-reach" "--far-field-gathers --near-at-reach --far-field-bins" \
+  "--far-field-gathers --near-at-reach --far-field-bins --leak-guard 0.1,0 --open-fraction-bands 0.1"; do
   # shellcheck disable=SC2086 # the options are meant to split
   "$binary" --bench --obj "$here/cornell.obj" --out "$out/cornell-near" --size 64 --metrics split-sphere,hessian-anisotropic \
     --thresholds 1 --no-path-trace --reference-rays 4096 --near-field 4,64 $near > "$out/cornell-near.log"
