@@ -326,7 +326,8 @@ class Bench {
     std::vector<CachePtr> caches;
     for (int b = 0; b < bands; ++b) caches.push_back(new_cache());
     CachePtr &cache = caches[0];
-    auto cache_of = [&](size_t pixel) { return caches[band_of(pixel_near ? (*pixel_near)[pixel][3] : 0.0)].get(); };
+    auto pixel_band = [&](size_t pixel) { return band_of(pixel_near ? (*pixel_near)[pixel][3] : 0.0); };
+    auto cache_of = [&](size_t pixel) { return caches[pixel_band(pixel)].get(); };
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
     // The inserted records, kept for the smoothing experiment (their derivatives point into the
@@ -344,8 +345,8 @@ class Bench {
       check(raddiff_cache_set_leak_guard(quadratic.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
             "raddiff_cache_set_leak_guard");
     }
-    // The binned far-field experiment's cache of the records' bins (same extents, same kernel, no
-    // gradients).
+    // The binned far-field experiment's caches of the records' bins (same extents, same kernel, no
+    // gradients; one per band of open fraction, as the records').
     std::vector<CachePtr> binned_caches;
     if (render && settings_.far_field_bins)
       for (int b = 0; b < bands; ++b) {
@@ -355,9 +356,7 @@ class Bench {
               "raddiff_cache_set_leak_guard");
       }
     const bool binned = !binned_caches.empty();
-    auto binned_of = [&](size_t pixel) {
-      return binned_caches[band_of(pixel_near ? (*pixel_near)[pixel][3] : 0.0)].get();
-    };
+    auto binned_of = [&](size_t pixel) { return binned_caches[pixel_band(pixel)].get(); };
     auto covered = [&](size_t i) {
       float v[3];
       const raddiff_status st = raddiff_cache_lookup(cache_of(i), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
@@ -445,16 +444,16 @@ class Bench {
                           luminance(rec.value)};
           t0 = thread_cpu_seconds();
           const int band = band_of(e.open_fraction);
-          for (int b = std::max(0, band - 1); b <= std::min(bands - 1, band + 1); ++b)
-            if (banded || b == 0) check(raddiff_cache_insert(caches[b].get(), &rec), "raddiff_cache_insert");
+          const int first_band = std::max(0, band - 1), last_band = std::min(bands - 1, band + 1);
+          for (int b = first_band; b <= last_band; ++b)
+            check(raddiff_cache_insert(caches[b].get(), &rec), "raddiff_cache_insert");
           cache_cpu.add(thread_cpu_seconds() - t0);
           if (binned) {
             raddiff_cache_record br = rec;
             br.value = e.far_bins;
             br.gradient = br.rotation_gradient = nullptr;
-            for (int b = std::max(0, band - 1); b <= std::min(bands - 1, band + 1); ++b)
-              if (banded || b == 0)
-                check(raddiff_cache_insert(binned_caches[b].get(), &br), "raddiff_cache_insert");
+            for (int b = first_band; b <= last_band; ++b)
+              check(raddiff_cache_insert(binned_caches[b].get(), &br), "raddiff_cache_insert");
           }
           out.records.push_back(info);
           if (smooth) kept.push_back(rec);
