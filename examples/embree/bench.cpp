@@ -805,6 +805,8 @@ long max_rss_mib() {
 int run_bench(const Scene &scene, const View &view, const std::string &scene_key, const BenchSettings &settings) {
   if (settings.far_field_bins && settings.near_field_px <= 0)
     throw std::runtime_error("--far-field-bins needs --near-field");
+  if (settings.open_fraction_bands > 0 && settings.near_field_px <= 0)
+    throw std::runtime_error("--open-fraction-bands needs --near-field");
   if (settings.near_at_reach && !settings.far_field_gathers)
     throw std::runtime_error("--near-at-reach needs --far-field-gathers");
   if (settings.far_field_gathers && settings.near_field_px <= 0)
