@@ -17,13 +17,19 @@ namespace rd {
 namespace {
 
 // A gather computed at most once per pixel and shared by every metric and threshold, with what it
-// cost. Gathers depend only on their pixel (its primary hit and the seed 1 + pixel).
+// cost. Gathers depend only on their pixel (its primary hit and the seed 1 + pixel, or a stream of
+// --noise-seed).
 struct Slot {
   std::once_flag once;
   std::unique_ptr<Evaluated> evaluated;
   double trace_seconds = 0;
   uint64_t rays = 0;
 };
+
+// `seed` itself for noise seed 0 (the usual samples), else a seed of another stream.
+uint64_t reseeded(uint64_t seed, uint64_t noise_seed) {
+  return noise_seed == 0 ? seed : mix(seed ^ mix(noise_seed + 0x5eedull));
+}
 
 // The binned far-field experiment's far field for channel c: F plus pi times the records' bin
 // departures `bins` weighted by the pixel's open rays' bins, at least 0.
@@ -45,7 +51,8 @@ class GatherStore {
       const Primary &px = primary_[pixel];
       const double t0 = thread_cpu_seconds();
       const raddiff_irradiance_settings &irr = settings_.irradiance;
-      TracedGather g = trace_gather(scene_, settings_.radiance, px.p, px.n, irr.gather_m, irr.gather_n, 1 + pixel);
+      TracedGather g = trace_gather(scene_, settings_.radiance, px.p, px.n, irr.gather_m, irr.gather_n,
+                                    reseeded(1 + pixel, settings_.noise_seed));
       s.trace_seconds = thread_cpu_seconds() - t0;
       s.rays = g.rays;
       const double reach = settings_.near_field_px * px.footprint;
@@ -219,7 +226,8 @@ struct RecordInfo {
   V3 p, n;
   double radii[2];
   raddiff_vec3 axes[2];
-  double value;  // the luminance the cache interpolates (the far field under --near-field)
+  double value;          // the luminance the cache interpolates (the far field under --near-field)
+  double open_fraction;  // its gather's open fraction (1 without --near-field)
 };
 
 struct Fill {
@@ -278,7 +286,7 @@ class Bench {
         uint64_t rays = 0;
         const NearField f = trace_near_field(scene_, settings_.radiance, px.p, px.n,
                                              settings_.near_field_px * px.footprint, settings_.near_field_m,
-                                             mix(i) ^ 0x6e656172ull, rays);
+                                             reseeded(mix(i) ^ 0x6e656172ull, settings_.noise_seed), rays);
         near_[i] = {static_cast<float>(f.near[0]), static_cast<float>(f.near[1]), static_cast<float>(f.near[2]),
                     static_cast<float>(f.open_fraction)};
         if (settings_.far_field_bins)
@@ -441,7 +449,8 @@ class Bench {
                           primary_[i].n,
                           {rec.radii[0], rec.radii[1]},
                           {rec.axes[0], rec.axes[1]},
-                          luminance(rec.value)};
+                          luminance(rec.value),
+                          e.open_fraction};
           t0 = thread_cpu_seconds();
           const int band = band_of(e.open_fraction);
           const int first_band = std::max(0, band - 1), last_band = std::min(bands - 1, band + 1);
@@ -736,28 +745,32 @@ std::vector<size_t> floor_sample(const Fill &f, size_t count) {
   return out;
 }
 
+// The luminance pixel `p` shows from its own gather `g`, with no cache between them: the gather's
+// irradiance, or with the near field (`near` not empty) the pixel's own near field plus its open
+// fraction times the gather's far field (binned when `near_bins` is not empty).
+double shown_from_own_gather(size_t p, const Evaluated &g, const std::vector<std::array<float, 4>> &near,
+                             const std::vector<std::array<float, kDirBins>> &near_bins) {
+  if (near.empty()) return g.luminance;
+  double rgb[3];
+  for (int c = 0; c < 3; ++c) {
+    const double far =
+        near_bins.empty() ? g.far_value[c] : binned_far(g.far_value[c], near_bins[p], g.far_bins, c);
+    rgb[c] = near[p][c] + near[p][3] * far;
+  }
+  return luminance(rgb);
+}
+
 // Relative RMS error of the records' own gathers against converged irradiance at their positions,
 // the reference's own noise removed: the error a cache would have if every pixel had its record.
-// With the near field (`near` not empty) a record's pixel shows its own near field plus its open
-// fraction times the record's far field, so that is what is compared.
+// With the near field a record's pixel shows its own near field plus its open fraction times the
+// record's far field, so that is what is compared.
 double gather_floor(const std::vector<size_t> &pixels, GatherStore &store, const FloorReferences &refs,
                     const std::vector<std::array<float, 4>> &near,
                     const std::vector<std::array<float, kDirBins>> &near_bins) {
   double e2 = 0, n2 = 0, r2 = 0;
   for (size_t p : pixels) {
     const ReferencePixel &r = refs.at(p);
-    const Evaluated &g = *store.get(p).evaluated;
-    double shown = g.luminance;
-    if (!near.empty()) {
-      double rgb[3];
-      for (int c = 0; c < 3; ++c) {
-        const double far =
-            near_bins.empty() ? g.far_value[c] : binned_far(g.far_value[c], near_bins[p], g.far_bins, c);
-        rgb[c] = near[p][c] + near[p][3] * far;
-      }
-      shown = luminance(rgb);
-    }
-    const double e = shown - luminance(r.value());
+    const double e = shown_from_own_gather(p, *store.get(p).evaluated, near, near_bins) - luminance(r.value());
     const double noise = 0.5 * (luminance(r.half[0]) - luminance(r.half[1]));
     e2 += e * e;
     n2 += noise * noise;
@@ -775,7 +788,7 @@ std::string fmt(const char *f, double v) {
 void write_records_csv(const std::string &path, const Fill &f, const Camera &camera,
                        const std::vector<Primary> &primary) {
   std::ofstream out(path);
-  out << "pixel,px,py,ux,uy,vx,vy,radius_px,value\n";
+  out << "pixel,px,py,ux,uy,vx,vy,radius_px,value,open_fraction\n";
   for (const RecordInfo &r : f.records) {
     double cx, cy;
     if (!camera.project(r.p, cx, cy)) continue;
@@ -790,7 +803,7 @@ void write_records_csv(const std::string &path, const Fill &f, const Camera &cam
     camera.project(r.p + normalize(a1) * r.radii[1], bx, by);
     out << r.pixel << "," << cx << "," << cy << "," << ax - cx << "," << ay - cy << "," << bx - cx << "," << by - cy
         << "," << std::min(r.radii[0], r.radii[1]) / std::max(primary[r.pixel].footprint, 1e-300) << "," << r.value
-        << "\n";
+        << "," << r.open_fraction << "\n";
   }
 }
 
@@ -848,6 +861,11 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
     return 0.9 / std::max(1e-12, percentile(l, 0.99));
   }();
 
+  // A measured pixel's open fraction, from its near field (1 without one).
+  const auto pixel_open_fraction = [&](size_t p) {
+    return settings.near_field_px > 0 ? static_cast<double>(bench.near_field()[p][3]) : 1.0;
+  };
+
   std::ofstream fills(settings.out + "-fills.csv");
   fills << "metric,parameter,records,equal_records,trace_s,raddiff_s,cache_s,total_s,rel_rms,rms,worst1_share,"
            "radius_px_min,radius_px_p5,radius_px_median,radius_px_p95,uncovered,non_finite,negative\n";
@@ -890,11 +908,11 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
         write_images(prefix, f.image, exposure);
         write_records_csv(prefix + "-records.csv", f, bench.camera(), primary);
         std::ofstream px(prefix + "-pixels.csv");
-        px << "pixel,x,y,value,reference,error\n";
+        px << "pixel,x,y,value,reference,error,open_fraction\n";
         for (size_t i = 0; i < ref.pixels.size(); ++i) {
           const size_t p = ref.pixels[i].pixel;
           px << p << "," << p % view.width << "," << p / view.width << "," << luminance(f.image.at(p)) << ","
-             << luminance(ref.pixels[i].value()) << "," << err.errors[i] << "\n";
+             << luminance(ref.pixels[i].value()) << "," << err.errors[i] << "," << pixel_open_fraction(p) << "\n";
         }
         tuned.push_back(std::move(f));
       }
@@ -916,6 +934,33 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
     floor_csv << metric_name(f.metric) << "," << s.size() << "," << floor << "\n";
     std::printf("floor %-22s %.4f (gathers of %zu records against converged irradiance)\n", metric_name(f.metric),
                 floor, s.size());
+  }
+
+  // Every measured pixel shown from its own gather, no cache: the error no record placement removes
+  // (the gathers' and near fields' noise, the near/far decomposition's bias, the reference's noise).
+  double pixel_gathers_error = -1;
+  if (settings.pixel_gathers) {
+    std::vector<size_t> measured;
+    for (const ReferencePixel &r : ref.pixels) measured.push_back(r.pixel);
+    bench.store().ensure(measured);
+    std::ofstream px(settings.out + "-pixel-gathers-pixels.csv");
+    px << "pixel,x,y,value,reference,error,open_fraction\n";
+    double e2 = 0, r2 = 0;
+    size_t degenerate = 0;  // gathers raddiff found degenerate: shown with a zero far field
+    for (const ReferencePixel &r : ref.pixels) {
+      const size_t p = r.pixel;
+      const Evaluated &g = *bench.store().get(p).evaluated;
+      degenerate += !g.valid;
+      const double shown = shown_from_own_gather(p, g, bench.near_field(), bench.near_bins());
+      const double reference_value = luminance(r.value());
+      e2 += (shown - reference_value) * (shown - reference_value);
+      r2 += reference_value * reference_value;
+      px << p << "," << p % view.width << "," << p / view.width << "," << shown << "," << reference_value << ","
+         << shown - reference_value << "," << pixel_open_fraction(p) << "\n";
+    }
+    pixel_gathers_error = r2 > 0 ? std::sqrt(e2 / r2) : 0;
+    std::printf("pixel gathers: every measured pixel from its own gather, error %.4f (%zu degenerate)\n",
+                pixel_gathers_error, degenerate);
   }
 
   // The primary hits' normals: the denoiser's guide, and where the report finds geometric edges.
@@ -953,7 +998,8 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
           << "\nreference_loaded," << ref.loaded << "\ngradient_limit," << settings.irradiance.gradient_limit
           << "\nleak_guard," << settings.irradiance.leak_guard_relative << " " << settings.irradiance.leak_guard_absolute
           << "\nradius_bounds," << settings.irradiance.world_radius_min << " " << settings.irradiance.world_radius_max
-          << " " << settings.irradiance.pixel_radius_min << " " << settings.irradiance.pixel_radius_max << "\n";
+          << " " << settings.irradiance.pixel_radius_min << " " << settings.irradiance.pixel_radius_max
+          << "\nnoise_seed," << settings.noise_seed << "\npixel_gathers_rel_rms," << pixel_gathers_error << "\n";
   std::printf("bench: %zu gathers computed, max RSS %ld MiB, %.0f CPU s\n", bench.store().computed(), max_rss_mib(),
               process_cpu_seconds() - wall0);
   std::printf("%s\n", ok ? "OK" : "FAILED");

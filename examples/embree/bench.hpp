@@ -75,6 +75,14 @@ struct BenchSettings {
   // fraction (its near field's), so that a record beside a step, whose hemisphere is partly
   // closed, does not lend its far field to pixels that see more of theirs.
   double open_fraction_bands = 0;
+  // 0: the usual samples. Otherwise every gather's, near field's and hit radiance's random numbers
+  // drawn from another stream (the references' are not): two runs that differ only here measure
+  // how much of each metric's error is the samples' noise.
+  uint64_t noise_seed = 0;
+  // Also show every measured pixel from its own gather, with no cache (<out>-pixel-gathers-pixels.csv,
+  // summary key pixel_gathers_rel_rms; -1 when off): the error no record placement removes. Costs
+  // one gather per measured pixel not already a record's.
+  bool pixel_gathers = false;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
 };

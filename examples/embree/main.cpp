@@ -49,7 +49,7 @@ const char *kUsage =
     "                      [--hessian-distance-bound k] [--smooth-records s]\n"
     "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n"
     "                      [--near-field reach_px[,rays]] [--far-field-gathers] [--near-at-reach] [--far-field-bins]\n"
-    "                      [--open-fraction-bands width]\n";
+    "                      [--open-fraction-bands width] [--noise-seed K] [--pixel-gathers]\n";
 
 }  // namespace
 
@@ -122,6 +122,8 @@ int main(int argc, char **argv) {
       else if (a == "--near-at-reach") bench.near_at_reach = true;
       else if (a == "--far-field-bins") bench.far_field_bins = true;
       else if (a == "--open-fraction-bands") bench.open_fraction_bands = std::stod(next());
+      else if (a == "--noise-seed") bench.noise_seed = std::stoull(next());
+      else if (a == "--pixel-gathers") bench.pixel_gathers = true;
       else if (a == "--near-field") {
         // K (pixel footprints of reach) or K,N (N rays per pixel)
         const std::string v = next();

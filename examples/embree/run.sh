@@ -54,4 +54,18 @@ for near in "--far-field-gathers" "--far-field-gathers --near-at-reach" "--far-f
     --thresholds 1 --no-path-trace --reference-rays 4096 --near-field 4,64 $near > "$out/cornell-near.log"
   grep -q '^OK$' "$out/cornell-near.log"
 done
+# Two runs that differ only in their samples (--noise-seed), each pixel also shown from its own
+# gather (--pixel-gathers): what examples/embree/noise_split.py splits into noise and systematic parts.
+for seed in 0 1; do
+  "$binary" --bench --obj "$here/cornell.obj" --out "$out/cornell-seed$seed" --size 64 --metrics split-sphere,hessian-anisotropic \
+    --thresholds 1 --no-path-trace --reference-rays 4096 --near-field 4,64 --far-field-gathers --near-at-reach \
+    --pixel-gathers --noise-seed "$seed" > "$out/cornell-seed$seed.log"
+  grep -q '^OK$' "$out/cornell-seed$seed.log"
+  grep -q '^pixel gathers: every measured pixel from its own gather' "$out/cornell-seed$seed.log"
+done
+# another noise seed draws other samples: the pixels' own gathers differ
+if cmp -s "$out/cornell-seed0-pixel-gathers-pixels.csv" "$out/cornell-seed1-pixel-gathers-pixels.csv"; then
+  echo "--noise-seed 1 drew the same samples as --noise-seed 0" >&2
+  exit 1
+fi
 echo "embree example: OK (images and caches in $out)"

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Checks of report.py's edge split, shared and own errors and equal-error records on synthetic
-runs whose answers are known by construction.
+"""Checks of report.py's edge split, shared and own errors and equal-error records, and of
+noise_split.py's noise and systematic parts, on synthetic runs whose answers are known by
+construction.
 
 usage: python3 examples/embree/test_report.py   (needs numpy and matplotlib, as report.py does)
 """
@@ -13,6 +14,7 @@ import tempfile
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import noise_split  # noqa: E402
 import report  # noqa: E402
 
 
@@ -138,6 +140,38 @@ def test_records_to_reach_an_error(folder):
     assert report.records_to_reach(run, 0.05) == (1000, True)  # its cheapest point is already below
     assert report.records_to_reach(run, 0.005) is None  # never reached
     assert report.records_to_reach(CurveRun([]), 0.03) is None
+
+
+def test_the_noise_and_systematic_parts_are_what_the_runs_were_built_from(folder):
+    # two runs with a common error b, and noises s*u, s*w of patterns u, w that are orthogonal
+    # to each other and to b's sign: the estimates are exact, not only expected
+    count, s, b_level, ref_noise = 4000, 0.03, 0.02, 0.005
+    u = np.array([1.0, 1.0, -1.0, -1.0] * (count // 4))
+    w = np.array([1.0, -1.0, 1.0, -1.0] * (count // 4))
+    b = np.full(count, b_level)
+    references = np.full(count, 2.0)
+
+    def pixels(noise):
+        return {(k, 0): (ref + e, ref, e) for k, (ref, e) in enumerate(zip(references, b + noise))}
+
+    ref = math.sqrt((references**2).sum())
+    noise, systematic, worst = noise_split.noise_split(pixels(s * u), pixels(s * w), ref_noise)
+    true_noise = s * math.sqrt(count) / ref
+    true_systematic = math.sqrt((b_level * math.sqrt(count) / ref) ** 2 - ref_noise**2)
+    assert abs(noise - true_noise) < 1e-12, (noise, true_noise)
+    assert abs(systematic - true_systematic) < 1e-12, (systematic, true_systematic)
+    # each pixel's estimate is (b + s(u + w)/2)^2 - (s(u - w)/2)^2, which sum to count * b^2; the
+    # worst 1% are pixels with u = w = 1, each (b + s)^2
+    assert abs(worst - (b_level + s) ** 2 / (100 * b_level**2)) < 1e-12, worst
+    # the squares add up to each run's error, reference noise included
+    total = noise_split.relative_rms(pixels(s * u))
+    assert abs(total**2 - (noise**2 + systematic**2 + ref_noise**2)) < 1e-12
+    # identical runs: no noise, the whole error systematic; no shared pixel: no answer
+    same = noise_split.noise_split(pixels(s * u), pixels(s * u), 0.0)
+    assert same[0] == 0.0 and abs(same[1] - total) < 1e-12
+    # then each pixel's estimate is its error squared, (b + s)^2 on half the pixels, (b - s)^2 on the rest
+    assert abs(same[2] - (b_level + s) ** 2 / (100 * (b_level**2 + s**2))) < 1e-12, same[2]
+    assert noise_split.noise_split(pixels(s * u), {(-1, 0): (1.0, 1.0, 0.0)}, 0.0) is None
 
 
 def main():
