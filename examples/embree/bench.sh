@@ -55,7 +55,7 @@ views_of() {
 settings=()
 if [ "$quick" = 1 ]; then
   settings=(--thresholds 2 --reference-rays 32768 --reference-grid 32 --floor-records 60 --floor-rays 8192
-            --metrics split-sphere,bounded-split-sphere,hessian-anisotropic)
+            --metrics split-sphere,bounded-split-sphere,hessian-anisotropic --pixel-gathers)
 fi
 
 start=$(date +%s)

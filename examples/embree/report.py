@@ -414,6 +414,14 @@ def report_run(run, md, table):
             f"Shared by every metric: {shared[0]:.4f} (at each measured pixel the mean of the metrics' errors "
             f"at equal records); \"own part\" is a metric's error minus that mean, where its records make it "
             f"depart from the others.\n")
+    own_gathers = float(s.get("pixel_gathers_rel_rms", -1))
+    if own_gathers >= 0:
+        md.append(
+            f"Every measured pixel from its own gather, with no cache (`--pixel-gathers`): {own_gathers:.4f}, "
+            f"what a record at every pixel would give (the gathers' and near field's noise, the near/far "
+            f"decomposition's bias, the reference's noise); a cache can fall a little below it where its "
+            f"lookups average neighbouring records' noise.\n")
+        table.append([run.name, "pixel-gathers", "", "", "", "", "", "", own_gathers, "", "", "", "", "", "", 0])
     md.append("| metric | records | CPU s (trace / raddiff / cache) | raddiff share | error | vs split sphere "
               "| gathers' floor | interpolation | own part | worst 1% share | without the worst 1% "
               "| at edges / away | CPU s to the Hessian's error | the Hessian's records at this error "
