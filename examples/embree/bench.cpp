@@ -68,7 +68,7 @@ class GatherStore {
         HitRadianceSettings averaged = settings_.radiance;
         averaged.paths = settings_.oracle_derivative_paths;
         const TracedGather q = trace_gather(scene_, averaged, px.p, px.n, irr.gather_m, irr.gather_n,
-                                            mix(1 + pixel) ^ 0x0facull);
+                                            reseeded(mix(1 + pixel) ^ 0x0facull, settings_.noise_seed));
         Evaluated o = evaluate_gather(q, needs_, irr);
         if (o.valid) {
           // The records' radii and derivatives from the averaged radiance, their values (and the
