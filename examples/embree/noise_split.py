@@ -17,12 +17,18 @@ the noise part is what the gathers and near fields bring whatever the metric doe
 gather, no cache) has the systematic part no record placement removes (the near/far
 decomposition's bias); a metric's systematic part above it is its interpolation's.
 
+Under `--near-field` (the pixels' and records' CSVs carry open fractions) it also gives, per
+metric, the share of the pixels next to a record of RUN_A (within 3 pixels) whose open fraction
+differs from theirs by more than 0.1, and the share of the systematic square they hold.
+
 usage: noise_split.py RUN_A RUN_B   (run prefixes: <prefix>-summary.csv, <prefix>-<metric>-pixels.csv)
 """
 
 import math
 import os
 import sys
+
+import numpy as np
 
 from report import METRICS, rows
 
@@ -59,6 +65,43 @@ def noise_split(a, b, reference_noise):
     return math.sqrt(noise2), math.sqrt(max(0.0, mean2 - noise2 / 2 - reference_noise**2)), worst
 
 
+def read_records(prefix, metric):
+    """[(px, py, open_fraction)] of a run's records for `metric`, or None when its records' CSV
+    has no open fraction (runs before the column, or without one)."""
+    records = rows(f"{prefix}-{metric}-records.csv")
+    if not records or "open_fraction" not in records[0]:
+        return None
+    return [(float(r["px"]), float(r["py"]), float(r["open_fraction"])) for r in records]
+
+
+def read_open_fractions(prefix, metric):
+    """{(x, y): open fraction} of a run's measured pixels, or None without the column."""
+    pixels = rows(f"{prefix}-{metric}-pixels.csv")
+    if not pixels or "open_fraction" not in pixels[0]:
+        return None
+    return {(int(r["x"]), int(r["y"])): float(r["open_fraction"]) for r in pixels}
+
+
+def open_fraction_mismatch(a, b, open_fractions, records, within_px=3.0, tolerance=0.1):
+    """(pixel share, systematic share): the pixels (both runs measured) with a record within
+    `within_px` pixels whose open fraction differs from the pixel's by more than `tolerance`,
+    as a share of the pixels and of the sum of the per-pixel systematic estimates (as in
+    noise_split). None when no pixel has an open fraction or the estimates sum to 0 or less."""
+    keys = [k for k in sorted(set(a) & set(b)) if k in open_fractions]
+    if not keys or not records:
+        return None
+    rec = np.array(records)
+    estimate = np.array([((a[k][2] + b[k][2]) / 2) ** 2 - ((a[k][0] - b[k][0]) / 2) ** 2 for k in keys])
+    mismatched = np.zeros(len(keys), dtype=bool)
+    for i, (x, y) in enumerate(keys):
+        near = np.hypot(rec[:, 0] - x, rec[:, 1] - y) < within_px
+        mismatched[i] = near.any() and np.abs(rec[near, 2] - open_fractions[(x, y)]).max() > tolerance
+    total = estimate.sum()
+    if total <= 0:
+        return None
+    return mismatched.mean(), estimate[mismatched].sum() / total
+
+
 def main():
     if len(sys.argv) != 3:
         sys.exit(__doc__)
@@ -81,6 +124,17 @@ def main():
               f"{parts[2]:.2f} |")
     if not found:
         sys.exit(f"no metric measured in both {run_a} and {run_b}")
+    for m in found:
+        if m == "pixel-gathers":
+            continue
+        open_fractions, records = read_open_fractions(run_a, m), read_records(run_a, m)
+        if open_fractions is None or records is None:
+            continue
+        shares = open_fraction_mismatch(read_pixels(run_a, m), read_pixels(run_b, m), open_fractions, records)
+        if shares is not None:
+            print(f"{m}: pixels with a record of RUN_A within 3 px whose open fraction differs from theirs by "
+                  f"more than 0.1 are {100 * shares[0]:.1f}% of the pixels and hold {100 * shares[1]:.0f}% of the "
+                  f"systematic square")
 
 
 if __name__ == "__main__":

@@ -174,6 +174,25 @@ def test_the_noise_and_systematic_parts_are_what_the_runs_were_built_from(folder
     assert noise_split.noise_split(pixels(s * u), {(-1, 0): (1.0, 1.0, 0.0)}, 0.0) is None
 
 
+def test_the_open_fraction_mismatch_counts_pixels_next_to_records_of_another_openness(folder):
+    # four pixels in a row, with the systematic estimates 4, 1, 1, 2 (identical runs: errors
+    # 2, 1, 1, sqrt 2); open fractions 0.5, 0.5, 0.9, 0.9
+    errors = [2.0, 1.0, 1.0, math.sqrt(2.0)]
+    pixels = {(10 * k, 0): (1.0 + e, 1.0, e) for k, e in enumerate(errors)}
+    open_fractions = {(0, 0): 0.5, (10, 0): 0.5, (20, 0): 0.9, (30, 0): 0.9}
+    # a record of open fraction 0.9 beside pixel 0, one of 0.55 beside pixel 1 (within the
+    # tolerance), one of 0.5 beside pixel 3 and one far from every pixel
+    records = [(1.0, 1.0, 0.9), (11.0, 0.0, 0.55), (30.0, 2.0, 0.5), (100.0, 100.0, 0.0)]
+    share = noise_split.open_fraction_mismatch(pixels, pixels, open_fractions, records)
+    assert share == (0.5, 6.0 / 8.0), share  # pixels 0 and 3
+    # a wider reach takes pixels 1 and 2 in too (the records 0.9 and 0.55 nine pixels away); a
+    # looser tolerance none
+    share = noise_split.open_fraction_mismatch(pixels, pixels, open_fractions, records, within_px=10.0)
+    assert share == (1.0, 1.0), share
+    assert noise_split.open_fraction_mismatch(pixels, pixels, open_fractions, records, tolerance=0.5) == (0.0, 0.0)
+    assert noise_split.open_fraction_mismatch(pixels, pixels, {}, records) is None
+
+
 def main():
     tests = [v for k, v in sorted(globals().items()) if k.startswith("test_")]
     with tempfile.TemporaryDirectory() as folder:
