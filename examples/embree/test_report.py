@@ -155,7 +155,7 @@ def test_the_noise_and_systematic_parts_are_what_the_runs_were_built_from(folder
         return {(k, 0): (ref + e, ref, e) for k, (ref, e) in enumerate(zip(references, b + noise))}
 
     ref = math.sqrt((references**2).sum())
-    noise, systematic, worst = noise_split.noise_split(pixels(s * u), pixels(s * w), ref_noise)
+    noise, systematic, worst = noise_split.noise_split([pixels(s * u), pixels(s * w)], ref_noise)
     true_noise = s * math.sqrt(count) / ref
     true_systematic = math.sqrt((b_level * math.sqrt(count) / ref) ** 2 - ref_noise**2)
     assert abs(noise - true_noise) < 1e-12, (noise, true_noise)
@@ -167,11 +167,34 @@ def test_the_noise_and_systematic_parts_are_what_the_runs_were_built_from(folder
     total = noise_split.relative_rms(pixels(s * u))
     assert abs(total**2 - (noise**2 + systematic**2 + ref_noise**2)) < 1e-12
     # identical runs: no noise, the whole error systematic; no shared pixel: no answer
-    same = noise_split.noise_split(pixels(s * u), pixels(s * u), 0.0)
+    same = noise_split.noise_split([pixels(s * u), pixels(s * u)], 0.0)
     assert same[0] == 0.0 and abs(same[1] - total) < 1e-12
     # then each pixel's estimate is its error squared, (b + s)^2 on half the pixels, (b - s)^2 on the rest
     assert abs(same[2] - (b_level + s) ** 2 / (100 * (b_level**2 + s**2))) < 1e-12, same[2]
-    assert noise_split.noise_split(pixels(s * u), {(-1, 0): (1.0, 1.0, 0.0)}, 0.0) is None
+    assert noise_split.noise_split([pixels(s * u), {(-1, 0): (1.0, 1.0, 0.0)}], 0.0) is None
+
+
+def test_more_runs_give_the_same_parts_when_their_noises_are_orthogonal(folder):
+    # four runs whose noises are rows 1-4 of a Hadamard matrix of order 8 (each sums to 0, all
+    # mutually orthogonal) times s, over a common error b: the sample variance and the mean
+    # give the parts exactly
+    h = np.array([[1.0]])
+    for _ in range(3):
+        h = np.block([[h, h], [h, -h]])
+    count, s, b_level = 800, 0.04, 0.03
+    references = np.full(count, 1.5)
+    ref = math.sqrt((references**2).sum())
+
+    def pixels(noise):
+        return {(k, 0): (ref_k + b_level + e, ref_k, b_level + e) for k, (ref_k, e) in enumerate(zip(references, noise))}
+
+    runs = [pixels(s * np.tile(h[row], count // 8)) for row in range(1, 5)]
+    noise, systematic, _ = noise_split.noise_split(runs, 0.0)
+    assert abs(noise - s * math.sqrt(count) / ref) < 1e-12, noise
+    assert abs(systematic - b_level * math.sqrt(count) / ref) < 1e-12, systematic
+    # two of them give the same answer too
+    noise2, systematic2, _ = noise_split.noise_split(runs[:2], 0.0)
+    assert abs(noise2 - noise) < 1e-12 and abs(systematic2 - systematic) < 1e-12
 
 
 def test_the_open_fraction_mismatch_counts_pixels_next_to_records_of_another_openness(folder):
@@ -183,14 +206,14 @@ def test_the_open_fraction_mismatch_counts_pixels_next_to_records_of_another_ope
     # a record of open fraction 0.9 beside pixel 0, one of 0.55 beside pixel 1 (within the
     # tolerance), one of 0.5 beside pixel 3 and one far from every pixel
     records = [(1.0, 1.0, 0.9), (11.0, 0.0, 0.55), (30.0, 2.0, 0.5), (100.0, 100.0, 0.0)]
-    share = noise_split.open_fraction_mismatch(pixels, pixels, open_fractions, records)
+    share = noise_split.open_fraction_mismatch([pixels, pixels], open_fractions, records)
     assert share == (0.5, 6.0 / 8.0), share  # pixels 0 and 3
     # a wider reach takes pixels 1 and 2 in too (the records 0.9 and 0.55 nine pixels away); a
     # looser tolerance none
-    share = noise_split.open_fraction_mismatch(pixels, pixels, open_fractions, records, within_px=10.0)
+    share = noise_split.open_fraction_mismatch([pixels, pixels], open_fractions, records, within_px=10.0)
     assert share == (1.0, 1.0), share
-    assert noise_split.open_fraction_mismatch(pixels, pixels, open_fractions, records, tolerance=0.5) == (0.0, 0.0)
-    assert noise_split.open_fraction_mismatch(pixels, pixels, {}, records) is None
+    assert noise_split.open_fraction_mismatch([pixels, pixels], open_fractions, records, tolerance=0.5) == (0.0, 0.0)
+    assert noise_split.open_fraction_mismatch([pixels, pixels], {}, records) is None
 
 
 def main():
