@@ -945,13 +945,15 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
     bench.store().ensure(measured);
     std::ofstream px(settings.out + "-pixel-gathers-pixels.csv");
     px << "pixel,x,y,value,reference,error,open_fraction\n";
+    const std::vector<std::array<float, 4>> &near = bench.near_field();
+    const std::vector<std::array<float, kDirBins>> &near_bins = bench.near_bins();
     double e2 = 0, r2 = 0;
     size_t degenerate = 0;  // gathers raddiff found degenerate: shown with a zero far field
     for (const ReferencePixel &r : ref.pixels) {
       const size_t p = r.pixel;
       const Evaluated &g = *bench.store().get(p).evaluated;
       degenerate += !g.valid;
-      const double shown = shown_from_own_gather(p, g, bench.near_field(), bench.near_bins());
+      const double shown = shown_from_own_gather(p, g, near, near_bins);
       const double reference_value = luminance(r.value());
       e2 += (shown - reference_value) * (shown - reference_value);
       r2 += reference_value * reference_value;
