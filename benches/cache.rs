@@ -39,6 +39,7 @@ fn record(i: usize, n: usize) -> Record<[f32; 3]> {
         gradient: Some([[0.1, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0; 3]]),
         rotation_gradient: Some([[0.0; 3], [0.05; 3], [0.0; 3]]),
         extent: Extent::isotropic(r * (0.8 + 0.4 * unit(k + 5))),
+        open_fraction: None,
     }
 }
 
@@ -252,6 +253,7 @@ fn inserts(c: &mut Criterion) {
                 gradient: None,
                 rotation_gradient: None,
                 extent: r.extent,
+                open_fraction: None,
             };
             cache.insert(&rec).unwrap();
         }

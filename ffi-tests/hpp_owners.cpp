@@ -2,6 +2,7 @@
 // move, destruction, every method) and raddiff::Error (status and message), against the values
 // ffi-tests/cache.c and ffi-tests/scatter.cpp assert through the C API.
 #include "hpp_check.h"
+#include <cmath>
 #include <cstdio>
 #include <limits>
 #include <type_traits>
@@ -224,6 +225,39 @@ void gradient_limit() {
   CHECK(plain.gradient_limit() == std::numeric_limits<double>::infinity());
 }
 
+// The open-fraction test through the wrapper: the tolerance's setter and getter, lookup_open and
+// try_lookup_open with and without a cursor (the values ffi-tests/open_fraction.c asserts).
+void open_fraction() {
+  const float closed_value = 1.0f, open_value = 3.0f;
+  const double closed = 0.25, open = 0.875;
+  raddiff::Cache cache(raddiff_cache_config{1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD, 0.2});
+  raddiff::CacheCursor cursor;
+  raddiff_cache_record a = make_record(-0.1, &closed_value, nullptr), b = make_record(0.1, &open_value, nullptr);
+  a.open_fraction = &closed;
+  b.open_fraction = &open;
+  cache.insert(a);
+  cache.insert(b);
+  const raddiff_vec3 x{0.0, 0.0, 0.0};
+  float v = 0.0f, plain = 0.0f;
+  CHECK(std::isinf(cache.open_fraction_tolerance()));
+  const double w_plain = cache.lookup(x, kN, raddiff::Span<float>(&plain, 1));
+  CHECK(cache.lookup_open(x, kN, 0.3, raddiff::Span<float>(&v, 1)) == w_plain && v == plain);
+  cache.set_open_fraction_tolerance(0.25);
+  CHECK(cache.open_fraction_tolerance() == 0.25);
+  cache.lookup_open(x, kN, 0.3, raddiff::Span<float>(&v, 1));
+  CHECK_CLOSE(v, 1.0, 1e-6);
+  double w = 0.0;
+  CHECK(cache.try_lookup_open(x, kN, 0.8, raddiff::Span<float>(&v, 1), &w, &cursor) && w > 0.0);
+  CHECK_CLOSE(v, 3.0, 1e-6);
+  CHECK(!cache.try_lookup_open(x, kN, 0.56, raddiff::Span<float>(&v, 1)));
+  CHECK_THROWS(cache.lookup_open(x, kN, 0.56, raddiff::Span<float>(&v, 1), &cursor), RADDIFF_ERROR_NOT_FOUND,
+               "no cache record");
+  CHECK_THROWS(cache.lookup_open(x, kN, 2.0, raddiff::Span<float>(&v, 1)), RADDIFF_ERROR_INVALID_ARGUMENT,
+               "open fraction");
+  CHECK_THROWS(cache.set_open_fraction_tolerance(-1.0), RADDIFF_ERROR_INVALID_ARGUMENT, "open-fraction");
+  CHECK(cache.open_fraction_tolerance() == 0.25);
+}
+
 void clamping() {
   const float one[1] = {1.0f};
   const raddiff_cache_config ccfg{1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD, 0.2};
@@ -312,6 +346,7 @@ int main(int argc, char **argv) {
   error_class();
   cache();
   gradient_limit();
+  open_fraction();
   clamping();
   mesh();
   CHECK_DONE("hpp_owners.cpp");

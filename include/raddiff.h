@@ -281,6 +281,11 @@ typedef struct raddiff_cache_record {
   double radii[3];
   // Principal axes (need not be unit; may be zero for isotropic radii).
   struct raddiff_vec3 axes[3];
+  // Nullable: the open fraction of a far-field record's gather, in [0, 1] (the share of its
+  // measure whose rays reach at least the reach), for the open-fraction test
+  // (`raddiff_cache_set_open_fraction_tolerance`). NULL: none (the test never refuses the
+  // record; what a zero-initialized record has). Read during the call; stored to within 2^-31.
+  const double *open_fraction;
 } raddiff_cache_record;
 
 // How irradiance records are made (Rust: `cache::irradiance::IrradianceSettings`, whose docs
@@ -344,6 +349,11 @@ typedef struct raddiff_irradiance_settings {
   uint32_t near_field_m;
   // Near rays per query along phi (default 32).
   uint32_t near_field_n;
+  // The cache's open-fraction test, tolerance >= 0 (default INFINITY: off; see
+  // `raddiff_cache_set_open_fraction_tolerance`). With it on,
+  // `raddiff_cache_irradiance_near_far` traces a query's near rays before its lookup and
+  // its records keep their open fractions.
+  double near_field_open_fraction_tolerance;
 } raddiff_irradiance_settings;
 
 // An m x n stratified layout: `kind` is a `RADDIFF_LAYOUT_*` constant; 1 <= m, n <=
@@ -469,8 +479,9 @@ typedef int (*raddiff_trace_fn)(void *user,
 // `max_distance`) and its radiance may be left as it is (zeros; not read). Returns 0 on success;
 // anything else abandons the request (`RADDIFF_ERROR_CALLBACK`, nothing inserted). `user` is the
 // pointer given to `raddiff_cache_irradiance_near_far`. Called once per call that passes the
-// argument checks (never after a refusal), on the calling thread; it must not unwind and may
-// call raddiff functions.
+// argument checks (never after a refusal), twice on a miss with the open-fraction test on (see
+// `raddiff_cache_irradiance_near_far`), on the calling thread; it must not unwind and may call
+// raddiff functions.
 typedef int (*raddiff_trace_bounded_fn)(void *user,
                                         struct raddiff_vec3 origin,
                                         const struct raddiff_vec3 *directions,
@@ -508,6 +519,8 @@ typedef struct raddiff_medium {
   // Henyey-Greenstein asymmetry in (-1, 1); 0 is isotropic.
   double g;
 } raddiff_medium;
+
+
 
 
 
@@ -627,7 +640,7 @@ void raddiff_cache_free(struct raddiff_cache *cache);
 
 // Inserts a record (thread-safe). Inserting a record identical to a stored one is a no-op that
 // succeeds. `RADDIFF_ERROR_INVALID_ARGUMENT` for non-finite input, radii out of range, a zero
-// surface normal, or degenerate axes with anisotropic radii.
+// surface normal, degenerate axes with anisotropic radii, or an open fraction outside [0, 1].
 enum raddiff_status raddiff_cache_insert(struct raddiff_cache *cache,
                                          const struct raddiff_cache_record *record);
 
@@ -658,6 +671,23 @@ enum raddiff_status raddiff_cache_lookup_with(const struct raddiff_cache *cache,
                                               struct raddiff_cache_cursor *cursor,
                                               struct raddiff_vec3 position,
                                               struct raddiff_vec3 normal,
+                                              float *value,
+                                              double *weight_sum);
+
+// Runs a lookup into a stack buffer (heap beyond 32 channels) and copies it to the caller.
+// `raddiff_cache_lookup` (`cursor` NULL) or `raddiff_cache_lookup_with` (`cursor` not NULL) for
+// a query whose open fraction is `open_fraction` (in [0, 1]; the near field's, see
+// `raddiff_near_field`): the cache's open-fraction test refuses every record whose open fraction
+// differs from it by more than the tolerance (`raddiff_cache_set_open_fraction_tolerance`;
+// records inserted without an open fraction are never refused). With the test off, the result of
+// `raddiff_cache_lookup` bit for bit. `RADDIFF_ERROR_NOT_FOUND` when no admitted record covers
+// the point; `RADDIFF_ERROR_INVALID_ARGUMENT` for an open fraction outside [0, 1] (NaN
+// included). Thread-safe as `raddiff_cache_lookup`; a cursor is used by one thread only.
+enum raddiff_status raddiff_cache_lookup_open(const struct raddiff_cache *cache,
+                                              struct raddiff_cache_cursor *cursor,
+                                              struct raddiff_vec3 position,
+                                              struct raddiff_vec3 normal,
+                                              double open_fraction,
                                               float *value,
                                               double *weight_sum);
 
@@ -701,6 +731,23 @@ enum raddiff_status raddiff_cache_set_leak_guard(struct raddiff_cache *cache,
 enum raddiff_status raddiff_cache_get_leak_guard(const struct raddiff_cache *cache,
                                                  double *relative,
                                                  double *absolute);
+
+// Sets the open-fraction test of a far-field cache for every lookup from now on: a record with
+// open fraction V_i (`raddiff_cache_record.open_fraction`) is not used at a query of open
+// fraction V (`raddiff_cache_lookup_open`, `raddiff_cache_irradiance_near_far`) when
+// |V_i - V| > `tolerance`. A record's far field is the mean over the directions its gather found
+// open; a query whose hemisphere is open elsewhere (under a ledge, at the foot of a step) would
+// take the wrong mean. The tolerance is dimensionless (0.1-0.2 suits gathers of a thousand rays
+// or more, whose open fractions have a noise of at most 0.5/sqrt(rays)); INFINITY (the default)
+// turns the test off. `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for a NaN or negative
+// tolerance. Saved with the cache and restored by `raddiff_cache_load` (files written before it
+// load with it off). **Not thread-safe**: no other thread may use the cache during the call.
+enum raddiff_status raddiff_cache_set_open_fraction_tolerance(struct raddiff_cache *cache,
+                                                              double tolerance);
+
+// Writes the cache's open-fraction tolerance to `*tolerance` (INFINITY when the test is off).
+enum raddiff_status raddiff_cache_get_open_fraction_tolerance(const struct raddiff_cache *cache,
+                                                              double *tolerance);
 
 // Neighbour clamping (Krivanek et al. 2006) of a record about to be inserted: shrinks
 // `record->radii` in place so that the record's largest radius R (surface: of `radii[0..1]`) is at
@@ -847,8 +894,9 @@ struct raddiff_irradiance_settings raddiff_irradiance_settings_default(void);
 // A cache for the records `settings` make: surface domain, the settings' channels, the
 // metric's interpolation (`RADDIFF_INTERP_WARD` for the split-sphere family and the gradient
 // metric, `RADDIFF_INTERP_TENT` for the Hessian metrics), values clamped at zero
-// (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit, leak guard and near-field
-// reach (records then hold far fields), maximum normal deviation 0.2 rad. NULL (with
+// (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit, leak guard, near-field
+// reach (records then hold far fields) and open-fraction tolerance, maximum normal deviation
+// 0.2 rad. NULL (with
 // `raddiff_last_error`) for NULL or invalid settings. Free it with `raddiff_cache_free`.
 struct raddiff_cache *raddiff_irradiance_cache_new(const struct raddiff_irradiance_settings *settings);
 
@@ -892,7 +940,11 @@ enum raddiff_status raddiff_cache_irradiance(struct raddiff_cache *cache,
 // with the `near_field_m * near_field_n` near rays and `max_distance` = rho; on a miss, with the
 // record's `gather_m * gather_n` gather and `max_distance` = INFINITY, whose rays give both the
 // near field and, split at rho (near hits moved to the reach with the far field's mean
-// radiance, as `raddiff_gather_far_field`), the new record. `out` (`channels` floats) receives
+// radiance, as `raddiff_gather_far_field`), the new record. With the settings'
+// `near_field_open_fraction_tolerance` finite (the open-fraction test, see
+// `raddiff_cache_set_open_fraction_tolerance`), the near rays come first and the lookup admits
+// only records whose open fraction is within the tolerance of theirs; a miss then also traces
+// the gather, whose open fraction the new record keeps. `out` (`channels` floats) receives
 // `E_near + V * F`. Thread-safe as `raddiff_cache_irradiance`.
 //
 // `x`, `n`, `footprint` and the errors are as `raddiff_cache_irradiance`'s, and
@@ -919,8 +971,9 @@ enum raddiff_status raddiff_cache_irradiance_near_far(struct raddiff_cache *cach
 // They let a renderer shade a pixel once while it fills the cache and again, without tracing,
 // once the cache is complete: keep `E_near` and `V` from the call that visited the pixel, then
 // show `E_near + V * F` with the far field `F` from `raddiff_cache_lookup` (or
-// `raddiff_cache_lookup_with`) on the finished cache. On a miss the near field comes from the
-// new record's gather (its rays closer than the reach), on a hit from the near rays.
+// `raddiff_cache_lookup_with`, or `raddiff_cache_lookup_open` with `V` when the cache has the
+// open-fraction test) on the finished cache. On a miss the near field comes from the new
+// record's gather (its rays closer than the reach), on a hit from the near rays.
 //
 // Arguments, callback and errors as `raddiff_cache_irradiance_near_far`'s.
 enum raddiff_status raddiff_cache_irradiance_near_far_parts(struct raddiff_cache *cache,

@@ -253,6 +253,29 @@ class Cache : public detail::Owner<raddiff_cache> {
     return weight_sum;
   }
 
+  /// Wraps `raddiff_cache_lookup_open`: lookup() for a query whose open fraction is
+  /// `open_fraction` (in [0, 1]), through `cursor` when it is not NULL. The cache's open-fraction
+  /// test refuses the records whose open fraction differs by more than its tolerance; a point no
+  /// admitted record covers throws raddiff::Error with RADDIFF_ERROR_NOT_FOUND.
+  double lookup_open(raddiff_vec3 position, raddiff_vec3 normal, double open_fraction, Span<float> value,
+                     CacheCursor *cursor = nullptr) const {
+    double weight_sum = 0.0;
+    detail::check(raddiff_cache_lookup_open(get(), cursor ? cursor->get() : nullptr, position, normal,
+                                            open_fraction, value.data(), &weight_sum));
+    return weight_sum;
+  }
+
+  /// lookup_open() without an exception for a miss: false on RADDIFF_ERROR_NOT_FOUND (`value`
+  /// untouched), true on success (weight sum in `*weight_sum` if not NULL); other failures throw.
+  bool try_lookup_open(raddiff_vec3 position, raddiff_vec3 normal, double open_fraction, Span<float> value,
+                       double *weight_sum = nullptr, CacheCursor *cursor = nullptr) const {
+    const raddiff_status s = raddiff_cache_lookup_open(get(), cursor ? cursor->get() : nullptr, position, normal,
+                                                       open_fraction, value.data(), weight_sum);
+    if (s == RADDIFF_ERROR_NOT_FOUND) return false;
+    detail::check(s);
+    return true;
+  }
+
   /// Wraps `raddiff_cache_compact` (not thread-safe): prepares a lookup-only phase.
   void compact() { detail::check(raddiff_cache_compact(get())); }
 
@@ -302,6 +325,19 @@ class Cache : public detail::Owner<raddiff_cache> {
     double relative = 0.0, absolute = 0.0;
     detail::check(raddiff_cache_get_leak_guard(get(), &relative, &absolute));
     return {relative, absolute};
+  }
+
+  /// Wraps `raddiff_cache_set_open_fraction_tolerance` (not thread-safe): the open-fraction test
+  /// of a far-field cache (INFINITY: off; NaN or negative throws).
+  void set_open_fraction_tolerance(double tolerance) {
+    detail::check(raddiff_cache_set_open_fraction_tolerance(get(), tolerance));
+  }
+
+  /// Wraps `raddiff_cache_get_open_fraction_tolerance`: the tolerance (INFINITY when off).
+  double open_fraction_tolerance() const {
+    double tolerance = 0.0;
+    detail::check(raddiff_cache_get_open_fraction_tolerance(get(), &tolerance));
+    return tolerance;
   }
 
   /// Wraps `raddiff_cache_get_far_field`: the far-field reach (world, pixels) its records were

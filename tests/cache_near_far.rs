@@ -36,7 +36,12 @@ fn settings(reach: FarFieldReach) -> IrradianceSettings {
     s.gather_m = 16;
     s.gather_n = 48;
     s.radius_bounds = RadiusBounds::world(0.01, 5.0);
-    s.near_field = NearFieldSettings { reach, m: 8, n: 8 };
+    s.near_field = NearFieldSettings {
+        reach,
+        m: 8,
+        n: 8,
+        ..Default::default()
+    };
     s
 }
 

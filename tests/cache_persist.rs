@@ -4,7 +4,9 @@
 
 use glam::DVec3;
 use proptest::prelude::*;
-use raddiff::cache::{Cache, CacheConfig, Extent, FarFieldReach, LeakGuard, Record};
+use raddiff::cache::{
+    Cache, CacheConfig, Extent, FarFieldReach, LeakGuard, OpenFractionTest, Record,
+};
 use raddiff::Error;
 
 fn sample(n: usize) -> Cache<[f32; 3]> {
@@ -21,6 +23,7 @@ fn sample(n: usize) -> Cache<[f32; 3]> {
                 radii: [0.5, 1.0, 0.0],
                 axes: [DVec3::X, DVec3::ZERO, DVec3::ZERO],
             },
+            open_fraction: None,
         })
         .unwrap();
     }
@@ -47,8 +50,10 @@ fn reseal(bytes: &mut [u8]) {
     bytes[body..].copy_from_slice(&sum.to_le_bytes());
 }
 
-/// Size of the version 5 header (records start here).
-const HEADER: usize = 88;
+/// Size of the version 6 header (records start here).
+const HEADER: usize = 96;
+/// Size of the version 5 header: no open-fraction field (offsets 88..96).
+const HEADER_V5: usize = 88;
 /// Size of the version 4 header: no far-field fields (offsets 72..88).
 const HEADER_V4: usize = 72;
 /// Size of the version 3 header: no leak-guard fields either (offsets 56..72).
@@ -124,16 +129,16 @@ fn header_and_record_damage_is_named() {
     b[0] = b'X';
     assert!(corrupt_reason(&b).contains("magic"));
     let mut b = good.clone();
-    b[8] = 6;
+    b[8] = 7;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("version"));
     let mut b = good.clone();
     b[100] ^= 1;
     assert!(corrupt_reason(&b).contains("checksum"));
     // a header flag this version does not know (bit 0 is the non-negative flag, bit 1 the
-    // gradient limit, bit 2 the leak guard, bit 3 the far field)
+    // gradient limit, bit 2 the leak guard, bit 3 the far field, bit 4 the open-fraction test)
     let mut b = good.clone();
-    b[44] = 16;
+    b[44] = 32;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("flags"));
     // a resealed file with a NaN radius (record 0 radii start at HEADER + 40)
@@ -146,11 +151,11 @@ fn header_and_record_damage_is_named() {
     b[HEADER + 24..HEADER + 28].copy_from_slice(&2.0f32.to_le_bytes());
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("quaternion"));
-    // the reserved field of a record (HEADER + 60)
+    // a record's open fraction beyond 1 (its code at HEADER + 60: 0 none, else 1 + V·2³⁰)
     let mut b = good.clone();
-    b[HEADER + 60] = 1;
+    b[HEADER + 60..HEADER + 64].copy_from_slice(&((1u32 << 30) + 2).to_le_bytes());
     reseal(&mut b);
-    assert!(corrupt_reason(&b).contains("reserved"));
+    assert!(corrupt_reason(&b).contains("open fraction"));
     // records swapped: no longer in content order
     let stride = 64 + 16 * 3;
     let mut b = good.clone();
@@ -180,32 +185,35 @@ fn header_and_record_damage_is_named() {
     assert!(corrupt_reason(&b).contains("domain"));
 }
 
-/// The version 2 file of a cache without a gradient limit, leak guard or far field: the version
-/// 5 file without the fields at offsets 48..88, version 2, resealed.
-fn as_version_2(v5: &[u8]) -> Vec<u8> {
-    let mut b = v5[..48].to_vec();
-    b.extend_from_slice(&v5[HEADER..]);
-    b[8..12].copy_from_slice(&2u32.to_le_bytes());
-    reseal(&mut b);
-    b
+/// The version 2 file of a cache without a gradient limit, leak guard, far field or open-fraction
+/// test: the current file without the fields at offsets 48..96, version 2, resealed.
+fn as_version_2(current: &[u8]) -> Vec<u8> {
+    as_version(current, 48, 2)
 }
 
-/// The version 3 file of a cache without a leak guard or far field: the version 5 file without
-/// the fields at offsets 56..88, version 3, resealed.
-fn as_version_3(v5: &[u8]) -> Vec<u8> {
-    let mut b = v5[..HEADER_V3].to_vec();
-    b.extend_from_slice(&v5[HEADER..]);
-    b[8..12].copy_from_slice(&3u32.to_le_bytes());
-    reseal(&mut b);
-    b
+/// The version 3 file of a cache without a leak guard or later fields: the current file without
+/// the fields at offsets 56..96, version 3, resealed.
+fn as_version_3(current: &[u8]) -> Vec<u8> {
+    as_version(current, HEADER_V3, 3)
 }
 
-/// The version 4 file of a cache without a far field: the version 5 file without the far-field
-/// fields (offsets 72..88), version 4, resealed.
-fn as_version_4(v5: &[u8]) -> Vec<u8> {
-    let mut b = v5[..HEADER_V4].to_vec();
-    b.extend_from_slice(&v5[HEADER..]);
-    b[8..12].copy_from_slice(&4u32.to_le_bytes());
+/// The version 4 file of a cache without a far field or open-fraction test: the current file
+/// without the fields at offsets 72..96, version 4, resealed.
+fn as_version_4(current: &[u8]) -> Vec<u8> {
+    as_version(current, HEADER_V4, 4)
+}
+
+/// The version 5 file of a cache without an open-fraction test: the current file without the
+/// tolerance (offsets 88..96), version 5, resealed.
+fn as_version_5(current: &[u8]) -> Vec<u8> {
+    as_version(current, HEADER_V5, 5)
+}
+
+/// The current file with its header cut to `header` bytes and its version set to `version`.
+fn as_version(current: &[u8], header: usize, version: u32) -> Vec<u8> {
+    let mut b = current[..header].to_vec();
+    b.extend_from_slice(&current[HEADER..]);
+    b[8..12].copy_from_slice(&version.to_le_bytes());
     reseal(&mut b);
     b
 }
@@ -220,7 +228,7 @@ fn gradient_limit_round_trips() {
         c.insert(&r).unwrap();
     }
     let bytes = c.to_bytes();
-    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 5);
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 6);
     assert_eq!(u32::from_le_bytes(bytes[44..48].try_into().unwrap()), 0b11);
     assert_eq!(f64::from_le_bytes(bytes[48..56].try_into().unwrap()), 0.75);
     let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
@@ -235,6 +243,7 @@ fn gradient_limit_round_trips() {
         gradient: Some([[500.0, 0.0, 0.0], [0.0; 3], [0.0; 3]]),
         rotation_gradient: None,
         extent: Extent::isotropic(1.0),
+        open_fraction: None,
     };
     c.insert(&steep).unwrap();
     back.insert(&steep).unwrap();
@@ -268,7 +277,7 @@ fn version_2_files_still_load() {
     let c = sample(30);
     let v5 = c.to_bytes();
     let v2 = as_version_2(&v5);
-    assert_eq!(v2.len(), v5.len() - 40);
+    assert_eq!(v2.len(), v5.len() - 48);
     let back = Cache::<[f32; 3]>::from_bytes(&v2).unwrap();
     assert_eq!(back.config(), c.config());
     assert_eq!(back.config().gradient_limit, f64::INFINITY);
@@ -311,7 +320,7 @@ fn version_3_files_load_with_the_leak_guard_off() {
     }
     let v5 = limited.to_bytes();
     let v3 = as_version_3(&v5);
-    assert_eq!(v3.len(), v5.len() - 32);
+    assert_eq!(v3.len(), v5.len() - 40);
     let back = Cache::<[f32; 3]>::from_bytes(&v3).unwrap();
     assert_eq!(back.config(), limited.config());
     assert_eq!(back.config().leak_guard, LeakGuard::OFF);
@@ -398,7 +407,7 @@ fn version_4_files_load_without_far_fields() {
     }
     let v5 = guarded.to_bytes();
     let v4 = as_version_4(&v5);
-    assert_eq!(v4.len(), v5.len() - 16);
+    assert_eq!(v4.len(), v5.len() - 24);
     let back = Cache::<[f32; 3]>::from_bytes(&v4).unwrap();
     assert_eq!(back.config(), guarded.config());
     assert_eq!(back.config().far_field, FarFieldReach::OFF);
@@ -465,6 +474,108 @@ fn far_field_marker_round_trips() {
     // an invalid reach is refused when the cache is made
     for bad in [-1.0, f64::NAN, f64::INFINITY] {
         let config = CacheConfig::surface(3).with_far_field(FarFieldReach::pixels(bad));
+        assert!(matches!(
+            Cache::<[f32; 3]>::new(config),
+            Err(Error::InvalidArgument(_))
+        ));
+    }
+}
+
+/// Version 5 files (written before the open-fraction test existed) load with it off and keep
+/// their far-field marker; version 5 knows no open-fraction flag, and its records' last head
+/// field is reserved (0).
+#[test]
+fn version_5_files_load_without_open_fractions() {
+    let reach = FarFieldReach::pixels(8.0);
+    let far: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3).with_far_field(reach)).unwrap();
+    for r in sample(12).records() {
+        far.insert(&r).unwrap();
+    }
+    let current = far.to_bytes();
+    let v5 = as_version_5(&current);
+    assert_eq!(v5.len(), current.len() - 8);
+    let back = Cache::<[f32; 3]>::from_bytes(&v5).unwrap();
+    assert_eq!(back.config(), far.config());
+    assert_eq!(back.config().open_fraction_test, OpenFractionTest::OFF);
+    assert_eq!(back.config().far_field, reach);
+    assert_eq!(back.keys(), far.keys());
+    assert_eq!(back.to_bytes(), current);
+    let mut b = v5.clone();
+    b[44] |= 16;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("flags"));
+    // a version 5 record whose reserved field holds what version 6 reads as an open fraction
+    let mut b = v5.clone();
+    b[HEADER_V5 + 60] = 1;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("reserved"));
+    for len in 0..v5.len() {
+        let m = corrupt_reason(&v5[..len]);
+        assert!(
+            m.contains("truncated") || m.contains("length"),
+            "{len}: {m}"
+        );
+    }
+}
+
+/// The open-fraction test is cache state (flag bit 4, tolerance at offset 88) and each record's
+/// open fraction is stored with it (the head's last field): the restored cache answers every
+/// lookup as the saved one did, and damage to either is named.
+#[test]
+fn open_fraction_test_round_trips() {
+    let test = OpenFractionTest::new(0.125);
+    let config = CacheConfig::surface(3)
+        .with_far_field(FarFieldReach::world(0.5))
+        .with_open_fraction_test(test);
+    let c: Cache<[f32; 3]> = Cache::new(config).unwrap();
+    for (i, mut r) in sample(20).records().into_iter().enumerate() {
+        // open fractions 0, 1/8, ..., 7/8 and one record without
+        r.open_fraction = (i != 7).then_some((i % 8) as f64 / 8.0);
+        c.insert(&r).unwrap();
+    }
+    let bytes = c.to_bytes();
+    assert_eq!(
+        u32::from_le_bytes(bytes[44..48].try_into().unwrap()),
+        0b11000
+    );
+    assert_eq!(f64::from_le_bytes(bytes[88..96].try_into().unwrap()), 0.125);
+    let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
+    assert_eq!(back.config(), c.config());
+    assert_eq!(back.keys(), c.keys());
+    assert_eq!(back.to_bytes(), bytes);
+    let mut records = back.records();
+    records.sort_by(|a, b| a.value[0].total_cmp(&b.value[0]));
+    for (i, r) in records.iter().enumerate() {
+        assert_eq!(r.open_fraction, (i != 7).then_some((i % 8) as f64 / 8.0));
+    }
+    let mut refused = 0;
+    for i in 0..400 {
+        let p = DVec3::new(i as f64 * 0.02, (i % 9) as f64 * 0.5, 0.0);
+        let open = (i % 11) as f64 / 10.0;
+        let (a, b) = (
+            c.lookup_open(p, DVec3::Z, open),
+            back.lookup_open(p, DVec3::Z, open),
+        );
+        assert_eq!(a.as_ref().ok().map(|l| l.value), b.ok().map(|l| l.value));
+        let plain = c.lookup(p, DVec3::Z);
+        refused += (plain.is_ok() && a.is_err()) as usize;
+    }
+    assert!(refused > 0, "the test never refused a record");
+    // no test: flag clear and a zero field; the field without the flag is damage
+    let plain = sample(3).to_bytes();
+    assert_eq!(u64::from_le_bytes(plain[88..96].try_into().unwrap()), 0);
+    let mut b = plain.clone();
+    b[88..96].copy_from_slice(&0.5f64.to_le_bytes());
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("open-fraction"));
+    for bad in [-1.0, f64::NAN, f64::INFINITY] {
+        let mut b = bytes.clone();
+        b[88..96].copy_from_slice(&f64::to_le_bytes(bad));
+        reseal(&mut b);
+        assert!(corrupt_reason(&b).contains("open-fraction"), "{bad}");
+    }
+    for bad in [-0.5, f64::NAN] {
+        let config = CacheConfig::surface(3).with_open_fraction_test(OpenFractionTest::new(bad));
         assert!(matches!(
             Cache::<[f32; 3]>::new(config),
             Err(Error::InvalidArgument(_))

@@ -57,6 +57,7 @@ fn record(t: usize, i: usize) -> Record<[f32; 3]> {
                 DVec3::ZERO,
             ],
         },
+        open_fraction: None,
     }
 }
 

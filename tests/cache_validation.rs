@@ -143,6 +143,7 @@ fn fill(metric: Metric, param: f64, interp: Interpolation, pts: &[DVec2]) -> Cac
                 gradient: Some([g.x as f32, g.y as f32, 0.0]),
                 rotation_gradient: None,
                 extent: extent(metric, param, p),
+                open_fraction: None,
             })
             .unwrap();
     }

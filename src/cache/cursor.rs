@@ -42,6 +42,8 @@ struct Group {
     radii: [[f64; GROUP]; 3],
     /// The radius along the normal (the stored third radius), for the leak guard.
     normal_radius: [f64; GROUP],
+    /// The records' coded open fractions, for the open-fraction test.
+    open_code: [u32; GROUP],
     /// The records' gradient scales (translational, rotational), for the blend.
     gradient_scale: [f32; GROUP],
     rotation_scale: [f32; GROUP],
@@ -184,6 +186,7 @@ impl Cursor {
         }
         g.reach2[k] = (head.max_radius() * (1.0 + 1e-9)).powi(2);
         g.normal_radius[k] = head.radii[2] as f64;
+        g.open_code[k] = head.open_fraction;
         g.gradient_scale[k] = head.gradient_scale;
         g.rotation_scale[k] = head.rotation_scale;
         // exactly what `record_weight` computes from the stored record
@@ -377,7 +380,8 @@ impl Cursor {
                 let k = hits.trailing_zeros() as usize;
                 hits &= hits - 1;
                 // the same test, on the same values, as `weigh::guarded`
-                if kernel.leaks(x, n, g.position(k), g.normal(k), g.normal_radius[k]) {
+                let (position, normal) = (g.position(k), g.normal(k));
+                if kernel.refuses(x, n, position, normal, g.normal_radius[k], g.open_code[k]) {
                     continue;
                 }
                 take(g, k, weights[k]);

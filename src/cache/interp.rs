@@ -36,6 +36,7 @@
 use glam::DVec3;
 
 use super::leak_guard::LeakGuard;
+use super::open_fraction::{OpenFractionTest, OpenWindow};
 use super::record::{packed_scale, Channel, Domain, Head};
 use crate::error::{ensure_finite, Error, Result};
 
@@ -90,6 +91,11 @@ pub(crate) struct Kernel {
     pub(crate) inv_a: f64,
     /// The leak guard, when it is on and the domain has normals (surfaces).
     pub(crate) leak_guard: Option<LeakGuard>,
+    /// The cache's open-fraction test (off: infinite tolerance).
+    pub(crate) open_fraction_test: OpenFractionTest,
+    /// The open fractions the current query admits: set per query by [`Kernel::for_query`],
+    /// `None` when the test is off or the query has no open fraction.
+    pub(crate) open_window: Option<OpenWindow>,
 }
 
 /// Floor of t + ρ in Ward's weights: at a record's exact position and normal the weight is
@@ -121,6 +127,8 @@ impl Kernel {
             cos_max,
             inv_a: if a > 0.0 { 1.0 / a } else { 0.0 },
             leak_guard: None,
+            open_fraction_test: OpenFractionTest::OFF,
+            open_window: None,
         })
     }
 
@@ -130,21 +138,40 @@ impl Kernel {
         self
     }
 
-    /// Whether the leak guard refuses the record at `position` (unit `normal`, radius
-    /// `normal_radius` along it) at the query `x` with unit normal `n`.
+    /// The same kernel with the open-fraction test `test`.
+    pub(crate) fn with_open_fraction_test(mut self, test: OpenFractionTest) -> Self {
+        self.open_fraction_test = test;
+        self
+    }
+
+    /// The kernel of one query: the cache's, with the open fractions a query of open fraction
+    /// `open` admits (`None`: a query without one, which the test never refuses records at).
     #[inline]
-    pub(crate) fn leaks(
+    pub(crate) fn for_query(&self, open: Option<f64>) -> Self {
+        Kernel {
+            open_window: open.and_then(|v| OpenWindow::new(self.open_fraction_test, v)),
+            ..*self
+        }
+    }
+
+    /// Whether the leak guard or the open-fraction test refuses the record at `position` (unit
+    /// `normal`, radius `normal_radius` along it, open fraction coded `open_code`) at the query
+    /// `x` with unit normal `n`.
+    #[inline]
+    pub(crate) fn refuses(
         &self,
         x: DVec3,
         n: DVec3,
         position: DVec3,
         normal: DVec3,
         normal_radius: f64,
+        open_code: u32,
     ) -> bool {
-        match self.leak_guard {
+        let leaks = match self.leak_guard {
             Some(guard) => !guard.admits(x, n, position, normal, normal_radius),
             None => false,
-        }
+        };
+        leaks || self.open_window.is_some_and(|w| w.refuses(open_code))
     }
 
     /// Weight of a record at normalized distance `t` whose normal has cosine `cos_n` with the

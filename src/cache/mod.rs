@@ -75,37 +75,50 @@
 //! planes and spheres, so curvature alone never trips it; the tolerance's derivation is in the
 //! [`LeakGuard`] docs.
 //!
-//! # File format (version 5, little-endian)
+//! # Open-fraction test
+//! A far-field record's value is the mean over the directions its gather found open beyond the
+//! reach; a query whose hemisphere is open elsewhere (under a ledge, at the foot of a step) takes
+//! the wrong mean. [`CacheConfig::open_fraction_test`] (off by default) refuses record i at a
+//! query of open fraction V when `|Vᵢ − V| > tolerance`, for records inserted with an open
+//! fraction ([`Record::open_fraction`]) and lookups made with one ([`Cache::lookup_open`],
+//! [`Cache::irradiance_near_far`]). The tolerance's choice is in the [`OpenFractionTest`] docs.
+//!
+//! # File format (version 6, little-endian)
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic `RDFCACHE` |
-//! | 8 | 4 | format version, u32 = 5 |
+//! | 8 | 4 | format version, u32 = 6 |
 //! | 12 | 4 | channels, u32 ≥ 1 |
 //! | 16 | 4 | domain, u32 (0 surface, 1 volume) |
 //! | 20 | 4 | interpolation, u32 (`RADDIFF_INTERP_*`) |
 //! | 24 | 8 | max normal deviation, f64 radians |
 //! | 32 | 8 | record count N, u64 |
 //! | 40 | 4 | record size S = 64 + 16·channels, u32 |
-//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, bit 2 leak guard on, bit 3 far field on, the other bits 0 |
+//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, bit 2 leak guard on, bit 3 far field on, bit 4 open-fraction test on, the other bits 0 |
 //! | 48 | 8 | gradient limit c, f64: finite and > 0 if flag bit 1 is set, else 0.0 (all bits 0) |
 //! | 56 | 8 | leak guard relative tolerance, f64: finite and ≥ 0 if flag bit 2 is set, else 0.0 (all bits 0) |
 //! | 64 | 8 | leak guard absolute tolerance, f64: as the relative one |
 //! | 72 | 8 | far-field reach in L ([`FarFieldReach::world`]), f64: finite and ≥ 0 if flag bit 3 is set (one of the two reaches > 0), else 0.0 (all bits 0) |
 //! | 80 | 8 | far-field reach in pixels ([`FarFieldReach::pixels`]), f64: as the one in L |
-//! | 88 | N·S | records, in strictly increasing content order |
-//! | 88 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
+//! | 88 | 8 | open-fraction tolerance ([`OpenFractionTest::tolerance`]), f64: finite and ≥ 0 if flag bit 4 is set, else 0.0 (all bits 0) |
+//! | 96 | N·S | records, in strictly increasing content order |
+//! | 96 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
 //!
-//! Older versions are still read. Version 4 (before the far-field marker) has the same header up
+//! Older versions are still read. Version 5 (before the open-fraction test) has the same header
+//! up to offset 88 without the tolerance (records start at 88), flag bit 4 must be 0, and its
+//! records' open-fraction field (reserved then) must be 0: no record has an open fraction.
+//! Version 4 (before the far-field marker) has the same header up
 //! to offset 72 without the reaches (records start at 72), flag bit 3 must be 0, and the cache's
 //! records hold no far fields. Version 3 (before the leak guard) also lacks the leak-guard fields
 //! (records start at 56), flag bit 2 must be 0, and the cache has no leak guard. Version 2 (before
 //! the gradient limit) also lacks the gradient-limit field (records start at 48), flag bit 1 must
-//! be 0, and the cache has no gradient limit. [`Cache::save`] always writes version 5.
+//! be 0, and the cache has no gradient limit. [`Cache::save`] always writes version 6.
 //!
 //! Record (S bytes): position 3×f64; frame as a unit quaternion 4×f32 (x, y, z, w with w ≥ 0,
 //! rotating the world axes onto the frame: surface axis 0, axis 1 = n × axis 0, normal n; volume
 //! axes 0-2); radii 3×f32 (surface: radius along axis 0, axis 1, and their minimum for the normal
-//! direction); translational and rotational gradient scales 2×f32; reserved u32 = 0; then per
+//! direction); translational and rotational gradient scales 2×f32; open fraction u32 (0: none,
+//! else `1 + round(V·2³⁰)`, at most `2³⁰ + 1`); then per
 //! channel: value f32, translational gradient 3×binary16, rotational gradient 3×binary16, the
 //! gradients relative to their scale. Content order: position bit patterns (x, then y, then z,
 //! as u64), then the record's bytes compared lexicographically. Version 1 files (88-byte heads
@@ -114,7 +127,7 @@
 //! [`Cache::save`] writes a temporary file in the same directory, `fsync`s it, renames it over the
 //! target and `fsync`s the directory: a crash leaves either the old or the new file. [`Cache::load`]
 //! checks the magic, version, header fields, exact length, checksum, every record (finite numbers,
-//! radii in range, unit quaternion, reserved fields) and the record order, and reports
+//! radii in range, unit quaternion, open fractions in range) and the record order, and reports
 //! [`Error::Corrupt`] (or [`Error::Io`]) with the reason; it never panics on any input.
 
 mod blend;
@@ -126,6 +139,7 @@ pub mod interp;
 pub mod irradiance;
 mod leak_guard;
 pub mod metric;
+mod open_fraction;
 mod persist;
 mod record;
 mod store;
@@ -144,6 +158,7 @@ pub use cursor::Cursor;
 pub use far_field::FarFieldReach;
 pub use interp::Interpolation;
 pub use leak_guard::LeakGuard;
+pub use open_fraction::OpenFractionTest;
 pub use record::{
     Domain, Extent, Record, CHANNEL_BYTES, HEAD_BYTES, POSITION_MAX, RADIUS_MAX, RADIUS_MIN,
 };
@@ -206,6 +221,12 @@ pub struct CacheConfig {
     /// cache from being filled or read as one of irradiance. Saved with the cache (file format
     /// version 5; older files load with it off).
     pub far_field: FarFieldReach,
+    /// The open-fraction test of far-field caches (default [`OpenFractionTest::OFF`]): a record
+    /// i with an open fraction Vᵢ is not used at a query of open fraction V
+    /// ([`Cache::lookup_open`], [`Cache::irradiance_near_far`]) when `|Vᵢ − V| > tolerance` (see
+    /// [`OpenFractionTest`]). The tolerance must be ≥ 0; [`Cache::new`] rejects NaN and negative
+    /// ones. Saved with the cache (file format version 6; older files load with it off).
+    pub open_fraction_test: OpenFractionTest,
 }
 
 impl CacheConfig {
@@ -221,6 +242,7 @@ impl CacheConfig {
             gradient_limit: f64::INFINITY,
             leak_guard: LeakGuard::OFF,
             far_field: FarFieldReach::OFF,
+            open_fraction_test: OpenFractionTest::OFF,
         }
     }
 
@@ -235,6 +257,7 @@ impl CacheConfig {
             gradient_limit: f64::INFINITY,
             leak_guard: LeakGuard::OFF,
             far_field: FarFieldReach::OFF,
+            open_fraction_test: OpenFractionTest::OFF,
         }
     }
 
@@ -266,6 +289,12 @@ impl CacheConfig {
     /// The same configuration with [`CacheConfig::far_field`] set to `reach`.
     pub fn with_far_field(mut self, reach: FarFieldReach) -> Self {
         self.far_field = reach;
+        self
+    }
+
+    /// The same configuration with [`CacheConfig::open_fraction_test`] set to `test`.
+    pub fn with_open_fraction_test(mut self, test: OpenFractionTest) -> Self {
+        self.open_fraction_test = test;
         self
     }
 
@@ -349,12 +378,13 @@ const PRECISION_RATIO: f64 = (1u64 << 40) as f64;
 impl<V: CacheValue> Cache<V> {
     /// An empty cache. `InvalidArgument` for 0 or more than [`MAX_CHANNELS`] channels, a channel
     /// count that disagrees with `V`, a maximum normal deviation outside (0, π] (surfaces), a
-    /// gradient limit that is not > 0 (NaN, 0, negative), or a far-field reach that is negative
-    /// or not finite.
+    /// gradient limit that is not > 0 (NaN, 0, negative), a far-field reach that is negative
+    /// or not finite, or a leak-guard or open-fraction tolerance that is negative or NaN.
     pub fn new(config: CacheConfig) -> Result<Self> {
         check_gradient_limit(config.gradient_limit)?;
         config.leak_guard.validate()?;
         config.far_field.validate()?;
+        config.open_fraction_test.validate()?;
         if config.channels == 0 || config.channels > MAX_CHANNELS {
             return Err(Error::InvalidArgument(format!(
                 "channels must be in 1..={MAX_CHANNELS} (got {})",
@@ -374,7 +404,8 @@ impl<V: CacheValue> Cache<V> {
             config.domain,
             config.max_normal_deviation,
         )?
-        .with_leak_guard(config.leak_guard);
+        .with_leak_guard(config.leak_guard)
+        .with_open_fraction_test(config.open_fraction_test);
         let words = (HEAD_BYTES + CHANNEL_BYTES * config.channels).div_ceil(8);
         Ok(Cache {
             config,
@@ -410,6 +441,16 @@ impl<V: CacheValue> Cache<V> {
         guard.validate()?;
         self.config.leak_guard = guard;
         self.kernel = self.kernel.with_leak_guard(guard);
+        Ok(())
+    }
+
+    /// Sets [`CacheConfig::open_fraction_test`] for every lookup from now on (it acts when
+    /// records are weighed; stored records keep their open fractions). `InvalidArgument` (and no
+    /// change) for a NaN or negative tolerance.
+    pub fn set_open_fraction_test(&mut self, test: OpenFractionTest) -> Result<()> {
+        test.validate()?;
+        self.config.open_fraction_test = test;
+        self.kernel = self.kernel.with_open_fraction_test(test);
         Ok(())
     }
 
@@ -490,8 +531,8 @@ impl<V: CacheValue> Cache<V> {
 
     /// Inserts a record, its gradients limited by [`CacheConfig::gradient_limit`] (if set).
     /// Returns `false` (and changes nothing) if an identical record is already stored. `InvalidArgument` for non-finite or out-of-range input, a zero surface normal,
-    /// degenerate axes with anisotropic radii, or a largest radius below |position|·2⁻⁴⁰ (beyond
-    /// the index's resolution).
+    /// degenerate axes with anisotropic radii, a largest radius below |position|·2⁻⁴⁰ (beyond
+    /// the index's resolution), or an open fraction outside [0, 1].
     pub fn insert(&self, record: &Record<V>) -> Result<bool> {
         let g = record.gradient.as_ref().map(record::channel_major);
         let r = record.rotation_gradient.as_ref().map(record::channel_major);
@@ -502,6 +543,7 @@ impl<V: CacheValue> Cache<V> {
             gradient: g.as_deref(),
             rotation: r.as_deref(),
             extent: record.extent,
+            open_fraction: record.open_fraction,
         })
     }
 
@@ -609,11 +651,42 @@ impl<V: CacheValue> Cache<V> {
         normal: DVec3,
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
+        self.lookup_into_query(position, normal, None, out)
+    }
+
+    /// [`Cache::lookup_into`] for a query whose open fraction is `open_fraction` (in [0, 1]): the
+    /// cache's [open-fraction test](OpenFractionTest) refuses the records whose open fraction
+    /// differs from it by more than the tolerance (with the test off, the result of
+    /// [`Cache::lookup_into`] bit for bit). `InvalidArgument` for an open fraction outside
+    /// [0, 1].
+    pub fn lookup_into_open(
+        &self,
+        position: DVec3,
+        normal: DVec3,
+        open_fraction: f64,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
+        open_fraction::check_query_open_fraction(open_fraction)?;
+        self.lookup_into_query(position, normal, Some(open_fraction), out)
+    }
+
+    /// [`Cache::lookup_into`] with the query's open fraction, if any, through this thread's
+    /// cursor.
+    fn lookup_into_query(
+        &self,
+        position: DVec3,
+        normal: DVec3,
+        open: Option<f64>,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
         let mut result = None;
         thread_cursor::with(self.identity, |cursor| {
-            result = Some(self.lookup_into_with(cursor, position, normal, out));
+            result = Some(self.lookup_into_cursor(cursor, position, normal, open, out));
         });
-        result.unwrap_or_else(|| self.lookup_into_indexed(position, normal, out))
+        result.unwrap_or_else(|| {
+            let n = self.check_lookup(position, normal, out.len())?;
+            self.lookup_checked_indexed(&self.kernel.for_query(open), position, n, out)
+        })
     }
 
     /// [`Cache::lookup_into`] through the index alone, with no per-thread state: the reference
@@ -625,12 +698,28 @@ impl<V: CacheValue> Cache<V> {
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
         let n = self.check_lookup(position, normal, out.len())?;
-        self.lookup_checked_indexed(position, n, out)
+        self.lookup_checked_indexed(&self.kernel, position, n, out)
     }
 
-    /// The index path of a query already validated (`n` the unit normal).
+    /// [`Cache::lookup_into_open`] through the index alone (the reference of its cursor paths).
+    pub fn lookup_into_indexed_open(
+        &self,
+        position: DVec3,
+        normal: DVec3,
+        open_fraction: f64,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
+        open_fraction::check_query_open_fraction(open_fraction)?;
+        let n = self.check_lookup(position, normal, out.len())?;
+        let kernel = self.kernel.for_query(Some(open_fraction));
+        self.lookup_checked_indexed(&kernel, position, n, out)
+    }
+
+    /// The index path of a query already validated (`n` the unit normal) with the query's
+    /// `kernel`.
     fn lookup_checked_indexed(
         &self,
+        kernel: &Kernel,
         position: DVec3,
         n: DVec3,
         out: &mut [f32],
@@ -640,7 +729,7 @@ impl<V: CacheValue> Cache<V> {
         self.index.query(position, |id| {
             slots.push(self.prefetch_record(self.records.slot_ptr(id as usize) as usize));
         });
-        self.interpolate(position, n, &slots, out)
+        self.interpolate(kernel, position, n, &slots, out)
     }
 
     /// [`Cache::lookup_into`] for spatially coherent queries: `cursor` (one per thread, see
@@ -653,7 +742,34 @@ impl<V: CacheValue> Cache<V> {
         normal: DVec3,
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
+        self.lookup_into_cursor(cursor, position, normal, None, out)
+    }
+
+    /// [`Cache::lookup_into_open`] through `cursor` (see [`Cache::lookup_into_with`]): results
+    /// bit for bit those of [`Cache::lookup_into_indexed_open`].
+    pub fn lookup_into_with_open(
+        &self,
+        cursor: &mut Cursor,
+        position: DVec3,
+        normal: DVec3,
+        open_fraction: f64,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
+        open_fraction::check_query_open_fraction(open_fraction)?;
+        self.lookup_into_cursor(cursor, position, normal, Some(open_fraction), out)
+    }
+
+    /// The cursor path of every lookup, with the query's open fraction if any.
+    fn lookup_into_cursor(
+        &self,
+        cursor: &mut Cursor,
+        position: DVec3,
+        normal: DVec3,
+        open: Option<f64>,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
         let n = self.check_lookup(position, normal, out.len())?;
+        let kernel = self.kernel.for_query(open);
         let Some(finest) = self.index.finest_side() else {
             return Err(Error::NotFound(format!(
                 "no cache record covers {position}"
@@ -661,7 +777,7 @@ impl<V: CacheValue> Cache<V> {
         };
         let source = (self.identity, self.generation, self.len());
         match cursor.plan(source, position, finest) {
-            cursor::Plan::Plain => return self.lookup_checked_indexed(position, n, out),
+            cursor::Plan::Plain => return self.lookup_checked_indexed(&kernel, position, n, out),
             cursor::Plan::Anchor(reach) => {
                 // remembered in content order, so that the records of later lookups arrive
                 // sorted and their sort below is a single check
@@ -689,12 +805,12 @@ impl<V: CacheValue> Cache<V> {
         let stored = |slot: usize| unsafe { self.stored_at(slot) };
         if self.kernel.interpolation == Interpolation::Log {
             let mut used = weigh::UsedRecords::new();
-            cursor.weigh(&self.kernel, position, n, stored, &mut used);
+            cursor.weigh(&kernel, position, n, stored, &mut used);
             return self.blend_used(position, n, &mut used, out);
         }
         // the records come in content order: straight into the blend's lanes
         let mut covering = blend::Covering::new(self.config.channels);
-        cursor.weigh_covering(&self.kernel, position, n, stored, &mut covering);
+        cursor.weigh_covering(&kernel, position, n, stored, &mut covering);
         self.blend_covering(position, n, &covering, out)
     }
 
@@ -721,6 +837,7 @@ impl<V: CacheValue> Cache<V> {
     /// superset of those covering `position`; `n` the unit query normal) into `out`.
     fn interpolate(
         &self,
+        kernel: &Kernel,
         position: DVec3,
         n: DVec3,
         slots: &[usize],
@@ -729,7 +846,7 @@ impl<V: CacheValue> Cache<V> {
         let mut used = weigh::UsedRecords::new();
         // SAFETY: every slot was taken from this cache's storage during this lookup.
         let stored = |slot: usize| unsafe { self.stored_at(slot) };
-        weigh::weigh(&self.kernel, position, n, slots, stored, &mut used);
+        weigh::weigh(kernel, position, n, slots, stored, &mut used);
         self.blend_used(position, n, &mut used, out)
     }
 
@@ -799,6 +916,17 @@ impl<V: CacheValue> Cache<V> {
     /// served from its cursor (see [`Cache::lookup_into`]).
     pub fn lookup(&self, position: DVec3, normal: DVec3) -> Result<Lookup<V>> {
         self.lookup_via(|out| self.lookup_into(position, normal, out))
+    }
+
+    /// [`Cache::lookup`] for a query whose open fraction is `open_fraction` (in [0, 1]; see
+    /// [`Cache::lookup_into_open`]).
+    pub fn lookup_open(
+        &self,
+        position: DVec3,
+        normal: DVec3,
+        open_fraction: f64,
+    ) -> Result<Lookup<V>> {
+        self.lookup_via(|out| self.lookup_into_open(position, normal, open_fraction, out))
     }
 
     /// [`Cache::lookup`] through the index alone (see [`Cache::lookup_into_indexed`]).
@@ -872,6 +1000,7 @@ impl<V: CacheValue> Cache<V> {
                         radii: h.radii.map(|r| r as f64),
                         axes: frame.0,
                     },
+                    open_fraction: open_fraction::decode(h.open_fraction),
                 }
             })
             .collect()

@@ -7,23 +7,29 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::record::{self, Domain, CHANNEL_BYTES, FNV_OFFSET, HEAD_BYTES};
 use super::{
-    Cache, CacheConfig, CacheValue, FarFieldReach, Interpolation, LeakGuard, MAX_CHANNELS,
+    Cache, CacheConfig, CacheValue, FarFieldReach, Interpolation, LeakGuard, OpenFractionTest,
+    MAX_CHANNELS,
 };
 use crate::error::{Error, Result};
 
 /// File magic.
 pub const MAGIC: [u8; 8] = *b"RDFCACHE";
-/// Format version written by [`Cache::to_bytes`] (versions 2 to 5 are read).
-pub const FORMAT_VERSION: u32 = 5;
+/// Format version written by [`Cache::to_bytes`] (versions 2 to 6 are read).
+pub const FORMAT_VERSION: u32 = 6;
+/// Version 5: no open-fraction test, records at [`HEADER_BYTES_V5`] without open fractions.
+const FORMAT_VERSION_5: u32 = 5;
 /// Version 4: no far-field fields, records at [`HEADER_BYTES_V4`].
 const FORMAT_VERSION_4: u32 = 4;
 /// Version 3: no leak-guard fields either, records at [`HEADER_BYTES_V3`].
 const FORMAT_VERSION_3: u32 = 3;
 /// The oldest version read: no gradient-limit field either, records at [`HEADER_BYTES_V2`].
 const FORMAT_VERSION_2: u32 = 2;
+/// Header size of version 6: the version 5 header plus the open-fraction tolerance (f64 at
+/// offset 88).
+const HEADER_BYTES: usize = 96;
 /// Header size of version 5: the version 4 header plus the far field's two reaches (f64 at
 /// offsets 72 and 80).
-const HEADER_BYTES: usize = 88;
+const HEADER_BYTES_V5: usize = 88;
 /// Header size of version 4: the version 3 header plus the leak guard's two tolerances (f64 at
 /// offsets 56 and 64).
 const HEADER_BYTES_V4: usize = 72;
@@ -42,6 +48,9 @@ const FLAG_LEAK_GUARD: u32 = 4;
 /// Header flag (offset 44, version 5): [`CacheConfig::far_field`] is on (its reaches at offsets
 /// 72 and 80).
 const FLAG_FAR_FIELD: u32 = 8;
+/// Header flag (offset 44, version 6): [`CacheConfig::open_fraction_test`] is on (its tolerance
+/// at offset 88).
+const FLAG_OPEN_FRACTION: u32 = 16;
 
 impl<V: CacheValue> Cache<V> {
     /// The cache in the documented binary format (records in content order, so equal record
@@ -76,6 +85,10 @@ impl<V: CacheValue> Cache<V> {
         if far.is_on() {
             flags |= FLAG_FAR_FIELD;
         }
+        let open = self.config.open_fraction_test;
+        if open.is_on() {
+            flags |= FLAG_OPEN_FRACTION;
+        }
         out.extend_from_slice(&flags.to_le_bytes());
         let limit = if limited {
             self.config.gradient_limit
@@ -93,6 +106,8 @@ impl<V: CacheValue> Cache<V> {
         let far = if far.is_on() { far } else { FarFieldReach::OFF };
         out.extend_from_slice(&far.world.to_le_bytes());
         out.extend_from_slice(&far.pixels.to_le_bytes());
+        let tolerance = if open.is_on() { open.tolerance } else { 0.0 };
+        out.extend_from_slice(&tolerance.to_le_bytes());
         for id in ids {
             let (head, chans) = self.stored(id);
             record::serialize(head, chans, &mut out);
@@ -105,9 +120,10 @@ impl<V: CacheValue> Cache<V> {
     /// Parses and validates a cache in the documented binary format. `Corrupt` with the reason
     /// for anything that [`Cache::to_bytes`] could not have written, including a channel count
     /// that disagrees with `V`. Never panics.
-    /// Version 4 files (no far-field marker: records hold no far fields), version 3 files (no
-    /// leak guard either: it is off) and version 2 files (no gradient limit either) are read as
-    /// well.
+    /// Version 5 files (no open-fraction test: it is off, and records have no open fraction),
+    /// version 4 files (no far-field marker either: records hold no far fields), version 3 files
+    /// (no leak guard either: it is off) and version 2 files (no gradient limit either) are read
+    /// as well.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
         let corrupt = |m: String| Err(Error::Corrupt(m));
         if bytes.len() < HEADER_BYTES_V2 + CHECKSUM_BYTES {
@@ -125,6 +141,7 @@ impl<V: CacheValue> Cache<V> {
         let version = u32_at(8);
         let header_bytes = match version {
             FORMAT_VERSION => HEADER_BYTES,
+            FORMAT_VERSION_5 => HEADER_BYTES_V5,
             FORMAT_VERSION_4 => HEADER_BYTES_V4,
             FORMAT_VERSION_3 => HEADER_BYTES_V3,
             FORMAT_VERSION_2 => HEADER_BYTES_V2,
@@ -169,7 +186,16 @@ impl<V: CacheValue> Cache<V> {
             FORMAT_VERSION_2 => FLAG_NON_NEGATIVE,
             FORMAT_VERSION_3 => FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT,
             FORMAT_VERSION_4 => FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT | FLAG_LEAK_GUARD,
-            _ => FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT | FLAG_LEAK_GUARD | FLAG_FAR_FIELD,
+            FORMAT_VERSION_5 => {
+                FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT | FLAG_LEAK_GUARD | FLAG_FAR_FIELD
+            }
+            _ => {
+                FLAG_NON_NEGATIVE
+                    | FLAG_GRADIENT_LIMIT
+                    | FLAG_LEAK_GUARD
+                    | FLAG_FAR_FIELD
+                    | FLAG_OPEN_FRACTION
+            }
         };
         let f64_at = |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
         if flags & !known != 0 {
@@ -220,7 +246,7 @@ impl<V: CacheValue> Cache<V> {
             None => LeakGuard::OFF,
         };
         let far_field = match field_pair(
-            version == FORMAT_VERSION,
+            version >= FORMAT_VERSION_5,
             FLAG_FAR_FIELD,
             72,
             "far-field",
@@ -235,6 +261,26 @@ impl<V: CacheValue> Cache<V> {
                 reach
             }
             None => FarFieldReach::OFF,
+        };
+        let open_fraction_test = if version < FORMAT_VERSION {
+            OpenFractionTest::OFF
+        } else {
+            let tolerance = f64_at(88);
+            if flags & FLAG_OPEN_FRACTION != 0 {
+                let test = OpenFractionTest { tolerance };
+                if test.validate().is_err() || !test.is_on() {
+                    return corrupt(format!(
+                        "open-fraction tolerance {tolerance} is not finite and >= 0"
+                    ));
+                }
+                test
+            } else if tolerance.to_bits() != 0 {
+                return corrupt(
+                    "open-fraction field is set but the open-fraction flag is not".into(),
+                );
+            } else {
+                OpenFractionTest::OFF
+            }
         };
         let expected = usize::try_from(count)
             .ok()
@@ -268,6 +314,7 @@ impl<V: CacheValue> Cache<V> {
             gradient_limit,
             leak_guard,
             far_field,
+            open_fraction_test,
         };
         let mut cache = Cache::new(config).map_err(|e| Error::Corrupt(format!("header: {e}")))?;
         let mut previous: Option<(record::Head, record::Channels)> = None;
@@ -275,6 +322,12 @@ impl<V: CacheValue> Cache<V> {
             let at = header_bytes + i * stride;
             let (head, chans) = record::deserialize(domain, &bytes[at..at + stride])
                 .map_err(|e| Error::Corrupt(format!("record {i}: {e}")))?;
+            if version < FORMAT_VERSION && head.open_fraction != 0 {
+                return corrupt(format!(
+                    "record {i}: reserved field is not 0 (version {version} records have no open \
+                     fraction)"
+                ));
+            }
             if let Some((h, c)) = &previous {
                 if record::content_order((h, c), (&head, &chans)).is_ge() {
                     return corrupt(format!(

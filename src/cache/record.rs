@@ -117,10 +117,15 @@ pub struct Record<V> {
     pub rotation_gradient: Option<[V; 3]>,
     /// The validity region.
     pub extent: Extent,
+    /// The open fraction of a far-field record's gather (in [0, 1]: the share of its measure
+    /// whose rays reach at least the cache's reach), for the
+    /// [open-fraction test](super::OpenFractionTest); `None` (the default) for records of other
+    /// caches, and for far-field records the test should never refuse. Stored to within 2⁻³¹.
+    pub open_fraction: Option<f64>,
 }
 
 impl<V: CacheValue> Record<V> {
-    /// A record with no gradients.
+    /// A record with no gradients and no open fraction.
     pub fn new(position: DVec3, normal: DVec3, value: V, extent: Extent) -> Self {
         Record {
             position,
@@ -129,6 +134,7 @@ impl<V: CacheValue> Record<V> {
             gradient: None,
             rotation_gradient: None,
             extent,
+            open_fraction: None,
         }
     }
 }
@@ -151,8 +157,8 @@ pub(crate) struct Head {
     pub radii: [f32; 3],
     pub gradient_scale: f32,
     pub rotation_scale: f32,
-    /// Always 0 (keeps the head a multiple of 8 bytes; reserved for flags).
-    pub reserved: u32,
+    /// The record's open fraction, coded (0: none; see [`super::open_fraction`]).
+    pub open_fraction: u32,
 }
 
 const _: () = assert!(std::mem::size_of::<Head>() == HEAD_BYTES);
@@ -318,6 +324,7 @@ pub(crate) struct RecordInput<'a> {
     pub gradient: Option<&'a [f32]>,
     pub rotation: Option<&'a [f32]>,
     pub extent: Extent,
+    pub open_fraction: Option<f64>,
 }
 
 pub(crate) type Channels = SmallVec<[Channel; 8]>;
@@ -537,7 +544,7 @@ pub(crate) fn encode(
         radii,
         gradient_scale,
         rotation_scale,
-        reserved: 0,
+        open_fraction: super::open_fraction::encode(input.open_fraction)?,
     };
     let chans: Channels = (0..channels)
         .map(|c| Channel {
@@ -572,7 +579,7 @@ pub(crate) fn serialize(head: &Head, chans: &[Channel], out: &mut Vec<u8>) {
     }
     out.extend_from_slice(&head.gradient_scale.to_le_bytes());
     out.extend_from_slice(&head.rotation_scale.to_le_bytes());
-    out.extend_from_slice(&head.reserved.to_le_bytes());
+    out.extend_from_slice(&head.open_fraction.to_le_bytes());
     for c in chans {
         out.extend_from_slice(&c.value.to_le_bytes());
         for h in c.gradient.iter().chain(&c.rotation) {
@@ -607,7 +614,7 @@ pub(crate) fn content_order(a: (&Head, &[Channel]), b: (&Head, &[Channel])) -> s
 
 /// Parses one serialized record (length `HEAD_BYTES + channels * CHANNEL_BYTES`) and checks that
 /// it could have been produced by [`encode`]: finite numbers, radii in range, unit frame
-/// quaternion, reserved field 0, finite binary16 gradients.
+/// quaternion, open fraction in range, finite binary16 gradients.
 pub(crate) fn deserialize(domain: Domain, bytes: &[u8]) -> Result<(Head, Channels)> {
     let f64_at = |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
     let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
@@ -623,9 +630,9 @@ pub(crate) fn deserialize(domain: Domain, bytes: &[u8]) -> Result<(Head, Channel
     }
     head.gradient_scale = f32_at(52);
     head.rotation_scale = f32_at(56);
-    head.reserved = u32::from_le_bytes(bytes[60..64].try_into().unwrap_or([0; 4]));
-    if head.reserved != 0 {
-        return Err(corrupt("reserved field is not 0"));
+    head.open_fraction = u32::from_le_bytes(bytes[60..64].try_into().unwrap_or([0; 4]));
+    if head.open_fraction > super::open_fraction::CODE_MAX {
+        return Err(corrupt("open fraction out of range"));
     }
     if !head
         .position

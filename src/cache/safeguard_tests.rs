@@ -28,6 +28,7 @@ fn steep_surface_record() -> Record<[f32; 2]> {
             radii: [1.0, 0.5, 0.0],
             axes: [DVec3::X, DVec3::ZERO, DVec3::ZERO],
         },
+        open_fraction: None,
     }
 }
 
@@ -113,6 +114,7 @@ fn gradient_limit_leaves_records_within_the_bound_bit_for_bit() {
         gradient: Some([[0.5, 1.5], [0.0, 0.0], [0.0, 0.0]]),
         rotation_gradient: Some([[0.3, 0.0], [0.0, 0.4], [0.0, 0.0]]),
         extent: Extent::isotropic(1.0),
+        open_fraction: None,
     };
     let plain: Cache<[f32; 2]> = Cache::new(CacheConfig::surface(2)).unwrap();
     let limited: Cache<[f32; 2]> =
@@ -146,6 +148,7 @@ fn gradient_limit_removes_the_gradients_of_zero_channels() {
         gradient: Some([[3.0, 0.5], [1.0, 0.0], [0.0, 0.0]]),
         rotation_gradient: Some([[2.0, 0.0], [0.0, 0.0], [0.0, 0.0]]),
         extent: Extent::isotropic(1.0),
+        open_fraction: None,
     })
     .unwrap();
     let r = &c.records()[0];
@@ -179,6 +182,7 @@ fn gradient_limit_in_volumes_counts_translation_only() {
                 DVec3::Z,
             ],
         },
+        open_fraction: None,
     };
     let config = CacheConfig::volume(2).with_gradient_limit(0.5);
     let limited: Cache<[f32; 2]> = Cache::new(config).unwrap();

@@ -20,6 +20,7 @@ fn rec(p: DVec3, value: f32, gradient: [f32; 3], r: f64) -> Record<f32> {
         gradient: Some(gradient),
         rotation_gradient: None,
         extent: Extent::isotropic(r),
+        open_fraction: None,
     }
 }
 
@@ -264,6 +265,7 @@ fn duplicates_are_detected_and_order_does_not_matter() {
             gradient: Some([[g[0]; 3], [g[1]; 3], [0.0; 3]]),
             rotation_gradient: Some([[0.1; 3], [0.2; 3], [0.0; 3]]),
             extent: Extent::isotropic(0.3 + rnd()),
+            open_fraction: None,
         });
     }
     let a: Cache<[f32; 3]> = Cache::new(CacheConfig::surface(3)).unwrap();
@@ -370,6 +372,7 @@ fn gradients_survive_binary16_storage() {
         gradient: Some(g),
         rotation_gradient: None,
         extent: Extent::isotropic(1.0),
+        open_fraction: None,
     };
     c.insert(&r).unwrap();
     let back = c.records().pop().unwrap();
@@ -396,6 +399,7 @@ fn many_channels_cross_the_accumulation_blocks() {
         gradient: Some([gx, vec![0.0; 27], vec![0.0; 27]]),
         rotation_gradient: None,
         extent: Extent::isotropic(1.0),
+        open_fraction: None,
     };
     c.insert(&r).unwrap();
     let l = c.lookup(DVec3::new(0.5, 0.0, 0.0), DVec3::ZERO).unwrap();

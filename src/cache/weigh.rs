@@ -36,8 +36,8 @@ pub(crate) fn record_weight(kernel: &Kernel, head: &Head, x: DVec3, n: DVec3) ->
     )
 }
 
-/// `weight`, or 0 when the kernel's leak guard refuses the record `head` (unit `normal`) at the
-/// query (`x`, `n`).
+/// `weight`, or 0 when the kernel's leak guard or open-fraction test refuses the record `head`
+/// (unit `normal`) at the query (`x`, `n`).
 #[inline(always)]
 pub(crate) fn guarded(
     kernel: &Kernel,
@@ -47,7 +47,16 @@ pub(crate) fn guarded(
     head: &Head,
     normal: DVec3,
 ) -> f64 {
-    if weight > 0.0 && kernel.leaks(x, n, head.position(), normal, head.radii[2] as f64) {
+    if weight > 0.0
+        && kernel.refuses(
+            x,
+            n,
+            head.position(),
+            normal,
+            head.radii[2] as f64,
+            head.open_fraction,
+        )
+    {
         0.0
     } else {
         weight

@@ -93,6 +93,11 @@ pub struct raddiff_cache_record {
     pub radii: [f64; 3],
     /// Principal axes (need not be unit; may be zero for isotropic radii).
     pub axes: [raddiff_vec3; 3],
+    /// Nullable: the open fraction of a far-field record's gather, in [0, 1] (the share of its
+    /// measure whose rays reach at least the reach), for the open-fraction test
+    /// (`raddiff_cache_set_open_fraction_tolerance`). NULL: none (the test never refuses the
+    /// record; what a zero-initialized record has). Read during the call; stored to within 2^-31.
+    pub open_fraction: *const f64,
 }
 
 fn config_from_c(c: &raddiff_cache_config) -> Result<CacheConfig, FfiError> {
@@ -110,6 +115,7 @@ fn config_from_c(c: &raddiff_cache_config) -> Result<CacheConfig, FfiError> {
         },
         leak_guard: crate::cache::LeakGuard::OFF,
         far_field: crate::cache::FarFieldReach::OFF,
+        open_fraction_test: crate::cache::OpenFractionTest::OFF,
     })
 }
 
@@ -150,7 +156,7 @@ pub extern "C" fn raddiff_cache_free(cache: *mut raddiff_cache) {
 
 /// Inserts a record (thread-safe). Inserting a record identical to a stored one is a no-op that
 /// succeeds. `RADDIFF_ERROR_INVALID_ARGUMENT` for non-finite input, radii out of range, a zero
-/// surface normal, or degenerate axes with anisotropic radii.
+/// surface normal, degenerate axes with anisotropic radii, or an open fraction outside [0, 1].
 #[no_mangle]
 pub extern "C" fn raddiff_cache_insert(
     cache: *mut raddiff_cache,
@@ -173,6 +179,8 @@ pub extern "C" fn raddiff_cache_insert(
                 )
             })
             .transpose()?;
+        // SAFETY: NULL or one readable double (the header's contract).
+        let open_fraction = unsafe { r.open_fraction.as_ref() }.copied();
         cache.inner.insert_flat(&crate::cache::RecordInput {
             position: r.position.into(),
             normal: r.normal.into(),
@@ -183,6 +191,7 @@ pub extern "C" fn raddiff_cache_insert(
                 radii: r.radii,
                 axes: r.axes.map(DVec3::from),
             },
+            open_fraction,
         })?;
         Ok(())
     })
@@ -263,6 +272,38 @@ pub extern "C" fn raddiff_cache_lookup_with(
 }
 
 /// Runs a lookup into a stack buffer (heap beyond 32 channels) and copies it to the caller.
+/// `raddiff_cache_lookup` (`cursor` NULL) or `raddiff_cache_lookup_with` (`cursor` not NULL) for
+/// a query whose open fraction is `open_fraction` (in [0, 1]; the near field's, see
+/// `raddiff_near_field`): the cache's open-fraction test refuses every record whose open fraction
+/// differs from it by more than the tolerance (`raddiff_cache_set_open_fraction_tolerance`;
+/// records inserted without an open fraction are never refused). With the test off, the result of
+/// `raddiff_cache_lookup` bit for bit. `RADDIFF_ERROR_NOT_FOUND` when no admitted record covers
+/// the point; `RADDIFF_ERROR_INVALID_ARGUMENT` for an open fraction outside [0, 1] (NaN
+/// included). Thread-safe as `raddiff_cache_lookup`; a cursor is used by one thread only.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_lookup_open(
+    cache: *const raddiff_cache,
+    cursor: *mut raddiff_cache_cursor,
+    position: raddiff_vec3,
+    normal: raddiff_vec3,
+    open_fraction: f64,
+    value: *mut f32,
+    weight_sum: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        // SAFETY: NULL or a live cursor used by this thread only (the header's contract).
+        let cursor = unsafe { cursor.as_mut() };
+        let (p, n) = (position.into(), normal.into());
+        lookup_to_c(cache, value, weight_sum, |out| match cursor {
+            Some(c) => cache
+                .inner
+                .lookup_into_with_open(&mut c.inner, p, n, open_fraction, out),
+            None => cache.inner.lookup_into_open(p, n, open_fraction, out),
+        })
+    })
+}
+
 fn lookup_to_c(
     cache: &raddiff_cache,
     value: *mut f32,
@@ -381,6 +422,45 @@ pub extern "C" fn raddiff_cache_get_leak_guard(
         let g = cache.inner.config().leak_guard;
         *relative = g.relative;
         *absolute = g.absolute;
+        Ok(())
+    })
+}
+
+/// Sets the open-fraction test of a far-field cache for every lookup from now on: a record with
+/// open fraction V_i (`raddiff_cache_record.open_fraction`) is not used at a query of open
+/// fraction V (`raddiff_cache_lookup_open`, `raddiff_cache_irradiance_near_far`) when
+/// |V_i - V| > `tolerance`. A record's far field is the mean over the directions its gather found
+/// open; a query whose hemisphere is open elsewhere (under a ledge, at the foot of a step) would
+/// take the wrong mean. The tolerance is dimensionless (0.1-0.2 suits gathers of a thousand rays
+/// or more, whose open fractions have a noise of at most 0.5/sqrt(rays)); INFINITY (the default)
+/// turns the test off. `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for a NaN or negative
+/// tolerance. Saved with the cache and restored by `raddiff_cache_load` (files written before it
+/// load with it off). **Not thread-safe**: no other thread may use the cache during the call.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_set_open_fraction_tolerance(
+    cache: *mut raddiff_cache,
+    tolerance: f64,
+) -> raddiff_status {
+    guard(|| {
+        // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
+        let cache = unsafe { out_ref(cache, "cache")? };
+        cache
+            .inner
+            .set_open_fraction_test(crate::cache::OpenFractionTest::new(tolerance))?;
+        Ok(())
+    })
+}
+
+/// Writes the cache's open-fraction tolerance to `*tolerance` (INFINITY when the test is off).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_get_open_fraction_tolerance(
+    cache: *const raddiff_cache,
+    tolerance: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        let tolerance = unsafe { out_ref(tolerance, "tolerance")? };
+        *tolerance = cache.inner.config().open_fraction_test.tolerance;
         Ok(())
     })
 }

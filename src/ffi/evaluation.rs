@@ -214,6 +214,7 @@ pub extern "C" fn raddiff_irradiance_record(
             rotation_gradient: evaluation.rotation_gradient.as_ptr(),
             radii: built.extent.radii,
             axes: built.extent.axes.map(raddiff_vec3::from),
+            open_fraction: std::ptr::null(),
         };
         Ok(())
     })

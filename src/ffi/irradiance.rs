@@ -14,7 +14,7 @@ use super::common::*;
 use crate::cache::irradiance::{
     IrradianceSettings, Metric, NearFieldSettings, RadiusBounds, SeedPolicy,
 };
-use crate::cache::{Cache, FarFieldReach, LeakGuard};
+use crate::cache::{Cache, FarFieldReach, LeakGuard, OpenFractionTest};
 use crate::gather::LayoutKind;
 use crate::Error;
 
@@ -119,6 +119,11 @@ pub struct raddiff_irradiance_settings {
     pub near_field_m: u32,
     /// Near rays per query along phi (default 32).
     pub near_field_n: u32,
+    /// The cache's open-fraction test, tolerance >= 0 (default INFINITY: off; see
+    /// `raddiff_cache_set_open_fraction_tolerance`). With it on,
+    /// `raddiff_cache_irradiance_near_far` traces a query's near rays before its lookup and
+    /// its records keep their open fractions.
+    pub near_field_open_fraction_tolerance: f64,
 }
 
 /// The default settings (3 channels, the anisotropic occlusion-aware Hessian, a 32 x 128
@@ -157,6 +162,7 @@ fn settings_to_c(s: &IrradianceSettings) -> raddiff_irradiance_settings {
         near_field_reach_pixels: s.near_field.reach.pixels,
         near_field_m: s.near_field.m,
         near_field_n: s.near_field.n,
+        near_field_open_fraction_tolerance: s.near_field.open_fraction_test.tolerance,
     }
 }
 
@@ -220,6 +226,7 @@ pub(crate) unsafe fn settings_from_c(
             },
             m: settings.near_field_m,
             n: settings.near_field_n,
+            open_fraction_test: OpenFractionTest::new(settings.near_field_open_fraction_tolerance),
         },
     })
 }
@@ -227,8 +234,9 @@ pub(crate) unsafe fn settings_from_c(
 /// A cache for the records `settings` make: surface domain, the settings' channels, the
 /// metric's interpolation (`RADDIFF_INTERP_WARD` for the split-sphere family and the gradient
 /// metric, `RADDIFF_INTERP_TENT` for the Hessian metrics), values clamped at zero
-/// (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit, leak guard and near-field
-/// reach (records then hold far fields), maximum normal deviation 0.2 rad. NULL (with
+/// (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit, leak guard, near-field
+/// reach (records then hold far fields) and open-fraction tolerance, maximum normal deviation
+/// 0.2 rad. NULL (with
 /// `raddiff_last_error`) for NULL or invalid settings. Free it with `raddiff_cache_free`.
 #[no_mangle]
 pub extern "C" fn raddiff_irradiance_cache_new(

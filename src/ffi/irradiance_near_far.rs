@@ -20,8 +20,9 @@ use super::irradiance::{callback_result, query_args, raddiff_irradiance_settings
 /// `max_distance`) and its radiance may be left as it is (zeros; not read). Returns 0 on success;
 /// anything else abandons the request (`RADDIFF_ERROR_CALLBACK`, nothing inserted). `user` is the
 /// pointer given to `raddiff_cache_irradiance_near_far`. Called once per call that passes the
-/// argument checks (never after a refusal), on the calling thread; it must not unwind and may
-/// call raddiff functions.
+/// argument checks (never after a refusal), twice on a miss with the open-fraction test on (see
+/// `raddiff_cache_irradiance_near_far`), on the calling thread; it must not unwind and may call
+/// raddiff functions.
 pub type raddiff_trace_bounded_fn = Option<
     unsafe extern "C" fn(
         user: *mut c_void,
@@ -45,7 +46,11 @@ pub type raddiff_trace_bounded_fn = Option<
 /// with the `near_field_m * near_field_n` near rays and `max_distance` = rho; on a miss, with the
 /// record's `gather_m * gather_n` gather and `max_distance` = INFINITY, whose rays give both the
 /// near field and, split at rho (near hits moved to the reach with the far field's mean
-/// radiance, as `raddiff_gather_far_field`), the new record. `out` (`channels` floats) receives
+/// radiance, as `raddiff_gather_far_field`), the new record. With the settings'
+/// `near_field_open_fraction_tolerance` finite (the open-fraction test, see
+/// `raddiff_cache_set_open_fraction_tolerance`), the near rays come first and the lookup admits
+/// only records whose open fraction is within the tolerance of theirs; a miss then also traces
+/// the gather, whose open fraction the new record keeps. `out` (`channels` floats) receives
 /// `E_near + V * F`. Thread-safe as `raddiff_cache_irradiance`.
 ///
 /// `x`, `n`, `footprint` and the errors are as `raddiff_cache_irradiance`'s, and
@@ -89,8 +94,9 @@ pub extern "C" fn raddiff_cache_irradiance_near_far(
 /// They let a renderer shade a pixel once while it fills the cache and again, without tracing,
 /// once the cache is complete: keep `E_near` and `V` from the call that visited the pixel, then
 /// show `E_near + V * F` with the far field `F` from `raddiff_cache_lookup` (or
-/// `raddiff_cache_lookup_with`) on the finished cache. On a miss the near field comes from the
-/// new record's gather (its rays closer than the reach), on a hit from the near rays.
+/// `raddiff_cache_lookup_with`, or `raddiff_cache_lookup_open` with `V` when the cache has the
+/// open-fraction test) on the finished cache. On a miss the near field comes from the new
+/// record's gather (its rays closer than the reach), on a hit from the near rays.
 ///
 /// Arguments, callback and errors as `raddiff_cache_irradiance_near_far`'s.
 #[no_mangle]

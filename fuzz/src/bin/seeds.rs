@@ -1,8 +1,8 @@
 //! Writes the seed corpora into `fuzz/corpus/<target>/` (run from `fuzz/`:
 //! `cargo run --release --bin seeds`). For every target but `cache_load`: pseudo-random byte
 //! strings (fixed seed), the first few that the target accepts and the first few it refuses. For
-//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 5) and their version 4,
-//! 3 and 2 forms, each behind the option byte 0, and two refused files (truncated, damaged).
+//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 6) and their version 5,
+//! 4, 3 and 2 forms, each behind the option byte 0, and two refused files (truncated, damaged).
 use std::ffi::CString;
 use std::path::Path;
 
@@ -53,13 +53,14 @@ fn main() {
     damaged.extend(first);
     damaged[1 + 60] ^= 0x40;
     std::fs::write(dir.join("damaged"), damaged).expect("writing");
-    for (i, v5) in caches.iter().enumerate() {
-        let v4 = as_version_4(v5);
+    for (i, v6) in caches.iter().enumerate() {
+        let v5 = as_version_5(v6);
+        let v4 = as_version_4(&v5);
         let v3 = as_version_3(&v4);
         let v2 = as_version_2(&v3);
-        // the older forms a cache has (none with a far field, no version 3 with a leak guard, no
-        // version 2 with a gradient limit)
-        for (version, file) in [(5, v5), (4, &v4), (3, &v3), (2, &v2)] {
+        // the older forms a cache has (none with an open-fraction test, no version 4 with a far
+        // field, no version 3 with a leak guard, no version 2 with a gradient limit)
+        for (version, file) in [(6, v6), (5, &v5), (4, &v4), (3, &v3), (2, &v2)] {
             if u32::from_le_bytes(file[8..12].try_into().expect("4 bytes")) != version {
                 continue;
             }
@@ -96,6 +97,8 @@ fn saved_caches() -> Vec<Vec<u8>> {
         (1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT),
         // irradiance far fields (below: the interpolation is the settings' metric's)
         (3, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT),
+        // far fields with the open-fraction test, records with open fractions
+        (3, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT),
     ];
     kinds
         .iter()
@@ -107,10 +110,13 @@ fn saved_caches() -> Vec<Vec<u8>> {
                 interpolation,
                 max_normal_deviation: 0.3,
             };
-            let cache = if kind == 5 {
+            let cache = if kind >= 5 {
                 let mut settings = raddiff_irradiance_settings_default();
                 settings.channels = channels;
                 settings.near_field_reach_pixels = 8.0;
+                if kind == 6 {
+                    settings.near_field_open_fraction_tolerance = 0.15;
+                }
                 raddiff_irradiance_cache_new(&settings)
             } else {
                 raddiff_cache_new(&config)
@@ -124,6 +130,7 @@ fn saved_caches() -> Vec<Vec<u8>> {
             }
             for i in 0..5 {
                 let t = i as f64;
+                let open = 0.2 * t;
                 let value: Vec<f32> = (0..channels).map(|c| 1.0 + t as f32 + c as f32).collect();
                 let gradient: Vec<f32> = (0..3 * channels)
                     .map(|k| 0.1 * k as f32 - t as f32)
@@ -168,6 +175,11 @@ fn saved_caches() -> Vec<Vec<u8>> {
                             z: 1.0,
                         },
                     ],
+                    open_fraction: if kind == 6 {
+                        &open
+                    } else {
+                        std::ptr::null()
+                    },
                 };
                 assert_eq!(
                     raddiff_cache_insert(cache, &record),
@@ -189,11 +201,28 @@ fn saved_caches() -> Vec<Vec<u8>> {
         .collect()
 }
 
+/// The version 5 form of a version 6 file: no open-fraction field (bytes 88..96), resealed. Only
+/// for caches without an open-fraction test (the seeds' only records with open fractions are in
+/// such a cache): others are returned as is.
+fn as_version_5(v6: &[u8]) -> Vec<u8> {
+    let flags = u32::from_le_bytes(v6[44..48].try_into().expect("4 bytes"));
+    if flags & 16 != 0 {
+        return v6.to_vec();
+    }
+    let mut v5 = v6[..88].to_vec();
+    v5[8..12].copy_from_slice(&5u32.to_le_bytes());
+    v5.extend_from_slice(&v6[96..v6.len() - 8]);
+    let sum = fnv1a(&v5);
+    v5.extend_from_slice(&sum.to_le_bytes());
+    v5
+}
+
 /// The version 4 form of a version 5 file: no far-field fields (bytes 72..88), resealed. Only for
 /// caches without a far field (version 4 cannot hold one): others are returned as is.
 fn as_version_4(v5: &[u8]) -> Vec<u8> {
     let flags = u32::from_le_bytes(v5[44..48].try_into().expect("4 bytes"));
-    if flags & 8 != 0 {
+    let version = u32::from_le_bytes(v5[8..12].try_into().expect("4 bytes"));
+    if flags & 8 != 0 || version != 5 {
         return v5.to_vec();
     }
     let mut v4 = v5[..72].to_vec();

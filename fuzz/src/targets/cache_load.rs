@@ -3,18 +3,20 @@
 //! Input: one option byte, then the file. When the option byte is odd, the file's last 8 bytes are
 //! replaced by the FNV-1a checksum of the rest (as `raddiff_cache_save` writes it), so that mutated
 //! headers and records get past the checksum and reach the record validation. The seed corpus is
-//! real saved caches of format versions 2 to 5 (surface and volume, 1 and 3 channels, with and
-//! without gradients, a gradient limit, a leak guard and a far-field marker).
+//! real saved caches of format versions 2 to 6 (surface and volume, 1 and 3 channels, with and
+//! without gradients, a gradient limit, a leak guard, a far-field marker, an open-fraction test
+//! and records' open fractions).
 //! Properties: no panic; NULL comes with a message; a loaded cache holds at most the file's record
-//! count, looks up finite values at its records' positions, and saving it reproduces a version 5
-//! file byte for byte (an older file: the same records once loaded again).
+//! count, looks up finite values at its records' positions (with and without an open fraction),
+//! and saving it reproduces a version 6 file byte for byte (an older file: the same records once
+//! loaded again).
 use std::ffi::CString;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use raddiff::ffi::*;
 
-use super::cache_ops::lookup;
+use super::cache_ops::{lookup, lookup_open};
 use super::check;
 use super::Outcome;
 
@@ -54,6 +56,7 @@ pub fn run(data: &[u8]) -> Outcome {
         };
         for normal in AXES {
             lookup(cache, None, position, normal, header.channels);
+            lookup_open(cache, None, position, normal, 0.5, header.channels);
         }
     }
     resave(cache, &file, header.version);
@@ -61,7 +64,7 @@ pub fn run(data: &[u8]) -> Outcome {
     Outcome::Ok
 }
 
-/// Saves the loaded cache: a version 5 file comes back byte for byte, an older file as a version 5
+/// Saves the loaded cache: a version 6 file comes back byte for byte, an older file as a version 6
 /// file that loads with as many records.
 fn resave(cache: *const raddiff_cache, file: &[u8], version: u32) {
     let path = scratch_path("resave");
@@ -81,10 +84,10 @@ fn resave(cache: *const raddiff_cache, file: &[u8], version: u32) {
     );
     assert_eq!(raddiff_cache_len(again), raddiff_cache_len(cache));
     raddiff_cache_free(again);
-    if version == 5 {
+    if version == 6 {
         assert!(
             saved == file,
-            "saving a loaded version 5 file changed its bytes"
+            "saving a loaded version 6 file changed its bytes"
         );
     }
 }
@@ -146,7 +149,8 @@ impl Header {
                 2 => 48,
                 3 => 56,
                 4 => 72,
-                _ => 88,
+                5 => 88,
+                _ => 96,
             },
         }
     }

@@ -1,13 +1,17 @@
 //! The radiance cache through a sequence of calls: `raddiff_cache_new`, `_insert`, `_lookup`,
 //! `_lookup_with`, `_clamp_record`, `_clamp_neighbours`, `_set_gradient_limit`,
-//! `_get_gradient_limit`, `_compact`, `_merge`, and a `_save` / `_load` round trip.
+//! `_get_gradient_limit`, `_compact`, `_merge`, a `_save` / `_load` round trip, and the
+//! open-fraction test (`_set_open_fraction_tolerance`, records with an open fraction,
+//! `_lookup_open`).
 //!
 //! Input: the configuration (1..=3 channels, sometimes 33..=40 or any u32; each domain,
 //! interpolation and flag; the normal deviation), then up to 64 operations. Records are decoded
 //! near stored ones half of the time, so lookups and clamping meet overlapping records.
 //! Properties: no panic; every failure leaves a message and its outputs untouched (lookup values
 //! and weight, clamped radii), and a refused insert stores nothing; a lookup that succeeds gives
-//! finite values and a finite positive weight, the same bits through a cursor; clamping only
+//! finite values and a finite positive weight, the same bits through a cursor (with an open
+//! fraction too, and with the test off the plain lookup's bits); an open fraction or tolerance
+//! out of range is refused and changes nothing; clamping only
 //! shrinks radii (but raises those below what an insert accepts); a saved cache loads back with
 //! the same records and the same lookups.
 use std::ffi::CString;
@@ -106,7 +110,12 @@ impl State {
                 self.any_ok |= ok;
             }
             10 => self.merge_self(),
-            _ => self.round_trip(input),
+            _ => match input.below(4) {
+                0 => self.round_trip(input),
+                1 => self.open_fraction_tolerance(input),
+                2 => self.insert_open(input),
+                _ => self.lookup_open(input),
+            },
         }
     }
 
@@ -166,6 +175,7 @@ impl State {
                 rotation_gradient: std::ptr::null(),
                 radii,
                 axes,
+                open_fraction: std::ptr::null(),
             },
         };
         r.c.value = r.value.as_ptr();
@@ -176,6 +186,86 @@ impl State {
 
     fn insert(&mut self, input: &mut Input) {
         let record = self.record(input);
+        self.insert_record(&record);
+    }
+
+    /// A record with an open fraction (sometimes out of [0, 1]: refused).
+    fn insert_open(&mut self, input: &mut Input) {
+        let mut record = self.record(input);
+        let open = open_fraction(input);
+        record.c.open_fraction = &open;
+        let refused = !(0.0..=1.0).contains(&open);
+        let before = self.len();
+        self.insert_record(&record);
+        if refused {
+            assert_eq!(self.len(), before, "an open fraction of {open} was stored");
+        }
+    }
+
+    /// Sets a tolerance (sometimes invalid: refused, the old one kept) and reads it back.
+    fn open_fraction_tolerance(&mut self, input: &mut Input) {
+        let tolerance = if input.byte() < 32 {
+            input.f64()
+        } else {
+            input.unit() * 0.5
+        };
+        let mut before = sentinel();
+        let name = "raddiff_cache_get_open_fraction_tolerance";
+        assert!(check::status(
+            name,
+            raddiff_cache_get_open_fraction_tolerance(self.cache, &mut before)
+        ));
+        let ok = check::status(
+            "raddiff_cache_set_open_fraction_tolerance",
+            raddiff_cache_set_open_fraction_tolerance(self.cache, tolerance),
+        );
+        assert_eq!(ok, tolerance >= 0.0, "tolerance {tolerance}");
+        let mut after = sentinel();
+        assert!(check::status(
+            name,
+            raddiff_cache_get_open_fraction_tolerance(self.cache, &mut after)
+        ));
+        let want = if ok { tolerance } else { before };
+        assert_eq!(after.to_bits(), want.to_bits(), "tolerance read back");
+        self.any_ok |= ok;
+    }
+
+    /// Looks up one point with an open fraction, with and without a cursor (the same bits); with
+    /// the test off, the plain lookup's bits; an open fraction out of [0, 1] is refused.
+    fn lookup_open(&mut self, input: &mut Input) {
+        let (position, normal) = self.position(input);
+        let open = open_fraction(input);
+        let plain = lookup_open(self.cache, None, position, normal, open, self.channels);
+        let cursor = raddiff_cache_cursor_new();
+        assert!(check::constructed("raddiff_cache_cursor_new", cursor));
+        let with = lookup_open(
+            self.cache,
+            Some(cursor),
+            position,
+            normal,
+            open,
+            self.channels,
+        );
+        raddiff_cache_cursor_free(cursor);
+        assert_eq!(
+            plain, with,
+            "raddiff_cache_lookup_open with and without a cursor"
+        );
+        if !(0.0..=1.0).contains(&open) {
+            assert!(!plain.0, "an open fraction of {open} was accepted");
+            return;
+        }
+        let mut tolerance = 0.0;
+        raddiff_cache_get_open_fraction_tolerance(self.cache, &mut tolerance);
+        if tolerance.is_infinite() {
+            let untested = lookup(self.cache, None, position, normal, self.channels);
+            assert_eq!(plain, untested, "with the test off, lookup_open is lookup");
+        }
+        self.any_ok |= plain.0;
+    }
+
+    /// Inserts a decoded record and checks the count.
+    fn insert_record(&mut self, record: &Record) {
         let before = self.len();
         let ok = check::status(
             "raddiff_cache_insert",
@@ -352,18 +442,54 @@ pub fn lookup(
     normal: raddiff_vec3,
     channels: usize,
 ) -> (bool, Vec<u32>, u64) {
-    let mut value = vec![sentinel_f32(); channels];
-    let mut weight = sentinel();
-    let (name, status) = match cursor {
+    checked_lookup(channels, |value, weight| match cursor {
         None => (
             "raddiff_cache_lookup",
-            raddiff_cache_lookup(cache, position, normal, value.as_mut_ptr(), &mut weight),
+            raddiff_cache_lookup(cache, position, normal, value, weight),
         ),
         Some(c) => (
             "raddiff_cache_lookup_with",
-            raddiff_cache_lookup_with(cache, c, position, normal, value.as_mut_ptr(), &mut weight),
+            raddiff_cache_lookup_with(cache, c, position, normal, value, weight),
         ),
-    };
+    })
+}
+
+/// [`lookup`] with the query's open fraction (`raddiff_cache_lookup_open`).
+pub fn lookup_open(
+    cache: *const raddiff_cache,
+    cursor: Option<*mut raddiff_cache_cursor>,
+    position: raddiff_vec3,
+    normal: raddiff_vec3,
+    open: f64,
+    channels: usize,
+) -> (bool, Vec<u32>, u64) {
+    let cursor = cursor.unwrap_or(std::ptr::null_mut());
+    checked_lookup(channels, |value, weight| {
+        (
+            "raddiff_cache_lookup_open",
+            raddiff_cache_lookup_open(cache, cursor, position, normal, open, value, weight),
+        )
+    })
+}
+
+/// An open fraction: in [0, 1] mostly, anything sometimes.
+fn open_fraction(input: &mut Input) -> f64 {
+    if input.byte() < 32 {
+        input.f64()
+    } else {
+        input.unit()
+    }
+}
+
+/// Runs one lookup call (`call(value, weight_sum)` returns its name and status) with the
+/// property checks.
+fn checked_lookup(
+    channels: usize,
+    call: impl FnOnce(*mut f32, *mut f64) -> (&'static str, raddiff_status),
+) -> (bool, Vec<u32>, u64) {
+    let mut value = vec![sentinel_f32(); channels];
+    let mut weight = sentinel();
+    let (name, status) = call(value.as_mut_ptr(), &mut weight);
     let ok = check::status(name, status);
     if ok {
         check::finite_f32(name, "value", &value);

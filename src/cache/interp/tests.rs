@@ -31,7 +31,7 @@ fn vector_blend_equals_portable_blend() {
                 radii: [1.0; 3],
                 gradient_scale: (next() % 1000) as f32 * if huge { 1e36 } else { 0.01 },
                 rotation_scale: (next() % 1000) as f32 * if huge { 1e36 } else { 0.001 },
-                reserved: 0,
+                open_fraction: 0,
             })
             .collect();
         let channels: Vec<Channel> = (0..records * 5)

@@ -39,14 +39,17 @@ impl<V: CacheValue> Cache<V> {
     ///   and the radiance arriving along it (`channels` per ray, interleaved). Rays need go no
     ///   farther than `max_distance`: for one that finds nothing closer, write
     ///   `f64::INFINITY` (or any distance ≥ `max_distance`) and leave its radiance (it is not
-    ///   read; the buffer holds zeros). Called once per call that passes the argument checks, on
-    ///   the calling thread:
+    ///   read; the buffer holds zeros). Called on the calling thread, once per call that passes
+    ///   the argument checks when the open-fraction test is off:
     ///   when a record covers `x`, with the `near_field.m·near_field.n` near rays and
     ///   `max_distance = ρ`; on a miss, with the record's `gather_m·gather_n` gather and
     ///   `max_distance = f64::INFINITY`, whose rays give both the near field and, split at ρ
     ///   ([`far_field_gather`]: near hits moved to the reach with the far field's mean
-    ///   radiance), the new record. An `Err` abandons the request ([`Error::Callback`]; nothing
-    ///   inserted).
+    ///   radiance), the new record. With the settings'
+    ///   [`open_fraction_test`](super::NearFieldSettings::open_fraction_test) on, the near rays
+    ///   come first (the lookup needs their open fraction), and a miss then traces the gather
+    ///   too: once on a hit, twice on a miss. An `Err` abandons the request
+    ///   ([`Error::Callback`]; nothing inserted).
     ///
     /// Errors: as [`Cache::irradiance`], and `InvalidArgument` when the settings have no
     /// near-field reach, the cache holds no far fields or holds them at another reach, the reach
@@ -87,7 +90,13 @@ impl<V: CacheValue> Cache<V> {
         x: DVec3,
         n: DVec3,
         footprint: f64,
-        trace: impl FnOnce(DVec3, &[DVec3], f64, &mut [f64], &mut [f32]) -> std::result::Result<(), E>,
+        mut trace: impl FnMut(
+            DVec3,
+            &[DVec3],
+            f64,
+            &mut [f64],
+            &mut [f32],
+        ) -> std::result::Result<(), E>,
     ) -> Result<NearFarLookup<V>> {
         check_query(x, n, footprint)?;
         if !settings.near_field.reach.is_on() {
@@ -100,24 +109,36 @@ impl<V: CacheValue> Cache<V> {
         settings.check_cache(self.config())?;
         let reach = settings.near_field.reach.resolve(footprint)?;
         let channels = settings.channels;
-        let (near, far) = match self.lookup(x, n) {
-            Ok(far) => {
-                let layout = Layout::new(
-                    settings.gather_kind,
-                    settings.near_field.m,
-                    settings.near_field.n,
-                    settings.seed.seed(x, n),
-                )
-                .map_err(refusing("the near-field rays"))?;
-                let directions = layout.directions(&query_frame(x, n)?)?;
-                let mut distance = vec![0.0; directions.len()];
-                let mut radiance = vec![0.0f32; directions.len() * channels];
-                trace(x, &directions, reach, &mut distance, &mut radiance)
-                    .map_err(|e| Error::Callback(e.to_string()))?;
-                let near = near_field(&layout, &distance, &radiance, channels, reach)
-                    .map_err(refusing("the traced near-field rays"))?;
-                (near, far)
-            }
+        let test = settings.near_field.open_fraction_test.is_on();
+        let mut near_rays = || -> Result<NearField> {
+            let layout = Layout::new(
+                settings.gather_kind,
+                settings.near_field.m,
+                settings.near_field.n,
+                settings.seed.seed(x, n),
+            )
+            .map_err(refusing("the near-field rays"))?;
+            let directions = layout.directions(&query_frame(x, n)?)?;
+            let mut distance = vec![0.0; directions.len()];
+            let mut radiance = vec![0.0f32; directions.len() * channels];
+            trace(x, &directions, reach, &mut distance, &mut radiance)
+                .map_err(|e| Error::Callback(e.to_string()))?;
+            near_field(&layout, &distance, &radiance, channels, reach)
+                .map_err(refusing("the traced near-field rays"))
+        };
+        // with the open-fraction test the lookup needs the query's open fraction first
+        let (queried, found) = if test {
+            let near = near_rays()?;
+            let found = self.lookup_open(x, n, near.open_fraction);
+            (Some(near), found)
+        } else {
+            (None, self.lookup(x, n))
+        };
+        let (near, far) = match found {
+            Ok(far) => match queried {
+                Some(near) => (near, far),
+                None => (near_rays()?, far),
+            },
             Err(Error::NotFound(_)) => {
                 let (near, evaluation) = self.evaluate_traced(
                     settings,
@@ -135,8 +156,17 @@ impl<V: CacheValue> Cache<V> {
                 )?;
                 // a record whose own point's sum overflows is not inserted
                 sum_f32(&near, &evaluation.irradiance)?;
-                self.insert(&settings.record(&evaluation, footprint)?)?;
-                (near, self.lookup(x, n)?)
+                let mut record = settings.record(&evaluation, footprint)?;
+                // the gather's own open fraction: the new record covers its own point
+                let far = if test {
+                    record.open_fraction = Some(near.open_fraction);
+                    self.insert(&record)?;
+                    self.lookup_open(x, n, near.open_fraction)?
+                } else {
+                    self.insert(&record)?;
+                    self.lookup(x, n)?
+                };
+                (near, far)
             }
             Err(other) => return Err(other),
         };

@@ -6,7 +6,8 @@ use super::evaluation::{check_weights, Hessians};
 use super::metric::Metric;
 use super::seed::SeedPolicy;
 use crate::cache::{
-    check_gradient_limit, CacheConfig, Domain, FarFieldReach, LeakGuard, MAX_CHANNELS,
+    check_gradient_limit, CacheConfig, Domain, FarFieldReach, LeakGuard, OpenFractionTest,
+    MAX_CHANNELS,
 };
 use crate::error::{Error, Result};
 use crate::gather::radii::CURVATURE_FLOOR_WEIGHT;
@@ -47,6 +48,11 @@ pub struct NearFieldSettings {
     pub m: u32,
     /// Near rays along φ per query (default 32).
     pub n: u32,
+    /// The cache's open-fraction test (default [`OpenFractionTest::OFF`]): a record is not used
+    /// at a query whose near rays' open fraction differs from the record's gather's by more than
+    /// the tolerance. Cache state, like the reach. With it on, every query traces its near rays
+    /// before it looks up (a miss then also traces its gather).
+    pub open_fraction_test: OpenFractionTest,
 }
 
 impl Default for NearFieldSettings {
@@ -56,6 +62,7 @@ impl Default for NearFieldSettings {
             reach: FarFieldReach::OFF,
             m: 32,
             n: 32,
+            open_fraction_test: OpenFractionTest::OFF,
         }
     }
 }
@@ -195,6 +202,7 @@ impl IrradianceSettings {
         check_gradient_limit(self.gradient_limit)?;
         self.leak_guard.validate()?;
         self.near_field.reach.validate()?;
+        self.near_field.open_fraction_test.validate()?;
         if self.near_field.reach.is_on() {
             Layout::new(self.gather_kind, self.near_field.m, self.near_field.n, 0)
                 .map_err(|e| Error::InvalidArgument(format!("the near-field rays: {e}")))?;
@@ -203,8 +211,8 @@ impl IrradianceSettings {
     }
 
     /// The configuration of a cache for these records: surface domain, the settings' channels,
-    /// the metric's interpolation ([`Metric::interpolation`]), gradient limit, leak guard and
-    /// far-field reach, extrapolation clamped at zero (irradiance is never negative), maximum
+    /// the metric's interpolation ([`Metric::interpolation`]), gradient limit, leak guard,
+    /// far-field reach and open-fraction test, extrapolation clamped at zero (irradiance is never negative), maximum
     /// normal deviation 0.2 rad.
     pub fn cache_config(&self) -> CacheConfig {
         CacheConfig::surface(self.channels)
@@ -213,12 +221,13 @@ impl IrradianceSettings {
             .with_gradient_limit(self.gradient_limit)
             .with_leak_guard(self.leak_guard)
             .with_far_field(self.near_field.reach)
+            .with_open_fraction_test(self.near_field.open_fraction_test)
     }
 
     /// `InvalidArgument` unless a cache configured as `config` stores what these settings make:
-    /// the same channel count, the surface domain, the same gradient limit, leak guard and
-    /// far-field reach (cache state the records are inserted and looked up under). The interpolation and the normal
-    /// deviation are the cache's to choose.
+    /// the same channel count, the surface domain, the same gradient limit, leak guard,
+    /// far-field reach and open-fraction test (cache state the records are inserted and looked
+    /// up under). The interpolation and the normal deviation are the cache's to choose.
     pub fn check_cache(&self, config: &CacheConfig) -> Result<()> {
         let disagree = |what: &str, cache: String, settings: String| {
             Err(Error::InvalidArgument(format!(
@@ -257,6 +266,17 @@ impl IrradianceSettings {
                 "far-field reach",
                 format!("{:?}", config.far_field),
                 format!("{:?}", self.near_field.reach),
+            );
+        }
+        let (ours, theirs) = (
+            self.near_field.open_fraction_test,
+            config.open_fraction_test,
+        );
+        if (ours.is_on() || theirs.is_on()) && ours != theirs {
+            return disagree(
+                "open-fraction test",
+                format!("{theirs:?}"),
+                format!("{ours:?}"),
             );
         }
         Ok(())
