@@ -994,9 +994,10 @@ class IrradianceCache {
   /// Wraps `raddiff_cache_irradiance_near_far` (settings with a near-field reach): the irradiance
   /// E_near + V * F at `x` into `out` (`channels` floats, checked). Calls
   /// `trace(origin, directions, max_distance, distance, radiance)` once (unless the arguments are
-  /// refused first): with the near
-  /// rays and the reach when a record covers `x`, with the record's gather and INFINITY on a miss;
-  /// rays that find nothing closer than `max_distance` get INFINITY. Exceptions as irradiance().
+  /// refused first): with the near rays and the reach when a record covers `x`, with the record's
+  /// gather and INFINITY on a miss; with the settings' open-fraction tolerance finite, the near
+  /// rays come first and a miss traces the gather too (twice). Rays that find nothing closer than
+  /// `max_distance` get INFINITY. Exceptions as irradiance().
   template <class Trace>
   void irradiance_near_far(raddiff_vec3 x, raddiff_vec3 n, double footprint, Trace &&trace, Span<float> out) {
     detail::check_size("out", out.size(), settings_.channels);

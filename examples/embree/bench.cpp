@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -312,13 +313,21 @@ class Bench {
     raddiff_irradiance_settings irr = settings_.irradiance;
     irr.metric = c_metric(m);
     irr.accuracy = p;
+    // With --open-fraction-tolerance, the library's open-fraction test in every cache of the records.
+    const bool open_test = std::isfinite(settings_.open_fraction_tolerance) && settings_.near_field_px > 0;
+    auto with_open_test = [&](CachePtr c) {
+      if (open_test)
+        check(raddiff_cache_set_open_fraction_tolerance(c.get(), settings_.open_fraction_tolerance),
+              "raddiff_cache_set_open_fraction_tolerance");
+      return c;
+    };
     // The cache this metric wants: Ward or tent weights, extrapolation clamped at zero, the
     // gradient limit and the leak guard of the settings (or the interpolation the settings force).
     auto new_cache = [&] {
-      if (settings_.interpolation >= 0) return surface_cache(settings_.interpolation, irr.gradient_limit);
+      if (settings_.interpolation >= 0) return with_open_test(surface_cache(settings_.interpolation, irr.gradient_limit));
       CachePtr c(raddiff_irradiance_cache_new(&irr), raddiff_cache_free);
       if (!c) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
-      return c;
+      return with_open_test(std::move(c));
     };
     // With --open-fraction-bands, one cache per band of open fraction (a record goes into its own
     // band's and the two neighbouring bands' caches; a pixel looks only into its own band's).
@@ -327,15 +336,22 @@ class Bench {
     auto band_of = [&](double open) {
       return banded ? std::clamp(static_cast<int>(open / settings_.open_fraction_bands), 0, bands - 1) : 0;
     };
-    if (banded && (settings_.neighbour_clamp || settings_.smooth_records > 0 || settings_.second_order > 0))
-      throw std::runtime_error("--open-fraction-bands does not combine with --neighbour-clamp, --smooth-records "
-                               "or --second-order");
-    const std::vector<std::array<float, 4>> *pixel_near = banded ? &near_field() : nullptr;
+    if ((banded || open_test) &&
+        (settings_.neighbour_clamp || settings_.smooth_records > 0 || settings_.second_order > 0))
+      throw std::runtime_error("--open-fraction-bands and --open-fraction-tolerance do not combine with "
+                               "--neighbour-clamp, --smooth-records or --second-order");
+    const std::vector<std::array<float, 4>> *pixel_near = banded || open_test ? &near_field() : nullptr;
     std::vector<CachePtr> caches;
     for (int b = 0; b < bands; ++b) caches.push_back(new_cache());
     CachePtr &cache = caches[0];
     auto pixel_band = [&](size_t pixel) { return band_of(pixel_near ? (*pixel_near)[pixel][3] : 0.0); };
     auto cache_of = [&](size_t pixel) { return caches[pixel_band(pixel)].get(); };
+    // A pixel's lookup: with the open-fraction test, with its near field's open fraction.
+    auto lookup_pixel = [&](raddiff_cache *c, size_t pixel, float *value) {
+      const raddiff_vec3 p = to_c(primary_[pixel].p), n = to_c(primary_[pixel].n);
+      return open_test ? raddiff_cache_lookup_open(c, nullptr, p, n, (*pixel_near)[pixel][3], value, nullptr)
+                       : raddiff_cache_lookup(c, p, n, value, nullptr);
+    };
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
     // The inserted records, kept for the smoothing experiment (their derivatives point into the
@@ -358,7 +374,7 @@ class Bench {
     std::vector<CachePtr> binned_caches;
     if (render && settings_.far_field_bins)
       for (int b = 0; b < bands; ++b) {
-        binned_caches.push_back(surface_cache(kernel, irr.gradient_limit, 3 * kDirBins, false));
+        binned_caches.push_back(with_open_test(surface_cache(kernel, irr.gradient_limit, 3 * kDirBins, false)));
         check(raddiff_cache_set_leak_guard(binned_caches.back().get(), irr.leak_guard_relative,
                                            irr.leak_guard_absolute),
               "raddiff_cache_set_leak_guard");
@@ -367,7 +383,7 @@ class Bench {
     auto binned_of = [&](size_t pixel) { return binned_caches[pixel_band(pixel)].get(); };
     auto covered = [&](size_t i) {
       float v[3];
-      const raddiff_status st = raddiff_cache_lookup(cache_of(i), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
+      const raddiff_status st = lookup_pixel(cache_of(i), i, v);
       if (st != RADDIFF_OK && st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
       return st == RADDIFF_OK;
     };
@@ -422,6 +438,7 @@ class Bench {
           out.raddiff_seconds += thread_cpu_seconds() - t0;
           if (!defined) continue;
           if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
+          if (open_test) rec.open_fraction = &e.open_fraction;
           float far_gradient[9], far_rotation_gradient[9];
           if (settings_.near_field_px > 0) {
             // The far field's record: its value, and the gather's gradients in the same ratio.
@@ -525,8 +542,7 @@ class Bench {
           const size_t i = row * w + x;
           if (!primary_[i].hit) continue;
           float *v = out.image.at(i);
-          const raddiff_status st =
-              raddiff_cache_lookup(cache_of(i), to_c(primary_[i].p), to_c(primary_[i].n), v, nullptr);
+          const raddiff_status st = lookup_pixel(cache_of(i), i, v);
           if (st == RADDIFF_ERROR_NOT_FOUND) {
             ++uncovered;
           } else {
@@ -542,9 +558,7 @@ class Bench {
             for (int c = 0; c < 3; ++c) v[c] = static_cast<float>(std::max(0.0, v[c] * scale));
           }
           float q[3 * kDirBins];
-          const bool bins = st == RADDIFF_OK && binned &&
-                            raddiff_cache_lookup(binned_of(i), to_c(primary_[i].p), to_c(primary_[i].n), q,
-                                                 nullptr) == RADDIFF_OK;
+          const bool bins = st == RADDIFF_OK && binned && lookup_pixel(binned_of(i), i, q) == RADDIFF_OK;
           if (st == RADDIFF_OK && !near.empty())
             for (int c = 0; c < 3; ++c) {
               const double far = bins ? binned_far(v[c], near_bins_[i], q, c) : v[c];
@@ -820,6 +834,8 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
     throw std::runtime_error("--far-field-bins needs --near-field");
   if (settings.open_fraction_bands > 0 && settings.near_field_px <= 0)
     throw std::runtime_error("--open-fraction-bands needs --near-field");
+  if (std::isfinite(settings.open_fraction_tolerance) && settings.near_field_px <= 0)
+    throw std::runtime_error("--open-fraction-tolerance needs --near-field");
   if (settings.near_at_reach && !settings.far_field_gathers)
     throw std::runtime_error("--near-at-reach needs --far-field-gathers");
   if (settings.far_field_gathers && settings.near_field_px <= 0)
@@ -1001,7 +1017,7 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
           << "\nleak_guard," << settings.irradiance.leak_guard_relative << " " << settings.irradiance.leak_guard_absolute
           << "\nradius_bounds," << settings.irradiance.world_radius_min << " " << settings.irradiance.world_radius_max
           << " " << settings.irradiance.pixel_radius_min << " " << settings.irradiance.pixel_radius_max
-          << "\nnoise_seed," << settings.noise_seed << "\npixel_gathers_rel_rms," << pixel_gathers_error << "\n";
+          << "\nopen_fraction_tolerance," << settings.open_fraction_tolerance << "\nnoise_seed," << settings.noise_seed << "\npixel_gathers_rel_rms," << pixel_gathers_error << "\n";
   std::printf("bench: %zu gathers computed, max RSS %ld MiB, %.0f CPU s\n", bench.store().computed(), max_rss_mib(),
               process_cpu_seconds() - wall0);
   std::printf("%s\n", ok ? "OK" : "FAILED");

@@ -8,6 +8,7 @@
 #include "metrics.hpp"
 #include "reference.hpp"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -75,6 +76,10 @@ struct BenchSettings {
   // fraction (its near field's), so that a record beside a step, whose hemisphere is partly
   // closed, does not lend its far field to pixels that see more of theirs.
   double open_fraction_bands = 0;
+  // The library's open-fraction test (with a near field; INFINITY: off): records keep their
+  // gather's open fraction, every pixel's lookup passes its near field's, and a record whose open
+  // fraction differs from the pixel's by more than this is not used (raddiff_cache_lookup_open).
+  double open_fraction_tolerance = INFINITY;
   // 0: the usual samples. Otherwise every gather's, near field's and hit radiance's random numbers
   // drawn from another stream (the references' are not): two runs that differ only here measure
   // how much of each metric's error is the samples' noise.

@@ -4,6 +4,7 @@
 #include "metrics.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 
@@ -250,6 +251,9 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
   if (near_field_on(used.irradiance))
     std::printf("near field: reach %g px, %u x %u rays per pixel; records hold far fields\n",
                 used.irradiance.near_field_reach_pixels, used.irradiance.near_field_m, used.irradiance.near_field_n);
+  if (near_field_on(used.irradiance) && std::isfinite(used.irradiance.near_field_open_fraction_tolerance))
+    std::printf("open-fraction test: records used only at pixels whose open fraction is within %g of theirs\n",
+                used.irradiance.near_field_open_fraction_tolerance);
 
   // Render through a per-thread cursor, or with plain lookups (the library keeps a cursor per
   // thread). Both give the same bits; pass 2 uses the other one, so its check covers that too.
@@ -268,9 +272,14 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
       if (!near.empty() && !near[i].valid) return;  // its fill call found no value (every ray missed)
       thread_local Cursor cursor;
       float *value = image.at(i);
+      const raddiff_vec3 p = to_c(primary[i].p), n = to_c(primary[i].n);
+      // with a near field the lookup passes the pixel's open fraction: the cache's open-fraction
+      // test, if it has one, needs it (without one, the same bits as the plain lookup)
       const raddiff_status st =
-          use_cursor ? raddiff_cache_lookup_with(c, cursor.p, to_c(primary[i].p), to_c(primary[i].n), value, nullptr)
-                     : raddiff_cache_lookup(c, to_c(primary[i].p), to_c(primary[i].n), value, nullptr);
+          !near.empty() ? raddiff_cache_lookup_open(c, use_cursor ? cursor.p : nullptr, p, n, near[i].open_fraction,
+                                                    value, nullptr)
+          : use_cursor  ? raddiff_cache_lookup_with(c, cursor.p, p, n, value, nullptr)
+                        : raddiff_cache_lookup(c, p, n, value, nullptr);
       if (st == RADDIFF_ERROR_NOT_FOUND) {
         ++miss;
         return;

@@ -28,7 +28,12 @@ records="$(sed -n 's/^pass 1: \([0-9][0-9]*\) records.*/\1/p' "$out/cornell.log"
 near_records="$(sed -n 's/^pass 1: \([0-9][0-9]*\) records.*/\1/p' "$out/cornell-near-split.log")"
 "$binary" --obj "$here/cornell.obj" --out "$out/cornell-near-hessian" --size 128 --gather 16x48 \
   --near-field 4,256 --hessian 0.05 --records "$near_records" "$@" | tee "$out/cornell-near-hessian.log"
-runs=(cornell cornell-hessian cornell-near-split cornell-near-hessian)
+# The split sphere's near-field run with the cache's open-fraction test (the near rays traced before
+# each lookup, the records keeping their gathers' open fractions, the final lookups passing the
+# pixels' own).
+"$binary" --obj "$here/cornell.obj" --out "$out/cornell-near-open" --size 128 --gather 16x48 \
+  --near-field 4,256 --open-fraction-tolerance 0.1 "$@" | tee "$out/cornell-near-open.log"
+runs=(cornell cornell-hessian cornell-near-split cornell-near-hessian cornell-near-open)
 
 # The program exits non-zero when its own checks fail; check the files too.
 for f in "${runs[@]}"; do
@@ -44,11 +49,13 @@ awk -v n="$(records_of cornell)" -v x="$(error_of cornell)" -v m="$(records_of c
     printf "equal records: split sphere %d records error %.4f, hessian %d records error %.4f (hessian/split sphere = %.2f)\n",
       n, x, m, y, (x > 0 ? y / x : 0) }'
 grep -q '^near field: reach 4 px' "$out/cornell-near-hessian.log"
+grep -q '^open-fraction test: records used only at pixels whose open fraction is within 0.1' "$out/cornell-near-open.log"
 # The benchmark's near-field experiment on the same box, small and quick, with far-field gathers as
 # raddiff_gather_far_field_radiance and raddiff_gather_far_field make them: each run exits non-zero
 # unless every fill covers the image with finite, non-negative values.
 for near in "--far-field-gathers" "--far-field-gathers --near-at-reach" "--far-field-gathers --near-at-reach --far-field-bins" \
-  "--far-field-gathers --near-at-reach --far-field-bins --leak-guard 0.1,0 --open-fraction-bands 0.1"; do
+  "--far-field-gathers --near-at-reach --far-field-bins --leak-guard 0.1,0 --open-fraction-bands 0.1" \
+  "--far-field-gathers --near-at-reach --far-field-bins --leak-guard 0.1,0 --open-fraction-tolerance 0.1"; do
   # shellcheck disable=SC2086 # the options are meant to split
   "$binary" --bench --obj "$here/cornell.obj" --out "$out/cornell-near" --size 64 --metrics split-sphere,hessian-anisotropic \
     --thresholds 1 --no-path-trace --reference-rays 4096 --near-field 4,64 $near > "$out/cornell-near.log"
