@@ -683,10 +683,7 @@ impl<V: CacheValue> Cache<V> {
         thread_cursor::with(self.identity, |cursor| {
             result = Some(self.lookup_into_cursor(cursor, position, normal, open, out));
         });
-        result.unwrap_or_else(|| {
-            let n = self.check_lookup(position, normal, out.len())?;
-            self.lookup_checked_indexed(&self.kernel.for_query(open), position, n, out)
-        })
+        result.unwrap_or_else(|| self.lookup_into_indexed_query(position, normal, open, out))
     }
 
     /// [`Cache::lookup_into`] through the index alone, with no per-thread state: the reference
@@ -697,8 +694,7 @@ impl<V: CacheValue> Cache<V> {
         normal: DVec3,
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
-        let n = self.check_lookup(position, normal, out.len())?;
-        self.lookup_checked_indexed(&self.kernel, position, n, out)
+        self.lookup_into_indexed_query(position, normal, None, out)
     }
 
     /// [`Cache::lookup_into_open`] through the index alone (the reference of its cursor paths).
@@ -710,9 +706,19 @@ impl<V: CacheValue> Cache<V> {
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
         open_fraction::check_query_open_fraction(open_fraction)?;
+        self.lookup_into_indexed_query(position, normal, Some(open_fraction), out)
+    }
+
+    /// The index path of every lookup, with the query's open fraction if any.
+    fn lookup_into_indexed_query(
+        &self,
+        position: DVec3,
+        normal: DVec3,
+        open: Option<f64>,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
         let n = self.check_lookup(position, normal, out.len())?;
-        let kernel = self.kernel.for_query(Some(open_fraction));
-        self.lookup_checked_indexed(&kernel, position, n, out)
+        self.lookup_checked_indexed(&self.kernel.for_query(open), position, n, out)
     }
 
     /// The index path of a query already validated (`n` the unit normal) with the query's

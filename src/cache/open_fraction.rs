@@ -101,8 +101,7 @@ pub(crate) fn decode(code: u32) -> Option<f64> {
     (code != 0).then(|| (code - 1) as f64 / STEPS)
 }
 
-/// The open fractions a query admits: `[V − tolerance, V + tolerance]`, as the range of stored
-/// codes it admits.
+/// The open fractions a query of open fraction V admits: `[V − tolerance, V + tolerance]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct OpenWindow {
     lowest: f64,
