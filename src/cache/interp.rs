@@ -33,6 +33,8 @@
 //! * Every result is clamped to the finite `f32` range. First-order extrapolation may produce
 //!   negative values from positive records; clamp them yourself if your quantity is non-negative.
 
+use std::borrow::Cow;
+
 use glam::DVec3;
 
 use super::leak_guard::LeakGuard;
@@ -145,12 +147,16 @@ impl Kernel {
     }
 
     /// The kernel of one query: the cache's, with the open fractions a query of open fraction
-    /// `open` admits (`None`: a query without one, which the test never refuses records at).
+    /// `open` admits (`None`: a query without one, which the test never refuses records at). The
+    /// cache's own kernel, borrowed, when nothing is refused (no open fraction, or the test off).
     #[inline]
-    pub(crate) fn for_query(&self, open: Option<f64>) -> Self {
-        Kernel {
-            open_window: open.and_then(|v| OpenWindow::new(self.open_fraction_test, v)),
-            ..*self
+    pub(crate) fn for_query(&self, open: Option<f64>) -> Cow<'_, Kernel> {
+        match open.and_then(|v| OpenWindow::new(self.open_fraction_test, v)) {
+            None => Cow::Borrowed(self),
+            Some(window) => Cow::Owned(Kernel {
+                open_window: Some(window),
+                ..*self
+            }),
         }
     }
 
