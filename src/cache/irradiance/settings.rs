@@ -212,8 +212,8 @@ impl IrradianceSettings {
 
     /// The configuration of a cache for these records: surface domain, the settings' channels,
     /// the metric's interpolation ([`Metric::interpolation`]), gradient limit, leak guard,
-    /// far-field reach and open-fraction test, extrapolation clamped at zero (irradiance is never negative), maximum
-    /// normal deviation 0.2 rad.
+    /// far-field reach and open-fraction test, extrapolation clamped at zero (irradiance is never
+    /// negative), maximum normal deviation 0.2 rad.
     pub fn cache_config(&self) -> CacheConfig {
         CacheConfig::surface(self.channels)
             .with_interpolation(self.metric.interpolation())
