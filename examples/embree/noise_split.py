@@ -21,7 +21,10 @@ make the systematic part's estimate steadier (its worst pixels are heavy-tailed)
 
 Under `--near-field` (the pixels' and records' CSVs carry open fractions) it also gives, per
 metric, the share of the pixels next to a record of the first run (within 3 pixels) whose open
-fraction differs from theirs by more than 0.1, and the share of the systematic square they hold.
+fraction differs from theirs by more than 0.1, and the share of the systematic square they hold;
+and each metric's systematic part split by the pixels' own open fraction (bins 0-0.6, 0.6-0.8,
+0.8-0.9, 0.9-0.97, 0.97-1), whose squares add up to the systematic square with the reference's
+noise included: which pixels a safeguard helps, and which it costs.
 
 usage: noise_split.py RUN RUN [RUN...]   (run prefixes: <prefix>-summary.csv, <prefix>-<metric>-pixels.csv)
 """
@@ -124,6 +127,32 @@ def open_fraction_mismatch(runs, open_fractions, records, within_px=3.0, toleran
     return float(mismatched.mean()), float(estimate[mismatched].sum() / total)
 
 
+OPEN_FRACTION_BINS = (0.0, 0.6, 0.8, 0.9, 0.97, 1.0)
+
+
+def systematic_by_open_fraction(runs, open_fractions, edges=OPEN_FRACTION_BINS):
+    """[(low, high, pixel share, part)]: for each bin [low, high) of the pixels' open fractions
+    (the last bin closed), the share of the pixels (every run measured, with an open fraction)
+    in it and its part of the systematic error, `sqrt(max(0, sum of the bin's per-pixel
+    estimates) / sum ref^2)` over all those pixels, the reference's noise included (so that the
+    parts' squares add up to the whole's). None when no pixel has an open fraction or the
+    references are all 0."""
+    keys, values, errors, references = per_pixel(runs)
+    kept = [i for i, k in enumerate(keys) if k in open_fractions]
+    ref2 = (references[kept] ** 2).sum() if kept else 0.0
+    if not kept or ref2 <= 0:
+        return None
+    estimate = systematic_estimates(values[:, kept], errors[:, kept])
+    opens = np.array([open_fractions[keys[i]] for i in kept])
+    parts = []
+    for k, (low, high) in enumerate(zip(edges[:-1], edges[1:])):
+        last = k == len(edges) - 2
+        inside = (opens >= low) & ((opens <= high) if last else (opens < high))
+        part = math.sqrt(max(0.0, float(estimate[inside].sum()) / ref2))
+        parts.append((low, high, float(inside.mean()), part))
+    return parts
+
+
 def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
@@ -157,6 +186,12 @@ def main():
             print(f"{m}: pixels with a record of the first run within 3 px whose open fraction differs from "
                   f"theirs by more than 0.1 are {100 * shares[0]:.1f}% of the pixels and hold "
                   f"{100 * shares[1]:.0f}% of the systematic square")
+        bins = systematic_by_open_fraction(runs, open_fractions)
+        if bins is not None:
+            print(f"{m}: systematic part by the pixel's open fraction (share of the pixels), the "
+                  "reference's noise included: "
+                  + ", ".join(f"[{lo:g}, {hi:g}{']' if hi == 1.0 else ')'} {part:.4f} ({100 * share:.0f}%)"
+                              for lo, hi, share, part in bins))
 
 
 if __name__ == "__main__":

@@ -216,6 +216,22 @@ def test_the_open_fraction_mismatch_counts_pixels_next_to_records_of_another_ope
     assert noise_split.open_fraction_mismatch([pixels, pixels], {}, records) is None
 
 
+def test_the_systematic_part_splits_by_the_pixels_open_fraction(folder):
+    # identical runs (each pixel's estimate its error squared): errors 3, 4 at open fractions
+    # 0.5 and 0.95, 12 at 1.0 (the last bin is closed), references 1; a pixel without an open
+    # fraction is left out of every bin and of the sum of references
+    pixels = {(0, 0): (4.0, 1.0, 3.0), (1, 0): (5.0, 1.0, 4.0), (2, 0): (13.0, 1.0, 12.0), (3, 0): (1.0, 1.0, 0.0)}
+    opens = {(0, 0): 0.5, (1, 0): 0.95, (2, 0): 1.0}
+    bins = noise_split.systematic_by_open_fraction([pixels, pixels], opens)
+    assert [(lo, hi) for lo, hi, _, _ in bins] == [(0.0, 0.6), (0.6, 0.8), (0.8, 0.9), (0.9, 0.97), (0.97, 1.0)]
+    expected = [(1 / 3, 3 / math.sqrt(3)), (0.0, 0.0), (0.0, 0.0), (1 / 3, 4 / math.sqrt(3)), (1 / 3, 12 / math.sqrt(3))]
+    for (_, _, share, part), (want_share, want_part) in zip(bins, expected):
+        assert abs(share - want_share) < 1e-12 and abs(part - want_part) < 1e-12, bins
+    # the parts' squares add up to the whole's (13^2 / 3)
+    assert abs(sum(p**2 for _, _, _, p in bins) - 169.0 / 3.0) < 1e-9
+    assert noise_split.systematic_by_open_fraction([pixels, pixels], {}) is None
+
+
 def main():
     tests = [v for k, v in sorted(globals().items()) if k.startswith("test_")]
     with tempfile.TemporaryDirectory() as folder:
