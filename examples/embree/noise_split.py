@@ -24,7 +24,8 @@ metric, the share of the pixels next to a record of the first run (within 3 pixe
 fraction differs from theirs by more than 0.1, and the share of the systematic square they hold;
 and each metric's systematic part split by the pixels' own open fraction (bins 0-0.6, 0.6-0.8,
 0.8-0.9, 0.9-0.97, 0.97-1), whose squares add up to the systematic square with the reference's
-noise included: which pixels a safeguard helps, and which it costs.
+noise included (a bin whose estimates sum below 0 shows 0): which pixels a safeguard helps, and
+which it costs.
 
 usage: noise_split.py RUN RUN [RUN...]   (run prefixes: <prefix>-summary.csv, <prefix>-<metric>-pixels.csv)
 """
@@ -135,8 +136,8 @@ def systematic_by_open_fraction(runs, open_fractions, edges=OPEN_FRACTION_BINS):
     (the last bin closed), the share of the pixels (every run measured, with an open fraction)
     in it and its part of the systematic error, `sqrt(max(0, sum of the bin's per-pixel
     estimates) / sum ref^2)` over all those pixels, the reference's noise included (so that the
-    parts' squares add up to the whole's). None when no pixel has an open fraction or the
-    references are all 0."""
+    parts' squares add up to the whole's, but for a bin whose sum is negative, shown as 0: the
+    estimates' own noise). None when no pixel has an open fraction or the references are all 0."""
     keys, values, errors, references = per_pixel(runs)
     kept = [i for i, k in enumerate(keys) if k in open_fractions]
     ref2 = (references[kept] ** 2).sum() if kept else 0.0
