@@ -105,21 +105,27 @@ def read_open_fractions(prefix, metric):
     return {(int(r["x"]), int(r["y"])): float(r["open_fraction"]) for r in pixels}
 
 
+def estimates_with_open_fraction(runs, open_fractions):
+    """(keys, estimates, references) over the pixels every run measured that have an open
+    fraction: their keys, their per-pixel systematic estimates (as in noise_split) and their
+    references."""
+    keys, values, errors, references = per_pixel(runs)
+    kept = [i for i, k in enumerate(keys) if k in open_fractions]
+    return [keys[i] for i in kept], systematic_estimates(values[:, kept], errors[:, kept]), references[kept]
+
+
 def open_fraction_mismatch(runs, open_fractions, records, within_px=3.0, tolerance=0.1):
     """(pixel share, systematic share): the pixels (every run measured) with a record within
     `within_px` pixels whose open fraction differs from the pixel's by more than `tolerance`,
     as a share of the pixels and of the sum of the per-pixel systematic estimates (as in
     noise_split). None when no pixel has an open fraction, there are no records, or the
     estimates sum to 0 or less."""
-    keys, values, errors, _ = per_pixel(runs)
-    kept = [i for i, k in enumerate(keys) if k in open_fractions]
-    if not kept or not records:
+    keys, estimate, _ = estimates_with_open_fraction(runs, open_fractions)
+    if not keys or not records:
         return None
     rec = np.array(records)
-    estimate = systematic_estimates(values[:, kept], errors[:, kept])
-    mismatched = np.zeros(len(kept), dtype=bool)
-    for j, i in enumerate(kept):
-        x, y = keys[i]
+    mismatched = np.zeros(len(keys), dtype=bool)
+    for j, (x, y) in enumerate(keys):
         near = np.hypot(rec[:, 0] - x, rec[:, 1] - y) < within_px
         mismatched[j] = near.any() and np.abs(rec[near, 2] - open_fractions[(x, y)]).max() > tolerance
     total = estimate.sum()
@@ -138,13 +144,11 @@ def systematic_by_open_fraction(runs, open_fractions, edges=OPEN_FRACTION_BINS):
     estimates) / sum ref^2)` over all those pixels, the reference's noise included (so that the
     parts' squares add up to the whole's, but for a bin whose sum is negative, shown as 0: the
     estimates' own noise). None when no pixel has an open fraction or the references are all 0."""
-    keys, values, errors, references = per_pixel(runs)
-    kept = [i for i, k in enumerate(keys) if k in open_fractions]
-    ref2 = (references[kept] ** 2).sum() if kept else 0.0
-    if not kept or ref2 <= 0:
+    keys, estimate, references = estimates_with_open_fraction(runs, open_fractions)
+    ref2 = (references**2).sum()
+    if not keys or ref2 <= 0:
         return None
-    estimate = systematic_estimates(values[:, kept], errors[:, kept])
-    opens = np.array([open_fractions[keys[i]] for i in kept])
+    opens = np.array([open_fractions[k] for k in keys])
     parts = []
     for k, (low, high) in enumerate(zip(edges[:-1], edges[1:])):
         last = k == len(edges) - 2

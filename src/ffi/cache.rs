@@ -271,14 +271,15 @@ pub extern "C" fn raddiff_cache_lookup_with(
     })
 }
 
-/// `raddiff_cache_lookup` (`cursor` NULL) or `raddiff_cache_lookup_with` (`cursor` not NULL) for
-/// a query whose open fraction is `open_fraction` (in [0, 1]; the near field's, see
+/// `raddiff_cache_lookup` (`cursor` NULL) or `raddiff_cache_lookup_with` (`cursor` not NULL) for a
+/// query whose open fraction is `open_fraction` (in [0, 1]; the near field's, see
 /// `raddiff_gather_near_field`): the cache's open-fraction test refuses every record whose open
 /// fraction differs from it by more than the tolerance
 /// (`raddiff_cache_set_open_fraction_tolerance`; records inserted without an open fraction are
-/// never refused). With the test off, the result of `raddiff_cache_lookup` bit for bit. `RADDIFF_ERROR_NOT_FOUND` when no admitted record covers
-/// the point; `RADDIFF_ERROR_INVALID_ARGUMENT` for an open fraction outside [0, 1] (NaN
-/// included). Thread-safe as `raddiff_cache_lookup`; a cursor is used by one thread only.
+/// never refused). With the test off, the result of `raddiff_cache_lookup` bit for bit.
+/// `RADDIFF_ERROR_NOT_FOUND` when no admitted record covers the point;
+/// `RADDIFF_ERROR_INVALID_ARGUMENT` for an open fraction outside [0, 1] (NaN included). Thread-safe
+/// as `raddiff_cache_lookup`; a cursor is used by one thread only.
 #[no_mangle]
 pub extern "C" fn raddiff_cache_lookup_open(
     cache: *const raddiff_cache,
