@@ -40,6 +40,27 @@ double binned_far(double far, const std::array<float, kDirBins> &open_bins, cons
   return std::max(0.0, far + kPi * d);
 }
 
+// A record kept after its insertion (the smoothing experiment), with copies of its gradients: the
+// far field's are computed in the fill's locals.
+class KeptRecord {
+ public:
+  explicit KeptRecord(const raddiff_cache_record &rec) : rec_(rec) {
+    if (rec.gradient) std::copy(rec.gradient, rec.gradient + 9, gradient_.begin());
+    if (rec.rotation_gradient) std::copy(rec.rotation_gradient, rec.rotation_gradient + 9, rotation_gradient_.begin());
+  }
+  // The record, its gradients pointing into this object (valid while it lives and does not move).
+  raddiff_cache_record get() const {
+    raddiff_cache_record r = rec_;
+    if (r.gradient) r.gradient = gradient_.data();
+    if (r.rotation_gradient) r.rotation_gradient = rotation_gradient_.data();
+    return r;
+  }
+
+ private:
+  raddiff_cache_record rec_;
+  std::array<float, 9> gradient_{}, rotation_gradient_{};
+};
+
 class GatherStore {
  public:
   GatherStore(const Scene &scene, const std::vector<Primary> &primary, const BenchSettings &settings,
@@ -57,6 +78,7 @@ class GatherStore {
       s.trace_seconds = thread_cpu_seconds() - t0;
       s.rays = g.rays;
       const double reach = settings_.near_field_px * px.footprint;
+      if (!settings_.strata_dir.empty() && pixel % settings_.strata_every == 0) write_strata(pixel, g, reach);
       const bool far_field_gather = settings_.near_field_px > 0 && settings_.far_field_gathers;
       float far_bins[3 * kDirBins] = {};
       if (settings_.near_field_px > 0 && settings_.far_field_bins) bin_far_radiance(g, reach, far_bins);
@@ -95,6 +117,31 @@ class GatherStore {
   }
 
   size_t computed() const { return computed_; }
+
+  // The adaptive-gather experiment's file for the gather `g` of `pixel` (format in
+  // strata_allocation.py): m, n and the trace count as uint32, the near field's reach (0: none) as
+  // float64, then per stratum its luminance in each of strata_paths traces of independent hit
+  // radiance (float32, stratum-major), then per stratum its hit distance (float64).
+  void write_strata(size_t pixel, const TracedGather &g, double reach) const {
+    const Primary &px = primary_[pixel];
+    const raddiff_irradiance_settings &irr = settings_.irradiance;
+    const size_t count = g.distance.size(), paths = settings_.strata_paths;
+    std::vector<float> lum(count * paths);
+    for (size_t k = 0; k < paths; ++k) {
+      const TracedGather q = trace_gather(scene_, settings_.radiance, px.p, px.n, irr.gather_m, irr.gather_n,
+                                          reseeded(1 + pixel, settings_.noise_seed + 0x57a7a0000ull + k));
+      for (size_t i = 0; i < count; ++i) lum[i * paths + k] = static_cast<float>(luminance(&q.radiance[3 * i]));
+    }
+    const std::string name = settings_.strata_dir + "/p" + std::to_string(pixel) + ".strata";
+    std::ofstream f(name, std::ios::binary);
+    const uint32_t header[3] = {irr.gather_m, irr.gather_n, static_cast<uint32_t>(paths)};
+    f.write(reinterpret_cast<const char *>(header), sizeof header);
+    f.write(reinterpret_cast<const char *>(&reach), sizeof reach);
+    f.write(reinterpret_cast<const char *>(lum.data()), static_cast<std::streamsize>(lum.size() * sizeof(float)));
+    f.write(reinterpret_cast<const char *>(g.distance.data()),
+            static_cast<std::streamsize>(count * sizeof(double)));
+    if (!f) throw std::runtime_error("cannot write " + name);
+  }
 
   // The binned far-field experiment's record (Evaluated::far_bins): over the rays that reach at
   // least `reach`, each bin's mean radiance minus the mean of them all, shrunk by n_b / (n_b + 16).
@@ -354,10 +401,10 @@ class Bench {
     };
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
-    // The inserted records, kept for the smoothing experiment (their derivatives point into the
-    // store's evaluations, which outlive the fill).
+    // The inserted records, kept for the smoothing experiment (their values and open fractions
+    // point into the store's evaluations, which outlive the fill).
     const bool smooth = render && settings_.smooth_records > 0;
-    std::vector<raddiff_cache_record> kept;
+    std::vector<KeptRecord> kept;
     // The kernel of the experiments' side caches: the one the settings force, or the metric's own.
     const int kernel = settings_.interpolation >= 0 ? settings_.interpolation
                        : uses_hessian(m)            ? RADDIFF_INTERP_TENT
@@ -482,7 +529,7 @@ class Bench {
               check(raddiff_cache_insert(binned_caches[b].get(), &br), "raddiff_cache_insert");
           }
           out.records.push_back(info);
-          if (smooth) kept.push_back(rec);
+          if (smooth) kept.emplace_back(rec);
           if (quadratic) {
             if (!e.evaluation[1]) throw std::runtime_error("--second-order needs an occlusion-aware Hessian metric");
             raddiff_gather_summary summary{};
@@ -516,13 +563,15 @@ class Bench {
       // records covering its position (its own included, radii times smooth_records), each
       // extrapolated through its gradient; the cache rebuilt from the same records.
       CachePtr blend = surface_cache(RADDIFF_INTERP_TENT, irr.gradient_limit);
-      for (raddiff_cache_record rec : kept) {
+      for (const KeptRecord &k : kept) {
+        raddiff_cache_record rec = k.get();
         for (double &x : rec.radii) x *= settings_.smooth_records;
         check(raddiff_cache_insert(blend.get(), &rec), "raddiff_cache_insert");
       }
       check(raddiff_cache_compact(blend.get()), "raddiff_cache_compact");
       cache = new_cache();
-      for (raddiff_cache_record rec : kept) {
+      for (const KeptRecord &k : kept) {
+        raddiff_cache_record rec = k.get();
         float smoothed[3];
         const raddiff_status st = raddiff_cache_lookup(blend.get(), rec.position, rec.normal, smoothed, nullptr);
         if (st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");

@@ -88,6 +88,13 @@ struct BenchSettings {
   // summary key pixel_gathers_rel_rms; -1 when off): the error no record placement removes. Costs
   // one gather per measured pixel not already a record's.
   bool pixel_gathers = false;
+  // Non-empty: the adaptive-gather experiment (examples/embree/strata_allocation.py reads it). Every
+  // record gather whose pixel index is a multiple of strata_every is traced strata_paths more times
+  // with independent hit-radiance samples (same directions and hits; not timed), and each
+  // stratum's luminance per trace is written to <strata_dir>/p<pixel>.strata.
+  std::string strata_dir;
+  uint32_t strata_every = 97;
+  uint32_t strata_paths = 16;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
 };

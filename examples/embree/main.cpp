@@ -50,7 +50,8 @@ const char *kUsage =
     "                      [--hessian-distance-bound k] [--smooth-records s]\n"
     "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n"
     "                      [--near-field reach_px[,rays]] [--far-field-gathers] [--near-at-reach] [--far-field-bins]\n"
-    "                      [--open-fraction-bands width] [--noise-seed K] [--pixel-gathers]\n";
+    "                      [--open-fraction-bands width] [--noise-seed K] [--pixel-gathers]\n"
+    "                      [--strata-variance DIR[,every (97)[,paths (16)]]]\n";
 
 }  // namespace
 
@@ -127,6 +128,16 @@ int main(int argc, char **argv) {
         render.irradiance.near_field_open_fraction_tolerance = bench.open_fraction_tolerance = std::stod(next());
       else if (a == "--noise-seed") bench.noise_seed = std::stoull(next());
       else if (a == "--pixel-gathers") bench.pixel_gathers = true;
+      else if (a == "--strata-variance") {
+        // DIR[,every[,paths]]
+        std::stringstream s(next());
+        std::string part;
+        std::getline(s, bench.strata_dir, ',');
+        if (std::getline(s, part, ',')) bench.strata_every = static_cast<uint32_t>(std::stoul(part));
+        if (std::getline(s, part, ',')) bench.strata_paths = static_cast<uint32_t>(std::stoul(part));
+        if (bench.strata_dir.empty() || bench.strata_every < 1 || bench.strata_paths < 2)
+          throw std::runtime_error("--strata-variance DIR[,every[,paths]]: every >= 1, paths >= 2");
+      }
       else if (a == "--near-field") {
         // K (pixel footprints of reach) or K,N (N rays per pixel)
         const std::string v = next();

@@ -70,6 +70,16 @@ for seed in 0 1; do
   grep -q '^OK$' "$out/cornell-seed$seed.log"
   grep -q '^pixel gathers: every measured pixel from its own gather' "$out/cornell-seed$seed.log"
 done
+# The adaptive-gather experiment: a few record gathers traced 8 more times each
+# (examples/embree/strata_allocation.py reads the files); and the smoothing experiment, whose
+# far-field records keep their gradients.
+rm -rf "$out/cornell-strata" && mkdir -p "$out/cornell-strata"
+"$binary" --bench --obj "$here/cornell.obj" --out "$out/cornell-strata" --size 64 --gather 16x32 \
+  --metrics split-sphere,hessian-anisotropic --thresholds 1 --no-path-trace --reference-rays 4096 \
+  --near-field 4,64 --far-field-gathers --near-at-reach --smooth-records 1 \
+  --strata-variance "$out/cornell-strata,5,8" > "$out/cornell-strata.log"
+grep -q '^OK$' "$out/cornell-strata.log"
+ls "$out/cornell-strata/"*.strata > /dev/null
 # another noise seed draws other samples: the pixels' own gathers differ
 if cmp -s "$out/cornell-seed0-pixel-gathers-pixels.csv" "$out/cornell-seed1-pixel-gathers-pixels.csv"; then
   echo "--noise-seed 1 drew the same samples as --noise-seed 0" >&2

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Checks of report.py's edge split, shared and own errors and equal-error records, and of
-noise_split.py's noise and systematic parts, on synthetic runs whose answers are known by
-construction.
+noise_split.py's noise and systematic parts, and of strata_allocation.py's variances, on synthetic
+runs whose answers are known by construction.
 
 usage: python3 examples/embree/test_report.py   (needs numpy and matplotlib, as report.py does)
 """
@@ -16,6 +16,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import noise_split  # noqa: E402
 import report  # noqa: E402
+import strata_allocation  # noqa: E402
 
 
 def write_pfm(path, rgb):
@@ -230,6 +231,93 @@ def test_the_systematic_part_splits_by_the_pixels_open_fraction(folder):
     # the parts' squares add up to the whole's (13^2 / 3)
     assert abs(sum(p**2 for _, _, _, p in bins) - 169.0 / 3.0) < 1e-9
     assert noise_split.systematic_by_open_fraction([pixels, pixels], {}) is None
+
+
+def write_strata(path, lum, distance, m, n, reach):
+    """A file of `--strata-variance`: lum[m*n, P] luminances, m*n distances."""
+    with open(path, "wb") as f:
+        f.write(np.array([m, n, lum.shape[1]], dtype="<u4").tobytes())
+        f.write(np.array([reach], dtype="<f8").tobytes())
+        f.write(np.ascontiguousarray(lum, dtype="<f4").tobytes())
+        f.write(np.ascontiguousarray(distance, dtype="<f8").tobytes())
+
+
+def alternating(count, paths, means, spread):
+    """Traces mean_i +- spread_i in turn: each stratum's sample variance is known exactly."""
+    signs = np.where(np.arange(paths) % 2 == 0, 1.0, -1.0)
+    return means[:, None] + spread[:, None] * signs[None, :]
+
+
+def test_even_variances_leave_nothing_to_allocate(folder):
+    m, n, paths = 4, 8, 8
+    means = np.linspace(1.0, 2.0, m * n)
+    lum = alternating(m * n, paths, means, np.full(m * n, 0.5))
+    path = os.path.join(folder, "even.strata")
+    write_strata(path, lum, np.ones(m * n), m, n, 0.0)
+    got = strata_allocation.relative_variances(*strata_allocation.read_strata(path))
+    for budget in strata_allocation.BUDGETS:
+        assert abs(got["even"][budget] - 1 / budget) < 1e-12, got
+        assert abs(got["oracle (true deviations)"][budget] - 1 / budget) < 1e-9, got
+        # with equal variances no allocation beats the even one (convexity of 1/n)
+        for rule, by_budget in got.items():
+            assert by_budget.get(budget, 1.0) >= 1 / budget - 1e-9, (rule, by_budget)
+
+
+def test_the_oracle_puts_every_extra_path_where_the_variance_is(folder):
+    # a of the read strata have variance, the others none: Neyman gives the quiet ones one path and
+    # the rest of T*N to the a, so the variance falls to a / (T*N - (N - a)). The first row is
+    # closer than the reach and noisier than all: it must not count.
+    m, n, paths, reach = 4, 8, 8, 2.0
+    spread = np.zeros(m * n)
+    noisy = [9, 14, 20, 27, 31]
+    spread[noisy] = 1.0
+    spread[:n] = 50.0
+    distance = np.full(m * n, 3.0)
+    distance[:n] = 1.0
+    distance[12] = np.inf  # a miss is read
+    lum = alternating(m * n, paths, np.full(m * n, 4.0), spread)
+    path = os.path.join(folder, "oracle.strata")
+    write_strata(path, lum, distance, m, n, reach)
+    got = strata_allocation.relative_variances(*strata_allocation.read_strata(path))
+    read, a = m * n - n, len(noisy)
+    for budget in strata_allocation.BUDGETS:
+        want = a / (budget * read - (read - a))
+        assert abs(got["oracle (true deviations)"][budget] - want) < 1e-9, (budget, got)
+    # without a near field every stratum is read: the quiet 19 get one path each, and so do the five
+    # of deviation 1 (their share, below one path, is raised to it); the first row's eight share
+    # the rest, 5 paths each for T = 2 and 13 for T = 4
+    write_strata(path, lum, distance, m, n, 0.0)
+    got = strata_allocation.relative_variances(*strata_allocation.read_strata(path))
+    one_path = 8 * 50.0**2 + a
+    for budget, first_row in ((2, 5.0), (4, 13.0)):
+        want = (8 * 50.0**2 / first_row + a) / one_path
+        assert abs(got["oracle (true deviations)"][budget] - want) < 1e-9, (budget, got)
+
+
+def test_the_noisiest_strata_share(folder):
+    # 38 read strata: two of variance 9 (deviation 3), 36 of variance 1; the noisiest 5% (round(1.9))
+    # are the two, 18 of 54. Six near strata, three of them of variance 100, are not read.
+    m, n = 4, 11
+    spread = np.ones(m * n)
+    spread[[3, 17]] = 3.0
+    spread[:4] = 10.0
+    spread[3] = 3.0
+    distance = np.full(m * n, 5.0)
+    distance[:3] = 1.0
+    distance[[40, 41, 42]] = 1.0
+    path = os.path.join(folder, "share.strata")
+    write_strata(path, alternating(m * n, 6, np.full(m * n, 2.0), spread), distance, m, n, 2.0)
+    share = strata_allocation.noisiest_share(*strata_allocation.read_strata(path))
+    assert abs(share - 18.0 / 54.0) < 1e-9, share
+    gathers, mean_share, _ = strata_allocation.summarize(folder)
+    assert gathers >= 1 and 0 < mean_share <= 1
+
+
+def test_a_gather_without_variance_is_left_out(folder):
+    m, n = 2, 4
+    path = os.path.join(folder, "flat.strata")
+    write_strata(path, np.ones((m * n, 4)), np.ones(m * n), m, n, 0.0)
+    assert strata_allocation.relative_variances(*strata_allocation.read_strata(path)) is None
 
 
 def main():
