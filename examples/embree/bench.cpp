@@ -401,9 +401,14 @@ class Bench {
     };
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
-    // The inserted records, kept for the smoothing experiment (their values and open fractions
-    // point into the store's evaluations, which outlive the fill).
+    // The inserted records, kept for the smoothing and lookup-scale experiments (their values and
+    // open fractions point into the store's evaluations, which outlive the fill).
     const bool smooth = render && settings_.smooth_records > 0;
+    const bool rescale = render && settings_.lookup_scale != 1;
+    if (rescale && (banded || smooth || settings_.far_field_bins || settings_.neighbour_clamp ||
+                    settings_.second_order > 0))
+      throw std::runtime_error("--lookup-scale does not combine with --open-fraction-bands, --smooth-records, "
+                               "--far-field-bins, --neighbour-clamp or --second-order");
     std::vector<KeptRecord> kept;
     // The kernel of the experiments' side caches: the one the settings force, or the metric's own.
     const int kernel = settings_.interpolation >= 0 ? settings_.interpolation
@@ -529,7 +534,7 @@ class Bench {
               check(raddiff_cache_insert(binned_caches[b].get(), &br), "raddiff_cache_insert");
           }
           out.records.push_back(info);
-          if (smooth) kept.emplace_back(rec);
+          if (smooth || rescale) kept.emplace_back(rec);
           if (quadratic) {
             if (!e.evaluation[1]) throw std::runtime_error("--second-order needs an occlusion-aware Hessian metric");
             raddiff_gather_summary summary{};
@@ -576,6 +581,14 @@ class Bench {
         const raddiff_status st = raddiff_cache_lookup(blend.get(), rec.position, rec.normal, smoothed, nullptr);
         if (st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
         if (st == RADDIFF_OK) rec.value = smoothed;
+        check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
+      }
+    }
+    if (rescale) {
+      cache = new_cache();
+      for (const KeptRecord &k : kept) {
+        raddiff_cache_record rec = k.get();
+        for (double &x : rec.radii) x *= settings_.lookup_scale;
         check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
       }
     }

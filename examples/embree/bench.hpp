@@ -29,6 +29,10 @@ struct BenchSettings {
   bool path_trace = true;
   double smooth_records = 0;          // > 0: records' values blended with their neighbours' (tent, radii x this)
   bool record_gradients = true;       // false: records without gradients (to measure what they add)
+  // != 1: the filled cache rebuilt for rendering with every record's radii times this (its leak
+  // guard's tolerance with them), the records placed as before: lookups that blend more records
+  // (less noise, more bias) at the same record count (experiment).
+  double lookup_scale = 1;
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.
   int oracle_derivative_paths = 0;

@@ -47,7 +47,7 @@ const char *kUsage =
     "                      [--reference-rays N (65536)] [--reference-grid G (64)] [--cache-dir DIR] [--floor-records N]\n"
     "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n"
     "                      [--oracle-derivatives K] [--interpolation ward|tent|cubic]\n"
-    "                      [--hessian-distance-bound k] [--smooth-records s]\n"
+    "                      [--hessian-distance-bound k] [--smooth-records s] [--lookup-scale k]\n"
     "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n"
     "                      [--near-field reach_px[,rays]] [--far-field-gathers] [--near-at-reach] [--far-field-bins]\n"
     "                      [--open-fraction-bands width] [--noise-seed K] [--pixel-gathers]\n"
@@ -118,6 +118,11 @@ int main(int argc, char **argv) {
       else if (a == "--pt-max-spp") bench.path_trace_max_spp = static_cast<uint32_t>(std::stoul(next()));
       else if (a == "--no-path-trace") bench.path_trace = false;
       else if (a == "--smooth-records") bench.smooth_records = std::stod(next());
+      else if (a == "--lookup-scale") {
+        bench.lookup_scale = std::stod(next());
+        if (!(bench.lookup_scale > 0) || !std::isfinite(bench.lookup_scale))
+          throw std::runtime_error("--lookup-scale k needs a finite k > 0");
+      }
       else if (a == "--second-order") bench.second_order = std::stod(next());
       else if (a == "--error-norm") bench.error_norm = std::stod(next());
       else if (a == "--far-field-gathers") bench.far_field_gathers = true;

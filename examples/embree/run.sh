@@ -55,7 +55,8 @@ grep -q '^open-fraction test: records used only at pixels whose open fraction is
 # unless every fill covers the image with finite, non-negative values.
 for near in "--far-field-gathers" "--far-field-gathers --near-at-reach" "--far-field-gathers --near-at-reach --far-field-bins" \
   "--far-field-gathers --near-at-reach --far-field-bins --leak-guard 0.1,0 --open-fraction-bands 0.1" \
-  "--far-field-gathers --near-at-reach --far-field-bins --leak-guard 0.1,0 --open-fraction-tolerance 0.1"; do
+  "--far-field-gathers --near-at-reach --far-field-bins --leak-guard 0.1,0 --open-fraction-tolerance 0.1" \
+  "--far-field-gathers --near-at-reach --leak-guard 0.1,0 --open-fraction-tolerance 0.1 --lookup-scale 1.5"; do
   # shellcheck disable=SC2086 # the options are meant to split
   "$binary" --bench --obj "$here/cornell.obj" --out "$out/cornell-near" --size 64 --metrics split-sphere,hessian-anisotropic \
     --thresholds 1 --no-path-trace --reference-rays 4096 --near-field 4,64 $near > "$out/cornell-near.log"
