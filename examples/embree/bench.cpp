@@ -26,8 +26,9 @@ double binned_far(double far, const std::array<float, kDirBins> &open_bins, cons
   return std::max(0.0, far + kPi * d);
 }
 
-// A record kept after its insertion (the smoothing experiment), with copies of its gradients: the
-// far field's are computed in the fill's locals.
+// A record kept after its insertion (the smoothing and lookup-scale experiments), with copies of
+// its gradients (three channels, as every record of the bench): the far field's are computed in
+// the fill's locals.
 class KeptRecord {
  public:
   explicit KeptRecord(const raddiff_cache_record &rec) : rec_(rec) {
