@@ -48,6 +48,15 @@ class KeptRecord {
   std::array<float, 9> gradient_{}, rotation_gradient_{};
 };
 
+// Inserts the `kept` records into `cache` with their radii times `scale`.
+void insert_scaled(raddiff_cache *cache, const std::vector<KeptRecord> &kept, double scale) {
+  for (const KeptRecord &k : kept) {
+    raddiff_cache_record rec = k.get();
+    for (double &x : rec.radii) x *= scale;
+    check(raddiff_cache_insert(cache, &rec), "raddiff_cache_insert");
+  }
+}
+
 
 // CPU seconds summed over threads.
 class CpuSum {
@@ -411,11 +420,7 @@ class Bench {
       // records covering its position (its own included, radii times smooth_records), each
       // extrapolated through its gradient; the cache rebuilt from the same records.
       CachePtr blend = surface_cache(RADDIFF_INTERP_TENT, irr.gradient_limit);
-      for (const KeptRecord &k : kept) {
-        raddiff_cache_record rec = k.get();
-        for (double &x : rec.radii) x *= settings_.smooth_records;
-        check(raddiff_cache_insert(blend.get(), &rec), "raddiff_cache_insert");
-      }
+      insert_scaled(blend.get(), kept, settings_.smooth_records);
       check(raddiff_cache_compact(blend.get()), "raddiff_cache_compact");
       cache = new_cache();
       for (const KeptRecord &k : kept) {
@@ -429,11 +434,7 @@ class Bench {
     }
     if (rescale) {
       cache = new_cache();
-      for (const KeptRecord &k : kept) {
-        raddiff_cache_record rec = k.get();
-        for (double &x : rec.radii) x *= settings_.lookup_scale;
-        check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
-      }
+      insert_scaled(cache.get(), kept, settings_.lookup_scale);
     }
     if (render) {
       const std::vector<std::array<float, 4>> &near = near_field();

@@ -242,7 +242,7 @@ def write_strata(path, lum, distance, m, n, reach):
         f.write(np.ascontiguousarray(distance, dtype="<f8").tobytes())
 
 
-def alternating(count, paths, means, spread):
+def alternating(paths, means, spread):
     """Traces mean_i +- spread_i in turn: each stratum's sample variance is known exactly."""
     signs = np.where(np.arange(paths) % 2 == 0, 1.0, -1.0)
     return means[:, None] + spread[:, None] * signs[None, :]
@@ -251,7 +251,7 @@ def alternating(count, paths, means, spread):
 def test_even_variances_leave_nothing_to_allocate(folder):
     m, n, paths = 4, 8, 8
     means = np.linspace(1.0, 2.0, m * n)
-    lum = alternating(m * n, paths, means, np.full(m * n, 0.5))
+    lum = alternating(paths, means, np.full(m * n, 0.5))
     path = os.path.join(folder, "even.strata")
     write_strata(path, lum, np.ones(m * n), m, n, 0.0)
     got = strata_allocation.relative_variances(*strata_allocation.read_strata(path))
@@ -275,7 +275,7 @@ def test_the_oracle_puts_every_extra_path_where_the_variance_is(folder):
     distance = np.full(m * n, 3.0)
     distance[:n] = 1.0
     distance[12] = np.inf  # a miss is read
-    lum = alternating(m * n, paths, np.full(m * n, 4.0), spread)
+    lum = alternating(paths, np.full(m * n, 4.0), spread)
     path = os.path.join(folder, "oracle.strata")
     write_strata(path, lum, distance, m, n, reach)
     got = strata_allocation.relative_variances(*strata_allocation.read_strata(path))
@@ -306,7 +306,7 @@ def test_the_noisiest_strata_share(folder):
     distance[:3] = 1.0
     distance[[40, 41, 42]] = 1.0
     path = os.path.join(folder, "share.strata")
-    write_strata(path, alternating(m * n, 6, np.full(m * n, 2.0), spread), distance, m, n, 2.0)
+    write_strata(path, alternating(6, np.full(m * n, 2.0), spread), distance, m, n, 2.0)
     share = strata_allocation.noisiest_share(*strata_allocation.read_strata(path))
     assert abs(share - 18.0 / 54.0) < 1e-9, share
     gathers, mean_share, _ = strata_allocation.summarize(folder)
