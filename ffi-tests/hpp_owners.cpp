@@ -258,6 +258,28 @@ void open_fraction() {
   CHECK(cache.open_fraction_tolerance() == 0.25);
 }
 
+// The lookup radius scale through the wrapper: its setter and getter, a covered query blending
+// a record beyond its own radius, a gap staying uncovered (the values ffi-tests/lookup_radius.c
+// asserts).
+void lookup_radius() {
+  const float one = 1.0f, three = 3.0f;
+  raddiff::Cache cache(raddiff_cache_config{1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD, 0.2});
+  cache.insert(make_record(0.0, &one, nullptr));
+  cache.insert(make_record(3.0, &three, nullptr));
+  const raddiff_vec3 near_a{0.5, 0.0, 0.0}, gap{1.5, 0.0, 0.0};
+  float v = 0.0f;
+  CHECK(cache.lookup_radius_scale() == 1.0);
+  cache.lookup(near_a, kN, raddiff::Span<float>(&v, 1));
+  CHECK(v == 1.0f);
+  cache.set_lookup_radius_scale(3.0);
+  CHECK(cache.lookup_radius_scale() == 3.0);
+  CHECK_CLOSE(cache.lookup(near_a, kN, raddiff::Span<float>(&v, 1)), 5.2, 1e-9);
+  CHECK_CLOSE(v, (5.0 + 0.2 * 3.0) / 5.2, 1e-6);
+  CHECK_THROWS(cache.lookup(gap, kN, raddiff::Span<float>(&v, 1)), RADDIFF_ERROR_NOT_FOUND, "no cache record");
+  CHECK_THROWS(cache.set_lookup_radius_scale(0.5), RADDIFF_ERROR_INVALID_ARGUMENT, "lookup radius scale");
+  CHECK(cache.lookup_radius_scale() == 3.0);
+}
+
 void clamping() {
   const float one[1] = {1.0f};
   const raddiff_cache_config ccfg{1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD, 0.2};
@@ -347,6 +369,7 @@ int main(int argc, char **argv) {
   cache();
   gradient_limit();
   open_fraction();
+  lookup_radius();
   clamping();
   mesh();
   CHECK_DONE("hpp_owners.cpp");

@@ -62,6 +62,11 @@
 // `RADDIFF_INTERP_NON_NEGATIVE`.
 #define RADDIFF_GRADIENT_LIMIT_DEFAULT 2.0
 
+// The largest lookup radius scale (`raddiff_cache_set_lookup_radius_scale`): a lookup over 8
+// radii already weighs about 64 times the records of one over 1 (Rust:
+// `cache::LOOKUP_RADIUS_SCALE_MAX`).
+#define RADDIFF_LOOKUP_RADIUS_SCALE_MAX 8.0
+
 // Major version of the library this header belongs to.
 #define RADDIFF_VERSION_MAJOR 0
 
@@ -354,6 +359,11 @@ typedef struct raddiff_irradiance_settings {
   // `raddiff_cache_irradiance_near_far` traces a query's near rays before its lookup and
   // its records keep their open fractions.
   double near_field_open_fraction_tolerance;
+  // How far the cache reads records, in multiples of their radii, in
+  // [1, `RADDIFF_LOOKUP_RADIUS_SCALE_MAX`] (default 1; see
+  // `raddiff_cache_set_lookup_radius_scale`): records are made where they would be at 1, and
+  // each value blends more of them. Only `raddiff_irradiance_cache_new` reads it.
+  double lookup_radius_scale;
 } raddiff_irradiance_settings;
 
 // An m x n stratified layout: `kind` is a `RADDIFF_LAYOUT_*` constant; 1 <= m, n <=
@@ -749,6 +759,24 @@ enum raddiff_status raddiff_cache_set_open_fraction_tolerance(struct raddiff_cac
 enum raddiff_status raddiff_cache_get_open_fraction_tolerance(const struct raddiff_cache *cache,
                                                               double *tolerance);
 
+// Sets how far records are read, in multiples of their radii, for every lookup from now on
+// (default 1). A lookup then blends every record within `scale` times its radii (the leak
+// guard's radius scaled alike), while a query still counts as covered only where some record
+// covers it at its own radii: `raddiff_cache_lookup` returns `RADDIFF_ERROR_NOT_FOUND`, and
+// `raddiff_cache_irradiance` makes a record, exactly where they would at 1. So records are
+// placed as before and each value blends about scale^2 more of them (surfaces): less of the
+// gathers' noise, more bias where the value curves (the real-scene benchmark: 1.5 lowers every
+// error metric's error by 3-13%). `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) unless `scale`
+// is in [1, `RADDIFF_LOOKUP_RADIUS_SCALE_MAX`]. The index is rebuilt. Saved with the cache and
+// restored by `raddiff_cache_load` (files written before it load with 1). **Not thread-safe**:
+// no other thread may use the cache during the call.
+enum raddiff_status raddiff_cache_set_lookup_radius_scale(struct raddiff_cache *cache,
+                                                          double scale);
+
+// Writes the cache's lookup radius scale to `*scale` (1 unless set).
+enum raddiff_status raddiff_cache_get_lookup_radius_scale(const struct raddiff_cache *cache,
+                                                          double *scale);
+
 // Neighbour clamping (Krivanek et al. 2006) of a record about to be inserted: shrinks
 // `record->radii` in place so that the record's largest radius R (surface: of `radii[0..1]`) is at
 // most R_j + d_j for every stored record j at distance d_j = |position - x_j| < R (R_j its largest
@@ -895,8 +923,8 @@ struct raddiff_irradiance_settings raddiff_irradiance_settings_default(void);
 // metric's interpolation (`RADDIFF_INTERP_WARD` for the split-sphere family and the gradient
 // metric, `RADDIFF_INTERP_TENT` for the Hessian metrics), values clamped at zero
 // (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit, leak guard, near-field
-// reach (records then hold far fields) and open-fraction tolerance, maximum normal deviation
-// 0.2 rad. NULL (with
+// reach (records then hold far fields), open-fraction tolerance and lookup radius scale,
+// maximum normal deviation 0.2 rad. NULL (with
 // `raddiff_last_error`) for NULL or invalid settings. Free it with `raddiff_cache_free`.
 struct raddiff_cache *raddiff_irradiance_cache_new(const struct raddiff_irradiance_settings *settings);
 

@@ -340,6 +340,20 @@ class Cache : public detail::Owner<raddiff_cache> {
     return tolerance;
   }
 
+  /// Wraps `raddiff_cache_set_lookup_radius_scale` (not thread-safe): records are read over
+  /// `scale` times their radii, in [1, RADDIFF_LOOKUP_RADIUS_SCALE_MAX] (anything else throws);
+  /// misses stay where they are at 1.
+  void set_lookup_radius_scale(double scale) {
+    detail::check(raddiff_cache_set_lookup_radius_scale(get(), scale));
+  }
+
+  /// Wraps `raddiff_cache_get_lookup_radius_scale`: the scale (1 unless set).
+  double lookup_radius_scale() const {
+    double scale = 0.0;
+    detail::check(raddiff_cache_get_lookup_radius_scale(get(), &scale));
+    return scale;
+  }
+
   /// Wraps `raddiff_cache_get_far_field`: the far-field reach (world, pixels) its records were
   /// made at; both 0 when they hold irradiance.
   std::pair<double, double> far_field() const {

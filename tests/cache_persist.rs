@@ -50,8 +50,10 @@ fn reseal(bytes: &mut [u8]) {
     bytes[body..].copy_from_slice(&sum.to_le_bytes());
 }
 
-/// Size of the version 6 header (records start here).
-const HEADER: usize = 96;
+/// Size of the version 7 header (records start here).
+const HEADER: usize = 104;
+/// Size of the version 6 header: no lookup radius scale (offsets 96..104).
+const HEADER_V6: usize = 96;
 /// Size of the version 5 header: no open-fraction field (offsets 88..96).
 const HEADER_V5: usize = 88;
 /// Size of the version 4 header: no far-field fields (offsets 72..88).
@@ -129,7 +131,7 @@ fn header_and_record_damage_is_named() {
     b[0] = b'X';
     assert!(corrupt_reason(&b).contains("magic"));
     let mut b = good.clone();
-    b[8] = 7;
+    b[8] = 8;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("version"));
     let mut b = good.clone();
@@ -186,27 +188,33 @@ fn header_and_record_damage_is_named() {
 }
 
 /// The version 2 file of a cache without a gradient limit, leak guard, far field or open-fraction
-/// test: the current file without the fields at offsets 48..96, version 2, resealed.
+/// test: the current file without the fields at offsets 48..104, version 2, resealed.
 fn as_version_2(current: &[u8]) -> Vec<u8> {
     as_version(current, 48, 2)
 }
 
 /// The version 3 file of a cache without a leak guard or later fields: the current file without
-/// the fields at offsets 56..96, version 3, resealed.
+/// the fields at offsets 56..104, version 3, resealed.
 fn as_version_3(current: &[u8]) -> Vec<u8> {
     as_version(current, HEADER_V3, 3)
 }
 
 /// The version 4 file of a cache without a far field or open-fraction test: the current file
-/// without the fields at offsets 72..96, version 4, resealed.
+/// without the fields at offsets 72..104, version 4, resealed.
 fn as_version_4(current: &[u8]) -> Vec<u8> {
     as_version(current, HEADER_V4, 4)
 }
 
 /// The version 5 file of a cache without an open-fraction test: the current file without the
-/// tolerance (offsets 88..96), version 5, resealed.
+/// tolerance and the scale (offsets 88..104), version 5, resealed.
 fn as_version_5(current: &[u8]) -> Vec<u8> {
     as_version(current, HEADER_V5, 5)
+}
+
+/// The version 6 file of a cache read over its records' own radii: the current file without the
+/// lookup radius scale (offsets 96..104), version 6, resealed.
+fn as_version_6(current: &[u8]) -> Vec<u8> {
+    as_version(current, HEADER_V6, 6)
 }
 
 /// The current file with its header cut to `header` bytes and its version set to `version`.
@@ -228,7 +236,7 @@ fn gradient_limit_round_trips() {
         c.insert(&r).unwrap();
     }
     let bytes = c.to_bytes();
-    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 6);
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 7);
     assert_eq!(u32::from_le_bytes(bytes[44..48].try_into().unwrap()), 0b11);
     assert_eq!(f64::from_le_bytes(bytes[48..56].try_into().unwrap()), 0.75);
     let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
@@ -277,7 +285,7 @@ fn version_2_files_still_load() {
     let c = sample(30);
     let v5 = c.to_bytes();
     let v2 = as_version_2(&v5);
-    assert_eq!(v2.len(), v5.len() - 48);
+    assert_eq!(v2.len(), v5.len() - (HEADER - 48));
     let back = Cache::<[f32; 3]>::from_bytes(&v2).unwrap();
     assert_eq!(back.config(), c.config());
     assert_eq!(back.config().gradient_limit, f64::INFINITY);
@@ -320,7 +328,7 @@ fn version_3_files_load_with_the_leak_guard_off() {
     }
     let v5 = limited.to_bytes();
     let v3 = as_version_3(&v5);
-    assert_eq!(v3.len(), v5.len() - 40);
+    assert_eq!(v3.len(), v5.len() - (HEADER - HEADER_V3));
     let back = Cache::<[f32; 3]>::from_bytes(&v3).unwrap();
     assert_eq!(back.config(), limited.config());
     assert_eq!(back.config().leak_guard, LeakGuard::OFF);
@@ -407,7 +415,7 @@ fn version_4_files_load_without_far_fields() {
     }
     let v5 = guarded.to_bytes();
     let v4 = as_version_4(&v5);
-    assert_eq!(v4.len(), v5.len() - 24);
+    assert_eq!(v4.len(), v5.len() - (HEADER - HEADER_V4));
     let back = Cache::<[f32; 3]>::from_bytes(&v4).unwrap();
     assert_eq!(back.config(), guarded.config());
     assert_eq!(back.config().far_field, FarFieldReach::OFF);
@@ -493,7 +501,7 @@ fn version_5_files_load_without_open_fractions() {
     }
     let current = far.to_bytes();
     let v5 = as_version_5(&current);
-    assert_eq!(v5.len(), current.len() - 8);
+    assert_eq!(v5.len(), current.len() - (HEADER - HEADER_V5));
     let back = Cache::<[f32; 3]>::from_bytes(&v5).unwrap();
     assert_eq!(back.config(), far.config());
     assert_eq!(back.config().open_fraction_test, OpenFractionTest::OFF);
@@ -580,6 +588,77 @@ fn open_fraction_test_round_trips() {
             Cache::<[f32; 3]>::new(config),
             Err(Error::InvalidArgument(_))
         ));
+    }
+}
+
+/// The lookup radius scale is cache state (offset 96, version 7): the restored cache answers
+/// every lookup as the saved one did, and a scale outside [1, 8] is damage.
+#[test]
+fn lookup_radius_scale_round_trips() {
+    let config = CacheConfig::surface(3).with_lookup_radius_scale(1.75);
+    let c: Cache<[f32; 3]> = Cache::new(config).unwrap();
+    for r in sample(20).records() {
+        c.insert(&r).unwrap();
+    }
+    let bytes = c.to_bytes();
+    assert_eq!(f64::from_le_bytes(bytes[96..104].try_into().unwrap()), 1.75);
+    let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
+    assert_eq!(back.config().lookup_radius_scale, 1.75);
+    assert_eq!(back.config(), c.config());
+    assert_eq!(back.to_bytes(), bytes);
+    let unscaled = sample(20);
+    let mut wider = 0;
+    for i in 0..400 {
+        let p = DVec3::new(i as f64 * 0.02, (i % 9) as f64 * 0.5, 0.0);
+        let (a, b) = (c.lookup(p, DVec3::Z), back.lookup(p, DVec3::Z));
+        assert_eq!(a.as_ref().ok().map(|l| l.value), b.ok().map(|l| l.value));
+        let at_one = unscaled.lookup(p, DVec3::Z);
+        assert_eq!(a.is_ok(), at_one.is_ok(), "misses must not move: {p}");
+        if let (Ok(a), Ok(one)) = (a, at_one) {
+            wider += (a.records > one.records) as usize;
+        }
+    }
+    assert!(wider > 0, "the scale never blended a further record");
+    // the unscaled cache writes 1.0
+    assert_eq!(
+        f64::from_le_bytes(sample(3).to_bytes()[96..104].try_into().unwrap()),
+        1.0
+    );
+    for bad in [0.0, 0.5, 8.5, -1.0, f64::NAN, f64::INFINITY] {
+        let mut b = bytes.clone();
+        b[96..104].copy_from_slice(&f64::to_le_bytes(bad));
+        reseal(&mut b);
+        assert!(corrupt_reason(&b).contains("lookup radius scale"), "{bad}");
+    }
+}
+
+/// Version 6 files (before the lookup radius scale) load with scale 1, their records and every
+/// other field as saved.
+#[test]
+fn version_6_files_load_with_scale_one() {
+    let test = OpenFractionTest::new(0.25);
+    let config = CacheConfig::surface(3)
+        .with_far_field(FarFieldReach::world(0.5))
+        .with_open_fraction_test(test)
+        .with_lookup_radius_scale(2.0);
+    let c: Cache<[f32; 3]> = Cache::new(config).unwrap();
+    for (i, mut r) in sample(12).records().into_iter().enumerate() {
+        r.open_fraction = Some((i % 4) as f64 / 4.0);
+        c.insert(&r).unwrap();
+    }
+    let v6 = as_version_6(&c.to_bytes());
+    let back = Cache::<[f32; 3]>::from_bytes(&v6).unwrap();
+    assert_eq!(back.config().lookup_radius_scale, 1.0);
+    assert_eq!(back.config().open_fraction_test, test);
+    assert_eq!(back.config().far_field, FarFieldReach::world(0.5));
+    assert_eq!(back.keys(), c.keys());
+    // every truncation of a version 6 file is rejected
+    for len in 0..v6.len() {
+        let m = corrupt_reason(&v6[..len]);
+        assert!(
+            m.contains("truncated") || m.contains("length"),
+            "{len}: {m}"
+        );
     }
 }
 

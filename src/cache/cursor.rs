@@ -170,8 +170,9 @@ impl Cursor {
         self.groups.clear();
     }
 
-    /// Remembers `head`, the record at slot address `slot` (records must come in content order).
-    pub(crate) fn push(&mut self, domain: Domain, head: &Head, slot: usize) {
+    /// Remembers `head`, the record at slot address `slot` (records must come in content order),
+    /// for a cache that weighs records over `lookup_scale` times their radii.
+    pub(crate) fn push(&mut self, domain: Domain, lookup_scale: f64, head: &Head, slot: usize) {
         if !matches!(self.groups.last(), Some(g) if (g.len as usize) < GROUP) {
             self.groups.push(Group::default());
         }
@@ -184,8 +185,8 @@ impl Cursor {
         for i in 0..3 {
             g.position[i][k] = head.position[i];
         }
-        g.reach2[k] = (head.max_radius() * (1.0 + 1e-9)).powi(2);
-        g.normal_radius[k] = head.radii[2] as f64;
+        g.reach2[k] = (head.max_radius() * lookup_scale * (1.0 + 1e-9)).powi(2);
+        g.normal_radius[k] = head.radii[2] as f64 * lookup_scale;
         g.open_code[k] = head.open_fraction;
         g.gradient_scale[k] = head.gradient_scale;
         g.rotation_scale[k] = head.rotation_scale;
@@ -358,6 +359,7 @@ impl Cursor {
                 let lanes = _mm256_castsi256_pd(_mm256_setr_epi64x(bit(0), bit(1), bit(2), bit(3)));
                 t = _mm256_blendv_pd(t, ta, lanes);
             }
+            let t = _mm256_mul_pd(t, _mm256_set1_pd(kernel.inv_lookup_scale));
             let cos_n = if surface {
                 _mm256_add_pd(
                     _mm256_add_pd(_mm256_mul_pd(normal[0], nx), _mm256_mul_pd(normal[1], ny)),

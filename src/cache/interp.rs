@@ -98,6 +98,12 @@ pub(crate) struct Kernel {
     /// The open fractions the current query admits: set per query by [`Kernel::for_query`],
     /// `None` when the test is off or the query has no open fraction.
     pub(crate) open_window: Option<OpenWindow>,
+    /// The cache's lookup radius scale k ≥ 1 (see [`super::lookup_radius`]): records are weighed
+    /// over k times their radii.
+    pub(crate) lookup_scale: f64,
+    /// 1/k: a record's normalized distance at its own radii times this is the one it is weighed
+    /// at (exactly 1.0 when k = 1, so that unscaled weights are bit for bit those without it).
+    pub(crate) inv_lookup_scale: f64,
 }
 
 /// Floor of t + ρ in Ward's weights: at a record's exact position and normal the weight is
@@ -131,7 +137,29 @@ impl Kernel {
             leak_guard: None,
             open_fraction_test: OpenFractionTest::OFF,
             open_window: None,
+            lookup_scale: 1.0,
+            inv_lookup_scale: 1.0,
         })
+    }
+
+    /// The same kernel weighing records over `scale` times their radii (a valid
+    /// [`CacheConfig::lookup_radius_scale`](super::CacheConfig::lookup_radius_scale)).
+    pub(crate) fn with_lookup_radius_scale(mut self, scale: f64) -> Self {
+        self.lookup_scale = scale;
+        self.inv_lookup_scale = 1.0 / scale;
+        self
+    }
+
+    /// Whether records are weighed over more than their own radii.
+    #[inline]
+    pub(crate) fn is_scaled(&self) -> bool {
+        self.lookup_scale != 1.0
+    }
+
+    /// The same kernel at the records' own radii: the one that decides whether a query is
+    /// covered.
+    pub(crate) fn at_own_radii(&self) -> Kernel {
+        self.with_lookup_radius_scale(1.0)
     }
 
     /// The same kernel with `guard` (ignored when off or in the volume domain).

@@ -5,17 +5,20 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use super::lookup_radius::check_scale;
 use super::record::{self, Domain, CHANNEL_BYTES, FNV_OFFSET, HEAD_BYTES};
 use super::{
     Cache, CacheConfig, CacheValue, FarFieldReach, Interpolation, LeakGuard, OpenFractionTest,
-    MAX_CHANNELS,
+    LOOKUP_RADIUS_SCALE_MAX, MAX_CHANNELS,
 };
 use crate::error::{Error, Result};
 
 /// File magic.
 pub const MAGIC: [u8; 8] = *b"RDFCACHE";
-/// Format version written by [`Cache::to_bytes`] (versions 2 to 6 are read).
-pub const FORMAT_VERSION: u32 = 6;
+/// Format version written by [`Cache::to_bytes`] (versions 2 to 7 are read).
+pub const FORMAT_VERSION: u32 = 7;
+/// Version 6: no lookup radius scale (it is 1), records at [`HEADER_BYTES_V6`].
+const FORMAT_VERSION_6: u32 = 6;
 /// Version 5: no open-fraction test, records at [`HEADER_BYTES_V5`] without open fractions.
 const FORMAT_VERSION_5: u32 = 5;
 /// Version 4: no far-field fields, records at [`HEADER_BYTES_V4`].
@@ -24,9 +27,12 @@ const FORMAT_VERSION_4: u32 = 4;
 const FORMAT_VERSION_3: u32 = 3;
 /// The oldest version read: no gradient-limit field either, records at [`HEADER_BYTES_V2`].
 const FORMAT_VERSION_2: u32 = 2;
+/// Header size of version 7: the version 6 header plus the lookup radius scale (f64 at offset
+/// 96).
+const HEADER_BYTES: usize = 104;
 /// Header size of version 6: the version 5 header plus the open-fraction tolerance (f64 at
 /// offset 88).
-const HEADER_BYTES: usize = 96;
+const HEADER_BYTES_V6: usize = 96;
 /// Header size of version 5: the version 4 header plus the far field's two reaches (f64 at
 /// offsets 72 and 80).
 const HEADER_BYTES_V5: usize = 88;
@@ -108,6 +114,7 @@ impl<V: CacheValue> Cache<V> {
         out.extend_from_slice(&far.pixels.to_le_bytes());
         let tolerance = if open.is_on() { open.tolerance } else { 0.0 };
         out.extend_from_slice(&tolerance.to_le_bytes());
+        out.extend_from_slice(&self.config.lookup_radius_scale.to_le_bytes());
         for id in ids {
             let (head, chans) = self.stored(id);
             record::serialize(head, chans, &mut out);
@@ -120,7 +127,8 @@ impl<V: CacheValue> Cache<V> {
     /// Parses and validates a cache in the documented binary format. `Corrupt` with the reason
     /// for anything that [`Cache::to_bytes`] could not have written, including a channel count
     /// that disagrees with `V`. Never panics.
-    /// Version 5 files (no open-fraction test: it is off, and records have no open fraction),
+    /// Version 6 files (no lookup radius scale: it is 1), version 5 files (no open-fraction test
+    /// either: it is off, and records have no open fraction),
     /// version 4 files (no far-field marker either: records hold no far fields), version 3 files
     /// (no leak guard either: it is off) and version 2 files (no gradient limit either) are read
     /// as well.
@@ -141,6 +149,7 @@ impl<V: CacheValue> Cache<V> {
         let version = u32_at(8);
         let header_bytes = match version {
             FORMAT_VERSION => HEADER_BYTES,
+            FORMAT_VERSION_6 => HEADER_BYTES_V6,
             FORMAT_VERSION_5 => HEADER_BYTES_V5,
             FORMAT_VERSION_4 => HEADER_BYTES_V4,
             FORMAT_VERSION_3 => HEADER_BYTES_V3,
@@ -262,7 +271,7 @@ impl<V: CacheValue> Cache<V> {
             }
             None => FarFieldReach::OFF,
         };
-        let open_fraction_test = if version < FORMAT_VERSION {
+        let open_fraction_test = if version < FORMAT_VERSION_6 {
             OpenFractionTest::OFF
         } else {
             let tolerance = f64_at(88);
@@ -281,6 +290,17 @@ impl<V: CacheValue> Cache<V> {
             } else {
                 OpenFractionTest::OFF
             }
+        };
+        let lookup_radius_scale = if version < FORMAT_VERSION {
+            1.0
+        } else {
+            let scale = f64_at(96);
+            if check_scale(scale).is_err() {
+                return corrupt(format!(
+                    "lookup radius scale {scale} is not in [1, {LOOKUP_RADIUS_SCALE_MAX}]"
+                ));
+            }
+            scale
         };
         let expected = usize::try_from(count)
             .ok()
@@ -315,6 +335,7 @@ impl<V: CacheValue> Cache<V> {
             leak_guard,
             far_field,
             open_fraction_test,
+            lookup_radius_scale,
         };
         let mut cache = Cache::new(config).map_err(|e| Error::Corrupt(format!("header: {e}")))?;
         let mut previous: Option<(record::Head, record::Channels)> = None;
@@ -322,7 +343,7 @@ impl<V: CacheValue> Cache<V> {
             let at = header_bytes + i * stride;
             let (head, chans) = record::deserialize(domain, &bytes[at..at + stride])
                 .map_err(|e| Error::Corrupt(format!("record {i}: {e}")))?;
-            if version < FORMAT_VERSION && head.open_fraction != 0 {
+            if version < FORMAT_VERSION_6 && head.open_fraction != 0 {
                 return corrupt(format!(
                     "record {i}: reserved field is not 0 (version {version} records have no open \
                      fraction)"

@@ -29,6 +29,7 @@ pub(crate) fn record_weight(kernel: &Kernel, head: &Head, x: DVec3, n: DVec3) ->
         let frame = head.frame();
         (head.normalized_distance(&frame, x), frame.0[2])
     };
+    let t = t * kernel.inv_lookup_scale;
     let cos_n = if surface { normal.dot(n) } else { 1.0 };
     (
         guarded(kernel, kernel.weight(t, cos_n), x, n, head, normal),
@@ -53,7 +54,7 @@ pub(crate) fn guarded(
             n,
             head.position(),
             normal,
-            head.radii[2] as f64,
+            head.radii[2] as f64 * kernel.lookup_scale,
             head.open_fraction,
         )
     {
@@ -157,7 +158,10 @@ unsafe fn weigh4(kernel: &Kernel, x: DVec3, n: DVec3, h: [&Head; 4]) -> ([f64; 4
         h[2].radii[0],
         h[3].radii[0],
     ));
-    let t = _mm256_div_pd(_mm256_sqrt_pd(d2), radius);
+    let t = _mm256_mul_pd(
+        _mm256_div_pd(_mm256_sqrt_pd(d2), radius),
+        _mm256_set1_pd(kernel.inv_lookup_scale),
+    );
     let one = _mm256_set1_pd(1.0);
     let zero = _mm256_setzero_pd();
     let (mut ax, mut ay, mut az, cos_n) = (zero, zero, zero, one);

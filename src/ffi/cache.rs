@@ -49,6 +49,10 @@ pub const RADDIFF_INTERP_GRADIENT_LIMIT: u32 = 0x200;
 /// With c > 1 an extrapolated value may change sign: irradiance caches also set
 /// `RADDIFF_INTERP_NON_NEGATIVE`.
 pub const RADDIFF_GRADIENT_LIMIT_DEFAULT: f64 = 2.0;
+/// The largest lookup radius scale (`raddiff_cache_set_lookup_radius_scale`): a lookup over 8
+/// radii already weighs about 64 times the records of one over 1 (Rust:
+/// `cache::LOOKUP_RADIUS_SCALE_MAX`).
+pub const RADDIFF_LOOKUP_RADIUS_SCALE_MAX: f64 = 8.0;
 
 /// A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
 /// `raddiff_cache_insert` on the same handle at once (lookups never block).
@@ -116,6 +120,7 @@ fn config_from_c(c: &raddiff_cache_config) -> Result<CacheConfig, FfiError> {
         leak_guard: crate::cache::LeakGuard::OFF,
         far_field: crate::cache::FarFieldReach::OFF,
         open_fraction_test: crate::cache::OpenFractionTest::OFF,
+        lookup_radius_scale: 1.0,
     })
 }
 
@@ -462,6 +467,44 @@ pub extern "C" fn raddiff_cache_get_open_fraction_tolerance(
         let cache = unsafe { in_ref(cache, "cache")? };
         let tolerance = unsafe { out_ref(tolerance, "tolerance")? };
         *tolerance = cache.inner.config().open_fraction_test.tolerance;
+        Ok(())
+    })
+}
+
+/// Sets how far records are read, in multiples of their radii, for every lookup from now on
+/// (default 1). A lookup then blends every record within `scale` times its radii (the leak
+/// guard's radius scaled alike), while a query still counts as covered only where some record
+/// covers it at its own radii: `raddiff_cache_lookup` returns `RADDIFF_ERROR_NOT_FOUND`, and
+/// `raddiff_cache_irradiance` makes a record, exactly where they would at 1. So records are
+/// placed as before and each value blends about scale^2 more of them (surfaces): less of the
+/// gathers' noise, more bias where the value curves (the real-scene benchmark: 1.5 lowers every
+/// error metric's error by 3-13%). `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) unless `scale`
+/// is in [1, `RADDIFF_LOOKUP_RADIUS_SCALE_MAX`]. The index is rebuilt. Saved with the cache and
+/// restored by `raddiff_cache_load` (files written before it load with 1). **Not thread-safe**:
+/// no other thread may use the cache during the call.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_set_lookup_radius_scale(
+    cache: *mut raddiff_cache,
+    scale: f64,
+) -> raddiff_status {
+    guard(|| {
+        // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
+        let cache = unsafe { out_ref(cache, "cache")? };
+        cache.inner.set_lookup_radius_scale(scale)?;
+        Ok(())
+    })
+}
+
+/// Writes the cache's lookup radius scale to `*scale` (1 unless set).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_get_lookup_radius_scale(
+    cache: *const raddiff_cache,
+    scale: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        let scale = unsafe { out_ref(scale, "scale")? };
+        *scale = cache.inner.config().lookup_radius_scale;
         Ok(())
     })
 }

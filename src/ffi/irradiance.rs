@@ -124,6 +124,11 @@ pub struct raddiff_irradiance_settings {
     /// `raddiff_cache_irradiance_near_far` traces a query's near rays before its lookup and
     /// its records keep their open fractions.
     pub near_field_open_fraction_tolerance: f64,
+    /// How far the cache reads records, in multiples of their radii, in
+    /// [1, `RADDIFF_LOOKUP_RADIUS_SCALE_MAX`] (default 1; see
+    /// `raddiff_cache_set_lookup_radius_scale`): records are made where they would be at 1, and
+    /// each value blends more of them. Only `raddiff_irradiance_cache_new` reads it.
+    pub lookup_radius_scale: f64,
 }
 
 /// The default settings (3 channels, the anisotropic occlusion-aware Hessian, a 32 x 128
@@ -163,6 +168,7 @@ fn settings_to_c(s: &IrradianceSettings) -> raddiff_irradiance_settings {
         near_field_m: s.near_field.m,
         near_field_n: s.near_field.n,
         near_field_open_fraction_tolerance: s.near_field.open_fraction_test.tolerance,
+        lookup_radius_scale: s.lookup_radius_scale,
     }
 }
 
@@ -228,6 +234,7 @@ pub(crate) unsafe fn settings_from_c(
             n: settings.near_field_n,
             open_fraction_test: OpenFractionTest::new(settings.near_field_open_fraction_tolerance),
         },
+        lookup_radius_scale: settings.lookup_radius_scale,
     })
 }
 
@@ -235,8 +242,8 @@ pub(crate) unsafe fn settings_from_c(
 /// metric's interpolation (`RADDIFF_INTERP_WARD` for the split-sphere family and the gradient
 /// metric, `RADDIFF_INTERP_TENT` for the Hessian metrics), values clamped at zero
 /// (`RADDIFF_INTERP_NON_NEGATIVE`), the settings' gradient limit, leak guard, near-field
-/// reach (records then hold far fields) and open-fraction tolerance, maximum normal deviation
-/// 0.2 rad. NULL (with
+/// reach (records then hold far fields), open-fraction tolerance and lookup radius scale,
+/// maximum normal deviation 0.2 rad. NULL (with
 /// `raddiff_last_error`) for NULL or invalid settings. Free it with `raddiff_cache_free`.
 #[no_mangle]
 pub extern "C" fn raddiff_irradiance_cache_new(

@@ -2,7 +2,8 @@
 //! `_lookup_with`, `_clamp_record`, `_clamp_neighbours`, `_set_gradient_limit`,
 //! `_get_gradient_limit`, `_compact`, `_merge`, a `_save` / `_load` round trip, and the
 //! open-fraction test (`_set_open_fraction_tolerance`, records with an open fraction,
-//! `_lookup_open`).
+//! `_lookup_open`), and the lookup radius scale (`_set_lookup_radius_scale`: the other
+//! operations then run on a cache read over scaled radii).
 //!
 //! Input: the configuration (1..=3 channels, sometimes 33..=40 or any u32; each domain,
 //! interpolation and flag; the normal deviation), then up to 64 operations. Records are decoded
@@ -10,8 +11,8 @@
 //! Properties: no panic; every failure leaves a message and its outputs untouched (lookup values
 //! and weight, clamped radii), and a refused insert stores nothing; a lookup that succeeds gives
 //! finite values and a finite positive weight, the same bits through a cursor (with an open
-//! fraction too, and with the test off the plain lookup's bits); an open fraction or tolerance
-//! out of range is refused and changes nothing; clamping only
+//! fraction too, and with the test off the plain lookup's bits); an open fraction, tolerance or
+//! lookup radius scale out of range is refused and changes nothing; clamping only
 //! shrinks radii (but raises those below what an insert accepts); a saved cache loads back with
 //! the same records and the same lookups.
 use std::ffi::CString;
@@ -110,10 +111,11 @@ impl State {
                 self.any_ok |= ok;
             }
             10 => self.merge_self(),
-            _ => match input.below(4) {
+            _ => match input.below(5) {
                 0 => self.round_trip(input),
                 1 => self.open_fraction_tolerance(input),
                 2 => self.insert_open(input),
+                3 => self.lookup_radius_scale(input),
                 _ => self.lookup_open(input),
             },
         }
@@ -227,6 +229,39 @@ impl State {
         ));
         let want = if ok { tolerance } else { before };
         assert_eq!(after.to_bits(), want.to_bits(), "tolerance read back");
+        self.any_ok |= ok;
+    }
+
+    /// Sets a lookup radius scale (sometimes out of [1, 8]: refused, the old one kept) and reads
+    /// it back.
+    fn lookup_radius_scale(&mut self, input: &mut Input) {
+        let scale = if input.byte() < 32 {
+            input.f64()
+        } else {
+            1.0 + input.unit() * 3.0
+        };
+        let name = "raddiff_cache_get_lookup_radius_scale";
+        let mut before = sentinel();
+        assert!(check::status(
+            name,
+            raddiff_cache_get_lookup_radius_scale(self.cache, &mut before)
+        ));
+        let ok = check::status(
+            "raddiff_cache_set_lookup_radius_scale",
+            raddiff_cache_set_lookup_radius_scale(self.cache, scale),
+        );
+        assert_eq!(
+            ok,
+            (1.0..=RADDIFF_LOOKUP_RADIUS_SCALE_MAX).contains(&scale),
+            "scale {scale}"
+        );
+        let mut after = sentinel();
+        assert!(check::status(
+            name,
+            raddiff_cache_get_lookup_radius_scale(self.cache, &mut after)
+        ));
+        let want = if ok { scale } else { before };
+        assert_eq!(after.to_bits(), want.to_bits(), "scale read back");
         self.any_ok |= ok;
     }
 

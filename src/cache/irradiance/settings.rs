@@ -6,8 +6,8 @@ use super::evaluation::{check_weights, Hessians};
 use super::metric::Metric;
 use super::seed::SeedPolicy;
 use crate::cache::{
-    check_gradient_limit, CacheConfig, Domain, FarFieldReach, LeakGuard, OpenFractionTest,
-    MAX_CHANNELS,
+    check_gradient_limit, check_lookup_radius_scale, CacheConfig, Domain, FarFieldReach, LeakGuard,
+    OpenFractionTest, MAX_CHANNELS,
 };
 use crate::error::{Error, Result};
 use crate::gather::radii::CURVATURE_FLOOR_WEIGHT;
@@ -117,6 +117,12 @@ pub struct IrradianceSettings {
     /// hold far fields and the cache is queried with
     /// [`Cache::irradiance_near_far`](crate::cache::Cache::irradiance_near_far).
     pub near_field: NearFieldSettings,
+    /// How far the cache reads records, in multiples of their radii (default 1; in
+    /// [1, [`LOOKUP_RADIUS_SCALE_MAX`](crate::cache::LOOKUP_RADIUS_SCALE_MAX)]):
+    /// [`CacheConfig::lookup_radius_scale`]. Records are made
+    /// where they would be at 1; each value blends more of them. The cache's to choose, like
+    /// its interpolation: [`IrradianceSettings::check_cache`] does not compare it.
+    pub lookup_radius_scale: f64,
 }
 
 impl Default for IrradianceSettings {
@@ -144,6 +150,7 @@ impl IrradianceSettings {
             gradient_limit: GRADIENT_LIMIT_DEFAULT,
             leak_guard: LeakGuard::OFF,
             near_field: NearFieldSettings::default(),
+            lookup_radius_scale: 1.0,
         }
     }
 
@@ -203,6 +210,7 @@ impl IrradianceSettings {
         self.leak_guard.validate()?;
         self.near_field.reach.validate()?;
         self.near_field.open_fraction_test.validate()?;
+        check_lookup_radius_scale(self.lookup_radius_scale)?;
         if self.near_field.reach.is_on() {
             Layout::new(self.gather_kind, self.near_field.m, self.near_field.n, 0)
                 .map_err(|e| Error::InvalidArgument(format!("the near-field rays: {e}")))?;
@@ -212,8 +220,8 @@ impl IrradianceSettings {
 
     /// The configuration of a cache for these records: surface domain, the settings' channels,
     /// the metric's interpolation ([`Metric::interpolation`]), gradient limit, leak guard,
-    /// far-field reach and open-fraction test, extrapolation clamped at zero (irradiance is never
-    /// negative), maximum normal deviation 0.2 rad.
+    /// far-field reach, open-fraction test and lookup radius scale, extrapolation clamped at zero
+    /// (irradiance is never negative), maximum normal deviation 0.2 rad.
     pub fn cache_config(&self) -> CacheConfig {
         CacheConfig::surface(self.channels)
             .with_interpolation(self.metric.interpolation())
@@ -222,6 +230,7 @@ impl IrradianceSettings {
             .with_leak_guard(self.leak_guard)
             .with_far_field(self.near_field.reach)
             .with_open_fraction_test(self.near_field.open_fraction_test)
+            .with_lookup_radius_scale(self.lookup_radius_scale)
     }
 
     /// `InvalidArgument` unless a cache configured as `config` stores what these settings make:
