@@ -26,7 +26,7 @@ double binned_far(double far, const std::array<float, kDirBins> &open_bins, cons
   return std::max(0.0, far + kPi * d);
 }
 
-// A record kept after its insertion (the smoothing and lookup-scale experiments), with copies of
+// A record kept after its insertion (the smoothing experiment), with copies of
 // its gradients (three channels, as every record of the bench): the far field's are computed in
 // the fill's locals.
 class KeptRecord {
@@ -212,21 +212,24 @@ class Bench {
     raddiff_irradiance_settings irr = settings_.irradiance;
     irr.metric = c_metric(m);
     irr.accuracy = p;
-    // With --open-fraction-tolerance, the library's open-fraction test in every cache of the records.
+    // With --open-fraction-tolerance, the library's open-fraction test in every cache of the records;
+    // with --lookup-scale, every such cache read over the records' radii times it.
     const bool open_test = std::isfinite(settings_.open_fraction_tolerance) && settings_.near_field_px > 0;
-    auto with_open_test = [&](CachePtr c) {
+    auto with_cache_state = [&](CachePtr c) {
       if (open_test)
         check(raddiff_cache_set_open_fraction_tolerance(c.get(), settings_.open_fraction_tolerance),
               "raddiff_cache_set_open_fraction_tolerance");
+      check(raddiff_cache_set_lookup_radius_scale(c.get(), settings_.lookup_scale),
+            "raddiff_cache_set_lookup_radius_scale");
       return c;
     };
     // The cache this metric wants: Ward or tent weights, extrapolation clamped at zero, the
     // gradient limit and the leak guard of the settings (or the interpolation the settings force).
     auto new_cache = [&] {
-      if (settings_.interpolation >= 0) return with_open_test(surface_cache(settings_.interpolation, irr.gradient_limit));
+      if (settings_.interpolation >= 0) return with_cache_state(surface_cache(settings_.interpolation, irr.gradient_limit));
       CachePtr c(raddiff_irradiance_cache_new(&irr), raddiff_cache_free);
       if (!c) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
-      return with_open_test(std::move(c));
+      return with_cache_state(std::move(c));
     };
     // With --open-fraction-bands, one cache per band of open fraction (a record goes into its own
     // band's and the two neighbouring bands' caches; a pixel looks only into its own band's).
@@ -253,14 +256,9 @@ class Bench {
     };
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
-    // The inserted records, kept for the smoothing and lookup-scale experiments (their values and
+    // The inserted records, kept for the smoothing experiment (their values and
     // open fractions point into the store's evaluations, which outlive the fill).
     const bool smooth = render && settings_.smooth_records > 0;
-    const bool rescale = render && settings_.lookup_scale != 1;
-    if (rescale && (banded || smooth || settings_.far_field_bins || settings_.neighbour_clamp ||
-                    settings_.second_order > 0))
-      throw std::runtime_error("--lookup-scale does not combine with --open-fraction-bands, --smooth-records, "
-                               "--far-field-bins, --neighbour-clamp or --second-order");
     std::vector<KeptRecord> kept;
     // The kernel of the experiments' side caches: the one the settings force, or the metric's own.
     const int kernel = settings_.interpolation >= 0 ? settings_.interpolation
@@ -270,6 +268,8 @@ class Bench {
     CachePtr quadratic(nullptr, raddiff_cache_free);
     if (render && settings_.second_order > 0) {
       quadratic = surface_cache(kernel, irr.gradient_limit, kQuadraticChannels, false);
+      check(raddiff_cache_set_lookup_radius_scale(quadratic.get(), settings_.lookup_scale),
+            "raddiff_cache_set_lookup_radius_scale");
       check(raddiff_cache_set_leak_guard(quadratic.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
             "raddiff_cache_set_leak_guard");
     }
@@ -278,7 +278,7 @@ class Bench {
     std::vector<CachePtr> binned_caches;
     if (render && settings_.far_field_bins)
       for (int b = 0; b < bands; ++b) {
-        binned_caches.push_back(with_open_test(surface_cache(kernel, irr.gradient_limit, 3 * kDirBins, false)));
+        binned_caches.push_back(with_cache_state(surface_cache(kernel, irr.gradient_limit, 3 * kDirBins, false)));
         check(raddiff_cache_set_leak_guard(binned_caches.back().get(), irr.leak_guard_relative,
                                            irr.leak_guard_absolute),
               "raddiff_cache_set_leak_guard");
@@ -386,7 +386,7 @@ class Bench {
               check(raddiff_cache_insert(binned_caches[b].get(), &br), "raddiff_cache_insert");
           }
           out.records.push_back(info);
-          if (smooth || rescale) kept.emplace_back(rec);
+          if (smooth) kept.emplace_back(rec);
           if (quadratic) {
             if (!e.evaluation[1]) throw std::runtime_error("--second-order needs an occlusion-aware Hessian metric");
             raddiff_gather_summary summary{};
@@ -431,10 +431,6 @@ class Bench {
         if (st == RADDIFF_OK) rec.value = smoothed;
         check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
       }
-    }
-    if (rescale) {
-      cache = new_cache();
-      insert_scaled(cache.get(), kept, settings_.lookup_scale);
     }
     if (render) {
       const std::vector<std::array<float, 4>> &near = near_field();
@@ -923,7 +919,8 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
           << "\nleak_guard," << settings.irradiance.leak_guard_relative << " " << settings.irradiance.leak_guard_absolute
           << "\nradius_bounds," << settings.irradiance.world_radius_min << " " << settings.irradiance.world_radius_max
           << " " << settings.irradiance.pixel_radius_min << " " << settings.irradiance.pixel_radius_max
-          << "\nopen_fraction_tolerance," << settings.open_fraction_tolerance << "\nnoise_seed," << settings.noise_seed << "\npixel_gathers_rel_rms," << pixel_gathers_error << "\n";
+          << "\nopen_fraction_tolerance," << settings.open_fraction_tolerance
+          << "\nlookup_radius_scale," << settings.lookup_scale << "\nnoise_seed," << settings.noise_seed << "\npixel_gathers_rel_rms," << pixel_gathers_error << "\n";
   std::printf("bench: %zu gathers computed, max RSS %ld MiB, %.0f CPU s\n", bench.store().computed(), max_rss_mib(),
               process_cpu_seconds() - wall0);
   std::printf("%s\n", ok ? "OK" : "FAILED");

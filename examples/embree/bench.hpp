@@ -29,9 +29,10 @@ struct BenchSettings {
   bool path_trace = true;
   double smooth_records = 0;          // > 0: records' values blended with their neighbours' (tent, radii x this)
   bool record_gradients = true;       // false: records without gradients (to measure what they add)
-  // != 1: the filled cache rebuilt for rendering with every record's radii times this (its leak
-  // guard's tolerance with them), the records placed as before: lookups that blend more records
-  // (less noise, more bias) at the same record count (experiment).
+  // != 1: every cache of the records read over their radii times this
+  // (raddiff_cache_set_lookup_radius_scale, in [1, 8]; the leak guard's radius with them). Misses,
+  // and so the records the fills place, are those at 1: lookups blend more records (less noise,
+  // more bias) at the same record count. The render mode passes it to raddiff_irradiance_cache_new.
   double lookup_scale = 1;
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.

@@ -118,11 +118,8 @@ int main(int argc, char **argv) {
       else if (a == "--pt-max-spp") bench.path_trace_max_spp = static_cast<uint32_t>(std::stoul(next()));
       else if (a == "--no-path-trace") bench.path_trace = false;
       else if (a == "--smooth-records") bench.smooth_records = std::stod(next());
-      else if (a == "--lookup-scale") {
-        bench.lookup_scale = std::stod(next());
-        if (!(bench.lookup_scale > 0) || !std::isfinite(bench.lookup_scale))
-          throw std::runtime_error("--lookup-scale k needs a finite k > 0");
-      }
+      else if (a == "--lookup-scale")
+        render.irradiance.lookup_radius_scale = bench.lookup_scale = std::stod(next());
       else if (a == "--second-order") bench.second_order = std::stod(next());
       else if (a == "--error-norm") bench.error_norm = std::stod(next());
       else if (a == "--far-field-gathers") bench.far_field_gathers = true;

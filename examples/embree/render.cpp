@@ -254,6 +254,9 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
   if (near_field_on(used.irradiance) && std::isfinite(used.irradiance.near_field_open_fraction_tolerance))
     std::printf("open-fraction test: records used only at pixels whose open fraction is within %g of theirs\n",
                 used.irradiance.near_field_open_fraction_tolerance);
+  if (used.irradiance.lookup_radius_scale != 1)
+    std::printf("lookup radius scale: records read over %g times their radii, misses decided at their own\n",
+                used.irradiance.lookup_radius_scale);
 
   // Render through a per-thread cursor, or with plain lookups (the library keeps a cursor per
   // thread). Both give the same bits; pass 2 uses the other one, so its check covers that too.

@@ -33,7 +33,14 @@ near_records="$(sed -n 's/^pass 1: \([0-9][0-9]*\) records.*/\1/p' "$out/cornell
 # pixels' own).
 "$binary" --obj "$here/cornell.obj" --out "$out/cornell-near-open" --size 128 --gather 16x48 \
   --near-field 4,256 --open-fraction-tolerance 0.1 "$@" | tee "$out/cornell-near-open.log"
-runs=(cornell cornell-hessian cornell-near-split cornell-near-hessian cornell-near-open)
+# The split sphere on one thread, read over its records' radii and over 1.5 times them (the cache's
+# lookup radius scale): the same records, since misses are decided at the records' own radii.
+for wide in 1 1.5; do
+  "$binary" --obj "$here/cornell.obj" --out "$out/cornell-wide$wide" --size 128 --gather 16x48 --threads 1 \
+    --lookup-scale "$wide" "$@" | tee "$out/cornell-wide$wide.log"
+done
+grep -q '^lookup radius scale: records read over 1.5 times their radii' "$out/cornell-wide1.5.log"
+runs=(cornell cornell-hessian cornell-near-split cornell-near-hessian cornell-near-open cornell-wide1 cornell-wide1.5)
 
 # The program exits non-zero when its own checks fail; check the files too.
 for f in "${runs[@]}"; do
@@ -44,6 +51,9 @@ for f in "${runs[@]}"; do
 done
 records_of() { sed -n 's/^pass 1: \([0-9][0-9]*\) records.*/\1/p' "$out/$1.log"; }
 error_of() { sed -n 's/^check: relative RMS error.*: \([0-9.eE+-]*\)$/\1/p' "$out/$1.log"; }
+[ "$(records_of cornell-wide1)" = "$(records_of cornell-wide1.5)" ] ||
+  { echo "the lookup radius scale changed the record count" >&2; exit 1; }
+echo "lookup radius scale: $(records_of cornell-wide1) records, check error $(error_of cornell-wide1) at 1, $(error_of cornell-wide1.5) at 1.5"
 awk -v n="$(records_of cornell)" -v x="$(error_of cornell)" -v m="$(records_of cornell-hessian)" \
   -v y="$(error_of cornell-hessian)" 'BEGIN {
     printf "equal records: split sphere %d records error %.4f, hessian %d records error %.4f (hessian/split sphere = %.2f)\n",
