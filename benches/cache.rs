@@ -181,6 +181,32 @@ fn lookups(c: &mut Criterion) {
             }
             group.throughput(Throughput::Elements(1));
         }
+        if n == 100_000 {
+            // the lookup radius scale's cost: the same records read over 1 and 1.5 times their
+            // radii (about 2.25 times the records weighed and blended), random and coherent
+            let row = scanline_queries(n);
+            for scale in [1.0, 1.5] {
+                let mut wide = build(n);
+                wide.set_lookup_radius_scale(scale).unwrap();
+                eprintln!(
+                    "{n} at lookup radius scale {scale}: {:.2} records blended per query",
+                    mean_covering(&wide, &qs)
+                );
+                let mut k = 0;
+                group.bench_function(format!("scaled/{scale}/random/{n}"), |b| {
+                    b.iter(|| {
+                        k = (k + 1) & (qs.len() - 1);
+                        black_box(wide.lookup(qs[k], DVec3::Z).ok())
+                    })
+                });
+                group.bench_function(format!("scaled/{scale}/coherent/{n}"), |b| {
+                    b.iter(|| {
+                        k = (k + 1) & (row.len() - 1);
+                        black_box(wide.lookup(row[k], DVec3::Z).ok())
+                    })
+                });
+            }
+        }
         if n == 10_000 {
             // baseline: test every record's bounding sphere (what a cache without an index does)
             let recs: Vec<(DVec3, f64)> = (0..n)

@@ -190,9 +190,9 @@ impl Cursor {
         g.open_code[k] = head.open_fraction;
         g.gradient_scale[k] = head.gradient_scale;
         g.rotation_scale[k] = head.rotation_scale;
-        // exactly what `record_weight` computes from the stored record
+        // exactly what `record_weight` computes from the stored record (radii read over the scale)
         let normal = if head.is_isotropic() {
-            g.radius[k] = head.radii[0] as f64;
+            g.radius[k] = head.radii[0] as f64 * lookup_scale;
             if domain == Domain::Surface {
                 head.axis2()
             } else {
@@ -204,7 +204,7 @@ impl Cursor {
             for i in 0..3 {
                 g.axes[0][i][k] = frame.0[0][i];
                 g.axes[1][i][k] = frame.0[1][i];
-                g.radii[i][k] = head.radii[i] as f64;
+                g.radii[i][k] = head.radii[i] as f64 * lookup_scale;
             }
             frame.0[2]
         };
@@ -359,7 +359,6 @@ impl Cursor {
                 let lanes = _mm256_castsi256_pd(_mm256_setr_epi64x(bit(0), bit(1), bit(2), bit(3)));
                 t = _mm256_blendv_pd(t, ta, lanes);
             }
-            let t = _mm256_mul_pd(t, _mm256_set1_pd(kernel.inv_lookup_scale));
             let cos_n = if surface {
                 _mm256_add_pd(
                     _mm256_add_pd(_mm256_mul_pd(normal[0], nx), _mm256_mul_pd(normal[1], ny)),

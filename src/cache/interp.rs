@@ -98,12 +98,10 @@ pub(crate) struct Kernel {
     /// The open fractions the current query admits: set per query by [`Kernel::for_query`],
     /// `None` when the test is off or the query has no open fraction.
     pub(crate) open_window: Option<OpenWindow>,
-    /// The cache's lookup radius scale k ≥ 1 (see [`super::lookup_radius`]): records are weighed
-    /// over k times their radii.
+    /// The cache's lookup radius scale k ≥ 1 ([`CacheConfig::lookup_radius_scale`]
+    /// (super::CacheConfig::lookup_radius_scale)): records are weighed over their radii times k
+    /// (exactly the radii when k = 1, so that unscaled weights are bit for bit those without it).
     pub(crate) lookup_scale: f64,
-    /// 1/k: a record's normalized distance at its own radii times this is the one it is weighed
-    /// at (exactly 1.0 when k = 1, so that unscaled weights are bit for bit those without it).
-    pub(crate) inv_lookup_scale: f64,
 }
 
 /// Floor of t + ρ in Ward's weights: at a record's exact position and normal the weight is
@@ -138,7 +136,6 @@ impl Kernel {
             open_fraction_test: OpenFractionTest::OFF,
             open_window: None,
             lookup_scale: 1.0,
-            inv_lookup_scale: 1.0,
         })
     }
 
@@ -146,7 +143,6 @@ impl Kernel {
     /// [`CacheConfig::lookup_radius_scale`](super::CacheConfig::lookup_radius_scale)).
     pub(crate) fn with_lookup_radius_scale(mut self, scale: f64) -> Self {
         self.lookup_scale = scale;
-        self.inv_lookup_scale = 1.0 / scale;
         self
     }
 

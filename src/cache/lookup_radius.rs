@@ -27,8 +27,8 @@ pub(crate) fn check_scale(scale: f64) -> Result<()> {
 /// Whether a query at `x` with unit normal `n`, whose records weighed with `kernel` are `used`,
 /// is covered: some record covers it at its own radii (always, for an unscaled kernel and a
 /// non-empty `used`). Every record that covers the query at its own radii is among `used`:
-/// multiplying a normalized distance by 1/k ≤ 1 never makes it larger, and the leak guard admits
-/// at least as much over larger radii.
+/// dividing by radii k ≥ 1 times larger never makes a normalized distance larger, and the leak
+/// guard admits at least as much over larger radii.
 pub(crate) fn covered(kernel: &Kernel, used: &UsedRecords<'_>, x: DVec3, n: DVec3) -> bool {
     if !kernel.is_scaled() {
         return true;

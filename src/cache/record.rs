@@ -242,11 +242,11 @@ impl Head {
     /// Normalized ellipsoid distance t (thesis eq. 6.12) of `p` in the frame `f` of this record:
     /// 1 on the boundary of the record.
     #[inline]
-    pub(crate) fn normalized_distance(&self, f: &Frame, p: DVec3) -> f64 {
+    pub(crate) fn normalized_distance(&self, f: &Frame, p: DVec3, scale: f64) -> f64 {
         let d = p - self.position();
-        let u0 = d.dot(f.0[0]) / self.radii[0] as f64;
-        let u1 = d.dot(f.0[1]) / self.radii[1] as f64;
-        let u2 = d.dot(f.0[2]) / self.radii[2] as f64;
+        let u0 = d.dot(f.0[0]) / (self.radii[0] as f64 * scale);
+        let u1 = d.dot(f.0[1]) / (self.radii[1] as f64 * scale);
+        let u2 = d.dot(f.0[2]) / (self.radii[2] as f64 * scale);
         (u0 * u0 + u1 * u1 + u2 * u2).sqrt()
     }
 }

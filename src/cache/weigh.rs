@@ -22,14 +22,14 @@ pub(crate) type UsedRecords<'a> = SmallVec<[Used<'a>; 16]>;
 pub(crate) fn record_weight(kernel: &Kernel, head: &Head, x: DVec3, n: DVec3) -> (f64, DVec3) {
     let surface = kernel.domain == Domain::Surface;
     // isotropic records (the common case) need only the normal, not the whole frame
+    let scale = kernel.lookup_scale;
     let (t, normal) = if head.is_isotropic() {
-        let t = (x - head.position()).length() / head.radii[0] as f64;
+        let t = (x - head.position()).length() / (head.radii[0] as f64 * scale);
         (t, if surface { head.axis2() } else { DVec3::ZERO })
     } else {
         let frame = head.frame();
-        (head.normalized_distance(&frame, x), frame.0[2])
+        (head.normalized_distance(&frame, x, scale), frame.0[2])
     };
-    let t = t * kernel.inv_lookup_scale;
     let cos_n = if surface { normal.dot(n) } else { 1.0 };
     (
         guarded(kernel, kernel.weight(t, cos_n), x, n, head, normal),
@@ -152,16 +152,16 @@ unsafe fn weigh4(kernel: &Kernel, x: DVec3, n: DVec3, h: [&Head; 4]) -> ([f64; 4
         _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)),
         _mm256_mul_pd(dz, dz),
     );
-    let radius = _mm256_cvtps_pd(_mm_setr_ps(
-        h[0].radii[0],
-        h[1].radii[0],
-        h[2].radii[0],
-        h[3].radii[0],
-    ));
-    let t = _mm256_mul_pd(
-        _mm256_div_pd(_mm256_sqrt_pd(d2), radius),
-        _mm256_set1_pd(kernel.inv_lookup_scale),
+    let radius = _mm256_mul_pd(
+        _mm256_cvtps_pd(_mm_setr_ps(
+            h[0].radii[0],
+            h[1].radii[0],
+            h[2].radii[0],
+            h[3].radii[0],
+        )),
+        _mm256_set1_pd(kernel.lookup_scale),
     );
+    let t = _mm256_div_pd(_mm256_sqrt_pd(d2), radius);
     let one = _mm256_set1_pd(1.0);
     let zero = _mm256_setzero_pd();
     let (mut ax, mut ay, mut az, cos_n) = (zero, zero, zero, one);
