@@ -2,47 +2,22 @@
 //! blends, misses exactly where the unscaled cache misses (so the one-call queries make the same
 //! records), gives the same bits on every lookup path, and is the unscaled cache bit for bit at 1.
 
+#[path = "common/plane_records.rs"]
+mod plane_records;
 #[path = "common/splitmix.rs"]
 mod splitmix;
 
 use glam::DVec3;
 use raddiff::cache::irradiance::{IrradianceSettings, NearFieldSettings, RadiusBounds};
 use raddiff::cache::{
-    Cache, CacheConfig, Cursor, Extent, FarFieldReach, Interpolation, LeakGuard, OpenFractionTest,
-    Record, LOOKUP_RADIUS_SCALE_MAX,
+    Cache, CacheConfig, Cursor, FarFieldReach, Interpolation, LeakGuard, OpenFractionTest, Record,
+    LOOKUP_RADIUS_SCALE_MAX,
 };
 use raddiff::Error;
 
-/// Records on the plane z = 0 (normals tilted a little), isotropic and anisotropic, with
-/// gradients and open fractions on a grid of 1/16 (a few without one).
+/// The shared plane records with largest radii in [0.1, 0.4).
 fn records(count: usize, seed: u64) -> Vec<Record<[f32; 3]>> {
-    let mut state = seed;
-    let mut u = move || splitmix::uniform(&mut state);
-    (0..count)
-        .map(|i| {
-            let position = DVec3::new(4.0 * u(), 4.0 * u(), 0.0);
-            let normal = DVec3::new(0.05 * (u() - 0.5), 0.05 * (u() - 0.5), 1.0);
-            let r = 0.1 + 0.3 * u();
-            let extent = if i % 3 == 0 {
-                Extent {
-                    radii: [r, 0.5 * r, 0.0],
-                    axes: [
-                        DVec3::new(u() - 0.5, u() - 0.5, 0.0),
-                        DVec3::ZERO,
-                        DVec3::ZERO,
-                    ],
-                }
-            } else {
-                Extent::isotropic(r)
-            };
-            let value = [0.5 + u() as f32, 0.5 + u() as f32, 1.0 + i as f32];
-            let mut record = Record::new(position, normal, value, extent);
-            record.gradient = Some([[0.1, 0.0, 0.2], [0.0, -0.1, 0.0], [0.0; 3]]);
-            record.rotation_gradient = Some([[0.0; 3], [0.05, 0.0, 0.0], [0.0; 3]]);
-            record.open_fraction = (i % 7 != 3).then(|| (16.0 * u()).floor() / 16.0);
-            record
-        })
-        .collect()
+    plane_records::plane_records(count, seed, (0.1, 0.3))
 }
 
 fn filled(config: CacheConfig, all: &[Record<[f32; 3]>]) -> Cache<[f32; 3]> {

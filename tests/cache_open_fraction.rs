@@ -3,58 +3,28 @@
 //! bit), change nothing with the test off, and the one-call near/far query under a ledge makes
 //! a record of its own where the records nearby see another part of the sky.
 
+#[path = "common/plane_records.rs"]
+mod plane_records;
+#[path = "common/splitmix.rs"]
+mod splitmix;
+
 use std::cell::Cell;
 
 use glam::DVec3;
 use raddiff::cache::irradiance::{IrradianceSettings, NearFieldSettings, RadiusBounds};
 use raddiff::cache::{
-    Cache, CacheConfig, Cursor, Extent, FarFieldReach, Interpolation, OpenFractionTest, Record,
+    Cache, CacheConfig, Cursor, FarFieldReach, Interpolation, OpenFractionTest, Record,
 };
 use raddiff::Error;
 
-/// A splitmix64 stream in [0, 1).
+/// A stream of numbers in [0, 1) from `seed`.
 fn stream(mut state: u64) -> impl FnMut() -> f64 {
-    move || {
-        state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
+    move || splitmix::uniform(&mut state)
 }
 
-/// Records on the plane z = 0 (normals tilted a little), isotropic and anisotropic, with open
-/// fractions on a grid of 1/16 and a few without one.
+/// The shared plane records with largest radii in [0.2, 0.8).
 fn records(count: usize, seed: u64) -> Vec<Record<[f32; 3]>> {
-    let mut u = stream(seed);
-    (0..count)
-        .map(|i| {
-            let position = DVec3::new(4.0 * u(), 4.0 * u(), 0.0);
-            let normal = DVec3::new(0.05 * (u() - 0.5), 0.05 * (u() - 0.5), 1.0);
-            let r = 0.2 + 0.6 * u();
-            let extent = if i % 3 == 0 {
-                Extent {
-                    radii: [r, 0.5 * r, 0.0],
-                    axes: [
-                        DVec3::new(u() - 0.5, u() - 0.5, 0.0),
-                        DVec3::ZERO,
-                        DVec3::ZERO,
-                    ],
-                }
-            } else {
-                Extent::isotropic(r)
-            };
-            let mut record = Record::new(
-                position,
-                normal,
-                [u() as f32, u() as f32, 1.0 + i as f32],
-                extent,
-            );
-            record.gradient = Some([[0.1, 0.0, 0.2], [0.0, -0.1, 0.0], [0.0; 3]]);
-            record.open_fraction = (i % 7 != 3).then(|| (16.0 * u()).floor() / 16.0);
-            record
-        })
-        .collect()
+    plane_records::plane_records(count, seed, (0.2, 0.6))
 }
 
 fn far_cache(test: OpenFractionTest, interpolation: Interpolation) -> Cache<[f32; 3]> {
