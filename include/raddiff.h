@@ -362,7 +362,8 @@ typedef struct raddiff_irradiance_settings {
   // How far the cache reads records, in multiples of their radii, in
   // [1, `RADDIFF_LOOKUP_RADIUS_SCALE_MAX`] (default 1; see
   // `raddiff_cache_set_lookup_radius_scale`): records are made where they would be at 1, and
-  // each value blends more of them. Only `raddiff_irradiance_cache_new` reads it.
+  // each value blends more of them. `raddiff_irradiance_cache_new` gives the cache this scale;
+  // the query calls only check its range, as every field's (the cache's own scale applies).
   double lookup_radius_scale;
 } raddiff_irradiance_settings;
 
@@ -806,8 +807,10 @@ size_t raddiff_cache_len(const struct raddiff_cache *cache);
 enum raddiff_status raddiff_cache_save(const struct raddiff_cache *cache, const char *path);
 
 // Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags, the
-// gradient limit and the leak guard come from the file; files of format version 2 have no
-// gradient limit, those of versions 2 and 3 no leak guard). Returns
+// gradient limit, the leak guard, the far-field reach, the open-fraction tolerance and the
+// lookup radius scale come from the file; files of format version 2 have no gradient limit,
+// those of versions 2 and 3 no leak guard, 2 to 4 no far field, 2 to 5 no open-fraction test,
+// 2 to 6 a lookup radius scale of 1). Returns
 // NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in `raddiff_last_error` for
 // unreadable, truncated, damaged or wrong-version files.
 struct raddiff_cache *raddiff_cache_load(const char *path);

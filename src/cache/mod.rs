@@ -518,7 +518,7 @@ impl<V: CacheValue> Cache<V> {
         for id in 0..self.len() as u32 {
             let head = *self.stored(id).0;
             self.index
-                .insert(id, head.position(), head.max_radius() * scale);
+                .insert(id, head.position(), self.read_radius(&head));
         }
         self.generation += 1;
         self.compact();
@@ -660,6 +660,12 @@ impl<V: CacheValue> Cache<V> {
         duplicate
     }
 
+    /// The radius of the sphere a record is read over: its largest radius times the lookup radius
+    /// scale (what the index holds).
+    fn read_radius(&self, head: &Head) -> f64 {
+        head.max_radius() * self.kernel.lookup_scale
+    }
+
     /// Writes a record into the next slot, indexes it and publishes it.
     ///
     /// # Contract
@@ -678,11 +684,8 @@ impl<V: CacheValue> Cache<V> {
                 chans.len(),
             );
         }
-        self.index.insert(
-            id as u32,
-            head.position(),
-            head.max_radius() * self.kernel.lookup_scale,
-        );
+        self.index
+            .insert(id as u32, head.position(), self.read_radius(head));
         self.len.store(id + 1, Ordering::Release);
     }
 

@@ -585,8 +585,10 @@ pub extern "C" fn raddiff_cache_save(
 }
 
 /// Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags, the
-/// gradient limit and the leak guard come from the file; files of format version 2 have no
-/// gradient limit, those of versions 2 and 3 no leak guard). Returns
+/// gradient limit, the leak guard, the far-field reach, the open-fraction tolerance and the
+/// lookup radius scale come from the file; files of format version 2 have no gradient limit,
+/// those of versions 2 and 3 no leak guard, 2 to 4 no far field, 2 to 5 no open-fraction test,
+/// 2 to 6 a lookup radius scale of 1). Returns
 /// NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in `raddiff_last_error` for
 /// unreadable, truncated, damaged or wrong-version files.
 #[no_mangle]

@@ -127,7 +127,8 @@ pub struct raddiff_irradiance_settings {
     /// How far the cache reads records, in multiples of their radii, in
     /// [1, `RADDIFF_LOOKUP_RADIUS_SCALE_MAX`] (default 1; see
     /// `raddiff_cache_set_lookup_radius_scale`): records are made where they would be at 1, and
-    /// each value blends more of them. Only `raddiff_irradiance_cache_new` reads it.
+    /// each value blends more of them. `raddiff_irradiance_cache_new` gives the cache this scale;
+    /// the query calls only check its range, as every field's (the cache's own scale applies).
     pub lookup_radius_scale: f64,
 }
 
