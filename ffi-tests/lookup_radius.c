@@ -60,6 +60,11 @@ int main(int argc, char **argv) {
   CHECK_STATUS(raddiff_cache_lookup(cache, near_b, n, &out, NULL), RADDIFF_OK);
   CHECK(out > 1.0f && out < 3.0f);
 
+  /* the largest scale is accepted, and a scale is set back exactly */
+  CHECK_STATUS(raddiff_cache_set_lookup_radius_scale(cache, RADDIFF_LOOKUP_RADIUS_SCALE_MAX), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_get_lookup_radius_scale(cache, &scale), RADDIFF_OK);
+  CHECK(scale == RADDIFF_LOOKUP_RADIUS_SCALE_MAX);
+  CHECK_STATUS(raddiff_cache_set_lookup_radius_scale(cache, 3.0), RADDIFF_OK);
   /* invalid scales: refused, nothing changed */
   for (i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
     CHECK_STATUS(raddiff_cache_set_lookup_radius_scale(cache, bad[i]), RADDIFF_ERROR_INVALID_ARGUMENT);

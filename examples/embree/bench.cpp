@@ -26,9 +26,9 @@ double binned_far(double far, const std::array<float, kDirBins> &open_bins, cons
   return std::max(0.0, far + kPi * d);
 }
 
-// A record kept after its insertion (the smoothing experiment), with copies of
-// its gradients (three channels, as every record of the bench): the far field's are computed in
-// the fill's locals.
+// A record kept after its insertion (the smoothing experiment), with copies of its gradients
+// (three channels, as every record of the bench): the far field's are computed in the fill's
+// locals.
 class KeptRecord {
  public:
   explicit KeptRecord(const raddiff_cache_record &rec) : rec_(rec) {
@@ -256,8 +256,8 @@ class Bench {
     };
     CpuSum cache_cpu;
     const int w = view_.width, h = view_.height;
-    // The inserted records, kept for the smoothing experiment (their values and
-    // open fractions point into the store's evaluations, which outlive the fill).
+    // The inserted records, kept for the smoothing experiment (their values and open fractions
+    // point into the store's evaluations, which outlive the fill).
     const bool smooth = render && settings_.smooth_records > 0;
     std::vector<KeptRecord> kept;
     // The kernel of the experiments' side caches: the one the settings force, or the metric's own.

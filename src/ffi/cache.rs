@@ -53,6 +53,7 @@ pub const RADDIFF_GRADIENT_LIMIT_DEFAULT: f64 = 2.0;
 /// radii already weighs about 64 times the records of one over 1 (Rust:
 /// `cache::LOOKUP_RADIUS_SCALE_MAX`).
 pub const RADDIFF_LOOKUP_RADIUS_SCALE_MAX: f64 = 8.0;
+const _: () = assert!(RADDIFF_LOOKUP_RADIUS_SCALE_MAX == crate::cache::LOOKUP_RADIUS_SCALE_MAX);
 
 /// A thread-safe radiance cache: any number of threads may call `raddiff_cache_lookup` and
 /// `raddiff_cache_insert` on the same handle at once (lookups never block).
