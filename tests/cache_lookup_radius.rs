@@ -10,8 +10,8 @@ mod splitmix;
 use glam::DVec3;
 use raddiff::cache::irradiance::{IrradianceSettings, NearFieldSettings, RadiusBounds};
 use raddiff::cache::{
-    Cache, CacheConfig, Cursor, FarFieldReach, Interpolation, LeakGuard, OpenFractionTest, Record,
-    LOOKUP_RADIUS_SCALE_MAX,
+    Cache, CacheConfig, Cursor, Extent, FarFieldReach, Interpolation, LeakGuard, OpenFractionTest,
+    Record, LOOKUP_RADIUS_SCALE_MAX, RADIUS_MAX,
 };
 use raddiff::Error;
 
@@ -319,5 +319,52 @@ fn one_call_queries_make_the_records_they_make_at_scale_one() {
             .filter(|(a, b)| a != b)
             .count();
         assert!(changed > 50, "near {near}: only {changed} values changed");
+    }
+}
+
+/// The largest scale at tiny, unit and huge radii: a record 4.5 radii away is blended in, a gap
+/// between the records' own radii stays a miss, and every value is finite and between the
+/// records'. A record of `RADIUS_MAX` (whose scaled sphere the index must still place) is found.
+#[test]
+fn the_largest_scale_holds_at_every_size() {
+    let config = CacheConfig::surface(3)
+        .with_interpolation(Interpolation::Tent)
+        .with_lookup_radius_scale(LOOKUP_RADIUS_SCALE_MAX);
+    let largest: Cache<[f32; 3]> = Cache::new(config).unwrap();
+    let record = Record::new(
+        DVec3::ZERO,
+        DVec3::Z,
+        [2.0; 3],
+        Extent::isotropic(RADIUS_MAX),
+    );
+    largest.insert(&record).unwrap();
+    for x in [0.0, 0.5, 0.99] {
+        let hit = largest.lookup(DVec3::new(x * RADIUS_MAX, 0.0, 0.0), DVec3::Z);
+        assert_eq!(hit.map(|h| h.value).ok(), Some([2.0; 3]), "{x} R");
+    }
+    for r in [1e-25, 1.0, 1e29] {
+        let cache: Cache<[f32; 3]> = Cache::new(config).unwrap();
+        let disc = |x: f64, v: f32| {
+            Record::new(
+                DVec3::new(x, 0.0, 0.0),
+                DVec3::Z,
+                [v; 3],
+                Extent::isotropic(r),
+            )
+        };
+        cache.insert(&disc(0.0, 1.0)).unwrap();
+        cache.insert(&disc(5.0 * r, 3.0)).unwrap();
+        let at = |x: f64| cache.lookup(DVec3::new(x * r, 0.0, 0.0), DVec3::Z);
+        for x in [0.5, 4.5] {
+            let hit = at(x).unwrap();
+            assert_eq!(hit.records, 2, "r {r} at {x}");
+            assert!(
+                hit.value
+                    .iter()
+                    .all(|v| v.is_finite() && *v > 1.0 && *v < 3.0),
+                "r {r}: {hit:?}"
+            );
+        }
+        assert!(matches!(at(2.5), Err(Error::NotFound(_))), "r {r}");
     }
 }
