@@ -520,7 +520,7 @@ impl<V: CacheValue> Cache<V> {
             self.index
                 .insert(id, head.position(), self.read_radius(&head));
         }
-        self.generation += 1;
+        // compacting also moves the cache to a new generation, so cursors re-anchor
         self.compact();
         Ok(())
     }
