@@ -1,5 +1,7 @@
 #include "bench.hpp"
 
+#include "fill.hpp"
+#include "fill_experiments.hpp"
 #include "gather_store.hpp"
 #include "image.hpp"
 #include "pathtrace.hpp"
@@ -18,138 +20,6 @@
 namespace rd {
 namespace {
 
-// The binned far-field experiment's far field for channel c: F plus pi times the records' bin
-// departures `bins` weighted by the pixel's open rays' bins, at least 0.
-double binned_far(double far, const std::array<float, kDirBins> &open_bins, const float *bins, int c) {
-  double d = 0;
-  for (int b = 0; b < kDirBins; ++b) d += open_bins[b] * bins[3 * b + c];
-  return std::max(0.0, far + kPi * d);
-}
-
-// A record kept after its insertion (the smoothing experiment), with copies of its gradients
-// (three channels, as every record of the bench): the far field's are computed in the fill's
-// locals.
-class KeptRecord {
- public:
-  explicit KeptRecord(const raddiff_cache_record &rec) : rec_(rec) {
-    if (rec.gradient) std::copy(rec.gradient, rec.gradient + 9, gradient_.begin());
-    if (rec.rotation_gradient) std::copy(rec.rotation_gradient, rec.rotation_gradient + 9, rotation_gradient_.begin());
-  }
-  // The record, its gradients pointing into this object (valid while it lives and does not move).
-  raddiff_cache_record get() const {
-    raddiff_cache_record r = rec_;
-    if (r.gradient) r.gradient = gradient_.data();
-    if (r.rotation_gradient) r.rotation_gradient = rotation_gradient_.data();
-    return r;
-  }
-
- private:
-  raddiff_cache_record rec_;
-  std::array<float, 9> gradient_{}, rotation_gradient_{};
-};
-
-// Inserts the `kept` records into `cache` with their radii times `scale`.
-void insert_scaled(raddiff_cache *cache, const std::vector<KeptRecord> &kept, double scale) {
-  for (const KeptRecord &k : kept) {
-    raddiff_cache_record rec = k.get();
-    for (double &x : rec.radii) x *= scale;
-    check(raddiff_cache_insert(cache, &rec), "raddiff_cache_insert");
-  }
-}
-
-
-// CPU seconds summed over threads.
-class CpuSum {
- public:
-  void add(double s) {
-    std::lock_guard<std::mutex> g(lock_);
-    total_ += s;
-  }
-  double total() const { return total_; }
-
- private:
-  std::mutex lock_;
-  double total_ = 0;
-};
-
-using CachePtr = std::unique_ptr<raddiff_cache, void (*)(raddiff_cache *)>;
-
-// A surface cache of `channels` channels with `interpolation` (RADDIFF_INTERP_*), clamped at zero
-// when `non_negative`, with gradient limit c.
-CachePtr surface_cache(int interpolation, double c, uint32_t channels = 3, bool non_negative = true) {
-  const raddiff_cache_config config{
-      channels, RADDIFF_DOMAIN_SURFACE,
-      static_cast<uint32_t>(interpolation) | (non_negative ? RADDIFF_INTERP_NON_NEGATIVE : 0u), 0.2};
-  CachePtr cache(raddiff_cache_new(&config), raddiff_cache_free);
-  if (!cache) throw std::runtime_error(std::string("raddiff_cache_new: ") + raddiff_last_error());
-  check(raddiff_cache_set_gradient_limit(cache.get(), c), "raddiff_cache_set_gradient_limit");
-  return cache;
-}
-
-// The second-order experiment (--second-order): the blend of the covering records' terms
-// q_i(x) = 1/2 (x - x_i)^T H_i (x - x_i) is linear in the records' constants H_i, H_i x_i and
-// 1/2 x_i^T H_i x_i, so a cache of those ten channels (no gradients; the main cache's kernel, hence
-// its weights) blends them, and q(x) = 1/2 x^T <H> x - <H x_i> . x + <1/2 x_i^T H x_i>.
-constexpr uint32_t kQuadraticChannels = 10;
-
-// The ten channels of a record at `p` (unit normal `n`) whose scalar has Hessian `h` (row-major),
-// projected on the tangent plane (the Hessian's normal rows carry robustness terms, not curvature).
-std::array<float, kQuadraticChannels> quadratic_channels(const V3 &p, const V3 &n, const double h[9]) {
-  // P H P with P = I - n n^T: H - n (n^T H) - (H n) n^T + (n^T H n) n n^T
-  const double nv[3] = {n.x, n.y, n.z}, x[3] = {p.x, p.y, p.z};
-  double hn[3], nh[3], ht[9], hx[3];
-  for (int i = 0; i < 3; ++i) {
-    hn[i] = h[3 * i] * nv[0] + h[3 * i + 1] * nv[1] + h[3 * i + 2] * nv[2];
-    nh[i] = nv[0] * h[i] + nv[1] * h[3 + i] + nv[2] * h[6 + i];
-  }
-  const double nhn = nv[0] * hn[0] + nv[1] * hn[1] + nv[2] * hn[2];
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      ht[3 * i + j] = h[3 * i + j] - nv[i] * nh[j] - hn[i] * nv[j] + nhn * nv[i] * nv[j];
-  for (int i = 0; i < 3; ++i) hx[i] = ht[3 * i] * x[0] + ht[3 * i + 1] * x[1] + ht[3 * i + 2] * x[2];
-  const double c = 0.5 * (x[0] * hx[0] + x[1] * hx[1] + x[2] * hx[2]);
-  return {static_cast<float>(ht[0]), static_cast<float>(ht[4]), static_cast<float>(ht[8]),
-          static_cast<float>(0.5 * (ht[1] + ht[3])), static_cast<float>(0.5 * (ht[2] + ht[6])),
-          static_cast<float>(0.5 * (ht[5] + ht[7])), static_cast<float>(hx[0]), static_cast<float>(hx[1]),
-          static_cast<float>(hx[2]), static_cast<float>(c)};
-}
-
-// q(x) from the blended channels `b` of kQuadraticChannels.
-double quadratic_term(const V3 &p, const float *b) {
-  const double x = p.x, y = p.y, z = p.z;
-  const double xhx = b[0] * x * x + b[1] * y * y + b[2] * z * z + 2 * (b[3] * x * y + b[4] * x * z + b[5] * y * z);
-  return 0.5 * xhx - (b[6] * x + b[7] * y + b[8] * z) + b[9];
-}
-
-struct RecordInfo {
-  size_t pixel;
-  V3 p, n;
-  double radii[2];
-  raddiff_vec3 axes[2];
-  double value;          // the luminance the cache interpolates (the far field under --near-field)
-  double open_fraction;  // its gather's open fraction (1 without --near-field)
-};
-
-struct Fill {
-  Metric metric;
-  double parameter = 0;
-  std::vector<RecordInfo> records;
-  double trace_seconds = 0, raddiff_seconds = 0, cache_seconds = 0;
-  Image image;
-  size_t uncovered = 0, non_finite = 0, negative = 0;
-  double total_seconds() const { return trace_seconds + raddiff_seconds + cache_seconds; }
-};
-
-// Pixel indices of one coarse-to-fine level: the grid of step `step` without the coarser grid's
-// pixels (the coarsest level, 16, takes its whole grid).
-std::vector<size_t> level_pixels(int w, int h, int step) {
-  std::vector<size_t> level;
-  for (int y = 0; y < h; y += step)
-    for (int x = 0; x < w; x += step)
-      if (step == 16 || x % (2 * step) != 0 || y % (2 * step) != 0) level.push_back(static_cast<size_t>(y) * w + x);
-  return level;
-}
-
 class Bench {
  public:
   Bench(const Scene &scene, const View &view, const BenchSettings &settings)
@@ -158,7 +28,12 @@ class Bench {
         settings_(settings),
         camera_(view),
         primary_(primary_hits(scene, camera_, settings.threads)),
-        store_(scene, primary_, settings_, hessian_needs(settings.metrics)) {}
+        store_(scene, primary_, settings_, hessian_needs(settings.metrics)),
+        fill_inputs_{settings_, primary_, view_.width, view_.height, store_,
+                     [this]() -> const NearFields & {
+                       near_field();
+                       return near_;
+                     }} {}
 
   const std::vector<Primary> &primary() const { return primary_; }
   const Camera &camera() const { return camera_; }
@@ -167,15 +42,15 @@ class Bench {
   // The binned far-field experiment's per-pixel open_bins (empty without it), filled with near_field().
   const std::vector<std::array<float, kDirBins>> &near_bins() {
     near_field();
-    return near_bins_;
+    return near_.bins;
   }
 
   // The near-field experiment: every pixel's near irradiance (RGB) and open fraction, traced once
   // and shared by every fill, and what that cost in CPU seconds.
   const std::vector<std::array<float, 4>> &near_field() {
-    if (!near_.empty() || settings_.near_field_px <= 0) return near_;
-    near_.assign(primary_.size(), {0, 0, 0, 1});
-    if (settings_.far_field_bins) near_bins_.assign(primary_.size(), {});
+    if (!near_.near.empty() || settings_.near_field_px <= 0) return near_.near;
+    near_.near.assign(primary_.size(), {0, 0, 0, 1});
+    if (settings_.far_field_bins) near_.bins.assign(primary_.size(), {});
     CpuSum cpu;
     const size_t w = static_cast<size_t>(view_.width);
     parallel_for(static_cast<size_t>(view_.height), settings_.threads, [&](size_t row) {
@@ -187,329 +62,22 @@ class Bench {
         const NearField f = trace_near_field(scene_, settings_.radiance, px.p, px.n,
                                              settings_.near_field_px * px.footprint, settings_.near_field_m,
                                              reseeded(mix(i) ^ 0x6e656172ull, settings_.noise_seed), rays);
-        near_[i] = {static_cast<float>(f.near[0]), static_cast<float>(f.near[1]), static_cast<float>(f.near[2]),
+        near_.near[i] = {static_cast<float>(f.near[0]), static_cast<float>(f.near[1]), static_cast<float>(f.near[2]),
                     static_cast<float>(f.open_fraction)};
         if (settings_.far_field_bins)
-          std::copy(std::begin(f.open_bins), std::end(f.open_bins), near_bins_[i].begin());
+          std::copy(std::begin(f.open_bins), std::end(f.open_bins), near_.bins[i].begin());
       }
       cpu.add(thread_cpu_seconds() - t0);
     });
-    near_seconds_ = cpu.total();
+    near_.seconds = cpu.total();
     std::printf("near field: %u x %u rays of %.3g pixels' reach per pixel, %.2f CPU s\n", settings_.near_field_m,
-                settings_.near_field_m, settings_.near_field_px, near_seconds_);
+                settings_.near_field_m, settings_.near_field_px, near_.seconds);
     std::fflush(stdout);
-    return near_;
+    return near_.near;
   }
 
-  // Fills a fresh cache for metric m with parameter p, coarse to fine over the image. Which pixels
-  // get records does not depend on the thread count: a level's candidates are the pixels the cache
-  // misses when the level starts, taken in pixel order; gathers are computed in parallel, a batch at
-  // a time, and inserted one by one after a second lookup.
-  Fill fill(Metric m, double p, bool render) {
-    Fill out;
-    out.metric = m;
-    out.parameter = p;
-    raddiff_irradiance_settings irr = settings_.irradiance;
-    irr.metric = c_metric(m);
-    irr.accuracy = p;
-    // With --open-fraction-tolerance, the library's open-fraction test in every cache of the records;
-    // with --lookup-scale, every such cache read over the records' radii times it.
-    const bool open_test = std::isfinite(settings_.open_fraction_tolerance) && settings_.near_field_px > 0;
-    auto with_cache_state = [&](CachePtr c) {
-      if (open_test)
-        check(raddiff_cache_set_open_fraction_tolerance(c.get(), settings_.open_fraction_tolerance),
-              "raddiff_cache_set_open_fraction_tolerance");
-      check(raddiff_cache_set_lookup_radius_scale(c.get(), settings_.lookup_scale),
-            "raddiff_cache_set_lookup_radius_scale");
-      return c;
-    };
-    // The cache this metric wants: Ward or tent weights, extrapolation clamped at zero, the
-    // gradient limit and the leak guard of the settings (or the interpolation the settings force).
-    auto new_cache = [&] {
-      if (settings_.interpolation >= 0) return with_cache_state(surface_cache(settings_.interpolation, irr.gradient_limit));
-      CachePtr c(raddiff_irradiance_cache_new(&irr), raddiff_cache_free);
-      if (!c) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
-      return with_cache_state(std::move(c));
-    };
-    // With --open-fraction-bands, one cache per band of open fraction (a record goes into its own
-    // band's and the two neighbouring bands' caches; a pixel looks only into its own band's).
-    const bool banded = settings_.open_fraction_bands > 0 && settings_.near_field_px > 0;
-    const int bands = banded ? static_cast<int>(std::ceil(1.0 / settings_.open_fraction_bands)) + 1 : 1;
-    auto band_of = [&](double open) {
-      return banded ? std::clamp(static_cast<int>(open / settings_.open_fraction_bands), 0, bands - 1) : 0;
-    };
-    if ((banded || open_test) &&
-        (settings_.neighbour_clamp || settings_.smooth_records > 0 || settings_.second_order > 0))
-      throw std::runtime_error("--open-fraction-bands and --open-fraction-tolerance do not combine with "
-                               "--neighbour-clamp, --smooth-records or --second-order");
-    const std::vector<std::array<float, 4>> *pixel_near = banded || open_test ? &near_field() : nullptr;
-    std::vector<CachePtr> caches;
-    for (int b = 0; b < bands; ++b) caches.push_back(new_cache());
-    CachePtr &cache = caches[0];
-    auto pixel_band = [&](size_t pixel) { return band_of(pixel_near ? (*pixel_near)[pixel][3] : 0.0); };
-    auto cache_of = [&](size_t pixel) { return caches[pixel_band(pixel)].get(); };
-    // A pixel's lookup: with the open-fraction test, with its near field's open fraction.
-    auto lookup_pixel = [&](raddiff_cache *c, size_t pixel, float *value) {
-      const raddiff_vec3 p = to_c(primary_[pixel].p), n = to_c(primary_[pixel].n);
-      return open_test ? raddiff_cache_lookup_open(c, nullptr, p, n, (*pixel_near)[pixel][3], value, nullptr)
-                       : raddiff_cache_lookup(c, p, n, value, nullptr);
-    };
-    CpuSum cache_cpu;
-    const int w = view_.width, h = view_.height;
-    // The inserted records, kept for the smoothing experiment (their values and open fractions
-    // point into the store's evaluations, which outlive the fill).
-    const bool smooth = render && settings_.smooth_records > 0;
-    std::vector<KeptRecord> kept;
-    // The kernel of the experiments' side caches: the one the settings force, or the metric's own.
-    const int kernel = settings_.interpolation >= 0 ? settings_.interpolation
-                       : uses_hessian(m)            ? RADDIFF_INTERP_TENT
-                                                    : RADDIFF_INTERP_WARD;
-    // The second-order experiment's cache of the records' quadratic terms (same extents, same kernel).
-    CachePtr quadratic(nullptr, raddiff_cache_free);
-    if (render && settings_.second_order > 0) {
-      quadratic = surface_cache(kernel, irr.gradient_limit, kQuadraticChannels, false);
-      check(raddiff_cache_set_lookup_radius_scale(quadratic.get(), settings_.lookup_scale),
-            "raddiff_cache_set_lookup_radius_scale");
-      check(raddiff_cache_set_leak_guard(quadratic.get(), irr.leak_guard_relative, irr.leak_guard_absolute),
-            "raddiff_cache_set_leak_guard");
-    }
-    // The binned far-field experiment's caches of the records' bins (same extents, same kernel, no
-    // gradients; one per band of open fraction, as the records').
-    std::vector<CachePtr> binned_caches;
-    if (render && settings_.far_field_bins)
-      for (int b = 0; b < bands; ++b) {
-        binned_caches.push_back(with_cache_state(surface_cache(kernel, irr.gradient_limit, 3 * kDirBins, false)));
-        check(raddiff_cache_set_leak_guard(binned_caches.back().get(), irr.leak_guard_relative,
-                                           irr.leak_guard_absolute),
-              "raddiff_cache_set_leak_guard");
-      }
-    const bool binned = !binned_caches.empty();
-    auto binned_of = [&](size_t pixel) { return binned_caches[pixel_band(pixel)].get(); };
-    auto covered = [&](size_t i) {
-      float v[3];
-      const raddiff_status st = lookup_pixel(cache_of(i), i, v);
-      if (st != RADDIFF_OK && st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
-      return st == RADDIFF_OK;
-    };
-    // With neighbour clamping, the two-sided pass runs after each level; it can uncover pixels, so
-    // the finest level is repeated over every pixel until a round inserts nothing, the last
-    // allowed round filling only (as the render mode does).
-    const bool clamp = settings_.neighbour_clamp;
-    if (clamp && (settings_.smooth_records > 0 || settings_.second_order > 0))
-      throw std::runtime_error("--neighbour-clamp does not combine with --smooth-records or --second-order");
-    constexpr int kClampRounds = 3;
-    int finest_rounds = 0;
-    for (int step = 16;;) {
-      std::vector<size_t> level;
-      if (finest_rounds == 0) {
-        for (size_t i : level_pixels(w, h, step))
-          if (primary_[i].hit) level.push_back(i);
-      } else {
-        for (size_t i = 0; i < primary_.size(); ++i)
-          if (primary_[i].hit) level.push_back(i);
-      }
-      const size_t records_before = out.records.size();
-      std::vector<char> missed(level.size(), 0);
-      parallel_for((level.size() + 255) / 256, settings_.threads, [&](size_t chunk) {
-        const double t0 = thread_cpu_seconds();
-        for (size_t k = chunk * 256; k < std::min(level.size(), (chunk + 1) * 256); ++k) missed[k] = !covered(level[k]);
-        cache_cpu.add(thread_cpu_seconds() - t0);
-      });
-      std::vector<size_t> candidates;
-      for (size_t k = 0; k < level.size(); ++k)
-        if (missed[k]) candidates.push_back(level[k]);
-      const size_t batch = 4 * std::max(1u, settings_.threads);
-      for (size_t b = 0; b < candidates.size(); b += batch) {
-        double t0 = thread_cpu_seconds();
-        std::vector<size_t> still;
-        for (size_t k = b; k < std::min(candidates.size(), b + batch); ++k)
-          if (!covered(candidates[k])) still.push_back(candidates[k]);
-        cache_cpu.add(thread_cpu_seconds() - t0);
-        store_.ensure(still);
-        for (size_t i : still) {
-          t0 = thread_cpu_seconds();
-          const bool skip = covered(i);
-          cache_cpu.add(thread_cpu_seconds() - t0);
-          if (skip) continue;
-          const Slot &slot = store_.get(i);
-          const Evaluated &e = *slot.evaluated;
-          out.trace_seconds += slot.trace_seconds;  // a miss traces the gather: its cost counts
-          out.raddiff_seconds += raddiff_seconds(m, e);
-          if (!e.valid) continue;
-          t0 = thread_cpu_seconds();
-          raddiff_cache_record rec{};
-          const bool defined = metric_record(m, p, e, irr, primary_[i].footprint, rec);
-          out.raddiff_seconds += thread_cpu_seconds() - t0;
-          if (!defined) continue;
-          if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
-          if (open_test) rec.open_fraction = &e.open_fraction;
-          float far_gradient[9], far_rotation_gradient[9];
-          if (settings_.near_field_px > 0) {
-            // The far field's record: its value, and the gather's gradients in the same ratio.
-            rec.value = e.far_value;
-            for (int c = 0; c < 3; ++c) {
-              const double ratio = e.value[c] > 0 ? e.far_value[c] / e.value[c] : 0.0;
-              for (int k = 0; k < 3; ++k) {
-                if (rec.gradient) far_gradient[3 * c + k] = static_cast<float>(rec.gradient[3 * c + k] * ratio);
-                if (rec.rotation_gradient)
-                  far_rotation_gradient[3 * c + k] = static_cast<float>(rec.rotation_gradient[3 * c + k] * ratio);
-              }
-            }
-            if (rec.gradient) rec.gradient = far_gradient;
-            if (rec.rotation_gradient) rec.rotation_gradient = far_rotation_gradient;
-          }
-          if (settings_.hessian_distance_bound > 0 && uses_hessian(m)) {
-            const double bound = std::max(settings_.hessian_distance_bound * e.harmonic_mean_distance,
-                                          irr.pixel_radius_min * primary_[i].footprint);
-            for (double &r : rec.radii) r = std::min(r, bound);
-          }
-          if (settings_.error_norm > 0 && (m == Metric::HessianAnisotropic || m == Metric::HessianIsotropic))
-            norm_radii(m, p, e, irr, primary_[i].footprint, rec);
-          RecordInfo info{i,
-                          primary_[i].p,
-                          primary_[i].n,
-                          {rec.radii[0], rec.radii[1]},
-                          {rec.axes[0], rec.axes[1]},
-                          luminance(rec.value),
-                          e.open_fraction};
-          t0 = thread_cpu_seconds();
-          const int band = band_of(e.open_fraction);
-          const int first_band = std::max(0, band - 1), last_band = std::min(bands - 1, band + 1);
-          for (int b = first_band; b <= last_band; ++b)
-            check(raddiff_cache_insert(caches[b].get(), &rec), "raddiff_cache_insert");
-          cache_cpu.add(thread_cpu_seconds() - t0);
-          if (binned) {
-            raddiff_cache_record br = rec;
-            br.value = e.far_bins;
-            br.gradient = br.rotation_gradient = nullptr;
-            for (int b = first_band; b <= last_band; ++b)
-              check(raddiff_cache_insert(binned_caches[b].get(), &br), "raddiff_cache_insert");
-          }
-          out.records.push_back(info);
-          if (smooth) kept.emplace_back(rec);
-          if (quadratic) {
-            if (!e.evaluation[1]) throw std::runtime_error("--second-order needs an occlusion-aware Hessian metric");
-            raddiff_gather_summary summary{};
-            check(raddiff_gather_evaluation_summary(e.evaluation[1].get(), &summary),
-                  "raddiff_gather_evaluation_summary");
-            const std::array<float, kQuadraticChannels> q = quadratic_channels(
-                from_c(rec.position), normalize(from_c(rec.normal)), summary.occlusion_hessian);
-            raddiff_cache_record qr = rec;
-            qr.value = q.data();
-            qr.gradient = qr.rotation_gradient = nullptr;
-            check(raddiff_cache_insert(quadratic.get(), &qr), "raddiff_cache_insert");
-          }
-        }
-      }
-      const bool last_round = step == 1 && finest_rounds == kClampRounds;
-      if (clamp && !last_round) {
-        const double t0 = thread_cpu_seconds();
-        size_t shrunk = 0;
-        check(raddiff_cache_clamp_neighbours(cache.get(), &shrunk), "raddiff_cache_clamp_neighbours");
-        cache_cpu.add(thread_cpu_seconds() - t0);
-      }
-      if (step > 1) {
-        step /= 2;
-        continue;
-      }
-      ++finest_rounds;
-      if (!clamp || out.records.size() == records_before || last_round) break;
-    }
-    if (smooth) {
-      // Experiment (not timed): every record's value replaced by the tent-weighted blend of the
-      // records covering its position (its own included, radii times smooth_records), each
-      // extrapolated through its gradient; the cache rebuilt from the same records.
-      CachePtr blend = surface_cache(RADDIFF_INTERP_TENT, irr.gradient_limit);
-      insert_scaled(blend.get(), kept, settings_.smooth_records);
-      check(raddiff_cache_compact(blend.get()), "raddiff_cache_compact");
-      cache = new_cache();
-      for (const KeptRecord &k : kept) {
-        raddiff_cache_record rec = k.get();
-        float smoothed[3];
-        const raddiff_status st = raddiff_cache_lookup(blend.get(), rec.position, rec.normal, smoothed, nullptr);
-        if (st != RADDIFF_ERROR_NOT_FOUND) check(st, "raddiff_cache_lookup");
-        if (st == RADDIFF_OK) rec.value = smoothed;
-        check(raddiff_cache_insert(cache.get(), &rec), "raddiff_cache_insert");
-      }
-    }
-    if (render) {
-      const std::vector<std::array<float, 4>> &near = near_field();
-      out.trace_seconds += near_seconds_;
-      out.image = Image(w, h);
-      for (CachePtr &c : caches) check(raddiff_cache_compact(c.get()), "raddiff_cache_compact");
-      std::atomic<size_t> uncovered{0};
-      parallel_for(static_cast<size_t>(h), settings_.threads, [&](size_t row) {
-        const double t0 = thread_cpu_seconds();
-        for (int x = 0; x < w; ++x) {
-          const size_t i = row * w + x;
-          if (!primary_[i].hit) continue;
-          float *v = out.image.at(i);
-          const raddiff_status st = lookup_pixel(cache_of(i), i, v);
-          if (st == RADDIFF_ERROR_NOT_FOUND) {
-            ++uncovered;
-          } else {
-            check(st, "raddiff_cache_lookup");
-          }
-          float b[kQuadraticChannels];
-          if (st == RADDIFF_OK && quadratic &&
-              raddiff_cache_lookup(quadratic.get(), to_c(primary_[i].p), to_c(primary_[i].n), b, nullptr) ==
-                  RADDIFF_OK) {
-            // the scalar's term shared by the channels in proportion to the interpolated value
-            const double lum = luminance(v);
-            const double scale = lum > 0 ? 1 + settings_.second_order * quadratic_term(primary_[i].p, b) / lum : 1;
-            for (int c = 0; c < 3; ++c) v[c] = static_cast<float>(std::max(0.0, v[c] * scale));
-          }
-          float q[3 * kDirBins];
-          const bool bins = st == RADDIFF_OK && binned && lookup_pixel(binned_of(i), i, q) == RADDIFF_OK;
-          if (st == RADDIFF_OK && !near.empty())
-            for (int c = 0; c < 3; ++c) {
-              const double far = bins ? binned_far(v[c], near_bins_[i], q, c) : v[c];
-              v[c] = static_cast<float>(far * near[i][3] + near[i][c]);
-            }
-        }
-        cache_cpu.add(thread_cpu_seconds() - t0);
-      });
-      out.uncovered = uncovered;
-      for (float v : out.image.rgb) {
-        out.non_finite += !std::isfinite(v);
-        out.negative += v < 0;
-      }
-    }
-    out.cache_seconds = cache_cpu.total();
-    return out;
-  }
-
-  // The error-norm experiment: rec's radii (an occlusion-aware Hessian metric's) replaced by those
-  // minimizing the image's L^p error at equal records (see BenchSettings::error_norm). The
-  // library's radii a ~ (tau/|lambda|)^(1/4) (its anisotropy and curvature floor) are raised to the
-  // power 4q, q = p/(2p + 2), in scene units, and scaled by the footprint^(1/(p+1)) (pixels are
-  // uniform on the image, not on surfaces); then the pixel bounds and the anisotropy limit are
-  // applied again.
-  void norm_radii(Metric m, double p, const Evaluated &e, const raddiff_irradiance_settings &irr, double footprint,
-                  raddiff_cache_record &rec) const {
-    raddiff_gather_summary summary{};
-    check(raddiff_gather_evaluation_summary(e.evaluation[1].get(), &summary), "raddiff_gather_evaluation_summary");
-    const raddiff_vec3 n = to_c(normalize(from_c(rec.normal)));
-    const double anisotropy = m == Metric::HessianIsotropic ? 1.0 : irr.max_anisotropy;
-    const double distance = std::isfinite(e.harmonic_mean_distance) ? e.harmonic_mean_distance : 1e30;
-    double radii[2];
-    raddiff_vec3 axes[2];
-    check(raddiff_surface_radii_floored(summary.occlusion_hessian, n, e.luminance, p,
-                                        settings_.absolute_error ? RADDIFF_ERROR_ABSOLUTE : RADDIFF_ERROR_RELATIVE,
-                                        anisotropy, distance, irr.curvature_floor, radii, axes),
-          "raddiff_surface_radii_floored");
-    const double norm = settings_.error_norm;
-    const double q = norm / (2 * norm + 2);
-    const double lo = irr.pixel_radius_min * footprint, hi = irr.pixel_radius_max * footprint;
-    for (int k = 0; k < 2; ++k) {
-      const double r = std::pow(std::min(radii[k], 1e6), 4 * q) * std::pow(footprint, 1 / (norm + 1));
-      rec.radii[k] = std::clamp(r, lo, hi);
-      rec.axes[k] = axes[k];
-    }
-    rec.radii[1] = std::min(rec.radii[1], anisotropy * rec.radii[0]);
-    rec.radii[0] = std::min(rec.radii[0], rec.radii[1]);
-    rec.radii[2] = rec.radii[0];
-  }
+  // Fills a fresh cache for metric m with parameter p (see fill_cache).
+  Fill fill(Metric m, double p, bool render) { return fill_cache(fill_inputs_, m, p, render); }
 
   // Tunes metric m's parameter until the record count is within 5% of `target` (at most 14
   // fills): power-law jumps until the target is bracketed, then bisection in log space.
@@ -550,9 +118,8 @@ class Bench {
   Camera camera_;
   std::vector<Primary> primary_;
   GatherStore store_;
-  std::vector<std::array<float, 4>> near_;
-  std::vector<std::array<float, kDirBins>> near_bins_;  // the binned experiment's open_bins per pixel
-  double near_seconds_ = 0;
+  NearFields near_;
+  FillInputs fill_inputs_;
 };
 
 // Errors at the measured pixels.

@@ -34,6 +34,14 @@ struct BenchSettings {
   // and so the records the fills place, are those at 1: lookups blend more records (less noise,
   // more bias) at the same record count. The render mode passes it to raddiff_irradiance_cache_new.
   double lookup_scale = 1;
+  // > 0: the adaptive-lookup experiment (render fills; instead of lookup_scale; not with bands,
+  // neighbour clamping, smoothing, second order or bins). Each pixel reads the records over k
+  // times their radii, k = adaptive_lookup * (s / s_median)^(1/3) within [1, adaptive_lookup_max]
+  // (rounded to a quarter octave), s the records' relative noise (Evaluated::relative_noise)
+  // blended at the pixel and s_median the records' median: blending ~k^2 records divides the noise
+  // by k while the interpolation's bias grows as k^2, so their sum is least at k ~ (noise/bias)^(1/3).
+  double adaptive_lookup = 0;
+  double adaptive_lookup_max = 4;
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.
   int oracle_derivative_paths = 0;

@@ -1,5 +1,5 @@
 // Shared small pieces of the Embree renderer: a double-precision vector, random numbers, thread
-// CPU clocks, a parallel loop, and raddiff status checks.
+// CPU clocks, a parallel loop, a CPU-time sum, and raddiff status checks.
 #pragma once
 
 #include "raddiff.h"
@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <exception>
 #include <functional>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -115,5 +116,19 @@ inline void parallel_for(size_t count, unsigned threads, const std::function<voi
   for (auto &th : pool) th.join();
   if (error) std::rethrow_exception(error);
 }
+
+// CPU seconds summed over threads.
+class CpuSum {
+ public:
+  void add(double s) {
+    std::lock_guard<std::mutex> g(lock_);
+    total_ += s;
+  }
+  double total() const { return total_; }
+
+ private:
+  std::mutex lock_;
+  double total_ = 0;
+};
 
 }  // namespace rd

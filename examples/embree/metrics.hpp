@@ -64,6 +64,9 @@ struct Evaluated {
   // radiance of the gather's open rays in the bin minus the mean over all its open rays, shrunk
   // towards 0 by n_b / (n_b + 16) for a bin of n_b rays (0 for an empty bin).
   float far_bins[3 * kDirBins] = {};
+  // The adaptive-lookup experiment: the standard error of the record's value (its far field under
+  // the near field) relative to that value, from the gather's own strata (0 for a black gather).
+  double relative_noise = 0;
 };
 
 // `settings` gives the channels and their weights.

@@ -66,12 +66,15 @@ grep -q '^open-fraction test: records used only at pixels whose open fraction is
 for near in "--far-field-gathers" "--far-field-gathers --near-at-reach" "--far-field-gathers --near-at-reach --far-field-bins" \
   "--far-field-gathers --near-at-reach --far-field-bins --leak-guard 0.1,0 --open-fraction-bands 0.1" \
   "--far-field-gathers --near-at-reach --far-field-bins --leak-guard 0.1,0 --open-fraction-tolerance 0.1" \
-  "--far-field-gathers --near-at-reach --leak-guard 0.1,0 --open-fraction-tolerance 0.1 --lookup-scale 1.5"; do
+  "--far-field-gathers --near-at-reach --leak-guard 0.1,0 --open-fraction-tolerance 0.1 --lookup-scale 1.5" \
+  "--far-field-gathers --near-at-reach --leak-guard 0.1,0 --open-fraction-tolerance 0.1 --adaptive-lookup 2,4"; do
   # shellcheck disable=SC2086 # the options are meant to split
   "$binary" --bench --obj "$here/cornell.obj" --out "$out/cornell-near" --size 64 --metrics split-sphere,hessian-anisotropic \
     --thresholds 1 --no-path-trace --reference-rays 4096 --near-field 4,64 $near > "$out/cornell-near.log"
   grep -q '^OK$' "$out/cornell-near.log"
 done
+# the adaptive lookup (the last run above) read the records over more than their own radii
+awk '/^adaptive lookup:/ { n++; if ($NF + 0 <= 1) bad = 1 } END { exit !(n == 2 && !bad) }' "$out/cornell-near.log"
 # Two runs that differ only in their samples (--noise-seed), each pixel also shown from its own
 # gather (--pixel-gathers): what examples/embree/noise_split.py splits into noise and systematic parts.
 for seed in 0 1; do
