@@ -76,8 +76,8 @@ class Bench {
     return near_.near;
   }
 
-  // Fills a fresh cache for metric m with parameter p (see fill_cache).
-  Fill fill(Metric m, double p, bool render) { return fill_cache(fill_inputs_, m, p, render); }
+  // Fills a fresh cache for metric m with parameter p (see fill_bench_cache).
+  BenchFill fill(Metric m, double p, bool render) { return fill_bench_cache(fill_inputs_, m, p, render); }
 
   // Tunes metric m's parameter until the record count is within 5% of `target` (at most 14
   // fills): power-law jumps until the target is bracketed, then bisection in log space.
@@ -86,7 +86,7 @@ class Bench {
     double k = 2 * radius_exponent(m);  // records ~ p^-k: area per record ~ radius^2
     double too_many = 0, too_few = 0, last_p = 0, last_n = 0, best_p = p, best_miss = INFINITY;
     for (int fills = 0; fills < 14; ++fills) {
-      const Fill f = fill(m, p, false);
+      const BenchFill f = fill(m, p, false);
       const double n = static_cast<double>(f.records.size());
       const double miss = std::abs(std::log(std::max(n, 1.0) / target));
       std::printf("  tune %s: p = %.5g -> %zu records (%zu gathers so far)\n", metric_name(m), p, f.records.size(),
@@ -157,7 +157,7 @@ double percentile(std::vector<double> v, double q) {
 }
 
 // The records' smallest radii in pixels (radius / the footprint of the record's pixel).
-std::vector<double> radii_in_pixels(const Fill &f, const std::vector<Primary> &primary) {
+std::vector<double> radii_in_pixels(const BenchFill &f, const std::vector<Primary> &primary) {
   std::vector<double> out;
   for (const RecordInfo &r : f.records)
     out.push_back(std::min(r.radii[0], r.radii[1]) / std::max(primary[r.pixel].footprint, 1e-300));
@@ -219,7 +219,7 @@ class FloorReferences {
 
 // The records sampled for the floor: the `count` with the smallest hash of their pixel (so that
 // metrics whose records share pixels share the samples).
-std::vector<size_t> floor_sample(const Fill &f, size_t count) {
+std::vector<size_t> floor_sample(const BenchFill &f, size_t count) {
   std::vector<std::pair<uint64_t, size_t>> keyed;
   for (const RecordInfo &r : f.records) keyed.push_back({mix(r.pixel ^ 0xf1008ull), r.pixel});
   std::sort(keyed.begin(), keyed.end());
@@ -268,10 +268,10 @@ std::string fmt(const char *f, double v) {
   return buf;
 }
 
-void write_records_csv(const std::string &path, const Fill &f, const Camera &camera,
+void write_records_csv(const std::string &path, const BenchFill &f, const Camera &camera,
                        const std::vector<Primary> &primary) {
   std::ofstream out(path);
-  out << "pixel,px,py,ux,uy,vx,vy,radius_px,value,open_fraction\n";
+  out << "pixel,px,py,ux,uy,vx,vy,radius_px,value,open_fraction,relative_noise\n";
   for (const RecordInfo &r : f.records) {
     double cx, cy;
     if (!camera.project(r.p, cx, cy)) continue;
@@ -286,7 +286,7 @@ void write_records_csv(const std::string &path, const Fill &f, const Camera &cam
     camera.project(r.p + normalize(a1) * r.radii[1], bx, by);
     out << r.pixel << "," << cx << "," << cy << "," << ax - cx << "," << ay - cy << "," << bx - cx << "," << by - cy
         << "," << std::min(r.radii[0], r.radii[1]) / std::max(primary[r.pixel].footprint, 1e-300) << "," << r.value
-        << "," << r.open_fraction << "\n";
+        << "," << r.open_fraction << "," << r.relative_noise << "\n";
   }
 }
 
@@ -355,7 +355,7 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
   fills << "metric,parameter,records,equal_records,trace_s,raddiff_s,cache_s,total_s,rel_rms,rms,worst1_share,"
            "radius_px_min,radius_px_p5,radius_px_median,radius_px_p95,uncovered,non_finite,negative\n";
   bool ok = true;
-  std::vector<Fill> tuned;
+  std::vector<BenchFill> tuned;
   double longest = 0;
   FloorReferences floor_refs(settings.reference.cache_dir.empty()
                                  ? std::string()
@@ -371,7 +371,7 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
     const int first = settings.thresholds >= 2 ? -1 : 0;
     for (int k = first; k < first + settings.thresholds; ++k) {
       const double pk = p * std::pow(2.0, 0.75 * k / radius_exponent(m));
-      Fill f = bench.fill(m, pk, true);
+      BenchFill f = bench.fill(m, pk, true);
       const Measured err = measure(f.image, ref);
       const std::vector<double> rpx = radii_in_pixels(f, primary);
       const bool equal = k == 0;
@@ -408,12 +408,12 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
   std::ofstream floor_csv(settings.out + "-floor.csv");
   floor_csv << "metric,records_sampled,floor_rel_rms\n";
   std::vector<size_t> all_samples;
-  for (const Fill &f : tuned) {
+  for (const BenchFill &f : tuned) {
     const std::vector<size_t> s = floor_sample(f, settings.floor_records);
     all_samples.insert(all_samples.end(), s.begin(), s.end());
   }
   floor_refs.ensure(all_samples, scene, primary, settings);
-  for (const Fill &f : tuned) {
+  for (const BenchFill &f : tuned) {
     const std::vector<size_t> s = floor_sample(f, settings.floor_records);
     const double floor = gather_floor(s, bench.store(), floor_refs, bench.near_field(), bench.near_bins());
     floor_csv << metric_name(f.metric) << "," << s.size() << "," << floor << "\n";

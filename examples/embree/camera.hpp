@@ -41,4 +41,14 @@ class Camera {
 
 std::vector<Primary> primary_hits(const Scene &scene, const Camera &camera, unsigned threads);
 
+// Pixel indices of one level of a coarse-to-fine pass over a w x h image: the grid of step `step`
+// (16, 8, ..., 1) without the coarser grid's pixels (the coarsest level, 16, takes its whole grid).
+inline std::vector<size_t> level_pixels(int w, int h, int step) {
+  std::vector<size_t> level;
+  for (int y = 0; y < h; y += step)
+    for (int x = 0; x < w; x += step)
+      if (step == 16 || x % (2 * step) != 0 || y % (2 * step) != 0) level.push_back(static_cast<size_t>(y) * w + x);
+  return level;
+}
+
 }  // namespace rd

@@ -13,16 +13,6 @@
 namespace rd {
 namespace {
 
-// Pixel indices of one coarse-to-fine level: the grid of step `step` without the coarser grid's
-// pixels (the coarsest level, 16, takes its whole grid).
-std::vector<size_t> level_pixels(int w, int h, int step) {
-  std::vector<size_t> level;
-  for (int y = 0; y < h; y += step)
-    for (int x = 0; x < w; x += step)
-      if (step == 16 || x % (2 * step) != 0 || y % (2 * step) != 0) level.push_back(static_cast<size_t>(y) * w + x);
-  return level;
-}
-
 // The error-norm experiment: rec's radii (an occlusion-aware Hessian metric's) replaced by those
 // minimizing the image's L^p error at equal records (see BenchSettings::error_norm). The
 // library's radii a ~ (tau/|lambda|)^(1/4) (its anisotropy and curvature floor) are raised to the
@@ -60,11 +50,11 @@ struct FarGradients {
   float gradient[9], rotation_gradient[9];
 };
 
-// One fill (see fill_cache): its caches, the experiments' side caches, and what it measured.
+// One fill (see fill_bench_cache): its caches, the experiments' side caches, and what it measured.
 class CacheFill {
  public:
   CacheFill(const FillInputs &in, Metric m, double p, bool render);
-  Fill run();
+  BenchFill run();
 
  private:
   void check_combinations() const;
@@ -115,7 +105,7 @@ class CacheFill {
   std::vector<float> kept_noise_;
   std::unique_ptr<AdaptiveLookup> adaptive_lookup_;
   CpuSum cache_cpu_;
-  Fill out_;
+  BenchFill out_;
 };
 
 CacheFill::CacheFill(const FillInputs &in, Metric m, double p, bool render)
@@ -213,7 +203,7 @@ void CacheFill::make_side_caches() {
     }
 }
 
-Fill CacheFill::run() {
+BenchFill CacheFill::run() {
   place_records();
   if (smooth_) smooth_records();
   if (adaptive_) make_adaptive_lookup();
@@ -349,7 +339,8 @@ void CacheFill::insert_record(size_t pixel, const Evaluated &e, const raddiff_ca
                                     {rec.radii[0], rec.radii[1]},
                                     {rec.axes[0], rec.axes[1]},
                                     luminance(rec.value),
-                                    e.open_fraction});
+                                    e.open_fraction,
+                                    e.relative_noise});
   if (smooth_ || adaptive_) kept_.emplace_back(rec);
   if (adaptive_) kept_noise_.push_back(static_cast<float>(e.relative_noise));
   if (quadratic_) {
@@ -449,6 +440,6 @@ void CacheFill::render_image() {
 
 }  // namespace
 
-Fill fill_cache(const FillInputs &in, Metric m, double p, bool render) { return CacheFill(in, m, p, render).run(); }
+BenchFill fill_bench_cache(const FillInputs &in, Metric m, double p, bool render) { return CacheFill(in, m, p, render).run(); }
 
 }  // namespace rd

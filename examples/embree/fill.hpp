@@ -19,9 +19,10 @@ struct RecordInfo {
   raddiff_vec3 axes[2];
   double value;          // the luminance the cache interpolates (the far field under --near-field)
   double open_fraction;  // its gather's open fraction (1 without --near-field)
+  double relative_noise;  // its gather's (Evaluated::relative_noise)
 };
 
-struct Fill {
+struct BenchFill {
   Metric metric;
   double parameter = 0;
   std::vector<RecordInfo> records;
@@ -54,6 +55,6 @@ struct FillInputs {
 // pixels get records does not depend on the thread count: a level's candidates are the pixels the
 // cache misses when the level starts, taken in pixel order; gathers are computed in parallel, a
 // batch at a time, and inserted one by one after a second lookup.
-Fill fill_cache(const FillInputs &in, Metric m, double p, bool render);
+BenchFill fill_bench_cache(const FillInputs &in, Metric m, double p, bool render);
 
 }  // namespace rd

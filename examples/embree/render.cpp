@@ -80,14 +80,6 @@ raddiff_irradiance_settings settings_of(const RenderSettings &cfg) {
   return s;
 }
 
-std::vector<size_t> level_pixels(int w, int h, int step) {
-  std::vector<size_t> level;
-  for (int y = 0; y < h; y += step)
-    for (int x = 0; x < w; x += step)
-      if (step == 16 || x % (2 * step) != 0 || y % (2 * step) != 0) level.push_back(static_cast<size_t>(y) * w + x);
-  return level;
-}
-
 struct Fill {
   raddiff_cache *cache = nullptr;
   // per pixel, with a near-field reach: the near field of the call that filled it
