@@ -42,6 +42,7 @@ struct BenchSettings {
   // by k while the interpolation's bias grows as k^2, so their sum is least at k ~ (noise/bias)^(1/3).
   double adaptive_lookup = 0;
   double adaptive_lookup_max = 4;
+  double adaptive_lookup_exponent = 1.0 / 3.0;  // the power of s / s_median (1/3: the balance above)
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.
   int oracle_derivative_paths = 0;

@@ -381,7 +381,8 @@ void CacheFill::make_adaptive_lookup() {
   check(raddiff_cache_set_leak_guard(noise_cache.get(), irr_.leak_guard_relative, irr_.leak_guard_absolute),
         "raddiff_cache_set_leak_guard");
   adaptive_lookup_ = std::make_unique<AdaptiveLookup>(kept_, kept_noise_, settings_.adaptive_lookup,
-                                                      settings_.adaptive_lookup_max, [this] { return new_cache(); },
+                                                      settings_.adaptive_lookup_max, settings_.adaptive_lookup_exponent,
+                                                      [this] { return new_cache(); },
                                                       std::move(noise_cache));
 }
 
@@ -440,6 +441,8 @@ void CacheFill::render_image() {
 
 }  // namespace
 
-BenchFill fill_bench_cache(const FillInputs &in, Metric m, double p, bool render) { return CacheFill(in, m, p, render).run(); }
+BenchFill fill_bench_cache(const FillInputs &in, Metric m, double p, bool render) {
+  return CacheFill(in, m, p, render).run();
+}
 
 }  // namespace rd

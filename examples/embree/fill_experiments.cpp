@@ -92,7 +92,8 @@ void AdaptiveLookup::fill(const std::vector<KeptRecord> &kept, const std::vector
 raddiff_cache *AdaptiveLookup::rung(float blended_noise) {
   size_t r = 0;
   if (blended_noise > 0) {
-    const double k = std::clamp(k0_ * std::cbrt(blended_noise / median_), 1.0, std::exp2((ladder_.size() - 1) / 4.0));
+    const double kmax = std::exp2((ladder_.size() - 1) / 4.0);
+    const double k = std::clamp(k0_ * std::pow(blended_noise / median_, exponent_), 1.0, kmax);
     r = std::min(ladder_.size() - 1, static_cast<size_t>(std::lround(4 * std::log2(k))));
   }
   ++uses_[r];

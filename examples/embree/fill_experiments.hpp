@@ -57,15 +57,15 @@ double quadratic_term(const V3 &p, const float *b);
 
 // The adaptive-lookup experiment's caches (BenchSettings::adaptive_lookup): the records read at
 // every scale of a quarter-octave ladder from 1 to kmax, and a one-channel cache of their relative
-// noise (read at scale 1) that picks a pixel's rung.
+// noise (read at scale 1) that picks a pixel's rung, k0 (s / s_median)^exponent.
 class AdaptiveLookup {
  public:
   // `make_cache` returns an empty cache of the records' kind and state (guard, open-fraction test);
   // `noise_cache` is an empty one of a single channel. kept[i] has relative noise noise[i].
   template <class MakeCache>
   AdaptiveLookup(const std::vector<KeptRecord> &kept, const std::vector<float> &noise, double k0, double kmax,
-                 MakeCache make_cache, CachePtr noise_cache)
-      : k0_(k0), noise_(std::move(noise_cache)) {
+                 double exponent, MakeCache make_cache, CachePtr noise_cache)
+      : k0_(k0), exponent_(exponent), noise_(std::move(noise_cache)) {
     const int rungs = 1 + static_cast<int>(std::floor(4 * std::log2(std::clamp(kmax, 1.0, 8.0)) + 1e-9));
     for (int r = 0; r < rungs; ++r) ladder_.push_back(make_cache());
     fill(kept, noise);
@@ -88,7 +88,7 @@ class AdaptiveLookup {
   void fill(const std::vector<KeptRecord> &kept, const std::vector<float> &noise);
   raddiff_cache *rung(float blended_noise);
 
-  double k0_, median_ = 0;
+  double k0_, exponent_, median_ = 0;
   CachePtr noise_;
   std::vector<CachePtr> ladder_;
   std::vector<std::atomic<size_t>> uses_;

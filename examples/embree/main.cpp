@@ -41,7 +41,7 @@ const char *kUsage =
     "                      [--gradient-limit c (default 2, inf: off)] [--leak-guard relative,absolute]\n"
     "                      [--max-anisotropy r (default 2)] [--curvature-floor kappa (default 0.04)]\n"
     "                      [--lookup-scale k (records read over k times their radii, 1 to 8; default 1)]\n"
-    "                      [--adaptive-lookup k0[,kmax] (bench: each pixel's scale from the records' noise)]\n"
+    "                      [--adaptive-lookup k0[,kmax[,exponent]] (bench: scale per pixel from the noise)]\n"
     "  render mode:        [--accuracy a | --hessian relative_error] [--records N] [--neighbour-clamp]\n"
     "                      [--check pixels (default 96)] [--near-field reach_px[,rays]]\n"
     "  both, with --near-field: [--open-fraction-tolerance t (default inf: off)]\n"
@@ -123,11 +123,12 @@ int main(int argc, char **argv) {
       else if (a == "--lookup-scale")
         render.irradiance.lookup_radius_scale = bench.lookup_scale = std::stod(next());
       else if (a == "--adaptive-lookup") {
-        // k0[,kmax]
-        const std::string v = next();
-        const size_t comma = v.find(',');
-        bench.adaptive_lookup = std::stod(v.substr(0, comma));
-        if (comma != std::string::npos) bench.adaptive_lookup_max = std::stod(v.substr(comma + 1));
+        // k0[,kmax[,exponent]]
+        std::stringstream v(next());
+        std::string part;
+        double *fields[3] = {&bench.adaptive_lookup, &bench.adaptive_lookup_max, &bench.adaptive_lookup_exponent};
+        for (double *f : fields)
+          if (std::getline(v, part, ',')) *f = std::stod(part);
       } else if (a == "--second-order") bench.second_order = std::stod(next());
       else if (a == "--error-norm") bench.error_norm = std::stod(next());
       else if (a == "--far-field-gathers") bench.far_field_gathers = true;
