@@ -105,8 +105,10 @@ const Slot &GatherStore::get(size_t pixel) {
       // what the records would be with less noisy derivatives (an experiment; not timed).
       HitRadianceSettings averaged = settings_.radiance;
       averaged.paths = settings_.oracle_derivative_paths;
-      const TracedGather q = trace_gather(scene_, averaged, px.p, px.n, irr.gather_m, irr.gather_n,
-                                          reseeded(mix(1 + pixel) ^ 0x0facull, settings_.noise_seed));
+      TracedGather q = trace_gather(scene_, averaged, px.p, px.n, irr.gather_m, irr.gather_n,
+                                    reseeded(mix(1 + pixel) ^ 0x0facull, settings_.noise_seed));
+      // the same far-field gather as the records' (their derivatives must not see the near hits)
+      if (far_field_gather) fill_near_with_far(q, reach, settings_.near_at_reach);
       Evaluated o = evaluate_gather(q, needs_, irr);
       if (o.valid) {
         // The records' radii and derivatives from the averaged radiance, their values (and the
