@@ -43,6 +43,13 @@ struct BenchSettings {
   double adaptive_lookup = 0;
   double adaptive_lookup_max = 4;
   double adaptive_lookup_exponent = 1.0 / 3.0;  // the power of s / s_median (1/3: the balance above)
+  // > 0: the gradient-shrinkage experiment. Each record's translational gradients are multiplied
+  // by max(0, 1 - gradient_shrinkage * v / |g|^2), g the Ward-Heckbert gradient of its gather's
+  // luminance and v that gradient's variance under the strata's own noise: the gradient is linear
+  // in the strata's radiance, so v is the mean of |gradient|^2 over 8 gathers whose radiance is
+  // each stratum's noise amplitude (as Evaluated::relative_noise estimates it) with a random sign.
+  // At 1, the empirical Wiener factor (|g|^2 - v) / |g|^2.
+  double gradient_shrinkage = 0;
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.
   int oracle_derivative_paths = 0;

@@ -295,13 +295,16 @@ void CacheFill::add_record(size_t pixel) {
 void CacheFill::adjust_record(size_t pixel, const Evaluated &e, raddiff_cache_record &rec, FarGradients &far) const {
   if (!settings_.record_gradients) rec.gradient = rec.rotation_gradient = nullptr;
   if (open_test_) rec.open_fraction = &e.open_fraction;
-  if (settings_.near_field_px > 0) {
-    // The far field's record: its value, and the gather's gradients in the same ratio.
-    rec.value = e.far_value;
+  if (settings_.near_field_px > 0 || e.gradient_shrink != 1) {
+    // The far field's record: its value, and the gather's gradients in the same ratio (the
+    // translational ones shrunk by the gradient-shrinkage experiment's factor).
+    if (settings_.near_field_px > 0) rec.value = e.far_value;
     for (int c = 0; c < 3; ++c) {
-      const double ratio = e.value[c] > 0 ? e.far_value[c] / e.value[c] : 0.0;
+      const double ratio =
+          settings_.near_field_px <= 0 ? 1.0 : e.value[c] > 0 ? e.far_value[c] / e.value[c] : 0.0;
       for (int k = 0; k < 3; ++k) {
-        if (rec.gradient) far.gradient[3 * c + k] = static_cast<float>(rec.gradient[3 * c + k] * ratio);
+        if (rec.gradient)
+          far.gradient[3 * c + k] = static_cast<float>(rec.gradient[3 * c + k] * ratio * e.gradient_shrink);
         if (rec.rotation_gradient)
           far.rotation_gradient[3 * c + k] = static_cast<float>(rec.rotation_gradient[3 * c + k] * ratio);
       }

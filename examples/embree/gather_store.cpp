@@ -1,6 +1,7 @@
 #include "gather_store.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <string>
@@ -80,6 +81,42 @@ double relative_noise(const TracedGather &g) {
   return sum > 0 ? std::sqrt(squares) / sum : 0.0;
 }
 
+// The Ward-Heckbert gradient (world axes) of one value per direction of `g`.
+std::array<double, 3> scalar_gradient(const TracedGather &g, const std::vector<float> &values) {
+  raddiff_gather_input input{};
+  input.directions = g.directions.data();
+  input.distance = g.distance.data();
+  input.radiance = values.data();
+  input.channels = 1;
+  std::array<double, 3> gradient{};
+  raddiff_gather_output output{};
+  output.gradient = gradient.data();
+  check(raddiff_gather_evaluate(&g.layout, &g.frame, &input, &output), "raddiff_gather_evaluate");
+  return gradient;
+}
+
+// The gradient-shrinkage experiment's factor (BenchSettings::gradient_shrinkage) for gather `g`.
+double gradient_shrink(const TracedGather &g, double shrinkage, uint64_t seed) {
+  const uint32_t m = g.layout.m, n = g.layout.n;
+  std::vector<float> lum(g.distance.size()), amplitude(g.distance.size()), probe(g.distance.size());
+  for (size_t i = 0; i < lum.size(); ++i) lum[i] = static_cast<float>(luminance(&g.radiance[3 * i]));
+  for (uint32_t j = 0; j < m; ++j)
+    for (uint32_t k = 0; k < n; ++k)
+      amplitude[j * n + k] = std::abs(lum[j * n + k] - lum[j * n + (k + 1) % n]) / std::sqrt(2.0f);
+  const std::array<double, 3> g0 = scalar_gradient(g, lum);
+  const double signal = g0[0] * g0[0] + g0[1] * g0[1] + g0[2] * g0[2];
+  if (!(signal > 0)) return 1.0;
+  constexpr int kProbes = 8;
+  double variance = 0;
+  for (int p = 0; p < kProbes; ++p) {
+    for (size_t i = 0; i < probe.size(); ++i)
+      probe[i] = (mix(seed ^ mix(p * probe.size() + i)) & 1) ? amplitude[i] : -amplitude[i];
+    const std::array<double, 3> noise = scalar_gradient(g, probe);
+    variance += (noise[0] * noise[0] + noise[1] * noise[1] + noise[2] * noise[2]) / kProbes;
+  }
+  return std::max(0.0, 1.0 - shrinkage * variance / signal);
+}
+
 }  // namespace
 
 const Slot &GatherStore::get(size_t pixel) {
@@ -121,6 +158,8 @@ const Slot &GatherStore::get(size_t pixel) {
     }
     if (settings_.near_field_px > 0) split_far_field(g, reach, open, *s.evaluated, far_field_gather);
     s.evaluated->relative_noise = relative_noise(g);
+    if (settings_.gradient_shrinkage > 0 && s.evaluated->valid)
+      s.evaluated->gradient_shrink = gradient_shrink(g, settings_.gradient_shrinkage, mix(pixel ^ 0x5471ull));
     ++computed_;
   });
   return s;

@@ -67,6 +67,9 @@ struct Evaluated {
   // The adaptive-lookup experiment: the standard error of the record's value (its far field under
   // the near field) relative to that value, from the gather's own strata (0 for a black gather).
   double relative_noise = 0;
+  // The gradient-shrinkage experiment (BenchSettings::gradient_shrinkage): the factor in [0, 1]
+  // the records' translational gradients are multiplied by (1 when off).
+  double gradient_shrink = 1;
 };
 
 // `settings` gives the channels and their weights.
