@@ -309,6 +309,9 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
     throw std::runtime_error("--near-at-reach needs --far-field-gathers");
   if (settings.far_field_gathers && settings.near_field_px <= 0)
     throw std::runtime_error("--far-field-gathers needs --near-field");
+  if (settings.gradient_shrinkage > 0 && settings.oracle_derivative_paths > 0)
+    throw std::runtime_error("--gradient-shrinkage does not combine with --oracle-derivatives (its noise "
+                             "estimate is the usual gather's, the gradients the averaged one's)");
   const double wall0 = process_cpu_seconds();
   Bench bench(scene, view, settings);
   const std::vector<Primary> &primary = bench.primary();

@@ -99,10 +99,9 @@ class CacheFill {
   // gradients; one per band of open fraction, as the records').
   std::vector<CachePtr> binned_caches_;
   // The inserted records, kept for the smoothing and adaptive-lookup experiments (their values
-  // and open fractions point into the store's evaluations, which outlive the fill), and the
-  // latter's relative noise of each.
+  // and open fractions point into the store's evaluations, which outlive the fill), in the order
+  // of out_.records.
   std::vector<KeptRecord> kept_;
-  std::vector<float> kept_noise_;
   std::unique_ptr<AdaptiveLookup> adaptive_lookup_;
   CpuSum cache_cpu_;
   BenchFill out_;
@@ -345,7 +344,6 @@ void CacheFill::insert_record(size_t pixel, const Evaluated &e, const raddiff_ca
                                     e.open_fraction,
                                     e.relative_noise});
   if (smooth_ || adaptive_) kept_.emplace_back(rec);
-  if (adaptive_) kept_noise_.push_back(static_cast<float>(e.relative_noise));
   if (quadratic_) {
     if (!e.evaluation[1]) throw std::runtime_error("--second-order needs an occlusion-aware Hessian metric");
     raddiff_gather_summary summary{};
@@ -383,7 +381,9 @@ void CacheFill::make_adaptive_lookup() {
   CachePtr noise_cache = with_cache_state(surface_cache(kernel_, irr_.gradient_limit, 1, false));
   check(raddiff_cache_set_leak_guard(noise_cache.get(), irr_.leak_guard_relative, irr_.leak_guard_absolute),
         "raddiff_cache_set_leak_guard");
-  adaptive_lookup_ = std::make_unique<AdaptiveLookup>(kept_, kept_noise_, settings_.adaptive_lookup,
+  std::vector<float> noise;
+  for (const RecordInfo &r : out_.records) noise.push_back(static_cast<float>(r.relative_noise));
+  adaptive_lookup_ = std::make_unique<AdaptiveLookup>(kept_, noise, settings_.adaptive_lookup,
                                                       settings_.adaptive_lookup_max, settings_.adaptive_lookup_exponent,
                                                       [this] { return new_cache(); },
                                                       std::move(noise_cache));

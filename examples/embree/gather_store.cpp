@@ -63,20 +63,34 @@ void split_far_field(const TracedGather &g, double reach, double open, Evaluated
         e.open_fraction > 0 ? static_cast<float>(std::max(0.0, (e.value[c] - near[c]) / e.open_fraction)) : 0.0f;
 }
 
-// The standard error of the gather's mean luminance relative to that mean, from the differences
-// of azimuthal neighbours: a stratified estimate's variance is the sum of its strata's variances
-// over (m n)^2, and the stratum pair (j, k), (j, k + 1) estimates one stratum's as half its squared
-// difference (an overestimate by the signal's own change between neighbours, small at 128
-// azimuthal strata). 0 for a black gather.
+// Each direction's luminance of `g`, as T.
+template <class T>
+std::vector<T> luminances(const TracedGather &g) {
+  std::vector<T> lum(g.distance.size());
+  for (size_t i = 0; i < lum.size(); ++i) lum[i] = static_cast<T>(luminance(&g.radiance[3 * i]));
+  return lum;
+}
+
+// Stratum (j, k)'s value minus its azimuthal neighbour's, (j, k + 1 mod n), in an m x n layout:
+// a stratum's noise is estimated as half the square of this difference (an overestimate by the
+// signal's own change between neighbours, small at 128 azimuthal strata).
+template <class T>
+T azimuthal_difference(const std::vector<T> &values, uint32_t n, uint32_t j, uint32_t k) {
+  return values[j * n + k] - values[j * n + (k + 1) % n];
+}
+
+// The standard error of the gather's mean luminance relative to that mean: a stratified
+// estimate's variance is the sum of its strata's variances over (m n)^2, each from
+// azimuthal_difference. 0 for a black gather.
 double relative_noise(const TracedGather &g) {
   const uint32_t m = g.layout.m, n = g.layout.n;
+  const std::vector<double> lum = luminances<double>(g);
   double sum = 0, squares = 0;
   for (uint32_t j = 0; j < m; ++j)
     for (uint32_t k = 0; k < n; ++k) {
-      const double l = luminance(&g.radiance[3 * (j * n + k)]);
-      const double next = luminance(&g.radiance[3 * (j * n + (k + 1) % n)]);
-      sum += l;
-      squares += 0.5 * (l - next) * (l - next);
+      const double d = azimuthal_difference(lum, n, j, k);
+      sum += lum[j * n + k];
+      squares += 0.5 * d * d;
     }
   return sum > 0 ? std::sqrt(squares) / sum : 0.0;
 }
@@ -98,11 +112,11 @@ std::array<double, 3> scalar_gradient(const TracedGather &g, const std::vector<f
 // The gradient-shrinkage experiment's factor (BenchSettings::gradient_shrinkage) for gather `g`.
 double gradient_shrink(const TracedGather &g, double shrinkage, uint64_t seed) {
   const uint32_t m = g.layout.m, n = g.layout.n;
-  std::vector<float> lum(g.distance.size()), amplitude(g.distance.size()), probe(g.distance.size());
-  for (size_t i = 0; i < lum.size(); ++i) lum[i] = static_cast<float>(luminance(&g.radiance[3 * i]));
+  const std::vector<float> lum = luminances<float>(g);
+  std::vector<float> amplitude(lum.size()), probe(lum.size());
   for (uint32_t j = 0; j < m; ++j)
     for (uint32_t k = 0; k < n; ++k)
-      amplitude[j * n + k] = std::abs(lum[j * n + k] - lum[j * n + (k + 1) % n]) / std::sqrt(2.0f);
+      amplitude[j * n + k] = std::abs(azimuthal_difference(lum, n, j, k)) / std::sqrt(2.0f);
   const std::array<double, 3> g0 = scalar_gradient(g, lum);
   const double signal = g0[0] * g0[0] + g0[1] * g0[1] + g0[2] * g0[2];
   if (!(signal > 0)) return 1.0;

@@ -64,8 +64,9 @@ struct Evaluated {
   // radiance of the gather's open rays in the bin minus the mean over all its open rays, shrunk
   // towards 0 by n_b / (n_b + 16) for a bin of n_b rays (0 for an empty bin).
   float far_bins[3 * kDirBins] = {};
-  // The adaptive-lookup experiment: the standard error of the record's value (its far field under
-  // the near field) relative to that value, from the gather's own strata (0 for a black gather).
+  // The adaptive-lookup experiment: the standard error of the gather's mean luminance relative to
+  // that mean, from its own strata (0 for a black gather). With far-field gathers it is the far
+  // field's, the record's value; otherwise the whole gather's.
   double relative_noise = 0;
   // The gradient-shrinkage experiment (BenchSettings::gradient_shrinkage): the factor in [0, 1]
   // the records' translational gradients are multiplied by (1 when off).
