@@ -296,9 +296,8 @@ long max_rss_mib() {
   return u.ru_maxrss / 1024;
 }
 
-}  // namespace
-
-int run_bench(const Scene &scene, const View &view, const std::string &scene_key, const BenchSettings &settings) {
+// The option combinations the bench refuses, with the reason.
+void check_combinations(const BenchSettings &settings) {
   if (settings.far_field_bins && settings.near_field_px <= 0)
     throw std::runtime_error("--far-field-bins needs --near-field");
   if (settings.open_fraction_bands > 0 && settings.near_field_px <= 0)
@@ -309,62 +308,57 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
     throw std::runtime_error("--near-at-reach needs --far-field-gathers");
   if (settings.far_field_gathers && settings.near_field_px <= 0)
     throw std::runtime_error("--far-field-gathers needs --near-field");
-  if (settings.gradient_shrinkage > 0 && settings.oracle_derivative_paths > 0)
-    throw std::runtime_error("--gradient-shrinkage does not combine with --oracle-derivatives (its noise "
-                             "estimate is the usual gather's, the gradients the averaged one's)");
-  const double wall0 = process_cpu_seconds();
-  Bench bench(scene, view, settings);
-  const std::vector<Primary> &primary = bench.primary();
-  const size_t pixels = static_cast<size_t>(view.width) * view.height;
-  const size_t target = settings.target_records ? settings.target_records : std::max<size_t>(16, pixels / 32);
+  if ((settings.gradient_shrinkage > 0 || settings.hessian_shrinkage > 0) && settings.oracle_derivative_paths > 0)
+    throw std::runtime_error("--gradient-shrinkage and --hessian-shrinkage do not combine with --oracle-derivatives "
+                             "(their noise estimate is the usual gather's, the derivatives the averaged one's)");
+  if (settings.hessian_shrinkage > 0 && settings.error_norm > 0)
+    throw std::runtime_error("--hessian-shrinkage does not combine with --error-norm (which solves its own radii)");
+}
 
-  // The converged reference.
-  const Reference ref = reference(scene, primary, view, settings.radiance, settings.reference, scene_key,
-                                  settings.threads);
-  const double ref_mean = [&] {
-    double s = 0;
-    for (const ReferencePixel &p : ref.pixels) s += luminance(p.value());
-    return ref.pixels.empty() ? 1.0 : s / ref.pixels.size();
-  }();
-  std::printf("reference: %zu pixels, %u rays each, relative noise %.5f (%s)\n", ref.pixels.size(),
-              settings.reference.rays, ref.relative_noise(),
-              ref.loaded ? ("loaded from " + ref.file).c_str() : ("computed in " + fmt("%.0f", ref.seconds) + " CPU s").c_str());
-  {
-    std::ofstream out(settings.out + "-measured.csv");
-    out << "pixel,x,y,reference,noise\n";
-    for (const ReferencePixel &p : ref.pixels)
-      out << p.pixel << "," << p.pixel % view.width << "," << p.pixel / view.width << "," << luminance(p.value()) << ","
-          << 0.5 * std::abs(luminance(p.half[0]) - luminance(p.half[1])) << "\n";
-  }
-  Image ref_blocks(view.width, view.height);  // the reference at the measured pixels, for the exposure
+// What the images and the summary take from the reference: its mean luminance, and the exposure
+// that maps its 99th percentile to 0.9.
+struct ReferenceScale {
+  double mean = 1;
+  double exposure = 1;
+};
+
+// Writes `<out>-measured.csv` (each measured pixel's reference and the noise of its two halves).
+ReferenceScale write_reference(const Reference &ref, const View &view, const BenchSettings &settings) {
+  std::ofstream out(settings.out + "-measured.csv");
+  out << "pixel,x,y,reference,noise\n";
+  std::vector<double> l;
+  double sum = 0;
   for (const ReferencePixel &p : ref.pixels) {
-    const V3 v = p.value();
-    ref_blocks.at(p.pixel)[0] = static_cast<float>(v.x);
-    ref_blocks.at(p.pixel)[1] = static_cast<float>(v.y);
-    ref_blocks.at(p.pixel)[2] = static_cast<float>(v.z);
+    out << p.pixel << "," << p.pixel % view.width << "," << p.pixel / view.width << "," << luminance(p.value()) << ","
+        << 0.5 * std::abs(luminance(p.half[0]) - luminance(p.half[1])) << "\n";
+    l.push_back(luminance(p.value()));
+    sum += l.back();
   }
-  const double exposure = [&] {
-    std::vector<double> l;
-    for (const ReferencePixel &p : ref.pixels) l.push_back(luminance(p.value()));
-    return 0.9 / std::max(1e-12, percentile(l, 0.99));
-  }();
+  ReferenceScale scale;
+  scale.mean = ref.pixels.empty() ? 1.0 : sum / ref.pixels.size();
+  scale.exposure = 0.9 / std::max(1e-12, percentile(l, 0.99));
+  return scale;
+}
 
-  // A measured pixel's open fraction, from its near field (1 without one).
-  const auto pixel_open_fraction = [&](size_t p) {
-    return settings.near_field_px > 0 ? static_cast<double>(bench.near_field()[p][3]) : 1.0;
-  };
+// Pixel p's open fraction, from its near field (1 without one).
+double pixel_open_fraction(Bench &bench, const BenchSettings &settings, size_t p) {
+  return settings.near_field_px > 0 ? static_cast<double>(bench.near_field()[p][3]) : 1.0;
+}
 
+// The fills of every metric at equal records (tuned) and over the threshold sweep around it,
+// written to `<out>-fills.csv` and, for the equal-records fills, to their images and CSVs.
+struct Sweep {
+  std::vector<BenchFill> tuned;  // one per metric, at equal records
+  double longest = 0;            // CPU seconds of the costliest fill
+  bool ok = true;                // every fill covered every pixel with finite, non-negative values
+};
+Sweep sweep_metrics(Bench &bench, const Reference &ref, const View &view, const BenchSettings &settings,
+                    size_t target, double exposure) {
+  const std::vector<Primary> &primary = bench.primary();
   std::ofstream fills(settings.out + "-fills.csv");
   fills << "metric,parameter,records,equal_records,trace_s,raddiff_s,cache_s,total_s,rel_rms,rms,worst1_share,"
            "radius_px_min,radius_px_p5,radius_px_median,radius_px_p95,uncovered,non_finite,negative\n";
-  bool ok = true;
-  std::vector<BenchFill> tuned;
-  double longest = 0;
-  FloorReferences floor_refs(settings.reference.cache_dir.empty()
-                                 ? std::string()
-                                 : settings.reference.cache_dir + "/floor-" +
-                                       fmt("%.0f", static_cast<double>(settings.floor_rays)) + "-" +
-                                       (ref.file.empty() ? std::string("x") : ref.file.substr(ref.file.rfind('-') + 1)));
+  Sweep sweep;
   for (Metric m : settings.metrics) {
     std::printf("%s: tuning to %zu records\n", metric_name(m), target);
     std::fflush(stdout);
@@ -378,7 +372,7 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
       const Measured err = measure(f.image, ref);
       const std::vector<double> rpx = radii_in_pixels(f, primary);
       const bool equal = k == 0;
-      ok = ok && f.uncovered == 0 && f.non_finite == 0 && f.negative == 0 && !f.records.empty();
+      sweep.ok = sweep.ok && f.uncovered == 0 && f.non_finite == 0 && f.negative == 0 && !f.records.empty();
       fills << metric_name(m) << "," << pk << "," << f.records.size() << "," << equal << "," << f.trace_seconds << ","
             << f.raddiff_seconds << "," << f.cache_seconds << "," << f.total_seconds() << "," << err.rel_rms << ","
             << err.rms << "," << err.worst_share << "," << percentile(rpx, 0) << "," << percentile(rpx, 0.05) << ","
@@ -390,7 +384,7 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
                   metric_name(m), pk, f.records.size(), f.total_seconds(), f.trace_seconds, f.raddiff_seconds,
                   f.cache_seconds, err.rel_rms, err.worst_share);
       std::fflush(stdout);
-      longest = std::max(longest, f.total_seconds());
+      sweep.longest = std::max(sweep.longest, f.total_seconds());
       if (equal) {
         const std::string prefix = settings.out + "-" + metric_name(m);
         write_images(prefix, f.image, exposure);
@@ -398,16 +392,25 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
         std::ofstream px(prefix + "-pixels.csv");
         px << "pixel,x,y,value,reference,error,open_fraction\n";
         for (size_t i = 0; i < ref.pixels.size(); ++i) {
-          const size_t p = ref.pixels[i].pixel;
-          px << p << "," << p % view.width << "," << p / view.width << "," << luminance(f.image.at(p)) << ","
-             << luminance(ref.pixels[i].value()) << "," << err.errors[i] << "," << pixel_open_fraction(p) << "\n";
+          const size_t q = ref.pixels[i].pixel;
+          px << q << "," << q % view.width << "," << q / view.width << "," << luminance(f.image.at(q)) << ","
+             << luminance(ref.pixels[i].value()) << "," << err.errors[i] << "," << pixel_open_fraction(bench, settings, q) << "\n";
         }
-        tuned.push_back(std::move(f));
+        sweep.tuned.push_back(std::move(f));
       }
     }
   }
+  return sweep;
+}
 
-  // The gathers' own error at the records of each equal-records cache.
+// The gathers' own error at the records of each equal-records cache (`<out>-floor.csv`).
+void write_floors(Bench &bench, const std::vector<BenchFill> &tuned, const Scene &scene, const Reference &ref,
+                  const BenchSettings &settings) {
+  FloorReferences floor_refs(settings.reference.cache_dir.empty()
+                                 ? std::string()
+                                 : settings.reference.cache_dir + "/floor-" +
+                                       fmt("%.0f", static_cast<double>(settings.floor_rays)) + "-" +
+                                       (ref.file.empty() ? std::string("x") : ref.file.substr(ref.file.rfind('-') + 1)));
   std::ofstream floor_csv(settings.out + "-floor.csv");
   floor_csv << "metric,records_sampled,floor_rel_rms\n";
   std::vector<size_t> all_samples;
@@ -415,7 +418,7 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
     const std::vector<size_t> s = floor_sample(f, settings.floor_records);
     all_samples.insert(all_samples.end(), s.begin(), s.end());
   }
-  floor_refs.ensure(all_samples, scene, primary, settings);
+  floor_refs.ensure(all_samples, scene, bench.primary(), settings);
   for (const BenchFill &f : tuned) {
     const std::vector<size_t> s = floor_sample(f, settings.floor_records);
     const double floor = gather_floor(s, bench.store(), floor_refs, bench.near_field(), bench.near_bins());
@@ -423,57 +426,83 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
     std::printf("floor %-22s %.4f (gathers of %zu records against converged irradiance)\n", metric_name(f.metric),
                 floor, s.size());
   }
+}
 
-  // Every measured pixel shown from its own gather, no cache: the error no record placement removes
-  // (the gathers' and near fields' noise, the near/far decomposition's bias, the reference's noise).
-  double pixel_gathers_error = -1;
-  if (settings.pixel_gathers) {
-    std::vector<size_t> measured;
-    for (const ReferencePixel &r : ref.pixels) measured.push_back(r.pixel);
-    bench.store().ensure(measured);
-    std::ofstream px(settings.out + "-pixel-gathers-pixels.csv");
-    px << "pixel,x,y,value,reference,error,open_fraction\n";
-    const std::vector<std::array<float, 4>> &near = bench.near_field();
-    const std::vector<std::array<float, kDirBins>> &near_bins = bench.near_bins();
-    double e2 = 0, r2 = 0;
-    size_t degenerate = 0;  // gathers raddiff found degenerate: shown with a zero far field
-    for (const ReferencePixel &r : ref.pixels) {
-      const size_t p = r.pixel;
-      const Evaluated &g = *bench.store().get(p).evaluated;
-      degenerate += !g.valid;
-      const double shown = shown_from_own_gather(p, g, near, near_bins);
-      const double reference_value = luminance(r.value());
-      e2 += (shown - reference_value) * (shown - reference_value);
-      r2 += reference_value * reference_value;
-      px << p << "," << p % view.width << "," << p / view.width << "," << shown << "," << reference_value << ","
-         << shown - reference_value << "," << pixel_open_fraction(p) << "\n";
-    }
-    pixel_gathers_error = r2 > 0 ? std::sqrt(e2 / r2) : 0;
-    std::printf("pixel gathers: every measured pixel from its own gather, error %.4f (%zu degenerate)\n",
-                pixel_gathers_error, degenerate);
+// Every measured pixel shown from its own gather, no cache: the error no record placement removes
+// (the gathers' and near fields' noise, the near/far decomposition's bias, the reference's noise).
+// Writes `<out>-pixel-gathers-pixels.csv`; returns the relative RMS error.
+double pixel_gathers_error(Bench &bench, const Reference &ref, const View &view, const BenchSettings &settings) {
+  std::vector<size_t> measured;
+  for (const ReferencePixel &r : ref.pixels) measured.push_back(r.pixel);
+  bench.store().ensure(measured);
+  std::ofstream px(settings.out + "-pixel-gathers-pixels.csv");
+  px << "pixel,x,y,value,reference,error,open_fraction\n";
+  const std::vector<std::array<float, 4>> &near = bench.near_field();
+  const std::vector<std::array<float, kDirBins>> &near_bins = bench.near_bins();
+  double e2 = 0, r2 = 0;
+  size_t degenerate = 0;  // gathers raddiff found degenerate: shown with a zero far field
+  for (const ReferencePixel &r : ref.pixels) {
+    const size_t p = r.pixel;
+    const Evaluated &g = *bench.store().get(p).evaluated;
+    degenerate += !g.valid;
+    const double shown = shown_from_own_gather(p, g, near, near_bins);
+    const double reference_value = luminance(r.value());
+    e2 += (shown - reference_value) * (shown - reference_value);
+    r2 += reference_value * reference_value;
+    px << p << "," << p % view.width << "," << p / view.width << "," << shown << "," << reference_value << ","
+       << shown - reference_value << "," << pixel_open_fraction(bench, settings, p) << "\n";
   }
+  const double error = r2 > 0 ? std::sqrt(e2 / r2) : 0;
+  std::printf("pixel gathers: every measured pixel from its own gather, error %.4f (%zu degenerate)\n", error,
+              degenerate);
+  return error;
+}
 
+// Path tracing the indirect irradiance per pixel, up to 1.3 times `longest` CPU seconds: its
+// snapshots' errors in `<out>-pt.csv`, their images beside it.
+void write_path_tracing(const Scene &scene, const std::vector<Primary> &primary, const Reference &ref,
+                        const View &view, const BenchSettings &settings, double longest, double exposure) {
+  write_pfm(settings.out + "-albedo.pfm", albedo_buffer(scene, primary, view));
+  std::ofstream pt(settings.out + "-pt.csv");
+  pt << "spp,cpu_s,rays,rel_rms,rms,worst1_share,file\n";
+  path_trace(scene, primary, view, settings.radiance, settings.path_trace_max_spp, 1.3 * longest, settings.threads,
+             [&](const PathTraceSnapshot &s) {
+               const Measured err = measure(s.image, ref);
+               const std::string file = settings.out + "-pt-spp" + std::to_string(s.spp);
+               write_pfm(file + ".pfm", s.image);
+               if (s.spp == 1 || s.cpu_seconds > longest) write_png(file + ".png", s.image, exposure);
+               pt << s.spp << "," << s.cpu_seconds << "," << s.rays << "," << err.rel_rms << "," << err.rms << ","
+                  << err.worst_share << "," << file << ".pfm\n";
+               pt.flush();
+               std::printf("path tracing: %5u spp  %7.2f CPU s  error %.4f\n", s.spp, s.cpu_seconds, err.rel_rms);
+               std::fflush(stdout);
+             });
+}
+
+}  // namespace
+
+int run_bench(const Scene &scene, const View &view, const std::string &scene_key, const BenchSettings &settings) {
+  check_combinations(settings);
+  const double wall0 = process_cpu_seconds();
+  Bench bench(scene, view, settings);
+  const std::vector<Primary> &primary = bench.primary();
+  const size_t pixels = static_cast<size_t>(view.width) * view.height;
+  const size_t target = settings.target_records ? settings.target_records : std::max<size_t>(16, pixels / 32);
+
+  // The converged reference.
+  const Reference ref = reference(scene, primary, view, settings.radiance, settings.reference, scene_key,
+                                  settings.threads);
+  std::printf("reference: %zu pixels, %u rays each, relative noise %.5f (%s)\n", ref.pixels.size(),
+              settings.reference.rays, ref.relative_noise(),
+              ref.loaded ? ("loaded from " + ref.file).c_str() : ("computed in " + fmt("%.0f", ref.seconds) + " CPU s").c_str());
+  const ReferenceScale scale = write_reference(ref, view, settings);
+
+  const Sweep sweep = sweep_metrics(bench, ref, view, settings, target, scale.exposure);
+  write_floors(bench, sweep.tuned, scene, ref, settings);
+  const double pixel_gathers = settings.pixel_gathers ? pixel_gathers_error(bench, ref, view, settings) : -1;
   // The primary hits' normals: the denoiser's guide, and where the report finds geometric edges.
   write_pfm(settings.out + "-normal.pfm", normal_buffer(primary, view));
-
-  // Path tracing the indirect irradiance per pixel, up to past the costliest cache.
-  if (settings.path_trace) {
-    write_pfm(settings.out + "-albedo.pfm", albedo_buffer(scene, primary, view));
-    std::ofstream pt(settings.out + "-pt.csv");
-    pt << "spp,cpu_s,rays,rel_rms,rms,worst1_share,file\n";
-    path_trace(scene, primary, view, settings.radiance, settings.path_trace_max_spp, 1.3 * longest, settings.threads,
-               [&](const PathTraceSnapshot &s) {
-                 const Measured err = measure(s.image, ref);
-                 const std::string file = settings.out + "-pt-spp" + std::to_string(s.spp);
-                 write_pfm(file + ".pfm", s.image);
-                 if (s.spp == 1 || s.cpu_seconds > longest) write_png(file + ".png", s.image, exposure);
-                 pt << s.spp << "," << s.cpu_seconds << "," << s.rays << "," << err.rel_rms << "," << err.rms << ","
-                    << err.worst_share << "," << file << ".pfm\n";
-                 pt.flush();
-                 std::printf("path tracing: %5u spp  %7.2f CPU s  error %.4f\n", s.spp, s.cpu_seconds, err.rel_rms);
-                 std::fflush(stdout);
-               });
-  }
+  if (settings.path_trace) write_path_tracing(scene, primary, ref, view, settings, sweep.longest, scale.exposure);
 
   std::ofstream summary(settings.out + "-summary.csv");
   summary << "key,value\n"
@@ -482,19 +511,19 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
           << settings.irradiance.gather_n
           << "\nhit_radiance," << settings.radiance.describe() << "\ntarget_records," << target
           << "\nmeasured_pixels," << ref.pixels.size() << "\nreference_grid," << settings.reference.grid << "\nreference_rays," << settings.reference.rays
-          << "\nreference_relative_noise," << ref.relative_noise() << "\nreference_mean," << ref_mean
+          << "\nreference_relative_noise," << ref.relative_noise() << "\nreference_mean," << scale.mean
           << "\ngathers_computed," << bench.store().computed() << "\nmax_rss_mib," << max_rss_mib()
-          << "\nprocess_cpu_s," << process_cpu_seconds() - wall0 << "\nexposure," << exposure << "\nreference_cpu_s," << ref.seconds
+          << "\nprocess_cpu_s," << process_cpu_seconds() - wall0 << "\nexposure," << scale.exposure << "\nreference_cpu_s," << ref.seconds
           << "\nreference_loaded," << ref.loaded << "\ngradient_limit," << settings.irradiance.gradient_limit
           << "\nleak_guard," << settings.irradiance.leak_guard_relative << " " << settings.irradiance.leak_guard_absolute
           << "\nradius_bounds," << settings.irradiance.world_radius_min << " " << settings.irradiance.world_radius_max
           << " " << settings.irradiance.pixel_radius_min << " " << settings.irradiance.pixel_radius_max
           << "\nopen_fraction_tolerance," << settings.open_fraction_tolerance
-          << "\nlookup_radius_scale," << settings.lookup_scale << "\nnoise_seed," << settings.noise_seed << "\npixel_gathers_rel_rms," << pixel_gathers_error << "\n";
+          << "\nlookup_radius_scale," << settings.lookup_scale << "\nnoise_seed," << settings.noise_seed << "\npixel_gathers_rel_rms," << pixel_gathers << "\n";
   std::printf("bench: %zu gathers computed, max RSS %ld MiB, %.0f CPU s\n", bench.store().computed(), max_rss_mib(),
               process_cpu_seconds() - wall0);
-  std::printf("%s\n", ok ? "OK" : "FAILED");
-  return ok ? 0 : 1;
+  std::printf("%s\n", sweep.ok ? "OK" : "FAILED");
+  return sweep.ok ? 0 : 1;
 }
 
 }  // namespace rd

@@ -50,6 +50,11 @@ struct BenchSettings {
   // each stratum's noise amplitude (as Evaluated::relative_noise estimates it) with a random sign.
   // At 1, the empirical Wiener factor (|g|^2 - v) / |g|^2.
   double gradient_shrinkage = 0;
+  // > 0: the Hessian-shrinkage experiment. The Hessian metrics' radii are solved for their
+  // Hessian times max(1e-3, 1 - hessian_shrinkage * v / |H|^2), H the tangent projection of the
+  // occlusion-aware Hessian of the gather's luminance and v its variance under the strata's noise
+  // (the same probes as gradient_shrinkage): curvature the noise explains does not shrink radii.
+  double hessian_shrinkage = 0;
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.
   int oracle_derivative_paths = 0;

@@ -95,8 +95,10 @@ double relative_noise(const TracedGather &g) {
   return sum > 0 ? std::sqrt(squares) / sum : 0.0;
 }
 
-// The Ward-Heckbert gradient (world axes) of one value per direction of `g`.
-std::array<double, 3> scalar_gradient(const TracedGather &g, const std::vector<float> &values) {
+// The derivatives of one value per direction of `g`: the Ward-Heckbert gradient (world axes) and
+// the occlusion-aware Hessian (3x3, row-major; computed only when `hessian` is not null).
+std::array<double, 3> scalar_derivatives(const TracedGather &g, const std::vector<float> &values,
+                                         double *hessian = nullptr) {
   raddiff_gather_input input{};
   input.directions = g.directions.data();
   input.distance = g.distance.data();
@@ -105,30 +107,65 @@ std::array<double, 3> scalar_gradient(const TracedGather &g, const std::vector<f
   std::array<double, 3> gradient{};
   raddiff_gather_output output{};
   output.gradient = gradient.data();
+  output.hessian = hessian;
   check(raddiff_gather_evaluate(&g.layout, &g.frame, &input, &output), "raddiff_gather_evaluate");
   return gradient;
 }
 
-// The gradient-shrinkage experiment's factor (BenchSettings::gradient_shrinkage) for gather `g`.
-double gradient_shrink(const TracedGather &g, double shrinkage, uint64_t seed) {
+// Squared Frobenius norm of the 3x3 row-major `h` projected on the plane of unit normal `n`,
+// (I - n n^T) h (I - n n^T): the part of a Hessian the surface radii read.
+double tangent_norm2(const double h[9], V3 n) {
+  const double nn[3] = {n.x, n.y, n.z};
+  double p[3][3], ph[3][3], sum = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) p[i][j] = (i == j) - nn[i] * nn[j];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) ph[i][j] = p[i][0] * h[j] + p[i][1] * h[3 + j] + p[i][2] * h[6 + j];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double t = ph[i][0] * p[0][j] + ph[i][1] * p[1][j] + ph[i][2] * p[2][j];
+      sum += t * t;
+    }
+  return sum;
+}
+
+// The derivative-shrinkage experiments' factors (BenchSettings::gradient_shrinkage,
+// ::hessian_shrinkage) for gather `g`: max(0, 1 - k v / |d|^2) for each derivative d of its
+// luminance, v the mean of |d|^2 over kProbes gathers whose radiance is each stratum's noise
+// amplitude with a random sign (d is linear in the strata's radiance at fixed hits). The Hessian's
+// norm is its tangent projection's; its factor is at least kMinHessianShrink (see metric_record).
+struct DerivativeShrink {
+  double gradient = 1, hessian = 1;
+};
+DerivativeShrink derivative_shrink(const TracedGather &g, double gradient_k, double hessian_k, uint64_t seed) {
   const uint32_t m = g.layout.m, n = g.layout.n;
   const std::vector<float> lum = luminances<float>(g);
   std::vector<float> amplitude(lum.size()), probe(lum.size());
   for (uint32_t j = 0; j < m; ++j)
     for (uint32_t k = 0; k < n; ++k)
       amplitude[j * n + k] = std::abs(azimuthal_difference(lum, n, j, k)) / std::sqrt(2.0f);
-  const std::array<double, 3> g0 = scalar_gradient(g, lum);
-  const double signal = g0[0] * g0[0] + g0[1] * g0[1] + g0[2] * g0[2];
-  if (!(signal > 0)) return 1.0;
+  const bool hessian = hessian_k > 0;
+  const V3 normal = from_c(g.frame.normal);
+  double h0[9] = {};
+  const std::array<double, 3> g0 = scalar_derivatives(g, lum, hessian ? h0 : nullptr);
+  const double gradient_signal = g0[0] * g0[0] + g0[1] * g0[1] + g0[2] * g0[2];
+  const double hessian_signal = hessian ? tangent_norm2(h0, normal) : 0;
   constexpr int kProbes = 8;
-  double variance = 0;
+  double gradient_variance = 0, hessian_variance = 0;
   for (int p = 0; p < kProbes; ++p) {
     for (size_t i = 0; i < probe.size(); ++i)
       probe[i] = (mix(seed ^ mix(p * probe.size() + i)) & 1) ? amplitude[i] : -amplitude[i];
-    const std::array<double, 3> noise = scalar_gradient(g, probe);
-    variance += (noise[0] * noise[0] + noise[1] * noise[1] + noise[2] * noise[2]) / kProbes;
+    double h[9] = {};
+    const std::array<double, 3> noise = scalar_derivatives(g, probe, hessian ? h : nullptr);
+    gradient_variance += (noise[0] * noise[0] + noise[1] * noise[1] + noise[2] * noise[2]) / kProbes;
+    if (hessian) hessian_variance += tangent_norm2(h, normal) / kProbes;
   }
-  return std::max(0.0, 1.0 - shrinkage * variance / signal);
+  DerivativeShrink s;
+  if (gradient_k > 0 && gradient_signal > 0)
+    s.gradient = std::max(0.0, 1.0 - gradient_k * gradient_variance / gradient_signal);
+  if (hessian && hessian_signal > 0)
+    s.hessian = std::max(kMinHessianShrink, 1.0 - hessian_k * hessian_variance / hessian_signal);
+  return s;
 }
 
 }  // namespace
@@ -172,8 +209,12 @@ const Slot &GatherStore::get(size_t pixel) {
     }
     if (settings_.near_field_px > 0) split_far_field(g, reach, open, *s.evaluated, far_field_gather);
     s.evaluated->relative_noise = relative_noise(g);
-    if (settings_.gradient_shrinkage > 0 && s.evaluated->valid)
-      s.evaluated->gradient_shrink = gradient_shrink(g, settings_.gradient_shrinkage, mix(pixel ^ 0x5471ull));
+    if ((settings_.gradient_shrinkage > 0 || settings_.hessian_shrinkage > 0) && s.evaluated->valid) {
+      const DerivativeShrink shrink =
+          derivative_shrink(g, settings_.gradient_shrinkage, settings_.hessian_shrinkage, mix(pixel ^ 0x5471ull));
+      s.evaluated->gradient_shrink = shrink.gradient;
+      s.evaluated->hessian_shrink = shrink.hessian;
+    }
     ++computed_;
   });
   return s;

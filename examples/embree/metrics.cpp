@@ -118,6 +118,10 @@ bool metric_record(Metric m, double p, const Evaluated &e, raddiff_irradiance_se
                    raddiff_cache_record &record) {
   settings.metric = c_metric(m);
   settings.accuracy = p;
+  if (uses_hessian(m) && e.hessian_shrink != 1) {
+    settings.accuracy /= e.hessian_shrink;
+    settings.curvature_floor /= e.hessian_shrink;
+  }
   const raddiff_status st = raddiff_irradiance_record(&settings, e.evaluation[evaluation_of(m)].get(), footprint,
                                                       &record);
   if (st == RADDIFF_ERROR_DEGENERATE) return false;

@@ -71,7 +71,14 @@ struct Evaluated {
   // The gradient-shrinkage experiment (BenchSettings::gradient_shrinkage): the factor in [0, 1]
   // the records' translational gradients are multiplied by (1 when off).
   double gradient_shrink = 1;
+  // The Hessian-shrinkage experiment (BenchSettings::hessian_shrinkage): the factor in
+  // [kMinHessianShrink, 1] the Hessian metrics' curvature is multiplied by (1 when off).
+  double hessian_shrink = 1;
 };
+
+// The smallest Hessian-shrinkage factor: at it the curvature floor alone sets the radii (the
+// factor divides the accuracy and the floor's weight, which must stay in their domains).
+constexpr double kMinHessianShrink = 1e-3;
 
 // `settings` gives the channels and their weights.
 Evaluated evaluate_gather(const TracedGather &gather, const HessianNeeds &needs,
@@ -81,7 +88,9 @@ Evaluated evaluate_gather(const TracedGather &gather, const HessianNeeds &needs,
 double raddiff_seconds(Metric m, const Evaluated &e);
 
 // Metric m's record from the evaluation (settings.metric and .accuracy are set from m and p),
-// its value the gather's own irradiance. False when raddiff finds the metric undefined there.
+// its value the gather's own irradiance. A Hessian metric's radii are those of its Hessian times
+// e.hessian_shrink: the radii solve (s |lambda| + kappa E / D^2) a^2 terms = p E, the same as
+// accuracy p / s with the floor's weight kappa / s (the pixel bounds then apply as usual). False when raddiff finds the metric undefined there.
 bool metric_record(Metric m, double p, const Evaluated &e, raddiff_irradiance_settings settings, double footprint,
                    raddiff_cache_record &record);
 
