@@ -271,7 +271,7 @@ std::string fmt(const char *f, double v) {
 void write_records_csv(const std::string &path, const BenchFill &f, const Camera &camera,
                        const std::vector<Primary> &primary) {
   std::ofstream out(path);
-  out << "pixel,px,py,ux,uy,vx,vy,radius_px,value,open_fraction,relative_noise\n";
+  out << "pixel,px,py,ux,uy,vx,vy,radius_px,value,open_fraction,relative_noise,gradient_shrink,hessian_shrink\n";
   for (const RecordInfo &r : f.records) {
     double cx, cy;
     if (!camera.project(r.p, cx, cy)) continue;
@@ -286,7 +286,8 @@ void write_records_csv(const std::string &path, const BenchFill &f, const Camera
     camera.project(r.p + normalize(a1) * r.radii[1], bx, by);
     out << r.pixel << "," << cx << "," << cy << "," << ax - cx << "," << ay - cy << "," << bx - cx << "," << by - cy
         << "," << std::min(r.radii[0], r.radii[1]) / std::max(primary[r.pixel].footprint, 1e-300) << "," << r.value
-        << "," << r.open_fraction << "," << r.relative_noise << "\n";
+        << "," << r.open_fraction << "," << r.relative_noise << "," << r.gradient_shrink << ","
+        << r.hessian_shrink << "\n";
   }
 }
 
@@ -311,6 +312,8 @@ void check_combinations(const BenchSettings &settings) {
   if ((settings.gradient_shrinkage > 0 || settings.hessian_shrinkage > 0) && settings.oracle_derivative_paths > 0)
     throw std::runtime_error("--gradient-shrinkage and --hessian-shrinkage do not combine with --oracle-derivatives "
                              "(their noise estimate is the usual gather's, the derivatives the averaged one's)");
+  if (settings.retraced_shrinkage_noise && settings.gradient_shrinkage <= 0 && settings.hessian_shrinkage <= 0)
+    throw std::runtime_error("--retraced-shrinkage-noise needs --gradient-shrinkage or --hessian-shrinkage");
   if (settings.hessian_shrinkage > 0 && settings.error_norm > 0)
     throw std::runtime_error("--hessian-shrinkage does not combine with --error-norm (which solves its own radii)");
 }

@@ -55,6 +55,10 @@ struct BenchSettings {
   // occlusion-aware Hessian of the gather's luminance and v its variance under the strata's noise
   // (the same probes as gradient_shrinkage): curvature the noise explains does not shrink radii.
   double hessian_shrinkage = 0;
+  // With either shrinkage: each stratum's noise amplitude from a second trace of the same
+  // directions with independent hit-radiance samples (untimed; what a better noise estimate would
+  // give) instead of from its azimuthal neighbour, whose difference also holds the signal's change.
+  bool retraced_shrinkage_noise = false;
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.
   int oracle_derivative_paths = 0;

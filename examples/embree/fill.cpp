@@ -342,7 +342,9 @@ void CacheFill::insert_record(size_t pixel, const Evaluated &e, const raddiff_ca
                                     {rec.axes[0], rec.axes[1]},
                                     luminance(rec.value),
                                     e.open_fraction,
-                                    e.relative_noise});
+                                    e.relative_noise,
+                                    e.gradient_shrink,
+                                    e.hessian_shrink});
   if (smooth_ || adaptive_) kept_.emplace_back(rec);
   if (quadratic_) {
     if (!e.evaluation[1]) throw std::runtime_error("--second-order needs an occlusion-aware Hessian metric");

@@ -20,6 +20,7 @@ struct RecordInfo {
   double value;          // the luminance the cache interpolates (the far field under --near-field)
   double open_fraction;  // its gather's open fraction (1 without --near-field)
   double relative_noise;  // its gather's (Evaluated::relative_noise)
+  double gradient_shrink, hessian_shrink;  // the shrinkage experiments' factors (1 when off)
 };
 
 struct BenchFill {

@@ -134,16 +134,22 @@ double tangent_norm2(const double h[9], V3 n) {
 // luminance, v the mean of |d|^2 over kProbes gathers whose radiance is each stratum's noise
 // amplitude with a random sign (d is linear in the strata's radiance at fixed hits). The Hessian's
 // norm is its tangent projection's; its factor is at least kMinHessianShrink (see metric_record).
+// A stratum's noise amplitude is |L - L'| / sqrt(2), L' its azimuthal neighbour's luminance, or
+// with `retraced` the same direction's luminance from independent hit-radiance samples.
 struct DerivativeShrink {
   double gradient = 1, hessian = 1;
 };
-DerivativeShrink derivative_shrink(const TracedGather &g, double gradient_k, double hessian_k, uint64_t seed) {
+DerivativeShrink derivative_shrink(const TracedGather &g, const TracedGather *retraced, double gradient_k,
+                                   double hessian_k, uint64_t seed) {
   const uint32_t m = g.layout.m, n = g.layout.n;
   const std::vector<float> lum = luminances<float>(g);
   std::vector<float> amplitude(lum.size()), probe(lum.size());
+  const std::vector<float> other = retraced ? luminances<float>(*retraced) : std::vector<float>();
   for (uint32_t j = 0; j < m; ++j)
-    for (uint32_t k = 0; k < n; ++k)
-      amplitude[j * n + k] = std::abs(azimuthal_difference(lum, n, j, k)) / std::sqrt(2.0f);
+    for (uint32_t k = 0; k < n; ++k) {
+      const size_t i = j * n + k;
+      amplitude[i] = std::abs(retraced ? lum[i] - other[i] : azimuthal_difference(lum, n, j, k)) / std::sqrt(2.0f);
+    }
   const bool hessian = hessian_k > 0;
   const V3 normal = from_c(g.frame.normal);
   double h0[9] = {};
@@ -185,6 +191,17 @@ const Slot &GatherStore::get(size_t pixel) {
     const bool far_field_gather = settings_.near_field_px > 0 && settings_.far_field_gathers;
     float far_bins[3 * kDirBins] = {};
     if (settings_.near_field_px > 0 && settings_.far_field_bins) bin_far_radiance(g, reach, far_bins);
+    std::unique_ptr<TracedGather> retraced;
+    if (settings_.retraced_shrinkage_noise) {
+      // The same directions with independent hit-radiance samples: the shrinkage experiments'
+      // noise amplitudes from a second trace instead of the azimuthal neighbours (not timed).
+      retraced = std::make_unique<TracedGather>(g);
+      uint64_t rays = 0;
+      trace_directions(scene_, settings_.radiance, px.p, g.directions.data(), g.directions.size(),
+                       reseeded(mix(1 + pixel) ^ 0x2ea7ull, settings_.noise_seed), retraced->distance.data(),
+                       retraced->radiance.data(), rays, retraced->hit_normals.data());
+      if (far_field_gather) fill_near_with_far(*retraced, reach, settings_.near_at_reach);
+    }
     const double open = far_field_gather ? fill_near_with_far(g, reach, settings_.near_at_reach) : 1.0;
     s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_, irr));
     std::copy(std::begin(far_bins), std::end(far_bins), std::begin(s.evaluated->far_bins));
@@ -211,7 +228,8 @@ const Slot &GatherStore::get(size_t pixel) {
     s.evaluated->relative_noise = relative_noise(g);
     if ((settings_.gradient_shrinkage > 0 || settings_.hessian_shrinkage > 0) && s.evaluated->valid) {
       const DerivativeShrink shrink =
-          derivative_shrink(g, settings_.gradient_shrinkage, settings_.hessian_shrinkage, mix(pixel ^ 0x5471ull));
+          derivative_shrink(g, retraced.get(), settings_.gradient_shrinkage, settings_.hessian_shrinkage,
+                            mix(pixel ^ 0x5471ull));
       s.evaluated->gradient_shrink = shrink.gradient;
       s.evaluated->hessian_shrink = shrink.hessian;
     }

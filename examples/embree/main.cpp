@@ -49,7 +49,8 @@ const char *kUsage =
     "                      [--reference-rays N (65536)] [--reference-grid G (64)] [--cache-dir DIR] [--floor-records N]\n"
     "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n"
     "                      [--oracle-derivatives K] [--interpolation ward|tent|cubic] [--gradient-shrinkage k]\n"
-    "                      [--hessian-shrinkage k] [--hessian-distance-bound k] [--smooth-records s]\n"
+    "                      [--hessian-shrinkage k] [--retraced-shrinkage-noise]\n"
+    "                      [--hessian-distance-bound k] [--smooth-records s]\n"
     "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n"
     "                      [--near-field reach_px[,rays]] [--far-field-gathers] [--near-at-reach] [--far-field-bins]\n"
     "                      [--open-fraction-bands width] [--noise-seed K] [--pixel-gathers]\n"
@@ -166,6 +167,7 @@ int main(int argc, char **argv) {
       else if (a == "--no-record-gradients") bench.record_gradients = false;
       else if (a == "--gradient-shrinkage") bench.gradient_shrinkage = std::stod(next());
       else if (a == "--hessian-shrinkage") bench.hessian_shrinkage = std::stod(next());
+      else if (a == "--retraced-shrinkage-noise") bench.retraced_shrinkage_noise = true;
       else if (a == "--oracle-derivatives") bench.oracle_derivative_paths = std::stoi(next());
       else if (a == "--hessian-distance-bound") bench.hessian_distance_bound = std::stod(next());
       else if (a == "--interpolation") {
