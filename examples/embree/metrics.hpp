@@ -76,8 +76,9 @@ struct Evaluated {
   double hessian_shrink = 1;
 };
 
-// The smallest Hessian-shrinkage factor: at it the curvature floor alone sets the radii (the
-// factor divides the accuracy and the floor's weight, which must stay in their domains).
+// The smallest Hessian-shrinkage factor: at it the curvature floor all but sets the radii (the
+// curvature counts a thousandth); a floor above 0 keeps the factor from dividing by zero, since it
+// divides the accuracy and the floor's weight, which must stay in their domains.
 constexpr double kMinHessianShrink = 1e-3;
 
 // `settings` gives the channels and their weights.
@@ -90,7 +91,8 @@ double raddiff_seconds(Metric m, const Evaluated &e);
 // Metric m's record from the evaluation (settings.metric and .accuracy are set from m and p),
 // its value the gather's own irradiance. A Hessian metric's radii are those of its Hessian times
 // e.hessian_shrink: the radii solve (s |lambda| + kappa E / D^2) a^2 terms = p E, the same as
-// accuracy p / s with the floor's weight kappa / s (the pixel bounds then apply as usual). False when raddiff finds the metric undefined there.
+// accuracy p / s with the floor's weight kappa / s (the pixel bounds then apply as usual).
+// False when raddiff finds the metric undefined there.
 bool metric_record(Metric m, double p, const Evaluated &e, raddiff_irradiance_settings settings, double footprint,
                    raddiff_cache_record &record);
 
