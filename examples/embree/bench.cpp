@@ -271,7 +271,8 @@ std::string fmt(const char *f, double v) {
 void write_records_csv(const std::string &path, const BenchFill &f, const Camera &camera,
                        const std::vector<Primary> &primary) {
   std::ofstream out(path);
-  out << "pixel,px,py,ux,uy,vx,vy,radius_px,value,open_fraction,relative_noise,gradient_shrink,hessian_shrink\n";
+  out << "pixel,px,py,ux,uy,vx,vy,radius_px,value,open_fraction,relative_noise,gradient_shrink,hessian_shrink,"
+         "noise_curvature_weight,relative_gradient_noise\n";
   for (const RecordInfo &r : f.records) {
     double cx, cy;
     if (!camera.project(r.p, cx, cy)) continue;
@@ -287,7 +288,7 @@ void write_records_csv(const std::string &path, const BenchFill &f, const Camera
     out << r.pixel << "," << cx << "," << cy << "," << ax - cx << "," << ay - cy << "," << bx - cx << "," << by - cy
         << "," << std::min(r.radii[0], r.radii[1]) / std::max(primary[r.pixel].footprint, 1e-300) << "," << r.value
         << "," << r.open_fraction << "," << r.relative_noise << "," << r.gradient_shrink << ","
-        << r.hessian_shrink << "\n";
+        << r.hessian_shrink << "," << r.noise_curvature_weight << "," << r.relative_gradient_noise << "\n";
   }
 }
 
@@ -309,13 +310,25 @@ void check_combinations(const BenchSettings &settings) {
     throw std::runtime_error("--near-at-reach needs --far-field-gathers");
   if (settings.far_field_gathers && settings.near_field_px <= 0)
     throw std::runtime_error("--far-field-gathers needs --near-field");
-  if ((settings.gradient_shrinkage > 0 || settings.hessian_shrinkage > 0) && settings.oracle_derivative_paths > 0)
-    throw std::runtime_error("--gradient-shrinkage and --hessian-shrinkage do not combine with --oracle-derivatives "
-                             "(their noise estimate is the usual gather's, the derivatives the averaged one's)");
-  if (settings.retraced_shrinkage_noise && settings.gradient_shrinkage <= 0 && settings.hessian_shrinkage <= 0)
-    throw std::runtime_error("--retraced-shrinkage-noise needs --gradient-shrinkage or --hessian-shrinkage");
-  if (settings.hessian_shrinkage > 0 && settings.error_norm > 0)
-    throw std::runtime_error("--hessian-shrinkage does not combine with --error-norm (which solves its own radii)");
+  const bool noise_probes = settings.gradient_shrinkage > 0 || settings.hessian_shrinkage > 0 ||
+                            settings.noise_curvature > 0 || settings.gradient_noise_radius > 0;
+  if (noise_probes && settings.oracle_derivative_paths > 0)
+    throw std::runtime_error("--gradient-shrinkage, --hessian-shrinkage, --noise-curvature and --gradient-noise-radius "
+                             "do not combine with --oracle-derivatives (their noise estimate is the usual gather's, "
+                             "the derivatives the averaged one's)");
+  if (settings.retraced_shrinkage_noise && !noise_probes)
+    throw std::runtime_error("--retraced-shrinkage-noise needs --gradient-shrinkage, --hessian-shrinkage, "
+                             "--noise-curvature or --gradient-noise-radius");
+  if ((settings.hessian_shrinkage > 0 || settings.noise_curvature > 0 || settings.gradient_noise_radius > 0) &&
+      settings.error_norm > 0)
+    throw std::runtime_error("--hessian-shrinkage, --noise-curvature and --gradient-noise-radius do not combine with "
+                             "--error-norm (which solves its own radii)");
+  const bool smoothed = settings.smooth_azimuthal_passes > 0 || settings.smooth_polar_passes > 0;
+  if (settings.smooth_azimuthal_passes < 0 || settings.smooth_polar_passes < 0)
+    throw std::runtime_error("--smooth-derivative-strata takes pass counts >= 0");
+  if (smoothed && (settings.oracle_derivative_paths > 0 || noise_probes))
+    throw std::runtime_error("--smooth-derivative-strata does not combine with --oracle-derivatives or the "
+                             "noise-probe experiments (their derivatives are another gather's)");
 }
 
 // What the images and the summary take from the reference: its mean luminance, and the exposure

@@ -59,6 +59,22 @@ struct BenchSettings {
   // directions with independent hit-radiance samples (untimed; what a better noise estimate would
   // give) instead of from its azimuthal neighbour, whose difference also holds the signal's change.
   bool retraced_shrinkage_noise = false;
+  // > 0: the noise-curvature experiment. The Hessian metrics' curvature floor adds z times the
+  // tangent Hessian's noise (a per-eigenvalue standard deviation under the strata's noise, the
+  // same probes as gradient_shrinkage) to each eigenvalue's magnitude: radii from an upper
+  // confidence bound on the curvature, z standard deviations above the estimate.
+  double noise_curvature = 0;
+  // > 0: the gradient-noise-radius experiment. Hessian records' radii at most z p E / sigma_g
+  // (at least the pixel minimum), p the metric's accuracy, sigma_g the norm of the gradient's noise
+  // (the same probes): where the gradient's noise, extrapolated, alone reaches z p of the value,
+  // the budget the radii solve gives the curvature.
+  double gradient_noise_radius = 0;
+  // > 0: the smoothed-derivatives experiment. The records' radii and derivatives from their gather
+  // with each stratum's radiance smoothed over its neighbours (smooth_strata: [1 2 1] / 4 along the
+  // azimuth, then along the polar angle, this many passes each), their values from the gather
+  // itself: derivatives with less of the strata's noise, at the price of a blurred angular detail.
+  int smooth_azimuthal_passes = 0;
+  int smooth_polar_passes = 0;
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.
   int oracle_derivative_paths = 0;

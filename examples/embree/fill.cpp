@@ -316,6 +316,12 @@ void CacheFill::adjust_record(size_t pixel, const Evaluated &e, raddiff_cache_re
                                   irr_.pixel_radius_min * primary_[pixel].footprint);
     for (double &r : rec.radii) r = std::min(r, bound);
   }
+  if (settings_.gradient_noise_radius > 0 && uses_hessian(m_) && e.relative_gradient_noise > 0) {
+    // where the gradient's noise, extrapolated, alone reaches z p of the value
+    const double bound = std::max(settings_.gradient_noise_radius * p_ / e.relative_gradient_noise,
+                                  irr_.pixel_radius_min * primary_[pixel].footprint);
+    for (double &r : rec.radii) r = std::min(r, bound);
+  }
   if (settings_.error_norm > 0 && (m_ == Metric::HessianAnisotropic || m_ == Metric::HessianIsotropic))
     norm_radii(settings_, m_, p_, e, irr_, primary_[pixel].footprint, rec);
 }
@@ -344,7 +350,9 @@ void CacheFill::insert_record(size_t pixel, const Evaluated &e, const raddiff_ca
                                     e.open_fraction,
                                     e.relative_noise,
                                     e.gradient_shrink,
-                                    e.hessian_shrink});
+                                    e.hessian_shrink,
+                                    e.noise_curvature_weight,
+                                    e.relative_gradient_noise});
   if (smooth_ || adaptive_) kept_.emplace_back(rec);
   if (quadratic_) {
     if (!e.evaluation[1]) throw std::runtime_error("--second-order needs an occlusion-aware Hessian metric");

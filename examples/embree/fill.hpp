@@ -21,6 +21,7 @@ struct RecordInfo {
   double open_fraction;  // its gather's open fraction (1 without --near-field)
   double relative_noise;  // its gather's (Evaluated::relative_noise)
   double gradient_shrink, hessian_shrink;  // the shrinkage experiments' factors (1 when off)
+  double noise_curvature_weight, relative_gradient_noise;  // the noise-bound experiments' (0 when off)
 };
 
 struct BenchFill {

@@ -26,7 +26,8 @@ T azimuthal_difference(const std::vector<T> &values, uint32_t n, uint32_t j, uin
 // The derivatives of one value per direction of `g`: the Ward-Heckbert gradient (world axes) and
 // the occlusion-aware Hessian (3x3, row-major; computed only when `hessian` is not null).
 std::array<double, 3> scalar_derivatives(const TracedGather &g, const std::vector<float> &values,
-                                         double *hessian = nullptr) {
+                                         double *hessian = nullptr, double *irradiance = nullptr,
+                                         double *harmonic_mean_distance = nullptr) {
   raddiff_gather_input input{};
   input.directions = g.directions.data();
   input.distance = g.distance.data();
@@ -36,7 +37,9 @@ std::array<double, 3> scalar_derivatives(const TracedGather &g, const std::vecto
   raddiff_gather_output output{};
   output.gradient = gradient.data();
   output.hessian = hessian;
+  output.irradiance = irradiance;
   check(raddiff_gather_evaluate(&g.layout, &g.frame, &input, &output), "raddiff_gather_evaluate");
+  if (harmonic_mean_distance) *harmonic_mean_distance = output.harmonic_mean_distance;
   return gradient;
 }
 
@@ -72,8 +75,8 @@ double relative_noise(const TracedGather &g) {
   return sum > 0 ? std::sqrt(squares) / sum : 0.0;
 }
 
-DerivativeShrink derivative_shrink(const TracedGather &g, const TracedGather *retraced, double gradient_k,
-                                   double hessian_k, uint64_t seed) {
+DerivativeNoise derivative_noise(const TracedGather &g, const TracedGather *retraced, double gradient_k,
+                                 double hessian_k, bool hessian_noise, uint64_t seed) {
   const uint32_t m = g.layout.m, n = g.layout.n;
   const std::vector<float> lum = luminances<float>(g);
   std::vector<float> amplitude(lum.size()), probe(lum.size());
@@ -83,10 +86,10 @@ DerivativeShrink derivative_shrink(const TracedGather &g, const TracedGather *re
       const size_t i = j * n + k;
       amplitude[i] = std::abs(retraced ? lum[i] - other[i] : azimuthal_difference(lum, n, j, k)) / std::sqrt(2.0f);
     }
-  const bool hessian = hessian_k > 0;
+  const bool hessian = hessian_noise || hessian_k > 0;
   const V3 normal = from_c(g.frame.normal);
-  double h0[9] = {};
-  const std::array<double, 3> g0 = scalar_derivatives(g, lum, hessian ? h0 : nullptr);
+  double h0[9] = {}, irradiance = 0, distance = 0;
+  const std::array<double, 3> g0 = scalar_derivatives(g, lum, hessian ? h0 : nullptr, &irradiance, &distance);
   const double gradient_signal = g0[0] * g0[0] + g0[1] * g0[1] + g0[2] * g0[2];
   const double hessian_signal = hessian ? tangent_norm2(h0, normal) : 0;
   constexpr int kProbes = 8;
@@ -99,12 +102,34 @@ DerivativeShrink derivative_shrink(const TracedGather &g, const TracedGather *re
     gradient_variance += (noise[0] * noise[0] + noise[1] * noise[1] + noise[2] * noise[2]) / kProbes;
     if (hessian) hessian_variance += tangent_norm2(h, normal) / kProbes;
   }
-  DerivativeShrink s;
+  DerivativeNoise s;
   if (gradient_k > 0 && gradient_signal > 0)
-    s.gradient = std::max(0.0, 1.0 - gradient_k * gradient_variance / gradient_signal);
-  if (hessian && hessian_signal > 0)
-    s.hessian = std::max(kMinHessianShrink, 1.0 - hessian_k * hessian_variance / hessian_signal);
+    s.gradient_shrink = std::max(0.0, 1.0 - gradient_k * gradient_variance / gradient_signal);
+  if (hessian_k > 0 && hessian_signal > 0)
+    s.hessian_shrink = std::max(kMinHessianShrink, 1.0 - hessian_k * hessian_variance / hessian_signal);
+  if (irradiance > 0) {
+    s.relative_gradient_noise = std::sqrt(gradient_variance) / irradiance;
+    if (std::isfinite(distance)) s.hessian_noise_weight = std::sqrt(hessian_variance / 2) * distance * distance / irradiance;
+  }
   return s;
+}
+
+void smooth_strata(TracedGather &g, int azimuthal_passes, int polar_passes) {
+  const uint32_t m = g.layout.m, n = g.layout.n;
+  std::vector<float> before;
+  const auto pass = [&](bool azimuthal) {
+    before = g.radiance;
+    for (uint32_t j = 0; j < m; ++j)
+      for (uint32_t k = 0; k < n; ++k) {
+        const size_t here = j * n + k;
+        const size_t a = azimuthal ? j * n + (k + n - 1) % n : (j > 0 ? j - 1 : j) * n + k;
+        const size_t b = azimuthal ? j * n + (k + 1) % n : (j + 1 < m ? j + 1 : j) * n + k;
+        for (int c = 0; c < 3; ++c)
+          g.radiance[3 * here + c] = 0.25f * before[3 * a + c] + 0.5f * before[3 * here + c] + 0.25f * before[3 * b + c];
+      }
+  };
+  for (int p = 0; p < azimuthal_passes; ++p) pass(true);
+  for (int p = 0; p < polar_passes; ++p) pass(false);
 }
 
 }  // namespace rd

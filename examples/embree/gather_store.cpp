@@ -113,14 +113,32 @@ const Slot &GatherStore::get(size_t pixel) {
         *s.evaluated = std::move(o);
       }
     }
+    if ((settings_.smooth_azimuthal_passes > 0 || settings_.smooth_polar_passes > 0) && s.evaluated->valid) {
+      // The records' radii and derivatives from the same gather with its strata's radiance
+      // smoothed, their values from the gather itself; both evaluations' CPU time counts.
+      TracedGather q = g;
+      smooth_strata(q, settings_.smooth_azimuthal_passes, settings_.smooth_polar_passes);
+      Evaluated o = evaluate_gather(q, needs_, irr);
+      if (o.valid) {
+        std::copy(std::begin(s.evaluated->value), std::end(s.evaluated->value), std::begin(o.value));
+        o.luminance = s.evaluated->luminance;
+        for (size_t k = 0; k < std::size(o.seconds); ++k) o.seconds[k] += s.evaluated->seconds[k];
+        std::copy(std::begin(far_bins), std::end(far_bins), std::begin(o.far_bins));
+        *s.evaluated = std::move(o);
+      }
+    }
     if (settings_.near_field_px > 0) split_far_field(g, reach, open, *s.evaluated, far_field_gather);
     s.evaluated->relative_noise = relative_noise(g);
-    if ((settings_.gradient_shrinkage > 0 || settings_.hessian_shrinkage > 0) && s.evaluated->valid) {
-      const DerivativeShrink shrink =
-          derivative_shrink(g, retraced.get(), settings_.gradient_shrinkage, settings_.hessian_shrinkage,
-                            mix(pixel ^ 0x5471ull));
-      s.evaluated->gradient_shrink = shrink.gradient;
-      s.evaluated->hessian_shrink = shrink.hessian;
+    const bool noise_bounds = settings_.noise_curvature > 0 || settings_.gradient_noise_radius > 0;
+    if ((settings_.gradient_shrinkage > 0 || settings_.hessian_shrinkage > 0 || noise_bounds) &&
+        s.evaluated->valid) {
+      const DerivativeNoise noise =
+          derivative_noise(g, retraced.get(), settings_.gradient_shrinkage, settings_.hessian_shrinkage,
+                           settings_.noise_curvature > 0, mix(pixel ^ 0x5471ull));
+      s.evaluated->gradient_shrink = noise.gradient_shrink;
+      s.evaluated->hessian_shrink = noise.hessian_shrink;
+      s.evaluated->relative_gradient_noise = noise.relative_gradient_noise;
+      s.evaluated->noise_curvature_weight = settings_.noise_curvature * noise.hessian_noise_weight;
     }
     ++computed_;
   });

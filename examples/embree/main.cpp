@@ -49,7 +49,8 @@ const char *kUsage =
     "                      [--reference-rays N (65536)] [--reference-grid G (64)] [--cache-dir DIR] [--floor-records N]\n"
     "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n"
     "                      [--oracle-derivatives K] [--interpolation ward|tent|cubic] [--gradient-shrinkage k]\n"
-    "                      [--hessian-shrinkage k] [--retraced-shrinkage-noise]\n"
+    "                      [--hessian-shrinkage k] [--retraced-shrinkage-noise] [--noise-curvature z]\n"
+    "                      [--gradient-noise-radius z] [--smooth-derivative-strata A[,P]]\n"
     "                      [--hessian-distance-bound k] [--smooth-records s]\n"
     "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n"
     "                      [--near-field reach_px[,rays]] [--far-field-gathers] [--near-at-reach] [--far-field-bins]\n"
@@ -168,6 +169,14 @@ int main(int argc, char **argv) {
       else if (a == "--gradient-shrinkage") bench.gradient_shrinkage = std::stod(next());
       else if (a == "--hessian-shrinkage") bench.hessian_shrinkage = std::stod(next());
       else if (a == "--retraced-shrinkage-noise") bench.retraced_shrinkage_noise = true;
+      else if (a == "--noise-curvature") bench.noise_curvature = std::stod(next());
+      else if (a == "--gradient-noise-radius") bench.gradient_noise_radius = std::stod(next());
+      else if (a == "--smooth-derivative-strata") {
+        const std::string v = next();
+        const size_t comma = v.find(',');
+        bench.smooth_azimuthal_passes = std::stoi(v.substr(0, comma));
+        bench.smooth_polar_passes = comma == std::string::npos ? 0 : std::stoi(v.substr(comma + 1));
+      }
       else if (a == "--oracle-derivatives") bench.oracle_derivative_paths = std::stoi(next());
       else if (a == "--hessian-distance-bound") bench.hessian_distance_bound = std::stod(next());
       else if (a == "--interpolation") {

@@ -118,6 +118,7 @@ bool metric_record(Metric m, double p, const Evaluated &e, raddiff_irradiance_se
                    raddiff_cache_record &record) {
   settings.metric = c_metric(m);
   settings.accuracy = p;
+  if (uses_hessian(m)) settings.curvature_floor += e.noise_curvature_weight;
   if (uses_hessian(m) && e.hessian_shrink != 1) {
     settings.accuracy /= e.hessian_shrink;
     settings.curvature_floor /= e.hessian_shrink;

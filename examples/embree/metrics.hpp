@@ -74,6 +74,11 @@ struct Evaluated {
   // The Hessian-shrinkage experiment (BenchSettings::hessian_shrinkage): the factor in
   // [kMinHessianShrink, 1] the Hessian metrics' curvature is multiplied by (1 when off).
   double hessian_shrink = 1;
+  // The noise-bound experiments (BenchSettings::noise_curvature, ::gradient_noise_radius): the
+  // weight added to the Hessian metrics' curvature floor, z sigma D^2 / E, and the gradient's noise
+  // over E (DerivativeNoise; 0 when off).
+  double noise_curvature_weight = 0;
+  double relative_gradient_noise = 0;
 };
 
 // The smallest Hessian-shrinkage factor: at it the curvature floor all but sets the radii (the
@@ -91,7 +96,8 @@ double raddiff_seconds(Metric m, const Evaluated &e);
 // Metric m's record from the evaluation (settings.metric and .accuracy are set from m and p),
 // its value the gather's own irradiance. A Hessian metric's radii are those of its Hessian times
 // e.hessian_shrink: the radii solve (s |lambda| + kappa E / D^2) a^2 terms = p E, the same as
-// accuracy p / s with the floor's weight kappa / s (the pixel bounds then apply as usual).
+// accuracy p / s with the floor's weight kappa / s (the pixel bounds then apply as usual); the
+// floor's weight is kappa + e.noise_curvature_weight before that.
 // False when raddiff finds the metric undefined there.
 bool metric_record(Metric m, double p, const Evaluated &e, raddiff_irradiance_settings settings, double footprint,
                    raddiff_cache_record &record);
