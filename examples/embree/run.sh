@@ -69,6 +69,8 @@ for near in "--far-field-gathers" "--far-field-gathers --near-at-reach" "--far-f
   "--far-field-gathers --near-at-reach --leak-guard 0.1,0 --open-fraction-tolerance 0.1 --lookup-scale 1.5" \
   "--far-field-gathers --near-at-reach --leak-guard 0.1,0 --gradient-shrinkage 1 --hessian-shrinkage 1" \
   "--far-field-gathers --near-at-reach --leak-guard 0.1,0 --hessian-shrinkage 1 --retraced-shrinkage-noise" \
+  "--far-field-gathers --near-at-reach --leak-guard 0.1,0 --noise-curvature 1 --gradient-noise-radius 1" \
+  "--far-field-gathers --near-at-reach --leak-guard 0.1,0 --smooth-derivative-strata 2,1" \
   "--far-field-gathers --near-at-reach --leak-guard 0.1,0 --open-fraction-tolerance 0.1 --adaptive-lookup 2,4"; do
   # shellcheck disable=SC2086 # the options are meant to split
   "$binary" --bench --obj "$here/cornell.obj" --out "$out/cornell-near" --size 64 --metrics split-sphere,hessian-anisotropic \
