@@ -109,7 +109,8 @@ DerivativeNoise derivative_noise(const TracedGather &g, const TracedGather *retr
     s.hessian_shrink = std::max(kMinHessianShrink, 1.0 - hessian_k * hessian_variance / hessian_signal);
   if (irradiance > 0) {
     s.relative_gradient_noise = std::sqrt(gradient_variance) / irradiance;
-    if (std::isfinite(distance)) s.hessian_noise_weight = std::sqrt(hessian_variance / 2) * distance * distance / irradiance;
+    if (std::isfinite(distance))
+      s.hessian_noise_weight = std::sqrt(hessian_variance / 2) * distance * distance / irradiance;
   }
   return s;
 }
@@ -125,7 +126,8 @@ void smooth_strata(TracedGather &g, int azimuthal_passes, int polar_passes) {
         const size_t a = azimuthal ? j * n + (k + n - 1) % n : (j > 0 ? j - 1 : j) * n + k;
         const size_t b = azimuthal ? j * n + (k + 1) % n : (j + 1 < m ? j + 1 : j) * n + k;
         for (int c = 0; c < 3; ++c)
-          g.radiance[3 * here + c] = 0.25f * before[3 * a + c] + 0.5f * before[3 * here + c] + 0.25f * before[3 * b + c];
+          g.radiance[3 * here + c] =
+              0.25f * before[3 * a + c] + 0.5f * before[3 * here + c] + 0.25f * before[3 * b + c];
       }
   };
   for (int p = 0; p < azimuthal_passes; ++p) pass(true);

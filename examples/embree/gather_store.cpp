@@ -93,7 +93,6 @@ const Slot &GatherStore::get(size_t pixel) {
     }
     const double open = far_field_gather ? fill_near_with_far(g, reach, settings_.near_at_reach) : 1.0;
     s.evaluated = std::make_unique<Evaluated>(evaluate_gather(g, needs_, irr));
-    std::copy(std::begin(far_bins), std::end(far_bins), std::begin(s.evaluated->far_bins));
     if (settings_.oracle_derivative_paths > 0 && s.evaluated->valid) {
       // Derivatives from the same directions with radiance averaged over K independent paths:
       // what the records would be with less noisy derivatives (an experiment; not timed).
@@ -123,10 +122,11 @@ const Slot &GatherStore::get(size_t pixel) {
         std::copy(std::begin(s.evaluated->value), std::end(s.evaluated->value), std::begin(o.value));
         o.luminance = s.evaluated->luminance;
         for (size_t k = 0; k < std::size(o.seconds); ++k) o.seconds[k] += s.evaluated->seconds[k];
-        std::copy(std::begin(far_bins), std::end(far_bins), std::begin(o.far_bins));
         *s.evaluated = std::move(o);
       }
     }
+    // after the experiments that replace the evaluation, which would drop the bins
+    std::copy(std::begin(far_bins), std::end(far_bins), std::begin(s.evaluated->far_bins));
     if (settings_.near_field_px > 0) split_far_field(g, reach, open, *s.evaluated, far_field_gather);
     s.evaluated->relative_noise = relative_noise(g);
     const bool noise_bounds = settings_.noise_curvature > 0 || settings_.gradient_noise_radius > 0;
