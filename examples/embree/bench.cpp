@@ -310,8 +310,7 @@ void check_combinations(const BenchSettings &settings) {
     throw std::runtime_error("--near-at-reach needs --far-field-gathers");
   if (settings.far_field_gathers && settings.near_field_px <= 0)
     throw std::runtime_error("--far-field-gathers needs --near-field");
-  const bool noise_probes = settings.gradient_shrinkage > 0 || settings.hessian_shrinkage > 0 ||
-                            settings.noise_curvature > 0 || settings.gradient_noise_radius > 0;
+  const bool noise_probes = settings.noise_probes();
   if (noise_probes && settings.oracle_derivative_paths > 0)
     throw std::runtime_error("--gradient-shrinkage, --hessian-shrinkage, --noise-curvature and --gradient-noise-radius "
                              "do not combine with --oracle-derivatives (their noise estimate is the usual gather's, "
@@ -323,10 +322,9 @@ void check_combinations(const BenchSettings &settings) {
       settings.error_norm > 0)
     throw std::runtime_error("--hessian-shrinkage, --noise-curvature and --gradient-noise-radius do not combine with "
                              "--error-norm (which solves its own radii)");
-  const bool smoothed = settings.smooth_azimuthal_passes > 0 || settings.smooth_polar_passes > 0;
   if (settings.smooth_azimuthal_passes < 0 || settings.smooth_polar_passes < 0)
     throw std::runtime_error("--smooth-derivative-strata takes pass counts >= 0");
-  if (smoothed && (settings.oracle_derivative_paths > 0 || noise_probes))
+  if (settings.smooths_derivatives() && (settings.oracle_derivative_paths > 0 || noise_probes))
     throw std::runtime_error("--smooth-derivative-strata does not combine with --oracle-derivatives or the "
                              "noise-probe experiments (their derivatives are another gather's)");
 }

@@ -143,6 +143,13 @@ struct BenchSettings {
   uint32_t strata_paths = 16;
   std::string out = "bench";          // file prefix
   unsigned threads = 2;
+
+  // Whether an experiment needs the derivatives' noise probes (derivative_noise).
+  bool noise_probes() const {
+    return gradient_shrinkage > 0 || hessian_shrinkage > 0 || noise_curvature > 0 || gradient_noise_radius > 0;
+  }
+  // Whether the smoothed-derivatives experiment is on.
+  bool smooths_derivatives() const { return smooth_azimuthal_passes > 0 || smooth_polar_passes > 0; }
 };
 
 // Runs the benchmark on one view; returns 0 when every fill covered the image with finite,

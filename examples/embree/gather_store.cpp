@@ -63,6 +63,18 @@ void split_far_field(const TracedGather &g, double reach, double open, Evaluated
         e.open_fraction > 0 ? static_cast<float>(std::max(0.0, (e.value[c] - near[c]) / e.open_fraction)) : 0.0f;
 }
 
+// The experiments that take the records' radii and derivatives from another evaluation of the
+// same pixel (`other`, ignored when not valid) and their values from the usual one (`usual`):
+// usual becomes other with usual's values, and usual's CPU times, plus other's when `timed`.
+void take_derivatives(Evaluated other, bool timed, Evaluated &usual) {
+  if (!other.valid) return;
+  std::copy(std::begin(usual.value), std::end(usual.value), std::begin(other.value));
+  other.luminance = usual.luminance;
+  for (size_t k = 0; k < std::size(other.seconds); ++k)
+    other.seconds[k] = usual.seconds[k] + (timed ? other.seconds[k] : 0.0);
+  usual = std::move(other);
+}
+
 }  // namespace
 
 const Slot &GatherStore::get(size_t pixel) {
@@ -102,36 +114,20 @@ const Slot &GatherStore::get(size_t pixel) {
                                     reseeded(mix(1 + pixel) ^ 0x0facull, settings_.noise_seed));
       // the same far-field gather as the records' (their derivatives must not see the near hits)
       if (far_field_gather) fill_near_with_far(q, reach, settings_.near_at_reach);
-      Evaluated o = evaluate_gather(q, needs_, irr);
-      if (o.valid) {
-        // The records' radii and derivatives from the averaged radiance, their values (and the
-        // CPU times) from the usual gather.
-        std::copy(std::begin(s.evaluated->value), std::end(s.evaluated->value), std::begin(o.value));
-        o.luminance = s.evaluated->luminance;
-        std::copy(std::begin(s.evaluated->seconds), std::end(s.evaluated->seconds), std::begin(o.seconds));
-        *s.evaluated = std::move(o);
-      }
+      // the records' CPU times from the usual gather (the averaged one is not timed)
+      take_derivatives(evaluate_gather(q, needs_, irr), false, *s.evaluated);
     }
-    if ((settings_.smooth_azimuthal_passes > 0 || settings_.smooth_polar_passes > 0) && s.evaluated->valid) {
-      // The records' radii and derivatives from the same gather with its strata's radiance
-      // smoothed, their values from the gather itself; both evaluations' CPU time counts.
+    if (settings_.smooths_derivatives() && s.evaluated->valid) {
+      // the same gather with its strata's radiance smoothed; both evaluations' CPU time counts
       TracedGather q = g;
       smooth_strata(q, settings_.smooth_azimuthal_passes, settings_.smooth_polar_passes);
-      Evaluated o = evaluate_gather(q, needs_, irr);
-      if (o.valid) {
-        std::copy(std::begin(s.evaluated->value), std::end(s.evaluated->value), std::begin(o.value));
-        o.luminance = s.evaluated->luminance;
-        for (size_t k = 0; k < std::size(o.seconds); ++k) o.seconds[k] += s.evaluated->seconds[k];
-        *s.evaluated = std::move(o);
-      }
+      take_derivatives(evaluate_gather(q, needs_, irr), true, *s.evaluated);
     }
     // after the experiments that replace the evaluation, which would drop the bins
     std::copy(std::begin(far_bins), std::end(far_bins), std::begin(s.evaluated->far_bins));
     if (settings_.near_field_px > 0) split_far_field(g, reach, open, *s.evaluated, far_field_gather);
     s.evaluated->relative_noise = relative_noise(g);
-    const bool noise_bounds = settings_.noise_curvature > 0 || settings_.gradient_noise_radius > 0;
-    if ((settings_.gradient_shrinkage > 0 || settings_.hessian_shrinkage > 0 || noise_bounds) &&
-        s.evaluated->valid) {
+    if (settings_.noise_probes() && s.evaluated->valid) {
       const DerivativeNoise noise =
           derivative_noise(g, retraced.get(), settings_.gradient_shrinkage, settings_.hessian_shrinkage,
                            settings_.noise_curvature > 0, mix(pixel ^ 0x5471ull));
