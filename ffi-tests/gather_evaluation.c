@@ -130,6 +130,25 @@ int main(void) {
   CHECK_STATUS(raddiff_irradiance_record(&s, e, -1.0, &rec), RADDIFF_ERROR_INVALID_ARGUMENT);
   bad = s, bad.channels = 2;
   CHECK_STATUS(raddiff_irradiance_record(&bad, e, 0.0, &rec), RADDIFF_ERROR_INVALID_ARGUMENT);
+
+  /* derivatives from smoothed strata: the value and the distance from the strata as traced,
+     the derivatives changed; more passes than allowed refused */
+  {
+    raddiff_gather_evaluation *smoothed;
+    raddiff_gather_summary ss;
+    bad = s, bad.derivative_smoothing_azimuthal = 2, bad.derivative_smoothing_polar = 1;
+    smoothed = raddiff_gather_evaluation_new(&bad, &layout, &frame, &input, normals, all);
+    CHECK(smoothed != NULL);
+    CHECK_STATUS(raddiff_gather_evaluation_summary(smoothed, &ss), RADDIFF_OK);
+    CHECK(ss.scalar == sum.scalar && ss.harmonic_mean_distance == sum.harmonic_mean_distance);
+    CHECK(ss.scalar_gradient[1] > 0.0 && ss.scalar_gradient[1] != sum.scalar_gradient[1]);
+    CHECK(ss.occlusion_hessian[4] != sum.occlusion_hessian[4]);
+    raddiff_gather_evaluation_free(smoothed);
+    bad.derivative_smoothing_polar = RADDIFF_STRATA_SMOOTHING_MAX_PASSES + 1;
+    CHECK(raddiff_gather_evaluation_new(&bad, &layout, &frame, &input, normals, all) == NULL);
+    CHECK(strstr(raddiff_last_error(), "smoothing") != NULL);
+    CHECK(raddiff_irradiance_cache_new(&bad) == NULL);
+  }
   raddiff_gather_evaluation_free(no_normals);
   raddiff_gather_evaluation_free(e);
   raddiff_gather_evaluation_free(NULL);

@@ -105,6 +105,8 @@ int main(void) {
   CHECK(d.curvature_floor == RADDIFF_CURVATURE_FLOOR_WEIGHT && d.max_anisotropy == 2.0);
   CHECK(d.pixel_radius_min == 1.0 && d.pixel_radius_max == 150.0 && isinf(d.world_radius_max));
   CHECK(isinf(d.leak_guard_relative) && d.leak_guard_absolute == 0.0);
+  CHECK(d.derivative_smoothing_azimuthal == 0 && d.derivative_smoothing_polar == 0);
+  CHECK(RADDIFF_STRATA_SMOOTHING_MAX_PASSES == 64);
 
   /* a uniform ceiling: E = pi L per channel, exactly, whatever the radii */
   cache = raddiff_irradiance_cache_new(&s);

@@ -81,8 +81,9 @@ fn hessians_from_c(bits: u32) -> Result<Hessians, FfiError> {
 }
 
 /// Evaluates a traced gather once, for records of any metric and threshold. `settings` gives the
-/// channel count and weights (of the scalar the metrics measure); `layout`, `frame` and `input`
-/// are what `raddiff_gather_evaluate` takes (a hemisphere layout; the frame's position and normal
+/// channel count and weights (of the scalar the metrics measure) and the smoothing of the strata
+/// the derivatives are taken from (`derivative_smoothing_azimuthal`, `_polar`); `layout`,
+/// `frame` and `input` are what `raddiff_gather_evaluate` takes (a hemisphere layout; the frame's position and normal
 /// are the record's); `hit_normals` (nullable) the unit surface normal at every hit, needed by
 /// the unaware and geometric Hessians; `hessians` the `RADDIFF_HESSIAN_*` bits to compute (each
 /// costs several times the gradient; ask only for those your metrics need). In a medium the
@@ -124,8 +125,12 @@ pub extern "C" fn raddiff_gather_evaluation_new(
             hit_normals,
             scalar_radiance: None,
         };
-        let inner =
-            GatherEvaluation::new(&traced, &settings.weights(), hessians_from_c(hessians)?)?;
+        let inner = GatherEvaluation::with_smoothing(
+            &traced,
+            &settings.weights(),
+            hessians_from_c(hessians)?,
+            settings.derivative_smoothing,
+        )?;
         let stored: Record<Vec<f32>> = inner.record(Extent::isotropic(1.0))?;
         let gradient = stored.gradient.as_ref().map(crate::cache::channel_major);
         let rotation = stored

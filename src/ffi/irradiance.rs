@@ -15,7 +15,7 @@ use crate::cache::irradiance::{
     IrradianceSettings, Metric, NearFieldSettings, RadiusBounds, SeedPolicy,
 };
 use crate::cache::{Cache, FarFieldReach, LeakGuard, OpenFractionTest};
-use crate::gather::LayoutKind;
+use crate::gather::{LayoutKind, StrataSmoothing};
 use crate::Error;
 
 /// Ward's split sphere: radius a * D, D the harmonic-mean hit distance (accuracy a
@@ -130,7 +130,23 @@ pub struct raddiff_irradiance_settings {
     /// each value blends more of them. `raddiff_irradiance_cache_new` gives the cache this scale;
     /// the query calls only check its range, as every field's (the cache's own scale applies).
     pub lookup_radius_scale: f64,
+    /// Passes of the [1 2 1] / 4 filter over each stratum's azimuthal neighbours (the ring wraps;
+    /// the concentric layout's second square axis) before the gather's derivatives are taken,
+    /// 0..=`RADDIFF_STRATA_SMOOTHING_MAX_PASSES` (default 0: off). The records' gradients and
+    /// radii then come from the smoothed strata, their values from the strata as traced: for
+    /// noisy hit radiance (the real-scene benchmark's 2 and 1 passes lowered every metric's
+    /// error by 5-10%); on noise-free radiance it only blurs.
+    pub derivative_smoothing_azimuthal: u32,
+    /// Passes over each stratum's polar neighbours (the first square axis), after the azimuthal
+    /// ones, 0..=`RADDIFF_STRATA_SMOOTHING_MAX_PASSES` (default 0).
+    pub derivative_smoothing_polar: u32,
 }
+
+/// The largest number of smoothing passes along either axis of a gather
+/// (`derivative_smoothing_azimuthal`, `derivative_smoothing_polar`).
+pub const RADDIFF_STRATA_SMOOTHING_MAX_PASSES: u32 = 64;
+
+const _: () = assert!(RADDIFF_STRATA_SMOOTHING_MAX_PASSES == StrataSmoothing::MAX_PASSES);
 
 /// The default settings (3 channels, the anisotropic occlusion-aware Hessian, a 32 x 128
 /// cosine-polar gather, 1 to 150 pixel radii, the default safeguards, leak guard off, no near
@@ -170,6 +186,8 @@ fn settings_to_c(s: &IrradianceSettings) -> raddiff_irradiance_settings {
         near_field_n: s.near_field.n,
         near_field_open_fraction_tolerance: s.near_field.open_fraction_test.tolerance,
         lookup_radius_scale: s.lookup_radius_scale,
+        derivative_smoothing_azimuthal: s.derivative_smoothing.azimuthal_passes,
+        derivative_smoothing_polar: s.derivative_smoothing.polar_passes,
     }
 }
 
@@ -236,6 +254,10 @@ pub(crate) unsafe fn settings_from_c(
             open_fraction_test: OpenFractionTest::new(settings.near_field_open_fraction_tolerance),
         },
         lookup_radius_scale: settings.lookup_radius_scale,
+        derivative_smoothing: StrataSmoothing {
+            azimuthal_passes: settings.derivative_smoothing_azimuthal,
+            polar_passes: settings.derivative_smoothing_polar,
+        },
     })
 }
 

@@ -19,6 +19,7 @@ use glam::DVec3;
 
 use super::input::{GatherInput, MediaRadiance};
 use super::layout::{Frame, Layout, LayoutKind};
+use super::smoothing::{SmoothedRadiance, StrataSmoothing};
 use super::walls::{ConcentricWalls, LayoutTables, Walls};
 use crate::error::{Error, Result};
 use crate::{kernels, Order};
@@ -153,6 +154,27 @@ impl<'a> ValidGather<'a> {
             ));
         }
         Ok(out)
+    }
+
+    /// [`ValidGather::evaluate`] with the radiance of every stratum (and the marched media
+    /// radiance and its gradient, if any) first smoothed over its neighbours by `smoothing`
+    /// ([`StrataSmoothing`]): the derivatives of a noisy gather, quieter. The layout, frame,
+    /// directions and distances are this gather's; with [`StrataSmoothing::OFF`] this is
+    /// `evaluate` itself. Errors as `evaluate` (the smoothed values stay finite).
+    pub fn evaluate_smoothed(
+        &self,
+        smoothing: StrataSmoothing,
+        wanted: Wanted,
+    ) -> Result<GatherValues> {
+        if !smoothing.is_on() {
+            return self.evaluate(wanted);
+        }
+        let smoothed = SmoothedRadiance::of(&self.layout, &self.input, smoothing)?;
+        ValidGather {
+            input: smoothed.input(&self.input),
+            ..*self
+        }
+        .evaluate(wanted)
     }
 
     /// Irradiance, wall and rotational gradients and distances from the radiance reaching x

@@ -34,6 +34,7 @@ mod evaluate;
 mod input;
 pub mod layout;
 pub mod near_far;
+mod smoothing;
 mod strata;
 mod walls;
 
@@ -41,6 +42,7 @@ pub use evaluate::{evaluate, GatherValues, ValidGather, Wanted};
 pub use input::{GatherInput, MediaRadiance};
 pub use layout::{concentric_to_local, Frame, Layout, LayoutKind, StratumBounds};
 pub use near_far::{far_field_gather, far_field_radiance, near_field, NearField};
+pub use smoothing::StrataSmoothing;
 
 // The gather's Hessians (occlusion-aware on surfaces and in media, occlusion-unaware), and the
 // record radii they imply.

@@ -239,6 +239,10 @@ fn settings(input: &mut Input) -> raddiff_irradiance_settings {
     }
     s.near_field_m = input.below(6);
     s.near_field_n = input.below(6);
+    // off, typical, the largest allowed and one too many
+    let passes = [0, 1, 2, 64, 65];
+    s.derivative_smoothing_azimuthal = passes[input.below(5) as usize];
+    s.derivative_smoothing_polar = passes[input.below(5) as usize];
     s
 }
 

@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::gather::hessian::outputs::cached_topology;
 use crate::gather::hessian::unaware::{geometric_hessian, unaware_derivatives};
 use crate::gather::hessian::{occlusion_derivatives, HemisphereGather};
-use crate::gather::{ValidGather, Wanted};
+use crate::gather::{StrataSmoothing, ValidGather, Wanted};
 use crate::Order;
 
 /// Which Hessians a [`GatherEvaluation`] computes (each costs from several times the gradient to
@@ -97,21 +97,59 @@ pub struct GatherEvaluation {
     pub geometric_hessian: Option<DMat3>,
     /// The channel weights the scalar was formed with.
     pub(super) weights: Vec<f64>,
+    /// The smoothing the derivatives were taken with.
+    pub(super) smoothing: StrataSmoothing,
 }
 
 impl GatherEvaluation {
     /// Evaluates `traced` with the channel `weights` (one per channel, ≥ 0, not all 0) and the
-    /// Hessians in `hessians`.
+    /// Hessians in `hessians`, every quantity from the strata as traced.
     ///
     /// `InvalidArgument` for a gather [`gather::evaluate`](crate::gather::evaluate) refuses, bad
     /// weights or per-ray arrays, an unaware or geometric Hessian without hit normals or in a
     /// medium; `Degenerate` when a result overflows. A gather whose every ray missed is valid:
     /// its distance is infinite (the metrics then leave the radius unbounded).
     pub fn new(traced: &TracedGather, weights: &[f64], hessians: Hessians) -> Result<Self> {
+        Self::with_smoothing(traced, weights, hessians, StrataSmoothing::OFF)
+    }
+
+    /// [`GatherEvaluation::new`] with the derivatives (gradients, rotational gradients, the
+    /// scalar's gradient and every Hessian) taken from the strata smoothed by `smoothing`
+    /// ([`StrataSmoothing`]; [`IrradianceSettings::derivative_smoothing`](super::IrradianceSettings::derivative_smoothing)),
+    /// and the irradiance, the scalar and the distances from the strata as traced: quieter
+    /// derivatives and radii for noisy hit radiance, the record's value unbiased. With
+    /// [`StrataSmoothing::OFF`] this is `new`. Errors as `new`, and `InvalidArgument` for more
+    /// passes than [`StrataSmoothing::MAX_PASSES`].
+    pub fn with_smoothing(
+        traced: &TracedGather,
+        weights: &[f64],
+        hessians: Hessians,
+        smoothing: StrataSmoothing,
+    ) -> Result<Self> {
         traced.check_extras()?;
         check_weights(weights, traced.input.channels)?;
+        smoothing.validate()?;
         let valid = ValidGather::new(&traced.layout, &traced.frame, &traced.input)?;
-        let values = valid.evaluate(Wanted::ALL)?;
+        let values = if smoothing.is_on() {
+            let mut values = valid.evaluate(Wanted {
+                distances: true,
+                ..Wanted::IRRADIANCE
+            })?;
+            let derivatives = valid.evaluate_smoothed(
+                smoothing,
+                Wanted {
+                    irradiance: false,
+                    gradient: true,
+                    rotation_gradient: true,
+                    distances: false,
+                },
+            )?;
+            values.gradient = derivatives.gradient;
+            values.rotation_gradient = derivatives.rotation_gradient;
+            values
+        } else {
+            valid.evaluate(Wanted::ALL)?
+        };
         let weighted = |v: &dyn Fn(usize) -> f64| -> f64 {
             let mut sum = weights[0] * v(0);
             for (c, w) in weights.iter().enumerate().skip(1) {
@@ -138,6 +176,7 @@ impl GatherEvaluation {
             unaware_hessian: None,
             geometric_hessian: None,
             weights: weights.to_vec(),
+            smoothing,
         };
         for kind in [
             HessianKind::OcclusionAware,
@@ -152,11 +191,14 @@ impl GatherEvaluation {
     }
 
     /// Computes the Hessian `kind` of the scalar from `traced` (the gather this evaluation came
-    /// from) and keeps it: for callers that time or choose the Hessians one at a time. Errors as
-    /// [`GatherEvaluation::new`].
+    /// from, its strata smoothed as the evaluation's) and keeps it: for callers that time or
+    /// choose the Hessians one at a time. Errors as [`GatherEvaluation::new`].
     pub fn add_hessian(&mut self, traced: &TracedGather, kind: HessianKind) -> Result<()> {
         traced.check_extras()?;
-        let scalar = scalar_radiance(traced, &self.weights);
+        let mut scalar = scalar_radiance(traced, &self.weights);
+        if self.smoothing.is_on() {
+            self.smoothing.apply(&traced.layout, scalar.to_mut(), 1)?;
+        }
         let gather = HemisphereGather {
             normal: traced.frame.normal,
             directions: traced.input.directions,
@@ -201,6 +243,11 @@ impl GatherEvaluation {
     /// The channel weights the scalar was formed with.
     pub fn weights(&self) -> &[f64] {
         &self.weights
+    }
+
+    /// The smoothing of the strata the derivatives were taken with.
+    pub fn smoothing(&self) -> StrataSmoothing {
+        self.smoothing
     }
 
     fn hessian_slot(&mut self, kind: HessianKind) -> &mut Option<DMat3> {

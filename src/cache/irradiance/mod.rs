@@ -72,4 +72,6 @@ pub use settings::{
 pub use traced::TracedGather;
 
 #[cfg(test)]
+mod smoothing_tests;
+#[cfg(test)]
 mod tests;

@@ -123,8 +123,13 @@ impl<V: CacheValue> Cache<V> {
         );
         // the record keeps the bits of the normalized query normal (the frame re-normalizes)
         traced.normal = n / n.length();
-        let evaluation = GatherEvaluation::new(&traced, &settings.weights(), settings.hessians())
-            .map_err(refusing(TRACED_GATHER))?;
+        let evaluation = GatherEvaluation::with_smoothing(
+            &traced,
+            &settings.weights(),
+            settings.hessians(),
+            settings.derivative_smoothing,
+        )
+        .map_err(refusing(TRACED_GATHER))?;
         Ok((prepared, evaluation))
     }
 }

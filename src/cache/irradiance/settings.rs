@@ -11,7 +11,7 @@ use crate::cache::{
 };
 use crate::error::{Error, Result};
 use crate::gather::radii::CURVATURE_FLOOR_WEIGHT;
-use crate::gather::{Layout, LayoutKind};
+use crate::gather::{Layout, LayoutKind, StrataSmoothing};
 
 /// The gradient limit c irradiance caches use unless told otherwise (the one default of the
 /// library, the C ABI's `RADDIFF_GRADIENT_LIMIT_DEFAULT`, the demo and the Embree example): over
@@ -123,6 +123,13 @@ pub struct IrradianceSettings {
     /// where they would be at 1; each value blends more of them. The cache's to choose, like
     /// its interpolation: [`IrradianceSettings::check_cache`] does not compare it.
     pub lookup_radius_scale: f64,
+    /// How the gather's strata are smoothed before its derivatives are taken (default
+    /// [`StrataSmoothing::OFF`]; [`GatherEvaluation::with_smoothing`](super::GatherEvaluation::with_smoothing)):
+    /// the records' gradients and radii from the smoothed strata, their values from the strata
+    /// as traced. For noisy hit radiance (a few shadow rays or paths per gather ray); on
+    /// noise-free radiance it only blurs. On the real-scene benchmark 2 azimuthal passes and 1
+    /// polar pass lowered every metric's error by 5-10% (`docs/real-scenes.md`).
+    pub derivative_smoothing: StrataSmoothing,
 }
 
 impl Default for IrradianceSettings {
@@ -151,6 +158,7 @@ impl IrradianceSettings {
             leak_guard: LeakGuard::OFF,
             near_field: NearFieldSettings::default(),
             lookup_radius_scale: 1.0,
+            derivative_smoothing: StrataSmoothing::OFF,
         }
     }
 
@@ -211,6 +219,7 @@ impl IrradianceSettings {
         self.near_field.reach.validate()?;
         self.near_field.open_fraction_test.validate()?;
         check_lookup_radius_scale(self.lookup_radius_scale)?;
+        self.derivative_smoothing.validate()?;
         if self.near_field.reach.is_on() {
             Layout::new(self.gather_kind, self.near_field.m, self.near_field.n, 0)
                 .map_err(|e| Error::InvalidArgument(format!("the near-field rays: {e}")))?;

@@ -57,6 +57,7 @@ fn summary(scalar: f64, gradient: DVec3, distance: f64, hessian: DMat3) -> Gathe
         unaware_hessian: Some(hessian),
         geometric_hessian: None,
         weights: vec![1.0],
+        smoothing: crate::gather::StrataSmoothing::OFF,
     }
 }
 
@@ -488,7 +489,7 @@ fn settings_validate_each_field() {
         LUMINANCE_WEIGHTS.to_vec()
     );
     assert_eq!(IrradianceSettings::new(4).weights(), vec![0.25; 4]);
-    let breakages: [fn(&mut IrradianceSettings); 11] = [
+    let breakages: [fn(&mut IrradianceSettings); 12] = [
         |s| s.accuracy = -1.0,
         |s| s.accuracy = f64::INFINITY,
         |s| s.channels = 0,
@@ -500,6 +501,7 @@ fn settings_validate_each_field() {
         |s| s.curvature_floor = f64::NAN,
         |s| s.gradient_limit = 0.0,
         |s| s.leak_guard = LeakGuard::relative(-1.0),
+        |s| s.derivative_smoothing.polar_passes = 65,
     ];
     for (i, breaks) in breakages.iter().enumerate() {
         let mut s = IrradianceSettings::default();
