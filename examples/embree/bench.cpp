@@ -322,8 +322,6 @@ void check_combinations(const BenchSettings &settings) {
       settings.error_norm > 0)
     throw std::runtime_error("--hessian-shrinkage, --noise-curvature and --gradient-noise-radius do not combine with "
                              "--error-norm (which solves its own radii)");
-  if (settings.smooth_azimuthal_passes < 0 || settings.smooth_polar_passes < 0)
-    throw std::runtime_error("--smooth-derivative-strata takes pass counts >= 0");
   if (settings.smooths_derivatives() && (settings.oracle_derivative_paths > 0 || noise_probes))
     throw std::runtime_error("--smooth-derivative-strata does not combine with --oracle-derivatives or the "
                              "noise-probe experiments (their derivatives are another gather's)");

@@ -69,12 +69,6 @@ struct BenchSettings {
   // (the same probes): where the gradient's noise, extrapolated, alone reaches z p of the value,
   // the budget the radii solve gives the curvature.
   double gradient_noise_radius = 0;
-  // > 0: the smoothed-derivatives experiment. The records' radii and derivatives from their gather
-  // with each stratum's radiance smoothed over its neighbours (smooth_strata: [1 2 1] / 4 along the
-  // azimuth, then along the polar angle, this many passes each), their values from the gather
-  // itself: derivatives with less of the strata's noise, at the price of a blurred angular detail.
-  int smooth_azimuthal_passes = 0;
-  int smooth_polar_passes = 0;
   // > 0: the records' derivatives (gradients, Hessians) from the same gather with radiance averaged
   // over this many paths, their values from the usual gather: what derivative noise costs.
   int oracle_derivative_paths = 0;
@@ -148,8 +142,11 @@ struct BenchSettings {
   bool noise_probes() const {
     return gradient_shrinkage > 0 || hessian_shrinkage > 0 || noise_curvature > 0 || gradient_noise_radius > 0;
   }
-  // Whether the smoothed-derivatives experiment is on.
-  bool smooths_derivatives() const { return smooth_azimuthal_passes > 0 || smooth_polar_passes > 0; }
+  // Whether the records' derivatives come from smoothed strata (--smooth-derivative-strata:
+  // raddiff's derivative_smoothing, which the mid-level evaluation applies).
+  bool smooths_derivatives() const {
+    return irradiance.derivative_smoothing_azimuthal > 0 || irradiance.derivative_smoothing_polar > 0;
+  }
 };
 
 // Runs the benchmark on one view; returns 0 when every fill covered the image with finite,

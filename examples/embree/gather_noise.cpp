@@ -115,23 +115,4 @@ DerivativeNoise derivative_noise(const TracedGather &g, const TracedGather *retr
   return s;
 }
 
-void smooth_strata(TracedGather &g, int azimuthal_passes, int polar_passes) {
-  const uint32_t m = g.layout.m, n = g.layout.n;
-  std::vector<float> before;
-  const auto pass = [&](bool azimuthal) {
-    before = g.radiance;
-    for (uint32_t j = 0; j < m; ++j)
-      for (uint32_t k = 0; k < n; ++k) {
-        const size_t here = j * n + k;
-        const size_t a = azimuthal ? j * n + (k + n - 1) % n : (j > 0 ? j - 1 : j) * n + k;
-        const size_t b = azimuthal ? j * n + (k + 1) % n : (j + 1 < m ? j + 1 : j) * n + k;
-        for (int c = 0; c < 3; ++c)
-          g.radiance[3 * here + c] =
-              0.25f * before[3 * a + c] + 0.5f * before[3 * here + c] + 0.25f * before[3 * b + c];
-      }
-  };
-  for (int p = 0; p < azimuthal_passes; ++p) pass(true);
-  for (int p = 0; p < polar_passes; ++p) pass(false);
-}
-
 }  // namespace rd

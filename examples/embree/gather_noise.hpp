@@ -1,7 +1,6 @@
 // The benchmark experiments' estimates of a gather's own noise, from its strata (or a second
 // trace of the same directions): the relative noise of its mean (the adaptive lookup) and the
-// noise of its gradients and Hessian (the derivative-shrinkage and noise-bound experiments); and
-// the filter that smooths its strata's radiance (the smoothed-derivatives experiment).
+// noise of its gradients and Hessian (the derivative-shrinkage and noise-bound experiments).
 #pragma once
 
 #include "metrics.hpp"
@@ -39,11 +38,5 @@ struct DerivativeNoise {
 DerivativeNoise derivative_noise(const TracedGather &g, const TracedGather *retraced, double gradient_k,
                                  double hessian_k, bool hessian_noise, uint64_t seed);
 
-// The smoothed-derivatives experiment's filter (BenchSettings::smooth_azimuthal_passes,
-// ::smooth_polar_passes): each stratum's radiance replaced by [1 2 1] / 4 of it and its azimuthal
-// neighbours (the azimuth wraps), `azimuthal_passes` times, then by the same over its polar
-// neighbours (an edge ring repeats itself), `polar_passes` times. Every channel alike; directions
-// and hits unchanged.
-void smooth_strata(TracedGather &g, int azimuthal_passes, int polar_passes);
 
 }  // namespace rd

@@ -63,15 +63,14 @@ void split_far_field(const TracedGather &g, double reach, double open, Evaluated
         e.open_fraction > 0 ? static_cast<float>(std::max(0.0, (e.value[c] - near[c]) / e.open_fraction)) : 0.0f;
 }
 
-// The experiments that take the records' radii and derivatives from another evaluation of the
-// same pixel (`other`, ignored when not valid) and their values from the usual one (`usual`):
-// usual becomes other with usual's values, and usual's CPU times, plus other's when `timed`.
-void take_derivatives(Evaluated other, bool timed, Evaluated &usual) {
+// The oracle experiment: the records' radii and derivatives from another evaluation of the same
+// pixel (`other`, ignored when not valid), their values and CPU times from the usual one
+// (`usual`): usual becomes other with usual's values and times.
+void take_derivatives(Evaluated other, Evaluated &usual) {
   if (!other.valid) return;
   std::copy(std::begin(usual.value), std::end(usual.value), std::begin(other.value));
   other.luminance = usual.luminance;
-  for (size_t k = 0; k < std::size(other.seconds); ++k)
-    other.seconds[k] = usual.seconds[k] + (timed ? other.seconds[k] : 0.0);
+  std::copy(std::begin(usual.seconds), std::end(usual.seconds), std::begin(other.seconds));
   usual = std::move(other);
 }
 
@@ -115,15 +114,9 @@ const Slot &GatherStore::get(size_t pixel) {
       // the same far-field gather as the records' (their derivatives must not see the near hits)
       if (far_field_gather) fill_near_with_far(q, reach, settings_.near_at_reach);
       // the records' CPU times from the usual gather (the averaged one is not timed)
-      take_derivatives(evaluate_gather(q, needs_, irr), false, *s.evaluated);
+      take_derivatives(evaluate_gather(q, needs_, irr), *s.evaluated);
     }
-    if (settings_.smooths_derivatives() && s.evaluated->valid) {
-      // the same gather with its strata's radiance smoothed; both evaluations' CPU time counts
-      TracedGather q = g;
-      smooth_strata(q, settings_.smooth_azimuthal_passes, settings_.smooth_polar_passes);
-      take_derivatives(evaluate_gather(q, needs_, irr), true, *s.evaluated);
-    }
-    // after the experiments that replace the evaluation, which would drop the bins
+    // after the oracle experiment, whose evaluation replaces the record's without the bins
     std::copy(std::begin(far_bins), std::end(far_bins), std::begin(s.evaluated->far_bins));
     if (settings_.near_field_px > 0) split_far_field(g, reach, open, *s.evaluated, far_field_gather);
     s.evaluated->relative_noise = relative_noise(g);

@@ -40,6 +40,7 @@ const char *kUsage =
     "                      [--hit-radiance production[:N][xK] | one-shadow-ray[xK] (default production:4)]\n"
     "                      [--gradient-limit c (default 2, inf: off)] [--leak-guard relative,absolute]\n"
     "                      [--max-anisotropy r (default 2)] [--curvature-floor kappa (default 0.04)]\n"
+    "                      [--smooth-derivative-strata A[,P] (derivatives from smoothed strata; default off)]\n"
     "                      [--lookup-scale k (records read over k times their radii, 1 to 8; default 1)]\n"
     "                      [--adaptive-lookup k0[,kmax[,exponent]] (bench: scale per pixel from the noise)]\n"
     "  render mode:        [--accuracy a | --hessian relative_error] [--records N] [--neighbour-clamp]\n"
@@ -50,7 +51,7 @@ const char *kUsage =
     "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n"
     "                      [--oracle-derivatives K] [--interpolation ward|tent|cubic] [--gradient-shrinkage k]\n"
     "                      [--hessian-shrinkage k] [--retraced-shrinkage-noise] [--noise-curvature z]\n"
-    "                      [--gradient-noise-radius z] [--smooth-derivative-strata A[,P]]\n"
+    "                      [--gradient-noise-radius z]\n"
     "                      [--hessian-distance-bound k] [--smooth-records s]\n"
     "                      [--second-order k] [--error-norm p] [--absolute-error] [--neighbour-clamp]\n"
     "                      [--near-field reach_px[,rays]] [--far-field-gathers] [--near-at-reach] [--far-field-bins]\n"
@@ -103,6 +104,15 @@ int main(int argc, char **argv) {
       else if (a == "--gradient-limit") render.irradiance.gradient_limit = std::stod(next());
       else if (a == "--max-anisotropy") render.irradiance.max_anisotropy = std::stod(next());
       else if (a == "--curvature-floor") render.irradiance.curvature_floor = std::stod(next());
+      else if (a == "--smooth-derivative-strata") {
+        const std::string v = next();
+        const size_t comma = v.find(',');
+        const int azimuthal = std::stoi(v.substr(0, comma));
+        const int polar = comma == std::string::npos ? 0 : std::stoi(v.substr(comma + 1));
+        if (azimuthal < 0 || polar < 0) throw std::runtime_error("--smooth-derivative-strata takes pass counts >= 0");
+        render.irradiance.derivative_smoothing_azimuthal = static_cast<uint32_t>(azimuthal);
+        render.irradiance.derivative_smoothing_polar = static_cast<uint32_t>(polar);
+      }
       else if (a == "--leak-guard") parse_pair(next(), render.irradiance.leak_guard_relative,
                                                render.irradiance.leak_guard_absolute, "--leak-guard");
       else if (a == "--check") render.check_pixels = std::stoi(next());
@@ -171,12 +181,6 @@ int main(int argc, char **argv) {
       else if (a == "--retraced-shrinkage-noise") bench.retraced_shrinkage_noise = true;
       else if (a == "--noise-curvature") bench.noise_curvature = std::stod(next());
       else if (a == "--gradient-noise-radius") bench.gradient_noise_radius = std::stod(next());
-      else if (a == "--smooth-derivative-strata") {
-        const std::string v = next();
-        const size_t comma = v.find(',');
-        bench.smooth_azimuthal_passes = std::stoi(v.substr(0, comma));
-        bench.smooth_polar_passes = comma == std::string::npos ? 0 : std::stoi(v.substr(comma + 1));
-      }
       else if (a == "--oracle-derivatives") bench.oracle_derivative_paths = std::stoi(next());
       else if (a == "--hessian-distance-bound") bench.hessian_distance_bound = std::stod(next());
       else if (a == "--interpolation") {
