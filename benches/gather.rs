@@ -11,6 +11,9 @@
 //! A second summary times the stratum check alone (`Layout::check_directions`, the validation of
 //! every direction against its stratum that `evaluate` runs first) against the evaluation with
 //! Ward-Heckbert gradients, for each layout kind at every size (criterion group `gather_check`).
+//! A third summary times the evaluation with gradients from strata smoothed by 2 azimuthal and 1
+//! polar passes (`ValidGather::evaluate_smoothed`, what `IrradianceSettings::derivative_smoothing`
+//! adds to a record's evaluation) against the same evaluation without smoothing.
 //! `RADDIFF_BENCH_SUMMARY_ONLY=1` skips the criterion groups, `RADDIFF_BENCH_CHECK_ONLY=1` the
 //! first summary;
 //! `RADDIFF_BENCH_PROFILE=32x128:gradients:1000` runs one case only (for `perf`/callgrind).
@@ -23,7 +26,10 @@ use std::time::Instant;
 
 use criterion::{criterion_group, Criterion, Throughput};
 use glam::DVec3;
-use raddiff::gather::{evaluate, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, Wanted};
+use raddiff::gather::{
+    evaluate, Frame, GatherInput, Layout, LayoutKind, MediaRadiance, StrataSmoothing, ValidGather,
+    Wanted,
+};
 
 #[path = "../tests/gather_support/evaluate_reference.rs"]
 mod evaluate_reference;
@@ -323,6 +329,41 @@ fn summary() {
     }
 }
 
+/// The evaluation with gradients, as traced and from smoothed strata (2 azimuthal passes, 1
+/// polar), both validating the gather as `evaluate` does.
+fn smoothing_summary() {
+    println!(
+        "\nEvaluate with gradients ({CHANNELS} channels), CPU ns per sample: as traced / from strata smoothed 2,1 (ratio):"
+    );
+    println!("| layout | cosine-polar | concentric |");
+    println!("|---|---|---|");
+    for (m, n) in SIZES {
+        let samples = (m * n) as f64;
+        let mut cells = Vec::new();
+        for kind in [LayoutKind::CosinePolar, LayoutKind::Concentric] {
+            let s = Scene::new_kind(kind, m, n);
+            let input = s.input_with(false, false);
+            let run = |smoothing: StrataSmoothing| {
+                let valid = ValidGather::new(&s.layout, &s.frame, &input).unwrap();
+                black_box(valid.evaluate_smoothed(smoothing, GRADIENTS).unwrap());
+            };
+            let plain = time(&|| run(StrataSmoothing::OFF)) / samples;
+            let smoothed = time(&|| run(StrataSmoothing::new(2, 1))) / samples;
+            let copy = RefCell::new(s.rad.clone());
+            let filter = time(&|| {
+                StrataSmoothing::new(2, 1)
+                    .apply(&s.layout, black_box(&mut copy.borrow_mut()), CHANNELS)
+                    .unwrap()
+            }) / samples;
+            cells.push(format!(
+                "{plain:.1} / {smoothed:.1} ({:.2}x; the filter alone {filter:.1})",
+                smoothed / plain
+            ));
+        }
+        println!("| {m}x{n} | {} |", cells.join(" | "));
+    }
+}
+
 criterion_group!(benches, bench);
 
 /// `RADDIFF_BENCH_PROFILE=<m>x<n>:<case>:<calls>`: runs one case that many times and nothing else,
@@ -355,4 +396,5 @@ fn main() {
         summary();
     }
     check_summary();
+    smoothing_summary();
 }

@@ -82,57 +82,111 @@ impl StrataSmoothing {
 
     /// Smooths `values` in place: `width` consecutive values per stratum (channels, or march
     /// steps × channels), strata in the layout's order `i = j·N + k`. Each value is filtered
-    /// with the same value of its neighbours, in f64, so the result lies between the smallest
-    /// and the largest of the input's (finite input stays finite).
+    /// with the same value of its neighbours, as halves of halves, so the result lies between
+    /// the smallest and the largest of the input's (finite input stays finite).
     ///
     /// `InvalidArgument` for a count above [`StrataSmoothing::MAX_PASSES`], `width == 0` or
     /// `values.len() != layout.len() · width`.
     pub fn apply(&self, layout: &Layout, values: &mut [f32], width: usize) -> Result<()> {
+        if self.is_on() {
+            let smoothed = self.smoothed(layout, values, width)?;
+            values.copy_from_slice(&smoothed);
+            Ok(())
+        } else {
+            self.check(layout, values.len(), width)
+        }
+    }
+
+    /// [`StrataSmoothing::apply`] into a new vector, `values` unchanged (each pass reads one
+    /// buffer and writes the other: no copy between passes). Errors as `apply`.
+    pub fn smoothed(&self, layout: &Layout, values: &[f32], width: usize) -> Result<Vec<f32>> {
+        self.check(layout, values.len(), width)?;
+        let (m, n) = (layout.m as usize, layout.n as usize);
+        let row = n * width;
+        let wraps = layout.kind != LayoutKind::Concentric;
+        let azimuthal = |from: &[f32], to: &mut [f32]| {
+            for (out, ring) in to.chunks_exact_mut(row).zip(from.chunks_exact(row)) {
+                smooth_line(out, ring, width, wraps);
+            }
+        };
+        let polar = |from: &[f32], to: &mut [f32]| {
+            let ring = |j: usize| &from[j * row..(j + 1) * row];
+            for (j, out) in to.chunks_exact_mut(row).enumerate() {
+                let (previous, next) = (ring(j.saturating_sub(1)), ring((j + 1).min(m - 1)));
+                blend(out, previous, ring(j), next);
+            }
+        };
+        let passes = (0..self.azimuthal_passes)
+            .map(|_| true)
+            .chain((0..self.polar_passes).map(|_| false));
+        let (mut current, mut spare) = (None::<Vec<f32>>, Vec::new());
+        for along_azimuth in passes {
+            let mut out = std::mem::take(&mut spare);
+            out.resize(values.len(), 0.0);
+            let from = current.as_deref().unwrap_or(values);
+            if along_azimuth {
+                azimuthal(from, &mut out);
+            } else {
+                polar(from, &mut out);
+            }
+            spare = current.replace(out).unwrap_or_default();
+        }
+        Ok(current.unwrap_or_else(|| values.to_vec()))
+    }
+
+    /// `InvalidArgument` for a count out of range or values that are not `width` per stratum.
+    fn check(&self, layout: &Layout, len: usize, width: usize) -> Result<()> {
         self.validate()?;
-        if width == 0 || Some(values.len()) != layout.len().checked_mul(width) {
+        if width == 0 || Some(len) != layout.len().checked_mul(width) {
             return Err(Error::InvalidArgument(format!(
-                "smoothing {} values of width {width} over {} strata",
-                values.len(),
+                "smoothing {len} values of width {width} over {} strata",
                 layout.len()
             )));
         }
-        if !self.is_on() {
-            return Ok(());
-        }
-        let (m, n) = (layout.m as usize, layout.n as usize);
-        let wraps = layout.kind != LayoutKind::Concentric;
-        let mut before = vec![0.0f32; values.len()];
-        for _ in 0..self.azimuthal_passes {
-            before.copy_from_slice(values);
-            for j in 0..m {
-                for k in 0..n {
-                    let (previous, next) = neighbours(k, n, wraps);
-                    blend(
-                        values,
-                        &before,
-                        width,
-                        j * n + k,
-                        [j * n + previous, j * n + next],
-                    );
-                }
-            }
-        }
-        for _ in 0..self.polar_passes {
-            before.copy_from_slice(values);
-            for j in 0..m {
-                let (previous, next) = neighbours(j, m, false);
-                for k in 0..n {
-                    blend(
-                        values,
-                        &before,
-                        width,
-                        j * n + k,
-                        [previous * n + k, next * n + k],
-                    );
-                }
-            }
-        }
         Ok(())
+    }
+}
+
+/// One line of strata (`width` values each), filtered along itself: wrapping around, or with the
+/// end strata repeating themselves.
+fn smooth_line(out: &mut [f32], line: &[f32], width: usize, wraps: bool) {
+    let len = line.len();
+    if len == width {
+        // a single stratum is its own neighbour either way
+        out.copy_from_slice(line);
+        return;
+    }
+    let last = len - width;
+    blend(
+        &mut out[width..last],
+        &line[..last - width],
+        &line[width..last],
+        &line[2 * width..],
+    );
+    let (before_first, after_last) = if wraps {
+        (&line[last..], &line[..width])
+    } else {
+        (&line[..width], &line[last..])
+    };
+    blend(
+        &mut out[..width],
+        before_first,
+        &line[..width],
+        &line[width..2 * width],
+    );
+    blend(
+        &mut out[last..],
+        &line[last - width..last],
+        &line[last..],
+        after_last,
+    );
+}
+
+/// `out = (previous + 2 centre + next) / 4`, value by value, as halves of halves: no partial
+/// sum exceeds the largest input's magnitude, so finite values stay finite.
+fn blend(out: &mut [f32], previous: &[f32], centre: &[f32], next: &[f32]) {
+    for (((o, &a), &b), &c) in out.iter_mut().zip(previous).zip(centre).zip(next) {
+        *o = 0.5 * b + 0.5 * (0.5 * a + 0.5 * c);
     }
 }
 
@@ -152,11 +206,7 @@ impl SmoothedRadiance {
         input: &GatherInput,
         smoothing: StrataSmoothing,
     ) -> Result<Self> {
-        let smoothed = |values: &[f32], width: usize| -> Result<Vec<f32>> {
-            let mut copy = values.to_vec();
-            smoothing.apply(layout, &mut copy, width)?;
-            Ok(copy)
-        };
+        let smoothed = |values: &[f32], width: usize| smoothing.smoothed(layout, values, width);
         let radiance = smoothed(input.radiance, input.channels)?;
         let (media_radiance, media_gradient) = match &input.media {
             Some(media) => {
@@ -184,27 +234,6 @@ impl SmoothedRadiance {
             }),
             ..*input
         }
-    }
-}
-
-/// The indices before and after `i` in `0..len`: wrapping around, or the edge repeating itself.
-fn neighbours(i: usize, len: usize, wraps: bool) -> (usize, usize) {
-    if wraps {
-        ((i + len - 1) % len, (i + 1) % len)
-    } else {
-        (i.saturating_sub(1), (i + 1).min(len - 1))
-    }
-}
-
-/// `values[here] = (before[a] + 2 before[here] + before[b]) / 4`, value by value over `width`.
-fn blend(values: &mut [f32], before: &[f32], width: usize, here: usize, [a, b]: [usize; 2]) {
-    let block = |s: usize| &before[s * width..(s + 1) * width];
-    let (left, centre, right) = (block(a), block(here), block(b));
-    for (c, out) in values[here * width..(here + 1) * width]
-        .iter_mut()
-        .enumerate()
-    {
-        *out = (0.25 * left[c] as f64 + 0.5 * centre[c] as f64 + 0.25 * right[c] as f64) as f32;
     }
 }
 

@@ -197,7 +197,7 @@ impl GatherEvaluation {
         traced.check_extras()?;
         let mut scalar = scalar_radiance(traced, &self.weights);
         if self.smoothing.is_on() {
-            self.smoothing.apply(&traced.layout, scalar.to_mut(), 1)?;
+            scalar = Cow::Owned(self.smoothing.smoothed(&traced.layout, &scalar, 1)?);
         }
         let gather = HemisphereGather {
             normal: traced.frame.normal,

@@ -180,3 +180,25 @@ fn bad_counts_and_sizes_are_refused() {
         .apply(&l, &mut v[..11], 1)
         .is_err());
 }
+
+#[test]
+fn lines_of_one_and_two_strata() {
+    for kind in KINDS {
+        let l = layout(kind, 1, 1);
+        let mut v = vec![3.0f32, 5.0];
+        StrataSmoothing::new(2, 2).apply(&l, &mut v, 2).unwrap();
+        assert_eq!(v, [3.0, 5.0], "{kind:?}");
+        let l = layout(kind, 2, 2);
+        let mut v = vec![1.0f32, 0.0, 0.0, 0.0];
+        StrataSmoothing::new(1, 0).apply(&l, &mut v, 1).unwrap();
+        let want = if kind == LayoutKind::Concentric {
+            [0.75, 0.25, 0.0, 0.0]
+        } else {
+            [0.5, 0.5, 0.0, 0.0]
+        };
+        assert_eq!(v, want, "{kind:?}");
+        StrataSmoothing::new(0, 1).apply(&l, &mut v, 1).unwrap();
+        assert_eq!(v[..2], want.map(|x| 0.75 * x)[..2], "{kind:?}");
+        assert_eq!(v[2..], want.map(|x| 0.25 * x)[..2], "{kind:?}");
+    }
+}
