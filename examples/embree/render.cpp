@@ -249,6 +249,9 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
   if (used.irradiance.lookup_radius_scale != 1)
     std::printf("lookup radius scale: records read over %g times their radii, misses decided at their own\n",
                 used.irradiance.lookup_radius_scale);
+  if (used.irradiance.derivative_smoothing_azimuthal > 0 || used.irradiance.derivative_smoothing_polar > 0)
+    std::printf("derivative smoothing: %u azimuthal and %u polar passes over the strata, values from the raw ones\n",
+                used.irradiance.derivative_smoothing_azimuthal, used.irradiance.derivative_smoothing_polar);
 
   // Render through a per-thread cursor, or with plain lookups (the library keeps a cursor per
   // thread). Both give the same bits; pass 2 uses the other one, so its check covers that too.

@@ -40,7 +40,12 @@ for wide in 1 1.5; do
     --lookup-scale "$wide" "$@" | tee "$out/cornell-wide$wide.log"
 done
 grep -q '^lookup radius scale: records read over 1.5 times their radii' "$out/cornell-wide1.5.log"
-runs=(cornell cornell-hessian cornell-near-split cornell-near-hessian cornell-near-open cornell-wide1 cornell-wide1.5)
+# The Hessian with its derivatives from smoothed strata (raddiff's derivative_smoothing).
+"$binary" --obj "$here/cornell.obj" --out "$out/cornell-smoothed" --size 128 --gather 16x48 --hessian 0.05 \
+  --smooth-derivative-strata 2,1 "$@" | tee "$out/cornell-smoothed.log"
+grep -q '^derivative smoothing: 2 azimuthal and 1 polar passes' "$out/cornell-smoothed.log"
+runs=(cornell cornell-hessian cornell-near-split cornell-near-hessian cornell-near-open cornell-wide1 cornell-wide1.5
+  cornell-smoothed)
 
 # The program exits non-zero when its own checks fail; check the files too.
 for f in "${runs[@]}"; do
