@@ -374,7 +374,7 @@ typedef struct raddiff_irradiance_settings {
   // 0..=`RADDIFF_STRATA_SMOOTHING_MAX_PASSES` (default 0: off). The records' gradients and
   // radii then come from the smoothed strata, their values from the strata as traced: for
   // noisy hit radiance (the real-scene benchmark's 2 and 1 passes lowered every metric's
-  // error by 5-10%); on noise-free radiance it only blurs.
+  // error by 2-10%); on noise-free radiance it only blurs.
   uint32_t derivative_smoothing_azimuthal;
   // Passes over each stratum's polar neighbours (the first square axis), after the azimuthal
   // ones, 0..=`RADDIFF_STRATA_SMOOTHING_MAX_PASSES` (default 0).
@@ -936,7 +936,7 @@ enum raddiff_status raddiff_gather_evaluate(const struct raddiff_gather_layout *
 
 // The default settings (3 channels, the anisotropic occlusion-aware Hessian, a 32 x 128
 // cosine-polar gather, 1 to 150 pixel radii, the default safeguards, leak guard off, no near
-// field).
+// field, no smoothing of the strata).
 struct raddiff_irradiance_settings raddiff_irradiance_settings_default(void);
 
 // A cache for the records `settings` make: surface domain, the settings' channels, the

@@ -135,7 +135,7 @@ pub struct raddiff_irradiance_settings {
     /// 0..=`RADDIFF_STRATA_SMOOTHING_MAX_PASSES` (default 0: off). The records' gradients and
     /// radii then come from the smoothed strata, their values from the strata as traced: for
     /// noisy hit radiance (the real-scene benchmark's 2 and 1 passes lowered every metric's
-    /// error by 5-10%); on noise-free radiance it only blurs.
+    /// error by 2-10%); on noise-free radiance it only blurs.
     pub derivative_smoothing_azimuthal: u32,
     /// Passes over each stratum's polar neighbours (the first square axis), after the azimuthal
     /// ones, 0..=`RADDIFF_STRATA_SMOOTHING_MAX_PASSES` (default 0).
@@ -150,7 +150,7 @@ const _: () = assert!(RADDIFF_STRATA_SMOOTHING_MAX_PASSES == StrataSmoothing::MA
 
 /// The default settings (3 channels, the anisotropic occlusion-aware Hessian, a 32 x 128
 /// cosine-polar gather, 1 to 150 pixel radii, the default safeguards, leak guard off, no near
-/// field).
+/// field, no smoothing of the strata).
 #[no_mangle]
 pub extern "C" fn raddiff_irradiance_settings_default() -> raddiff_irradiance_settings {
     settings_to_c(&IrradianceSettings::default())

@@ -6,7 +6,7 @@
 //! the irradiance, a sum, averages it away. Replacing each stratum's value by `[1 2 1] / 4` of
 //! it and its two neighbours before differentiating trades a little angular resolution for less
 //! noise: on the real-scene benchmark (`docs/real-scenes.md`) two azimuthal passes and one polar
-//! pass lowered every metric's error by 5-10% at 1,024 and 4,096 rays per gather. On noise-free
+//! pass lowered every metric's error by 2-10% at 1,024 and 4,096 rays per gather. On noise-free
 //! radiance it only blurs, so it is off unless asked for.
 //!
 //! Neighbours are the layout's grid neighbours, which are neighbours on the (hemi)sphere:

@@ -128,7 +128,7 @@ pub struct IrradianceSettings {
     /// the records' gradients and radii from the smoothed strata, their values from the strata
     /// as traced. For noisy hit radiance (a few shadow rays or paths per gather ray); on
     /// noise-free radiance it only blurs. On the real-scene benchmark 2 azimuthal passes and 1
-    /// polar pass lowered every metric's error by 5-10% (`docs/real-scenes.md`).
+    /// polar pass lowered every metric's error by 2-10% (`docs/real-scenes.md`).
     pub derivative_smoothing: StrataSmoothing,
 }
 
