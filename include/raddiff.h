@@ -848,9 +848,9 @@ const char *raddiff_version(void);
 // Evaluates a traced gather once, for records of any metric and threshold. `settings` gives the
 // channel count and weights (of the scalar the metrics measure) and the smoothing of the strata
 // the derivatives are taken from (`derivative_smoothing_azimuthal`, `_polar`); `layout`,
-// `frame` and `input` are what `raddiff_gather_evaluate` takes (a hemisphere layout; the frame's position and normal
-// are the record's); `hit_normals` (nullable) the unit surface normal at every hit, needed by
-// the unaware and geometric Hessians; `hessians` the `RADDIFF_HESSIAN_*` bits to compute (each
+// `frame` and `input` are what `raddiff_gather_evaluate` takes (a hemisphere layout; the
+// frame's position and normal are the record's); `hit_normals` (nullable) the unit surface
+// normal at every hit, needed by the unaware and geometric Hessians; `hessians` the `RADDIFF_HESSIAN_*` bits to compute (each
 // costs several times the gradient; ask only for those your metrics need). In a medium the
 // occlusion-aware Hessian attenuates the surface radiance and leaves the marched in-scattered
 // radiance out. Returns NULL (with `raddiff_last_error`) for NULL or invalid arguments, a
