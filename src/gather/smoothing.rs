@@ -25,8 +25,14 @@ use crate::error::{Error, Result};
 use super::input::{GatherInput, MediaRadiance};
 use super::layout::{Layout, LayoutKind};
 
-/// How many `[1 2 1] / 4` passes smooth a gather's strata before its derivatives are taken
-/// (see the [module](self) docs). The default, [`StrataSmoothing::OFF`], leaves them as traced.
+/// How many `[1 2 1] / 4` passes smooth a gather's strata before its derivatives are taken.
+///
+/// Each pass replaces every stratum's value by `[1 2 1] / 4` of it and its two grid neighbours
+/// (on the cosine-polar and sphere layouts the rings wrap around and the edge rings repeat; on
+/// the concentric layout the edge cells repeat) and keeps each ring's or grid line's sum. It
+/// lowers the derivatives' noise under noisy hit radiance and only blurs noise-free radiance
+/// (`docs/gathers.md`, "Smoothed strata"). The default, [`StrataSmoothing::OFF`], leaves the
+/// strata as traced.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct StrataSmoothing {
     /// Passes along φ (cosine-polar and sphere layouts, wrapping around each ring) or along the
