@@ -1,9 +1,13 @@
 //! A cache's configuration: what its records hold, how they are weighed and blended, and the
 //! safeguards applied at insert and lookup. Every field is saved with the cache.
 
-use super::{record, Domain, FarFieldReach, Interpolation, LeakGuard, OpenFractionTest};
-#[cfg(doc)]
-use super::{Cache, LOOKUP_RADIUS_SCALE_MAX};
+// Sibling modules only: `mod.rs` re-exports this module's type, so naming it would be a cycle
+// (the documentation links to `Cache` by path for the same reason).
+use super::far_field::FarFieldReach;
+use super::interp::Interpolation;
+use super::leak_guard::LeakGuard;
+use super::open_fraction::OpenFractionTest;
+use super::record::{self, Domain};
 
 /// Configuration of a cache.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,12 +44,18 @@ pub struct CacheConfig {
     /// (|∇E|·R/E up to ~100). Records that satisfy the bound are stored bit for bit as without
     /// the limit. [`Cache::merge`] and [`Cache::load`] take records as stored (no limit is
     /// re-applied). Saved with the cache (file format version 3).
+    ///
+    /// [`Cache::new`]: super::Cache::new
+    /// [`Cache::merge`]: super::Cache::merge
+    /// [`Cache::load`]: super::Cache::load
     pub gradient_limit: f64,
     /// The "record in front of the query" test (default [`LeakGuard::OFF`]; surface domain
     /// only): a record i is not used at a query x with normal n when
     /// `(x − xᵢ)·(n + nᵢ)/2 < −(relative·Rᵢ + absolute)`, Rᵢ the record's radius along its
     /// normal (see [`LeakGuard`]). Both tolerances must be ≥ 0; [`Cache::new`] rejects NaN and
     /// negative ones. Saved with the cache (file format version 4; older files load with it off).
+    ///
+    /// [`Cache::new`]: super::Cache::new
     pub leak_guard: LeakGuard,
     /// Whether records hold far fields of the near/far decomposition, and at which reach
     /// (default [`FarFieldReach::OFF`]: records hold what their gathers saw). The cache itself
@@ -53,12 +63,18 @@ pub struct CacheConfig {
     /// ([`Cache::irradiance_near_far`]) that the near field is theirs to add, and keeps such a
     /// cache from being filled or read as one of irradiance. Saved with the cache (file format
     /// version 5; older files load with it off).
+    ///
+    /// [`Cache::irradiance_near_far`]: super::Cache::irradiance_near_far
     pub far_field: FarFieldReach,
     /// The open-fraction test of far-field caches (default [`OpenFractionTest::OFF`]): a record
     /// i with an open fraction Vᵢ is not used at a query of open fraction V
     /// ([`Cache::lookup_open`], [`Cache::irradiance_near_far`]) when `|Vᵢ − V| > tolerance` (see
     /// [`OpenFractionTest`]). The tolerance must be ≥ 0; [`Cache::new`] rejects NaN and negative
     /// ones. Saved with the cache (file format version 6; older files load with it off).
+    ///
+    /// [`Cache::lookup_open`]: super::Cache::lookup_open
+    /// [`Cache::irradiance_near_far`]: super::Cache::irradiance_near_far
+    /// [`Cache::new`]: super::Cache::new
     pub open_fraction_test: OpenFractionTest,
     /// How far records are read: the lookup radius scale k, in multiples of their radii
     /// (default 1; in [1, [`LOOKUP_RADIUS_SCALE_MAX`]], [`Cache::new`] rejects anything else).
@@ -85,6 +101,11 @@ pub struct CacheConfig {
     /// blended per lookup, plus the coverage test. k = 1 gives the results without the scale bit
     /// for bit. Saved with the cache (file format version 7; older files load with 1); changed
     /// on a filled cache by [`Cache::set_lookup_radius_scale`].
+    ///
+    /// [`LOOKUP_RADIUS_SCALE_MAX`]: super::LOOKUP_RADIUS_SCALE_MAX
+    /// [`Cache::new`]: super::Cache::new
+    /// [`Cache::irradiance`]: super::Cache::irradiance
+    /// [`Cache::set_lookup_radius_scale`]: super::Cache::set_lookup_radius_scale
     pub lookup_radius_scale: f64,
 }
 
@@ -136,6 +157,8 @@ impl CacheConfig {
 
     /// The same configuration with [`CacheConfig::gradient_limit`] set to `c` (`f64::INFINITY`
     /// turns the limit off; [`Cache::new`] rejects `c <= 0` and NaN).
+    ///
+    /// [`Cache::new`]: super::Cache::new
     pub fn with_gradient_limit(mut self, c: f64) -> Self {
         self.gradient_limit = c;
         self
