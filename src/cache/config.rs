@@ -127,19 +127,13 @@ impl CacheConfig {
         }
     }
 
-    /// Media radiance: the cubic kernel of Marco et al. (eq. 23).
+    /// Media radiance: the cubic kernel of Marco et al. (eq. 23); otherwise as
+    /// [`CacheConfig::surface`].
     pub fn volume(channels: usize) -> Self {
         CacheConfig {
-            channels,
             domain: Domain::Volume,
             interpolation: Interpolation::Cubic,
-            max_normal_deviation: 0.2,
-            non_negative: false,
-            gradient_limit: f64::INFINITY,
-            leak_guard: LeakGuard::OFF,
-            far_field: FarFieldReach::OFF,
-            open_fraction_test: OpenFractionTest::OFF,
-            lookup_radius_scale: 1.0,
+            ..Self::surface(channels)
         }
     }
 

@@ -310,12 +310,11 @@ impl March {
         self.steps as f64 * self.step
     }
 
-    /// `(∫_a^{a+len} exp(−σt) dt, ∫_a^{a+len} t exp(−σt) dt)`, without cancellation for small σ·len.
-    #[inline]
-    pub(super) fn segment(&self, a: f64, len: f64) -> (f64, f64) {
+    /// `(∫_0^len exp(−σu) du, ∫_0^len u exp(−σu) du)`, without cancellation for small σ·len.
+    #[inline(always)]
+    fn integrals_over(&self, len: f64) -> (f64, f64) {
         let x = self.sigma * len;
-        // ∫_0^len exp(−σu) du and ∫_0^len u exp(−σu) du
-        let (j0, j1) = if x < 1e-3 {
+        if x < 1e-3 {
             (
                 len * (1.0 - x / 2.0 + x * x / 6.0),
                 len * len * (0.5 - x / 3.0 + x * x / 8.0),
@@ -326,7 +325,13 @@ impl March {
                 -(-x).exp_m1() / self.sigma,
                 (1.0 - em * (1.0 + x)) / (self.sigma * self.sigma),
             )
-        };
+        }
+    }
+
+    /// `(∫_a^{a+len} exp(−σt) dt, ∫_a^{a+len} t exp(−σt) dt)`, without cancellation for small σ·len.
+    #[inline]
+    pub(super) fn segment(&self, a: f64, len: f64) -> (f64, f64) {
+        let (j0, j1) = self.integrals_over(len);
         let ta = (-self.sigma * a).exp();
         (ta * j0, ta * (a * j0 + j1))
     }
@@ -335,19 +340,7 @@ impl March {
     /// from the table: the same value.
     #[inline(always)]
     pub(super) fn segment_from_step(&self, s: usize, a: f64, len: f64) -> (f64, f64) {
-        let x = self.sigma * len;
-        let (j0, j1) = if x < 1e-3 {
-            (
-                len * (1.0 - x / 2.0 + x * x / 6.0),
-                len * len * (0.5 - x / 3.0 + x * x / 8.0),
-            )
-        } else {
-            let em = (-x).exp();
-            (
-                -(-x).exp_m1() / self.sigma,
-                (1.0 - em * (1.0 + x)) / (self.sigma * self.sigma),
-            )
-        };
+        let (j0, j1) = self.integrals_over(len);
         let ta = self.start[s];
         (ta * j0, ta * (a * j0 + j1))
     }
