@@ -17,8 +17,9 @@ pub(super) struct MediaTerms<'g, 'a> {
 }
 
 impl MediaTerms<'_, '_> {
-    /// Multiplies each stratum's radiance by the transmittance to its hit (zero for a miss) and
-    /// adds the cell-radiance gradient `weight · Σ ∇T·L` (eq. 17-18) to `out.gradient` when wanted.
+    /// Multiplies each stratum's radiance by the transmittance to its hit (zero for a miss); with
+    /// `want_gradient`, sets `gradient` to the cell-radiance gradient `weight · Σ ∇T·L` (eq.
+    /// 17-18), one vector per channel.
     pub(super) fn attenuate(
         &self,
         rad: &mut [f64],
@@ -76,11 +77,11 @@ impl MediaTerms<'_, '_> {
     }
 
     /// Adds the media radiance reaching x through each stratum, `Σ_s Q_s ∫ T dt` over the visible
-    /// part of each step, to `rad`. When the gradient is wanted, adds `weight · Σ_i ∇L_m,i` to
-    /// `out.gradient`: the gradient of each stratum's segment integral with its hit point held fixed
-    /// (the Ward-Heckbert assumption), so that together with the wall terms on the total radiance
-    /// the visibility gradient of surfaces occluding the medium (Jarosz 2008 eq. 22-26) appears at
-    /// silhouettes, and nowhere else.
+    /// part of each step, to `rad`. With `want_gradient`, adds `weight · Σ_i ∇L_m,i` to `gradient`
+    /// (sized to the channels first if empty): the gradient of each stratum's segment integral
+    /// with its hit point held fixed (the Ward-Heckbert assumption), so that together with the
+    /// wall terms on the total radiance the visibility gradient of surfaces occluding the medium
+    /// (Jarosz 2008 eq. 22-26) appears at silhouettes, and nowhere else.
     pub(super) fn add_media(
         &self,
         rad: &mut [f64],
@@ -276,8 +277,8 @@ impl MediaTerms<'_, '_> {
     }
 }
 
-/// March steps `[s·Δ, (s+1)·Δ]`, weighted by the exact integrals of `exp(−σt)` and `t·exp(−σt)` over
-/// the part of each step that is visible (media radiance constant within a step).
+/// March steps `[s·Δ, (s+1)·Δ]`, weighted by the exact integrals of `exp(−σt)` and `t·exp(−σt)`
+/// over the part of each step that is visible (media radiance constant within a step).
 pub(super) struct March {
     pub(super) sigma: f64,
     pub(super) step: f64,
@@ -328,7 +329,8 @@ impl March {
         }
     }
 
-    /// `(∫_a^{a+len} exp(−σt) dt, ∫_a^{a+len} t exp(−σt) dt)`, without cancellation for small σ·len.
+    /// `(∫_a^{a+len} exp(−σt) dt, ∫_a^{a+len} t exp(−σt) dt)`, without cancellation for small
+    /// σ·len.
     #[inline]
     pub(super) fn segment(&self, a: f64, len: f64) -> (f64, f64) {
         let (j0, j1) = self.integrals_over(len);
