@@ -146,8 +146,7 @@ impl MediaTerms<'_, '_> {
     ) {
         let steps = media.steps;
         let weight = self.weight;
-        let grad = want_gradient;
-        if grad && gradient.is_empty() {
+        if want_gradient && gradient.is_empty() {
             *gradient = vec![DVec3::ZERO; ch];
         }
         // Step weights of one stratum: ∫T, ∫T − σ∫tT, ∫T − ∫tT/r, ∫tT over the visible steps.
@@ -171,7 +170,7 @@ impl MediaTerms<'_, '_> {
                 &mut rad[i * ch..(i + 1) * ch],
                 media,
                 march,
-                grad,
+                want_gradient,
                 (i, r, w),
                 (&w0[..visible], &w1[..visible]),
                 (&mut wa, &mut wg),
@@ -180,7 +179,7 @@ impl MediaTerms<'_, '_> {
             );
             march.restore(&mut w0, &mut w1, used);
         }
-        if grad {
+        if want_gradient {
             for (g, t) in gradient.iter_mut().zip(total) {
                 *g += t * weight;
             }
