@@ -146,9 +146,12 @@ void CacheFill::check_combinations() const {
     throw std::runtime_error("--neighbour-clamp does not combine with --smooth-records or --second-order");
 }
 
-// With the test, the cache's open-fraction tolerance; with --lookup-scale, records read over their
-// radii times it.
+// The settings' leak guard (which raddiff_irradiance_cache_new sets and the experiments' caches
+// made with surface_cache would otherwise lack); with the test, the cache's open-fraction
+// tolerance; with --lookup-scale, records read over their radii times it.
 CachePtr CacheFill::with_cache_state(CachePtr c) const {
+  check(raddiff_cache_set_leak_guard(c.get(), irr_.leak_guard_relative, irr_.leak_guard_absolute),
+        "raddiff_cache_set_leak_guard");
   if (open_test_)
     check(raddiff_cache_set_open_fraction_tolerance(c.get(), settings_.open_fraction_tolerance),
           "raddiff_cache_set_open_fraction_tolerance");
@@ -187,19 +190,11 @@ bool CacheFill::covered(size_t pixel) const {
 
 void CacheFill::make_side_caches() {
   if (render_ && settings_.second_order > 0) {
-    quadratic_ = surface_cache(kernel_, irr_.gradient_limit, kQuadraticChannels, false);
-    check(raddiff_cache_set_lookup_radius_scale(quadratic_.get(), settings_.lookup_scale),
-          "raddiff_cache_set_lookup_radius_scale");
-    check(raddiff_cache_set_leak_guard(quadratic_.get(), irr_.leak_guard_relative, irr_.leak_guard_absolute),
-          "raddiff_cache_set_leak_guard");
+    quadratic_ = with_cache_state(surface_cache(kernel_, irr_.gradient_limit, kQuadraticChannels, false));
   }
   if (render_ && settings_.far_field_bins)
-    for (int b = 0; b < bands_; ++b) {
+    for (int b = 0; b < bands_; ++b)
       binned_caches_.push_back(with_cache_state(surface_cache(kernel_, irr_.gradient_limit, 3 * kDirBins, false)));
-      check(raddiff_cache_set_leak_guard(binned_caches_.back().get(), irr_.leak_guard_relative,
-                                         irr_.leak_guard_absolute),
-            "raddiff_cache_set_leak_guard");
-    }
 }
 
 BenchFill CacheFill::run() {
@@ -385,12 +380,9 @@ void CacheFill::smooth_records() {
   }
 }
 
-// The adaptive-lookup experiment's caches (not timed), with the records' state and the noise
-// cache's guard.
+// The adaptive-lookup experiment's caches (not timed), with the records' state.
 void CacheFill::make_adaptive_lookup() {
   CachePtr noise_cache = with_cache_state(surface_cache(kernel_, irr_.gradient_limit, 1, false));
-  check(raddiff_cache_set_leak_guard(noise_cache.get(), irr_.leak_guard_relative, irr_.leak_guard_absolute),
-        "raddiff_cache_set_leak_guard");
   std::vector<float> noise;
   for (const RecordInfo &r : out_.records) noise.push_back(static_cast<float>(r.relative_noise));
   adaptive_lookup_ = std::make_unique<AdaptiveLookup>(kept_, noise, settings_.adaptive_lookup,
