@@ -226,7 +226,7 @@ void gradient_limit() {
 }
 
 // The open-fraction test through the wrapper: the tolerance's setter and getter, lookup_open and
-// try_lookup_open with and without a cursor (the values ffi-tests/open_fraction.c asserts).
+// try_lookup_open with and without a cursor, keeping coverage (the values ffi-tests/open_fraction.c asserts).
 void open_fraction() {
   const float closed_value = 1.0f, open_value = 3.0f;
   const double closed = 0.25, open = 0.875;
@@ -256,6 +256,13 @@ void open_fraction() {
                "open fraction");
   CHECK_THROWS(cache.set_open_fraction_tolerance(-1.0), RADDIFF_ERROR_INVALID_ARGUMENT, "open-fraction");
   CHECK(cache.open_fraction_tolerance() == 0.25);
+  // keeping coverage: the query that every record's open fraction refuses reads them all
+  CHECK(!cache.open_fraction_keeps_coverage());
+  cache.set_open_fraction_keeps_coverage(true);
+  CHECK(cache.open_fraction_keeps_coverage());
+  CHECK(cache.lookup_open(x, kN, 0.56, raddiff::Span<float>(&v, 1), &cursor) == w_plain && v == plain);
+  cache.set_open_fraction_keeps_coverage(false);
+  CHECK(!cache.try_lookup_open(x, kN, 0.56, raddiff::Span<float>(&v, 1)));
 }
 
 // The lookup radius scale through the wrapper: its setter and getter, a covered query blending

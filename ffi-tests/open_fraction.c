@@ -1,7 +1,7 @@
 /* The open-fraction test of far-field caches from C: records with and without an open fraction,
-   lookups with the query's (index and cursor paths), the setters' validation, irradiance
-   settings that carry the tolerance, a save/load round trip, and the one-call near/far query
-   under a ledge. */
+   lookups with the query's (index and cursor paths), keeping coverage, the setters' validation,
+   irradiance settings that carry the tolerance, a save/load round trip, and the one-call
+   near/far query under a ledge. */
 #include "raddiff.h"
 #include "check.h"
 #include <string.h>
@@ -39,7 +39,7 @@ static int ledge(void *user, raddiff_vec3 origin, const raddiff_vec3 *directions
 int main(int argc, char **argv) {
   char path[4096];
   raddiff_cache_config config = {1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD, 0.2};
-  raddiff_cache *cache = raddiff_cache_new(&config), *loaded, *tested, *plain;
+  raddiff_cache *cache = raddiff_cache_new(&config), *loaded, *tested, *plain, *kept;
   raddiff_cache_cursor *cursor = raddiff_cache_cursor_new();
   raddiff_irradiance_settings s = raddiff_irradiance_settings_default();
   const float closed_value = 1.0f, open_value = 3.0f, plain_value = 2.0f;
@@ -50,6 +50,7 @@ int main(int argc, char **argv) {
   raddiff_vec3 under = {-1.0, 0.0, 0.0}, beyond = {1.0, 0.0, 0.0};
   float out = 0.0f, with_cursor = 0.0f, all = 0.0f, first = 0.0f;
   double tolerance = 0.0, w = 0.0, w_cursor = 0.0, v = 0.0;
+  uint32_t keeps = 7;
   ledge_state st = {0};
   const double bad[] = {-0.5, 1.5, NAN};
   size_t i;
@@ -76,6 +77,27 @@ int main(int argc, char **argv) {
   /* between the two, beyond the tolerance of both: nothing covers */
   CHECK_STATUS(raddiff_cache_lookup_open(cache, NULL, x, n, 0.56, &out, NULL), RADDIFF_ERROR_NOT_FOUND);
   CHECK_STATUS(raddiff_cache_lookup_open(cache, cursor, x, n, 0.56, &out, NULL), RADDIFF_ERROR_NOT_FOUND);
+  /* keeping coverage: that query reads the refused records (the plain lookup, bit for bit, on
+     both paths), while a query that some record passes still reads that record alone */
+  CHECK_STATUS(raddiff_cache_get_open_fraction_keeps_coverage(cache, &keeps), RADDIFF_OK);
+  CHECK(keeps == 0);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_keeps_coverage(cache, 1), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_lookup_open(cache, NULL, x, n, 0.56, &out, &w), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_lookup(cache, x, n, &all, &w_cursor), RADDIFF_OK);
+  CHECK(out == all && w == w_cursor);
+  CHECK_STATUS(raddiff_cache_lookup_open(cache, cursor, x, n, 0.56, &with_cursor, &w_cursor), RADDIFF_OK);
+  CHECK(with_cursor == all && w_cursor == w);
+  CHECK_STATUS(raddiff_cache_lookup_open(cache, cursor, x, n, 0.3, &out, NULL), RADDIFF_OK);
+  CHECK(fabsf(out - 1.0f) < 1e-6f);
+  /* the tolerance's setter keeps it; invalid values and NULL change nothing */
+  CHECK_STATUS(raddiff_cache_set_open_fraction_tolerance(cache, 0.25), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_keeps_coverage(cache, 2), RADDIFF_ERROR_INVALID_ARGUMENT);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_keeps_coverage(NULL, 1), RADDIFF_ERROR_NULL_POINTER);
+  CHECK_STATUS(raddiff_cache_get_open_fraction_keeps_coverage(cache, NULL), RADDIFF_ERROR_NULL_POINTER);
+  CHECK_STATUS(raddiff_cache_get_open_fraction_keeps_coverage(cache, &keeps), RADDIFF_OK);
+  CHECK(keeps == 1);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_keeps_coverage(cache, 0), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_lookup_open(cache, NULL, x, n, 0.56, &out, NULL), RADDIFF_ERROR_NOT_FOUND);
   /* the plain lookup is not tested */
   CHECK_STATUS(raddiff_cache_lookup(cache, x, n, &out, NULL), RADDIFF_OK);
   CHECK(out == all);
@@ -97,13 +119,17 @@ int main(int argc, char **argv) {
   CHECK_STATUS(raddiff_cache_lookup_open(cache, NULL, x, n, 0.5, NULL, NULL), RADDIFF_ERROR_NULL_POINTER);
   CHECK_STATUS(raddiff_cache_get_open_fraction_tolerance(cache, &tolerance), RADDIFF_OK);
   CHECK(tolerance == 0.25);
-  /* saved with the cache: the tolerance and every record's open fraction */
+  /* saved with the cache: the tolerance, whether it keeps coverage and every record's open
+     fraction */
+  CHECK_STATUS(raddiff_cache_set_open_fraction_keeps_coverage(cache, 1), RADDIFF_OK);
   CHECK_STATUS(raddiff_cache_lookup_open(cache, NULL, x, n, 0.3, &first, NULL), RADDIFF_OK);
   CHECK_STATUS(raddiff_cache_save(cache, path), RADDIFF_OK);
   loaded = raddiff_cache_load(path);
   CHECK(loaded != NULL);
   CHECK_STATUS(raddiff_cache_get_open_fraction_tolerance(loaded, &tolerance), RADDIFF_OK);
   CHECK(tolerance == 0.25);
+  CHECK_STATUS(raddiff_cache_get_open_fraction_keeps_coverage(loaded, &keeps), RADDIFF_OK);
+  CHECK(keeps == 1);
   CHECK_STATUS(raddiff_cache_lookup_open(loaded, NULL, x, n, 0.3, &out, NULL), RADDIFF_OK);
   CHECK(out == first);
   CHECK_STATUS(raddiff_cache_lookup_open(loaded, NULL, x, n, 0.56, &out, NULL), RADDIFF_OK);
@@ -131,6 +157,18 @@ int main(int argc, char **argv) {
   CHECK_STATUS(raddiff_cache_irradiance_near_far_parts(tested, &s, beyond, n, 0.0, ledge, &st, &out, NULL, &v),
                RADDIFF_OK);
   CHECK(st.calls == 4 && v == 1.0 && raddiff_cache_len(tested) == 2);
+  /* keeping coverage (the cache's choice: the settings need not say it): x = +1 reads the
+     record under the ledge, refused, instead of tracing a gather of its own */
+  kept = raddiff_irradiance_cache_new(&s);
+  CHECK(kept != NULL);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_keeps_coverage(kept, 1), RADDIFF_OK);
+  st.calls = 0;
+  CHECK_STATUS(raddiff_cache_irradiance_near_far_parts(kept, &s, under, n, 0.0, ledge, &st, &out, NULL, &v),
+               RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_irradiance_near_far_parts(kept, &s, beyond, n, 0.0, ledge, &st, &out, NULL, &v),
+               RADDIFF_OK);
+  CHECK(st.calls == 3 && v == 1.0 && raddiff_cache_len(kept) == 1);
+  raddiff_cache_free(kept);
   /* the settings and the cache must agree on the test */
   CHECK_STATUS(raddiff_cache_irradiance_near_far(plain, &s, beyond, n, 0.0, ledge, &st, &out),
                RADDIFF_ERROR_INVALID_ARGUMENT);

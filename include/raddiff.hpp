@@ -340,6 +340,19 @@ class Cache : public detail::Owner<raddiff_cache> {
     return tolerance;
   }
 
+  /// Wraps `raddiff_cache_set_open_fraction_keeps_coverage` (not thread-safe): whether a query
+  /// whose covering records the open-fraction test all refuses reads them instead of finding none.
+  void set_open_fraction_keeps_coverage(bool keeps) {
+    detail::check(raddiff_cache_set_open_fraction_keeps_coverage(get(), keeps ? 1u : 0u));
+  }
+
+  /// Wraps `raddiff_cache_get_open_fraction_keeps_coverage`.
+  bool open_fraction_keeps_coverage() const {
+    uint32_t keeps = 0;
+    detail::check(raddiff_cache_get_open_fraction_keeps_coverage(get(), &keeps));
+    return keeps != 0;
+  }
+
   /// Wraps `raddiff_cache_set_lookup_radius_scale` (not thread-safe): records are read over
   /// `scale` times their radii, in [1, RADDIFF_LOOKUP_RADIUS_SCALE_MAX] (anything else throws);
   /// misses stay where they are at 1.

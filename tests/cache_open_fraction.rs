@@ -1,7 +1,8 @@
 //! The open-fraction test of far-field caches: lookups with the query's open fraction refuse
 //! exactly the records beyond the tolerance (on the index path and on both cursor paths, bit for
-//! bit), change nothing with the test off, and the one-call near/far query under a ledge makes
-//! a record of its own where the records nearby see another part of the sky.
+//! bit), change nothing with the test off, uncover no query when the test keeps coverage, and
+//! the one-call near/far query under a ledge makes a record of its own where the records nearby
+//! see another part of the sky.
 
 #[path = "common/plane_records.rs"]
 mod plane_records;
@@ -76,6 +77,76 @@ fn lookups_refuse_exactly_the_records_beyond_the_tolerance() {
         assert!(
             refusals > 100,
             "{interpolation:?}: only {refusals} refusals"
+        );
+    }
+}
+
+/// Keeping coverage: a query that some record passes reads exactly what the default test gives;
+/// a query whose covering records the test all refuses reads them as the test off does (bit for
+/// bit, on the three paths of a lookup), so a query is covered exactly where it is with the test
+/// off. With records read over twice their radii too, where coverage is decided at their own.
+#[test]
+fn keeping_coverage_reads_the_refused_records_only_where_none_passes() {
+    let all = records(120, 13);
+    for scale in [1.0, 2.0] {
+        let test = OpenFractionTest::new(0.0625);
+        let cache_of = |test: OpenFractionTest| {
+            let config = CacheConfig::surface(3)
+                .with_interpolation(Interpolation::Tent)
+                .with_far_field(FarFieldReach::world(1.0))
+                .with_open_fraction_test(test)
+                .with_lookup_radius_scale(scale);
+            let cache = Cache::<[f32; 3]>::new(config).unwrap();
+            for r in &all {
+                cache.insert(r).unwrap();
+            }
+            cache
+        };
+        let (keeping, uncovering, off) = (
+            cache_of(test.keeping_coverage()),
+            cache_of(test),
+            cache_of(OpenFractionTest::OFF),
+        );
+        let mut cursor = Cursor::new();
+        let mut u = stream(17);
+        let (mut chosen, mut kept) = (0, 0);
+        for _ in 0..600 {
+            let x = DVec3::new(4.0 * u(), 4.0 * u(), 0.0);
+            let open = u();
+            let got = keeping.lookup_open(x, DVec3::Z, open);
+            let want = match uncovering.lookup_open(x, DVec3::Z, open) {
+                Err(Error::NotFound(_)) => {
+                    kept += usize::from(off.lookup(x, DVec3::Z).is_ok());
+                    off.lookup(x, DVec3::Z)
+                }
+                passed => {
+                    chosen += usize::from(passed.is_ok());
+                    passed
+                }
+            };
+            match (&got, &want) {
+                (Ok(a), Ok(b)) => assert_eq!(a, b, "scale {scale} at {x} open {open}"),
+                (Err(Error::NotFound(_)), Err(Error::NotFound(_))) => {}
+                _ => panic!("scale {scale} at {x} open {open}: {got:?} vs {want:?}"),
+            }
+            assert_eq!(
+                got.is_ok(),
+                off.lookup(x, DVec3::Z).is_ok(),
+                "coverage at {x}"
+            );
+            let mut indexed = [0.0f32; 3];
+            let mut explicit = [0.0f32; 3];
+            let a = keeping.lookup_into_indexed_open(x, DVec3::Z, open, &mut indexed);
+            let c = keeping.lookup_into_with_open(&mut cursor, x, DVec3::Z, open, &mut explicit);
+            assert_eq!(a.is_ok(), got.is_ok());
+            assert_eq!(c.is_ok(), got.is_ok());
+            if let (Ok(a), Ok(c)) = (a, c) {
+                assert_eq!((a, indexed), (c, explicit), "scale {scale} at {x}");
+            }
+        }
+        assert!(
+            chosen > 100 && kept > 30,
+            "scale {scale}: {chosen} chosen, {kept} kept"
         );
     }
 }

@@ -50,7 +50,7 @@ fn reseal(bytes: &mut [u8]) {
     bytes[body..].copy_from_slice(&sum.to_le_bytes());
 }
 
-/// Size of the version 7 header (records start here).
+/// Size of the version 8 and 7 headers (records start here).
 const HEADER: usize = 104;
 /// Size of the version 6 header: no lookup radius scale (offsets 96..104).
 const HEADER_V6: usize = 96;
@@ -131,16 +131,17 @@ fn header_and_record_damage_is_named() {
     b[0] = b'X';
     assert!(corrupt_reason(&b).contains("magic"));
     let mut b = good.clone();
-    b[8] = 8;
+    b[8] = 9;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("version"));
     let mut b = good.clone();
     b[100] ^= 1;
     assert!(corrupt_reason(&b).contains("checksum"));
     // a header flag this version does not know (bit 0 is the non-negative flag, bit 1 the
-    // gradient limit, bit 2 the leak guard, bit 3 the far field, bit 4 the open-fraction test)
+    // gradient limit, bit 2 the leak guard, bit 3 the far field, bit 4 the open-fraction test,
+    // bit 5 its keeping coverage)
     let mut b = good.clone();
-    b[44] = 32;
+    b[44] = 64;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("flags"));
     // a resealed file with a NaN radius (record 0 radii start at HEADER + 40)
@@ -236,7 +237,7 @@ fn gradient_limit_round_trips() {
         c.insert(&r).unwrap();
     }
     let bytes = c.to_bytes();
-    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 7);
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 8);
     assert_eq!(u32::from_le_bytes(bytes[44..48].try_into().unwrap()), 0b11);
     assert_eq!(f64::from_le_bytes(bytes[48..56].try_into().unwrap()), 0.75);
     let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
@@ -589,6 +590,69 @@ fn open_fraction_test_round_trips() {
             Err(Error::InvalidArgument(_))
         ));
     }
+}
+
+/// Whether the open-fraction test keeps coverage is cache state (flag bit 5, version 8): it
+/// round-trips, the restored cache answers the queries that every record's open fraction refuses
+/// as the saved one did, the flag without the test's is damage, and a version 7 file knows no
+/// such flag (and loads with the test uncovering, every other field as saved).
+#[test]
+fn keeping_coverage_round_trips() {
+    let test = OpenFractionTest::new(0.125).keeping_coverage();
+    let config = CacheConfig::surface(3)
+        .with_far_field(FarFieldReach::world(0.5))
+        .with_open_fraction_test(test);
+    let c: Cache<[f32; 3]> = Cache::new(config).unwrap();
+    for (i, mut r) in sample(20).records().into_iter().enumerate() {
+        r.open_fraction = Some((i % 8) as f64 / 8.0);
+        c.insert(&r).unwrap();
+    }
+    let bytes = c.to_bytes();
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 8);
+    assert_eq!(
+        u32::from_le_bytes(bytes[44..48].try_into().unwrap()),
+        0b111000
+    );
+    let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
+    assert_eq!(back.config().open_fraction_test, test);
+    assert_eq!(back.to_bytes(), bytes);
+    let uncovering =
+        Cache::<[f32; 3]>::new(config.with_open_fraction_test(OpenFractionTest::new(0.125)))
+            .unwrap();
+    for r in c.records() {
+        uncovering.insert(&r).unwrap();
+    }
+    let mut kept = 0;
+    for i in 0..400 {
+        let p = DVec3::new(i as f64 * 0.02, (i % 9) as f64 * 0.5, 0.0);
+        let open = (i % 11) as f64 / 10.0;
+        let (a, b) = (
+            c.lookup_open(p, DVec3::Z, open),
+            back.lookup_open(p, DVec3::Z, open),
+        );
+        assert_eq!(a.as_ref().ok().map(|l| l.value), b.ok().map(|l| l.value));
+        kept += (a.is_ok() && uncovering.lookup_open(p, DVec3::Z, open).is_err()) as usize;
+    }
+    assert!(kept > 0, "no query was kept covered");
+    // the flag without the test's
+    let mut b = sample(3).to_bytes();
+    b[44] |= 32;
+    reseal(&mut b);
+    assert!(corrupt_reason(&b).contains("keep-coverage"));
+    // version 7: the same header, flag bit 5 unknown
+    let mut v7 = bytes.clone();
+    v7[8..12].copy_from_slice(&7u32.to_le_bytes());
+    reseal(&mut v7);
+    assert!(corrupt_reason(&v7).contains("flags"));
+    v7[44] &= !32;
+    reseal(&mut v7);
+    let back = Cache::<[f32; 3]>::from_bytes(&v7).unwrap();
+    assert_eq!(
+        back.config().open_fraction_test,
+        OpenFractionTest::new(0.125)
+    );
+    assert_eq!(back.config().far_field, c.config().far_field);
+    assert_eq!(back.keys(), c.keys());
 }
 
 /// The lookup radius scale is cache state (offset 96, version 7): the restored cache answers

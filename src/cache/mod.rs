@@ -90,18 +90,18 @@
 //! only where a record covers it at its own radii: misses, and so the records a renderer makes,
 //! are those at k = 1. Why, cost and limits: [`CacheConfig::lookup_radius_scale`].
 //!
-//! # File format (version 7, little-endian)
+//! # File format (version 8, little-endian)
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic `RDFCACHE` |
-//! | 8 | 4 | format version, u32 = 6 |
+//! | 8 | 4 | format version, u32 = 8 |
 //! | 12 | 4 | channels, u32 ≥ 1 |
 //! | 16 | 4 | domain, u32 (0 surface, 1 volume) |
 //! | 20 | 4 | interpolation, u32 (`RADDIFF_INTERP_*`) |
 //! | 24 | 8 | max normal deviation, f64 radians |
 //! | 32 | 8 | record count N, u64 |
 //! | 40 | 4 | record size S = 64 + 16·channels, u32 |
-//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, bit 2 leak guard on, bit 3 far field on, bit 4 open-fraction test on, the other bits 0 |
+//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, bit 2 leak guard on, bit 3 far field on, bit 4 open-fraction test on, bit 5 the test keeps coverage ([`OpenFractionTest::keeps_coverage`]; only with bit 4), the other bits 0 |
 //! | 48 | 8 | gradient limit c, f64: finite and > 0 if flag bit 1 is set, else 0.0 (all bits 0) |
 //! | 56 | 8 | leak guard relative tolerance, f64: finite and ≥ 0 if flag bit 2 is set, else 0.0 (all bits 0) |
 //! | 64 | 8 | leak guard absolute tolerance, f64: as the relative one |
@@ -112,7 +112,8 @@
 //! | 104 | N·S | records, in strictly increasing content order |
 //! | 104 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
 //!
-//! Older versions are still read. Version 6 (before the lookup radius scale) has the same header
+//! Older versions are still read. Version 7 (before the test could keep coverage) has the same
+//! header; flag bit 5 must be 0. Version 6 (before the lookup radius scale) has the same header
 //! up to offset 96 without the scale (records start at 96); its caches read records over their
 //! own radii (scale 1). Version 5 (before the open-fraction test) has the same header
 //! up to offset 88 without the tolerance (records start at 88), flag bit 4 must be 0, and its
@@ -122,7 +123,7 @@
 //! records hold no far fields. Version 3 (before the leak guard) also lacks the leak-guard fields
 //! (records start at 56), flag bit 2 must be 0, and the cache has no leak guard. Version 2 (before
 //! the gradient limit) also lacks the gradient-limit field (records start at 48), flag bit 1 must
-//! be 0, and the cache has no gradient limit. [`Cache::save`] always writes version 7.
+//! be 0, and the cache has no gradient limit. [`Cache::save`] always writes version 8.
 //!
 //! Record (S bytes): position 3×f64; frame as a unit quaternion 4×f32 (x, y, z, w with w ≥ 0,
 //! rotating the world axes onto the frame: surface axis 0, axis 1 = n × axis 0, normal n; volume
@@ -554,8 +555,9 @@ impl<V: CacheValue> Cache<V> {
     /// [`Cache::lookup_into`] for a query whose open fraction is `open_fraction` (in [0, 1]): the
     /// cache's [open-fraction test](OpenFractionTest) refuses the records whose open fraction
     /// differs from it by more than the tolerance (with the test off, the result of
-    /// [`Cache::lookup_into`] bit for bit). `InvalidArgument` for an open fraction outside
-    /// [0, 1].
+    /// [`Cache::lookup_into`] bit for bit; where it refuses every covering record and
+    /// [keeps coverage](OpenFractionTest::keeps_coverage), too). `InvalidArgument` for an open
+    /// fraction outside [0, 1].
     pub fn lookup_into_open(
         &self,
         position: DVec3,
@@ -615,7 +617,12 @@ impl<V: CacheValue> Cache<V> {
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
         let n = self.check_lookup(position, normal, out.len())?;
-        self.lookup_checked_indexed(&self.kernel.for_query(open), position, n, out)
+        match self.lookup_checked_indexed(&self.kernel.for_query(open), position, n, out) {
+            Err(Error::NotFound(_)) if self.config.open_fraction_test.reads_refused(open) => {
+                self.lookup_checked_indexed(&self.kernel, position, n, out)
+            }
+            found => found,
+        }
     }
 
     /// The index path of a query already validated (`n` the unit normal) with the query's
@@ -662,8 +669,26 @@ impl<V: CacheValue> Cache<V> {
         self.lookup_into_cursor(cursor, position, normal, Some(open_fraction), out)
     }
 
-    /// The cursor path of every lookup, with the query's open fraction if any.
+    /// The cursor path of every lookup, with the query's open fraction if any (and, when the
+    /// open-fraction test keeps coverage, without it where no record passes the test).
     fn lookup_into_cursor(
+        &self,
+        cursor: &mut Cursor,
+        position: DVec3,
+        normal: DVec3,
+        open: Option<f64>,
+        out: &mut [f32],
+    ) -> Result<(f64, usize)> {
+        match self.lookup_cursor_once(cursor, position, normal, open, out) {
+            Err(Error::NotFound(_)) if self.config.open_fraction_test.reads_refused(open) => {
+                self.lookup_cursor_once(cursor, position, normal, None, out)
+            }
+            found => found,
+        }
+    }
+
+    /// One cursor lookup with the window of the query's open fraction, if any.
+    fn lookup_cursor_once(
         &self,
         cursor: &mut Cursor,
         position: DVec3,

@@ -15,8 +15,11 @@ use crate::error::{Error, Result};
 
 /// File magic.
 pub const MAGIC: [u8; 8] = *b"RDFCACHE";
-/// Format version written by [`Cache::to_bytes`] (versions 2 to 7 are read).
-pub const FORMAT_VERSION: u32 = 7;
+/// Format version written by [`Cache::to_bytes`] (versions 2 to 8 are read).
+pub const FORMAT_VERSION: u32 = 8;
+/// Version 7: the version 8 header, but the open-fraction test never keeps coverage (flag bit 5
+/// unknown).
+const FORMAT_VERSION_7: u32 = 7;
 /// Version 6: no lookup radius scale (it is 1), records at [`HEADER_BYTES_V6`].
 const FORMAT_VERSION_6: u32 = 6;
 /// Version 5: no open-fraction test, records at [`HEADER_BYTES_V5`] without open fractions.
@@ -27,8 +30,8 @@ const FORMAT_VERSION_4: u32 = 4;
 const FORMAT_VERSION_3: u32 = 3;
 /// The oldest version read: no gradient-limit field either, records at [`HEADER_BYTES_V2`].
 const FORMAT_VERSION_2: u32 = 2;
-/// Header size of version 7: the version 6 header plus the lookup radius scale (f64 at offset
-/// 96).
+/// Header size of versions 7 and 8: the version 6 header plus the lookup radius scale (f64 at
+/// offset 96).
 const HEADER_BYTES: usize = 104;
 /// Header size of version 6: the version 5 header plus the open-fraction tolerance (f64 at
 /// offset 88).
@@ -57,6 +60,9 @@ const FLAG_FAR_FIELD: u32 = 8;
 /// Header flag (offset 44, version 6): [`CacheConfig::open_fraction_test`] is on (its tolerance
 /// at offset 88).
 const FLAG_OPEN_FRACTION: u32 = 16;
+/// Header flag (offset 44, version 8; only with [`FLAG_OPEN_FRACTION`]): the open-fraction test
+/// keeps coverage ([`OpenFractionTest::keeps_coverage`]).
+const FLAG_OPEN_FRACTION_KEEPS_COVERAGE: u32 = 32;
 
 impl<V: CacheValue> Cache<V> {
     /// The cache in the documented binary format (records in content order, so equal record
@@ -94,6 +100,9 @@ impl<V: CacheValue> Cache<V> {
         let open = self.config.open_fraction_test;
         if open.is_on() {
             flags |= FLAG_OPEN_FRACTION;
+            if open.keeps_coverage {
+                flags |= FLAG_OPEN_FRACTION_KEEPS_COVERAGE;
+            }
         }
         out.extend_from_slice(&flags.to_le_bytes());
         let limit = if limited {
@@ -127,7 +136,8 @@ impl<V: CacheValue> Cache<V> {
     /// Parses and validates a cache in the documented binary format. `Corrupt` with the reason
     /// for anything that [`Cache::to_bytes`] could not have written, including a channel count
     /// that disagrees with `V`. Never panics.
-    /// Version 6 files (no lookup radius scale: it is 1), version 5 files (no open-fraction test
+    /// Version 7 files (the open-fraction test, if on, does not keep coverage), version 6 files
+    /// (no lookup radius scale either: it is 1), version 5 files (no open-fraction test
     /// either: it is off, and records have no open fraction),
     /// version 4 files (no far-field marker either: records hold no far fields), version 3 files
     /// (no leak guard either: it is off) and version 2 files (no gradient limit either) are read
@@ -148,7 +158,7 @@ impl<V: CacheValue> Cache<V> {
         let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
         let version = u32_at(8);
         let header_bytes = match version {
-            FORMAT_VERSION => HEADER_BYTES,
+            FORMAT_VERSION | FORMAT_VERSION_7 => HEADER_BYTES,
             FORMAT_VERSION_6 => HEADER_BYTES_V6,
             FORMAT_VERSION_5 => HEADER_BYTES_V5,
             FORMAT_VERSION_4 => HEADER_BYTES_V4,
@@ -198,12 +208,20 @@ impl<V: CacheValue> Cache<V> {
             FORMAT_VERSION_5 => {
                 FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT | FLAG_LEAK_GUARD | FLAG_FAR_FIELD
             }
+            FORMAT_VERSION_6 | FORMAT_VERSION_7 => {
+                FLAG_NON_NEGATIVE
+                    | FLAG_GRADIENT_LIMIT
+                    | FLAG_LEAK_GUARD
+                    | FLAG_FAR_FIELD
+                    | FLAG_OPEN_FRACTION
+            }
             _ => {
                 FLAG_NON_NEGATIVE
                     | FLAG_GRADIENT_LIMIT
                     | FLAG_LEAK_GUARD
                     | FLAG_FAR_FIELD
                     | FLAG_OPEN_FRACTION
+                    | FLAG_OPEN_FRACTION_KEEPS_COVERAGE
             }
         };
         let f64_at = |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
@@ -275,8 +293,12 @@ impl<V: CacheValue> Cache<V> {
             OpenFractionTest::OFF
         } else {
             let tolerance = f64_at(88);
+            let keeps_coverage = flags & FLAG_OPEN_FRACTION_KEEPS_COVERAGE != 0;
             if flags & FLAG_OPEN_FRACTION != 0 {
-                let test = OpenFractionTest { tolerance };
+                let test = OpenFractionTest {
+                    tolerance,
+                    keeps_coverage,
+                };
                 if test.validate().is_err() || !test.is_on() {
                     return corrupt(format!(
                         "open-fraction tolerance {tolerance} is not finite and >= 0"
@@ -287,11 +309,15 @@ impl<V: CacheValue> Cache<V> {
                 return corrupt(
                     "open-fraction field is set but the open-fraction flag is not".into(),
                 );
+            } else if keeps_coverage {
+                return corrupt(
+                    "the keep-coverage flag is set but the open-fraction flag is not".into(),
+                );
             } else {
                 OpenFractionTest::OFF
             }
         };
-        let lookup_radius_scale = if version < FORMAT_VERSION {
+        let lookup_radius_scale = if version < FORMAT_VERSION_7 {
             1.0
         } else {
             let scale = f64_at(96);

@@ -1,8 +1,8 @@
 //! Writes the seed corpora into `fuzz/corpus/<target>/` (run from `fuzz/`:
 //! `cargo run --release --bin seeds`). For every target but `cache_load`: pseudo-random byte
 //! strings (fixed seed), the first few that the target accepts and the first few it refuses. For
-//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 7) and their version
-//! 6, 5, 4, 3 and 2 forms, each behind the option byte 0, and two refused files (truncated, damaged).
+//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 8) and their version
+//! 7, 6, 5, 4, 3 and 2 forms, each behind the option byte 0, and two refused files (truncated, damaged).
 use std::ffi::CString;
 use std::path::Path;
 
@@ -53,16 +53,25 @@ fn main() {
     damaged.extend(first);
     damaged[1 + 60] ^= 0x40;
     std::fs::write(dir.join("damaged"), damaged).expect("writing");
-    for (i, v7) in caches.iter().enumerate() {
+    for (i, v8) in caches.iter().enumerate() {
+        let v7 = &as_version_7(v8);
         let v6 = &as_version_6(v7);
         let v5 = as_version_5(v6);
         let v4 = as_version_4(&v5);
         let v3 = as_version_3(&v4);
         let v2 = as_version_2(&v3);
-        // the older forms a cache has (none with a lookup radius scale, no version 5 with an
-        // open-fraction test, no version 4 with a far field, no version 3 with a leak guard, no
-        // version 2 with a gradient limit)
-        for (version, file) in [(7, v7), (6, v6), (5, &v5), (4, &v4), (3, &v3), (2, &v2)] {
+        // the older forms a cache has (no version 7 keeping coverage, no version 6 with a lookup
+        // radius scale, no version 5 with an open-fraction test, no version 4 with a far field,
+        // no version 3 with a leak guard, no version 2 with a gradient limit)
+        for (version, file) in [
+            (8, v8),
+            (7, v7),
+            (6, v6),
+            (5, &v5),
+            (4, &v4),
+            (3, &v3),
+            (2, &v2),
+        ] {
             if u32::from_le_bytes(file[8..12].try_into().expect("4 bytes")) != version {
                 continue;
             }
@@ -103,6 +112,8 @@ fn saved_caches() -> Vec<Vec<u8>> {
         (3, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT),
         // read over 1.5 times the radii (below)
         (1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD),
+        // the open-fraction test keeping coverage (below)
+        (3, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT),
     ];
     kinds
         .iter()
@@ -114,11 +125,12 @@ fn saved_caches() -> Vec<Vec<u8>> {
                 interpolation,
                 max_normal_deviation: 0.3,
             };
-            let cache = if (5..=6).contains(&kind) {
+            let tested = kind == 6 || kind == 8;
+            let cache = if (5..=6).contains(&kind) || kind == 8 {
                 let mut settings = raddiff_irradiance_settings_default();
                 settings.channels = channels;
                 settings.near_field_reach_pixels = 8.0;
-                if kind == 6 {
+                if tested {
                     settings.near_field_open_fraction_tolerance = 0.15;
                 }
                 raddiff_irradiance_cache_new(&settings)
@@ -129,6 +141,12 @@ fn saved_caches() -> Vec<Vec<u8>> {
             if kind == 4 {
                 assert_eq!(
                     raddiff_cache_set_leak_guard(cache, 0.1, 0.001),
+                    raddiff_status::RADDIFF_OK
+                );
+            }
+            if kind == 8 {
+                assert_eq!(
+                    raddiff_cache_set_open_fraction_keeps_coverage(cache, 1),
                     raddiff_status::RADDIFF_OK
                 );
             }
@@ -185,7 +203,7 @@ fn saved_caches() -> Vec<Vec<u8>> {
                             z: 1.0,
                         },
                     ],
-                    open_fraction: if kind == 6 { &open } else { std::ptr::null() },
+                    open_fraction: if tested { &open } else { std::ptr::null() },
                 };
                 assert_eq!(
                     raddiff_cache_insert(cache, &record),
@@ -207,11 +225,27 @@ fn saved_caches() -> Vec<Vec<u8>> {
         .collect()
 }
 
+/// The version 7 form of a version 8 file: the same bytes with version 7, resealed. Only for
+/// caches whose open-fraction test does not keep coverage (version 7 cannot hold it): others are
+/// returned as is.
+fn as_version_7(v8: &[u8]) -> Vec<u8> {
+    let flags = u32::from_le_bytes(v8[44..48].try_into().expect("4 bytes"));
+    if flags & 32 != 0 {
+        return v8.to_vec();
+    }
+    let mut v7 = v8[..v8.len() - 8].to_vec();
+    v7[8..12].copy_from_slice(&7u32.to_le_bytes());
+    let sum = fnv1a(&v7);
+    v7.extend_from_slice(&sum.to_le_bytes());
+    v7
+}
+
 /// The version 6 form of a version 7 file: no lookup radius scale (bytes 96..104), resealed.
 /// Only for caches read over their own radii (scale 1; version 6 cannot hold another): others
 /// are returned as is.
 fn as_version_6(v7: &[u8]) -> Vec<u8> {
-    if f64::from_le_bytes(v7[96..104].try_into().expect("8 bytes")) != 1.0 {
+    let version = u32::from_le_bytes(v7[8..12].try_into().expect("4 bytes"));
+    if f64::from_le_bytes(v7[96..104].try_into().expect("8 bytes")) != 1.0 || version != 7 {
         return v7.to_vec();
     }
     let mut v6 = v7[..96].to_vec();

@@ -244,8 +244,9 @@ impl IrradianceSettings {
 
     /// `InvalidArgument` unless a cache configured as `config` stores what these settings make:
     /// the same channel count, the surface domain, the same gradient limit, leak guard,
-    /// far-field reach and open-fraction test (cache state the records are inserted and looked
-    /// up under). The interpolation and the normal deviation are the cache's to choose.
+    /// far-field reach and open-fraction tolerance (cache state the records are inserted and
+    /// looked up under). The interpolation, the normal deviation and whether the test keeps
+    /// coverage ([`OpenFractionTest::keeps_coverage`]) are the cache's to choose.
     pub fn check_cache(&self, config: &CacheConfig) -> Result<()> {
         let disagree = |what: &str, cache: String, settings: String| {
             Err(Error::InvalidArgument(format!(
@@ -290,7 +291,7 @@ impl IrradianceSettings {
             self.near_field.open_fraction_test,
             config.open_fraction_test,
         );
-        if (ours.is_on() || theirs.is_on()) && ours != theirs {
+        if (ours.is_on() || theirs.is_on()) && ours.tolerance != theirs.tolerance {
             return disagree(
                 "open-fraction test",
                 format!("{theirs:?}"),
