@@ -41,9 +41,9 @@ use crate::error::{Error, Result};
 /// records the test refused (as with the test off; the leak guard still applies): the test then
 /// chooses among the records covering a query and never uncovers one, so records are made
 /// exactly where they would be without it. On the real-scene benchmark (`docs/real-scenes.md`)
-/// keeping coverage gave lower errors than the test off at every record budget, and lower than
-/// the default test below about 8,000 records at 512 px; above that the default test's extra
-/// records where the openness changes win.
+/// keeping coverage gave lower errors than the test off at every record budget measured, and
+/// lower than the default test below 5,000 to 8,000 records at 512 px (where the curves cross on
+/// the two scenes); above that the default test's own records where the openness changes win.
 ///
 /// The test is off when the tolerance is infinite ([`OpenFractionTest::OFF`], the default).
 #[derive(Debug, Clone, Copy, PartialEq)]

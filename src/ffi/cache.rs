@@ -481,7 +481,7 @@ pub extern "C" fn raddiff_cache_get_open_fraction_tolerance(
 /// among the records covering a query and never makes a renderer add a record. Without it the
 /// refusals make records where the open fraction changes, which at a fixed record budget leaves
 /// the open regions fewer, larger records (the real-scene benchmark: keeping coverage had the
-/// lower error below about 8,000 records at 512 px, the default above). Acts only while the
+/// lower error below 5,000 to 8,000 records at 512 px, the default above). Acts only while the
 /// test is on (a finite tolerance). `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for `keeps`
 /// other than 0 or 1. Saved with the cache (files written before it load without it). **Not
 /// thread-safe**: no other thread may use the cache during the call.
