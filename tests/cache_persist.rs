@@ -527,6 +527,28 @@ fn version_5_files_load_without_open_fractions() {
     }
 }
 
+/// Looks up 400 queries over the sample's records with open fractions 0 to 1 in `c` and in
+/// `back`, asserts the same answers, and counts the queries for which `mark` (the query's
+/// position and open fraction, and whether `c` found records) holds.
+fn same_open_answers(
+    c: &Cache<[f32; 3]>,
+    back: &Cache<[f32; 3]>,
+    mut mark: impl FnMut(DVec3, f64, bool) -> bool,
+) -> usize {
+    let mut marked = 0;
+    for i in 0..400 {
+        let p = DVec3::new(i as f64 * 0.02, (i % 9) as f64 * 0.5, 0.0);
+        let open = (i % 11) as f64 / 10.0;
+        let (a, b) = (
+            c.lookup_open(p, DVec3::Z, open),
+            back.lookup_open(p, DVec3::Z, open),
+        );
+        assert_eq!(a.as_ref().ok().map(|l| l.value), b.ok().map(|l| l.value));
+        marked += usize::from(mark(p, open, a.is_ok()));
+    }
+    marked
+}
+
 /// The open-fraction test is cache state (flag bit 4, tolerance at offset 88) and each record's
 /// open fraction is stored with it (the head's last field): the restored cache answers every
 /// lookup as the saved one did, and damage to either is named.
@@ -557,18 +579,9 @@ fn open_fraction_test_round_trips() {
     for (i, r) in records.iter().enumerate() {
         assert_eq!(r.open_fraction, (i != 7).then_some((i % 8) as f64 / 8.0));
     }
-    let mut refused = 0;
-    for i in 0..400 {
-        let p = DVec3::new(i as f64 * 0.02, (i % 9) as f64 * 0.5, 0.0);
-        let open = (i % 11) as f64 / 10.0;
-        let (a, b) = (
-            c.lookup_open(p, DVec3::Z, open),
-            back.lookup_open(p, DVec3::Z, open),
-        );
-        assert_eq!(a.as_ref().ok().map(|l| l.value), b.ok().map(|l| l.value));
-        let plain = c.lookup(p, DVec3::Z);
-        refused += (plain.is_ok() && a.is_err()) as usize;
-    }
+    let refused = same_open_answers(&c, &back, |p, _, found| {
+        !found && c.lookup(p, DVec3::Z).is_ok()
+    });
     assert!(refused > 0, "the test never refused a record");
     // no test: flag clear and a zero field; the field without the flag is damage
     let plain = sample(3).to_bytes();
@@ -622,17 +635,9 @@ fn keeping_coverage_round_trips() {
     for r in c.records() {
         uncovering.insert(&r).unwrap();
     }
-    let mut kept = 0;
-    for i in 0..400 {
-        let p = DVec3::new(i as f64 * 0.02, (i % 9) as f64 * 0.5, 0.0);
-        let open = (i % 11) as f64 / 10.0;
-        let (a, b) = (
-            c.lookup_open(p, DVec3::Z, open),
-            back.lookup_open(p, DVec3::Z, open),
-        );
-        assert_eq!(a.as_ref().ok().map(|l| l.value), b.ok().map(|l| l.value));
-        kept += (a.is_ok() && uncovering.lookup_open(p, DVec3::Z, open).is_err()) as usize;
-    }
+    let kept = same_open_answers(&c, &back, |p, open, found| {
+        found && uncovering.lookup_open(p, DVec3::Z, open).is_err()
+    });
     assert!(kept > 0, "no query was kept covered");
     // the flag without the test's
     let mut b = sample(3).to_bytes();
