@@ -617,9 +617,11 @@ impl<V: CacheValue> Cache<V> {
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
         let n = self.check_lookup(position, normal, out.len())?;
-        match self.lookup_checked_indexed(&self.kernel.for_query(open), position, n, out) {
+        let slots = self.candidate_slots(position);
+        // the same candidates serve the read of the refused records, when the test keeps coverage
+        match self.interpolate(&self.kernel.for_query(open), position, n, &slots, out) {
             Err(Error::NotFound(_)) if self.config.open_fraction_test.reads_refused(open) => {
-                self.lookup_checked_indexed(&self.kernel, position, n, out)
+                self.interpolate(&self.kernel, position, n, &slots, out)
             }
             found => found,
         }
@@ -634,12 +636,18 @@ impl<V: CacheValue> Cache<V> {
         n: DVec3,
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
-        // candidates first (their records prefetched), then the records: their misses overlap
+        self.interpolate(kernel, position, n, &self.candidate_slots(position), out)
+    }
+
+    /// The slot addresses of the index's candidates at `position`, their records prefetched (the
+    /// candidates first, then the records: their misses overlap).
+    #[inline(always)]
+    fn candidate_slots(&self, position: DVec3) -> SmallVec<[usize; 32]> {
         let mut slots: SmallVec<[usize; 32]> = SmallVec::new();
         self.index.query(position, |id| {
             slots.push(self.prefetch_record(self.records.slot_ptr(id as usize) as usize));
         });
-        self.interpolate(kernel, position, n, &slots, out)
+        slots
     }
 
     /// [`Cache::lookup_into`] for spatially coherent queries: `cursor` (one per thread, see
