@@ -261,8 +261,17 @@ void open_fraction() {
   cache.set_open_fraction_keeps_coverage(true);
   CHECK(cache.open_fraction_keeps_coverage());
   CHECK(cache.lookup_open(x, kN, 0.56, raddiff::Span<float>(&v, 1), &cursor) == w_plain && v == plain);
+  CHECK(cache.open_fraction_coverage_tolerance() == INFINITY);
   cache.set_open_fraction_keeps_coverage(false);
   CHECK(!cache.try_lookup_open(x, kN, 0.56, raddiff::Span<float>(&v, 1)));
+  // a finite coverage tolerance: the query open at 0.6 reads the record at 0.875 alone
+  cache.set_open_fraction_coverage_tolerance(0.3);
+  CHECK(cache.open_fraction_coverage_tolerance() == 0.3 && !cache.open_fraction_keeps_coverage());
+  CHECK(cache.lookup_open(x, kN, 0.6, raddiff::Span<float>(&v, 1), &cursor) > 0.0);
+  CHECK_CLOSE(v, 3.0, 1e-6);
+  CHECK(!cache.try_lookup_open(x, kN, 0.56, raddiff::Span<float>(&v, 1)));
+  CHECK_THROWS(cache.set_open_fraction_coverage_tolerance(-1.0), RADDIFF_ERROR_INVALID_ARGUMENT, "coverage");
+  cache.set_open_fraction_coverage_tolerance(0.0);
 }
 
 // The lookup radius scale through the wrapper: its setter and getter, a covered query blending

@@ -49,7 +49,7 @@ int main(int argc, char **argv) {
   raddiff_vec3 x = {0.0, 0.0, 0.0}, n = {0.0, 0.0, 1.0};
   raddiff_vec3 under = {-1.0, 0.0, 0.0}, beyond = {1.0, 0.0, 0.0};
   float out = 0.0f, with_cursor = 0.0f, all = 0.0f, first = 0.0f;
-  double tolerance = 0.0, w = 0.0, w_cursor = 0.0, v = 0.0;
+  double tolerance = 0.0, coverage = -1.0, w = 0.0, w_cursor = 0.0, v = 0.0;
   uint32_t keeps = 7;
   ledge_state st = {0};
   const double bad[] = {-0.5, 1.5, NAN};
@@ -98,6 +98,32 @@ int main(int argc, char **argv) {
   CHECK(keeps == 1);
   CHECK_STATUS(raddiff_cache_set_open_fraction_keeps_coverage(cache, 0), RADDIFF_OK);
   CHECK_STATUS(raddiff_cache_lookup_open(cache, NULL, x, n, 0.56, &out, NULL), RADDIFF_ERROR_NOT_FOUND);
+  /* a finite coverage tolerance, 0.3: a query open at 0.6 reads the refused record at 0.875
+     (0.275 away) alone, one at 0.56 neither (0.31 and 0.315 away), on both paths */
+  CHECK_STATUS(raddiff_cache_get_open_fraction_coverage_tolerance(cache, &coverage), RADDIFF_OK);
+  CHECK(coverage == 0.0);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_coverage_tolerance(cache, 0.3), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_lookup_open(cache, NULL, x, n, 0.6, &out, NULL), RADDIFF_OK);
+  CHECK(fabsf(out - 3.0f) < 1e-6f);
+  CHECK_STATUS(raddiff_cache_lookup_open(cache, cursor, x, n, 0.6, &with_cursor, NULL), RADDIFF_OK);
+  CHECK(with_cursor == out);
+  CHECK_STATUS(raddiff_cache_lookup_open(cache, NULL, x, n, 0.56, &out, NULL), RADDIFF_ERROR_NOT_FOUND);
+  CHECK_STATUS(raddiff_cache_lookup_open(cache, cursor, x, n, 0.56, &out, NULL), RADDIFF_ERROR_NOT_FOUND);
+  CHECK_STATUS(raddiff_cache_get_open_fraction_keeps_coverage(cache, &keeps), RADDIFF_OK);
+  CHECK(keeps == 0);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_coverage_tolerance(cache, NAN), RADDIFF_ERROR_INVALID_ARGUMENT);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_coverage_tolerance(cache, -0.1), RADDIFF_ERROR_INVALID_ARGUMENT);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_coverage_tolerance(NULL, 0.3), RADDIFF_ERROR_NULL_POINTER);
+  CHECK_STATUS(raddiff_cache_get_open_fraction_coverage_tolerance(cache, NULL), RADDIFF_ERROR_NULL_POINTER);
+  CHECK_STATUS(raddiff_cache_get_open_fraction_coverage_tolerance(cache, &coverage), RADDIFF_OK);
+  CHECK(coverage == 0.3);
+  /* keeping all coverage is an infinite coverage tolerance, keeping none 0 */
+  CHECK_STATUS(raddiff_cache_set_open_fraction_keeps_coverage(cache, 1), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_get_open_fraction_coverage_tolerance(cache, &coverage), RADDIFF_OK);
+  CHECK(isinf(coverage) && coverage > 0.0);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_keeps_coverage(cache, 0), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_get_open_fraction_coverage_tolerance(cache, &coverage), RADDIFF_OK);
+  CHECK(coverage == 0.0);
   /* the plain lookup is not tested */
   CHECK_STATUS(raddiff_cache_lookup(cache, x, n, &out, NULL), RADDIFF_OK);
   CHECK(out == all);
@@ -119,17 +145,17 @@ int main(int argc, char **argv) {
   CHECK_STATUS(raddiff_cache_lookup_open(cache, NULL, x, n, 0.5, NULL, NULL), RADDIFF_ERROR_NULL_POINTER);
   CHECK_STATUS(raddiff_cache_get_open_fraction_tolerance(cache, &tolerance), RADDIFF_OK);
   CHECK(tolerance == 0.25);
-  /* saved with the cache: the tolerance, whether it keeps coverage and every record's open
+  /* saved with the cache: the tolerance, the coverage tolerance and every record's open
      fraction */
-  CHECK_STATUS(raddiff_cache_set_open_fraction_keeps_coverage(cache, 1), RADDIFF_OK);
+  CHECK_STATUS(raddiff_cache_set_open_fraction_coverage_tolerance(cache, 0.35), RADDIFF_OK);
   CHECK_STATUS(raddiff_cache_lookup_open(cache, NULL, x, n, 0.3, &first, NULL), RADDIFF_OK);
   CHECK_STATUS(raddiff_cache_save(cache, path), RADDIFF_OK);
   loaded = raddiff_cache_load(path);
   CHECK(loaded != NULL);
   CHECK_STATUS(raddiff_cache_get_open_fraction_tolerance(loaded, &tolerance), RADDIFF_OK);
   CHECK(tolerance == 0.25);
-  CHECK_STATUS(raddiff_cache_get_open_fraction_keeps_coverage(loaded, &keeps), RADDIFF_OK);
-  CHECK(keeps == 1);
+  CHECK_STATUS(raddiff_cache_get_open_fraction_coverage_tolerance(loaded, &coverage), RADDIFF_OK);
+  CHECK(coverage == 0.35);
   CHECK_STATUS(raddiff_cache_lookup_open(loaded, NULL, x, n, 0.3, &out, NULL), RADDIFF_OK);
   CHECK(out == first);
   CHECK_STATUS(raddiff_cache_lookup_open(loaded, NULL, x, n, 0.56, &out, NULL), RADDIFF_OK);

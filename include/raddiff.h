@@ -361,8 +361,8 @@ typedef struct raddiff_irradiance_settings {
   // The cache's open-fraction test, tolerance >= 0 (default INFINITY: off; see
   // `raddiff_cache_set_open_fraction_tolerance`). With it on,
   // `raddiff_cache_irradiance_near_far` traces a query's near rays before its lookup and
-  // its records keep their open fractions. Whether the test keeps coverage is the cache's
-  // choice (`raddiff_cache_set_open_fraction_keeps_coverage`), not the settings'.
+  // its records keep their open fractions. The test's coverage tolerance is the cache's
+  // choice (`raddiff_cache_set_open_fraction_coverage_tolerance`), not the settings'.
   double near_field_open_fraction_tolerance;
   // How far the cache reads records, in multiples of their radii, in
   // [1, `RADDIFF_LOOKUP_RADIUS_SCALE_MAX`] (default 1; see
@@ -769,8 +769,8 @@ enum raddiff_status raddiff_cache_get_leak_guard(const struct raddiff_cache *cac
 // or more, whose open fractions have a noise of at most 0.5/sqrt(rays)); INFINITY (the default)
 // turns the test off. `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for a NaN or negative
 // tolerance. Saved with the cache and restored by `raddiff_cache_load` (files written before it
-// load with it off). Keeps whether the test keeps coverage
-// (`raddiff_cache_set_open_fraction_keeps_coverage`). **Not thread-safe**: no other thread may
+// load with it off). Keeps the test's coverage tolerance
+// (`raddiff_cache_set_open_fraction_coverage_tolerance`). **Not thread-safe**: no other thread may
 // use the cache during the call.
 enum raddiff_status raddiff_cache_set_open_fraction_tolerance(struct raddiff_cache *cache,
                                                               double tolerance);
@@ -779,21 +779,48 @@ enum raddiff_status raddiff_cache_set_open_fraction_tolerance(struct raddiff_cac
 enum raddiff_status raddiff_cache_get_open_fraction_tolerance(const struct raddiff_cache *cache,
                                                               double *tolerance);
 
-// Sets whether the open-fraction test keeps coverage (`keeps` 1) or not (0, the default): with
-// it, a query whose covering records the test all refuses reads them (as with the test off; the
-// leak guard still applies) instead of returning `RADDIFF_ERROR_NOT_FOUND`, so the test chooses
-// among the records covering a query and never makes a renderer add a record. Without it the
-// refusals make records where the open fraction changes, which at a fixed record budget leaves
-// the open regions fewer, larger records (the real-scene benchmark: keeping coverage had the
-// lower error below 5,000 to 8,000 records at 512 px, the default above). Acts only while the
-// test is on (a finite tolerance). `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for `keeps`
-// other than 0 or 1. Saved with the cache (files written before it load without it). **Not
-// thread-safe**: no other thread may use the cache during the call.
+// Sets the open-fraction test's coverage tolerance: a query whose covering records the test all
+// refuses reads those whose open fraction is within `coverage_tolerance` of its own (as with the
+// test at that tolerance; the leak guard still applies), and returns
+// `RADDIFF_ERROR_NOT_FOUND` only when none is. So the test makes a renderer add a record only
+// where the open fraction changes by more than the coverage tolerance (the foot of a wall, the
+// edge of a ledge), not where it changes by a little more than the tolerance; at a fixed record
+// budget the open regions keep more, smaller records. INFINITY keeps all coverage (the test then
+// only chooses among the records covering a query; also
+// `raddiff_cache_set_open_fraction_keeps_coverage`); 0 (the default), or any value not above
+// the tolerance, keeps none. On the real-scene benchmark at tolerance 0.1 a coverage tolerance
+// of 0.3 came within the better of none and INFINITY at every record budget measured.
+// Dimensionless. Acts only while the test is on (a finite tolerance), and is kept when the
+// tolerance changes. `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for a NaN or negative value.
+// Saved with the cache (files written before it load with 0, or with INFINITY where they kept
+// coverage). **Not thread-safe**: no other thread may use the cache during the call.
+enum raddiff_status raddiff_cache_set_open_fraction_coverage_tolerance(struct raddiff_cache *cache,
+                                                                       double coverage_tolerance);
+
+// Writes the open-fraction test's coverage tolerance to `*coverage_tolerance` (see
+// `raddiff_cache_set_open_fraction_coverage_tolerance`; INFINITY when it keeps all coverage).
+enum raddiff_status raddiff_cache_get_open_fraction_coverage_tolerance(const struct raddiff_cache *cache,
+                                                                       double *coverage_tolerance);
+
+// Sets whether the open-fraction test keeps all coverage (`keeps` 1: a coverage tolerance of
+// INFINITY) or none (0: a coverage tolerance of 0, the default); see
+// `raddiff_cache_set_open_fraction_coverage_tolerance`. With it, a query whose covering records
+// the test all refuses reads them (as with the test off; the leak guard still applies) instead
+// of returning `RADDIFF_ERROR_NOT_FOUND`, so the test chooses among the records covering a query
+// and never makes a renderer add a record. Without it the refusals make records where the open
+// fraction changes, which at a fixed record budget leaves the open regions fewer, larger records
+// (the real-scene benchmark: keeping all coverage had the lower error below 5,000 to 8,000
+// records at 512 px, keeping none above). Acts only while the test is on (a finite tolerance).
+// `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for `keeps` other than 0 or 1. Saved with the
+// cache (files written before it load without it). **Not thread-safe**: no other thread may use
+// the cache during the call.
 enum raddiff_status raddiff_cache_set_open_fraction_keeps_coverage(struct raddiff_cache *cache,
                                                                    uint32_t keeps);
 
-// Writes whether the open-fraction test keeps coverage to `*keeps` (1 or 0; see
-// `raddiff_cache_set_open_fraction_keeps_coverage`).
+// Writes whether the open-fraction test keeps all coverage to `*keeps`: 1 when its coverage
+// tolerance is INFINITY, else 0 (see `raddiff_cache_set_open_fraction_keeps_coverage`; a
+// finite coverage tolerance reads as 0: `raddiff_cache_get_open_fraction_coverage_tolerance`
+// gives it).
 enum raddiff_status raddiff_cache_get_open_fraction_keeps_coverage(const struct raddiff_cache *cache,
                                                                    uint32_t *keeps);
 
@@ -844,10 +871,11 @@ size_t raddiff_cache_len(const struct raddiff_cache *cache);
 enum raddiff_status raddiff_cache_save(const struct raddiff_cache *cache, const char *path);
 
 // Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags, the
-// gradient limit, the leak guard, the far-field reach, the open-fraction tolerance and the
-// lookup radius scale come from the file; files of format version 2 have no gradient limit,
-// those of versions 2 and 3 no leak guard, 2 to 4 no far field, 2 to 5 no open-fraction test,
-// 2 to 6 a lookup radius scale of 1). Returns
+// gradient limit, the leak guard, the far-field reach, the open-fraction tolerance and coverage
+// tolerance and the lookup radius scale come from the file; files of format version 2 have no
+// gradient limit, those of versions 2 and 3 no leak guard, 2 to 4 no far field, 2 to 5 no
+// open-fraction test, 2 to 6 a lookup radius scale of 1, 2 to 7 a coverage tolerance of 0,
+// version 8 one of 0 or INFINITY). Returns
 // NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in `raddiff_last_error` for
 // unreadable, truncated, damaged or wrong-version files.
 struct raddiff_cache *raddiff_cache_load(const char *path);

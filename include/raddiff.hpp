@@ -340,13 +340,29 @@ class Cache : public detail::Owner<raddiff_cache> {
     return tolerance;
   }
 
+  /// Wraps `raddiff_cache_set_open_fraction_coverage_tolerance` (not thread-safe): a query whose
+  /// covering records the open-fraction test all refuses reads those within this tolerance
+  /// (INFINITY: all; 0, the default: none; NaN or negative throws).
+  void set_open_fraction_coverage_tolerance(double coverage_tolerance) {
+    detail::check(raddiff_cache_set_open_fraction_coverage_tolerance(get(), coverage_tolerance));
+  }
+
+  /// Wraps `raddiff_cache_get_open_fraction_coverage_tolerance`.
+  double open_fraction_coverage_tolerance() const {
+    double coverage_tolerance = 0.0;
+    detail::check(raddiff_cache_get_open_fraction_coverage_tolerance(get(), &coverage_tolerance));
+    return coverage_tolerance;
+  }
+
   /// Wraps `raddiff_cache_set_open_fraction_keeps_coverage` (not thread-safe): whether a query
-  /// whose covering records the open-fraction test all refuses reads them instead of finding none.
+  /// whose covering records the open-fraction test all refuses reads them all (a coverage
+  /// tolerance of INFINITY) or none (0).
   void set_open_fraction_keeps_coverage(bool keeps) {
     detail::check(raddiff_cache_set_open_fraction_keeps_coverage(get(), keeps ? 1u : 0u));
   }
 
-  /// Wraps `raddiff_cache_get_open_fraction_keeps_coverage`.
+  /// Wraps `raddiff_cache_get_open_fraction_keeps_coverage`: whether the coverage tolerance is
+  /// INFINITY.
   bool open_fraction_keeps_coverage() const {
     uint32_t keeps = 0;
     detail::check(raddiff_cache_get_open_fraction_keeps_coverage(get(), &keeps));

@@ -1,6 +1,7 @@
 //! The open-fraction test of far-field caches: lookups with the query's open fraction refuse
 //! exactly the records beyond the tolerance (on the index path and on both cursor paths, bit for
-//! bit), change nothing with the test off, uncover no query when the test keeps coverage, and
+//! bit), change nothing with the test off, uncover no query beyond what the coverage tolerance
+//! allows when the test keeps coverage, and
 //! the one-call near/far query under a ledge makes a record of its own where the records nearby
 //! see another part of the sky.
 
@@ -82,71 +83,114 @@ fn lookups_refuse_exactly_the_records_beyond_the_tolerance() {
 }
 
 /// Keeping coverage: a query that some record passes reads exactly what the default test gives;
-/// a query whose covering records the test all refuses reads them as the test off does (bit for
-/// bit, on the three paths of a lookup), so a query is covered exactly where it is with the test
-/// off. With records read over twice their radii too, where coverage is decided at their own.
+/// a query whose covering records the test all refuses reads those within the coverage tolerance
+/// as a test at that tolerance does (bit for bit, on the three paths of a lookup), so a query is
+/// covered exactly where it is at the coverage tolerance: everywhere the test off covers it when
+/// the coverage tolerance is infinite, not where only records beyond it cover the query when it
+/// is finite. With records read over twice their radii too, where coverage is decided at their
+/// own.
 #[test]
 fn keeping_coverage_reads_the_refused_records_only_where_none_passes() {
     let all = records(120, 13);
     for scale in [1.0, 2.0] {
-        let test = OpenFractionTest::new(0.0625);
-        let cache_of = |test: OpenFractionTest| {
-            let config = CacheConfig::surface(3)
-                .with_interpolation(Interpolation::Tent)
-                .with_far_field(FarFieldReach::world(1.0))
-                .with_open_fraction_test(test)
-                .with_lookup_radius_scale(scale);
-            let cache = Cache::<[f32; 3]>::new(config).unwrap();
-            for r in &all {
-                cache.insert(r).unwrap();
-            }
-            cache
-        };
-        let (keeping, uncovering, off) = (
-            cache_of(test.keeping_coverage()),
-            cache_of(test),
-            cache_of(OpenFractionTest::OFF),
-        );
-        let mut cursor = Cursor::new();
-        let mut u = stream(17);
-        let (mut chosen, mut kept) = (0, 0);
-        for _ in 0..600 {
-            let x = DVec3::new(4.0 * u(), 4.0 * u(), 0.0);
-            let open = u();
-            let got = keeping.lookup_open(x, DVec3::Z, open);
-            let want = match uncovering.lookup_open(x, DVec3::Z, open) {
-                Err(Error::NotFound(_)) => {
-                    kept += usize::from(off.lookup(x, DVec3::Z).is_ok());
-                    off.lookup(x, DVec3::Z)
+        for coverage in [f64::INFINITY, 0.25] {
+            let test = OpenFractionTest::new(0.0625);
+            let cache_of = |test: OpenFractionTest| {
+                let config = CacheConfig::surface(3)
+                    .with_interpolation(Interpolation::Tent)
+                    .with_far_field(FarFieldReach::world(1.0))
+                    .with_open_fraction_test(test)
+                    .with_lookup_radius_scale(scale);
+                let cache = Cache::<[f32; 3]>::new(config).unwrap();
+                for r in &all {
+                    cache.insert(r).unwrap();
                 }
-                passed => {
-                    chosen += usize::from(passed.is_ok());
-                    passed
-                }
+                cache
             };
-            match (&got, &want) {
-                (Ok(a), Ok(b)) => assert_eq!(a, b, "scale {scale} at {x} open {open}"),
-                (Err(Error::NotFound(_)), Err(Error::NotFound(_))) => {}
-                _ => panic!("scale {scale} at {x} open {open}: {got:?} vs {want:?}"),
-            }
-            assert_eq!(
-                got.is_ok(),
-                off.lookup(x, DVec3::Z).is_ok(),
-                "coverage at {x}"
+            // the reference of the second read: the test at the coverage tolerance (infinite: off)
+            let (keeping, uncovering, wider, off) = (
+                cache_of(test.with_coverage_tolerance(coverage)),
+                cache_of(test),
+                cache_of(OpenFractionTest::new(coverage)),
+                cache_of(OpenFractionTest::OFF),
             );
-            let mut indexed = [0.0f32; 3];
-            let mut explicit = [0.0f32; 3];
-            let a = keeping.lookup_into_indexed_open(x, DVec3::Z, open, &mut indexed);
-            let c = keeping.lookup_into_with_open(&mut cursor, x, DVec3::Z, open, &mut explicit);
-            assert_eq!(a.is_ok(), got.is_ok());
-            assert_eq!(c.is_ok(), got.is_ok());
-            if let (Ok(a), Ok(c)) = (a, c) {
-                assert_eq!((a, indexed), (c, explicit), "scale {scale} at {x}");
+            let mut cursor = Cursor::new();
+            let mut u = stream(17);
+            let (mut chosen, mut kept, mut uncovered) = (0, 0, 0);
+            for _ in 0..600 {
+                let x = DVec3::new(4.0 * u(), 4.0 * u(), 0.0);
+                let open = u();
+                let got = keeping.lookup_open(x, DVec3::Z, open);
+                let want = match uncovering.lookup_open(x, DVec3::Z, open) {
+                    Err(Error::NotFound(_)) => {
+                        let second = wider.lookup_open(x, DVec3::Z, open);
+                        kept += usize::from(second.is_ok());
+                        uncovered +=
+                            usize::from(second.is_err() && off.lookup(x, DVec3::Z).is_ok());
+                        second
+                    }
+                    passed => {
+                        chosen += usize::from(passed.is_ok());
+                        passed
+                    }
+                };
+                let at = format!("scale {scale}, coverage {coverage} at {x} open {open}");
+                match (&got, &want) {
+                    (Ok(a), Ok(b)) => assert_eq!(a, b, "{at}"),
+                    (Err(Error::NotFound(_)), Err(Error::NotFound(_))) => {}
+                    _ => panic!("{at}: {got:?} vs {want:?}"),
+                }
+                assert_eq!(
+                    got.is_ok(),
+                    wider.lookup_open(x, DVec3::Z, open).is_ok(),
+                    "coverage {at}"
+                );
+                let mut indexed = [0.0f32; 3];
+                let mut explicit = [0.0f32; 3];
+                let a = keeping.lookup_into_indexed_open(x, DVec3::Z, open, &mut indexed);
+                let c =
+                    keeping.lookup_into_with_open(&mut cursor, x, DVec3::Z, open, &mut explicit);
+                assert_eq!(a.is_ok(), got.is_ok());
+                assert_eq!(c.is_ok(), got.is_ok());
+                if let (Ok(a), Ok(c)) = (a, c) {
+                    assert_eq!((a, indexed), (c, explicit), "{at}");
+                }
             }
+            assert!(
+                chosen > 100 && kept > 30,
+                "scale {scale}, coverage {coverage}: {chosen} chosen, {kept} kept"
+            );
+            // a finite coverage tolerance still uncovers the queries that only records beyond it
+            // cover; an infinite one none
+            assert_eq!(
+                uncovered > 10,
+                coverage.is_finite(),
+                "scale {scale}, coverage {coverage}: {uncovered} uncovered"
+            );
         }
+    }
+}
+
+/// The coverage tolerance keeps nothing unless it is above the tolerance, and is validated with
+/// it.
+#[test]
+fn a_coverage_tolerance_not_above_the_tolerance_keeps_nothing() {
+    let test = OpenFractionTest::new(0.125);
+    assert!(!test.keeps_coverage());
+    assert!(!test.with_coverage_tolerance(0.125).keeps_coverage());
+    assert!(test.with_coverage_tolerance(0.126).keeps_coverage());
+    assert!(test.keeping_coverage().keeps_coverage());
+    assert!(!OpenFractionTest::OFF.keeping_coverage().keeps_coverage());
+    for bad in [-0.5, f64::NAN] {
+        let config = CacheConfig::surface(3)
+            .with_far_field(FarFieldReach::world(1.0))
+            .with_open_fraction_test(test.with_coverage_tolerance(bad));
         assert!(
-            chosen > 100 && kept > 30,
-            "scale {scale}: {chosen} chosen, {kept} kept"
+            matches!(
+                Cache::<[f32; 3]>::new(config),
+                Err(Error::InvalidArgument(_))
+            ),
+            "{bad}"
         );
     }
 }

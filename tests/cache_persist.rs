@@ -50,8 +50,10 @@ fn reseal(bytes: &mut [u8]) {
     bytes[body..].copy_from_slice(&sum.to_le_bytes());
 }
 
-/// Size of the version 8 and 7 headers (records start here).
-const HEADER: usize = 104;
+/// Size of the version 9 header (records start here).
+const HEADER: usize = 112;
+/// Size of the version 8 and 7 headers: no coverage tolerance (offsets 104..112).
+const HEADER_V8: usize = 104;
 /// Size of the version 6 header: no lookup radius scale (offsets 96..104).
 const HEADER_V6: usize = 96;
 /// Size of the version 5 header: no open-fraction field (offsets 88..96).
@@ -131,15 +133,15 @@ fn header_and_record_damage_is_named() {
     b[0] = b'X';
     assert!(corrupt_reason(&b).contains("magic"));
     let mut b = good.clone();
-    b[8] = 9;
+    b[8] = 10;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("version"));
     let mut b = good.clone();
     b[100] ^= 1;
     assert!(corrupt_reason(&b).contains("checksum"));
     // a header flag this version does not know (bit 0 is the non-negative flag, bit 1 the
-    // gradient limit, bit 2 the leak guard, bit 3 the far field, bit 4 the open-fraction test,
-    // bit 5 its keeping coverage)
+    // gradient limit, bit 2 the leak guard, bit 3 the far field, bit 4 the open-fraction test;
+    // bit 5, version 8's keeping coverage, is unknown too)
     let mut b = good.clone();
     b[44] = 64;
     reseal(&mut b);
@@ -189,31 +191,31 @@ fn header_and_record_damage_is_named() {
 }
 
 /// The version 2 file of a cache without a gradient limit, leak guard, far field or open-fraction
-/// test: the current file without the fields at offsets 48..104, version 2, resealed.
+/// test: the current file without the fields at offsets 48..112, version 2, resealed.
 fn as_version_2(current: &[u8]) -> Vec<u8> {
     as_version(current, 48, 2)
 }
 
 /// The version 3 file of a cache without a leak guard or later fields: the current file without
-/// the fields at offsets 56..104, version 3, resealed.
+/// the fields at offsets 56..112, version 3, resealed.
 fn as_version_3(current: &[u8]) -> Vec<u8> {
     as_version(current, HEADER_V3, 3)
 }
 
 /// The version 4 file of a cache without a far field or open-fraction test: the current file
-/// without the fields at offsets 72..104, version 4, resealed.
+/// without the fields at offsets 72..112, version 4, resealed.
 fn as_version_4(current: &[u8]) -> Vec<u8> {
     as_version(current, HEADER_V4, 4)
 }
 
 /// The version 5 file of a cache without an open-fraction test: the current file without the
-/// tolerance and the scale (offsets 88..104), version 5, resealed.
+/// tolerance, the scale and the coverage tolerance (offsets 88..112), version 5, resealed.
 fn as_version_5(current: &[u8]) -> Vec<u8> {
     as_version(current, HEADER_V5, 5)
 }
 
 /// The version 6 file of a cache read over its records' own radii: the current file without the
-/// lookup radius scale (offsets 96..104), version 6, resealed.
+/// lookup radius scale and the coverage tolerance (offsets 96..112), version 6, resealed.
 fn as_version_6(current: &[u8]) -> Vec<u8> {
     as_version(current, HEADER_V6, 6)
 }
@@ -237,7 +239,7 @@ fn gradient_limit_round_trips() {
         c.insert(&r).unwrap();
     }
     let bytes = c.to_bytes();
-    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 8);
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 9);
     assert_eq!(u32::from_le_bytes(bytes[44..48].try_into().unwrap()), 0b11);
     assert_eq!(f64::from_le_bytes(bytes[48..56].try_into().unwrap()), 0.75);
     let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
@@ -605,47 +607,108 @@ fn open_fraction_test_round_trips() {
     }
 }
 
-/// Whether the open-fraction test keeps coverage is cache state (flag bit 5, version 8): it
+/// The version 8 file of a cache whose open-fraction test keeps all coverage or none: the
+/// current file without the coverage tolerance (offsets 104..112), flag bit 5 set for an
+/// infinite one, version 8, resealed.
+fn as_version_8(current: &[u8]) -> Vec<u8> {
+    let coverage = f64::from_le_bytes(current[104..112].try_into().unwrap());
+    let mut b = as_version(current, HEADER_V8, 8);
+    if coverage == f64::INFINITY {
+        b[44] |= 32;
+        reseal(&mut b);
+    }
+    b
+}
+
+/// The open-fraction test's coverage tolerance is cache state (offset 104, version 9): it
 /// round-trips, the restored cache answers the queries that every record's open fraction refuses
-/// as the saved one did, the flag without the test's is damage, and a version 7 file knows no
-/// such flag (and loads with the test uncovering, every other field as saved).
+/// as the saved one did, a NaN or negative one and the version 8 flag are damage, and it is
+/// kept with the test off.
 #[test]
-fn keeping_coverage_round_trips() {
-    let test = OpenFractionTest::new(0.125).keeping_coverage();
-    let config = CacheConfig::surface(3)
-        .with_far_field(FarFieldReach::world(0.5))
-        .with_open_fraction_test(test);
-    let c: Cache<[f32; 3]> = Cache::new(config).unwrap();
-    for (i, mut r) in sample(20).records().into_iter().enumerate() {
-        r.open_fraction = Some((i % 8) as f64 / 8.0);
-        c.insert(&r).unwrap();
+fn coverage_tolerance_round_trips() {
+    for coverage in [0.3, f64::INFINITY] {
+        let test = OpenFractionTest::new(0.125).with_coverage_tolerance(coverage);
+        let config = CacheConfig::surface(3)
+            .with_far_field(FarFieldReach::world(0.5))
+            .with_open_fraction_test(test);
+        let c: Cache<[f32; 3]> = Cache::new(config).unwrap();
+        for (i, mut r) in sample(20).records().into_iter().enumerate() {
+            r.open_fraction = Some((i % 8) as f64 / 8.0);
+            c.insert(&r).unwrap();
+        }
+        let bytes = c.to_bytes();
+        assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 9);
+        assert_eq!(
+            u32::from_le_bytes(bytes[44..48].try_into().unwrap()),
+            0b11000
+        );
+        assert_eq!(
+            f64::from_le_bytes(bytes[104..112].try_into().unwrap()),
+            coverage
+        );
+        let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
+        assert_eq!(back.config().open_fraction_test, test);
+        assert_eq!(back.to_bytes(), bytes);
+        let uncovering =
+            Cache::<[f32; 3]>::new(config.with_open_fraction_test(OpenFractionTest::new(0.125)))
+                .unwrap();
+        for r in c.records() {
+            uncovering.insert(&r).unwrap();
+        }
+        let kept = same_open_answers(&c, &back, |p, open, found| {
+            found && uncovering.lookup_open(p, DVec3::Z, open).is_err()
+        });
+        assert!(kept > 0, "{coverage}: no query was kept covered");
+        for bad in [-0.25, f64::NAN, f64::NEG_INFINITY] {
+            let mut b = bytes.clone();
+            b[104..112].copy_from_slice(&f64::to_le_bytes(bad));
+            reseal(&mut b);
+            assert!(corrupt_reason(&b).contains("coverage tolerance"), "{bad}");
+        }
+        // version 9 knows no keep-coverage flag
+        let mut b = bytes.clone();
+        b[44] |= 32;
+        reseal(&mut b);
+        assert!(corrupt_reason(&b).contains("flags"));
     }
-    let bytes = c.to_bytes();
-    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 8);
-    assert_eq!(
-        u32::from_le_bytes(bytes[44..48].try_into().unwrap()),
-        0b111000
-    );
-    let back = Cache::<[f32; 3]>::from_bytes(&bytes).unwrap();
-    assert_eq!(back.config().open_fraction_test, test);
-    assert_eq!(back.to_bytes(), bytes);
-    let uncovering =
-        Cache::<[f32; 3]>::new(config.with_open_fraction_test(OpenFractionTest::new(0.125)))
-            .unwrap();
-    for r in c.records() {
-        uncovering.insert(&r).unwrap();
-    }
-    let kept = same_open_answers(&c, &back, |p, open, found| {
-        found && uncovering.lookup_open(p, DVec3::Z, open).is_err()
-    });
-    assert!(kept > 0, "no query was kept covered");
+    // kept with the test off, for a test turned on later
+    let off = OpenFractionTest::OFF.with_coverage_tolerance(0.3);
+    let c: Cache<[f32; 3]> =
+        Cache::new(CacheConfig::surface(3).with_open_fraction_test(off)).unwrap();
+    let back = Cache::<[f32; 3]>::from_bytes(&c.to_bytes()).unwrap();
+    assert_eq!(back.config().open_fraction_test, off);
+}
+
+/// Version 8 files keep all coverage (flag bit 5) or none: they load with an infinite coverage
+/// tolerance or 0, the flag without the test's is damage, and a version 7 file knows no such flag
+/// (and loads with the test uncovering, every other field as saved).
+#[test]
+fn version_8_files_keep_all_coverage_or_none() {
+    let config = CacheConfig::surface(3).with_far_field(FarFieldReach::world(0.5));
+    let with = |test: OpenFractionTest| {
+        let c: Cache<[f32; 3]> = Cache::new(config.with_open_fraction_test(test)).unwrap();
+        for (i, mut r) in sample(20).records().into_iter().enumerate() {
+            r.open_fraction = Some((i % 8) as f64 / 8.0);
+            c.insert(&r).unwrap();
+        }
+        c
+    };
+    let keeping = with(OpenFractionTest::new(0.125).keeping_coverage());
+    let v8 = as_version_8(&keeping.to_bytes());
+    assert_eq!(u32::from_le_bytes(v8[44..48].try_into().unwrap()), 0b111000);
+    let back = Cache::<[f32; 3]>::from_bytes(&v8).unwrap();
+    assert_eq!(back.config(), keeping.config());
+    assert_eq!(back.to_bytes(), keeping.to_bytes());
+    let uncovering = with(OpenFractionTest::new(0.125));
+    let back = Cache::<[f32; 3]>::from_bytes(&as_version_8(&uncovering.to_bytes())).unwrap();
+    assert_eq!(back.config(), uncovering.config());
     // the flag without the test's
-    let mut b = sample(3).to_bytes();
+    let mut b = as_version_8(&sample(3).to_bytes());
     b[44] |= 32;
     reseal(&mut b);
     assert!(corrupt_reason(&b).contains("keep-coverage"));
     // version 7: the same header, flag bit 5 unknown
-    let mut v7 = bytes.clone();
+    let mut v7 = v8.clone();
     v7[8..12].copy_from_slice(&7u32.to_le_bytes());
     reseal(&mut v7);
     assert!(corrupt_reason(&v7).contains("flags"));
@@ -656,8 +719,8 @@ fn keeping_coverage_round_trips() {
         back.config().open_fraction_test,
         OpenFractionTest::new(0.125)
     );
-    assert_eq!(back.config().far_field, c.config().far_field);
-    assert_eq!(back.keys(), c.keys());
+    assert_eq!(back.config().far_field, keeping.config().far_field);
+    assert_eq!(back.keys(), keeping.keys());
 }
 
 /// The lookup radius scale is cache state (offset 96, version 7): the restored cache answers

@@ -531,7 +531,7 @@ int run_bench(const Scene &scene, const View &view, const std::string &scene_key
           << "\nradius_bounds," << settings.irradiance.world_radius_min << " " << settings.irradiance.world_radius_max
           << " " << settings.irradiance.pixel_radius_min << " " << settings.irradiance.pixel_radius_max
           << "\nopen_fraction_tolerance," << settings.open_fraction_tolerance
-          << "\nopen_fraction_keeps_coverage," << settings.open_fraction_keeps_coverage
+          << "\nopen_fraction_coverage_tolerance," << settings.open_fraction_coverage_tolerance
           << "\nlookup_radius_scale," << settings.lookup_scale << "\nnoise_seed," << settings.noise_seed << "\npixel_gathers_rel_rms," << pixel_gathers << "\n";
   std::printf("bench: %zu gathers computed, max RSS %ld MiB, %.0f CPU s\n", bench.store().computed(), max_rss_mib(),
               process_cpu_seconds() - wall0);

@@ -120,10 +120,10 @@ struct BenchSettings {
   // gather's open fraction, every pixel's lookup passes its near field's, and a record whose open
   // fraction differs from the pixel's by more than this is not used (raddiff_cache_lookup_open).
   double open_fraction_tolerance = INFINITY;
-  // With the test, the test keeps coverage (raddiff_cache_set_open_fraction_keeps_coverage): a
-  // pixel that no record passes reads the records the test refused, so the test decides which
-  // records a pixel reads, never where records are made.
-  bool open_fraction_keeps_coverage = false;
+  // With the test, its coverage tolerance (raddiff_cache_set_open_fraction_coverage_tolerance): a
+  // pixel that no record passes reads the refused records within it (INFINITY: all of them, so
+  // the test decides which records a pixel reads, never where records are made; 0: none).
+  double open_fraction_coverage_tolerance = 0;
   // 0: the usual samples. Otherwise every gather's, near field's and hit radiance's random numbers
   // drawn from another stream (the references' are not): two runs that differ only here measure
   // how much of each metric's error is the samples' noise.

@@ -148,15 +148,15 @@ void CacheFill::check_combinations() const {
 
 // The settings' leak guard (which raddiff_irradiance_cache_new sets and the experiments' caches
 // made with surface_cache would otherwise lack); with the test, the cache's open-fraction
-// tolerance and whether it keeps coverage; with --lookup-scale, records read over their radii times it.
+// tolerance and coverage tolerance; with --lookup-scale, records read over their radii times it.
 CachePtr CacheFill::with_cache_state(CachePtr c) const {
   check(raddiff_cache_set_leak_guard(c.get(), irr_.leak_guard_relative, irr_.leak_guard_absolute),
         "raddiff_cache_set_leak_guard");
   if (open_test_) {
     check(raddiff_cache_set_open_fraction_tolerance(c.get(), settings_.open_fraction_tolerance),
           "raddiff_cache_set_open_fraction_tolerance");
-    check(raddiff_cache_set_open_fraction_keeps_coverage(c.get(), settings_.open_fraction_keeps_coverage ? 1 : 0),
-          "raddiff_cache_set_open_fraction_keeps_coverage");
+    check(raddiff_cache_set_open_fraction_coverage_tolerance(c.get(), settings_.open_fraction_coverage_tolerance),
+          "raddiff_cache_set_open_fraction_coverage_tolerance");
   }
   check(raddiff_cache_set_lookup_radius_scale(c.get(), settings_.lookup_scale),
         "raddiff_cache_set_lookup_radius_scale");

@@ -45,7 +45,8 @@ const char *kUsage =
     "                      [--adaptive-lookup k0[,kmax[,exponent]] (bench: scale per pixel from the noise)]\n"
     "  render mode:        [--accuracy a | --hessian relative_error] [--records N] [--neighbour-clamp]\n"
     "                      [--check pixels (default 96)] [--near-field reach_px[,rays]]\n"
-    "  both, with --near-field: [--open-fraction-tolerance t (default inf: off)] [--open-fraction-keep-coverage]\n"
+    "  both, with --near-field: [--open-fraction-tolerance t (default inf: off)]\n"
+    "                      [--open-fraction-coverage-tolerance c (default 0: none)] [--open-fraction-keep-coverage (c inf)]\n"
     "  --bench:            [--records N (default pixels/32)] [--metrics name,name,...] [--thresholds N]\n"
     "                      [--reference-rays N (65536)] [--reference-grid G (64)] [--cache-dir DIR] [--floor-records N]\n"
     "                      [--floor-rays N] [--pt-max-spp N] [--no-path-trace] [--no-record-gradients]\n"
@@ -149,8 +150,10 @@ int main(int argc, char **argv) {
       else if (a == "--open-fraction-bands") bench.open_fraction_bands = std::stod(next());
       else if (a == "--open-fraction-tolerance")
         render.irradiance.near_field_open_fraction_tolerance = bench.open_fraction_tolerance = std::stod(next());
+      else if (a == "--open-fraction-coverage-tolerance")
+        render.open_fraction_coverage_tolerance = bench.open_fraction_coverage_tolerance = std::stod(next());
       else if (a == "--open-fraction-keep-coverage")
-        render.open_fraction_keeps_coverage = bench.open_fraction_keeps_coverage = true;
+        render.open_fraction_coverage_tolerance = bench.open_fraction_coverage_tolerance = INFINITY;
       else if (a == "--noise-seed") bench.noise_seed = std::stoull(next());
       else if (a == "--pixel-gathers") bench.pixel_gathers = true;
       else if (a == "--strata-variance") {

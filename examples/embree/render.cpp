@@ -124,8 +124,8 @@ Fill fill_cache(const Scene &scene, const RenderSettings &cfg, const View &view,
   out.cache = raddiff_irradiance_cache_new(&s);
   if (!out.cache) throw std::runtime_error(std::string("raddiff_irradiance_cache_new: ") + raddiff_last_error());
   raddiff_cache *cache = out.cache;
-  if (cfg.open_fraction_keeps_coverage)
-    check(raddiff_cache_set_open_fraction_keeps_coverage(cache, 1), "raddiff_cache_set_open_fraction_keeps_coverage");
+  check(raddiff_cache_set_open_fraction_coverage_tolerance(cache, cfg.open_fraction_coverage_tolerance),
+        "raddiff_cache_set_open_fraction_coverage_tolerance");
   if (near_field_on(s)) out.near.resize(primary.size());
   try {
     TraceContext ctx{&scene, &cfg.radiance};
@@ -248,7 +248,9 @@ int run_render(const Scene &scene, const View &view, const RenderSettings &setti
   if (near_field_on(used.irradiance) && std::isfinite(used.irradiance.near_field_open_fraction_tolerance))
     std::printf("open-fraction test: records used only at pixels whose open fraction is within %g of theirs%s\n",
                 used.irradiance.near_field_open_fraction_tolerance,
-                settings.open_fraction_keeps_coverage ? " (or, where none is, the refused ones)" : "");
+                settings.open_fraction_coverage_tolerance > used.irradiance.near_field_open_fraction_tolerance
+                    ? " (or, where none is, the refused ones within the coverage tolerance)"
+                    : "");
   if (used.irradiance.lookup_radius_scale != 1)
     std::printf("lookup radius scale: records read over %g times their radii, misses decided at their own\n",
                 used.irradiance.lookup_radius_scale);

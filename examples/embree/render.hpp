@@ -15,7 +15,7 @@ struct RenderSettings {
   double hessian_error = 0.0;  // > 0: anisotropic occlusion-aware Hessian records with this error
   int check_pixels = 96;
   bool neighbour_clamp = false;
-  bool open_fraction_keeps_coverage = false;  // with the open-fraction test (see BenchSettings)
+  double open_fraction_coverage_tolerance = 0;  // with the open-fraction test (see BenchSettings)
   size_t target_records = 0;  // > 0: tune the metric's parameter to about this many records
   HitRadianceSettings radiance;
   unsigned threads = 2;

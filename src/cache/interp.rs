@@ -175,7 +175,20 @@ impl Kernel {
     /// cache's own kernel, borrowed, when nothing is refused (no open fraction, or the test off).
     #[inline]
     pub(crate) fn for_query(&self, open: Option<f64>) -> Cow<'_, Kernel> {
-        match open.and_then(|v| OpenWindow::new(self.open_fraction_test, v)) {
+        self.for_query_within(open, self.open_fraction_test.tolerance)
+    }
+
+    /// [`Kernel::for_query`] at the test's coverage tolerance: the kernel of the second read of a
+    /// query that no record passes (the test keeping coverage).
+    #[inline]
+    pub(crate) fn for_coverage_query(&self, open: Option<f64>) -> Cow<'_, Kernel> {
+        self.for_query_within(open, self.open_fraction_test.coverage_tolerance)
+    }
+
+    /// The kernel of a query of open fraction `open` admitting the records within `tolerance`.
+    #[inline]
+    fn for_query_within(&self, open: Option<f64>, tolerance: f64) -> Cow<'_, Kernel> {
+        match open.and_then(|v| OpenWindow::new(tolerance, v)) {
             None => Cow::Borrowed(self),
             Some(window) => Cow::Owned(Kernel {
                 open_window: Some(window),

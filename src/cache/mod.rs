@@ -90,18 +90,18 @@
 //! only where a record covers it at its own radii: misses, and so the records a renderer makes,
 //! are those at k = 1. Why, cost and limits: [`CacheConfig::lookup_radius_scale`].
 //!
-//! # File format (version 8, little-endian)
+//! # File format (version 9, little-endian)
 //! | offset | size | field |
 //! |---|---|---|
 //! | 0 | 8 | magic `RDFCACHE` |
-//! | 8 | 4 | format version, u32 = 8 |
+//! | 8 | 4 | format version, u32 = 9 |
 //! | 12 | 4 | channels, u32 ≥ 1 |
 //! | 16 | 4 | domain, u32 (0 surface, 1 volume) |
 //! | 20 | 4 | interpolation, u32 (`RADDIFF_INTERP_*`) |
 //! | 24 | 8 | max normal deviation, f64 radians |
 //! | 32 | 8 | record count N, u64 |
 //! | 40 | 4 | record size S = 64 + 16·channels, u32 |
-//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, bit 2 leak guard on, bit 3 far field on, bit 4 open-fraction test on, bit 5 the test keeps coverage ([`OpenFractionTest::keeps_coverage`]; only with bit 4), the other bits 0 |
+//! | 44 | 4 | flags, u32: bit 0 [`CacheConfig::non_negative`], bit 1 gradient limit on, bit 2 leak guard on, bit 3 far field on, bit 4 open-fraction test on, the other bits 0 |
 //! | 48 | 8 | gradient limit c, f64: finite and > 0 if flag bit 1 is set, else 0.0 (all bits 0) |
 //! | 56 | 8 | leak guard relative tolerance, f64: finite and ≥ 0 if flag bit 2 is set, else 0.0 (all bits 0) |
 //! | 64 | 8 | leak guard absolute tolerance, f64: as the relative one |
@@ -109,21 +109,24 @@
 //! | 80 | 8 | far-field reach in pixels ([`FarFieldReach::pixels`]), f64: as the one in L |
 //! | 88 | 8 | open-fraction tolerance ([`OpenFractionTest::tolerance`]), f64: finite and ≥ 0 if flag bit 4 is set, else 0.0 (all bits 0) |
 //! | 96 | 8 | lookup radius scale ([`CacheConfig::lookup_radius_scale`]), f64 in [1, [`LOOKUP_RADIUS_SCALE_MAX`]] |
-//! | 104 | N·S | records, in strictly increasing content order |
-//! | 104 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
+//! | 104 | 8 | open-fraction coverage tolerance ([`OpenFractionTest::coverage_tolerance`]), f64 ≥ 0 or +∞ (kept with the test off) |
+//! | 112 | N·S | records, in strictly increasing content order |
+//! | 112 + N·S | 8 | FNV-1a 64 checksum of every preceding byte |
 //!
-//! Older versions are still read. Version 7 (before the test could keep coverage) has the same
-//! header; flag bit 5 must be 0. Version 6 (before the lookup radius scale) has the same header
-//! up to offset 96 without the scale (records start at 96); its caches read records over their
-//! own radii (scale 1). Version 5 (before the open-fraction test) has the same header
-//! up to offset 88 without the tolerance (records start at 88), flag bit 4 must be 0, and its
+//! Older versions are still read. Version 8 (before the coverage tolerance) has the same header
+//! up to offset 104 without it (records start at 104); its flag bit 5 (only with bit 4) means an
+//! infinite coverage tolerance, its absence 0. Version 7 (before the test could keep coverage)
+//! has the version 8 header; flag bit 5 must be 0. Version 6 (before the lookup radius scale)
+//! has the same header up to offset 96 without the scale (records start at 96); its caches read
+//! records over their own radii (scale 1). Version 5 (before the open-fraction test) has the
+//! same header up to offset 88 without the tolerance (records start at 88), flag bit 4 must be 0, and its
 //! records' open-fraction field (reserved then) must be 0: no record has an open fraction.
 //! Version 4 (before the far-field marker) has the same header up
 //! to offset 72 without the reaches (records start at 72), flag bit 3 must be 0, and the cache's
 //! records hold no far fields. Version 3 (before the leak guard) also lacks the leak-guard fields
 //! (records start at 56), flag bit 2 must be 0, and the cache has no leak guard. Version 2 (before
 //! the gradient limit) also lacks the gradient-limit field (records start at 48), flag bit 1 must
-//! be 0, and the cache has no gradient limit. [`Cache::save`] always writes version 8.
+//! be 0, and the cache has no gradient limit. [`Cache::save`] always writes version 9.
 //!
 //! Record (S bytes): position 3×f64; frame as a unit quaternion 4×f32 (x, y, z, w with w ≥ 0,
 //! rotating the world axes onto the frame: surface axis 0, axis 1 = n × axis 0, normal n; volume
@@ -556,8 +559,9 @@ impl<V: CacheValue> Cache<V> {
     /// cache's [open-fraction test](OpenFractionTest) refuses the records whose open fraction
     /// differs from it by more than the tolerance (with the test off, the result of
     /// [`Cache::lookup_into`] bit for bit; where it refuses every covering record and
-    /// [keeps coverage](OpenFractionTest::keeps_coverage), too). `InvalidArgument` for an open
-    /// fraction outside [0, 1].
+    /// [keeps all coverage](OpenFractionTest::keeping_coverage), too; where it keeps coverage
+    /// within a [coverage tolerance](OpenFractionTest::coverage_tolerance), that of the test at
+    /// it). `InvalidArgument` for an open fraction outside [0, 1].
     pub fn lookup_into_open(
         &self,
         position: DVec3,
@@ -621,7 +625,8 @@ impl<V: CacheValue> Cache<V> {
         // the same candidates serve the read of the refused records, when the test keeps coverage
         match self.interpolate(&self.kernel.for_query(open), position, n, &slots, out) {
             Err(Error::NotFound(_)) if self.config.open_fraction_test.reads_refused(open) => {
-                self.interpolate(&self.kernel, position, n, &slots, out)
+                let kernel = self.kernel.for_coverage_query(open);
+                self.interpolate(&kernel, position, n, &slots, out)
             }
             found => found,
         }
@@ -687,25 +692,26 @@ impl<V: CacheValue> Cache<V> {
         open: Option<f64>,
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
-        match self.lookup_cursor_once(cursor, position, normal, open, out) {
+        let kernel = self.kernel.for_query(open);
+        match self.lookup_cursor_once(cursor, &kernel, position, normal, out) {
             Err(Error::NotFound(_)) if self.config.open_fraction_test.reads_refused(open) => {
-                self.lookup_cursor_once(cursor, position, normal, None, out)
+                let kernel = self.kernel.for_coverage_query(open);
+                self.lookup_cursor_once(cursor, &kernel, position, normal, out)
             }
             found => found,
         }
     }
 
-    /// One cursor lookup with the window of the query's open fraction, if any.
+    /// One cursor lookup with the query's `kernel` (its open-fraction window, if any).
     fn lookup_cursor_once(
         &self,
         cursor: &mut Cursor,
+        kernel: &Kernel,
         position: DVec3,
         normal: DVec3,
-        open: Option<f64>,
         out: &mut [f32],
     ) -> Result<(f64, usize)> {
         let n = self.check_lookup(position, normal, out.len())?;
-        let kernel = self.kernel.for_query(open);
         let Some(finest) = self.index.finest_side() else {
             return Err(Error::NotFound(format!(
                 "no cache record covers {position}"
@@ -713,7 +719,7 @@ impl<V: CacheValue> Cache<V> {
         };
         let source = (self.identity, self.generation, self.len());
         match cursor.plan(source, position, finest) {
-            cursor::Plan::Plain => return self.lookup_checked_indexed(&kernel, position, n, out),
+            cursor::Plan::Plain => return self.lookup_checked_indexed(kernel, position, n, out),
             cursor::Plan::Anchor(reach) => {
                 // remembered in content order, so that the records of later lookups arrive
                 // sorted and their sort below is a single check
@@ -746,12 +752,12 @@ impl<V: CacheValue> Cache<V> {
         let stored = |slot: usize| unsafe { self.stored_at(slot) };
         if self.kernel.interpolation == Interpolation::Log || self.kernel.is_scaled() {
             let mut used = weigh::UsedRecords::new();
-            cursor.weigh(&kernel, position, n, stored, &mut used);
-            return self.blend_used(&kernel, position, n, &mut used, out);
+            cursor.weigh(kernel, position, n, stored, &mut used);
+            return self.blend_used(kernel, position, n, &mut used, out);
         }
         // the records come in content order: straight into the blend's lanes
         let mut covering = blend::Covering::new(self.config.channels);
-        cursor.weigh_covering(&kernel, position, n, stored, &mut covering);
+        cursor.weigh_covering(kernel, position, n, stored, &mut covering);
         self.blend_covering(position, n, &covering, out)
     }
 

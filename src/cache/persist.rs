@@ -15,8 +15,11 @@ use crate::error::{Error, Result};
 
 /// File magic.
 pub const MAGIC: [u8; 8] = *b"RDFCACHE";
-/// Format version written by [`Cache::to_bytes`] (versions 2 to 8 are read).
-pub const FORMAT_VERSION: u32 = 8;
+/// Format version written by [`Cache::to_bytes`] (versions 2 to 9 are read).
+pub const FORMAT_VERSION: u32 = 9;
+/// Version 8: no coverage tolerance field (records at [`HEADER_BYTES_V8`]); flag bit 5 says the
+/// open-fraction test keeps all coverage (an infinite coverage tolerance), else it keeps none.
+const FORMAT_VERSION_8: u32 = 8;
 /// Version 7: the version 8 header, but the open-fraction test never keeps coverage (flag bit 5
 /// unknown).
 const FORMAT_VERSION_7: u32 = 7;
@@ -30,9 +33,12 @@ const FORMAT_VERSION_4: u32 = 4;
 const FORMAT_VERSION_3: u32 = 3;
 /// The oldest version read: no gradient-limit field either, records at [`HEADER_BYTES_V2`].
 const FORMAT_VERSION_2: u32 = 2;
+/// Header size of version 9: the version 8 header plus the open-fraction coverage tolerance
+/// (f64 at offset 104).
+const HEADER_BYTES: usize = 112;
 /// Header size of versions 7 and 8: the version 6 header plus the lookup radius scale (f64 at
 /// offset 96).
-const HEADER_BYTES: usize = 104;
+const HEADER_BYTES_V8: usize = 104;
 /// Header size of version 6: the version 5 header plus the open-fraction tolerance (f64 at
 /// offset 88).
 const HEADER_BYTES_V6: usize = 96;
@@ -60,8 +66,9 @@ const FLAG_FAR_FIELD: u32 = 8;
 /// Header flag (offset 44, version 6): [`CacheConfig::open_fraction_test`] is on (its tolerance
 /// at offset 88).
 const FLAG_OPEN_FRACTION: u32 = 16;
-/// Header flag (offset 44, version 8; only with [`FLAG_OPEN_FRACTION`]): the open-fraction test
-/// keeps coverage ([`OpenFractionTest::keeps_coverage`]).
+/// Header flag (offset 44, version 8 only; only with [`FLAG_OPEN_FRACTION`]): the open-fraction
+/// test keeps all coverage (an infinite [`OpenFractionTest::coverage_tolerance`]); version 9
+/// stores the coverage tolerance instead.
 const FLAG_OPEN_FRACTION_KEEPS_COVERAGE: u32 = 32;
 
 impl<V: CacheValue> Cache<V> {
@@ -100,9 +107,6 @@ impl<V: CacheValue> Cache<V> {
         let open = self.config.open_fraction_test;
         if open.is_on() {
             flags |= FLAG_OPEN_FRACTION;
-            if open.keeps_coverage {
-                flags |= FLAG_OPEN_FRACTION_KEEPS_COVERAGE;
-            }
         }
         out.extend_from_slice(&flags.to_le_bytes());
         let limit = if limited {
@@ -124,6 +128,7 @@ impl<V: CacheValue> Cache<V> {
         let tolerance = if open.is_on() { open.tolerance } else { 0.0 };
         out.extend_from_slice(&tolerance.to_le_bytes());
         out.extend_from_slice(&self.config.lookup_radius_scale.to_le_bytes());
+        out.extend_from_slice(&open.coverage_tolerance.to_le_bytes());
         for id in ids {
             let (head, chans) = self.stored(id);
             record::serialize(head, chans, &mut out);
@@ -136,12 +141,13 @@ impl<V: CacheValue> Cache<V> {
     /// Parses and validates a cache in the documented binary format. `Corrupt` with the reason
     /// for anything that [`Cache::to_bytes`] could not have written, including a channel count
     /// that disagrees with `V`. Never panics.
-    /// Version 7 files (the open-fraction test, if on, does not keep coverage), version 6 files
-    /// (no lookup radius scale either: it is 1), version 5 files (no open-fraction test
-    /// either: it is off, and records have no open fraction),
-    /// version 4 files (no far-field marker either: records hold no far fields), version 3 files
-    /// (no leak guard either: it is off) and version 2 files (no gradient limit either) are read
-    /// as well.
+    ///
+    /// Version 8 files (the open-fraction test keeps all coverage or none), version 7 files (the
+    /// test, if on, keeps none), version 6 files (no lookup radius scale either: it is 1),
+    /// version 5 files (no open-fraction test either: it is off, and records have no open
+    /// fraction), version 4 files (no far-field marker either: records hold no far fields),
+    /// version 3 files (no leak guard either: it is off) and version 2 files (no gradient limit
+    /// either) are read as well.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
         let corrupt = |m: String| Err(Error::Corrupt(m));
         if bytes.len() < HEADER_BYTES_V2 + CHECKSUM_BYTES {
@@ -158,7 +164,8 @@ impl<V: CacheValue> Cache<V> {
         let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap_or([0; 8]));
         let version = u32_at(8);
         let header_bytes = match version {
-            FORMAT_VERSION | FORMAT_VERSION_7 => HEADER_BYTES,
+            FORMAT_VERSION => HEADER_BYTES,
+            FORMAT_VERSION_8 | FORMAT_VERSION_7 => HEADER_BYTES_V8,
             FORMAT_VERSION_6 => HEADER_BYTES_V6,
             FORMAT_VERSION_5 => HEADER_BYTES_V5,
             FORMAT_VERSION_4 => HEADER_BYTES_V4,
@@ -208,7 +215,7 @@ impl<V: CacheValue> Cache<V> {
             FORMAT_VERSION_5 => {
                 FLAG_NON_NEGATIVE | FLAG_GRADIENT_LIMIT | FLAG_LEAK_GUARD | FLAG_FAR_FIELD
             }
-            FORMAT_VERSION_6 | FORMAT_VERSION_7 => {
+            FORMAT_VERSION_6 | FORMAT_VERSION_7 | FORMAT_VERSION => {
                 FLAG_NON_NEGATIVE
                     | FLAG_GRADIENT_LIMIT
                     | FLAG_LEAK_GUARD
@@ -294,10 +301,20 @@ impl<V: CacheValue> Cache<V> {
         } else {
             let tolerance = f64_at(88);
             let keeps_coverage = flags & FLAG_OPEN_FRACTION_KEEPS_COVERAGE != 0;
+            let coverage_tolerance = match version {
+                FORMAT_VERSION => f64_at(104),
+                _ if keeps_coverage => f64::INFINITY,
+                _ => 0.0,
+            };
+            if coverage_tolerance.is_nan() || coverage_tolerance < 0.0 {
+                return corrupt(format!(
+                    "open-fraction coverage tolerance {coverage_tolerance} is not >= 0"
+                ));
+            }
             if flags & FLAG_OPEN_FRACTION != 0 {
                 let test = OpenFractionTest {
                     tolerance,
-                    keeps_coverage,
+                    coverage_tolerance,
                 };
                 if test.validate().is_err() || !test.is_on() {
                     return corrupt(format!(
@@ -314,7 +331,10 @@ impl<V: CacheValue> Cache<V> {
                     "the keep-coverage flag is set but the open-fraction flag is not".into(),
                 );
             } else {
-                OpenFractionTest::OFF
+                OpenFractionTest {
+                    coverage_tolerance,
+                    ..OpenFractionTest::OFF
+                }
             }
         };
         let lookup_radius_scale = if version < FORMAT_VERSION_7 {

@@ -441,8 +441,8 @@ pub extern "C" fn raddiff_cache_get_leak_guard(
 /// or more, whose open fractions have a noise of at most 0.5/sqrt(rays)); INFINITY (the default)
 /// turns the test off. `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for a NaN or negative
 /// tolerance. Saved with the cache and restored by `raddiff_cache_load` (files written before it
-/// load with it off). Keeps whether the test keeps coverage
-/// (`raddiff_cache_set_open_fraction_keeps_coverage`). **Not thread-safe**: no other thread may
+/// load with it off). Keeps the test's coverage tolerance
+/// (`raddiff_cache_set_open_fraction_coverage_tolerance`). **Not thread-safe**: no other thread may
 /// use the cache during the call.
 #[no_mangle]
 pub extern "C" fn raddiff_cache_set_open_fraction_tolerance(
@@ -475,16 +475,66 @@ pub extern "C" fn raddiff_cache_get_open_fraction_tolerance(
     })
 }
 
-/// Sets whether the open-fraction test keeps coverage (`keeps` 1) or not (0, the default): with
-/// it, a query whose covering records the test all refuses reads them (as with the test off; the
-/// leak guard still applies) instead of returning `RADDIFF_ERROR_NOT_FOUND`, so the test chooses
-/// among the records covering a query and never makes a renderer add a record. Without it the
-/// refusals make records where the open fraction changes, which at a fixed record budget leaves
-/// the open regions fewer, larger records (the real-scene benchmark: keeping coverage had the
-/// lower error below 5,000 to 8,000 records at 512 px, the default above). Acts only while the
-/// test is on (a finite tolerance). `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for `keeps`
-/// other than 0 or 1. Saved with the cache (files written before it load without it). **Not
-/// thread-safe**: no other thread may use the cache during the call.
+/// Sets the open-fraction test's coverage tolerance: a query whose covering records the test all
+/// refuses reads those whose open fraction is within `coverage_tolerance` of its own (as with the
+/// test at that tolerance; the leak guard still applies), and returns
+/// `RADDIFF_ERROR_NOT_FOUND` only when none is. So the test makes a renderer add a record only
+/// where the open fraction changes by more than the coverage tolerance (the foot of a wall, the
+/// edge of a ledge), not where it changes by a little more than the tolerance; at a fixed record
+/// budget the open regions keep more, smaller records. INFINITY keeps all coverage (the test then
+/// only chooses among the records covering a query; also
+/// `raddiff_cache_set_open_fraction_keeps_coverage`); 0 (the default), or any value not above
+/// the tolerance, keeps none. On the real-scene benchmark at tolerance 0.1 a coverage tolerance
+/// of 0.3 came within the better of none and INFINITY at every record budget measured.
+/// Dimensionless. Acts only while the test is on (a finite tolerance), and is kept when the
+/// tolerance changes. `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for a NaN or negative value.
+/// Saved with the cache (files written before it load with 0, or with INFINITY where they kept
+/// coverage). **Not thread-safe**: no other thread may use the cache during the call.
+#[no_mangle]
+pub extern "C" fn raddiff_cache_set_open_fraction_coverage_tolerance(
+    cache: *mut raddiff_cache,
+    coverage_tolerance: f64,
+) -> raddiff_status {
+    guard(|| {
+        // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
+        let cache = unsafe { out_ref(cache, "cache")? };
+        let test = cache
+            .inner
+            .config()
+            .open_fraction_test
+            .with_coverage_tolerance(coverage_tolerance);
+        cache.inner.set_open_fraction_test(test)?;
+        Ok(())
+    })
+}
+
+/// Writes the open-fraction test's coverage tolerance to `*coverage_tolerance` (see
+/// `raddiff_cache_set_open_fraction_coverage_tolerance`; INFINITY when it keeps all coverage).
+#[no_mangle]
+pub extern "C" fn raddiff_cache_get_open_fraction_coverage_tolerance(
+    cache: *const raddiff_cache,
+    coverage_tolerance: *mut f64,
+) -> raddiff_status {
+    guard(|| {
+        let cache = unsafe { in_ref(cache, "cache")? };
+        let coverage_tolerance = unsafe { out_ref(coverage_tolerance, "coverage_tolerance")? };
+        *coverage_tolerance = cache.inner.config().open_fraction_test.coverage_tolerance;
+        Ok(())
+    })
+}
+
+/// Sets whether the open-fraction test keeps all coverage (`keeps` 1: a coverage tolerance of
+/// INFINITY) or none (0: a coverage tolerance of 0, the default); see
+/// `raddiff_cache_set_open_fraction_coverage_tolerance`. With it, a query whose covering records
+/// the test all refuses reads them (as with the test off; the leak guard still applies) instead
+/// of returning `RADDIFF_ERROR_NOT_FOUND`, so the test chooses among the records covering a query
+/// and never makes a renderer add a record. Without it the refusals make records where the open
+/// fraction changes, which at a fixed record budget leaves the open regions fewer, larger records
+/// (the real-scene benchmark: keeping all coverage had the lower error below 5,000 to 8,000
+/// records at 512 px, keeping none above). Acts only while the test is on (a finite tolerance).
+/// `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for `keeps` other than 0 or 1. Saved with the
+/// cache (files written before it load without it). **Not thread-safe**: no other thread may use
+/// the cache during the call.
 #[no_mangle]
 pub extern "C" fn raddiff_cache_set_open_fraction_keeps_coverage(
     cache: *mut raddiff_cache,
@@ -493,26 +543,29 @@ pub extern "C" fn raddiff_cache_set_open_fraction_keeps_coverage(
     guard(|| {
         // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
         let cache = unsafe { out_ref(cache, "cache")? };
-        let keeps_coverage = match keeps {
-            0 => false,
-            1 => true,
+        let coverage_tolerance = match keeps {
+            0 => 0.0,
+            1 => f64::INFINITY,
             _ => {
                 return Err(
                     Error::InvalidArgument(format!("keeps must be 0 or 1, got {keeps}")).into(),
                 )
             }
         };
-        let test = crate::cache::OpenFractionTest {
-            keeps_coverage,
-            ..cache.inner.config().open_fraction_test
-        };
+        let test = cache
+            .inner
+            .config()
+            .open_fraction_test
+            .with_coverage_tolerance(coverage_tolerance);
         cache.inner.set_open_fraction_test(test)?;
         Ok(())
     })
 }
 
-/// Writes whether the open-fraction test keeps coverage to `*keeps` (1 or 0; see
-/// `raddiff_cache_set_open_fraction_keeps_coverage`).
+/// Writes whether the open-fraction test keeps all coverage to `*keeps`: 1 when its coverage
+/// tolerance is INFINITY, else 0 (see `raddiff_cache_set_open_fraction_keeps_coverage`; a
+/// finite coverage tolerance reads as 0: `raddiff_cache_get_open_fraction_coverage_tolerance`
+/// gives it).
 #[no_mangle]
 pub extern "C" fn raddiff_cache_get_open_fraction_keeps_coverage(
     cache: *const raddiff_cache,
@@ -521,7 +574,8 @@ pub extern "C" fn raddiff_cache_get_open_fraction_keeps_coverage(
     guard(|| {
         let cache = unsafe { in_ref(cache, "cache")? };
         let keeps = unsafe { out_ref(keeps, "keeps")? };
-        *keeps = u32::from(cache.inner.config().open_fraction_test.keeps_coverage);
+        let coverage = cache.inner.config().open_fraction_test.coverage_tolerance;
+        *keeps = u32::from(coverage == f64::INFINITY);
         Ok(())
     })
 }
@@ -640,10 +694,11 @@ pub extern "C" fn raddiff_cache_save(
 }
 
 /// Loads a cache saved by `raddiff_cache_save` (channels, domain, interpolation, its flags, the
-/// gradient limit, the leak guard, the far-field reach, the open-fraction tolerance and the
-/// lookup radius scale come from the file; files of format version 2 have no gradient limit,
-/// those of versions 2 and 3 no leak guard, 2 to 4 no far field, 2 to 5 no open-fraction test,
-/// 2 to 6 a lookup radius scale of 1). Returns
+/// gradient limit, the leak guard, the far-field reach, the open-fraction tolerance and coverage
+/// tolerance and the lookup radius scale come from the file; files of format version 2 have no
+/// gradient limit, those of versions 2 and 3 no leak guard, 2 to 4 no far field, 2 to 5 no
+/// open-fraction test, 2 to 6 a lookup radius scale of 1, 2 to 7 a coverage tolerance of 0,
+/// version 8 one of 0 or INFINITY). Returns
 /// NULL with a `RADDIFF_ERROR_IO` or `RADDIFF_ERROR_CORRUPT` message in `raddiff_last_error` for
 /// unreadable, truncated, damaged or wrong-version files.
 #[no_mangle]

@@ -122,8 +122,8 @@ pub struct raddiff_irradiance_settings {
     /// The cache's open-fraction test, tolerance >= 0 (default INFINITY: off; see
     /// `raddiff_cache_set_open_fraction_tolerance`). With it on,
     /// `raddiff_cache_irradiance_near_far` traces a query's near rays before its lookup and
-    /// its records keep their open fractions. Whether the test keeps coverage is the cache's
-    /// choice (`raddiff_cache_set_open_fraction_keeps_coverage`), not the settings'.
+    /// its records keep their open fractions. The test's coverage tolerance is the cache's
+    /// choice (`raddiff_cache_set_open_fraction_coverage_tolerance`), not the settings'.
     pub near_field_open_fraction_tolerance: f64,
     /// How far the cache reads records, in multiples of their radii, in
     /// [1, `RADDIFF_LOOKUP_RADIUS_SCALE_MAX`] (default 1; see

@@ -1,8 +1,8 @@
 //! Writes the seed corpora into `fuzz/corpus/<target>/` (run from `fuzz/`:
 //! `cargo run --release --bin seeds`). For every target but `cache_load`: pseudo-random byte
 //! strings (fixed seed), the first few that the target accepts and the first few it refuses. For
-//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 8) and their version
-//! 7, 6, 5, 4, 3 and 2 forms, each behind the option byte 0, and two refused files (truncated, damaged).
+//! `cache_load`: real caches saved by `raddiff_cache_save` (format version 9) and their version
+//! 8, 7, 6, 5, 4, 3 and 2 forms, each behind the option byte 0, and two refused files (truncated, damaged).
 use std::ffi::CString;
 use std::path::Path;
 
@@ -53,17 +53,20 @@ fn main() {
     damaged.extend(first);
     damaged[1 + 60] ^= 0x40;
     std::fs::write(dir.join("damaged"), damaged).expect("writing");
-    for (i, v8) in caches.iter().enumerate() {
+    for (i, v9) in caches.iter().enumerate() {
+        let v8 = &as_version_8(v9);
         let v7 = &as_version_7(v8);
         let v6 = &as_version_6(v7);
         let v5 = as_version_5(v6);
         let v4 = as_version_4(&v5);
         let v3 = as_version_3(&v4);
         let v2 = as_version_2(&v3);
-        // the older forms a cache has (no version 7 keeping coverage, no version 6 with a lookup
+        // the older forms a cache has (no version 8 with a finite coverage tolerance, no version 7
+        // keeping coverage, no version 6 with a lookup
         // radius scale, no version 5 with an open-fraction test, no version 4 with a far field,
         // no version 3 with a leak guard, no version 2 with a gradient limit)
         for (version, file) in [
+            (9, v9),
             (8, v8),
             (7, v7),
             (6, v6),
@@ -114,6 +117,8 @@ fn saved_caches() -> Vec<Vec<u8>> {
         (1, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_WARD),
         // the open-fraction test keeping coverage (below)
         (3, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT),
+        // the open-fraction test keeping the coverage within 0.3 (below)
+        (3, RADDIFF_DOMAIN_SURFACE, RADDIFF_INTERP_TENT),
     ];
     kinds
         .iter()
@@ -125,8 +130,8 @@ fn saved_caches() -> Vec<Vec<u8>> {
                 interpolation,
                 max_normal_deviation: 0.3,
             };
-            let tested = kind == 6 || kind == 8;
-            let cache = if (5..=6).contains(&kind) || kind == 8 {
+            let tested = kind == 6 || kind >= 8;
+            let cache = if (5..=6).contains(&kind) || kind >= 8 {
                 let mut settings = raddiff_irradiance_settings_default();
                 settings.channels = channels;
                 settings.near_field_reach_pixels = 8.0;
@@ -147,6 +152,12 @@ fn saved_caches() -> Vec<Vec<u8>> {
             if kind == 8 {
                 assert_eq!(
                     raddiff_cache_set_open_fraction_keeps_coverage(cache, 1),
+                    raddiff_status::RADDIFF_OK
+                );
+            }
+            if kind == 9 {
+                assert_eq!(
+                    raddiff_cache_set_open_fraction_coverage_tolerance(cache, 0.3),
                     raddiff_status::RADDIFF_OK
                 );
             }
@@ -225,12 +236,32 @@ fn saved_caches() -> Vec<Vec<u8>> {
         .collect()
 }
 
+/// The version 8 form of a version 9 file: no coverage tolerance (bytes 104..112), flag bit 5
+/// set for an infinite one, resealed. Only for caches whose coverage tolerance is 0 or infinite
+/// (version 8 cannot hold another): others are returned as is.
+fn as_version_8(v9: &[u8]) -> Vec<u8> {
+    let coverage = f64::from_le_bytes(v9[104..112].try_into().expect("8 bytes"));
+    if coverage != 0.0 && coverage != f64::INFINITY {
+        return v9.to_vec();
+    }
+    let mut v8 = v9[..104].to_vec();
+    v8[8..12].copy_from_slice(&8u32.to_le_bytes());
+    if coverage == f64::INFINITY {
+        v8[44] |= 32;
+    }
+    v8.extend_from_slice(&v9[112..v9.len() - 8]);
+    let sum = fnv1a(&v8);
+    v8.extend_from_slice(&sum.to_le_bytes());
+    v8
+}
+
 /// The version 7 form of a version 8 file: the same bytes with version 7, resealed. Only for
-/// caches whose open-fraction test does not keep coverage (version 7 cannot hold it): others are
-/// returned as is.
+/// caches whose open-fraction test does not keep coverage (version 7 cannot hold it) and version 8
+/// files: others are returned as is.
 fn as_version_7(v8: &[u8]) -> Vec<u8> {
+    let version = u32::from_le_bytes(v8[8..12].try_into().expect("4 bytes"));
     let flags = u32::from_le_bytes(v8[44..48].try_into().expect("4 bytes"));
-    if flags & 32 != 0 {
+    if flags & 32 != 0 || version != 8 {
         return v8.to_vec();
     }
     let mut v7 = v8[..v8.len() - 8].to_vec();

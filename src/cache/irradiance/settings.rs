@@ -245,8 +245,8 @@ impl IrradianceSettings {
     /// `InvalidArgument` unless a cache configured as `config` stores what these settings make:
     /// the same channel count, the surface domain, the same gradient limit, leak guard,
     /// far-field reach and open-fraction tolerance (cache state the records are inserted and
-    /// looked up under). The interpolation, the normal deviation and whether the test keeps
-    /// coverage ([`OpenFractionTest::keeps_coverage`]) are the cache's to choose.
+    /// looked up under). The interpolation, the normal deviation and the test's coverage
+    /// tolerance ([`OpenFractionTest::coverage_tolerance`]) are the cache's to choose.
     pub fn check_cache(&self, config: &CacheConfig) -> Result<()> {
         let disagree = |what: &str, cache: String, settings: String| {
             Err(Error::InvalidArgument(format!(
