@@ -498,14 +498,19 @@ pub extern "C" fn raddiff_cache_set_open_fraction_coverage_tolerance(
     guard(|| {
         // SAFETY: NULL or a live handle that, per the contract, nobody else uses right now.
         let cache = unsafe { out_ref(cache, "cache")? };
-        let test = cache
-            .inner
-            .config()
-            .open_fraction_test
-            .with_coverage_tolerance(coverage_tolerance);
-        cache.inner.set_open_fraction_test(test)?;
+        set_coverage_tolerance(cache, coverage_tolerance)?;
         Ok(())
     })
+}
+
+/// Sets the cache's open-fraction coverage tolerance, its tolerance kept.
+fn set_coverage_tolerance(cache: &mut raddiff_cache, coverage_tolerance: f64) -> crate::Result<()> {
+    let test = cache
+        .inner
+        .config()
+        .open_fraction_test
+        .with_coverage_tolerance(coverage_tolerance);
+    cache.inner.set_open_fraction_test(test)
 }
 
 /// Writes the open-fraction test's coverage tolerance to `*coverage_tolerance` (see
@@ -552,12 +557,7 @@ pub extern "C" fn raddiff_cache_set_open_fraction_keeps_coverage(
                 )
             }
         };
-        let test = cache
-            .inner
-            .config()
-            .open_fraction_test
-            .with_coverage_tolerance(coverage_tolerance);
-        cache.inner.set_open_fraction_test(test)?;
+        set_coverage_tolerance(cache, coverage_tolerance)?;
         Ok(())
     })
 }
