@@ -119,8 +119,9 @@
 //! has the version 8 header; flag bit 5 must be 0. Version 6 (before the lookup radius scale)
 //! has the same header up to offset 96 without the scale (records start at 96); its caches read
 //! records over their own radii (scale 1). Version 5 (before the open-fraction test) has the
-//! same header up to offset 88 without the tolerance (records start at 88), flag bit 4 must be 0, and its
-//! records' open-fraction field (reserved then) must be 0: no record has an open fraction.
+//! same header up to offset 88 without the tolerance (records start at 88), flag bit 4 must be
+//! 0, and its records' open-fraction field (reserved then) must be 0: no record has an open
+//! fraction.
 //! Version 4 (before the far-field marker) has the same header up
 //! to offset 72 without the reaches (records start at 72), flag bit 3 must be 0, and the cache's
 //! records hold no far fields. Version 3 (before the leak guard) also lacks the leak-guard fields
