@@ -306,7 +306,8 @@ impl<V: CacheValue> Cache<V> {
                 _ if keeps_coverage => f64::INFINITY,
                 _ => 0.0,
             };
-            if coverage_tolerance.is_nan() || coverage_tolerance < 0.0 {
+            let coverage = OpenFractionTest::OFF.with_coverage_tolerance(coverage_tolerance);
+            if coverage.validate().is_err() {
                 return corrupt(format!(
                     "open-fraction coverage tolerance {coverage_tolerance} is not >= 0"
                 ));
@@ -314,7 +315,7 @@ impl<V: CacheValue> Cache<V> {
             if flags & FLAG_OPEN_FRACTION != 0 {
                 let test = OpenFractionTest {
                     tolerance,
-                    coverage_tolerance,
+                    ..coverage
                 };
                 if test.validate().is_err() || !test.is_on() {
                     return corrupt(format!(
@@ -331,10 +332,7 @@ impl<V: CacheValue> Cache<V> {
                     "the keep-coverage flag is set but the open-fraction flag is not".into(),
                 );
             } else {
-                OpenFractionTest {
-                    coverage_tolerance,
-                    ..OpenFractionTest::OFF
-                }
+                coverage
             }
         };
         let lookup_radius_scale = if version < FORMAT_VERSION_7 {
