@@ -788,9 +788,9 @@ enum raddiff_status raddiff_cache_get_open_fraction_tolerance(const struct raddi
 // budget the open regions keep more, smaller records. INFINITY keeps all coverage (the test then
 // only chooses among the records covering a query; also
 // `raddiff_cache_set_open_fraction_keeps_coverage`); 0 (the default), or any value not above
-// the tolerance, keeps none. On the real-scene benchmark at tolerance 0.1 a coverage tolerance
-// of 0.3 came within 0.96x-1.06x of the better of none and INFINITY from 2,700 to 8,200 records
-// at 512 px (none was 2-8% lower at 13,000-14,500).
+// the tolerance, keeps none. On the real-scene benchmark at tolerance 0.1 (512 px) a coverage
+// tolerance of 0.25 came within 1.06x of the best of 0.15, 0.2, 0.25, 0.3 and INFINITY from
+// 4,000 to 14,000 records; 0.3 or more did better below about one record per 65 pixels.
 // Dimensionless. Acts only while the test is on (a finite tolerance), and is kept when the
 // tolerance changes. `RADDIFF_ERROR_INVALID_ARGUMENT` (no change) for a NaN or negative value.
 // Saved with the cache (files written before it load with 0, or with INFINITY where they kept

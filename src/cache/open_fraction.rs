@@ -49,9 +49,11 @@ use crate::error::{Error, Result};
 /// On the real-scene benchmark (`docs/real-scenes.md`, tolerance 0.1) an infinite coverage
 /// tolerance gave lower errors than the test off at every record budget measured, and lower than
 /// the default test below 5,000 to 8,000 records at 512 px (where the curves cross on the two
-/// scenes); above that the default test's own records where the openness changes win. A coverage
-/// tolerance of 0.3 came within 0.96x-1.06x of the better of the two from 2,700 to 8,200 records
-/// (two seeds), the default test 2-8% lower at 13,000-14,500 (the page gives the figures).
+/// scenes); above that the default test's own records where the openness changes win. The best
+/// finite coverage tolerance falls as the budget grows: 0.3 or more below about one record per 65
+/// pixels, 0.15-0.25 from one per 44 pixels on; 0.25 came within 1.06x of the best of 0.15, 0.2,
+/// 0.25, 0.3 and infinity at every budget from 4,000 to 14,000 records (two seeds; the page gives
+/// the figures).
 ///
 /// The test is off when the tolerance is infinite ([`OpenFractionTest::OFF`], the default).
 #[derive(Debug, Clone, Copy, PartialEq)]
