@@ -12,13 +12,12 @@
 //! and saving it reproduces a version 9 file byte for byte (an older file: the same records once
 //! loaded again).
 use std::ffi::CString;
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use raddiff::ffi::*;
 
 use super::cache_ops::{lookup, lookup_open};
 use super::check;
+use super::scratch::scratch_path;
 use super::Outcome;
 
 /// Loads the decoded file and checks what came back.
@@ -168,14 +167,4 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
     })
-}
-
-/// A file name in the temporary directory unique to this process, thread and call.
-pub fn scratch_path(tag: &str) -> PathBuf {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    std::env::temp_dir().join(format!(
-        "raddiff-fuzz-{}-{tag}-{n}.cache",
-        std::process::id()
-    ))
 }

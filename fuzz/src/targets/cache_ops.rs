@@ -431,7 +431,7 @@ impl State {
 
     /// Saves, loads back, and compares the two caches' sizes and one lookup.
     fn round_trip(&mut self, input: &mut Input) {
-        let path = super::cache_load::scratch_path("ops");
+        let path = super::scratch::scratch_path("ops");
         let c_path = CString::new(path.to_string_lossy().as_bytes()).expect("no NUL in path");
         let ok = check::status(
             "raddiff_cache_save",

@@ -13,6 +13,7 @@ pub mod decode;
 pub mod gather_evaluate;
 pub mod kernels;
 pub mod radii;
+pub mod scratch;
 pub mod single_scatter;
 
 /// What a fuzz input led to once every property held: whether the main call succeeded. The
