@@ -43,12 +43,6 @@ struct BenchSettings {
   double adaptive_lookup = 0;
   double adaptive_lookup_max = 4;
   double adaptive_lookup_exponent = 1.0 / 3.0;  // the power of s / s_median (1/3: the balance above)
-  // true: s is each record's radius in pixels (the geometric mean of its two radii over its pixel's
-  // footprint) instead of its noise; with a negative exponent the largest records are read least
-  // far (--adaptive-lookup-by radius[:R0]); R0 > 0 (pixels) replaces the median, so that the
-  // scales no longer follow the budget.
-  bool adaptive_lookup_by_radius = false;
-  double adaptive_lookup_reference = 0;
   // > 0: the gradient-shrinkage experiment. Each record's translational gradients are multiplied
   // by max(0, 1 - gradient_shrinkage * v / |g|^2), g the Ward-Heckbert gradient of its gather's
   // luminance and v that gradient's variance under the strata's own noise: the gradient is linear

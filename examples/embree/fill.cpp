@@ -386,15 +386,12 @@ void CacheFill::smooth_records() {
 // The adaptive-lookup experiment's caches (not timed), with the records' state.
 void CacheFill::make_adaptive_lookup() {
   CachePtr noise_cache = with_cache_state(surface_cache(kernel_, irr_.gradient_limit, 1, false));
-  std::vector<float> noise;  // or the radius in pixels
-  for (const RecordInfo &r : out_.records)
-    noise.push_back(static_cast<float>(settings_.adaptive_lookup_by_radius
-                                           ? std::sqrt(r.radii[0] * r.radii[1]) / primary_[r.pixel].footprint
-                                           : r.relative_noise));
+  std::vector<float> noise;
+  for (const RecordInfo &r : out_.records) noise.push_back(static_cast<float>(r.relative_noise));
   adaptive_lookup_ = std::make_unique<AdaptiveLookup>(kept_, noise, settings_.adaptive_lookup,
                                                       settings_.adaptive_lookup_max, settings_.adaptive_lookup_exponent,
                                                       [this] { return new_cache(); },
-                                                      std::move(noise_cache), settings_.adaptive_lookup_reference);
+                                                      std::move(noise_cache));
 }
 
 // Every pixel's irradiance from the caches: the near field's plus the open fraction times the
@@ -442,9 +439,8 @@ void CacheFill::render_image() {
   });
   out_.uncovered = uncovered;
   if (adaptive_lookup_)
-    std::printf("adaptive lookup: records' median %s %.4g, pixels' mean scale %.3f\n",
-                settings_.adaptive_lookup_by_radius ? "radius (px)" : "relative noise", adaptive_lookup_->median(),
-                adaptive_lookup_->mean_scale());
+    std::printf("adaptive lookup: records' median relative noise %.4g, pixels' mean scale %.3f\n",
+                adaptive_lookup_->median(), adaptive_lookup_->mean_scale());
   for (float v : out_.image.rgb) {
     out_.non_finite += !std::isfinite(v);
     out_.negative += v < 0;

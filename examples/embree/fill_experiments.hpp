@@ -62,15 +62,13 @@ class AdaptiveLookup {
  public:
   // `make_cache` returns an empty cache of the records' kind and state (guard, open-fraction test);
   // `noise_cache` is an empty one of a single channel. kept[i] has relative noise noise[i].
-  // A `reference` > 0 replaces the records' median in the scale's rule.
   template <class MakeCache>
   AdaptiveLookup(const std::vector<KeptRecord> &kept, const std::vector<float> &noise, double k0, double kmax,
-                 double exponent, MakeCache make_cache, CachePtr noise_cache, double reference = 0)
+                 double exponent, MakeCache make_cache, CachePtr noise_cache)
       : k0_(k0), exponent_(exponent), noise_(std::move(noise_cache)) {
     const int rungs = 1 + static_cast<int>(std::floor(4 * std::log2(std::clamp(kmax, 1.0, 8.0)) + 1e-9));
     for (int r = 0; r < rungs; ++r) ladder_.push_back(make_cache());
     fill(kept, noise);
-    if (reference > 0) median_ = reference;
   }
 
   // The cache a pixel reads: `lookup(cache, value)` looks the pixel up in a cache and returns the

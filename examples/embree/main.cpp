@@ -43,7 +43,6 @@ const char *kUsage =
     "                      [--smooth-derivative-strata A[,P] (derivatives from smoothed strata; default off)]\n"
     "                      [--lookup-scale k (records read over k times their radii, 1 to 8; default 1)]\n"
     "                      [--adaptive-lookup k0[,kmax[,exponent]] (bench: scale per pixel from the noise)]\n"
-    "                      [--adaptive-lookup-by noise|radius (bench: from the records' radii in pixels)]\n"
     "  render mode:        [--accuracy a | --hessian relative_error] [--records N] [--neighbour-clamp]\n"
     "                      [--check pixels (default 96)] [--near-field reach_px[,rays]]\n"
     "  both, with --near-field: [--open-fraction-tolerance t (default inf: off)]\n"
@@ -143,13 +142,6 @@ int main(int argc, char **argv) {
         double *fields[3] = {&bench.adaptive_lookup, &bench.adaptive_lookup_max, &bench.adaptive_lookup_exponent};
         for (double *f : fields)
           if (std::getline(v, part, ',')) *f = std::stod(part);
-      } else if (a == "--adaptive-lookup-by") {
-        const std::string by = next();
-        bench.adaptive_lookup_by_radius = by.rfind("radius", 0) == 0;
-        if (bench.adaptive_lookup_by_radius && by.size() > 7 && by[6] == ':')
-          bench.adaptive_lookup_reference = std::stod(by.substr(7));
-        else if (by != "radius" && by != "noise")
-          throw std::runtime_error("--adaptive-lookup-by radius[:R0]|noise, not " + by);
       } else if (a == "--second-order") bench.second_order = std::stod(next());
       else if (a == "--error-norm") bench.error_norm = std::stod(next());
       else if (a == "--far-field-gathers") bench.far_field_gathers = true;
