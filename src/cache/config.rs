@@ -102,7 +102,8 @@ pub struct CacheConfig {
     /// pixels, 1.41 gave the anisotropic Hessian 0.78x-0.86x the error of 2). Cost: about k² (k³
     /// in media) times the records weighed and blended per lookup, plus the coverage test. k = 1
     /// gives the results without the scale bit for bit. Saved with the cache (file format version
-    /// 7; older files load with 1); changed on a filled cache by [`Cache::set_lookup_radius_scale`].
+    /// 7; older files load with 1); changed on a filled cache by
+    /// [`Cache::set_lookup_radius_scale`].
     ///
     /// [`LOOKUP_RADIUS_SCALE_MAX`]: super::LOOKUP_RADIUS_SCALE_MAX
     /// [`Cache::new`]: super::Cache::new
